@@ -1,0 +1,179 @@
+//! The method's settings, shared by the CPU reference, the GPU engine, the CLI and the layer.
+
+/// Which per-pixel method runs (spec sections 3 and 5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Algorithm 1 with its four constraints (the paper's method).
+    Paper,
+    /// P = D + E'_h.
+    HueOnly,
+    /// P = D - E'_h.
+    OtherHue,
+    /// P = D + |E'_h| * OD/|OD|.
+    LumChroma,
+    /// Weiland et al. 2009: clip(k_v * display - k_b * background) in linear light.
+    Subtraction,
+}
+
+impl Method {
+    pub const ALL: [Method; 5] = [
+        Method::Paper,
+        Method::HueOnly,
+        Method::OtherHue,
+        Method::LumChroma,
+        Method::Subtraction,
+    ];
+
+    /// The name used on the command line and in config/JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Paper => "paper",
+            Method::HueOnly => "hue-only",
+            Method::OtherHue => "other-hue",
+            Method::LumChroma => "lum-chroma",
+            Method::Subtraction => "subtraction",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The code the shaders use for this method (push constant `method`).
+    pub fn shader_code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// Subtraction method gains (spec section 5): k_v on the display, k_b on the background.
+pub const SUBTRACTION_K_V: f32 = 1.0;
+pub const SUBTRACTION_K_B: f32 = 0.4;
+
+/// Every setting of the method. Defaults are the paper's (spec sections 2 and 3).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Maximum colour change in the scaled space (the paper's lambda'_E).
+    pub lambda_e: f32,
+    /// JND sphere radius in the scaled space (2.3 / 50).
+    pub lambda_jnd_scaled: f32,
+    /// Lens transmittance applied to the background in linear light (0.4 = 60% attenuation).
+    pub transmittance: f32,
+    /// Gaussian kernel size in camera pixels (odd; 1 = no blur).
+    pub blur_size: u32,
+    pub blur_sigma: f32,
+    /// False: no blur (`--no-blur`), whatever `blur_size` says.
+    pub blur: bool,
+    /// camera_uv = fov_scale * display_uv + fov_offset.
+    pub fov_scale: [f32; 2],
+    pub fov_offset: [f32; 2],
+    /// False: camera_uv = display_uv (`--no-fov`).
+    pub fov: bool,
+    pub method: Method,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            lambda_e: 0.4,
+            lambda_jnd_scaled: 0.046,
+            transmittance: 0.4,
+            blur_size: 3,
+            blur_sigma: 1.5,
+            blur: true,
+            fov_scale: [0.65, 0.65],
+            fov_offset: [0.13, 0.17],
+            fov: true,
+            method: Method::Paper,
+        }
+    }
+}
+
+/// Largest supported blur kernel (taps); the shaders hold this many weights.
+pub const MAX_BLUR_SIZE: u32 = 15;
+
+impl Params {
+    /// The normalised 1-D Gaussian taps at offsets -(n/2)..=(n/2); `[1.0]` without blur.
+    /// The 2-D kernel exp(-(x^2+y^2)/(2 sigma^2)) is separable, so the product of two of these
+    /// equals the renormalised 2-D kernel of spec section 2.
+    pub fn blur_taps(&self) -> Vec<f64> {
+        if !self.blur || self.blur_size <= 1 {
+            return vec![1.0];
+        }
+        let half = (self.blur_size.min(MAX_BLUR_SIZE) / 2) as i32;
+        let sigma = f64::from(self.blur_sigma);
+        let raw: Vec<f64> = (-half..=half)
+            .map(|x| (-(f64::from(x * x)) / (2.0 * sigma * sigma)).exp())
+            .collect();
+        let sum: f64 = raw.iter().sum();
+        raw.into_iter().map(|w| w / sum).collect()
+    }
+
+    /// The FoV mapping actually applied: identity with `--no-fov`.
+    pub fn fov_mapping(&self) -> ([f32; 2], [f32; 2]) {
+        if self.fov {
+            (self.fov_scale, self.fov_offset)
+        } else {
+            ([1.0, 1.0], [0.0, 0.0])
+        }
+    }
+
+    /// Checks ranges; the message names the setting.
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = [
+            ("lambda_e", self.lambda_e),
+            ("lambda_jnd_scaled", self.lambda_jnd_scaled),
+            ("transmittance", self.transmittance),
+            ("blur_sigma", self.blur_sigma),
+            ("fov_scale.x", self.fov_scale[0]),
+            ("fov_scale.y", self.fov_scale[1]),
+            ("fov_offset.x", self.fov_offset[0]),
+            ("fov_offset.y", self.fov_offset[1]),
+        ];
+        for (name, v) in finite {
+            if !v.is_finite() {
+                return Err(format!("{name} must be a finite number, got {v}"));
+            }
+        }
+        if self.lambda_e < 0.0 {
+            return Err(format!("lambda_e must be >= 0, got {}", self.lambda_e));
+        }
+        if self.lambda_jnd_scaled < 0.0 {
+            return Err(format!("lambda_jnd_scaled must be >= 0, got {}", self.lambda_jnd_scaled));
+        }
+        if !(0.0..=1.0).contains(&self.transmittance) {
+            return Err(format!("transmittance must be in [0, 1], got {}", self.transmittance));
+        }
+        if self.blur && (self.blur_size % 2 == 0 || self.blur_size > MAX_BLUR_SIZE) {
+            return Err(format!(
+                "blur_size must be odd and at most {MAX_BLUR_SIZE}, got {}",
+                self.blur_size
+            ));
+        }
+        if self.blur && self.blur_size > 1 && self.blur_sigma <= 0.0 {
+            return Err(format!("blur_sigma must be > 0, got {}", self.blur_sigma));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_taps_match_spec() {
+        let taps = Params::default().blur_taps();
+        let want = [0.307801, 0.384397, 0.307801];
+        for (t, w) in taps.iter().zip(want) {
+            assert!((t - w).abs() < 1e-6, "{taps:?}");
+        }
+    }
+
+    #[test]
+    fn method_names_round_trip() {
+        for m in Method::ALL {
+            assert_eq!(Method::parse(m.name()), Some(m));
+        }
+        assert_eq!(Method::parse("nope"), None);
+    }
+}

@@ -1,0 +1,1 @@
+//! Colour science: sRGB, CIE XYZ, CIELAB and the scaled space (spec section 1).

@@ -1,0 +1,12 @@
+//! contrastxr: colour contrast enhanced rendering for optical see-through headsets
+//! (Zhang et al., "Color Contrast Enhanced Rendering for OST-HMDs"), as a library, an OpenXR
+//! API layer (this same library, loaded as a cdylib) and a command-line tool.
+//!
+//! Data flows one way through the modules:
+//! `colour` + `algorithm` (pure, the CPU reference) -> `gpu` (ash engine, SPIR-V from `shaders/`)
+//! -> `layer` (OpenXR FFI). `camera` feeds background frames to the engine.
+//! Lower modules never import higher ones.
+
+pub mod algorithm;
+pub mod colour;
+pub mod image;
