@@ -9,4 +9,5 @@
 
 pub mod algorithm;
 pub mod colour;
+pub mod gpu;
 pub mod image;

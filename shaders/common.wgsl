@@ -1,0 +1,98 @@
+// Shared by every stage: the push constants, the bindings and the colour science of spec
+// section 1 in f32. The CPU reference (src/colour.rs, src/algorithm/) is the same math in f64.
+
+// One push-constant block for all passes (they share one pipeline layout).
+struct Params {
+    camera_size: vec2<u32>,
+    // Size of the display region (one view), in pixels; buffers are tightly packed rows.
+    region_size: vec2<u32>,
+    fov_scale: vec2<f32>,
+    fov_offset: vec2<f32>,
+    lambda_e: f32,
+    lambda_jnd: f32,
+    transmittance: f32,
+    // Gaussian taps at offsets -blur_half..=blur_half (blur_half <= 7).
+    blur_half: u32,
+    // Pixel layout in the low byte (LAYOUT_*), bit 8 set when values are sRGB-encoded.
+    format: u32,
+    method: u32,
+    k_v: f32,
+    k_b: f32,
+    // Symmetric normalised taps: tap(k) = taps[k / 4][k % 4] for k = |offset|.
+    taps: array<vec4<f32>, 2>,
+}
+
+var<immediate> pc: Params;
+
+// Camera frame: RGBA8 sRGB, one u32 per pixel (R in the low byte).
+@group(0) @binding(0) var<storage, read> camera: array<u32>;
+// Camera-grid linear light after the horizontal blur.
+@group(0) @binding(1) var<storage, read_write> blur_tmp: array<vec4<f32>>;
+// Camera-grid linear light after both blur passes.
+@group(0) @binding(2) var<storage, read_write> blurred: array<vec4<f32>>;
+// Display-grid background, FoV-mapped, linear light, not attenuated (for subtraction).
+@group(0) @binding(3) var<storage, read_write> bg_linear: array<vec4<f32>>;
+// Display-grid background in the scaled LAB space, attenuated: the paper's B.
+@group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec4<f32>>;
+// The display region's raw pixels in the swapchain format (1 or 2 u32 per pixel).
+@group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
+
+const LAYOUT_RGBA8: u32 = 0u;
+const LAYOUT_BGRA8: u32 = 1u;
+const LAYOUT_RGBA16_UNORM: u32 = 2u;
+const LAYOUT_RGBA16_FLOAT: u32 = 3u;
+const LAYOUT_A2B10G10R10: u32 = 4u;
+const FORMAT_SRGB_BIT: u32 = 256u;
+
+const METHOD_PAPER: u32 = 0u;
+const METHOD_HUE_ONLY: u32 = 1u;
+const METHOD_OTHER_HUE: u32 = 2u;
+const METHOD_LUM_CHROMA: u32 = 3u;
+const METHOD_SUBTRACTION: u32 = 4u;
+
+fn srgb_decode(v: vec3<f32>) -> vec3<f32> {
+    let lo = v / 12.92;
+    let hi = pow((v + 0.055) / 1.055, vec3<f32>(2.4));
+    return select(hi, lo, v <= vec3<f32>(0.04045));
+}
+
+fn srgb_encode(v: vec3<f32>) -> vec3<f32> {
+    let lo = 12.92 * v;
+    let hi = 1.055 * pow(max(v, vec3<f32>(0.0031308)), vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(hi, lo, v <= vec3<f32>(0.0031308));
+}
+
+const LAB_DELTA: f32 = 0.20689655; // 6/29
+
+fn lab_f(t: vec3<f32>) -> vec3<f32> {
+    let d3 = LAB_DELTA * LAB_DELTA * LAB_DELTA;
+    let lin = t / (3.0 * LAB_DELTA * LAB_DELTA) + 4.0 / 29.0;
+    let cube = pow(max(t, vec3<f32>(d3)), vec3<f32>(1.0 / 3.0));
+    return select(lin, cube, t > vec3<f32>(d3));
+}
+
+fn lab_f_inv(f: vec3<f32>) -> vec3<f32> {
+    let lin = 3.0 * LAB_DELTA * LAB_DELTA * (f - 4.0 / 29.0);
+    return select(lin, f * f * f, f > vec3<f32>(LAB_DELTA));
+}
+
+// linear sRGB -> scaled LAB (L' = (L*-50)/50, a' = a*/128, b' = b*/128).
+fn linear_to_scaled(rgb: vec3<f32>) -> vec3<f32> {
+    let xyz = vec3<f32>(dot(RGB_TO_XYZ_0, rgb), dot(RGB_TO_XYZ_1, rgb), dot(RGB_TO_XYZ_2, rgb));
+    let f = lab_f(xyz / WHITE_XYZ);
+    let lab = vec3<f32>(116.0 * f.y - 16.0, 500.0 * (f.x - f.y), 200.0 * (f.y - f.z));
+    return vec3<f32>((lab.x - 50.0) / 50.0, lab.y / 128.0, lab.z / 128.0);
+}
+
+// scaled LAB -> linear sRGB (not clipped).
+fn scaled_to_linear(s: vec3<f32>) -> vec3<f32> {
+    let lab = vec3<f32>(s.x * 50.0 + 50.0, s.y * 128.0, s.z * 128.0);
+    let fy = (lab.x + 16.0) / 116.0;
+    let f = vec3<f32>(fy + lab.y / 500.0, fy, fy - lab.z / 200.0);
+    let xyz = lab_f_inv(f) * WHITE_XYZ;
+    return vec3<f32>(dot(XYZ_TO_RGB_0, xyz), dot(XYZ_TO_RGB_1, xyz), dot(XYZ_TO_RGB_2, xyz));
+}
+
+fn blur_tap(k: u32) -> f32 {
+    return pc.taps[k / 4u][k % 4u];
+}

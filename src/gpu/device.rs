@@ -1,0 +1,331 @@
+//! A Vulkan device the engine works on: either one it created itself (the offline CLI and
+//! tests) or one that belongs to someone else (the app's device, inside the OpenXR layer).
+//! Drop destroys only what this object created.
+
+use super::error::{GpuError, VkResultExt};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_void, CStr};
+use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// Debug-messenger state: counts validation errors and keeps their text.
+#[derive(Default)]
+pub struct ValidationLog {
+    pub errors: AtomicU32,
+    pub messages: Mutex<Vec<String>>,
+}
+
+struct Messenger {
+    loader: ash::ext::debug_utils::Instance,
+    raw: vk::DebugUtilsMessengerEXT,
+    _log: Arc<ValidationLog>,
+}
+
+/// Objects this device created and must destroy (None when borrowed).
+struct Owned {
+    messenger: Option<Messenger>,
+}
+
+pub struct GpuDevice {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub name: String,
+    pub validation: Option<Arc<ValidationLog>>,
+    owned: Option<Owned>,
+}
+
+/// Options for a device the engine creates itself.
+#[derive(Clone, Debug, Default)]
+pub struct DeviceOptions {
+    /// Index into vkEnumeratePhysicalDevices (default the first).
+    pub index: usize,
+    /// Enable VK_LAYER_KHRONOS_validation (with synchronisation validation) and count errors.
+    pub validation: bool,
+}
+
+impl DeviceOptions {
+    /// `CONTRASTXR_VK_VALIDATION=1` turns validation on; `CONTRASTXR_VK_DEVICE=N` picks a device.
+    pub fn from_env() -> Self {
+        DeviceOptions {
+            index: std::env::var("CONTRASTXR_VK_DEVICE")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(0),
+            validation: std::env::var("CONTRASTXR_VK_VALIDATION").is_ok_and(|v| v == "1"),
+        }
+    }
+}
+
+unsafe extern "system" fn on_validation_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        // SAFETY: user is the Arc<ValidationLog> the messenger was created with, alive until
+        // the messenger is destroyed; data is valid for the duration of the callback.
+        let log = unsafe { &*(user as *const ValidationLog) };
+        let text = unsafe { (*data).message_as_c_str() }
+            .map(|m| m.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        eprintln!("contrastxr: Vulkan validation error: {text}");
+        log.errors.fetch_add(1, Ordering::Relaxed);
+        if let Ok(mut m) = log.messages.lock() {
+            m.push(text);
+        }
+    }
+    vk::FALSE
+}
+
+fn load_entry() -> Result<ash::Entry, GpuError> {
+    // SAFETY: loads libvulkan.so.1, whose initialisation has no preconditions.
+    unsafe { ash::Entry::load() }.map_err(|e| GpuError::NoLoader(e.to_string()))
+}
+
+fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance, GpuError> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"contrastxr")
+        .api_version(vk::API_VERSION_1_1);
+    let layers = [VALIDATION_LAYER.as_ptr()];
+    let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
+    let sync = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync);
+    let mut info = vk::InstanceCreateInfo::default().application_info(&app);
+    if validation {
+        info = info
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions)
+            .push_next(&mut features);
+    }
+    // SAFETY: info and everything it points to live until the call returns.
+    unsafe { entry.create_instance(&info, None) }.map_err(|e| match e {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER => GpuError::NoDevice("no Vulkan driver".into()),
+        vk::Result::ERROR_LAYER_NOT_PRESENT => GpuError::NoDevice(
+            "VK_LAYER_KHRONOS_validation is missing: install vulkan-validationlayers".into(),
+        ),
+        result => GpuError::Vulkan {
+            call: "vkCreateInstance",
+            result,
+        },
+    })
+}
+
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    log: &Arc<ValidationLog>,
+) -> Result<Messenger, GpuError> {
+    let loader = ash::ext::debug_utils::Instance::new(entry, instance);
+    let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
+        )
+        .pfn_user_callback(Some(on_validation_message))
+        .user_data(Arc::as_ptr(log) as *mut c_void);
+    // SAFETY: the callback's user data (the Arc) outlives the messenger (kept in Messenger).
+    let raw = unsafe { loader.create_debug_utils_messenger(&info, None) }
+        .vk("vkCreateDebugUtilsMessengerEXT")?;
+    Ok(Messenger {
+        loader,
+        raw,
+        _log: log.clone(),
+    })
+}
+
+fn compute_family(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Option<u32> {
+    // SAFETY: physical is a handle enumerated from this instance.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+    families
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+        .map(|i| i as u32)
+}
+
+fn device_name(instance: &ash::Instance, physical: vk::PhysicalDevice) -> String {
+    // SAFETY: physical is a handle enumerated from this instance.
+    let props = unsafe { instance.get_physical_device_properties(physical) };
+    props
+        .device_name_as_c_str()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|_| "unknown device".into())
+}
+
+fn create_allocator(
+    instance: &ash::Instance,
+    device: &ash::Device,
+    physical: vk::PhysicalDevice,
+) -> Result<Allocator, GpuError> {
+    let mut debug_settings = gpu_allocator::AllocatorDebugSettings::default();
+    debug_settings.log_leaks_on_shutdown = false;
+    Ok(Allocator::new(&AllocatorCreateDesc {
+        instance: instance.clone(),
+        device: device.clone(),
+        physical_device: physical,
+        debug_settings,
+        buffer_device_address: false,
+        allocation_sizes: Default::default(),
+    })?)
+}
+
+impl GpuDevice {
+    /// Creates an instance and a device of its own (Vulkan 1.1, one compute queue).
+    pub fn create(options: &DeviceOptions) -> Result<GpuDevice, GpuError> {
+        let entry = load_entry()?;
+        let instance = create_instance(&entry, options.validation)?;
+        let log = options
+            .validation
+            .then(|| Arc::new(ValidationLog::default()));
+        let messenger = match &log {
+            Some(log) => Some(create_messenger(&entry, &instance, log)?),
+            None => None,
+        };
+        // From here on, a failure must destroy the instance: build the device in a helper.
+        match Self::create_device(&entry, &instance, options.index) {
+            Ok((physical, device, family)) => {
+                let allocator = create_allocator(&instance, &device, physical)?;
+                // SAFETY: family was used to create the device with one queue.
+                let queue = unsafe { device.get_device_queue(family, 0) };
+                Ok(GpuDevice {
+                    name: device_name(&instance, physical),
+                    entry,
+                    instance,
+                    physical,
+                    device,
+                    queue,
+                    queue_family: family,
+                    allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                    validation: log,
+                    owned: Some(Owned { messenger }),
+                })
+            }
+            Err(e) => {
+                if let Some(m) = messenger {
+                    // SAFETY: the messenger was created from this instance and is unused.
+                    unsafe { m.loader.destroy_debug_utils_messenger(m.raw, None) };
+                }
+                // SAFETY: the instance has no children left.
+                unsafe { instance.destroy_instance(None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn create_device(
+        entry: &ash::Entry,
+        instance: &ash::Instance,
+        index: usize,
+    ) -> Result<(vk::PhysicalDevice, ash::Device, u32), GpuError> {
+        let _ = entry;
+        // SAFETY: instance is a valid instance.
+        let physicals =
+            unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+        let physical = *physicals.get(index).ok_or_else(|| {
+            GpuError::NoDevice(format!(
+                "{} Vulkan devices, asked for #{index}",
+                physicals.len()
+            ))
+        })?;
+        // SAFETY: physical was enumerated from this instance.
+        let props = unsafe { instance.get_physical_device_properties(physical) };
+        if props.api_version < vk::API_VERSION_1_1 {
+            return Err(GpuError::NoDevice(
+                "the device supports only Vulkan 1.0".into(),
+            ));
+        }
+        let family = compute_family(instance, physical)
+            .ok_or_else(|| GpuError::NoDevice("the device has no compute queue".into()))?;
+        let priorities = [1.0];
+        let queues = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
+        // SAFETY: info and its arrays live until the call returns.
+        let device =
+            unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
+        Ok((physical, device, family))
+    }
+
+    /// Wraps a device that belongs to someone else (the app's, in the layer). Nothing of it is
+    /// destroyed on drop; only the allocator's memory is freed.
+    ///
+    /// # Safety
+    /// The handles must be valid, belong together, and outlive this object; `queue_family` and
+    /// `queue_index` must name a queue the device was created with.
+    pub unsafe fn borrow(
+        raw_instance: vk::Instance,
+        physical: vk::PhysicalDevice,
+        raw_device: vk::Device,
+        queue_family: u32,
+        queue_index: u32,
+    ) -> Result<GpuDevice, GpuError> {
+        let entry = load_entry()?;
+        // SAFETY: the caller guarantees the instance handle is valid.
+        let instance = unsafe { ash::Instance::load(entry.static_fn(), raw_instance) };
+        // SAFETY: the caller guarantees the device handle is valid and from this instance.
+        let device = unsafe { ash::Device::load(instance.fp_v1_0(), raw_device) };
+        // SAFETY: the caller guarantees the family and index exist on this device.
+        let queue = unsafe { device.get_device_queue(queue_family, queue_index) };
+        let allocator = create_allocator(&instance, &device, physical)?;
+        Ok(GpuDevice {
+            name: device_name(&instance, physical),
+            entry,
+            instance,
+            physical,
+            device,
+            queue,
+            queue_family,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            validation: None,
+            owned: None,
+        })
+    }
+
+    /// Validation errors seen so far (0 when validation is off).
+    pub fn validation_errors(&self) -> u32 {
+        self.validation
+            .as_ref()
+            .map_or(0, |v| v.errors.load(Ordering::Relaxed))
+    }
+
+    /// Nanoseconds per timestamp tick.
+    pub fn timestamp_period(&self) -> f32 {
+        // SAFETY: physical belongs to this instance.
+        unsafe { self.instance.get_physical_device_properties(self.physical) }
+            .limits
+            .timestamp_period
+    }
+}
+
+impl Drop for GpuDevice {
+    fn drop(&mut self) {
+        // SAFETY: the allocator is dropped exactly once, here, before the device it uses.
+        unsafe { ManuallyDrop::drop(&mut self.allocator) };
+        let Some(owned) = self.owned.take() else {
+            return;
+        };
+        // SAFETY: this object created the device, instance and messenger; the engine objects
+        // built on them were destroyed by their owners before (they borrow this device).
+        unsafe {
+            self.device.destroy_device(None);
+            if let Some(m) = owned.messenger {
+                m.loader.destroy_debug_utils_messenger(m.raw, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}

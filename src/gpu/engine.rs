@@ -1,0 +1,438 @@
+//! The engine: records the background preparation and the per-pixel enhancement into a command
+//! buffer that the caller owns and submits. It works the same on a device it created (the CLI)
+//! and on someone else's device and queue (the app's, in the layer): it never submits, waits or
+//! touches images itself. Data lives in storage buffers, so the swapchain's format never has to
+//! be a storage-image format: the caller copies a view's region into `ViewTarget::pixels` and back.
+
+use super::buffer::GpuBuffer;
+use super::device::GpuDevice;
+use super::error::{GpuError, VkResultExt};
+use super::format::PixelFormat;
+use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT};
+use crate::algorithm::params::Params;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+const WORKGROUP: u32 = 8;
+
+/// One camera frame on the GPU and its blurred linear-light copy (camera grid).
+pub struct BackgroundFrame {
+    pub size: (u32, u32),
+    /// RGBA8 sRGB, one u32 per pixel; host-visible, written with `upload`.
+    pub camera: GpuBuffer,
+    blur_tmp: GpuBuffer,
+    blurred: GpuBuffer,
+}
+
+impl BackgroundFrame {
+    /// Copies a camera frame (RGBA8 sRGB, row-major) into the host-visible camera buffer.
+    pub fn upload(&mut self, rgba: &[[u8; 4]]) -> Result<(), GpuError> {
+        if rgba.len() != (self.size.0 * self.size.1) as usize {
+            return Err(GpuError::Unsupported("camera frame size changed".into()));
+        }
+        self.camera.write(rgba.as_flattened())
+    }
+
+    pub fn destroy(&mut self, gpu: &GpuDevice) {
+        for b in [&mut self.camera, &mut self.blur_tmp, &mut self.blurred] {
+            b.destroy(gpu);
+        }
+    }
+}
+
+/// One display region (a view): its prepared background and its pixels.
+pub struct ViewTarget {
+    pub region: (u32, u32),
+    pub format: PixelFormat,
+    /// Display-grid background, linear light, not attenuated (vec4<f32> per pixel).
+    pub bg_linear: GpuBuffer,
+    /// Display-grid background in scaled LAB (vec4<f32> per pixel): the paper's B.
+    pub bg_scaled: GpuBuffer,
+    /// The region's raw pixels in `format`, rows tightly packed.
+    pub pixels: GpuBuffer,
+    set: vk::DescriptorSet,
+    camera_size: (u32, u32),
+}
+
+impl ViewTarget {
+    pub fn pixel_bytes(&self) -> u64 {
+        u64::from(self.region.0)
+            * u64::from(self.region.1)
+            * u64::from(self.format.bytes_per_pixel())
+    }
+}
+
+pub struct Engine {
+    pipelines: Pipelines,
+    pool: vk::DescriptorPool,
+}
+
+/// Where the engine's working buffers live: device-local inside the layer, host-visible for the
+/// offline tool (which reads results back directly).
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    pub camera: MemoryLocation,
+    pub working: MemoryLocation,
+}
+
+impl Placement {
+    pub const OFFLINE: Placement = Placement {
+        camera: MemoryLocation::CpuToGpu,
+        working: MemoryLocation::GpuToCpu,
+    };
+    pub const DEVICE: Placement = Placement {
+        camera: MemoryLocation::CpuToGpu,
+        working: MemoryLocation::GpuOnly,
+    };
+}
+
+const STORAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::STORAGE_BUFFER;
+
+fn transfer_storage() -> vk::BufferUsageFlags {
+    STORAGE | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST
+}
+
+/// The memory accesses a set of stages can make (only those, or validation objects).
+fn accesses(stages: vk::PipelineStageFlags) -> vk::AccessFlags {
+    use vk::{AccessFlags as A, PipelineStageFlags as S};
+    if stages.contains(S::ALL_COMMANDS) {
+        return A::MEMORY_READ | A::MEMORY_WRITE;
+    }
+    let mut access = A::empty();
+    if stages.contains(S::COMPUTE_SHADER) {
+        access |= A::SHADER_READ | A::SHADER_WRITE;
+    }
+    if stages.contains(S::TRANSFER) {
+        access |= A::TRANSFER_READ | A::TRANSFER_WRITE;
+    }
+    if stages.contains(S::HOST) {
+        access |= A::HOST_READ | A::HOST_WRITE;
+    }
+    access
+}
+
+/// A memory dependency between passes of this engine and the copies around them.
+pub fn barrier(
+    gpu: &GpuDevice,
+    cmd: vk::CommandBuffer,
+    src: vk::PipelineStageFlags,
+    dst: vk::PipelineStageFlags,
+) {
+    let memory = [vk::MemoryBarrier::default()
+        .src_access_mask(accesses(src))
+        .dst_access_mask(accesses(dst))];
+    // SAFETY: cmd is in the recording state (the caller's contract for every record_* call).
+    unsafe {
+        gpu.device.cmd_pipeline_barrier(
+            cmd,
+            src,
+            dst,
+            vk::DependencyFlags::empty(),
+            &memory,
+            &[],
+            &[],
+        )
+    };
+}
+
+/// Allocates several buffers; on failure frees the ones already made.
+fn alloc_all<const N: usize>(
+    gpu: &GpuDevice,
+    specs: [(u64, vk::BufferUsageFlags, MemoryLocation, &str); N],
+) -> Result<[GpuBuffer; N], GpuError> {
+    let mut made = Vec::with_capacity(N);
+    for (size, usage, location, name) in specs {
+        match GpuBuffer::new(gpu, size, usage, location, name) {
+            Ok(b) => made.push(b),
+            Err(e) => {
+                made.iter_mut().for_each(|b: &mut GpuBuffer| b.destroy(gpu));
+                return Err(e);
+            }
+        }
+    }
+    Ok(made
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("N buffers were made")))
+}
+
+const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
+
+impl Engine {
+    /// Builds the pipelines; `max_views` bounds how many ViewTargets may exist at once.
+    pub fn new(gpu: &GpuDevice, max_views: u32) -> Result<Engine, GpuError> {
+        let mut pipelines = Pipelines::new(gpu)?;
+        let sizes = [vk::DescriptorPoolSize::default()
+            .ty(vk::DescriptorType::STORAGE_BUFFER)
+            .descriptor_count(max_views * BINDING_COUNT)];
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .flags(vk::DescriptorPoolCreateFlags::FREE_DESCRIPTOR_SET)
+            .max_sets(max_views)
+            .pool_sizes(&sizes);
+        // SAFETY: valid create info on a valid device.
+        match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
+            Ok(pool) => Ok(Engine { pipelines, pool }),
+            Err(result) => {
+                pipelines.destroy(gpu);
+                Err(GpuError::Vulkan {
+                    call: "vkCreateDescriptorPool",
+                    result,
+                })
+            }
+        }
+    }
+
+    pub fn create_background(
+        &self,
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        placement: Placement,
+    ) -> Result<BackgroundFrame, GpuError> {
+        if size.0 == 0 || size.1 == 0 {
+            return Err(GpuError::Unsupported("empty camera frame".into()));
+        }
+        let px = u64::from(size.0) * u64::from(size.1);
+        let gpu_only = MemoryLocation::GpuOnly;
+        let [camera, blur_tmp, blurred] = alloc_all(
+            gpu,
+            [
+                (px * 4, STORAGE, placement.camera, "camera"),
+                (px * 16, STORAGE, gpu_only, "blur_tmp"),
+                (px * 16, STORAGE, gpu_only, "blurred"),
+            ],
+        )?;
+        Ok(BackgroundFrame {
+            size,
+            camera,
+            blur_tmp,
+            blurred,
+        })
+    }
+
+    pub fn create_view(
+        &self,
+        gpu: &GpuDevice,
+        region: (u32, u32),
+        format: PixelFormat,
+        background: &BackgroundFrame,
+        placement: Placement,
+    ) -> Result<ViewTarget, GpuError> {
+        if region.0 == 0 || region.1 == 0 {
+            return Err(GpuError::Unsupported("empty display region".into()));
+        }
+        let px = u64::from(region.0) * u64::from(region.1);
+        let usage = transfer_storage();
+        let bpp = u64::from(format.bytes_per_pixel());
+        let at = placement.working;
+        let [bg_linear, bg_scaled, pixels] = alloc_all(
+            gpu,
+            [
+                (px * 16, usage, at, "bg_linear"),
+                (px * 16, usage, at, "bg_scaled"),
+                (px * bpp, usage, at, "pixels"),
+            ],
+        )?;
+        let mut view = ViewTarget {
+            region,
+            format,
+            bg_linear,
+            bg_scaled,
+            pixels,
+            set: vk::DescriptorSet::null(),
+            camera_size: background.size,
+        };
+        let layouts = [self.pipelines.set_layout];
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.pool)
+            .set_layouts(&layouts);
+        // SAFETY: pool and layout are valid; the pool was sized for max_views sets.
+        match unsafe { gpu.device.allocate_descriptor_sets(&info) } {
+            Ok(sets) => view.set = sets[0],
+            Err(result) => {
+                self.destroy_view(gpu, &mut view);
+                return Err(GpuError::Vulkan {
+                    call: "vkAllocateDescriptorSets",
+                    result,
+                });
+            }
+        }
+        self.bind(gpu, &mut view, background);
+        Ok(view)
+    }
+
+    /// Points a view's descriptor set at a (new) background frame. The set must not be in use.
+    pub fn bind(&self, gpu: &GpuDevice, view: &mut ViewTarget, background: &BackgroundFrame) {
+        let buffers = [
+            &background.camera,
+            &background.blur_tmp,
+            &background.blurred,
+            &view.bg_linear,
+            &view.bg_scaled,
+            &view.pixels,
+        ];
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+            .iter()
+            .map(|b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.raw)
+                    .range(vk::WHOLE_SIZE)]
+            })
+            .collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(view.set)
+                    .dst_binding(i as u32)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(info)
+            })
+            .collect();
+        // SAFETY: the set and buffers are valid; the caller guarantees the set is not in use.
+        unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
+        view.camera_size = background.size;
+    }
+
+    pub fn destroy_view(&self, gpu: &GpuDevice, view: &mut ViewTarget) {
+        if view.set != vk::DescriptorSet::null() {
+            // SAFETY: the set came from this pool and the GPU no longer uses it.
+            let _ = unsafe { gpu.device.free_descriptor_sets(self.pool, &[view.set]) };
+            view.set = vk::DescriptorSet::null();
+        }
+        for b in [&mut view.bg_linear, &mut view.bg_scaled, &mut view.pixels] {
+            b.destroy(gpu);
+        }
+    }
+
+    fn dispatch(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        set: vk::DescriptorSet,
+        push: &PushConstants,
+        grid: (u32, u32),
+    ) {
+        let d = &gpu.device;
+        // SAFETY: cmd is recording; pipeline, layout and set belong to this engine.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.pipelines.layout,
+                0,
+                &[set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.pipelines.layout,
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                push.bytes(),
+            );
+            d.cmd_dispatch(
+                cmd,
+                grid.0.div_ceil(WORKGROUP),
+                grid.1.div_ceil(WORKGROUP),
+                1,
+            );
+        }
+    }
+
+    /// Records the background preparation of spec section 2 for a camera frame already
+    /// uploaded: the blur once on the camera grid, then the FoV mapping for each view.
+    /// Every view must be bound to `background`.
+    pub fn record_background(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        background: &BackgroundFrame,
+        views: &[&ViewTarget],
+        params: &Params,
+    ) -> Result<(), GpuError> {
+        let Some(first) = views.first() else {
+            return Ok(());
+        };
+        if views.iter().any(|v| v.camera_size != background.size) {
+            return Err(GpuError::Unsupported(
+                "view bound to another background frame".into(),
+            ));
+        }
+        let all = vk::PipelineStageFlags::ALL_COMMANDS;
+        barrier(gpu, cmd, all, COMPUTE);
+        let push = PushConstants::new(params, background.size, first.region, 0);
+        self.dispatch(
+            gpu,
+            cmd,
+            self.pipelines.decode_blur_h,
+            first.set,
+            &push,
+            background.size,
+        );
+        barrier(gpu, cmd, COMPUTE, COMPUTE);
+        self.dispatch(
+            gpu,
+            cmd,
+            self.pipelines.blur_v,
+            first.set,
+            &push,
+            background.size,
+        );
+        barrier(gpu, cmd, COMPUTE, COMPUTE);
+        for view in views {
+            let push = PushConstants::new(params, background.size, view.region, 0);
+            self.dispatch(
+                gpu,
+                cmd,
+                self.pipelines.fov_map,
+                view.set,
+                &push,
+                view.region,
+            );
+        }
+        barrier(gpu, cmd, COMPUTE, all);
+        Ok(())
+    }
+
+    /// Records the per-pixel enhancement of one view's `pixels`, in place. The caller orders
+    /// its copy into `pixels` before this and its copy out after it (see `barrier`).
+    pub fn record_enhance(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        view: &ViewTarget,
+        params: &Params,
+    ) {
+        let push = PushConstants::new(
+            params,
+            view.camera_size,
+            view.region,
+            view.format.shader_code(),
+        );
+        self.dispatch(
+            gpu,
+            cmd,
+            self.pipelines.enhance,
+            view.set,
+            &push,
+            view.region,
+        );
+    }
+
+    pub fn destroy(&mut self, gpu: &GpuDevice) {
+        // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
+        unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };
+        self.pool = vk::DescriptorPool::null();
+        self.pipelines.destroy(gpu);
+    }
+}
+
+/// Begins a one-time-submit command buffer.
+pub fn begin(gpu: &GpuDevice, cmd: vk::CommandBuffer) -> Result<(), GpuError> {
+    let info =
+        vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+    // SAFETY: cmd is not pending (the caller waited for its fence).
+    unsafe { gpu.device.begin_command_buffer(cmd, &info) }.vk("vkBeginCommandBuffer")
+}

@@ -1,0 +1,61 @@
+//! How the engine reads and writes a display region's raw pixels: the swapchain format's byte
+//! layout and whether its values are sRGB-encoded (OpenXR: *_SRGB formats hold sRGB-encoded
+//! values, UNORM and float formats hold linear light).
+
+use ash::vk;
+
+/// Byte layout of one pixel (matches LAYOUT_* in shaders/common.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PixelLayout {
+    Rgba8 = 0,
+    Bgra8 = 1,
+    Rgba16Unorm = 2,
+    Rgba16Float = 3,
+    A2b10g10r10 = 4,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelFormat {
+    pub layout: PixelLayout,
+    /// True when stored values are sRGB-encoded.
+    pub srgb: bool,
+}
+
+const FORMAT_SRGB_BIT: u32 = 256;
+
+impl PixelFormat {
+    /// 8-bit sRGB RGBA: PNG files and the camera.
+    pub const SRGB8: PixelFormat = PixelFormat {
+        layout: PixelLayout::Rgba8,
+        srgb: true,
+    };
+
+    /// The engine's reading of a Vulkan colour format; None for formats it does not handle
+    /// (depth, compressed, ...), which the layer then leaves untouched.
+    pub fn from_vk(format: vk::Format) -> Option<PixelFormat> {
+        use PixelLayout::*;
+        let (layout, srgb) = match format {
+            vk::Format::R8G8B8A8_SRGB => (Rgba8, true),
+            vk::Format::R8G8B8A8_UNORM => (Rgba8, false),
+            vk::Format::B8G8R8A8_SRGB => (Bgra8, true),
+            vk::Format::B8G8R8A8_UNORM => (Bgra8, false),
+            vk::Format::R16G16B16A16_UNORM => (Rgba16Unorm, false),
+            vk::Format::R16G16B16A16_SFLOAT => (Rgba16Float, false),
+            vk::Format::A2B10G10R10_UNORM_PACK32 => (A2b10g10r10, false),
+            _ => return None,
+        };
+        Some(PixelFormat { layout, srgb })
+    }
+
+    pub fn bytes_per_pixel(self) -> u32 {
+        match self.layout {
+            PixelLayout::Rgba16Unorm | PixelLayout::Rgba16Float => 8,
+            _ => 4,
+        }
+    }
+
+    /// The shader's `format` push constant.
+    pub fn shader_code(self) -> u32 {
+        self.layout as u32 | if self.srgb { FORMAT_SRGB_BIT } else { 0 }
+    }
+}

@@ -1,0 +1,18 @@
+//! The GPU engine (ash + gpu-allocator + the SPIR-V built from `shaders/`): background
+//! preparation and per-pixel enhancement, usable offline on its own device and recorded into
+//! someone else's command buffer inside an app. Knows nothing of OpenXR.
+
+pub mod buffer;
+pub mod device;
+pub mod engine;
+pub mod error;
+pub mod format;
+pub mod offline;
+pub mod pipelines;
+pub mod shaders;
+
+pub use device::{DeviceOptions, GpuDevice};
+pub use engine::{BackgroundFrame, Engine, Placement, ViewTarget};
+pub use error::GpuError;
+pub use format::{PixelFormat, PixelLayout};
+pub use offline::OfflineEngine;

@@ -1,0 +1,179 @@
+//! The compute pipelines built from the embedded SPIR-V, with the one descriptor-set layout and
+//! push-constant block they share (see shaders/common.wgsl).
+
+use super::device::GpuDevice;
+use super::error::{GpuError, VkResultExt};
+use super::shaders::{self, ShaderModule};
+use crate::algorithm::params::{Params, SUBTRACTION_K_B, SUBTRACTION_K_V};
+use ash::vk;
+
+/// Bindings 0..=5 of shaders/common.wgsl, all storage buffers.
+pub const BINDING_COUNT: u32 = 6;
+
+/// The push-constant block, laid out as WGSL lays out `Params` (96 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PushConstants {
+    pub camera_size: [u32; 2],
+    pub region_size: [u32; 2],
+    pub fov_scale: [f32; 2],
+    pub fov_offset: [f32; 2],
+    pub lambda_e: f32,
+    pub lambda_jnd: f32,
+    pub transmittance: f32,
+    pub blur_half: u32,
+    pub format: u32,
+    pub method: u32,
+    pub k_v: f32,
+    pub k_b: f32,
+    pub taps: [f32; 8],
+}
+
+impl PushConstants {
+    pub fn new(params: &Params, camera: (u32, u32), region: (u32, u32), format: u32) -> Self {
+        let taps64 = params.blur_taps();
+        let half = taps64.len() / 2;
+        let mut taps = [0.0f32; 8];
+        for (k, t) in taps.iter_mut().enumerate().take(half + 1) {
+            *t = taps64[half + k] as f32;
+        }
+        let (fov_scale, fov_offset) = params.fov_mapping();
+        PushConstants {
+            camera_size: [camera.0, camera.1],
+            region_size: [region.0, region.1],
+            fov_scale,
+            fov_offset,
+            lambda_e: params.lambda_e,
+            lambda_jnd: params.lambda_jnd_scaled,
+            transmittance: params.transmittance,
+            blur_half: half as u32,
+            format,
+            method: params.method.shader_code(),
+            k_v: SUBTRACTION_K_V,
+            k_b: SUBTRACTION_K_B,
+            taps,
+        }
+    }
+
+    pub fn bytes(&self) -> &[u8] {
+        // SAFETY: PushConstants is repr(C), Copy, made only of 4-byte scalars (no padding).
+        unsafe {
+            std::slice::from_raw_parts(
+                (self as *const Self).cast::<u8>(),
+                std::mem::size_of::<Self>(),
+            )
+        }
+    }
+}
+
+pub struct Pipelines {
+    pub set_layout: vk::DescriptorSetLayout,
+    pub layout: vk::PipelineLayout,
+    pub decode_blur_h: vk::Pipeline,
+    pub blur_v: vk::Pipeline,
+    pub fov_map: vk::Pipeline,
+    pub enhance: vk::Pipeline,
+}
+
+impl Pipelines {
+    pub fn new(gpu: &GpuDevice) -> Result<Pipelines, GpuError> {
+        let mut p = Pipelines {
+            set_layout: vk::DescriptorSetLayout::null(),
+            layout: vk::PipelineLayout::null(),
+            decode_blur_h: vk::Pipeline::null(),
+            blur_v: vk::Pipeline::null(),
+            fov_map: vk::Pipeline::null(),
+            enhance: vk::Pipeline::null(),
+        };
+        // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
+        if let Err(e) = p.build(gpu) {
+            p.destroy(gpu);
+            return Err(e);
+        }
+        Ok(p)
+    }
+
+    fn build(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
+        let bindings: Vec<_> = (0..BINDING_COUNT)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: valid create info on a valid device.
+        self.set_layout = unsafe { gpu.device.create_descriptor_set_layout(&info, None) }
+            .vk("vkCreateDescriptorSetLayout")?;
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .size(std::mem::size_of::<PushConstants>() as u32)];
+        let set_layouts = [self.set_layout];
+        let info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&set_layouts)
+            .push_constant_ranges(&ranges);
+        // SAFETY: valid create info on a valid device.
+        self.layout = unsafe { gpu.device.create_pipeline_layout(&info, None) }
+            .vk("vkCreatePipelineLayout")?;
+        self.decode_blur_h = self.compute_pipeline(gpu, &shaders::DECODE_BLUR_H)?;
+        self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
+        self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
+        self.enhance = self.compute_pipeline(gpu, &shaders::ENHANCE)?;
+        Ok(())
+    }
+
+    fn compute_pipeline(
+        &self,
+        gpu: &GpuDevice,
+        shader: &ShaderModule,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let words = shader.words();
+        let info = vk::ShaderModuleCreateInfo::default().code(&words);
+        // SAFETY: words is SPIR-V produced and validated by naga at build time.
+        let module =
+            unsafe { gpu.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
+        let entry = std::ffi::CString::new(shader.entry).expect("entry names have no NUL");
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(&entry);
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(self.layout)];
+        // SAFETY: module and layout are valid; the module is destroyed after creation.
+        let result = unsafe {
+            gpu.device
+                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+        };
+        // SAFETY: a shader module may be destroyed once pipelines using it are created.
+        unsafe { gpu.device.destroy_shader_module(module, None) };
+        result
+            .map(|p| p[0])
+            .map_err(|(_, result)| GpuError::Vulkan {
+                call: "vkCreateComputePipelines",
+                result,
+            })
+    }
+
+    pub fn destroy(&mut self, gpu: &GpuDevice) {
+        // SAFETY: the caller guarantees the GPU no longer uses these objects.
+        unsafe {
+            for p in [self.decode_blur_h, self.blur_v, self.fov_map, self.enhance] {
+                gpu.device.destroy_pipeline(p, None);
+            }
+            gpu.device.destroy_pipeline_layout(self.layout, None);
+            gpu.device
+                .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+        *self = Pipelines {
+            set_layout: vk::DescriptorSetLayout::null(),
+            layout: vk::PipelineLayout::null(),
+            decode_blur_h: vk::Pipeline::null(),
+            blur_v: vk::Pipeline::null(),
+            fov_map: vk::Pipeline::null(),
+            enhance: vk::Pipeline::null(),
+        };
+    }
+}

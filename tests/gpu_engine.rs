@@ -1,0 +1,200 @@
+//! The GPU engine on the first Vulkan device (lavapipe in CI) with the validation layer on:
+//! every validation error fails the test.
+
+use contrastxr::algorithm::{Method, Params};
+use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
+use contrastxr::image::RgbaImage;
+use std::process::Command;
+
+fn engine() -> OfflineEngine {
+    OfflineEngine::with_options(&DeviceOptions {
+        index: 0,
+        validation: true,
+    })
+    .unwrap_or_else(|e| panic!("GPU engine: {e}"))
+}
+
+/// A deterministic pseudo-random image (xorshift), with some black and alpha-0 pixels.
+fn noise(width: u32, height: u32, seed: u32) -> RgbaImage {
+    let mut s = seed.max(1);
+    let mut next = move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s
+    };
+    let mut img = RgbaImage::new(width, height, [0, 0, 0, 255]);
+    for p in img.pixels.iter_mut() {
+        let r = next();
+        *p = match r % 10 {
+            0 => [0, 0, 0, 255],
+            1 => [(r >> 8) as u8, (r >> 16) as u8, (r >> 24) as u8, 0],
+            _ => [(r >> 8) as u8, (r >> 16) as u8, (r >> 24) as u8, 255],
+        };
+    }
+    img
+}
+
+fn assert_clean(e: &OfflineEngine) {
+    assert_eq!(
+        e.validation_errors(),
+        0,
+        "Vulkan validation errors (see stderr)"
+    );
+}
+
+#[test]
+fn every_embedded_shader_passes_spirv_val() {
+    let dir = std::env::temp_dir().join(format!("contrastxr-spv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for shader in contrastxr::gpu::shaders::ALL {
+        let path = dir.join(format!("{}.spv", shader.entry));
+        std::fs::write(&path, shader.bytes()).unwrap();
+        let out = Command::new("spirv-val")
+            .args(["--target-env", "vulkan1.1"])
+            .arg(&path)
+            .output()
+            .expect("spirv-val not found: run scripts/install-deps (package spirv-tools)");
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            shader.entry,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+#[test]
+fn lambda_zero_is_the_identity_bit_exact() {
+    let mut e = engine();
+    let display = noise(67, 41, 7);
+    let camera = noise(90, 50, 3);
+    let params = Params {
+        lambda_e: 0.0,
+        ..Params::default()
+    };
+    let out = e.enhance(&display, &camera, &params).unwrap();
+    assert_eq!(out, display);
+    assert_clean(&e);
+}
+
+#[test]
+fn black_and_transparent_pixels_are_untouched() {
+    let mut e = engine();
+    let display = noise(64, 64, 11);
+    let camera = RgbaImage::new(32, 32, [250, 230, 20, 255]);
+    for method in Method::ALL {
+        let params = Params {
+            method,
+            ..Params::default()
+        };
+        let out = e.enhance(&display, &camera, &params).unwrap();
+        let mut changed = 0;
+        for (a, b) in display.pixels.iter().zip(&out.pixels) {
+            if a[..3] == [0, 0, 0] || a[3] == 0 {
+                assert_eq!(a, b, "{method:?}");
+            }
+            assert_eq!(a[3], b[3], "alpha changed");
+            changed += usize::from(a != b);
+        }
+        assert!(
+            changed > 100,
+            "{method:?} changed only {changed} pixels on a yellow wall"
+        );
+    }
+    assert_clean(&e);
+}
+
+/// Encodes an 8-bit sRGB colour into each format's raw words, the way an app would store it.
+fn encode(format: PixelFormat, p: [u8; 4]) -> Vec<u32> {
+    let lin = |c: u8| {
+        let v = f64::from(c) / 255.0;
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let a = f64::from(p[3]) / 255.0;
+    match (format.layout, format.srgb) {
+        (PixelLayout::Rgba8, true) => vec![u32::from_le_bytes(p)],
+        (PixelLayout::Bgra8, true) => vec![u32::from_le_bytes([p[2], p[1], p[0], p[3]])],
+        (PixelLayout::Rgba8, false) => {
+            let q = |v: f64| (v * 255.0 + 0.5).floor() as u8;
+            vec![u32::from_le_bytes([
+                q(lin(p[0])),
+                q(lin(p[1])),
+                q(lin(p[2])),
+                p[3],
+            ])]
+        }
+        (PixelLayout::Rgba16Unorm, _) => {
+            let q = |v: f64| (v * 65535.0 + 0.5).floor() as u32;
+            vec![q(lin(p[0])) | q(lin(p[1])) << 16, q(lin(p[2])) | q(a) << 16]
+        }
+        (PixelLayout::A2b10g10r10, _) => {
+            let q = |v: f64| (v * 1023.0 + 0.5).floor() as u32;
+            vec![q(lin(p[0])) | q(lin(p[1])) << 10 | q(lin(p[2])) << 20 | (p[3] as u32 / 85) << 30]
+        }
+        (l, s) => unimplemented!("{l:?} srgb={s}"),
+    }
+}
+
+#[test]
+fn formats_agree_with_the_8bit_srgb_path() {
+    let mut e = engine();
+    let camera = RgbaImage::new(16, 16, [40, 120, 230, 255]);
+    let colours: Vec<[u8; 4]> = vec![
+        [200, 180, 40, 255],
+        [30, 200, 60, 255],
+        [128, 128, 128, 255],
+        [250, 20, 20, 255],
+    ];
+    let region = (colours.len() as u32, 1);
+    let params = Params::default();
+    let srgb: Vec<u32> = colours.iter().map(|p| u32::from_le_bytes(*p)).collect();
+    let want = e
+        .enhance_raw(&srgb, region, PixelFormat::SRGB8, &camera, &params)
+        .unwrap();
+    for (layout, srgb_flag) in [
+        (PixelLayout::Bgra8, true),
+        (PixelLayout::Rgba16Unorm, false),
+        (PixelLayout::A2b10g10r10, false),
+    ] {
+        let format = PixelFormat {
+            layout,
+            srgb: srgb_flag,
+        };
+        let raw: Vec<u32> = colours.iter().flat_map(|p| encode(format, *p)).collect();
+        let got = e
+            .enhance_raw(&raw, region, format, &camera, &params)
+            .unwrap();
+        let expect: Vec<u32> = want
+            .iter()
+            .flat_map(|w| encode(format, w.to_le_bytes()))
+            .collect();
+        assert_ne!(got, raw, "{format:?}: nothing changed");
+        // Compare as 8-bit sRGB-equivalent: within 1 code value after re-encoding the expectation.
+        for (k, (g, x)) in got.iter().zip(&expect).enumerate() {
+            let tol = match layout {
+                PixelLayout::Rgba16Unorm => 65535 / 255 * 2,
+                PixelLayout::A2b10g10r10 => 8,
+                _ => 1,
+            };
+            let fields: &[(u32, u32)] = match layout {
+                PixelLayout::Rgba16Unorm => &[(0, 16), (16, 16)],
+                PixelLayout::A2b10g10r10 => &[(0, 10), (10, 10), (20, 10), (30, 2)],
+                _ => &[(0, 8), (8, 8), (16, 8), (24, 8)],
+            };
+            for &(shift, bits) in fields {
+                let m = (1u32 << bits) - 1;
+                let (a, b) = ((g >> shift) & m, (x >> shift) & m);
+                assert!(
+                    a.abs_diff(b) <= tol,
+                    "{format:?} word {k}: {g:#x} vs {x:#x}"
+                );
+            }
+        }
+    }
+    assert_clean(&e);
+}
