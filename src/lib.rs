@@ -11,3 +11,4 @@ pub mod algorithm;
 pub mod colour;
 pub mod gpu;
 pub mod image;
+pub mod layer;

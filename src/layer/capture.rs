@@ -1,0 +1,135 @@
+//! `CONTRASTXR_CAPTURE_DIR`: writes what the app rendered, what the runtime got and the
+//! background used, for each processed view of the selected frames. How users show that the
+//! layer works, and how the tests see the null compositor's frames.
+
+use super::processor::CapturedView;
+use crate::algorithm::params::Params;
+use crate::gpu::{PixelFormat, PixelLayout};
+use crate::image::RgbaImage;
+use std::path::Path;
+
+fn half_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = i32::from((h >> 10) & 0x1f);
+    let frac = f32::from(h & 0x3ff);
+    match exp {
+        0 => sign * frac * 2f32.powi(-24),
+        31 => sign * f32::INFINITY,
+        e => sign * (1.0 + frac / 1024.0) * 2f32.powi(e - 15),
+    }
+}
+
+fn encode_srgb8(linear: f32) -> u8 {
+    let v = f64::from(linear.clamp(0.0, 1.0));
+    let e = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    (255.0 * e + 0.5).floor() as u8
+}
+
+/// One raw pixel as (r, g, b, a) channel values in [0, 1] in the format's own encoding.
+fn channels(format: PixelFormat, px: &[u8]) -> [f32; 4] {
+    let word = |i: usize| u32::from_le_bytes([px[i], px[i + 1], px[i + 2], px[i + 3]]);
+    match format.layout {
+        PixelLayout::Rgba8 => px[..4].iter().map(|&b| f32::from(b) / 255.0).collect::<Vec<_>>().try_into().unwrap(),
+        PixelLayout::Bgra8 => [px[2], px[1], px[0], px[3]].map(|b| f32::from(b) / 255.0),
+        PixelLayout::A2b10g10r10 => {
+            let w = word(0);
+            let c = |s: u32| ((w >> s) & 1023) as f32 / 1023.0;
+            [c(0), c(10), c(20), (w >> 30) as f32 / 3.0]
+        }
+        PixelLayout::Rgba16Unorm => {
+            std::array::from_fn(|k| f32::from(u16::from_le_bytes([px[2 * k], px[2 * k + 1]])) / 65535.0)
+        }
+        PixelLayout::Rgba16Float => {
+            std::array::from_fn(|k| half_to_f32(u16::from_le_bytes([px[2 * k], px[2 * k + 1]])))
+        }
+    }
+}
+
+/// Converts a region's raw pixels to 8-bit sRGB (sRGB formats are copied, linear ones encoded).
+pub fn to_srgb8(format: PixelFormat, raw: &[u8], width: u32, height: u32) -> RgbaImage {
+    let bpp = format.bytes_per_pixel() as usize;
+    let pixels = raw
+        .chunks_exact(bpp)
+        .take((width * height) as usize)
+        .map(|px| {
+            let c = channels(format, px);
+            let alpha = (255.0 * c[3].clamp(0.0, 1.0) + 0.5).floor() as u8;
+            if format.srgb {
+                [c[0], c[1], c[2]].map(|v| (255.0 * v + 0.5).floor() as u8).into_iter().chain([alpha]).collect::<Vec<_>>().try_into().unwrap()
+            } else {
+                [encode_srgb8(c[0]), encode_srgb8(c[1]), encode_srgb8(c[2]), alpha]
+            }
+        })
+        .collect();
+    RgbaImage { width, height, pixels, has_alpha: true }
+}
+
+fn params_json(p: &Params) -> serde_json::Value {
+    serde_json::json!({
+        "method": p.method.name(),
+        "lambda_e": p.lambda_e,
+        "lambda_jnd_scaled": p.lambda_jnd_scaled,
+        "transmittance": p.transmittance,
+        "blur": p.blur,
+        "blur_size": p.blur_size,
+        "blur_sigma": p.blur_sigma,
+        "fov": p.fov,
+        "fov_scale": p.fov_scale,
+        "fov_offset": p.fov_offset,
+    })
+}
+
+/// Writes the files of one captured view; errors are returned as one sentence.
+pub fn write_view(
+    dir: &Path,
+    frame: u64,
+    view: usize,
+    captured: &CapturedView,
+    background: &RgbaImage,
+    background_spec: &str,
+    params: &Params,
+) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let item = &captured.item;
+    let (w, h) = item.key.extent;
+    let stem = dir.join(format!("frame-{frame}-view-{view}"));
+    let name = |suffix: &str| stem.with_file_name(format!("frame-{frame}-view-{view}{suffix}"));
+    to_srgb8(item.format, &captured.display, w, h).save_png(&name("-display.png"))?;
+    to_srgb8(item.format, &captured.output, w, h).save_png(&name("-output.png"))?;
+    background.save_png(&name("-background.png"))?;
+    let json = serde_json::json!({
+        "frame": frame,
+        "view": view,
+        "format": format!("{:?}", item.vk_format),
+        "srgb": item.format.srgb,
+        "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
+        "image_array_index": item.key.array_index,
+        "background": background_spec,
+        "params": params_json(params),
+    });
+    let text = serde_json::to_string_pretty(&json).expect("plain JSON");
+    std::fs::write(name(".json"), text).map_err(|e| format!("cannot write capture JSON: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_floats_decode() {
+        assert_eq!(half_to_f32(0x3c00), 1.0);
+        assert_eq!(half_to_f32(0x3800), 0.5);
+        assert_eq!(half_to_f32(0x0000), 0.0);
+        assert!((half_to_f32(0x0001) - 5.96e-8).abs() < 1e-9);
+    }
+
+    #[test]
+    fn linear_formats_are_encoded_to_srgb() {
+        let f = PixelFormat { layout: PixelLayout::Rgba8, srgb: false };
+        // Linear 0.2140 (55/255 ~ 0.2157) encodes to sRGB ~ 0.5 -> 128.
+        let img = to_srgb8(f, &[55, 0, 255, 255], 1, 1);
+        assert_eq!(img.pixels[0], [128, 0, 255, 255]);
+        let f = PixelFormat { layout: PixelLayout::Bgra8, srgb: true };
+        assert_eq!(to_srgb8(f, &[1, 2, 3, 4], 1, 1).pixels[0], [3, 2, 1, 4]);
+    }
+}

@@ -1,0 +1,18 @@
+//! The OpenXR API layer `XR_APILAYER_CONTRASTXR_color_contrast`: loader negotiation, dispatch,
+//! sessions and swapchains, and the enhancement of every projection view at xrEndFrame.
+//! It must never crash or corrupt the host app: every entry point catches panics, and any
+//! failure turns the affected session into pass-through with one log line.
+
+pub mod background;
+pub mod capture;
+mod dispatch;
+mod entry;
+mod ffi;
+pub mod log;
+mod processor;
+pub mod session;
+pub mod settings;
+mod state;
+mod swapchain;
+
+pub use entry::{xrNegotiateLoaderApiLayerInterface, LAYER_NAME};

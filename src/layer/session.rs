@@ -1,0 +1,250 @@
+//! Sessions: read the Vulkan graphics binding at xrCreateSession, and at xrEndFrame enhance
+//! every projection view (and quad layers when configured) before the runtime composes it.
+
+use super::background::load_static;
+use super::capture;
+use super::ffi::{find_in_chain, guard};
+use super::processor::{Processor, ViewKey, WorkItem};
+use super::state::{self, lock, SessionState};
+use super::{log, swapchain};
+use crate::gpu::GpuDevice;
+use ash::vk::{self, Handle};
+use openxr_sys as xr;
+use std::sync::{Arc, Mutex};
+
+pub unsafe extern "system" fn create_session(
+    instance: xr::Instance,
+    info: *const xr::SessionCreateInfo,
+    session: *mut xr::Session,
+) -> xr::Result {
+    guard("xrCreateSession", xr::Result::ERROR_RUNTIME_FAILURE, || {
+        let Some(inst) = state::instance(instance) else {
+            return xr::Result::ERROR_HANDLE_INVALID;
+        };
+        // SAFETY: forwarding the app's arguments.
+        let result = unsafe { (inst.next.create_session)(instance, info, session) };
+        if result.into_raw() < 0 {
+            return result;
+        }
+        // SAFETY: the runtime accepted info, so its next chain is valid.
+        let binding = unsafe { info.as_ref() }.and_then(|i| unsafe {
+            find_in_chain::<xr::GraphicsBindingVulkanKHR>(i.next, xr::StructureType::GRAPHICS_BINDING_VULKAN_KHR)
+        });
+        let settings = inst.settings.clone();
+        let (processor, background) = match binding {
+            // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
+            Some(b) => set_up(unsafe { &*b }, &settings.background),
+            None => {
+                log::info("session is not a Vulkan session: passing its frames through untouched");
+                (None, None)
+            }
+        };
+        let state = SessionState {
+            instance,
+            next: inst.next,
+            settings,
+            processor,
+            background,
+            frames: 0,
+            processed: 0,
+        };
+        // SAFETY: session was written by the successful create call.
+        let handle = unsafe { *session };
+        state::registry().sessions.insert(handle.into_raw(), Arc::new(Mutex::new(state)));
+        result
+    })
+}
+
+fn set_up(
+    b: &xr::GraphicsBindingVulkanKHR,
+    background_spec: &str,
+) -> (Option<Processor>, Option<Arc<crate::image::RgbaImage>>) {
+    let background = match load_static(background_spec) {
+        Ok(bg) => bg,
+        Err(e) => {
+            log::info(&format!("no background ({e}): passing frames through untouched"));
+            return (None, None);
+        }
+    };
+    // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
+    // alive until after xrDestroySession, where the processor is dropped first.
+    let gpu = unsafe {
+        GpuDevice::borrow(
+            vk::Instance::from_raw(b.instance as u64),
+            vk::PhysicalDevice::from_raw(b.physical_device as u64),
+            vk::Device::from_raw(b.device as u64),
+            b.queue_family_index,
+            b.queue_index,
+        )
+    };
+    match gpu.and_then(Processor::new) {
+        Ok(p) => {
+            log::info(&format!("session on Vulkan device {:?}: enhancing", p.gpu.name));
+            (Some(p), Some(background))
+        }
+        Err(e) => {
+            log::info(&format!("GPU set-up failed ({e}): passing frames through untouched"));
+            (None, None)
+        }
+    }
+}
+
+/// Drops the layer's state of a session (its GPU objects first) and of its swapchains.
+pub fn forget(session: xr::Session) {
+    let removed = state::registry().sessions.remove(&session.into_raw());
+    if let Some(s) = removed {
+        lock(&s).processor = None;
+    }
+    state::registry()
+        .swapchains
+        .retain(|_, sc| lock(sc).session != session);
+}
+
+pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Result {
+    guard("xrDestroySession", xr::Result::ERROR_RUNTIME_FAILURE, || {
+        let Some(s) = state::session(session) else {
+            return xr::Result::ERROR_HANDLE_INVALID;
+        };
+        let next = lock(&s).next;
+        forget(session);
+        // SAFETY: forwarding the app's call after releasing everything the layer made.
+        unsafe { (next.destroy_session)(session) }
+    })
+}
+
+/// The sub-images of the frame's layers that the layer enhances.
+///
+/// # Safety
+/// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
+unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<xr::SwapchainSubImage> {
+    let mut out = Vec::new();
+    if info.layers.is_null() {
+        return out;
+    }
+    for i in 0..info.layer_count as usize {
+        // SAFETY: layer_count valid pointers (the caller's contract).
+        let layer = unsafe { *info.layers.add(i) };
+        let Some(base) = (unsafe { layer.as_ref() }) else { continue };
+        if base.ty == xr::StructureType::COMPOSITION_LAYER_PROJECTION {
+            // SAFETY: the type tag says this is a projection layer.
+            let proj = unsafe { &*(layer as *const xr::CompositionLayerProjection) };
+            for v in 0..proj.view_count as usize {
+                // SAFETY: view_count valid views.
+                out.push(unsafe { (*proj.views.add(v)).sub_image });
+            }
+        } else if quads && base.ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
+            // SAFETY: the type tag says this is a quad layer.
+            out.push(unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image });
+        }
+    }
+    out
+}
+
+/// A work item for a sub-image whose image the layer holds, with a rect inside the image.
+fn work_item(sub: &xr::SwapchainSubImage) -> Option<WorkItem> {
+    let sc = state::swapchain(sub.swapchain)?;
+    let sc = lock(&sc);
+    let format = sc.info.pixel.filter(|_| sc.info.processable())?;
+    let image = *sc.images.get(sc.held_release? as usize)?;
+    let r = sub.image_rect;
+    let fits = r.offset.x >= 0
+        && r.offset.y >= 0
+        && r.extent.width > 0
+        && r.extent.height > 0
+        && (r.offset.x + r.extent.width) as u32 <= sc.info.width
+        && (r.offset.y + r.extent.height) as u32 <= sc.info.height
+        && sub.image_array_index < sc.info.array_size;
+    if !fits {
+        log::once("bad-rect", "a layer's imageRect/imageArrayIndex lies outside its swapchain: that view passes through");
+        return None;
+    }
+    Some(WorkItem {
+        key: ViewKey {
+            swapchain: sub.swapchain.into_raw(),
+            offset: (r.offset.x, r.offset.y),
+            extent: (r.extent.width as u32, r.extent.height as u32),
+            array_index: sub.image_array_index,
+        },
+        image,
+        format,
+        vk_format: sc.info.vk_format,
+    })
+}
+
+fn acts_on(s: &SessionState, mode: xr::EnvironmentBlendMode) -> bool {
+    if mode == xr::EnvironmentBlendMode::ADDITIVE || s.settings.force {
+        return true;
+    }
+    log::once("blend-mode", &format!(
+        "environment blend mode {mode:?} is not ADDITIVE: passing frames through (set CONTRASTXR_FORCE=1 to act anyway)"
+    ));
+    false
+}
+
+fn capturing(s: &SessionState) -> bool {
+    s.settings.capture.as_ref().is_some_and(|c| {
+        s.frames > c.skip && s.processed < c.frames
+    })
+}
+
+/// Enhances the held images of this frame; any failure turns the session into pass-through.
+fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
+    if s.processor.is_none() || !acts_on(s, info.environment_blend_mode) {
+        return;
+    }
+    // SAFETY: the app's frame end info, valid for this call.
+    let subs = unsafe { sub_images(info, s.settings.quad_layers) };
+    let items: Vec<WorkItem> = subs.iter().filter_map(work_item).collect();
+    if items.is_empty() {
+        return;
+    }
+    let capture = capturing(s);
+    let Some(bg) = s.background.clone() else { return };
+    let params = s.settings.params.clone();
+    let processor = s.processor.as_mut().expect("checked above");
+    match processor.process(&items, &bg, 0, &params, capture) {
+        Ok(views) => {
+            if capture {
+                write_capture(s, &views, &bg);
+            }
+            s.processed += 1;
+            log::once("first-frame", &format!("processing frames ({} views per frame)", items.len()));
+        }
+        Err(e) => {
+            log::info(&format!("GPU work failed ({e}): passing this session's frames through from now on"));
+            s.processor = None;
+        }
+    }
+}
+
+fn write_capture(s: &SessionState, views: &[super::processor::CapturedView], bg: &crate::image::RgbaImage) {
+    let Some(c) = &s.settings.capture else { return };
+    for (k, v) in views.iter().enumerate() {
+        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings.background, &s.settings.params);
+        if let Err(e) = written {
+            log::once("capture-failed", &format!("capture failed: {e}"));
+        }
+    }
+}
+
+pub unsafe extern "system" fn end_frame(session: xr::Session, info: *const xr::FrameEndInfo) -> xr::Result {
+    guard("xrEndFrame", xr::Result::ERROR_RUNTIME_FAILURE, || {
+        let Some(s) = state::session(session) else {
+            return xr::Result::ERROR_HANDLE_INVALID;
+        };
+        let mut s = lock(&s);
+        s.frames += 1;
+        // SAFETY: the app's frame end info (null is left for the runtime to reject).
+        if let Some(info) = unsafe { info.as_ref() } {
+            let processed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| enhance_frame(&mut s, info)));
+            if processed.is_err() {
+                log::info("internal error while enhancing: passing this session's frames through from now on");
+                s.processor = None;
+            }
+        }
+        // The runtime composes only released images: hand over every image we held.
+        swapchain::release_held(session);
+        // SAFETY: forwarding the app's call.
+        unsafe { (s.next.end_frame)(session, info) }
+    })
+}

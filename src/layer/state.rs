@@ -1,0 +1,91 @@
+//! What the layer tracks per instance, session and swapchain, keyed by raw handle.
+//! Lock order: a session before any of its swapchains.
+
+use super::dispatch::NextFns;
+use super::processor::Processor;
+use super::settings::Settings;
+use crate::gpu::PixelFormat;
+use crate::image::RgbaImage;
+use ash::vk;
+use openxr_sys as xr;
+use std::collections::{HashMap, VecDeque};
+use std::sync::{Arc, Mutex, OnceLock};
+
+pub struct InstanceState {
+    pub next: NextFns,
+    pub settings: Arc<Settings>,
+}
+
+pub struct SessionState {
+    pub instance: xr::Instance,
+    pub next: NextFns,
+    pub settings: Arc<Settings>,
+    /// None: this session passes through (not Vulkan, set-up failed, or an earlier failure).
+    pub processor: Option<Processor>,
+    pub background: Option<Arc<RgbaImage>>,
+    /// Frames submitted through xrEndFrame so far.
+    pub frames: u64,
+    /// Frames the layer processed (captures are numbered by this).
+    pub processed: u64,
+}
+
+#[derive(Clone, Debug)]
+pub struct SwapchainInfo {
+    pub vk_format: vk::Format,
+    /// None for formats the engine does not handle (and for depth).
+    pub pixel: Option<PixelFormat>,
+    pub width: u32,
+    pub height: u32,
+    pub array_size: u32,
+    /// The layer got the transfer usage it needs to copy regions in and out.
+    pub transfer_usage: bool,
+}
+
+impl SwapchainInfo {
+    /// Whether the layer may touch this swapchain's images at all.
+    pub fn processable(&self) -> bool {
+        self.pixel.is_some() && self.transfer_usage
+    }
+}
+
+pub struct SwapchainState {
+    pub session: xr::Session,
+    pub next: NextFns,
+    pub info: SwapchainInfo,
+    pub images: Vec<vk::Image>,
+    /// Image indices acquired by the app and not yet released by it, oldest first.
+    pub acquired: VecDeque<u32>,
+    /// An image the app released whose release the layer holds until xrEndFrame.
+    pub held_release: Option<u32>,
+}
+
+#[derive(Default)]
+pub struct Registry {
+    pub instances: HashMap<u64, Arc<InstanceState>>,
+    pub sessions: HashMap<u64, Arc<Mutex<SessionState>>>,
+    pub swapchains: HashMap<u64, Arc<Mutex<SwapchainState>>>,
+}
+
+pub fn registry() -> std::sync::MutexGuard<'static, Registry> {
+    static REGISTRY: OnceLock<Mutex<Registry>> = OnceLock::new();
+    let m = REGISTRY.get_or_init(|| Mutex::new(Registry::default()));
+    // A panic while holding the lock leaves plain maps behind: keep using them.
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+pub fn instance(handle: xr::Instance) -> Option<Arc<InstanceState>> {
+    registry().instances.get(&handle.into_raw()).cloned()
+}
+
+pub fn session(handle: xr::Session) -> Option<Arc<Mutex<SessionState>>> {
+    registry().sessions.get(&handle.into_raw()).cloned()
+}
+
+pub fn swapchain(handle: xr::Swapchain) -> Option<Arc<Mutex<SwapchainState>>> {
+    registry().swapchains.get(&handle.into_raw()).cloned()
+}
+
+/// Locks a state mutex even if a panic poisoned it (the layer then passes through anyway).
+pub fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
