@@ -182,9 +182,11 @@ fn acts_on(s: &SessionState, mode: xr::EnvironmentBlendMode) -> bool {
 }
 
 fn capturing(s: &SessionState) -> bool {
-    s.settings.capture.as_ref().is_some_and(|c| {
-        s.frames > c.skip && s.processed < c.frames
-    })
+    // Frames are numbered by the layer's processed count: capture [skip, skip + frames).
+    s.settings
+        .capture
+        .as_ref()
+        .is_some_and(|c| s.processed >= c.skip && s.processed < c.skip + c.frames)
 }
 
 /// Enhances the held images of this frame; any failure turns the session into pass-through.
