@@ -5,6 +5,7 @@
 
 pub mod background;
 pub mod capture;
+pub mod install;
 mod dispatch;
 mod entry;
 mod ffi;
