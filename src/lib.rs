@@ -8,5 +8,8 @@
 //! Lower modules never import higher ones.
 
 pub mod algorithm;
+pub mod background;
 pub mod colour;
+pub mod evaluate;
 pub mod image;
+pub mod reference;
