@@ -151,3 +151,80 @@ pub fn metrics(
         delta_e_bg_out: Stats::of(diffs.iter().map(|d| d.bg_out)),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 3x1: black (not foreground), white turned red, grey 128 left alone; B = mid grey
+    /// (scaled origin, LAB (50, 0, 0)). Expected values from the spec's check values:
+    /// white (100, 0, 0), red (53.2408, 80.0925, 67.2032), grey 128 L* 53.585.
+    #[test]
+    fn hand_computed_case() {
+        let mut display = RgbaImage::new(3, 1, [0, 0, 0, 255]);
+        display.set(1, 0, [255, 255, 255, 255]);
+        display.set(2, 0, [128, 128, 128, 255]);
+        let mut output = display.clone();
+        output.set(1, 0, [255, 0, 0, 255]);
+        let bg = PreparedBackground {
+            width: 3,
+            height: 1,
+            linear: vec![DVec3::splat(0.5); 3],
+            scaled: vec![DVec3::ZERO; 3],
+        };
+        let m = metrics(&display, &output, &bg);
+        assert_eq!((m.foreground_pixels, m.enhanced_pixels), (2, 1));
+        assert!((m.enhanced_percent - 50.0).abs() < 1e-12);
+        let near = |a: f64, b: f64| (a - b).abs() < 2e-4;
+        let s = m.delta_e_out_display;
+        assert!(
+            near(s.min, 0.0) && near(s.max, 114.531661) && near(s.mean, 114.531661 / 2.0),
+            "{s:?}"
+        );
+        let s = m.delta_e_bg_display;
+        assert!(
+            near(s.min, 3.585) && near(s.max, 50.0) && near(s.mean, 26.7925),
+            "{s:?}"
+        );
+        let s = m.delta_e_bg_out;
+        assert!(near(s.min, 3.585) && near(s.max, 104.602014), "{s:?}");
+        assert_eq!(enhanced_mask(&display, &output, &bg), [false, true, false]);
+    }
+
+    #[test]
+    fn change_below_jnd_is_not_enhanced() {
+        // Grey 128 -> 129 moves away from a black background by ~0.37 Delta E only.
+        let display = RgbaImage::new(1, 1, [128, 128, 128, 255]);
+        let output = RgbaImage::new(1, 1, [129, 129, 129, 255]);
+        let bg = PreparedBackground {
+            width: 1,
+            height: 1,
+            linear: vec![DVec3::ZERO],
+            scaled: vec![DVec3::new(-1.0, 0.0, 0.0)],
+        };
+        let m = metrics(&display, &output, &bg);
+        assert_eq!((m.foreground_pixels, m.enhanced_pixels), (1, 0));
+        assert!(m.delta_e_bg_out.max > m.delta_e_bg_display.max);
+    }
+
+    #[test]
+    fn empty_foreground_reports_zeros() {
+        let black = RgbaImage::new(2, 1, [0, 0, 0, 255]);
+        let bg = PreparedBackground {
+            width: 2,
+            height: 1,
+            linear: vec![DVec3::ZERO; 2],
+            scaled: vec![DVec3::ZERO; 2],
+        };
+        let m = metrics(&black, &black, &bg);
+        assert_eq!((m.foreground_pixels, m.enhanced_percent), (0, 0.0));
+        assert_eq!(
+            m.delta_e_bg_out,
+            Stats {
+                min: 0.0,
+                mean: 0.0,
+                max: 0.0
+            }
+        );
+    }
+}

@@ -3,7 +3,7 @@
 //! Pure CPU; it never runs the method itself.
 
 pub mod figure;
-mod font;
+pub mod font;
 pub mod metric;
 pub mod perceived;
 

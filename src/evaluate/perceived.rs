@@ -34,3 +34,22 @@ pub fn perceived(display: &RgbaImage, camera: &RgbaImage, params: &Params) -> Rg
         has_alpha: false,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn additive_blend_of_display_and_attenuated_background() {
+        // Uniform code-200 background: linear 0.577580; x0.4 = 0.231032 -> code 132.
+        let camera = RgbaImage::new(8, 8, [200, 200, 200, 255]);
+        let mut display = RgbaImage::new(3, 1, [0, 0, 0, 255]);
+        display.set(1, 0, [255, 255, 255, 255]);
+        display.set(2, 0, [90, 0, 0, 0]);
+        let p = perceived(&display, &camera, &Params::default());
+        assert_eq!(p.get(0, 0), [132, 132, 132, 255]);
+        assert_eq!(p.get(1, 0), [255, 255, 255, 255], "clipped at white");
+        assert_eq!(p.get(2, 0), [132, 132, 132, 255], "alpha 0 adds no light");
+        assert!(!p.has_alpha);
+    }
+}
