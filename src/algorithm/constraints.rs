@@ -105,7 +105,7 @@ pub fn jnd_constraint(
 ) -> DVec3 {
     let p_dist = (p - background).length();
     m.note(p_dist, r);
-    if !(p_dist < r) {
+    if p_dist >= r {
         return p;
     }
     let d_to_b = display - background;

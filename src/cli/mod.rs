@@ -20,20 +20,27 @@ pub enum CliError {
 
 pub type Command = fn(&mut Args) -> Result<(), CliError>;
 
-/// (name, one-line summary, usage text, entry point)
-const COMMANDS: &[(&str, &str, fn() -> String, Command)] = &[
-    (
-        "enhance",
-        "enhance a display image against a background (camera) image",
-        enhance::usage,
-        enhance::run,
-    ),
-    (
-        "evaluate",
-        "measure an enhancement with the paper's metric, write figures, sweep lambda_e",
-        evaluate::usage,
-        evaluate::run,
-    ),
+/// One subcommand of the tool.
+pub struct Subcommand {
+    pub name: &'static str,
+    pub summary: &'static str,
+    pub usage: fn() -> String,
+    pub run: Command,
+}
+
+const COMMANDS: &[Subcommand] = &[
+    Subcommand {
+        name: "enhance",
+        summary: "enhance a display image against a background (camera) image",
+        usage: enhance::usage,
+        run: enhance::run,
+    },
+    Subcommand {
+        name: "evaluate",
+        summary: "measure an enhancement with the paper's metric, write figures, sweep lambda_e",
+        usage: evaluate::usage,
+        run: evaluate::run,
+    },
 ];
 
 fn overview() -> String {
@@ -42,8 +49,8 @@ fn overview() -> String {
          usage: contrastxr <command> [options]   (contrastxr <command> --help for its options)\n\n\
          commands:\n",
     );
-    for (name, summary, _, _) in COMMANDS {
-        s.push_str(&format!("  {name:<10} {summary}\n"));
+    for c in COMMANDS {
+        s.push_str(&format!("  {:<10} {}\n", c.name, c.summary));
     }
     s
 }
@@ -58,7 +65,7 @@ pub fn main(argv: Vec<String>) -> i32 {
         print!("{}", overview());
         return 0;
     }
-    let Some((_, _, usage, run)) = COMMANDS.iter().find(|c| c.0 == name) else {
+    let Some(command) = COMMANDS.iter().find(|c| c.name == name) else {
         eprintln!(
             "contrastxr: error: unknown command '{name}'; run `contrastxr --help` for the list."
         );
@@ -66,10 +73,10 @@ pub fn main(argv: Vec<String>) -> i32 {
     };
     let mut args = Args::new(argv[1..].to_vec());
     if args.flag("--help") || args.flag("-h") {
-        print!("{}", usage());
+        print!("{}", (command.usage)());
         return 0;
     }
-    match run(&mut args) {
+    match (command.run)(&mut args) {
         Ok(()) => 0,
         Err(CliError::Usage(msg)) => {
             eprintln!("contrastxr {name}: error: {msg}");
