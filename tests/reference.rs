@@ -2,7 +2,10 @@
 //! (values computed by hand or by the straightforward formulas below, never by the code under
 //! test), the JND geometry, the invariants as property tests, and the sRGB<->LAB round trip.
 
-use contrastxr::algorithm::{enhance_linear, enhance_scaled, enhance_srgb8, Method, Params};
+use contrastxr::algorithm::{
+    conformant, corner_cases, enhance_linear, enhance_scaled, enhance_srgb8, enhance_srgb8_trace,
+    Method, Params,
+};
 use contrastxr::colour;
 use glam::DVec3;
 use proptest::prelude::*;
@@ -326,4 +329,39 @@ proptest! {
         let out = enhance_srgb8(px, bl, bs, &Params { method, ..Params::default() });
         prop_assert_eq!(out[3], px[3]);
     }
+}
+
+/// The background a uniform camera frame of colour `bg` gives after preprocessing.
+fn uniform_background(bg: [u8; 3]) -> (DVec3, DVec3) {
+    let linear = colour::srgb8_to_linear(bg);
+    (linear, colour::linear_to_scaled(f64::from(0.4f32) * linear))
+}
+
+#[test]
+fn trace_agrees_with_enhance_and_flags_thresholds() {
+    let p = Params::default();
+    let mut flagged = 0;
+    for (d, b) in corner_cases() {
+        let (bl, bs) = uniform_background(b);
+        let px = [d[0], d[1], d[2], 255];
+        let t = enhance_srgb8_trace(px, bl, bs, &p);
+        assert_eq!(t.out, enhance_srgb8(px, bl, bs, &p));
+        assert_eq!(
+            t.exact.map(colour::quantize),
+            [t.out[0], t.out[1], t.out[2]],
+            "{d:?} on {b:?}"
+        );
+        assert!(conformant(&t, t.out));
+        let off_by_two = [t.out[0] ^ 2, t.out[1], t.out[2], 255];
+        assert_eq!(conformant(&t, off_by_two), t.near_threshold);
+        // Exact greys have |D'| = 0: float32 noise decides their chroma branch.
+        if d[0] == d[1] && d[1] == d[2] && d != [0, 0, 0] {
+            assert!(t.near_threshold, "grey {d:?} on {b:?}");
+        }
+        flagged += usize::from(t.near_threshold);
+    }
+    // A chromatic display on a chromatic background far from every threshold is not flagged.
+    let (bl, bs) = uniform_background([230, 210, 40]);
+    assert!(!enhance_srgb8_trace([200, 60, 50, 255], bl, bs, &p).near_threshold);
+    assert!(flagged < corner_cases().len());
 }
