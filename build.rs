@@ -123,16 +123,25 @@ fn storage_buffers_to_vulkan10(words: Vec<u32>) -> Vec<u32> {
     }
     let is_extension = |inst: &Vec<u32>| {
         inst[0] & 0xffff == OP_EXTENSION
-            && inst[1..].iter().flat_map(|w| w.to_le_bytes()).take_while(|&b| b != 0).collect::<Vec<u8>>()
+            && inst[1..]
+                .iter()
+                .flat_map(|w| w.to_le_bytes())
+                .take_while(|&b| b != 0)
+                .collect::<Vec<u8>>()
                 == b"SPV_KHR_storage_buffer_storage_class"
     };
     insts.retain(|inst| !is_extension(inst));
     for inst in insts.iter_mut() {
-        if inst[0] & 0xffff == OP_DECORATE && inst[2] == BLOCK && buffer_structs.contains(&inst[1]) {
+        if inst[0] & 0xffff == OP_DECORATE && inst[2] == BLOCK && buffer_structs.contains(&inst[1])
+        {
             inst[2] = BUFFER_BLOCK;
         }
     }
-    header.iter().copied().chain(insts.into_iter().flatten()).collect()
+    header
+        .iter()
+        .copied()
+        .chain(insts.into_iter().flatten())
+        .collect()
 }
 
 fn main() {

@@ -8,7 +8,10 @@
 //! Lower modules never import higher ones.
 
 pub mod algorithm;
+pub mod background;
 pub mod colour;
+pub mod evaluate;
 pub mod gpu;
 pub mod image;
 pub mod layer;
+pub mod reference;

@@ -198,3 +198,111 @@ fn formats_agree_with_the_8bit_srgb_path() {
     }
     assert_clean(&e);
 }
+
+/// Counts pixels where the GPU output does not conform to the CPU reference (spec section 6),
+/// with the CPU's own background preparation as the reference's B.
+fn nonconformant(
+    e: &mut OfflineEngine,
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    params: &Params,
+) -> Vec<String> {
+    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
+    let gpu = e.enhance(display, camera, params).unwrap();
+    let bg = contrastxr::background::prepare(camera, display.width, display.height, params);
+    let mut bad = Vec::new();
+    for (i, (d, g)) in display.pixels.iter().zip(&gpu.pixels).enumerate() {
+        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
+        if !conformant(&trace, *g) {
+            bad.push(format!(
+                "pixel {i}: display {d:?} cpu {:?} gpu {g:?}",
+                trace.out
+            ));
+        }
+    }
+    bad
+}
+
+fn check_all_methods(
+    e: &mut OfflineEngine,
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    base: &Params,
+) {
+    for method in Method::ALL {
+        for lambda_e in [0.1, 0.4, 1.0] {
+            let params = Params {
+                method,
+                lambda_e,
+                ..base.clone()
+            };
+            let bad = nonconformant(e, display, camera, &params);
+            assert!(
+                bad.is_empty(),
+                "{method:?} lambda_e {lambda_e}: {} of {} pixels differ, e.g. {:?}",
+                bad.len(),
+                display.pixels.len(),
+                &bad[..bad.len().min(5)]
+            );
+        }
+    }
+}
+
+#[test]
+fn gpu_matches_cpu_on_random_images() {
+    let mut e = engine();
+    let display = noise(97, 61, 21);
+    let camera = noise(131, 83, 5);
+    check_all_methods(&mut e, &display, &camera, &Params::default());
+    assert_clean(&e);
+}
+
+#[test]
+fn gpu_matches_cpu_on_the_corner_cases() {
+    let mut e = engine();
+    let cases = contrastxr::algorithm::corner_cases();
+    let width = 64;
+    let height = (cases.len() as u32).div_ceil(width);
+    // One pixel per case; without blur and FoV mapping, camera pixel i is display pixel i's B.
+    let mut display = RgbaImage::new(width, height, [0, 0, 0, 255]);
+    let mut camera = RgbaImage::new(width, height, [0, 0, 0, 255]);
+    for (i, (d, b)) in cases.iter().enumerate() {
+        display.pixels[i] = [d[0], d[1], d[2], 255];
+        camera.pixels[i] = [b[0], b[1], b[2], 255];
+    }
+    let base = Params {
+        blur: false,
+        fov: false,
+        ..Params::default()
+    };
+    check_all_methods(&mut e, &display, &camera, &base);
+    assert_clean(&e);
+}
+
+#[test]
+fn gpu_background_matches_cpu_preparation() {
+    let mut e = engine();
+    let camera = noise(150, 90, 9);
+    for params in [
+        Params::default(),
+        Params {
+            blur_size: 7,
+            blur_sigma: 2.5,
+            ..Params::default()
+        },
+    ] {
+        let gpu = e.prepare_background(&camera, (80, 45), &params).unwrap();
+        let cpu = contrastxr::background::prepare(&camera, 80, 45, &params);
+        for i in 0..gpu.scaled.len() {
+            for k in 0..3 {
+                let dl = (f64::from(gpu.linear[i][k]) - cpu.linear[i][k]).abs();
+                let ds = (f64::from(gpu.scaled[i][k]) - cpu.scaled[i][k]).abs();
+                assert!(
+                    dl < 1e-5 && ds < 1e-4,
+                    "pixel {i} channel {k}: linear {dl}, scaled {ds}"
+                );
+            }
+        }
+    }
+    assert_clean(&e);
+}

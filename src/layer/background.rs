@@ -24,7 +24,9 @@ pub fn load_static(spec: &str) -> Result<Arc<RgbaImage>, String> {
             .ok_or_else(|| format!("background colour {colour:?} is not #RRGGBB"))?;
         return Ok(Arc::new(RgbaImage::new(64, 64, [r, g, b, 255])));
     }
-    Err(format!("background source {spec:?} is not image:PATH or color:#RRGGBB"))
+    Err(format!(
+        "background source {spec:?} is not image:PATH or color:#RRGGBB"
+    ))
 }
 
 #[cfg(test)]

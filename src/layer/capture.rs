@@ -21,7 +21,11 @@ fn half_to_f32(h: u16) -> f32 {
 
 fn encode_srgb8(linear: f32) -> u8 {
     let v = f64::from(linear.clamp(0.0, 1.0));
-    let e = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    let e = if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
     (255.0 * e + 0.5).floor() as u8
 }
 
@@ -29,16 +33,21 @@ fn encode_srgb8(linear: f32) -> u8 {
 fn channels(format: PixelFormat, px: &[u8]) -> [f32; 4] {
     let word = |i: usize| u32::from_le_bytes([px[i], px[i + 1], px[i + 2], px[i + 3]]);
     match format.layout {
-        PixelLayout::Rgba8 => px[..4].iter().map(|&b| f32::from(b) / 255.0).collect::<Vec<_>>().try_into().unwrap(),
+        PixelLayout::Rgba8 => px[..4]
+            .iter()
+            .map(|&b| f32::from(b) / 255.0)
+            .collect::<Vec<_>>()
+            .try_into()
+            .unwrap(),
         PixelLayout::Bgra8 => [px[2], px[1], px[0], px[3]].map(|b| f32::from(b) / 255.0),
         PixelLayout::A2b10g10r10 => {
             let w = word(0);
             let c = |s: u32| ((w >> s) & 1023) as f32 / 1023.0;
             [c(0), c(10), c(20), (w >> 30) as f32 / 3.0]
         }
-        PixelLayout::Rgba16Unorm => {
-            std::array::from_fn(|k| f32::from(u16::from_le_bytes([px[2 * k], px[2 * k + 1]])) / 65535.0)
-        }
+        PixelLayout::Rgba16Unorm => std::array::from_fn(|k| {
+            f32::from(u16::from_le_bytes([px[2 * k], px[2 * k + 1]])) / 65535.0
+        }),
         PixelLayout::Rgba16Float => {
             std::array::from_fn(|k| half_to_f32(u16::from_le_bytes([px[2 * k], px[2 * k + 1]])))
         }
@@ -55,13 +64,29 @@ pub fn to_srgb8(format: PixelFormat, raw: &[u8], width: u32, height: u32) -> Rgb
             let c = channels(format, px);
             let alpha = (255.0 * c[3].clamp(0.0, 1.0) + 0.5).floor() as u8;
             if format.srgb {
-                [c[0], c[1], c[2]].map(|v| (255.0 * v + 0.5).floor() as u8).into_iter().chain([alpha]).collect::<Vec<_>>().try_into().unwrap()
+                [c[0], c[1], c[2]]
+                    .map(|v| (255.0 * v + 0.5).floor() as u8)
+                    .into_iter()
+                    .chain([alpha])
+                    .collect::<Vec<_>>()
+                    .try_into()
+                    .unwrap()
             } else {
-                [encode_srgb8(c[0]), encode_srgb8(c[1]), encode_srgb8(c[2]), alpha]
+                [
+                    encode_srgb8(c[0]),
+                    encode_srgb8(c[1]),
+                    encode_srgb8(c[2]),
+                    alpha,
+                ]
             }
         })
         .collect();
-    RgbaImage { width, height, pixels, has_alpha: true }
+    RgbaImage {
+        width,
+        height,
+        pixels,
+        has_alpha: true,
+    }
 }
 
 fn params_json(p: &Params) -> serde_json::Value {
@@ -125,11 +150,17 @@ mod tests {
 
     #[test]
     fn linear_formats_are_encoded_to_srgb() {
-        let f = PixelFormat { layout: PixelLayout::Rgba8, srgb: false };
+        let f = PixelFormat {
+            layout: PixelLayout::Rgba8,
+            srgb: false,
+        };
         // Linear 0.2140 (55/255 ~ 0.2157) encodes to sRGB ~ 0.5 -> 128.
         let img = to_srgb8(f, &[55, 0, 255, 255], 1, 1);
         assert_eq!(img.pixels[0], [128, 0, 255, 255]);
-        let f = PixelFormat { layout: PixelLayout::Bgra8, srgb: true };
+        let f = PixelFormat {
+            layout: PixelLayout::Bgra8,
+            srgb: true,
+        };
         assert_eq!(to_srgb8(f, &[1, 2, 3, 4], 1, 1).pixels[0], [3, 2, 1, 4]);
     }
 }

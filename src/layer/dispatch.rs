@@ -41,10 +41,8 @@ pub unsafe fn lookup(
 macro_rules! resolve {
     ($gipa:expr, $inst:expr, $name:literal, $ty:ty) => {{
         // SAFETY: guaranteed by the caller of `NextFns::load`.
-        let f = unsafe { lookup($gipa, $inst, $name) }.ok_or(concat!(
-            "the next layer has no ",
-            stringify!($name)
-        ))?;
+        let f = unsafe { lookup($gipa, $inst, $name) }
+            .ok_or(concat!("the next layer has no ", stringify!($name)))?;
         // SAFETY: the loader returns the function registered under this name, whose
         // signature is $ty by the OpenXR specification.
         unsafe { std::mem::transmute::<pfn::VoidFunction, $ty>(f) }
@@ -54,14 +52,22 @@ macro_rules! resolve {
 impl NextFns {
     /// # Safety
     /// `gipa` must be the next layer's xrGetInstanceProcAddr and `instance` a handle it created.
-    pub unsafe fn load(gipa: pfn::GetInstanceProcAddr, instance: xr::Instance) -> Result<NextFns, &'static str> {
+    pub unsafe fn load(
+        gipa: pfn::GetInstanceProcAddr,
+        instance: xr::Instance,
+    ) -> Result<NextFns, &'static str> {
         Ok(NextFns {
             get_instance_proc_addr: gipa,
             destroy_instance: resolve!(gipa, instance, c"xrDestroyInstance", pfn::DestroyInstance),
             create_session: resolve!(gipa, instance, c"xrCreateSession", pfn::CreateSession),
             destroy_session: resolve!(gipa, instance, c"xrDestroySession", pfn::DestroySession),
             create_swapchain: resolve!(gipa, instance, c"xrCreateSwapchain", pfn::CreateSwapchain),
-            destroy_swapchain: resolve!(gipa, instance, c"xrDestroySwapchain", pfn::DestroySwapchain),
+            destroy_swapchain: resolve!(
+                gipa,
+                instance,
+                c"xrDestroySwapchain",
+                pfn::DestroySwapchain
+            ),
             enumerate_swapchain_images: resolve!(
                 gipa,
                 instance,

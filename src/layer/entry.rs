@@ -26,30 +26,41 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
     _layer_name: *const c_char,
     request: *mut XrNegotiateApiLayerRequest,
 ) -> xr::Result {
-    guard("xrNegotiateLoaderApiLayerInterface", xr::Result::ERROR_INITIALIZATION_FAILED, || {
-        if loader_info.is_null() || request.is_null() {
-            return xr::Result::ERROR_INITIALIZATION_FAILED;
-        }
-        // SAFETY: the loader passes valid structs (checked non-null above).
-        let (info, req) = unsafe { (&*loader_info, &mut *request) };
-        if info.ty != XrNegotiateLoaderInfo::TYPE
-            || req.ty != XrNegotiateApiLayerRequest::TYPE
-            || info.min_interface_version > 1
-            || info.max_interface_version < 1
-        {
-            return xr::Result::ERROR_INITIALIZATION_FAILED;
-        }
-        req.layer_interface_version = 1;
-        req.layer_api_version = xr::CURRENT_API_VERSION;
-        req.get_instance_proc_addr = Some(get_instance_proc_addr);
-        req.create_api_layer_instance = Some(create_api_layer_instance);
-        xr::Result::SUCCESS
-    })
+    guard(
+        "xrNegotiateLoaderApiLayerInterface",
+        xr::Result::ERROR_INITIALIZATION_FAILED,
+        || {
+            if loader_info.is_null() || request.is_null() {
+                return xr::Result::ERROR_INITIALIZATION_FAILED;
+            }
+            // SAFETY: the loader passes valid structs (checked non-null above).
+            let (info, req) = unsafe { (&*loader_info, &mut *request) };
+            if info.ty != XrNegotiateLoaderInfo::TYPE
+                || req.ty != XrNegotiateApiLayerRequest::TYPE
+                || info.min_interface_version > 1
+                || info.max_interface_version < 1
+            {
+                return xr::Result::ERROR_INITIALIZATION_FAILED;
+            }
+            req.layer_interface_version = 1;
+            req.layer_api_version = xr::CURRENT_API_VERSION;
+            req.get_instance_proc_addr = Some(get_instance_proc_addr);
+            req.create_api_layer_instance = Some(create_api_layer_instance);
+            xr::Result::SUCCESS
+        },
+    )
 }
 
 fn startup_line(settings: &Settings, app: &str) -> String {
-    let state = if settings.enabled { "on" } else { "off (CONTRASTXR is 0/false/off/empty)" };
-    let mut line = format!("contrastxr {} {state}, app {app:?}", env!("CARGO_PKG_VERSION"));
+    let state = if settings.enabled {
+        "on"
+    } else {
+        "off (CONTRASTXR is 0/false/off/empty)"
+    };
+    let mut line = format!(
+        "contrastxr {} {state}, app {app:?}",
+        env!("CARGO_PKG_VERSION")
+    );
     if settings.enabled {
         line += &format!(", {}", settings.describe());
     }
@@ -61,31 +72,42 @@ unsafe extern "system" fn create_api_layer_instance(
     layer_info: *const ApiLayerCreateInfo,
     instance: *mut xr::Instance,
 ) -> xr::Result {
-    guard("xrCreateApiLayerInstance", xr::Result::ERROR_INITIALIZATION_FAILED, || {
-        // SAFETY: the loader passes a valid ApiLayerCreateInfo whose next_info names us.
-        let next_info = unsafe { layer_info.as_ref() }.map(|l| l.next_info).unwrap_or(std::ptr::null_mut());
-        // SAFETY: non-null next_info points to the loader's chain entry for this layer.
-        let Some(next) = (unsafe { next_info.as_ref() }) else {
-            return xr::Result::ERROR_INITIALIZATION_FAILED;
-        };
-        // Hand the next layer the chain without our entry.
-        // SAFETY: layer_info is valid (its next_info was read above).
-        let mut forwarded = unsafe { *layer_info };
-        forwarded.next_info = next.next;
-        // SAFETY: forwarding the loader's own arguments to the next layer.
-        let result = unsafe { (next.next_create_api_layer_instance)(info, &forwarded, instance) };
-        if result.into_raw() < 0 {
-            return result;
-        }
-        let _ = FIRST_NEXT_GIPA.set(next.next_get_instance_proc_addr);
-        // SAFETY: instance was just written by a successful create call.
-        let handle = unsafe { *instance };
-        register_instance(handle, next.next_get_instance_proc_addr, info);
-        result
-    })
+    guard(
+        "xrCreateApiLayerInstance",
+        xr::Result::ERROR_INITIALIZATION_FAILED,
+        || {
+            // SAFETY: the loader passes a valid ApiLayerCreateInfo whose next_info names us.
+            let next_info = unsafe { layer_info.as_ref() }
+                .map(|l| l.next_info)
+                .unwrap_or(std::ptr::null_mut());
+            // SAFETY: non-null next_info points to the loader's chain entry for this layer.
+            let Some(next) = (unsafe { next_info.as_ref() }) else {
+                return xr::Result::ERROR_INITIALIZATION_FAILED;
+            };
+            // Hand the next layer the chain without our entry.
+            // SAFETY: layer_info is valid (its next_info was read above).
+            let mut forwarded = unsafe { *layer_info };
+            forwarded.next_info = next.next;
+            // SAFETY: forwarding the loader's own arguments to the next layer.
+            let result =
+                unsafe { (next.next_create_api_layer_instance)(info, &forwarded, instance) };
+            if result.into_raw() < 0 {
+                return result;
+            }
+            let _ = FIRST_NEXT_GIPA.set(next.next_get_instance_proc_addr);
+            // SAFETY: instance was just written by a successful create call.
+            let handle = unsafe { *instance };
+            register_instance(handle, next.next_get_instance_proc_addr, info);
+            result
+        },
+    )
 }
 
-fn register_instance(handle: xr::Instance, gipa: pfn::GetInstanceProcAddr, info: *const xr::InstanceCreateInfo) {
+fn register_instance(
+    handle: xr::Instance,
+    gipa: pfn::GetInstanceProcAddr,
+    info: *const xr::InstanceCreateInfo,
+) {
     // SAFETY: info is the app's valid create info; the name is a NUL-terminated array.
     let app = unsafe { info.as_ref() }
         .and_then(|i| unsafe { c_str(i.application_info.application_name.as_ptr()) })
@@ -99,8 +121,13 @@ fn register_instance(handle: xr::Instance, gipa: pfn::GetInstanceProcAddr, info:
     // SAFETY: gipa is the next layer's and handle was created by it.
     match unsafe { NextFns::load(gipa, handle) } {
         Ok(next) => {
-            let state = InstanceState { next, settings: Arc::new(settings) };
-            state::registry().instances.insert(handle.into_raw(), Arc::new(state));
+            let state = InstanceState {
+                next,
+                settings: Arc::new(settings),
+            };
+            state::registry()
+                .instances
+                .insert(handle.into_raw(), Arc::new(state));
         }
         Err(e) => log::info(&format!("{e}: passing everything through")),
     }
@@ -112,16 +139,42 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
     // in the OpenXR specification, which is the one each function below is declared with.
     unsafe {
         Some(match name {
-            "xrGetInstanceProcAddr" => std::mem::transmute::<pfn::GetInstanceProcAddr, pfn::VoidFunction>(get_instance_proc_addr),
-            "xrDestroyInstance" => std::mem::transmute::<pfn::DestroyInstance, pfn::VoidFunction>(destroy_instance),
-            "xrCreateSession" => std::mem::transmute::<pfn::CreateSession, pfn::VoidFunction>(session::create_session),
-            "xrDestroySession" => std::mem::transmute::<pfn::DestroySession, pfn::VoidFunction>(session::destroy_session),
-            "xrEndFrame" => std::mem::transmute::<pfn::EndFrame, pfn::VoidFunction>(session::end_frame),
-            "xrCreateSwapchain" => std::mem::transmute::<pfn::CreateSwapchain, pfn::VoidFunction>(swapchain::create_swapchain),
-            "xrDestroySwapchain" => std::mem::transmute::<pfn::DestroySwapchain, pfn::VoidFunction>(swapchain::destroy_swapchain),
-            "xrEnumerateSwapchainImages" => std::mem::transmute::<pfn::EnumerateSwapchainImages, pfn::VoidFunction>(swapchain::enumerate_swapchain_images),
-            "xrAcquireSwapchainImage" => std::mem::transmute::<pfn::AcquireSwapchainImage, pfn::VoidFunction>(swapchain::acquire_swapchain_image),
-            "xrReleaseSwapchainImage" => std::mem::transmute::<pfn::ReleaseSwapchainImage, pfn::VoidFunction>(swapchain::release_swapchain_image),
+            "xrGetInstanceProcAddr" => std::mem::transmute::<
+                pfn::GetInstanceProcAddr,
+                pfn::VoidFunction,
+            >(get_instance_proc_addr),
+            "xrDestroyInstance" => {
+                std::mem::transmute::<pfn::DestroyInstance, pfn::VoidFunction>(destroy_instance)
+            }
+            "xrCreateSession" => std::mem::transmute::<pfn::CreateSession, pfn::VoidFunction>(
+                session::create_session,
+            ),
+            "xrDestroySession" => std::mem::transmute::<pfn::DestroySession, pfn::VoidFunction>(
+                session::destroy_session,
+            ),
+            "xrEndFrame" => {
+                std::mem::transmute::<pfn::EndFrame, pfn::VoidFunction>(session::end_frame)
+            }
+            "xrCreateSwapchain" => std::mem::transmute::<pfn::CreateSwapchain, pfn::VoidFunction>(
+                swapchain::create_swapchain,
+            ),
+            "xrDestroySwapchain" => {
+                std::mem::transmute::<pfn::DestroySwapchain, pfn::VoidFunction>(
+                    swapchain::destroy_swapchain,
+                )
+            }
+            "xrEnumerateSwapchainImages" => std::mem::transmute::<
+                pfn::EnumerateSwapchainImages,
+                pfn::VoidFunction,
+            >(swapchain::enumerate_swapchain_images),
+            "xrAcquireSwapchainImage" => std::mem::transmute::<
+                pfn::AcquireSwapchainImage,
+                pfn::VoidFunction,
+            >(swapchain::acquire_swapchain_image),
+            "xrReleaseSwapchainImage" => std::mem::transmute::<
+                pfn::ReleaseSwapchainImage,
+                pfn::VoidFunction,
+            >(swapchain::release_swapchain_image),
             _ => return None,
         })
     }
@@ -132,52 +185,63 @@ unsafe extern "system" fn get_instance_proc_addr(
     name: *const c_char,
     function: *mut Option<pfn::VoidFunction>,
 ) -> xr::Result {
-    guard("xrGetInstanceProcAddr", xr::Result::ERROR_RUNTIME_FAILURE, || {
-        let state = state::instance(instance);
-        let next_gipa = state.as_ref().map(|s| s.next.get_instance_proc_addr).or(FIRST_NEXT_GIPA.get().copied());
-        let Some(next_gipa) = next_gipa else {
-            return xr::Result::ERROR_HANDLE_INVALID;
-        };
-        // SAFETY: the app passes a NUL-terminated name.
-        let wanted = unsafe { c_str(name) }.unwrap_or("");
-        // Ask the next layer first: an extension function the app did not enable must stay
-        // XR_ERROR_FUNCTION_UNSUPPORTED, and its error codes pass through unchanged.
-        // SAFETY: forwarding the app's own arguments.
-        let result = unsafe { next_gipa(instance, name, function) };
-        let enabled = state.as_ref().is_some_and(|s| s.settings.enabled);
-        if result == xr::Result::SUCCESS && enabled {
-            if let Some(ours) = intercepted(wanted) {
-                // SAFETY: function is the app's valid out pointer (the call above wrote it).
-                unsafe { *function = Some(ours) };
+    guard(
+        "xrGetInstanceProcAddr",
+        xr::Result::ERROR_RUNTIME_FAILURE,
+        || {
+            let state = state::instance(instance);
+            let next_gipa = state
+                .as_ref()
+                .map(|s| s.next.get_instance_proc_addr)
+                .or(FIRST_NEXT_GIPA.get().copied());
+            let Some(next_gipa) = next_gipa else {
+                return xr::Result::ERROR_HANDLE_INVALID;
+            };
+            // SAFETY: the app passes a NUL-terminated name.
+            let wanted = unsafe { c_str(name) }.unwrap_or("");
+            // Ask the next layer first: an extension function the app did not enable must stay
+            // XR_ERROR_FUNCTION_UNSUPPORTED, and its error codes pass through unchanged.
+            // SAFETY: forwarding the app's own arguments.
+            let result = unsafe { next_gipa(instance, name, function) };
+            let enabled = state.as_ref().is_some_and(|s| s.settings.enabled);
+            if result == xr::Result::SUCCESS && enabled {
+                if let Some(ours) = intercepted(wanted) {
+                    // SAFETY: function is the app's valid out pointer (the call above wrote it).
+                    unsafe { *function = Some(ours) };
+                }
             }
-        }
-        if wanted == "xrGetInstanceProcAddr" && result == xr::Result::SUCCESS {
-            // SAFETY: as above; our gipa must stay in the chain even when disabled.
-            unsafe { *function = intercepted(wanted) };
-        }
-        result
-    })
+            if wanted == "xrGetInstanceProcAddr" && result == xr::Result::SUCCESS {
+                // SAFETY: as above; our gipa must stay in the chain even when disabled.
+                unsafe { *function = intercepted(wanted) };
+            }
+            result
+        },
+    )
 }
 
 unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result {
-    guard("xrDestroyInstance", xr::Result::ERROR_RUNTIME_FAILURE, || {
-        let Some(state) = state::instance(instance) else {
-            return xr::Result::ERROR_HANDLE_INVALID;
-        };
-        // Sessions left alive by the app die with the instance: drop our GPU state first.
-        let sessions: Vec<u64> = {
-            let reg = state::registry();
-            reg.sessions
-                .iter()
-                .filter(|(_, s)| lock(s).instance == instance)
-                .map(|(k, _)| *k)
-                .collect()
-        };
-        for s in sessions {
-            session::forget(xr::Session::from_raw(s));
-        }
-        state::registry().instances.remove(&instance.into_raw());
-        // SAFETY: forwarding the app's call.
-        unsafe { (state.next.destroy_instance)(instance) }
-    })
+    guard(
+        "xrDestroyInstance",
+        xr::Result::ERROR_RUNTIME_FAILURE,
+        || {
+            let Some(state) = state::instance(instance) else {
+                return xr::Result::ERROR_HANDLE_INVALID;
+            };
+            // Sessions left alive by the app die with the instance: drop our GPU state first.
+            let sessions: Vec<u64> = {
+                let reg = state::registry();
+                reg.sessions
+                    .iter()
+                    .filter(|(_, s)| lock(s).instance == instance)
+                    .map(|(k, _)| *k)
+                    .collect()
+            };
+            for s in sessions {
+                session::forget(xr::Session::from_raw(s));
+            }
+            state::registry().instances.remove(&instance.into_raw());
+            // SAFETY: forwarding the app's call.
+            unsafe { (state.next.destroy_instance)(instance) }
+        },
+    )
 }

@@ -16,7 +16,10 @@ pub fn guard(name: &str, on_panic: xr::Result, body: impl FnOnce() -> xr::Result
                 .map(|s| s.to_string())
                 .or_else(|| panic.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".into());
-            log::once(&format!("panic-{name}"), &format!("internal error in {name}: {what}"));
+            log::once(
+                &format!("panic-{name}"),
+                &format!("internal error in {name}: {what}"),
+            );
             on_panic
         }
     }
@@ -27,7 +30,10 @@ pub fn guard(name: &str, on_panic: xr::Result, body: impl FnOnce() -> xr::Result
 /// # Safety
 /// `next` must be null or point to a valid chain of OpenXR structs (each starting with
 /// `XrBaseInStructure`), and `T` must be the struct that `ty` identifies.
-pub unsafe fn find_in_chain<T>(mut next: *const std::ffi::c_void, ty: xr::StructureType) -> Option<*const T> {
+pub unsafe fn find_in_chain<T>(
+    mut next: *const std::ffi::c_void,
+    ty: xr::StructureType,
+) -> Option<*const T> {
     while !next.is_null() {
         // SAFETY: the caller guarantees every element starts with XrBaseInStructure.
         let base = unsafe { &*(next as *const xr::BaseInStructure) };

@@ -47,18 +47,25 @@ pub fn find_library() -> Result<PathBuf, String> {
         .find(|p| p.is_file())
         .map(|p| p.canonicalize().unwrap_or(p))
         .ok_or_else(|| {
-            format!("{LIBRARY_NAME} is not next to {}: build it with `cargo build --release`", exe.display())
+            format!(
+                "{LIBRARY_NAME} is not next to {}: build it with `cargo build --release`",
+                exe.display()
+            )
         })
 }
 
 pub fn install(scope: Scope, library: &Path) -> Result<PathBuf, String> {
     if !library.is_absolute() || !library.is_file() {
-        return Err(format!("{} is not an existing absolute library path", library.display()));
+        return Err(format!(
+            "{} is not an existing absolute library path",
+            library.display()
+        ));
     }
     let dir = layer_dir(scope)?;
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let path = dir.join(MANIFEST_NAME);
-    std::fs::write(&path, manifest_json(library)).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    std::fs::write(&path, manifest_json(library))
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path)
 }
 

@@ -24,7 +24,11 @@ fn log_path() -> Option<PathBuf> {
 fn open_file() -> Option<std::fs::File> {
     let path = log_path()?;
     std::fs::create_dir_all(path.parent()?).ok()?;
-    std::fs::OpenOptions::new().create(true).append(true).open(path).ok()
+    std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .ok()
 }
 
 fn log() -> &'static Mutex<Log> {

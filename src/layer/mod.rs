@@ -5,10 +5,10 @@
 
 pub mod background;
 pub mod capture;
-pub mod install;
 mod dispatch;
 mod entry;
 mod ffi;
+pub mod install;
 pub mod log;
 mod processor;
 pub mod session;

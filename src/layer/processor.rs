@@ -5,7 +5,9 @@
 use crate::algorithm::params::Params;
 use crate::gpu::engine::{barrier, begin};
 use crate::gpu::error::VkResultExt;
-use crate::gpu::{BackgroundFrame, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget};
+use crate::gpu::{
+    BackgroundFrame, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
+};
 use crate::image::RgbaImage;
 use ash::vk;
 use std::collections::{HashMap, HashSet};
@@ -93,13 +95,19 @@ impl Processor {
             .queue_family_index(self.gpu.queue_family);
         // SAFETY: valid create infos on the app's device; the objects are ours.
         unsafe {
-            self.pool = d.create_command_pool(&info, None).vk("vkCreateCommandPool")?;
+            self.pool = d
+                .create_command_pool(&info, None)
+                .vk("vkCreateCommandPool")?;
             let alloc = vk::CommandBufferAllocateInfo::default()
                 .command_pool(self.pool)
                 .level(vk::CommandBufferLevel::PRIMARY)
                 .command_buffer_count(1);
-            self.cmd = d.allocate_command_buffers(&alloc).vk("vkAllocateCommandBuffers")?[0];
-            self.fence = d.create_fence(&vk::FenceCreateInfo::default(), None).vk("vkCreateFence")?;
+            self.cmd = d
+                .allocate_command_buffers(&alloc)
+                .vk("vkAllocateCommandBuffers")?[0];
+            self.fence = d
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .vk("vkCreateFence")?;
         }
         Ok(())
     }
@@ -110,7 +118,8 @@ impl Processor {
             let d = &self.gpu.device;
             // SAFETY: the fence is ours and was submitted.
             unsafe {
-                d.wait_for_fences(&[self.fence], true, 5_000_000_000).vk("vkWaitForFences")?;
+                d.wait_for_fences(&[self.fence], true, 5_000_000_000)
+                    .vk("vkWaitForFences")?;
                 d.reset_fences(&[self.fence]).vk("vkResetFences")?;
             }
             self.in_flight = false;
@@ -128,7 +137,9 @@ impl Processor {
             if let Some(mut old) = self.background.take() {
                 old.destroy(&self.gpu);
             }
-            let bg = self.engine.create_background(&self.gpu, size, Placement::DEVICE)?;
+            let bg = self
+                .engine
+                .create_background(&self.gpu, size, Placement::DEVICE)?;
             for v in self.views.values_mut() {
                 self.engine.bind(&self.gpu, &mut v.target, &bg);
                 v.prepared_for = None;
@@ -142,7 +153,11 @@ impl Processor {
     }
 
     fn ensure_view(&mut self, item: &WorkItem) -> Result<(), GpuError> {
-        if self.views.get(&item.key).is_some_and(|v| v.target.format == item.format) {
+        if self
+            .views
+            .get(&item.key)
+            .is_some_and(|v| v.target.format == item.format)
+        {
             return Ok(());
         }
         if let Some(mut old) = self.views.remove(&item.key) {
@@ -151,15 +166,34 @@ impl Processor {
         if self.views.len() as u32 >= MAX_VIEWS {
             self.evict_oldest();
         }
-        let bg = self.background.as_ref().expect("background is set before views");
-        let target =
-            self.engine.create_view(&self.gpu, item.key.extent, item.format, bg, Placement::DEVICE)?;
-        self.views.insert(item.key, PreparedView { target, prepared_for: None, last_frame: self.frame });
+        let bg = self
+            .background
+            .as_ref()
+            .expect("background is set before views");
+        let target = self.engine.create_view(
+            &self.gpu,
+            item.key.extent,
+            item.format,
+            bg,
+            Placement::DEVICE,
+        )?;
+        self.views.insert(
+            item.key,
+            PreparedView {
+                target,
+                prepared_for: None,
+                last_frame: self.frame,
+            },
+        );
         Ok(())
     }
 
     fn evict_oldest(&mut self) {
-        let oldest = self.views.iter().min_by_key(|(_, v)| v.last_frame).map(|(k, _)| *k);
+        let oldest = self
+            .views
+            .iter()
+            .min_by_key(|(_, v)| v.last_frame)
+            .map(|(k, _)| *k);
         if let Some(mut v) = oldest.and_then(|k| self.views.remove(&k)) {
             self.engine.destroy_view(&self.gpu, &mut v.target);
         }
@@ -170,7 +204,12 @@ impl Processor {
         if self.wait_idle().is_err() {
             return;
         }
-        let keys: Vec<ViewKey> = self.views.keys().filter(|k| k.swapchain == swapchain).copied().collect();
+        let keys: Vec<ViewKey> = self
+            .views
+            .keys()
+            .filter(|k| k.swapchain == swapchain)
+            .copied()
+            .collect();
         for k in keys {
             if let Some(mut v) = self.views.remove(&k) {
                 self.engine.destroy_view(&self.gpu, &mut v.target);
@@ -200,8 +239,10 @@ impl Processor {
                 let bytes = self.views[&item.key].target.pixel_bytes();
                 let usage = vk::BufferUsageFlags::TRANSFER_DST;
                 let loc = gpu_allocator::MemoryLocation::GpuToCpu;
-                let before = crate::gpu::buffer::GpuBuffer::new(&self.gpu, bytes, usage, loc, "capture")?;
-                let after = crate::gpu::buffer::GpuBuffer::new(&self.gpu, bytes, usage, loc, "capture")?;
+                let before =
+                    crate::gpu::buffer::GpuBuffer::new(&self.gpu, bytes, usage, loc, "capture")?;
+                let after =
+                    crate::gpu::buffer::GpuBuffer::new(&self.gpu, bytes, usage, loc, "capture")?;
                 staging.push((before, after));
             }
         }
@@ -236,7 +277,10 @@ impl Processor {
         // SAFETY: recorded above; the app's queue is ours to use inside xrEndFrame (the OpenXR
         // spec gives the runtime, and so its layers, the queue during this call).
         unsafe {
-            self.gpu.device.end_command_buffer(self.cmd).vk("vkEndCommandBuffer")?;
+            self.gpu
+                .device
+                .end_command_buffer(self.cmd)
+                .vk("vkEndCommandBuffer")?;
             self.gpu
                 .device
                 .queue_submit(self.gpu.queue, &submit, self.fence)
@@ -246,24 +290,31 @@ impl Processor {
         Ok(())
     }
 
-    fn image_barriers(
-        &self,
-        items: &[WorkItem],
-        to_general: bool,
-    ) {
+    fn image_barriers(&self, items: &[WorkItem], to_general: bool) {
         let mut seen = HashSet::new();
         let barriers: Vec<_> = items
             .iter()
             .filter(|i| seen.insert((i.image, i.key.array_index)))
             .map(|i| {
                 let (old, new) = if to_general {
-                    (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, vk::ImageLayout::GENERAL)
+                    (
+                        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                        vk::ImageLayout::GENERAL,
+                    )
                 } else {
-                    (vk::ImageLayout::GENERAL, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    (
+                        vk::ImageLayout::GENERAL,
+                        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    )
                 };
-                let colour = vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_READ;
+                let colour = vk::AccessFlags::COLOR_ATTACHMENT_WRITE
+                    | vk::AccessFlags::COLOR_ATTACHMENT_READ;
                 let transfer = vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE;
-                let (src, dst) = if to_general { (colour, transfer) } else { (transfer, colour) };
+                let (src, dst) = if to_general {
+                    (colour, transfer)
+                } else {
+                    (transfer, colour)
+                };
                 vk::ImageMemoryBarrier::default()
                     .old_layout(old)
                     .new_layout(new)
@@ -277,7 +328,11 @@ impl Processor {
             .collect();
         let colour = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
         let transfer = vk::PipelineStageFlags::TRANSFER;
-        let (src, dst) = if to_general { (colour, transfer) } else { (transfer, colour) };
+        let (src, dst) = if to_general {
+            (colour, transfer)
+        } else {
+            (transfer, colour)
+        };
         // SAFETY: cmd is recording; the images are the app's, held by the layer until release.
         unsafe {
             self.gpu.device.cmd_pipeline_barrier(
@@ -301,16 +356,36 @@ impl Processor {
                     .base_array_layer(item.key.array_index)
                     .layer_count(1),
             )
-            .image_offset(vk::Offset3D { x: item.key.offset.0, y: item.key.offset.1, z: 0 })
-            .image_extent(vk::Extent3D { width: item.key.extent.0, height: item.key.extent.1, depth: 1 })];
+            .image_offset(vk::Offset3D {
+                x: item.key.offset.0,
+                y: item.key.offset.1,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width: item.key.extent.0,
+                height: item.key.extent.1,
+                depth: 1,
+            })];
         let d = &self.gpu.device;
         // SAFETY: cmd is recording; the image is in GENERAL (see image_barriers) and the
         // region lies inside it (checked against the swapchain size when the item was made).
         unsafe {
             if to_buffer {
-                d.cmd_copy_image_to_buffer(self.cmd, item.image, vk::ImageLayout::GENERAL, target.pixels.raw, &region);
+                d.cmd_copy_image_to_buffer(
+                    self.cmd,
+                    item.image,
+                    vk::ImageLayout::GENERAL,
+                    target.pixels.raw,
+                    &region,
+                );
             } else {
-                d.cmd_copy_buffer_to_image(self.cmd, target.pixels.raw, item.image, vk::ImageLayout::GENERAL, &region);
+                d.cmd_copy_buffer_to_image(
+                    self.cmd,
+                    target.pixels.raw,
+                    item.image,
+                    vk::ImageLayout::GENERAL,
+                    &region,
+                );
             }
         }
     }
@@ -319,7 +394,11 @@ impl Processor {
         let src = &self.views[&item.key].target.pixels;
         let region = [vk::BufferCopy::default().size(self.views[&item.key].target.pixel_bytes())];
         // SAFETY: cmd is recording; both buffers are ours and large enough.
-        unsafe { self.gpu.device.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &region) };
+        unsafe {
+            self.gpu
+                .device
+                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, &region)
+        };
     }
 
     fn record(
@@ -341,7 +420,8 @@ impl Processor {
         if !stale.is_empty() {
             let bg = self.background.as_ref().expect("set in process");
             let targets: Vec<&ViewTarget> = stale.iter().map(|k| &self.views[k].target).collect();
-            self.engine.record_background(&self.gpu, self.cmd, bg, &targets, params)?;
+            self.engine
+                .record_background(&self.gpu, self.cmd, bg, &targets, params)?;
         }
         for k in &stale {
             if let Some(v) = self.views.get_mut(k) {
@@ -357,7 +437,12 @@ impl Processor {
         use vk::PipelineStageFlags as S;
         self.image_barriers(items, true);
         items.iter().for_each(|i| self.copy_region(i, true));
-        barrier(&self.gpu, self.cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+        barrier(
+            &self.gpu,
+            self.cmd,
+            S::TRANSFER,
+            S::COMPUTE_SHADER | S::TRANSFER,
+        );
         for (i, (before, _)) in items.iter().zip(staging) {
             self.copy_to_capture(i, before);
         }
@@ -366,7 +451,8 @@ impl Processor {
             barrier(&self.gpu, self.cmd, S::TRANSFER, S::COMPUTE_SHADER);
         }
         for i in items {
-            self.engine.record_enhance(&self.gpu, self.cmd, &self.views[&i.key].target, params);
+            self.engine
+                .record_enhance(&self.gpu, self.cmd, &self.views[&i.key].target, params);
         }
         barrier(&self.gpu, self.cmd, S::COMPUTE_SHADER, S::TRANSFER);
         for (i, (_, after)) in items.iter().zip(staging) {

@@ -28,7 +28,10 @@ pub unsafe extern "system" fn create_session(
         }
         // SAFETY: the runtime accepted info, so its next chain is valid.
         let binding = unsafe { info.as_ref() }.and_then(|i| unsafe {
-            find_in_chain::<xr::GraphicsBindingVulkanKHR>(i.next, xr::StructureType::GRAPHICS_BINDING_VULKAN_KHR)
+            find_in_chain::<xr::GraphicsBindingVulkanKHR>(
+                i.next,
+                xr::StructureType::GRAPHICS_BINDING_VULKAN_KHR,
+            )
         });
         let settings = inst.settings.clone();
         let (processor, background) = match binding {
@@ -50,7 +53,9 @@ pub unsafe extern "system" fn create_session(
         };
         // SAFETY: session was written by the successful create call.
         let handle = unsafe { *session };
-        state::registry().sessions.insert(handle.into_raw(), Arc::new(Mutex::new(state)));
+        state::registry()
+            .sessions
+            .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
         result
     })
 }
@@ -62,7 +67,9 @@ fn set_up(
     let background = match load_static(background_spec) {
         Ok(bg) => bg,
         Err(e) => {
-            log::info(&format!("no background ({e}): passing frames through untouched"));
+            log::info(&format!(
+                "no background ({e}): passing frames through untouched"
+            ));
             return (None, None);
         }
     };
@@ -79,11 +86,16 @@ fn set_up(
     };
     match gpu.and_then(Processor::new) {
         Ok(p) => {
-            log::info(&format!("session on Vulkan device {:?}: enhancing", p.gpu.name));
+            log::info(&format!(
+                "session on Vulkan device {:?}: enhancing",
+                p.gpu.name
+            ));
             (Some(p), Some(background))
         }
         Err(e) => {
-            log::info(&format!("GPU set-up failed ({e}): passing frames through untouched"));
+            log::info(&format!(
+                "GPU set-up failed ({e}): passing frames through untouched"
+            ));
             (None, None)
         }
     }
@@ -101,15 +113,19 @@ pub fn forget(session: xr::Session) {
 }
 
 pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Result {
-    guard("xrDestroySession", xr::Result::ERROR_RUNTIME_FAILURE, || {
-        let Some(s) = state::session(session) else {
-            return xr::Result::ERROR_HANDLE_INVALID;
-        };
-        let next = lock(&s).next;
-        forget(session);
-        // SAFETY: forwarding the app's call after releasing everything the layer made.
-        unsafe { (next.destroy_session)(session) }
-    })
+    guard(
+        "xrDestroySession",
+        xr::Result::ERROR_RUNTIME_FAILURE,
+        || {
+            let Some(s) = state::session(session) else {
+                return xr::Result::ERROR_HANDLE_INVALID;
+            };
+            let next = lock(&s).next;
+            forget(session);
+            // SAFETY: forwarding the app's call after releasing everything the layer made.
+            unsafe { (next.destroy_session)(session) }
+        },
+    )
 }
 
 /// The sub-images of the frame's layers that the layer enhances.
@@ -124,7 +140,9 @@ unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<xr::SwapchainS
     for i in 0..info.layer_count as usize {
         // SAFETY: layer_count valid pointers (the caller's contract).
         let layer = unsafe { *info.layers.add(i) };
-        let Some(base) = (unsafe { layer.as_ref() }) else { continue };
+        let Some(base) = (unsafe { layer.as_ref() }) else {
+            continue;
+        };
         if base.ty == xr::StructureType::COMPOSITION_LAYER_PROJECTION {
             // SAFETY: the type tag says this is a projection layer.
             let proj = unsafe { &*(layer as *const xr::CompositionLayerProjection) };
@@ -201,7 +219,9 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
         return;
     }
     let capture = capturing(s);
-    let Some(bg) = s.background.clone() else { return };
+    let Some(bg) = s.background.clone() else {
+        return;
+    };
     let params = s.settings.params.clone();
     let processor = s.processor.as_mut().expect("checked above");
     match processor.process(&items, &bg, 0, &params, capture) {
@@ -210,26 +230,46 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
                 write_capture(s, &views, &bg);
             }
             s.processed += 1;
-            log::once("first-frame", &format!("processing frames ({} views per frame)", items.len()));
+            log::once(
+                "first-frame",
+                &format!("processing frames ({} views per frame)", items.len()),
+            );
         }
         Err(e) => {
-            log::info(&format!("GPU work failed ({e}): passing this session's frames through from now on"));
+            log::info(&format!(
+                "GPU work failed ({e}): passing this session's frames through from now on"
+            ));
             s.processor = None;
         }
     }
 }
 
-fn write_capture(s: &SessionState, views: &[super::processor::CapturedView], bg: &crate::image::RgbaImage) {
+fn write_capture(
+    s: &SessionState,
+    views: &[super::processor::CapturedView],
+    bg: &crate::image::RgbaImage,
+) {
     let Some(c) = &s.settings.capture else { return };
     for (k, v) in views.iter().enumerate() {
-        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings.background, &s.settings.params);
+        let written = capture::write_view(
+            &c.dir,
+            s.processed,
+            k,
+            v,
+            bg,
+            &s.settings.background,
+            &s.settings.params,
+        );
         if let Err(e) = written {
             log::once("capture-failed", &format!("capture failed: {e}"));
         }
     }
 }
 
-pub unsafe extern "system" fn end_frame(session: xr::Session, info: *const xr::FrameEndInfo) -> xr::Result {
+pub unsafe extern "system" fn end_frame(
+    session: xr::Session,
+    info: *const xr::FrameEndInfo,
+) -> xr::Result {
     guard("xrEndFrame", xr::Result::ERROR_RUNTIME_FAILURE, || {
         let Some(s) = state::session(session) else {
             return xr::Result::ERROR_HANDLE_INVALID;
@@ -238,7 +278,9 @@ pub unsafe extern "system" fn end_frame(session: xr::Session, info: *const xr::F
         s.frames += 1;
         // SAFETY: the app's frame end info (null is left for the runtime to reject).
         if let Some(info) = unsafe { info.as_ref() } {
-            let processed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| enhance_frame(&mut s, info)));
+            let processed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                enhance_frame(&mut s, info)
+            }));
             if processed.is_err() {
                 log::info("internal error while enhancing: passing this session's frames through from now on");
                 s.processor = None;

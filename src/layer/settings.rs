@@ -30,11 +30,17 @@ pub struct Settings {
 
 /// The loader enables an implicit layer when its variable is merely set: these values mean off.
 pub fn is_off(value: &str) -> bool {
-    matches!(value.trim().to_ascii_lowercase().as_str(), "" | "0" | "false" | "off" | "no")
+    matches!(
+        value.trim().to_ascii_lowercase().as_str(),
+        "" | "0" | "false" | "off" | "no"
+    )
 }
 
 fn is_on(value: &str) -> bool {
-    matches!(value.trim().to_ascii_lowercase().as_str(), "1" | "true" | "on" | "yes")
+    matches!(
+        value.trim().to_ascii_lowercase().as_str(),
+        "1" | "true" | "on" | "yes"
+    )
 }
 
 struct Reader<'a> {
@@ -47,7 +53,9 @@ impl Reader<'_> {
         match (self.get)(name) {
             None => default,
             Some(v) => v.trim().parse().unwrap_or_else(|_| {
-                self.warnings.push(format!("{name}={v:?} is not a valid value; using the default"));
+                self.warnings.push(format!(
+                    "{name}={v:?} is not a valid value; using the default"
+                ));
                 default
             }),
         }
@@ -61,7 +69,8 @@ impl Reader<'_> {
         match parts.as_slice() {
             [Some(x), Some(y)] => [*x, *y],
             _ => {
-                self.warnings.push(format!("{name}={v:?} is not X,Y; using the default"));
+                self.warnings
+                    .push(format!("{name}={v:?} is not X,Y; using the default"));
                 default
             }
         }
@@ -79,11 +88,16 @@ impl Settings {
 
     /// Reads settings through `get` (the environment, or a map in tests).
     pub fn from_lookup(get: &dyn Fn(&str) -> Option<String>) -> Settings {
-        let mut r = Reader { get, warnings: Vec::new() };
+        let mut r = Reader {
+            get,
+            warnings: Vec::new(),
+        };
         let d = Params::default();
         let method_name = (r.get)("CONTRASTXR_METHOD").unwrap_or_else(|| "paper".into());
         let method = Method::parse(method_name.trim()).unwrap_or_else(|| {
-            r.warnings.push(format!("CONTRASTXR_METHOD={method_name:?} is not a method; using paper"));
+            r.warnings.push(format!(
+                "CONTRASTXR_METHOD={method_name:?} is not a method; using paper"
+            ));
             Method::Paper
         });
         let mut params = Params {
@@ -99,14 +113,20 @@ impl Settings {
             method,
         };
         if let Err(e) = params.validate() {
-            r.warnings.push(format!("invalid engine settings ({e}); using the defaults"));
-            params = Params { method, ..Params::default() };
+            r.warnings
+                .push(format!("invalid engine settings ({e}); using the defaults"));
+            params = Params {
+                method,
+                ..Params::default()
+            };
         }
-        let capture = (r.get)("CONTRASTXR_CAPTURE_DIR").filter(|d| !d.is_empty()).map(|dir| Capture {
-            dir: PathBuf::from(dir),
-            frames: 0,
-            skip: 0,
-        });
+        let capture = (r.get)("CONTRASTXR_CAPTURE_DIR")
+            .filter(|d| !d.is_empty())
+            .map(|dir| Capture {
+                dir: PathBuf::from(dir),
+                frames: 0,
+                skip: 0,
+            });
         let capture = capture.map(|c| Capture {
             frames: r.parsed("CONTRASTXR_CAPTURE_FRAMES", 1),
             skip: r.parsed("CONTRASTXR_CAPTURE_SKIP", 0),
@@ -152,8 +172,10 @@ mod tests {
     use std::collections::HashMap;
 
     fn read(vars: &[(&str, &str)]) -> Settings {
-        let map: HashMap<String, String> =
-            vars.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        let map: HashMap<String, String> = vars
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
         Settings::from_lookup(&move |k| map.get(k).cloned())
     }
 
@@ -167,10 +189,16 @@ mod tests {
 
     #[test]
     fn bad_values_keep_defaults_and_warn() {
-        let s = read(&[("CONTRASTXR_LAMBDA_E", "lots"), ("CONTRASTXR_FOV_SCALE", "1")]);
+        let s = read(&[
+            ("CONTRASTXR_LAMBDA_E", "lots"),
+            ("CONTRASTXR_FOV_SCALE", "1"),
+        ]);
         assert_eq!(s.params, Params::default());
         assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
-        let s = read(&[("CONTRASTXR_LAMBDA_E", "0.6"), ("CONTRASTXR_METHOD", "hue-only")]);
+        let s = read(&[
+            ("CONTRASTXR_LAMBDA_E", "0.6"),
+            ("CONTRASTXR_METHOD", "hue-only"),
+        ]);
         assert_eq!(s.params.lambda_e, 0.6);
         assert_eq!(s.params.method, Method::HueOnly);
         let s = read(&[("CONTRASTXR_TRANSMITTANCE", "7")]);

@@ -1,0 +1,119 @@
+//! One display pixel end to end: 8-bit sRGB -> linear -> scaled -> method -> back (spec section 3).
+
+use glam::DVec3;
+
+use super::conformance::PixelTrace;
+use super::params::{SUBTRACTION_K_B, SUBTRACTION_K_V};
+use super::scaled::enhance_scaled_traced;
+use super::{Method, Params};
+use crate::colour;
+
+/// Linear result with the smallest branch margin (scaled units; infinite when no branch ran).
+struct LinearOutcome {
+    /// Before the [0, 1] clip.
+    unclipped: DVec3,
+    margin: f64,
+}
+
+impl LinearOutcome {
+    fn linear(&self) -> DVec3 {
+        self.unclipped.clamp(DVec3::ZERO, DVec3::ONE)
+    }
+}
+
+/// A pixel that is exactly black or fully transparent is transparent on an additive display.
+fn is_skipped(display_linear: DVec3, alpha: f64) -> bool {
+    alpha == 0.0 || display_linear == DVec3::ZERO
+}
+
+fn enhance_linear_traced(
+    display_linear: DVec3,
+    bg_linear: DVec3,
+    bg_scaled: DVec3,
+    params: &Params,
+) -> LinearOutcome {
+    if params.method == Method::Subtraction {
+        let k_v = f64::from(SUBTRACTION_K_V);
+        let k_b = f64::from(SUBTRACTION_K_B);
+        let unclipped = k_v * display_linear - k_b * bg_linear;
+        return LinearOutcome {
+            unclipped,
+            margin: f64::INFINITY,
+        };
+    }
+    let display = colour::linear_to_scaled(display_linear);
+    let out = enhance_scaled_traced(display, bg_scaled, params);
+    // P == D (lambda_e = 0, mid grey background, ...) skips the LAB round trip, so that "no
+    // change" is bit-exact.
+    let unclipped = if out.p == display {
+        display_linear
+    } else {
+        colour::scaled_to_linear(out.p)
+    };
+    LinearOutcome {
+        unclipped,
+        margin: out.margin,
+    }
+}
+
+/// The method on one pixel in linear light. `bg_linear` is the blurred, FoV-mapped,
+/// unattenuated background (for subtraction), `bg_scaled` the paper's B.
+/// None: the pixel is skipped (exactly black or alpha 0) and must be left untouched.
+/// Otherwise the new linear colour, each channel clipped to [0, 1].
+pub fn enhance_linear(
+    display_linear: DVec3,
+    alpha: f64,
+    bg_linear: DVec3,
+    bg_scaled: DVec3,
+    params: &Params,
+) -> Option<DVec3> {
+    if is_skipped(display_linear, alpha) {
+        return None;
+    }
+    Some(enhance_linear_traced(display_linear, bg_linear, bg_scaled, params).linear())
+}
+
+/// The method on one 8-bit RGBA pixel; alpha passes through, a skipped pixel comes back as is.
+pub fn enhance_srgb8(
+    display: [u8; 4],
+    bg_linear: DVec3,
+    bg_scaled: DVec3,
+    params: &Params,
+) -> [u8; 4] {
+    enhance_srgb8_trace(display, bg_linear, bg_scaled, params).out
+}
+
+/// `enhance_srgb8` with what the GPU conformance test needs to judge a difference.
+pub fn enhance_srgb8_trace(
+    display: [u8; 4],
+    bg_linear: DVec3,
+    bg_scaled: DVec3,
+    params: &Params,
+) -> PixelTrace {
+    let display_linear = colour::srgb8_to_linear([display[0], display[1], display[2]]);
+    let unchanged = || PixelTrace {
+        out: display,
+        exact: [0, 1, 2].map(|i| f64::from(display[i]) / 255.0),
+        linear: display_linear.to_array(),
+        near_threshold: false,
+    };
+    if is_skipped(display_linear, f64::from(display[3])) {
+        return unchanged();
+    }
+    let out = enhance_linear_traced(display_linear, bg_linear, bg_scaled, params);
+    let near_threshold = out.margin < super::NEAR_THRESHOLD;
+    if out.unclipped == display_linear {
+        return PixelTrace {
+            near_threshold,
+            ..unchanged()
+        };
+    }
+    let exact = out.linear().to_array().map(colour::srgb_encode);
+    let q = exact.map(colour::quantize);
+    PixelTrace {
+        out: [q[0], q[1], q[2], display[3]],
+        exact,
+        linear: out.unclipped.to_array(),
+        near_threshold,
+    }
+}

@@ -1,0 +1,65 @@
+//! The per-pixel methods in the scaled space: Algorithm 1 (spec section 3) and the paper's
+//! comparison methods (spec section 5).
+
+use glam::DVec3;
+
+use super::constraints::{
+    ab_plane, change_vector, chroma_constraint, jnd_constraint, luminance_constraint, split_chroma,
+    Margin,
+};
+use super::{Method, Params, DIRECTION_EPSILON};
+
+/// P and how close the computation came to a branch flip.
+#[derive(Clone, Copy, Debug)]
+pub struct ScaledOutcome {
+    /// The optimal displayed colour, scaled space, before any clipping.
+    pub p: DVec3,
+    /// Smallest |quantity - threshold| over the branch conditions evaluated (scaled units).
+    pub margin: f64,
+}
+
+/// The method's P for display colour D on background B (both scaled). `Method::Subtraction`
+/// is defined in linear light (see `enhance_linear`); here it returns D unchanged.
+pub fn enhance_scaled(display: DVec3, background: DVec3, params: &Params) -> DVec3 {
+    enhance_scaled_traced(display, background, params).p
+}
+
+pub fn enhance_scaled_traced(display: DVec3, background: DVec3, params: &Params) -> ScaledOutcome {
+    let mut m = Margin::new();
+    let lambda_e = f64::from(params.lambda_e);
+    let p = match change_vector(display, background, lambda_e, &mut m) {
+        None => display,
+        Some(e) => match params.method {
+            Method::Paper => paper(display, background, e, params, &mut m),
+            Method::HueOnly => display + hue_change(display, e, &mut m),
+            Method::OtherHue => display - hue_change(display, e, &mut m),
+            Method::LumChroma => lum_chroma(display, e, &mut m),
+            Method::Subtraction => display,
+        },
+    };
+    ScaledOutcome { p, margin: m.0 }
+}
+
+/// Algorithm 1: the chroma and luminance constraints shape E into dir; P = D + dir; then JND.
+fn paper(display: DVec3, background: DVec3, e: DVec3, params: &Params, m: &mut Margin) -> DVec3 {
+    let dir_ab = chroma_constraint(display, e, m);
+    let dir = DVec3::new(luminance_constraint(e), dir_ab.y, dir_ab.z);
+    let r = f64::from(params.lambda_jnd_scaled);
+    jnd_constraint(display, display + dir, background, r, m)
+}
+
+/// E'_h, the hue part of E'. For an achromatic D all of E' counts as hue change, as in the
+/// paper method's achromatic branch (dir.ab = E'.ab).
+fn hue_change(display: DVec3, e: DVec3, m: &mut Margin) -> DVec3 {
+    split_chroma(display, e, m).map_or(ab_plane(e), |s| s.hue)
+}
+
+/// Luminance and chroma only: |E'_h| along OD (away from mid grey).
+fn lum_chroma(display: DVec3, e: DVec3, m: &mut Margin) -> DVec3 {
+    let len = display.length();
+    m.note(len, DIRECTION_EPSILON);
+    if len <= DIRECTION_EPSILON {
+        return display;
+    }
+    display + hue_change(display, e, m).length() * (display / len)
+}

@@ -1,0 +1,207 @@
+//! Background preprocessing on the CPU (spec section 2): decode, Gaussian blur on the
+//! camera's own grid, FoV mapping onto the display grid (bilinear, linear light), then
+//! attenuation and conversion to the scaled space. The GPU engine does the same in f32.
+
+use glam::DVec3;
+
+use crate::algorithm::Params;
+use crate::colour;
+use crate::image::RgbaImage;
+
+/// The background behind each display pixel, on the display's grid.
+#[derive(Clone, Debug)]
+pub struct PreparedBackground {
+    pub width: u32,
+    pub height: u32,
+    /// Decoded, blurred, FoV-sampled linear light, NOT attenuated (subtraction needs this).
+    /// Row-major, `width * height` entries.
+    pub linear: Vec<DVec3>,
+    /// transmittance * linear -> XYZ -> LAB -> scaled: the paper's B.
+    pub scaled: Vec<DVec3>,
+}
+
+/// A linear-light image on the camera's grid.
+struct LinearImage {
+    width: u32,
+    height: u32,
+    pixels: Vec<DVec3>,
+}
+
+impl LinearImage {
+    fn decode(camera: &RgbaImage) -> Self {
+        let lut: Vec<f64> = (0..=255u8).map(colour::code_to_linear).collect();
+        let pixels = camera
+            .pixels
+            .iter()
+            .map(|p| DVec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
+            .collect();
+        LinearImage {
+            width: camera.width,
+            height: camera.height,
+            pixels,
+        }
+    }
+
+    /// Pixel with clamp-to-edge addressing.
+    fn at(&self, x: i64, y: i64) -> DVec3 {
+        let x = x.clamp(0, i64::from(self.width) - 1) as usize;
+        let y = y.clamp(0, i64::from(self.height) - 1) as usize;
+        self.pixels[y * self.width as usize + x]
+    }
+
+    /// One pass of the separable Gaussian, horizontal (`dx = 1`) or vertical.
+    fn blur_pass(&self, taps: &[f64], horizontal: bool) -> Self {
+        let half = (taps.len() / 2) as i64;
+        let (w, h) = (i64::from(self.width), i64::from(self.height));
+        let mut pixels = Vec::with_capacity(self.pixels.len());
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = DVec3::ZERO;
+                for (k, &t) in taps.iter().enumerate() {
+                    let o = k as i64 - half;
+                    sum += t * if horizontal {
+                        self.at(x + o, y)
+                    } else {
+                        self.at(x, y + o)
+                    };
+                }
+                pixels.push(sum);
+            }
+        }
+        LinearImage {
+            width: self.width,
+            height: self.height,
+            pixels,
+        }
+    }
+
+    fn blur(self, taps: &[f64]) -> Self {
+        if taps.len() <= 1 {
+            return self;
+        }
+        self.blur_pass(taps, true).blur_pass(taps, false)
+    }
+
+    /// Bilinear sample at texture coordinates (u, v): texel centres at (i + 0.5) / W,
+    /// clamp-to-edge.
+    fn sample(&self, u: f64, v: f64) -> DVec3 {
+        let x = u * f64::from(self.width) - 0.5;
+        let y = v * f64::from(self.height) - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = self.at(x0, y0).lerp(self.at(x0 + 1, y0), fx);
+        let bottom = self.at(x0, y0 + 1).lerp(self.at(x0 + 1, y0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+
+    /// Resamples onto a `width` x `height` display grid: camera_uv = scale * display_uv + offset.
+    fn fov_map(&self, width: u32, height: u32, params: &Params) -> Vec<DVec3> {
+        let (scale, offset) = params.fov_mapping();
+        let (sx, sy) = (f64::from(scale[0]), f64::from(scale[1]));
+        let (ox, oy) = (f64::from(offset[0]), f64::from(offset[1]));
+        let mut out = Vec::with_capacity((width * height) as usize);
+        for y in 0..height {
+            let v = sy * ((f64::from(y) + 0.5) / f64::from(height)) + oy;
+            for x in 0..width {
+                let u = sx * ((f64::from(x) + 0.5) / f64::from(width)) + ox;
+                out.push(self.sample(u, v));
+            }
+        }
+        out
+    }
+}
+
+/// Preprocesses a camera frame for a `width` x `height` display (spec section 2).
+pub fn prepare(camera: &RgbaImage, width: u32, height: u32, params: &Params) -> PreparedBackground {
+    let blurred = LinearImage::decode(camera).blur(&params.blur_taps());
+    let linear = blurred.fov_map(width, height, params);
+    let transmittance = f64::from(params.transmittance);
+    let scaled = linear
+        .iter()
+        .map(|&c| colour::linear_to_scaled(transmittance * c))
+        .collect();
+    PreparedBackground {
+        width,
+        height,
+        linear,
+        scaled,
+    }
+}
+
+/// The camera frame FoV-mapped onto the display grid, linear light, neither blurred nor
+/// attenuated: what the eye sees sharp through the lens (before the lens's transmittance).
+pub fn fov_sharp(camera: &RgbaImage, width: u32, height: u32, params: &Params) -> Vec<DVec3> {
+    LinearImage::decode(camera).fov_map(width, height, params)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn no_fov() -> Params {
+        Params {
+            fov: false,
+            ..Params::default()
+        }
+    }
+
+    #[test]
+    fn uniform_camera_gives_uniform_background() {
+        let camera = RgbaImage::new(7, 5, [200, 100, 50, 255]);
+        let bg = prepare(&camera, 4, 3, &Params::default());
+        let want = colour::srgb8_to_linear([200, 100, 50]);
+        for c in &bg.linear {
+            assert!((*c - want).abs().max_element() < 1e-12);
+        }
+        let scaled = colour::linear_to_scaled(f64::from(0.4f32) * want);
+        assert!((bg.scaled[5] - scaled).abs().max_element() < 1e-12);
+    }
+
+    #[test]
+    fn blur_uses_spec_taps_with_clamp_to_edge() {
+        // A single white column x = 1 on black, 3 wide: after the horizontal pass the middle
+        // column keeps 0.384397 and its neighbours get 0.307801 (the edge clamps repeat 0).
+        let mut camera = RgbaImage::new(3, 3, [0, 0, 0, 255]);
+        for y in 0..3 {
+            camera.set(1, y, [255, 255, 255, 255]);
+        }
+        let bg = prepare(&camera, 3, 3, &no_fov());
+        let row: Vec<f64> = (0..3).map(|x| bg.linear[3 + x].x).collect();
+        assert!(
+            (row[0] - 0.307801).abs() < 1e-6 && (row[1] - 0.384397).abs() < 1e-6,
+            "{row:?}"
+        );
+        assert!((row[2] - 0.307801).abs() < 1e-6);
+    }
+
+    #[test]
+    fn fov_window_is_cropped_and_bilinear() {
+        // Camera 4x1 with linear ramp codes; display 2x1, no blur, scale 0.5 offset 0.25:
+        // display u = 0.25 -> camera u = 0.375 -> x = 1.0 exactly (texel 1);
+        // display u = 0.75 -> camera u = 0.625 -> x = 2.0 (texel 2).
+        let mut camera = RgbaImage::new(4, 1, [0, 0, 0, 255]);
+        let codes = [10u8, 60, 120, 250];
+        for (x, c) in codes.iter().enumerate() {
+            camera.set(x as u32, 0, [*c, *c, *c, 255]);
+        }
+        let params = Params {
+            blur: false,
+            fov_scale: [0.5, 1.0],
+            fov_offset: [0.25, 0.0],
+            ..Params::default()
+        };
+        let sharp = fov_sharp(&camera, 2, 1, &params);
+        assert!((sharp[0].x - colour::code_to_linear(60)).abs() < 1e-6);
+        assert!((sharp[1].x - colour::code_to_linear(120)).abs() < 1e-6);
+        // Half way between texels 0 and 1 in linear light, not in code values.
+        let half = Params {
+            fov_scale: [0.25, 1.0],
+            fov_offset: [0.125, 0.0],
+            ..params
+        };
+        let s = fov_sharp(&camera, 1, 1, &half);
+        let want = 0.5 * (colour::code_to_linear(10) + colour::code_to_linear(60));
+        assert!((s[0].x - want).abs() < 1e-6, "{} vs {want}", s[0].x);
+    }
+}

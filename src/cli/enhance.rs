@@ -1,0 +1,41 @@
+//! `contrastxr enhance`: one display image against one background image, to a PNG.
+
+use std::time::Instant;
+
+use super::options::{self, PARAMS_USAGE};
+use super::{engine, Args, CliError};
+
+const USAGE: &str =
+    "usage: contrastxr enhance --display D.png --background B.png -o OUT.png [options]\n\n\
+     Enhances the colour contrast of the display image (virtual content; black is transparent)\n\
+     against the background image (a camera frame of any size). PNG in and out, RGB or RGBA;\n\
+     alpha passes through and the output has the display's layout.\n\n";
+
+pub fn run(args: &mut Args) -> Result<(), CliError> {
+    let display_path = args.required(&["--display"])?;
+    let background_path = args.required(&["--background"])?;
+    let out_path = args.required(&["-o", "--output"])?;
+    let params = options::params(args)?;
+    let engine = options::engine(args)?;
+    args.finish()?;
+    let display = options::load_path(&display_path, "display")?;
+    let camera = options::load_path(&background_path, "background")?;
+    let start = Instant::now();
+    let out = engine::run(engine, &display, &camera, &params).map_err(CliError::Failure)?;
+    let seconds = start.elapsed().as_secs_f64();
+    options::save_image(&out, &out_path)?;
+    super::print(&format!(
+        "wrote {out_path} ({}x{}, method {}, lambda_e {}, {} engine, {seconds:.3} s)\n",
+        out.width,
+        out.height,
+        params.method.name(),
+        params.lambda_e,
+        engine.name()
+    ));
+    Ok(())
+}
+
+/// Full help text (the options block is shared with `evaluate`).
+pub fn usage() -> String {
+    format!("{USAGE}{PARAMS_USAGE}")
+}

@@ -1,0 +1,200 @@
+//! `contrastxr evaluate`: the paper's enhanced-pixel metric for one enhancement, or a sweep
+//! over lambda_e; optionally a figure (perceived original | perceived enhanced | cyan map).
+
+use contrastxr::algorithm::Params;
+use contrastxr::background;
+use contrastxr::evaluate::{self as eval, Metrics};
+use contrastxr::image::RgbaImage;
+
+use super::args::parse_list;
+use super::engine::{self, Engine};
+use super::options::{self, PARAMS_USAGE};
+use super::{Args, CliError};
+
+const USAGE: &str = "\
+usage: contrastxr evaluate --display D.png --background B.png [--enhanced OUT.png] [options]
+       contrastxr evaluate --display D.png --background B.png --sweep 0.2,0.4,0.6,0.8,1.0 [options]
+
+Measures the share of foreground pixels whose contrast with the background went up by a
+noticeable amount (the paper's metric). Without --enhanced the method runs first (--engine).
+  --enhanced OUT.png   the enhanced image to measure (the display's size)
+  --sweep L1,L2,...    run the method at each lambda_e and print one row per value
+  --json               print the metrics as JSON (an array of rows for --sweep)
+  --figure FIG.png     write a figure; one row per lambda_e for --sweep
+
+";
+
+pub fn usage() -> String {
+    format!("{USAGE}{PARAMS_USAGE}")
+}
+
+struct Inputs {
+    display: RgbaImage,
+    camera: RgbaImage,
+    params: Params,
+    engine: Engine,
+    json: bool,
+    figure: Option<String>,
+}
+
+pub fn run(args: &mut Args) -> Result<(), CliError> {
+    let display_path = args.required(&["--display"])?;
+    let background_path = args.required(&["--background"])?;
+    let enhanced = args.value(&["--enhanced"])?;
+    let sweep = args.value(&["--sweep"])?;
+    let json = args.flag("--json");
+    let figure = args.value(&["--figure"])?;
+    let params = options::params(args)?;
+    let engine = options::engine(args)?;
+    args.finish()?;
+    if enhanced.is_some() && sweep.is_some() {
+        return Err(CliError::Usage(
+            "--sweep runs the method itself; leave out --enhanced".into(),
+        ));
+    }
+    let lambdas = sweep.map(|s| parse_list("--sweep", &s)).transpose()?;
+    let display = options::load_path(&display_path, "display")?;
+    let camera = options::load_path(&background_path, "background")?;
+    let inputs = Inputs {
+        display,
+        camera,
+        params,
+        engine,
+        json,
+        figure,
+    };
+    match lambdas {
+        Some(l) => run_sweep(&inputs, &l),
+        None => run_single(&inputs, enhanced.as_deref()),
+    }
+}
+
+fn enhanced_image(
+    inputs: &Inputs,
+    path: Option<&str>,
+    params: &Params,
+) -> Result<RgbaImage, CliError> {
+    let Some(path) = path else {
+        return engine::run(inputs.engine, &inputs.display, &inputs.camera, params)
+            .map_err(CliError::Failure);
+    };
+    let img = options::load_path(path, "enhanced")?;
+    let (d, e) = (&inputs.display, &img);
+    if (d.width, d.height) != (e.width, e.height) {
+        return Err(CliError::Failure(format!(
+            "the enhanced image is {}x{} but the display image is {}x{}; they must match",
+            e.width, e.height, d.width, d.height
+        )));
+    }
+    Ok(img)
+}
+
+fn measure(inputs: &Inputs, enhanced: &RgbaImage, params: &Params) -> Metrics {
+    let d = &inputs.display;
+    let bg = background::prepare(&inputs.camera, d.width, d.height, params);
+    eval::metrics(d, enhanced, &bg)
+}
+
+fn run_single(inputs: &Inputs, path: Option<&str>) -> Result<(), CliError> {
+    let enhanced = enhanced_image(inputs, path, &inputs.params)?;
+    let m = measure(inputs, &enhanced, &inputs.params);
+    if inputs.json {
+        super::print(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&m).expect("metrics serialise")
+        ));
+    } else {
+        super::print(&metrics_text(&m));
+    }
+    if let Some(fig) = &inputs.figure {
+        let img = eval::figure(&inputs.display, &enhanced, &inputs.camera, &inputs.params);
+        options::save_image(&img, fig)?;
+    }
+    Ok(())
+}
+
+fn metrics_text(m: &Metrics) -> String {
+    let mut out = format!(
+        "enhanced pixels: {} of {} foreground pixels ({:.2}%)\n",
+        m.enhanced_pixels, m.foreground_pixels, m.enhanced_percent
+    );
+    out += &format!(
+        "{:<22} {:>8} {:>8} {:>8}\n",
+        "Delta E*ab", "min", "mean", "max"
+    );
+    for (name, s) in [
+        ("output vs display", m.delta_e_out_display),
+        ("background vs display", m.delta_e_bg_display),
+        ("background vs output", m.delta_e_bg_out),
+    ] {
+        out += &format!("{name:<22} {:>8.3} {:>8.3} {:>8.3}\n", s.min, s.mean, s.max);
+    }
+    out
+}
+
+fn run_sweep(inputs: &Inputs, lambdas: &[f32]) -> Result<(), CliError> {
+    let mut rows = Vec::new();
+    let mut figure_rows = Vec::new();
+    for &lambda_e in lambdas {
+        let params = Params {
+            lambda_e,
+            ..inputs.params.clone()
+        };
+        params.validate().map_err(CliError::Failure)?;
+        let enhanced = enhanced_image(inputs, None, &params)?;
+        rows.push((lambda_e, measure(inputs, &enhanced, &params)));
+        if inputs.figure.is_some() {
+            let title = format!("λE = {lambda_e}   METHOD {}", params.method.name());
+            let d = &inputs.display;
+            figure_rows.push(eval::figure_row(
+                d,
+                &enhanced,
+                &inputs.camera,
+                &params,
+                Some(&title),
+            ));
+        }
+    }
+    super::print(&if inputs.json {
+        sweep_json(&rows)
+    } else {
+        sweep_table(&rows)
+    });
+    if let Some(fig) = &inputs.figure {
+        options::save_image(&eval::stack_rows(&figure_rows), fig)?;
+    }
+    Ok(())
+}
+
+fn sweep_json(rows: &[(f32, Metrics)]) -> String {
+    let values: Vec<serde_json::Value> = rows
+        .iter()
+        .map(|(l, m)| {
+            let mut v = serde_json::to_value(m).expect("metrics serialise");
+            v["lambda_e"] = serde_json::json!(l);
+            v
+        })
+        .collect();
+    format!(
+        "{}\n",
+        serde_json::to_string_pretty(&values).expect("rows serialise")
+    )
+}
+
+fn sweep_table(rows: &[(f32, Metrics)]) -> String {
+    let mut out = format!(
+        "{:>8} {:>10} {:>10} {:>9} {:>14} {:>14}\n",
+        "lambda_e", "foreground", "enhanced", "percent", "mean dE(out,D)", "mean dE(B,out)"
+    );
+    for (l, m) in rows {
+        out += &format!(
+            "{l:>8} {:>10} {:>10} {:>8.2}% {:>14.3} {:>14.3}\n",
+            m.foreground_pixels,
+            m.enhanced_pixels,
+            m.enhanced_percent,
+            m.delta_e_out_display.mean,
+            m.delta_e_bg_out.mean
+        );
+    }
+    out
+}

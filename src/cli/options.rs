@@ -1,0 +1,82 @@
+//! The options shared by `enhance` and `evaluate`: method, preprocessing, engine, images.
+
+use contrastxr::algorithm::{Method, Params};
+use contrastxr::image::RgbaImage;
+
+use super::args::{parse_f32, parse_pair};
+use super::engine::Engine;
+use super::{Args, CliError};
+
+pub const PARAMS_USAGE: &str = "\
+method and preprocessing options (defaults are the paper's):
+  --lambda-e F             maximum colour change, scaled LAB units (0.4; 0 = no change)
+  --lambda-jnd-scaled F    JND sphere radius, scaled units (0.046 = Delta E 2.3)
+  --transmittance F        lens transmittance applied to the background (0.4)
+  --blur-size N            Gaussian kernel size on the camera grid, odd (3)
+  --blur-sigma F           Gaussian sigma in camera pixels (1.5)
+  --no-blur                no background blur
+  --fov-scale X,Y          camera_uv = scale * display_uv + offset (0.65,0.65)
+  --fov-offset X,Y         (0.13,0.17)
+  --no-fov                 camera_uv = display_uv
+  --method M               paper|hue-only|other-hue|lum-chroma|subtraction (paper)
+  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)
+";
+
+/// Takes the method and preprocessing options out of `args`, starting from the defaults.
+pub fn params(args: &mut Args) -> Result<Params, CliError> {
+    let mut p = Params::default();
+    let number = |args: &mut Args, name: &str, slot: &mut f32| -> Result<(), CliError> {
+        if let Some(v) = args.value(&[name])? {
+            *slot = parse_f32(name, &v)?;
+        }
+        Ok(())
+    };
+    number(args, "--lambda-e", &mut p.lambda_e)?;
+    number(args, "--lambda-jnd-scaled", &mut p.lambda_jnd_scaled)?;
+    number(args, "--transmittance", &mut p.transmittance)?;
+    number(args, "--blur-sigma", &mut p.blur_sigma)?;
+    if let Some(v) = args.value(&["--blur-size"])? {
+        p.blur_size = v.trim().parse().map_err(|_| {
+            CliError::Failure(format!(
+                "--blur-size must be a positive odd integer, got '{v}'"
+            ))
+        })?;
+    }
+    if let Some(v) = args.value(&["--fov-scale"])? {
+        p.fov_scale = parse_pair("--fov-scale", &v)?;
+    }
+    if let Some(v) = args.value(&["--fov-offset"])? {
+        p.fov_offset = parse_pair("--fov-offset", &v)?;
+    }
+    p.blur = !args.flag("--no-blur");
+    p.fov = !args.flag("--no-fov");
+    if let Some(v) = args.value(&["--method"])? {
+        p.method = Method::parse(&v).ok_or_else(|| {
+            let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+            CliError::Failure(format!(
+                "--method must be one of {}, got '{v}'",
+                names.join(", ")
+            ))
+        })?;
+    }
+    p.validate().map_err(CliError::Failure)?;
+    Ok(p)
+}
+
+pub fn engine(args: &mut Args) -> Result<Engine, CliError> {
+    match args.value(&["--engine"])? {
+        None => Ok(Engine::Gpu),
+        Some(v) => Engine::parse(&v)
+            .ok_or_else(|| CliError::Failure(format!("--engine must be gpu or cpu, got '{v}'"))),
+    }
+}
+
+pub fn load_path(path: &str, what: &str) -> Result<RgbaImage, CliError> {
+    RgbaImage::load_png(std::path::Path::new(path))
+        .map_err(|e| CliError::Failure(format!("cannot read the {what} image: {e}")))
+}
+
+pub fn save_image(img: &RgbaImage, path: &str) -> Result<(), CliError> {
+    img.save_png(std::path::Path::new(path))
+        .map_err(CliError::Failure)
+}

@@ -1,0 +1,12 @@
+//! Evaluation of an enhancement (spec section 4): the paper's enhanced-pixel metric, the
+//! simulated perceived image of an additive display, and figures a person can look at.
+//! Pure CPU; it never runs the method itself.
+
+pub mod figure;
+pub mod font;
+pub mod metric;
+pub mod perceived;
+
+pub use figure::{figure, figure_row, stack_rows};
+pub use metric::{enhanced_mask, metrics, Metrics, Stats, JND_DELTA_E};
+pub use perceived::perceived;

@@ -1,0 +1,37 @@
+//! The CPU reference on whole images: background preprocessing plus the per-pixel method.
+//! Slow and exact (f64); the GPU engine is tested against it.
+
+use crate::algorithm::{enhance_srgb8, Params};
+use crate::background::{self, PreparedBackground};
+use crate::image::RgbaImage;
+
+/// Enhances every display pixel against an already prepared background of the same size.
+pub fn enhance_image(
+    display: &RgbaImage,
+    background: &PreparedBackground,
+    params: &Params,
+) -> RgbaImage {
+    assert_eq!(
+        (display.width, display.height),
+        (background.width, background.height),
+        "the background must be prepared for the display's size"
+    );
+    let pixels = display
+        .pixels
+        .iter()
+        .zip(background.linear.iter().zip(&background.scaled))
+        .map(|(&d, (&bg_linear, &bg_scaled))| enhance_srgb8(d, bg_linear, bg_scaled, params))
+        .collect();
+    RgbaImage {
+        width: display.width,
+        height: display.height,
+        pixels,
+        has_alpha: display.has_alpha,
+    }
+}
+
+/// Preprocesses the camera frame (any size) for the display, then enhances.
+pub fn enhance_with_camera(display: &RgbaImage, camera: &RgbaImage, params: &Params) -> RgbaImage {
+    let bg = background::prepare(camera, display.width, display.height, params);
+    enhance_image(display, &bg, params)
+}

@@ -1,0 +1,347 @@
+//! The `contrastxr` binary on the sample scenes, CPU engine: outputs checked against the
+//! inputs independently (black stays black, lambda_e 0 changes nothing, metric consistency),
+//! and the error messages and exit codes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use contrastxr::image::RgbaImage;
+
+const DISPLAY: &str = "samples/display-hand-interaction.png";
+const YELLOW: &str = "samples/background-yellow-wall.png";
+const SKY: &str = "samples/background-blue-sky.png";
+
+fn contrastxr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run contrastxr")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("contrastxr-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn load(path: &Path) -> RgbaImage {
+    RgbaImage::load_png(path).unwrap()
+}
+
+fn sample(path: &str) -> RgbaImage {
+    load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(path))
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).expect("valid JSON")
+}
+
+#[test]
+fn enhance_keeps_black_and_changes_content() {
+    let out = scratch("enhanced.png");
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        out.to_str().unwrap(),
+        "--engine",
+        "cpu",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (display, enhanced) = (sample(DISPLAY), load(&out));
+    assert_eq!(
+        (enhanced.width, enhanced.height, enhanced.has_alpha),
+        (640, 360, false)
+    );
+    let mut changed = 0;
+    for (d, e) in display.pixels.iter().zip(&enhanced.pixels) {
+        if d[..3] == [0, 0, 0] {
+            assert_eq!(d, e, "black is transparent and must stay black");
+        } else if d != e {
+            changed += 1;
+        }
+    }
+    assert!(changed > 10_000, "only {changed} pixels changed");
+}
+
+#[test]
+fn lambda_e_zero_reproduces_the_display() {
+    let out = scratch("identity.png");
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        SKY,
+        "-o",
+        out.to_str().unwrap(),
+        "--engine",
+        "cpu",
+        "--lambda-e",
+        "0",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(load(&out).pixels, sample(DISPLAY).pixels);
+}
+
+#[test]
+fn rgba_alpha_passes_through() {
+    let mut display = sample(DISPLAY);
+    display.has_alpha = true;
+    for (i, p) in display.pixels.iter_mut().enumerate() {
+        p[3] = (i % 251) as u8;
+    }
+    let (input, out) = (scratch("rgba-in.png"), scratch("rgba-out.png"));
+    display.save_png(&input).unwrap();
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        input.to_str().unwrap(),
+        "--background",
+        YELLOW,
+        "-o",
+        out.to_str().unwrap(),
+        "--engine",
+        "cpu",
+        "--no-blur",
+        "--no-fov",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let enhanced = load(&out);
+    assert!(enhanced.has_alpha);
+    for (d, e) in display.pixels.iter().zip(&enhanced.pixels) {
+        assert_eq!(d[3], e[3]);
+        if d[3] == 0 {
+            assert_eq!(d, e, "alpha 0 is transparent and must stay untouched");
+        }
+    }
+}
+
+fn check_metrics(m: &serde_json::Value, foreground: u64) {
+    let fg = m["foreground_pixels"].as_u64().unwrap();
+    let enhanced = m["enhanced_pixels"].as_u64().unwrap();
+    assert_eq!(fg, foreground);
+    assert!(enhanced <= fg);
+    let percent = m["enhanced_percent"].as_f64().unwrap();
+    assert!((percent - 100.0 * enhanced as f64 / fg as f64).abs() < 1e-9);
+    for key in [
+        "delta_e_out_display",
+        "delta_e_bg_display",
+        "delta_e_bg_out",
+    ] {
+        let s = &m[key];
+        let (min, mean, max) = (
+            s["min"].as_f64().unwrap(),
+            s["mean"].as_f64().unwrap(),
+            s["max"].as_f64().unwrap(),
+        );
+        assert!(0.0 <= min && min <= mean && mean <= max, "{key}: {s}");
+    }
+}
+
+fn foreground_count(img: &RgbaImage) -> u64 {
+    img.pixels
+        .iter()
+        .filter(|p| p[3] != 0 && p[..3] != [0, 0, 0])
+        .count() as u64
+}
+
+#[test]
+fn evaluate_reports_consistent_metrics_and_a_figure() {
+    let (out, fig) = (scratch("eval-out.png"), scratch("eval-fig.png"));
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        out.to_str().unwrap(),
+        "--engine",
+        "cpu",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = contrastxr(&[
+        "evaluate",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "--enhanced",
+        out.to_str().unwrap(),
+        "--json",
+        "--figure",
+        fig.to_str().unwrap(),
+    ]);
+    let m = json(&o);
+    check_metrics(&m, foreground_count(&sample(DISPLAY)));
+    // White content on a yellow wall is the paper's showcase: most pixels gain contrast.
+    assert!(m["enhanced_percent"].as_f64().unwrap() > 50.0, "{m}");
+    let figure = load(&fig);
+    assert!(figure.width >= 3 * 640 && figure.height >= 360);
+}
+
+#[test]
+fn evaluate_of_unchanged_output_finds_nothing_enhanced() {
+    let o = contrastxr(&[
+        "evaluate",
+        "--display",
+        DISPLAY,
+        "--background",
+        SKY,
+        "--enhanced",
+        DISPLAY,
+        "--json",
+    ]);
+    let m = json(&o);
+    assert_eq!(m["enhanced_pixels"], 0);
+    assert_eq!(m["delta_e_out_display"]["max"], 0.0);
+}
+
+#[test]
+fn sweep_prints_one_row_per_lambda_and_a_figure() {
+    let fig = scratch("sweep.png");
+    let args = [
+        "evaluate",
+        "--display",
+        DISPLAY,
+        "--background",
+        SKY,
+        "--engine",
+        "cpu",
+        "--sweep",
+        "0.2,0.6",
+    ];
+    let o = contrastxr(&[&args[..], &["--json"]].concat());
+    let rows = json(&o);
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    let fg = foreground_count(&sample(DISPLAY));
+    for (row, lambda) in rows.iter().zip([0.2, 0.6]) {
+        assert!((row["lambda_e"].as_f64().unwrap() - lambda).abs() < 1e-6);
+        check_metrics(row, fg);
+    }
+    let mean = |i: usize| rows[i]["delta_e_out_display"]["mean"].as_f64().unwrap();
+    assert!(mean(1) > mean(0), "a larger lambda_e changes colours more");
+    let o = contrastxr(&[&args[..], &["--figure", fig.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("lambda_e") && table.lines().count() == 3,
+        "{table}"
+    );
+    let single_row = 360 + 2 * 16;
+    assert!(load(&fig).height > 2 * 360 && load(&fig).height > single_row);
+}
+
+#[test]
+fn missing_file_is_one_clear_sentence() {
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        "nope.png",
+        "--background",
+        YELLOW,
+        "-o",
+        "x.png",
+        "--engine",
+        "cpu",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("cannot read the display image") && e.contains("nope.png"),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1, "{e}");
+}
+
+#[test]
+fn non_png_is_reported() {
+    let o = contrastxr(&[
+        "evaluate",
+        "--display",
+        DISPLAY,
+        "--background",
+        "Cargo.toml",
+        "--engine",
+        "cpu",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("background image") && e.contains("not a readable PNG"),
+        "{e}"
+    );
+}
+
+#[test]
+fn usage_errors_exit_2_and_bad_values_exit_1() {
+    let o = contrastxr(&["enhance", "--background", YELLOW, "-o", "x.png"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--display is required"));
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        "x.png",
+        "--colour",
+        "red",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("unknown option --colour"));
+    assert_eq!(contrastxr(&["frobnicate"]).status.code(), Some(2));
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        "x.png",
+        "--lambda-e",
+        "lots",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--lambda-e must be a number"));
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        "x.png",
+        "--method",
+        "magic",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("paper, hue-only"));
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        "x.png",
+        "--blur-size",
+        "4",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(contrastxr(&["--help"]).status.success());
+    let help = contrastxr(&["evaluate", "--help"]);
+    assert!(String::from_utf8_lossy(&help.stdout).contains("--sweep"));
+}
