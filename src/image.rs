@@ -47,17 +47,35 @@ impl RgbaImage {
         let data = &buf[..info.buffer_size()];
         let (w, h) = (info.width, info.height);
         let (pixels, has_alpha): (Vec<[u8; 4]>, bool) = match info.color_type {
-            png::ColorType::Rgba => (data.chunks_exact(4).map(|p| [p[0], p[1], p[2], p[3]]).collect(), true),
-            png::ColorType::Rgb => (data.chunks_exact(3).map(|p| [p[0], p[1], p[2], 255]).collect(), false),
-            png::ColorType::GrayscaleAlpha => {
-                (data.chunks_exact(2).map(|p| [p[0], p[0], p[0], p[1]]).collect(), true)
-            }
+            png::ColorType::Rgba => (
+                data.chunks_exact(4)
+                    .map(|p| [p[0], p[1], p[2], p[3]])
+                    .collect(),
+                true,
+            ),
+            png::ColorType::Rgb => (
+                data.chunks_exact(3)
+                    .map(|p| [p[0], p[1], p[2], 255])
+                    .collect(),
+                false,
+            ),
+            png::ColorType::GrayscaleAlpha => (
+                data.chunks_exact(2)
+                    .map(|p| [p[0], p[0], p[0], p[1]])
+                    .collect(),
+                true,
+            ),
             png::ColorType::Grayscale => (data.iter().map(|&g| [g, g, g, 255]).collect(), false),
             png::ColorType::Indexed => {
                 return Err(format!("{}: unexpanded palette PNG", path.display()))
             }
         };
-        Ok(RgbaImage { width: w, height: h, pixels, has_alpha })
+        Ok(RgbaImage {
+            width: w,
+            height: h,
+            pixels,
+            has_alpha,
+        })
     }
 
     /// Writes an 8-bit PNG: RGBA if the image has alpha, else RGB.
@@ -71,7 +89,10 @@ impl RgbaImage {
             self.pixels.iter().flatten().copied().collect()
         } else {
             encoder.set_color(png::ColorType::Rgb);
-            self.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect()
+            self.pixels
+                .iter()
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect()
         };
         let mut writer = encoder
             .write_header()

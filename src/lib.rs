@@ -8,5 +8,6 @@
 //! Lower modules never import higher ones.
 
 pub mod algorithm;
+pub mod camera;
 pub mod colour;
 pub mod image;

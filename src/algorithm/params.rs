@@ -138,10 +138,16 @@ impl Params {
             return Err(format!("lambda_e must be >= 0, got {}", self.lambda_e));
         }
         if self.lambda_jnd_scaled < 0.0 {
-            return Err(format!("lambda_jnd_scaled must be >= 0, got {}", self.lambda_jnd_scaled));
+            return Err(format!(
+                "lambda_jnd_scaled must be >= 0, got {}",
+                self.lambda_jnd_scaled
+            ));
         }
         if !(0.0..=1.0).contains(&self.transmittance) {
-            return Err(format!("transmittance must be in [0, 1], got {}", self.transmittance));
+            return Err(format!(
+                "transmittance must be in [0, 1], got {}",
+                self.transmittance
+            ));
         }
         if self.blur && (self.blur_size % 2 == 0 || self.blur_size > MAX_BLUR_SIZE) {
             return Err(format!(
