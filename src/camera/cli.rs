@@ -62,8 +62,11 @@ pub fn list_in(dir: &Path, out: &mut dyn Write) -> Result<(), String> {
     Ok(())
 }
 
+/// Frame rates offered at each (width, height).
+type RatesBySize = BTreeMap<(u32, u32), Vec<f64>>;
+
 fn write_modes(modes: &[Mode], out: &mut dyn Write) -> std::io::Result<()> {
-    let mut by_format: BTreeMap<[u8; 4], BTreeMap<(u32, u32), Vec<f64>>> = BTreeMap::new();
+    let mut by_format: BTreeMap<[u8; 4], RatesBySize> = BTreeMap::new();
     for m in modes {
         by_format
             .entry(m.fourcc)
@@ -143,7 +146,7 @@ fn collect(background: &Background, wanted: usize, deadline: Instant) -> Vec<(Fr
             Some(f)
                 if got
                     .last()
-                    .is_none_or(|(last, _)| f.sequence > last.sequence) =>
+                    .map_or(true, |(last, _)| f.sequence > last.sequence) =>
             {
                 got.push((f, Instant::now()))
             }

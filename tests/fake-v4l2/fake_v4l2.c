@@ -225,6 +225,8 @@ static int device_present(void)
 	return now_ns() - dev.vanished_at_ns >= (uint64_t)cfg.return_after_ms * 1000000ull;
 }
 
+static void free_buffers(void);
+
 static int open_fake(void)
 {
 	pthread_mutex_lock(&lock);
@@ -236,6 +238,8 @@ static int open_fake(void)
 	if (dev.vanished) {
 		/* Back again: a fresh device. Fds opened before the vanish stay dead. */
 		dev.vanished = 0;
+		dev.streaming = 0;
+		free_buffers();
 		for (int i = 0; i < MAX_FDS; i++)
 			if (fake_fd[i] == 2)
 				fake_fd[i] = 3;

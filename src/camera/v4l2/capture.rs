@@ -162,13 +162,17 @@ fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Ses
     let mut session = Some(first);
     let mut backoff = FIRST_BACKOFF;
     let mut open_error = None;
+    // A device that opens but delivers nothing is reopened quietly, with growing waits.
+    let mut quiet = false;
     while !shared.stopping() {
         let current = match session.take() {
             Some(s) => s,
             None => match open_session(target.as_ref(), cfg) {
                 Ok(s) => {
-                    log(&format!("reopened {}", s.description));
-                    (open_error, backoff) = (None, FIRST_BACKOFF);
+                    if !quiet {
+                        log(&format!("reopened {}", s.description));
+                    }
+                    open_error = None;
                     s
                 }
                 Err(e) => {
@@ -186,12 +190,22 @@ fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Ses
         };
         // The v4l crate panics in Drop on some driver errors; that is one more way to lose
         // the device, not a reason to take the application down.
+        let sequence_before = capture.sequence;
         let ended = catch_unwind(AssertUnwindSafe(|| capture.stream(&current, cfg, shared)));
         drop(current);
+        let delivered = capture.sequence > sequence_before;
         match ended {
             Ok(Ok(())) => break,
+            _ if quiet && !delivered => {}
             Ok(Err(e)) => log(&format!("lost the camera: {e}")),
             Err(_) => log("lost the camera: the driver failed (v4l panicked)"),
+        }
+        quiet = !delivered;
+        if delivered {
+            backoff = FIRST_BACKOFF;
+        } else {
+            shared.sleep_until(Instant::now() + backoff);
+            backoff = (backoff * 2).min(cfg.max_backoff.max(FIRST_BACKOFF));
         }
         shared.mark_down();
         capture.status.update(shared, cfg);
@@ -215,41 +229,43 @@ impl Capture {
     ) -> io::Result<()> {
         let mut stream =
             MmapStream::with_buffers(&session.device, Type::VideoCapture, BUFFER_COUNT)?;
-        stream.set_timeout(POLL_SLICE.min(cfg.stall_timeout));
+        // `next()` must never time out once streaming: the v4l crate would then queue the same
+        // buffer twice on the following call (vb2 refuses that with EINVAL). So the waiting
+        // is done by our own short polls, and `next()` runs only when a buffer is ready. The
+        // first `next()` starts the stream and may wait up to the stall timeout.
+        stream.set_timeout(cfg.stall_timeout);
+        let handle = session.device.handle();
+        let slice = POLL_SLICE.min(cfg.stall_timeout).as_millis() as i32;
         let mut last_frame = Instant::now();
-        // After a poll timeout inside `next()`, the v4l crate would queue the same buffer a
-        // second time on the following `next()` (vb2 refuses that with EINVAL), so until a
-        // buffer comes back it is dequeued directly; that one frame is dropped.
-        let mut awaiting_buffer = false;
+        let mut started = false;
         let mut bad_frame_logged = false;
         while !shared.stopping() {
             self.status.update(shared, cfg);
-            if last_frame.elapsed() > cfg.stall_timeout {
+            let stalled = || {
                 let ms = cfg.stall_timeout.as_millis();
-                return Err(io::Error::new(
-                    io::ErrorKind::TimedOut,
-                    format!("no frame for {ms} ms"),
-                ));
-            }
-            let result = if awaiting_buffer {
-                CaptureStream::dequeue(&mut stream).map(|_| None)
-            } else {
-                CaptureStream::next(&mut stream)
-                    .map(|(data, meta)| Some(self.convert(session, data, meta)))
+                io::Error::new(io::ErrorKind::TimedOut, format!("no frame for {ms} ms"))
             };
-            match result {
-                Ok(None) => awaiting_buffer = false,
-                Ok(Some(Ok(frame))) => {
+            if last_frame.elapsed() > cfg.stall_timeout {
+                return Err(stalled());
+            }
+            if started && handle.poll(libc::POLLIN, slice)? == 0 {
+                continue;
+            }
+            started = true;
+            let (data, meta) = CaptureStream::next(&mut stream).map_err(|e| match e.kind() {
+                io::ErrorKind::TimedOut => stalled(),
+                _ => e,
+            })?;
+            match self.convert(session, data, meta) {
+                Ok(frame) => {
                     shared.publish(frame);
                     last_frame = Instant::now();
                 }
-                Ok(Some(Err(e))) if !bad_frame_logged => {
+                Err(e) if !bad_frame_logged => {
                     log(&format!("skipping bad frames: {e}"));
                     bad_frame_logged = true;
                 }
-                Ok(Some(Err(_))) => {}
-                Err(e) if e.kind() == io::ErrorKind::TimedOut => awaiting_buffer = true,
-                Err(e) => return Err(e),
+                Err(_) => {}
             }
         }
         Ok(())
@@ -280,6 +296,8 @@ impl Capture {
             None => image,
         };
         self.sequence += 1;
+        // time_t is 32 bits on some targets.
+        #[allow(clippy::unnecessary_cast)]
         let captured_at = instant_of(meta.timestamp.sec as i64, meta.timestamp.usec as i64);
         Ok(Frame {
             image: Arc::new(image),
@@ -299,6 +317,7 @@ fn instant_of(sec: i64, usec: i64) -> Instant {
     };
     // SAFETY: `ts` is a valid, writable timespec and CLOCK_MONOTONIC always exists on Linux.
     unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    #[allow(clippy::unnecessary_cast)] // time_t and c_long are 32 bits on some targets
     let now_us = ts.tv_sec as i64 * 1_000_000 + ts.tv_nsec as i64 / 1000;
     let age_us = now_us - (sec * 1_000_000 + usec);
     if (0..10_000_000).contains(&age_us) {
