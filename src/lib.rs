@@ -9,6 +9,7 @@
 
 pub mod algorithm;
 pub mod background;
+pub mod camera;
 pub mod colour;
 pub mod evaluate;
 pub mod gpu;

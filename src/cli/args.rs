@@ -46,6 +46,14 @@ impl Args {
             .ok_or_else(|| CliError::Usage(format!("{} is required", names[0])))
     }
 
+    /// Takes the remaining arguments as positionals; an unknown `-option` is an error later.
+    pub fn positional(&mut self) -> Vec<String> {
+        let (pos, opts): (Vec<String>, Vec<String>) =
+            self.rest.drain(..).partition(|a| !a.starts_with('-'));
+        self.rest = opts;
+        pos
+    }
+
     /// Fails on anything not taken out by the command.
     pub fn finish(&self) -> Result<(), CliError> {
         match self.rest.first() {

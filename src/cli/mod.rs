@@ -2,6 +2,7 @@
 //! `usage() -> String` and `run(&mut Args) -> Result<(), CliError>`, and one line in `COMMANDS`.
 
 mod args;
+mod camera;
 mod engine;
 mod enhance;
 mod evaluate;
@@ -41,6 +42,12 @@ const COMMANDS: &[Subcommand] = &[
         summary: "measure an enhancement with the paper's metric, write figures, sweep lambda_e",
         usage: evaluate::usage,
         run: evaluate::run,
+    },
+    Subcommand {
+        name: "camera",
+        summary: "list V4L2 cameras, or test one as the layer would use it",
+        usage: camera::usage,
+        run: camera::run,
     },
     Subcommand {
         name: "install",

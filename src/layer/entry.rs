@@ -114,6 +114,7 @@ fn register_instance(
         .unwrap_or("")
         .to_string();
     let settings = Settings::from_env();
+    crate::camera::set_log_sink(Box::new(log::info));
     log::info(&startup_line(&settings, &app));
     for w in &settings.warnings {
         log::info(w);

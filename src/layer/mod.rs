@@ -3,7 +3,6 @@
 //! It must never crash or corrupt the host app: every entry point catches panics, and any
 //! failure turns the affected session into pass-through with one log line.
 
-pub mod background;
 pub mod capture;
 mod dispatch;
 mod entry;

@@ -1,12 +1,12 @@
 //! Sessions: read the Vulkan graphics binding at xrCreateSession, and at xrEndFrame enhance
 //! every projection view (and quad layers when configured) before the runtime composes it.
 
-use super::background::load_static;
 use super::capture;
 use super::ffi::{find_in_chain, guard};
 use super::processor::{Processor, ViewKey, WorkItem};
 use super::state::{self, lock, SessionState};
 use super::{log, swapchain};
+use crate::camera::{self, Background, CaptureConfig};
 use crate::gpu::GpuDevice;
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
@@ -60,11 +60,16 @@ pub unsafe extern "system" fn create_session(
     })
 }
 
+fn open_background(spec: &str) -> Result<Background, String> {
+    let source = camera::parse_source(spec)?;
+    Background::open(&source, &CaptureConfig::default()).map_err(|e| e.to_string())
+}
+
 fn set_up(
     b: &xr::GraphicsBindingVulkanKHR,
     background_spec: &str,
-) -> (Option<Processor>, Option<Arc<crate::image::RgbaImage>>) {
-    let background = match load_static(background_spec) {
+) -> (Option<Processor>, Option<Background>) {
+    let background = match open_background(background_spec) {
         Ok(bg) => bg,
         Err(e) => {
             log::info(&format!(
@@ -87,8 +92,9 @@ fn set_up(
     match gpu.and_then(Processor::new) {
         Ok(p) => {
             log::info(&format!(
-                "session on Vulkan device {:?}: enhancing",
-                p.gpu.name
+                "session on Vulkan device {:?}, background {}: enhancing",
+                p.gpu.name,
+                background.description()
             ));
             (Some(p), Some(background))
         }
@@ -105,7 +111,10 @@ fn set_up(
 pub fn forget(session: xr::Session) {
     let removed = state::registry().sessions.remove(&session.into_raw());
     if let Some(s) = removed {
-        lock(&s).processor = None;
+        let mut s = lock(&s);
+        s.processor = None;
+        // Closes the camera: it is open only while a session runs.
+        s.background = None;
     }
     state::registry()
         .swapchains
@@ -218,16 +227,21 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     if items.is_empty() {
         return;
     }
-    let capture = capturing(s);
-    let Some(bg) = s.background.clone() else {
+    // No frame yet, or the source was lost past its grace period: pass this frame through.
+    let Some(frame) = s.background.as_ref().and_then(|b| b.latest()) else {
+        log::once(
+            "no-background-frame",
+            "no background frame (not yet, or the source is lost): passing frames through until one arrives",
+        );
         return;
     };
+    let capture = capturing(s);
     let params = s.settings.params.clone();
     let processor = s.processor.as_mut().expect("checked above");
-    match processor.process(&items, &bg, 0, &params, capture) {
+    match processor.process(&items, &frame.image, frame.sequence, &params, capture) {
         Ok(views) => {
             if capture {
-                write_capture(s, &views, &bg);
+                write_capture(s, &views, &frame.image);
             }
             s.processed += 1;
             log::once(

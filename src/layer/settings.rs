@@ -21,7 +21,8 @@ pub struct Settings {
     /// Also enhance quad layers (`CONTRASTXR_QUAD_LAYERS=1`).
     pub quad_layers: bool,
     pub params: Params,
-    /// Background source spec (`CONTRASTXR_BACKGROUND`), e.g. `image:PATH` or `color:#RRGGBB`.
+    /// Background source spec (`CONTRASTXR_BACKGROUND`): `v4l2:auto` (default), `v4l2:/dev/videoN`,
+    /// `image:PATH`, `video:PATH` or `color:#RRGGBB`.
     pub background: String,
     pub capture: Option<Capture>,
     /// Problems found while reading the variables (each is logged once).
@@ -137,7 +138,7 @@ impl Settings {
             force: r.flag("CONTRASTXR_FORCE"),
             quad_layers: r.flag("CONTRASTXR_QUAD_LAYERS"),
             params,
-            background: (r.get)("CONTRASTXR_BACKGROUND").unwrap_or_else(|| "color:#808080".into()),
+            background: (r.get)("CONTRASTXR_BACKGROUND").unwrap_or_else(|| "v4l2:auto".into()),
             capture,
             warnings: r.warnings,
         }

@@ -5,7 +5,6 @@ use super::dispatch::NextFns;
 use super::processor::Processor;
 use super::settings::Settings;
 use crate::gpu::PixelFormat;
-use crate::image::RgbaImage;
 use ash::vk;
 use openxr_sys as xr;
 use std::collections::{HashMap, VecDeque};
@@ -22,7 +21,8 @@ pub struct SessionState {
     pub settings: Arc<Settings>,
     /// None: this session passes through (not Vulkan, set-up failed, or an earlier failure).
     pub processor: Option<Processor>,
-    pub background: Option<Arc<RgbaImage>>,
+    /// The running background source (camera, video, image): open only while the session lives.
+    pub background: Option<crate::camera::Background>,
     /// Frames submitted through xrEndFrame so far.
     pub frames: u64,
     /// Frames the layer processed (captures are numbered by this).

@@ -1,0 +1,131 @@
+//! The running background source the consumer holds.
+
+use crate::camera::files::{color_frame, image_frame, open_video, play};
+use crate::camera::frame::{Frame, Shared, SourceStatus};
+use crate::camera::{v4l2, CameraError, CaptureConfig, SourceSpec};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// An open background source. Cameras are open exactly as long as this lives: dropping it
+/// stops and joins the capture thread, which closes the device.
+pub struct Background {
+    source: Source,
+    description: String,
+}
+
+enum Source {
+    Static(Frame),
+    Threaded {
+        shared: Arc<Shared>,
+        thread: Option<JoinHandle<()>>,
+        /// Cameras are watched for stalls and loss; videos only play.
+        supervised: bool,
+        stall_timeout: Duration,
+        grace: Duration,
+    },
+}
+
+impl Background {
+    pub fn open(spec: &SourceSpec, cfg: &CaptureConfig) -> Result<Self, CameraError> {
+        let (source, description) = match spec {
+            SourceSpec::Image(path) => (
+                Source::Static(image_frame(path)?),
+                format!("image {}", path.display()),
+            ),
+            SourceSpec::Color(c) => {
+                let text = format!("colour #{:02X}{:02X}{:02X}", c[0], c[1], c[2]);
+                (Source::Static(color_frame(*c, cfg)), text)
+            }
+            SourceSpec::Video(path) => {
+                let (frames, fps) = open_video(path, cfg)?;
+                let count = frames.count();
+                let shared = Arc::new(Shared::new());
+                let (thread_shared, smoothing) = (shared.clone(), cfg.smoothing);
+                let start = Instant::now();
+                let thread = std::thread::Builder::new()
+                    .name("contrastxr-video".into())
+                    .spawn(move || play(frames, fps, start, &thread_shared, smoothing))
+                    .map_err(|e| {
+                        CameraError::File(format!("cannot start the video thread: {e}"))
+                    })?;
+                let text = format!("video {} ({count} frames at {fps:.2} fps)", path.display());
+                (threaded(shared, thread, false, cfg), text)
+            }
+            SourceSpec::V4l2Device(_) | SourceSpec::V4l2Auto => {
+                let (shared, thread, text) = v4l2::spawn(spec, cfg)?;
+                (threaded(shared, thread, true, cfg), text)
+            }
+        };
+        Ok(Background {
+            source,
+            description,
+        })
+    }
+
+    /// The newest frame, without waiting; `None` before the first frame and once `Lost`.
+    pub fn latest(&self) -> Option<Frame> {
+        match &self.source {
+            Source::Static(frame) => Some(frame.clone()),
+            Source::Threaded { shared, .. } => match self.status() {
+                SourceStatus::Lost => None,
+                _ => shared.peek(),
+            },
+        }
+    }
+
+    pub fn status(&self) -> SourceStatus {
+        match &self.source {
+            Source::Static(_) => SourceStatus::Live,
+            Source::Threaded {
+                shared,
+                supervised: true,
+                stall_timeout,
+                grace,
+                ..
+            } => shared.status(Instant::now(), *stall_timeout, *grace),
+            Source::Threaded { shared, .. } => {
+                // A video is live once its first frame is decoded (open decodes frame 0 first).
+                match shared.peek() {
+                    Some(_) => SourceStatus::Live,
+                    None => SourceStatus::Waiting {
+                        since: Instant::now(),
+                    },
+                }
+            }
+        }
+    }
+
+    /// What was opened, e.g. `/dev/video0 (HD Webcam) 640x480 YUYV at 30 fps`.
+    pub fn description(&self) -> &str {
+        &self.description
+    }
+}
+
+fn threaded(
+    shared: Arc<Shared>,
+    thread: JoinHandle<()>,
+    supervised: bool,
+    cfg: &CaptureConfig,
+) -> Source {
+    Source::Threaded {
+        shared,
+        thread: Some(thread),
+        supervised,
+        stall_timeout: cfg.stall_timeout,
+        grace: cfg.grace,
+    }
+}
+
+impl Drop for Background {
+    fn drop(&mut self) {
+        if let Source::Threaded { shared, thread, .. } = &mut self.source {
+            shared.stop.store(true, Ordering::Release);
+            if let Some(thread) = thread.take() {
+                thread.thread().unpark();
+                let _ = thread.join();
+            }
+        }
+    }
+}

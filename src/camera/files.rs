@@ -1,0 +1,179 @@
+//! File sources: a PNG image, a flat colour, and videos (numbered PNG frames or Y4M) played
+//! in a loop at their frame rate, following wall-clock time.
+
+use crate::camera::frame::{Frame, Shared};
+use crate::camera::log::log;
+use crate::camera::smoothing::Smoother;
+use crate::camera::y4m::Y4m;
+use crate::camera::{CameraError, CaptureConfig};
+use crate::image::RgbaImage;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+pub(crate) fn image_frame(path: &Path) -> Result<Frame, CameraError> {
+    let image = RgbaImage::load_png(path).map_err(CameraError::File)?;
+    Ok(static_frame(image))
+}
+
+/// A flat colour at the configured camera size, so consumers see one background size.
+pub(crate) fn color_frame([r, g, b]: [u8; 3], cfg: &CaptureConfig) -> Frame {
+    let mut image = RgbaImage::new(cfg.width.max(1), cfg.height.max(1), [r, g, b, 255]);
+    image.has_alpha = false;
+    static_frame(image)
+}
+
+fn static_frame(image: RgbaImage) -> Frame {
+    Frame {
+        image: Arc::new(image),
+        sequence: 1,
+        captured_at: Instant::now(),
+    }
+}
+
+/// The frames of a video, loaded one at a time by the player thread.
+pub(crate) trait VideoFrames: Send {
+    fn count(&self) -> usize;
+    fn load(&self, index: usize) -> Result<RgbaImage, String>;
+}
+
+struct PngFolder {
+    files: Vec<PathBuf>,
+}
+
+impl VideoFrames for PngFolder {
+    fn count(&self) -> usize {
+        self.files.len()
+    }
+    fn load(&self, index: usize) -> Result<RgbaImage, String> {
+        RgbaImage::load_png(&self.files[index])
+    }
+}
+
+impl VideoFrames for Y4m {
+    fn count(&self) -> usize {
+        self.frame_count()
+    }
+    fn load(&self, index: usize) -> Result<RgbaImage, String> {
+        self.read_frame(index)
+    }
+}
+
+/// Opens a video: a folder of PNG frames (at `cfg.video_fps`) or a Y4M file (at its own rate).
+pub(crate) fn open_video(
+    path: &Path,
+    cfg: &CaptureConfig,
+) -> Result<(Box<dyn VideoFrames>, f64), CameraError> {
+    if path.is_dir() {
+        let files = numbered_pngs(path)?;
+        let fps = cfg.video_fps;
+        if !(fps > 0.0 && fps.is_finite()) {
+            return Err(CameraError::File(format!(
+                "video frame rate {fps} is not positive"
+            )));
+        }
+        Ok((Box::new(PngFolder { files }), fps))
+    } else {
+        let y4m = Y4m::open(path).map_err(CameraError::File)?;
+        let fps = y4m.fps;
+        Ok((Box::new(y4m), fps))
+    }
+}
+
+/// The PNG files of a folder in frame order: by the number in the name, then by name.
+fn numbered_pngs(dir: &Path) -> Result<Vec<PathBuf>, CameraError> {
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| CameraError::File(format!("cannot read {}: {e}", dir.display())))?;
+    let mut files: Vec<(u64, PathBuf)> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("png")))
+        .map(|p| (frame_number(&p), p))
+        .collect();
+    if files.is_empty() {
+        return Err(CameraError::File(format!(
+            "video folder {} holds no PNG frames",
+            dir.display()
+        )));
+    }
+    files.sort();
+    Ok(files.into_iter().map(|(_, p)| p).collect())
+}
+
+fn frame_number(path: &Path) -> u64 {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy())
+        .unwrap_or_default();
+    let digits: String = stem.chars().filter(|c| c.is_ascii_digit()).collect();
+    digits.parse().unwrap_or(u64::MAX)
+}
+
+/// Plays `frames` in a loop until asked to stop. Frame `n` (counted from `start`) is shown from
+/// `start + n / fps`; its sequence is `n + 1`, so skipped frames show as a jump in sequence.
+pub(crate) fn play(
+    frames: Box<dyn VideoFrames>,
+    fps: f64,
+    start: Instant,
+    shared: &Shared,
+    smoothing: Option<f32>,
+) {
+    let mut smoother = smoothing.map(Smoother::new);
+    let mut shown = None;
+    let mut failed = false;
+    let count = frames.count() as u64;
+    while !shared.stopping() {
+        let n = (start.elapsed().as_secs_f64() * fps) as u64;
+        // A one-frame video never changes, so it keeps sequence 1.
+        let n = if count == 1 { 0 } else { n };
+        if shown != Some(n) {
+            shown = Some(n);
+            match frames.load((n % count) as usize) {
+                Ok(image) => {
+                    let image = match smoother.as_mut() {
+                        Some(s) => s.apply(image),
+                        None => image,
+                    };
+                    let captured_at = start + Duration::from_secs_f64(n as f64 / fps);
+                    shared.publish(Frame {
+                        image: Arc::new(image),
+                        sequence: n + 1,
+                        captured_at,
+                    });
+                    failed = false;
+                }
+                Err(e) if !failed => {
+                    failed = true;
+                    log(&format!(
+                        "video frame {} unreadable, keeping the last one: {e}",
+                        n % count
+                    ));
+                }
+                Err(_) => {}
+            }
+        }
+        shared.sleep_until(start + Duration::from_secs_f64((n + 1) as f64 / fps));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_sort_by_number_not_by_text() {
+        let mut v = vec![
+            Path::new("f10.png"),
+            Path::new("f2.png"),
+            Path::new("f1.png"),
+        ];
+        v.sort_by_key(|p| frame_number(p));
+        assert_eq!(
+            v,
+            [
+                Path::new("f1.png"),
+                Path::new("f2.png"),
+                Path::new("f10.png")
+            ]
+        );
+    }
+}

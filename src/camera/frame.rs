@@ -1,0 +1,189 @@
+//! Frames, source status, and the latest-frame mailbox shared with the producer thread.
+
+use crate::image::RgbaImage;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, TryLockError};
+use std::time::{Duration, Instant};
+
+/// One background frame.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// 8-bit sRGB RGBA, top row first.
+    pub image: Arc<RgbaImage>,
+    /// Starts at 1 and grows with each new frame (it may skip), so a consumer preprocesses once
+    /// per new value. Static sources keep the same value for ever.
+    pub sequence: u64,
+    /// When the frame was captured (for V4L2, the driver's timestamp mapped to `Instant`).
+    pub captured_at: Instant,
+}
+
+/// Health of a source, for the consumer's grace-period logic.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SourceStatus {
+    /// Opened, no frame yet.
+    Waiting { since: Instant },
+    /// Frames are arriving.
+    Live,
+    /// The device stalled or vanished; the last good frame is still served.
+    Stale { since: Instant },
+    /// Past the grace period: `latest()` returns `None`, the consumer passes frames through.
+    Lost,
+}
+
+/// Shared between a producer thread and the readers. Readers never block: the mailbox lock is
+/// only ever held for an `Arc` clone or swap, and readers use `try_lock`.
+pub(crate) struct Shared {
+    mailbox: Mutex<Option<Frame>>,
+    epoch: Instant,
+    /// Nanoseconds after `epoch` (+1; 0 = never) of the newest frame.
+    last_frame_ns: AtomicU64,
+    /// Nanoseconds after `epoch` (+1; 0 = not down) since the device has been lost.
+    down_since_ns: AtomicU64,
+    pub(crate) stop: AtomicBool,
+}
+
+impl Shared {
+    pub(crate) fn new() -> Self {
+        Shared {
+            mailbox: Mutex::new(None),
+            epoch: Instant::now(),
+            last_frame_ns: AtomicU64::new(0),
+            down_since_ns: AtomicU64::new(0),
+            stop: AtomicBool::new(false),
+        }
+    }
+
+    fn stamp(&self, t: Instant) -> u64 {
+        t.saturating_duration_since(self.epoch).as_nanos() as u64 + 1
+    }
+
+    fn instant(&self, stamp: u64) -> Instant {
+        self.epoch + Duration::from_nanos(stamp - 1)
+    }
+
+    pub(crate) fn publish(&self, frame: Frame) {
+        let mut slot = self.mailbox.lock().unwrap_or_else(|e| e.into_inner());
+        *slot = Some(frame);
+        drop(slot);
+        self.last_frame_ns
+            .store(self.stamp(Instant::now()), Ordering::Release);
+        self.down_since_ns.store(0, Ordering::Release);
+    }
+
+    pub(crate) fn stopping(&self) -> bool {
+        self.stop.load(Ordering::Acquire)
+    }
+
+    /// Sleeps until `deadline` or until asked to stop (`Drop` unparks the thread).
+    pub(crate) fn sleep_until(&self, deadline: Instant) {
+        while !self.stopping() {
+            let now = Instant::now();
+            if now >= deadline {
+                return;
+            }
+            std::thread::park_timeout(deadline - now);
+        }
+    }
+
+    pub(crate) fn mark_down(&self) {
+        let stamp = self.stamp(Instant::now());
+        let _ = self
+            .down_since_ns
+            .compare_exchange(0, stamp, Ordering::AcqRel, Ordering::Acquire);
+    }
+
+    /// The newest frame without waiting. Contention lasts nanoseconds (an `Arc` clone), so a
+    /// few spins settle it; if they do not, the reader gets `None` rather than waiting.
+    pub(crate) fn peek(&self) -> Option<Frame> {
+        for _ in 0..1000 {
+            match self.mailbox.try_lock() {
+                Ok(slot) => return slot.clone(),
+                Err(TryLockError::Poisoned(e)) => return e.into_inner().clone(),
+                Err(TryLockError::WouldBlock) => std::hint::spin_loop(),
+            }
+        }
+        None
+    }
+
+    /// Status at `now` from the two timestamps: no thread has to be scheduled for a stall to
+    /// show, so a blocked capture thread still reads as `Stale`, then `Lost`.
+    pub(crate) fn status(&self, now: Instant, stall: Duration, grace: Duration) -> SourceStatus {
+        let last = self.last_frame_ns.load(Ordering::Acquire);
+        let down = self.down_since_ns.load(Ordering::Acquire);
+        if last == 0 {
+            // `epoch` is when the source was opened: waiting (or reopening) since then.
+            let since = self.epoch;
+            return if now.saturating_duration_since(since) > stall + grace {
+                SourceStatus::Lost
+            } else {
+                SourceStatus::Waiting { since }
+            };
+        }
+        let stalled_at = self.instant(last) + stall;
+        let since = match down {
+            0 if now <= stalled_at => return SourceStatus::Live,
+            0 => stalled_at,
+            d => self.instant(d).min(stalled_at),
+        };
+        if now.saturating_duration_since(since) > grace {
+            SourceStatus::Lost
+        } else {
+            SourceStatus::Stale { since }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame() -> Frame {
+        Frame {
+            image: Arc::new(RgbaImage::new(1, 1, [1, 2, 3, 255])),
+            sequence: 1,
+            captured_at: Instant::now(),
+        }
+    }
+
+    #[test]
+    fn status_follows_the_timeline() {
+        let s = Shared::new();
+        let (stall, grace) = (Duration::from_millis(100), Duration::from_millis(200));
+        let t0 = Instant::now();
+        assert!(matches!(
+            s.status(t0, stall, grace),
+            SourceStatus::Waiting { .. }
+        ));
+        assert_eq!(
+            s.status(t0 + Duration::from_secs(1), stall, grace),
+            SourceStatus::Lost
+        );
+        s.publish(frame());
+        let t1 = Instant::now();
+        assert_eq!(s.status(t1, stall, grace), SourceStatus::Live);
+        let stalled = s.status(t1 + Duration::from_millis(150), stall, grace);
+        assert!(matches!(stalled, SourceStatus::Stale { .. }), "{stalled:?}");
+        assert_eq!(
+            s.status(t1 + Duration::from_millis(400), stall, grace),
+            SourceStatus::Lost
+        );
+        s.mark_down();
+        assert!(matches!(
+            s.status(Instant::now(), stall, grace),
+            SourceStatus::Stale { .. }
+        ));
+        s.publish(frame());
+        assert_eq!(s.status(Instant::now(), stall, grace), SourceStatus::Live);
+    }
+
+    #[test]
+    fn peek_returns_the_newest_frame() {
+        let s = Shared::new();
+        assert!(s.peek().is_none());
+        let mut f = frame();
+        s.publish(f.clone());
+        f.sequence = 2;
+        s.publish(f);
+        assert_eq!(s.peek().map(|f| f.sequence), Some(2));
+    }
+}

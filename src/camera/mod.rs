@@ -1,0 +1,57 @@
+//! Background sources: the real world behind the display, as 8-bit sRGB RGBA frames.
+//!
+//! A [`Background`] is chosen by a spec string (`CONTRASTXR_BACKGROUND`, see [`parse_source`]):
+//! a V4L2 camera, a PNG image, a video (numbered PNG frames or a Y4M file) or a flat colour.
+//! Live sources run on their own thread and publish into a latest-frame mailbox; the render
+//! thread only ever takes the newest frame and never waits for a camera or a file.
+//!
+//! This module must not know about the GPU engine or the OpenXR layer: it hands out
+//! [`Frame`]s and a [`SourceStatus`]; what to do with them (preprocess once per new
+//! `sequence`, pass through when `Lost`) is the consumer's business.
+//! Privacy: a camera is open only while its [`Background`] lives, and no frame is written
+//! anywhere except by [`cli::test`] when asked for an output folder.
+
+mod background;
+pub mod cli;
+pub mod convert;
+mod files;
+mod frame;
+mod log;
+mod mjpeg;
+mod smoothing;
+pub mod source;
+pub mod v4l2;
+mod y4m;
+
+pub use background::Background;
+pub use frame::{Frame, SourceStatus};
+pub use log::set_log_sink;
+pub use source::{parse_source, CaptureConfig, SourceSpec};
+
+use std::fmt;
+
+/// Why a background source could not be opened.
+#[derive(Debug)]
+pub enum CameraError {
+    /// No capture device at the path, or none at all for `v4l2:auto`.
+    NoDevice(String),
+    /// The device offers no pixel format this module can convert.
+    Unsupported(String),
+    /// An I/O or driver error while opening or negotiating.
+    Device(String),
+    /// An image or video file is missing or unreadable.
+    File(String),
+}
+
+impl fmt::Display for CameraError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CameraError::NoDevice(m)
+            | CameraError::Unsupported(m)
+            | CameraError::Device(m)
+            | CameraError::File(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for CameraError {}

@@ -1,0 +1,134 @@
+//! Source specs (`CONTRASTXR_BACKGROUND`) and capture settings.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Which background to use, parsed from a spec string by [`parse_source`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SourceSpec {
+    /// `v4l2:/dev/videoN`: this capture device.
+    V4l2Device(PathBuf),
+    /// `v4l2:auto`: the first capture device, looked up again on each reopen.
+    V4l2Auto,
+    /// `image:PATH`: one PNG, static.
+    Image(PathBuf),
+    /// `video:PATH`: a folder of numbered PNG frames or a Y4M file, looped.
+    Video(PathBuf),
+    /// `color:#RRGGBB`: a flat sRGB colour, static.
+    Color([u8; 3]),
+}
+
+/// Parses a background spec such as `v4l2:/dev/video0` or `color:#204080`.
+pub fn parse_source(spec: &str) -> Result<SourceSpec, String> {
+    let spec = spec.trim();
+    let Some((kind, rest)) = spec.split_once(':') else {
+        return Err(format!(
+            "background source '{spec}' has no kind: use v4l2:, image:, video: or color:"
+        ));
+    };
+    if rest.is_empty() {
+        return Err(format!(
+            "background source '{spec}' is missing what follows '{kind}:'"
+        ));
+    }
+    match kind {
+        "v4l2" if rest == "auto" => Ok(SourceSpec::V4l2Auto),
+        "v4l2" => Ok(SourceSpec::V4l2Device(PathBuf::from(rest))),
+        "image" => Ok(SourceSpec::Image(PathBuf::from(rest))),
+        "video" => Ok(SourceSpec::Video(PathBuf::from(rest))),
+        "color" | "colour" => parse_color(rest).map(SourceSpec::Color),
+        _ => Err(format!(
+            "background source kind '{kind}' is unknown: use v4l2:, image:, video: or color:"
+        )),
+    }
+}
+
+fn parse_color(text: &str) -> Result<[u8; 3], String> {
+    let hex = text.strip_prefix('#').unwrap_or(text);
+    let valid = hex.len() == 6 && hex.chars().all(|c| c.is_ascii_hexdigit());
+    if !valid {
+        return Err(format!(
+            "background colour '{text}' is not of the form #RRGGBB"
+        ));
+    }
+    let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).expect("checked hex digits");
+    Ok([byte(0), byte(2), byte(4)])
+}
+
+/// How to open and supervise a source. `Default` gives the documented defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CaptureConfig {
+    /// Wanted camera width; the smallest offered size at least this wide is chosen (640).
+    pub width: u32,
+    /// Wanted camera height (480).
+    pub height: u32,
+    /// Wanted camera rate in frames per second; the lowest offered rate >= this (30).
+    pub fps: u32,
+    /// Frame rate of a `video:` folder of PNG frames (Y4M files carry their own) (30).
+    pub video_fps: f64,
+    /// No new camera frame for this long counts as a stall: the stream is reopened (1 s).
+    pub stall_timeout: Duration,
+    /// How long the last good frame is kept after a loss or stall before `Lost` (2 s).
+    pub grace: Duration,
+    /// Longest wait between reopen attempts; waits double from 100 ms up to this (2 s).
+    pub max_backoff: Duration,
+    /// Temporal smoothing: weight of the newest frame in an exponential moving average of
+    /// the background, in (0, 1]; `None` (the default) is off.
+    pub smoothing: Option<f32>,
+}
+
+impl Default for CaptureConfig {
+    fn default() -> Self {
+        CaptureConfig {
+            width: 640,
+            height: 480,
+            fps: 30,
+            video_fps: 30.0,
+            stall_timeout: Duration::from_secs(1),
+            grace: Duration::from_secs(2),
+            max_backoff: Duration::from_secs(2),
+            smoothing: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_each_kind() {
+        assert_eq!(parse_source("v4l2:auto"), Ok(SourceSpec::V4l2Auto));
+        assert_eq!(
+            parse_source("v4l2:/dev/video2"),
+            Ok(SourceSpec::V4l2Device("/dev/video2".into()))
+        );
+        assert_eq!(
+            parse_source("image:a.png"),
+            Ok(SourceSpec::Image("a.png".into()))
+        );
+        assert_eq!(
+            parse_source(" video:/x/y.y4m "),
+            Ok(SourceSpec::Video("/x/y.y4m".into()))
+        );
+        assert_eq!(
+            parse_source("color:#FF8001"),
+            Ok(SourceSpec::Color([255, 128, 1]))
+        );
+    }
+
+    #[test]
+    fn rejects_bad_specs_with_a_sentence() {
+        for bad in [
+            "",
+            "webcam",
+            "v4l2:",
+            "color:#12345",
+            "color:#GG0000",
+            "file:x",
+        ] {
+            let err = parse_source(bad).unwrap_err();
+            assert!(err.starts_with("background "), "{bad}: {err}");
+        }
+    }
+}

@@ -1,0 +1,354 @@
+//! The capture thread: opens the device, streams memory-mapped buffers, converts each frame to
+//! RGBA and publishes it; on loss or stall it marks the source down and reopens with backoff.
+//! Readers only ever touch the mailbox in `Shared`, so nothing here can block them.
+
+use super::{choose_mode, device_dir, first_capture_device, modes, probe};
+use crate::camera::convert::{to_rgba, PixelFormat};
+use crate::camera::frame::{Frame, Shared, SourceStatus};
+use crate::camera::log::log;
+use crate::camera::smoothing::Smoother;
+use crate::camera::{CameraError, CaptureConfig, SourceSpec};
+use std::io;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::PathBuf;
+use std::sync::mpsc::sync_channel;
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use v4l::buffer::{Flags as BufferFlags, Metadata, Type};
+use v4l::io::traits::CaptureStream;
+use v4l::prelude::MmapStream;
+use v4l::video::capture::Parameters;
+use v4l::video::Capture as _;
+use v4l::{Device, FourCC, Fraction};
+
+/// How long the first open may take before `Background::open` gives up on the device.
+const FIRST_OPEN_TIMEOUT: Duration = Duration::from_secs(10);
+/// The longest a poll waits, so that a stop request is noticed promptly.
+const POLL_SLICE: Duration = Duration::from_millis(100);
+const FIRST_BACKOFF: Duration = Duration::from_millis(100);
+/// Buffers in the driver's queue: enough to ride out a slow conversion, few enough for latency.
+const BUFFER_COUNT: u32 = 4;
+
+/// An open, configured device.
+struct Session {
+    device: Device,
+    format: PixelFormat,
+    width: u32,
+    height: u32,
+    stride: u32,
+    description: String,
+}
+
+/// Starts capturing; returns once the device is open and configured (or failed to be).
+pub(crate) fn spawn(
+    spec: &SourceSpec,
+    cfg: &CaptureConfig,
+) -> Result<(Arc<Shared>, JoinHandle<()>, String), CameraError> {
+    let target = match spec {
+        SourceSpec::V4l2Device(path) => Some(path.clone()),
+        _ => None,
+    };
+    let shared = Arc::new(Shared::new());
+    let (tx, rx) = sync_channel(1);
+    let (thread_shared, cfg) = (shared.clone(), cfg.clone());
+    let thread = std::thread::Builder::new()
+        .name("contrastxr-camera".into())
+        .spawn(move || match open_session(target.as_ref(), &cfg) {
+            Ok(session) => {
+                let _ = tx.send(Ok(session.description.clone()));
+                run(target, &cfg, &thread_shared, session);
+            }
+            Err(e) => {
+                let _ = tx.send(Err(e));
+            }
+        })
+        .map_err(|e| CameraError::Device(format!("cannot start the capture thread: {e}")))?;
+    match rx.recv_timeout(FIRST_OPEN_TIMEOUT) {
+        Ok(Ok(description)) => Ok((shared, thread, description)),
+        Ok(Err(e)) => {
+            let _ = thread.join();
+            Err(e)
+        }
+        Err(_) => {
+            shared
+                .stop
+                .store(true, std::sync::atomic::Ordering::Release);
+            Err(CameraError::Device(
+                "the camera did not answer within 10 s".into(),
+            ))
+        }
+    }
+}
+
+fn resolve(target: Option<&PathBuf>) -> Result<PathBuf, CameraError> {
+    match target {
+        Some(path) => Ok(path.clone()),
+        None => first_capture_device(&device_dir()).ok_or_else(|| {
+            CameraError::NoDevice(format!(
+                "no V4L2 capture device found ({}/video* absent or not capture devices)",
+                device_dir().display()
+            ))
+        }),
+    }
+}
+
+fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session, CameraError> {
+    let path = resolve(target)?;
+    let shown = path.display();
+    let (device, info) = probe(&path).map_err(|e| match e.kind() {
+        io::ErrorKind::NotFound => CameraError::NoDevice(format!("{shown} does not exist")),
+        _ => CameraError::Device(format!("cannot open {shown}: {e}")),
+    })?;
+    if !info.capture {
+        return Err(CameraError::NoDevice(format!(
+            "{shown} is not a video capture device"
+        )));
+    }
+    let all = modes(&device).map_err(|e| CameraError::Device(format!("{shown}: {e}")))?;
+    let mode = choose_mode(&all, cfg.width, cfg.height, cfg.fps).ok_or_else(|| {
+        CameraError::Unsupported(format!(
+            "{shown} offers none of YUYV, NV12, MJPG, RGB3, BGR3, GREY"
+        ))
+    })?;
+    let device_err = |e: io::Error| CameraError::Device(format!("{shown}: {e}"));
+    let mut wanted = device.format().map_err(device_err)?;
+    (wanted.width, wanted.height, wanted.fourcc) =
+        (mode.width, mode.height, FourCC::new(&mode.fourcc));
+    let got = device.set_format(&wanted).map_err(device_err)?;
+    let format = PixelFormat::from_fourcc(got.fourcc.repr).ok_or_else(|| {
+        CameraError::Unsupported(format!(
+            "{shown} switched to unsupported format {}",
+            got.fourcc
+        ))
+    })?;
+    if mode.interval.0 > 0 {
+        let rate = Parameters::new(Fraction::new(mode.interval.0, mode.interval.1));
+        if let Err(e) = device.set_params(&rate) {
+            log(&format!(
+                "{shown}: cannot set the frame rate, using the driver's: {e}"
+            ));
+        }
+    }
+    let fps = device.params().map(|p| p.interval).map_or(0.0, |f| {
+        if f.numerator > 0 {
+            f64::from(f.denominator) / f64::from(f.numerator)
+        } else {
+            0.0
+        }
+    });
+    let description = format!(
+        "{shown} ({}) {}x{} {} at {fps:.0} fps",
+        info.card, got.width, got.height, got.fourcc
+    );
+    Ok(Session {
+        device,
+        format,
+        width: got.width,
+        height: got.height,
+        stride: got.stride,
+        description,
+    })
+}
+
+/// The thread's life: stream, and after each loss reopen with doubling waits, until stopped.
+fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Session) {
+    let mut capture = Capture {
+        sequence: 0,
+        smoother: cfg.smoothing.map(Smoother::new),
+        status: StatusLog::default(),
+    };
+    log(&format!("opened {}", first.description));
+    let mut session = Some(first);
+    let mut backoff = FIRST_BACKOFF;
+    let mut open_error = None;
+    // A device that opens but delivers nothing is reopened quietly, with growing waits.
+    let mut quiet = false;
+    while !shared.stopping() {
+        let current = match session.take() {
+            Some(s) => s,
+            None => match open_session(target.as_ref(), cfg) {
+                Ok(s) => {
+                    if !quiet {
+                        log(&format!("reopened {}", s.description));
+                    }
+                    open_error = None;
+                    s
+                }
+                Err(e) => {
+                    let message = e.to_string();
+                    if open_error.as_ref() != Some(&message) {
+                        log(&format!("cannot reopen yet: {message}"));
+                        open_error = Some(message);
+                    }
+                    capture.status.update(shared, cfg);
+                    shared.sleep_until(Instant::now() + backoff);
+                    backoff = (backoff * 2).min(cfg.max_backoff.max(FIRST_BACKOFF));
+                    continue;
+                }
+            },
+        };
+        // The v4l crate panics in Drop on some driver errors; that is one more way to lose
+        // the device, not a reason to take the application down.
+        let sequence_before = capture.sequence;
+        let ended = catch_unwind(AssertUnwindSafe(|| capture.stream(&current, cfg, shared)));
+        drop(current);
+        let delivered = capture.sequence > sequence_before;
+        match ended {
+            Ok(Ok(())) => break,
+            _ if quiet && !delivered => {}
+            Ok(Err(e)) => log(&format!("lost the camera: {e}")),
+            Err(_) => log("lost the camera: the driver failed (v4l panicked)"),
+        }
+        quiet = !delivered;
+        if delivered {
+            backoff = FIRST_BACKOFF;
+        } else {
+            shared.sleep_until(Instant::now() + backoff);
+            backoff = (backoff * 2).min(cfg.max_backoff.max(FIRST_BACKOFF));
+        }
+        shared.mark_down();
+        capture.status.update(shared, cfg);
+    }
+}
+
+struct Capture {
+    /// Sequence of the last published frame; continues across reopens.
+    sequence: u64,
+    smoother: Option<Smoother>,
+    status: StatusLog,
+}
+
+impl Capture {
+    /// Streams until stopped (`Ok`) or until the device fails or stalls (`Err`).
+    fn stream(
+        &mut self,
+        session: &Session,
+        cfg: &CaptureConfig,
+        shared: &Shared,
+    ) -> io::Result<()> {
+        let mut stream =
+            MmapStream::with_buffers(&session.device, Type::VideoCapture, BUFFER_COUNT)?;
+        // `next()` must never time out once streaming: the v4l crate would then queue the same
+        // buffer twice on the following call (vb2 refuses that with EINVAL). So the waiting
+        // is done by our own short polls, and `next()` runs only when a buffer is ready. The
+        // first `next()` starts the stream and may wait up to the stall timeout.
+        stream.set_timeout(cfg.stall_timeout);
+        let handle = session.device.handle();
+        let slice = POLL_SLICE.min(cfg.stall_timeout).as_millis() as i32;
+        let mut last_frame = Instant::now();
+        let mut started = false;
+        let mut bad_frame_logged = false;
+        while !shared.stopping() {
+            self.status.update(shared, cfg);
+            let stalled = || {
+                let ms = cfg.stall_timeout.as_millis();
+                io::Error::new(io::ErrorKind::TimedOut, format!("no frame for {ms} ms"))
+            };
+            if last_frame.elapsed() > cfg.stall_timeout {
+                return Err(stalled());
+            }
+            if started && handle.poll(libc::POLLIN, slice)? == 0 {
+                continue;
+            }
+            started = true;
+            let (data, meta) = CaptureStream::next(&mut stream).map_err(|e| match e.kind() {
+                io::ErrorKind::TimedOut => stalled(),
+                _ => e,
+            })?;
+            match self.convert(session, data, meta) {
+                Ok(frame) => {
+                    shared.publish(frame);
+                    last_frame = Instant::now();
+                }
+                Err(e) if !bad_frame_logged => {
+                    log(&format!("skipping bad frames: {e}"));
+                    bad_frame_logged = true;
+                }
+                Err(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn convert(
+        &mut self,
+        session: &Session,
+        data: &[u8],
+        meta: &Metadata,
+    ) -> Result<Frame, String> {
+        if meta.flags.contains(BufferFlags::ERROR) {
+            return Err("the driver marked a frame as corrupt".into());
+        }
+        let used = match meta.bytesused as usize {
+            0 => data.len(),
+            n => n.min(data.len()),
+        };
+        let image = to_rgba(
+            session.format,
+            &data[..used],
+            session.width,
+            session.height,
+            session.stride,
+        )?;
+        let image = match self.smoother.as_mut() {
+            Some(s) => s.apply(image),
+            None => image,
+        };
+        self.sequence += 1;
+        // time_t is 32 bits on some targets.
+        #[allow(clippy::unnecessary_cast)]
+        let captured_at = instant_of(meta.timestamp.sec as i64, meta.timestamp.usec as i64);
+        Ok(Frame {
+            image: Arc::new(image),
+            sequence: self.sequence,
+            captured_at,
+        })
+    }
+}
+
+/// Maps a driver timestamp (CLOCK_MONOTONIC, as UVC and vb2 drivers stamp buffers) to an
+/// `Instant`; an implausible one (another clock, or none) becomes "now".
+fn instant_of(sec: i64, usec: i64) -> Instant {
+    let now = Instant::now();
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec and CLOCK_MONOTONIC always exists on Linux.
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts) };
+    #[allow(clippy::unnecessary_cast)] // time_t and c_long are 32 bits on some targets
+    let now_us = ts.tv_sec as i64 * 1_000_000 + ts.tv_nsec as i64 / 1000;
+    let age_us = now_us - (sec * 1_000_000 + usec);
+    if (0..10_000_000).contains(&age_us) {
+        now.checked_sub(Duration::from_micros(age_us as u64))
+            .unwrap_or(now)
+    } else {
+        now
+    }
+}
+
+/// Logs each change of status once.
+#[derive(Default)]
+struct StatusLog {
+    last: Option<std::mem::Discriminant<SourceStatus>>,
+}
+
+impl StatusLog {
+    fn update(&mut self, shared: &Shared, cfg: &CaptureConfig) {
+        let status = shared.status(Instant::now(), cfg.stall_timeout, cfg.grace);
+        let kind = std::mem::discriminant(&status);
+        if self.last == Some(kind) {
+            return;
+        }
+        self.last = Some(kind);
+        let grace = cfg.grace.as_millis();
+        log(match status {
+            SourceStatus::Waiting { .. } => "waiting for the first frame",
+            SourceStatus::Live => "live",
+            SourceStatus::Stale { .. } => "no new frames, keeping the last one",
+            SourceStatus::Lost if grace == 0 => "lost, passing frames through",
+            SourceStatus::Lost => "lost for longer than the grace period, passing frames through",
+        });
+    }
+}

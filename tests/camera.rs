@@ -1,0 +1,836 @@
+//! Background sources end to end: file sources in-process, and the real V4L2 path (the `v4l`
+//! crate, unchanged) against tests/fake-v4l2, an LD_PRELOAD stand-in for a capture device.
+//!
+//! LD_PRELOAD must be set when a process starts, so each V4L2 case re-executes this test
+//! binary with the stand-in preloaded and `CONTRASTXR_CAMERA_CHILD` naming the case; the
+//! `child_dispatch` test runs that case in the child and does nothing in a normal run.
+//! Expected pixels are computed here from the BT.601 / JFIF equations in floating point,
+//! independently of the crate's fixed-point conversion.
+
+use contrastxr::camera::{cli, parse_source, Background, CaptureConfig, SourceSpec, SourceStatus};
+use contrastxr::image::RgbaImage;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+const CHILD: &str = "CONTRASTXR_CAMERA_CHILD";
+const W: u32 = 640;
+const H: u32 = 480;
+
+// ---------------------------------------------------------------- expected colours
+
+fn clamp_round(v: f64) -> u8 {
+    v.round().clamp(0.0, 255.0) as u8
+}
+
+/// BT.601 limited range, from the defining equations (Kr = 0.299, Kb = 0.114).
+fn ref_limited(y: u8, cb: u8, cr: u8) -> [u8; 4] {
+    let (y, cb, cr) = (
+        (f64::from(y) - 16.0) * 255.0 / 219.0,
+        (f64::from(cb) - 128.0) * 255.0 / 224.0,
+        (f64::from(cr) - 128.0) * 255.0 / 224.0,
+    );
+    ref_rgb(y, cb, cr)
+}
+
+/// JFIF full range.
+fn ref_full(y: u8, cb: u8, cr: u8) -> [u8; 4] {
+    ref_rgb(f64::from(y), f64::from(cb) - 128.0, f64::from(cr) - 128.0)
+}
+
+fn ref_rgb(y: f64, cb: f64, cr: f64) -> [u8; 4] {
+    let (kr, kb) = (0.299, 0.114);
+    let kg = 1.0 - kr - kb;
+    let r = y + 2.0 * (1.0 - kr) * cr;
+    let b = y + 2.0 * (1.0 - kb) * cb;
+    let g = (y - kr * r - kb * b) / kg;
+    [clamp_round(r), clamp_round(g), clamp_round(b), 255]
+}
+
+/// Eight YCbCr triples for eight vertical bands of 80 pixels.
+const PALETTE: [[u8; 3]; 8] = [
+    [16, 128, 128],
+    [235, 128, 128],
+    [81, 90, 240],
+    [145, 54, 34],
+    [41, 240, 110],
+    [116, 168, 108],
+    [200, 100, 160],
+    [60, 150, 90],
+];
+
+fn band(x: u32) -> usize {
+    (x / 80) as usize
+}
+
+fn yuv_expected(palette: &[[u8; 3]; 8], full: bool) -> RgbaImage {
+    let mut img = RgbaImage::new(W, H, [0; 4]);
+    for y in 0..H {
+        for x in 0..W {
+            let [l, cb, cr] = palette[band(x)];
+            img.set(
+                x,
+                y,
+                if full {
+                    ref_full(l, cb, cr)
+                } else {
+                    ref_limited(l, cb, cr)
+                },
+            );
+        }
+    }
+    img
+}
+
+/// One raw frame in `fourcc` and the RGBA it must decode to.
+fn test_frame(fourcc: &str, variant: u8) -> (Vec<u8>, RgbaImage) {
+    let mut palette = PALETTE;
+    palette.rotate_left(variant as usize);
+    match fourcc {
+        "YUYV" => (yuyv(&palette), yuv_expected(&palette, false)),
+        "NV12" => (nv12(&palette), yuv_expected(&palette, false)),
+        "MJPG" => (jpeg::encode(&palette), yuv_expected(&palette, true)),
+        "RGB3" | "BGR3" | "GREY" => packed(fourcc, &palette),
+        _ => unreachable!(),
+    }
+}
+
+fn yuyv(p: &[[u8; 3]; 8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for _ in 0..H {
+        for x in (0..W).step_by(2) {
+            let [y, cb, cr] = p[band(x)];
+            out.extend([y, cb, y, cr]);
+        }
+    }
+    out
+}
+
+fn nv12(p: &[[u8; 3]; 8]) -> Vec<u8> {
+    let mut out: Vec<u8> = (0..W * H).map(|i| p[band(i % W)][0]).collect();
+    for _ in 0..H / 2 {
+        for x in (0..W).step_by(2) {
+            out.extend([p[band(x)][1], p[band(x)][2]]);
+        }
+    }
+    out
+}
+
+/// RGB3, BGR3 and GREY frames, taking the palette bytes as colours.
+fn packed(fourcc: &str, p: &[[u8; 3]; 8]) -> (Vec<u8>, RgbaImage) {
+    let mut raw = Vec::new();
+    let mut img = RgbaImage::new(W, H, [0; 4]);
+    for y in 0..H {
+        for x in 0..W {
+            let [a, b, c] = p[band(x)];
+            let rgba = match fourcc {
+                "RGB3" => {
+                    raw.extend([a, b, c]);
+                    [a, b, c, 255]
+                }
+                "BGR3" => {
+                    raw.extend([a, b, c]);
+                    [c, b, a, 255]
+                }
+                _ => {
+                    raw.push(a);
+                    [a, a, a, 255]
+                }
+            };
+            img.set(x, y, rgba);
+        }
+    }
+    (raw, img)
+}
+
+/// A baseline JPEG the way UVC cameras send MJPEG: 4:4:4, no Huffman tables (the standard ones
+/// of JPEG Annex K are implied), each 8x8 block flat (DC only), quantisation all ones.
+mod jpeg {
+    use super::{band, H, W};
+
+    const DC_LUMA_BITS: [u8; 16] = [0, 1, 5, 1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0];
+    const DC_CHROMA_BITS: [u8; 16] = [0, 3, 1, 1, 1, 1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0];
+    /// End-of-block codes of the standard AC tables (K.5 luminance, K.6 chrominance).
+    const EOB: [(u32, u32); 2] = [(0b1010, 4), (0b00, 2)];
+
+    /// Canonical Huffman codes (code, length) for symbols 0.. from the count per length.
+    fn codes(bits: &[u8; 16]) -> Vec<(u32, u32)> {
+        let (mut out, mut code) = (Vec::new(), 0u32);
+        for (i, &n) in bits.iter().enumerate() {
+            for _ in 0..n {
+                out.push((code, i as u32 + 1));
+                code += 1;
+            }
+            code <<= 1;
+        }
+        out
+    }
+
+    #[derive(Default)]
+    struct Bits {
+        out: Vec<u8>,
+        acc: u32,
+        n: u32,
+    }
+
+    impl Bits {
+        fn put(&mut self, value: u32, len: u32) {
+            for i in (0..len).rev() {
+                self.acc = self.acc << 1 | (value >> i & 1);
+                self.n += 1;
+                if self.n == 8 {
+                    let byte = self.acc as u8;
+                    self.out.push(byte);
+                    if byte == 0xFF {
+                        self.out.push(0); // byte stuffing
+                    }
+                    (self.acc, self.n) = (0, 0);
+                }
+            }
+        }
+        fn finish(mut self) -> Vec<u8> {
+            while self.n != 0 {
+                self.put(1, 1);
+            }
+            self.out
+        }
+    }
+
+    pub fn encode(palette: &[[u8; 3]; 8]) -> Vec<u8> {
+        let dc = [codes(&DC_LUMA_BITS), codes(&DC_CHROMA_BITS)];
+        let mut bits = Bits::default();
+        let mut prev = [0i32; 3];
+        for _ in 0..H / 8 {
+            for bx in 0..W / 8 {
+                for c in 0..3 {
+                    // Flat block of value v: DC = 8 (v - 128) with unit quantisation.
+                    let value = 8 * (i32::from(palette[band(bx * 8)][c]) - 128);
+                    let diff = value - prev[c];
+                    prev[c] = value;
+                    let size = 32 - diff.unsigned_abs().leading_zeros();
+                    let table = usize::from(c > 0);
+                    let (code, len) = dc[table][size as usize];
+                    bits.put(code, len);
+                    let extra = if diff < 0 { diff - 1 } else { diff } as u32;
+                    bits.put(extra & ((1 << size) - 1), size);
+                    bits.put(EOB[table].0, EOB[table].1);
+                }
+            }
+        }
+        let mut out = vec![0xFF, 0xD8, 0xFF, 0xDB, 0, 67, 0];
+        out.extend([1u8; 64]);
+        out.extend([
+            0xFF,
+            0xC0,
+            0,
+            17,
+            8,
+            (H >> 8) as u8,
+            H as u8,
+            (W >> 8) as u8,
+            W as u8,
+            3,
+        ]);
+        out.extend([1, 0x11, 0, 2, 0x11, 0, 3, 0x11, 0]);
+        out.extend([0xFF, 0xDA, 0, 12, 3, 1, 0x00, 2, 0x11, 3, 0x11, 0, 63, 0]);
+        out.extend(bits.finish());
+        out.extend([0xFF, 0xD9]);
+        out
+    }
+}
+
+// ---------------------------------------------------------------- comparing
+
+fn max_difference(a: &RgbaImage, b: &RgbaImage) -> Result<u8, String> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(format!(
+            "size {}x{} vs {}x{}",
+            a.width, a.height, b.width, b.height
+        ));
+    }
+    let mut worst = 0;
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        for c in 0..3 {
+            worst = worst.max(p[c].abs_diff(q[c]));
+        }
+    }
+    Ok(worst)
+}
+
+fn read_rgba(path: &Path) -> RgbaImage {
+    let bytes = std::fs::read(path).unwrap();
+    let pixels = bytes
+        .chunks_exact(4)
+        .map(|p| [p[0], p[1], p[2], p[3]])
+        .collect();
+    RgbaImage {
+        width: W,
+        height: H,
+        pixels,
+        has_alpha: false,
+    }
+}
+
+fn write_rgba(path: &Path, img: &RgbaImage) {
+    std::fs::write(
+        path,
+        img.pixels.iter().flatten().copied().collect::<Vec<u8>>(),
+    )
+    .unwrap();
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("camera-tests")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+// ---------------------------------------------------------------- the stand-in device
+
+fn fake_library() -> &'static Path {
+    static LIB: OnceLock<PathBuf> = OnceLock::new();
+    LIB.get_or_init(|| {
+        let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fake-v4l2/fake_v4l2.c");
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fake-v4l2");
+        std::fs::create_dir_all(&dir).unwrap();
+        let lib = dir.join("libfake_v4l2.so");
+        let status = Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
+            .args(["-shared", "-fPIC", "-O2", "-Wall", "-o"])
+            .arg(&lib)
+            .arg(&source)
+            .args(["-ldl", "-lpthread"])
+            .status()
+            .expect("a C compiler (cc) is needed to build the V4L2 stand-in");
+        assert!(status.success(), "building {} failed", source.display());
+        lib
+    })
+}
+
+/// A stand-in camera: a folder holding its device node and frame files.
+struct FakeCamera {
+    dir: PathBuf,
+    env: Vec<(String, String)>,
+}
+
+impl FakeCamera {
+    fn new(name: &str, format: &str) -> FakeCamera {
+        let dir = temp_dir(name);
+        let node = dir.join("video7");
+        std::fs::write(&node, b"").unwrap(); // so that listing the folder finds it
+        let env = vec![
+            ("FAKE_V4L2_DEVICE".into(), node.display().to_string()),
+            ("FAKE_V4L2_FORMAT".into(), format.into()),
+            ("CONTRASTXR_V4L2_DIR".into(), dir.display().to_string()),
+        ];
+        FakeCamera { dir, env }
+    }
+
+    fn set(mut self, key: &str, value: &str) -> FakeCamera {
+        self.env.push((key.into(), value.into()));
+        self
+    }
+
+    /// Frames the device serves in turn, and the images they must decode to.
+    fn frames(self, fourcc: &str, variants: &[u8]) -> FakeCamera {
+        let (mut frames, mut expected) = (Vec::new(), Vec::new());
+        for &v in variants {
+            let (raw, img) = test_frame(fourcc, v);
+            let (f, e) = (
+                self.dir.join(format!("frame{v}.raw")),
+                self.dir.join(format!("expect{v}.rgba")),
+            );
+            std::fs::write(&f, raw).unwrap();
+            write_rgba(&e, &img);
+            frames.push(f.display().to_string());
+            expected.push(e.display().to_string());
+        }
+        self.set("FAKE_V4L2_FRAMES", &frames.join(":"))
+            .set("EXPECT", &expected.join(":"))
+    }
+
+    /// Runs `case` in a child process with the stand-in preloaded; returns its output.
+    fn run(&self, case: &str) -> String {
+        let mut child = Command::new(std::env::current_exe().unwrap())
+            .args([
+                "child_dispatch",
+                "--exact",
+                "--nocapture",
+                "--test-threads=1",
+            ])
+            .env(CHILD, case)
+            .env("LD_PRELOAD", fake_library())
+            .envs(self.env.iter().map(|(k, v)| (k, v)))
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while child.try_wait().unwrap().is_none() {
+            if Instant::now() > deadline {
+                child.kill().unwrap();
+                panic!("child case {case} hung (killed after 60 s)");
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let out = child.wait_with_output().unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "child case {case} failed:\n{text}");
+        println!("--- child {case}:\n{text}");
+        text
+    }
+}
+
+// ---------------------------------------------------------------- V4L2 cases (parent side)
+
+#[test]
+fn each_pixel_format_negotiates_and_decodes() {
+    for (fourcc, tolerance) in [
+        ("YUYV", 1),
+        ("NV12", 1),
+        ("MJPG", 2),
+        ("RGB3", 0),
+        ("BGR3", 0),
+        ("GREY", 0),
+    ] {
+        let out = FakeCamera::new(&format!("format-{fourcc}"), fourcc)
+            .frames(fourcc, &[0])
+            .set("TOLERANCE", &tolerance.to_string())
+            .run("decode");
+        assert!(out.contains(&format!("640x480 {fourcc}")), "{out}");
+    }
+}
+
+#[test]
+fn negotiation_prefers_the_smallest_good_size_and_raw_formats() {
+    // 320x240 is too small, 1280x720 larger than needed; YUYV is chosen over MJPEG; of
+    // 15/30/60 fps the lowest that reaches 30.
+    let out = FakeCamera::new("negotiate", "MJPG,YUYV")
+        .set("FAKE_V4L2_SIZE", "320x240,640x480,1280x720")
+        .set("FAKE_V4L2_FPS", "15,30,60")
+        .frames("YUYV", &[0])
+        .set("TOLERANCE", "1")
+        .run("decode");
+    assert!(out.contains("640x480 YUYV at 30 fps"), "{out}");
+}
+
+#[test]
+fn streaming_delivers_new_frames_with_growing_sequence() {
+    // At 5 fps the capture thread's 100 ms polls time out between frames, which must not be
+    // taken for a loss (the v4l crate would queue a buffer twice after a timeout).
+    let out = FakeCamera::new("stream", "YUYV")
+        .set("FAKE_V4L2_FPS", "5")
+        .frames("YUYV", &[0, 3])
+        .run("stream");
+    assert!(out.contains("saw both frames"), "{out}");
+}
+
+#[test]
+fn vanishing_device_goes_stale_then_lost_then_live_again() {
+    let out = FakeCamera::new("vanish", "NV12")
+        .frames("NV12", &[0, 1])
+        .set("FAKE_V4L2_VANISH_AFTER", "6")
+        .set("FAKE_V4L2_RETURN_AFTER_MS", "1200")
+        .run("vanish");
+    assert!(out.contains("recovered"), "{out}");
+}
+
+#[test]
+fn device_that_never_delivers_reports_it_without_hanging() {
+    let out = FakeCamera::new("silent", "YUYV")
+        .set("FAKE_V4L2_NO_FRAMES", "1")
+        .run("silent");
+    assert!(out.contains("no frame, as expected"), "{out}");
+}
+
+#[test]
+fn camera_list_shows_the_fake_device_and_auto_finds_it() {
+    let cam = FakeCamera::new("list", "YUYV,MJPG,H264")
+        .set("FAKE_V4L2_SIZE", "320x240,640x480")
+        .set("FAKE_V4L2_FPS", "15,30");
+    std::fs::write(cam.dir.join("video3"), b"not a device").unwrap();
+    let out = cam.run("list");
+    assert!(out.contains("auto chose video7"), "{out}");
+}
+
+#[test]
+fn camera_test_reports_rate_and_saves_frames() {
+    let out = FakeCamera::new("cli-test", "YUYV")
+        .frames("YUYV", &[0, 2])
+        .set("TOLERANCE", "1")
+        .run("cli_test");
+    assert!(out.contains("saved frames match"), "{out}");
+}
+
+#[test]
+fn camera_list_without_any_device_says_so() {
+    let dir = temp_dir("no-device");
+    let mut out = Vec::new();
+    cli::list_in(&dir, &mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    assert_eq!(
+        text.trim(),
+        format!(
+            "no V4L2 capture device found ({}/video* absent)",
+            dir.display()
+        )
+    );
+}
+
+#[test]
+fn missing_device_is_a_clear_error() {
+    let spec = parse_source("v4l2:/nonexistent/video9").unwrap();
+    let err = Background::open(&spec, &CaptureConfig::default())
+        .err()
+        .expect("must fail");
+    assert_eq!(err.to_string(), "/nonexistent/video9 does not exist");
+}
+
+// ---------------------------------------------------------------- V4L2 cases (child side)
+
+#[test]
+fn child_dispatch() {
+    let Ok(case) = std::env::var(CHILD) else {
+        return; // a normal run: the cases above start this in a child process
+    };
+    match case.as_str() {
+        "decode" => child_decode(),
+        "stream" => child_stream(),
+        "vanish" => child_vanish(),
+        "silent" => child_silent(),
+        "list" => child_list(),
+        "cli_test" => child_cli_test(),
+        other => panic!("unknown child case {other}"),
+    }
+}
+
+fn env(key: &str) -> String {
+    std::env::var(key).unwrap_or_default()
+}
+
+fn expected_images() -> Vec<RgbaImage> {
+    env("EXPECT")
+        .split(':')
+        .map(|p| read_rgba(Path::new(p)))
+        .collect()
+}
+
+fn fake_spec() -> SourceSpec {
+    SourceSpec::V4l2Device(env("FAKE_V4L2_DEVICE").into())
+}
+
+/// Index of the expected image `img` matches within the tolerance, or a description.
+fn which_expected(img: &RgbaImage, expected: &[RgbaImage]) -> Result<usize, String> {
+    let tolerance: u8 = env("TOLERANCE").parse().unwrap_or(1);
+    let diffs: Vec<_> = expected.iter().map(|e| max_difference(img, e)).collect();
+    diffs
+        .iter()
+        .position(|d| d.as_ref().is_ok_and(|d| *d <= tolerance))
+        .ok_or(format!(
+            "frame matches no expected image (max differences {diffs:?})"
+        ))
+}
+
+fn wait_for_frame(
+    bg: &Background,
+    after: u64,
+    within: Duration,
+) -> Option<contrastxr::camera::Frame> {
+    let deadline = Instant::now() + within;
+    while Instant::now() < deadline {
+        if let Some(f) = bg.latest().filter(|f| f.sequence > after) {
+            return Some(f);
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    None
+}
+
+fn child_decode() {
+    let bg = Background::open(&fake_spec(), &CaptureConfig::default()).unwrap();
+    println!("opened {}", bg.description());
+    let frame = wait_for_frame(&bg, 0, Duration::from_secs(10)).expect("a frame");
+    which_expected(&frame.image, &expected_images()).unwrap();
+    assert_eq!(bg.status(), SourceStatus::Live);
+}
+
+fn child_stream() {
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    let bg = Background::open(&fake_spec(), &CaptureConfig::default()).unwrap();
+    assert!(
+        bg.description().ends_with("640x480 YUYV at 5 fps"),
+        "{}",
+        bg.description()
+    );
+    let expected = expected_images();
+    let (mut last, mut seen) = (0, [false; 2]);
+    for _ in 0..8 {
+        let frame = wait_for_frame(&bg, last, Duration::from_secs(5)).expect("a new frame");
+        assert!(frame.sequence > last);
+        last = frame.sequence;
+        seen[which_expected(&frame.image, &expected).unwrap()] = true;
+    }
+    assert_eq!(seen, [true, true], "both served frames should show up");
+    let log = LOG.lock().unwrap().join("\n");
+    assert!(
+        !log.contains("lost"),
+        "a slow camera is not a lost one:\n{log}"
+    );
+    println!("saw both frames");
+}
+
+fn child_vanish() {
+    let cfg = CaptureConfig {
+        stall_timeout: Duration::from_millis(400),
+        grace: Duration::from_millis(300),
+        max_backoff: Duration::from_millis(100),
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&fake_spec(), &cfg).unwrap();
+    let expected = expected_images();
+    let mut history: Vec<&str> = Vec::new();
+    let mut before = 0;
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while Instant::now() < deadline {
+        // latest() must answer while the device is gone; this loop would stall otherwise.
+        let frame = bg.latest();
+        let state = match bg.status() {
+            SourceStatus::Waiting { .. } => "waiting",
+            SourceStatus::Live => "live",
+            SourceStatus::Stale { .. } => {
+                assert!(frame.is_some(), "the last good frame is kept while stale");
+                "stale"
+            }
+            SourceStatus::Lost => {
+                assert!(frame.is_none(), "no frame once lost");
+                "lost"
+            }
+        };
+        if let Some(f) = &frame {
+            which_expected(&f.image, &expected).unwrap();
+        }
+        if history.last() != Some(&state) {
+            history.push(state);
+        }
+        match (history.contains(&"lost"), &frame) {
+            (false, Some(f)) => before = f.sequence,
+            (true, Some(f)) if state == "live" => {
+                assert!(f.sequence > before, "sequence continues after reopening");
+                break;
+            }
+            _ => {}
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let joined = history.join(" -> ");
+    let path: Vec<&str> = history.into_iter().filter(|s| *s != "waiting").collect();
+    assert_eq!(path, ["live", "stale", "lost", "live"], "{joined}");
+    println!("recovered: {joined}");
+}
+
+fn child_silent() {
+    let cfg = CaptureConfig {
+        stall_timeout: Duration::from_millis(200),
+        grace: Duration::from_millis(200),
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&fake_spec(), &cfg).unwrap();
+    assert!(
+        matches!(bg.status(), SourceStatus::Waiting { .. }),
+        "{:?}",
+        bg.status()
+    );
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_millis(1200) {
+        assert!(bg.latest().is_none());
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(bg.status(), SourceStatus::Lost);
+    drop(bg); // joins the capture thread: must not hang on the silent device
+    println!("no frame, as expected");
+}
+
+fn child_list() {
+    let mut out = Vec::new();
+    cli::list(&mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    println!("{text}");
+    let dir = env("CONTRASTXR_V4L2_DIR");
+    assert!(
+        text.contains(&format!("{dir}/video3: cannot open")),
+        "{text}"
+    );
+    assert!(text.contains(&format!(
+        "{dir}/video7: Fake V4L2 camera (fake_v4l2, fake:0)"
+    )));
+    assert!(text.contains("  YUYV\n    320x240 at 15, 30 fps\n    640x480 at 15, 30 fps\n"));
+    assert!(text.contains("  MJPG\n"));
+    assert!(text.contains("  H264 (not usable as a background)\n"));
+    assert!(!text.contains("no V4L2 capture device"));
+    let bg = Background::open(&SourceSpec::V4l2Auto, &CaptureConfig::default()).unwrap();
+    assert!(
+        bg.description().contains("/video7 "),
+        "{}",
+        bg.description()
+    );
+    println!("auto chose video7");
+}
+
+fn child_cli_test() {
+    let dir = PathBuf::from(env("CONTRASTXR_V4L2_DIR")).join("saved");
+    let mut out = Vec::new();
+    cli::test(&env("FAKE_V4L2_DEVICE"), 6, Some(&dir), &mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    println!("{text}");
+    assert!(text.contains("6 frames of 640x480 at "), "{text}");
+    assert!(
+        text.contains("latency from capture to the reader: mean "),
+        "{text}"
+    );
+    let expected = expected_images();
+    for i in 0..6 {
+        let saved = RgbaImage::load_png(&dir.join(format!("frame-{i:04}.png"))).unwrap();
+        which_expected(&saved, &expected).unwrap();
+    }
+    println!("saved frames match");
+}
+
+// ---------------------------------------------------------------- file sources
+
+#[test]
+fn image_source_serves_the_png_unchanged_and_static() {
+    let dir = temp_dir("image");
+    let mut img = RgbaImage::new(5, 3, [0; 4]);
+    img.has_alpha = false;
+    for (i, p) in img.pixels.iter_mut().enumerate() {
+        *p = [i as u8 * 10, 255 - i as u8, 7, 255];
+    }
+    let path = dir.join("bg.png");
+    img.save_png(&path).unwrap();
+    let spec = parse_source(&format!("image:{}", path.display())).unwrap();
+    let bg = Background::open(&spec, &CaptureConfig::default()).unwrap();
+    let (a, b) = (bg.latest().unwrap(), bg.latest().unwrap());
+    assert_eq!(a.image.pixels, img.pixels);
+    assert_eq!(a.sequence, b.sequence, "a static source keeps its sequence");
+    assert_eq!(bg.status(), SourceStatus::Live);
+    let missing = parse_source("image:/nonexistent.png").unwrap();
+    assert!(Background::open(&missing, &CaptureConfig::default()).is_err());
+}
+
+#[test]
+fn color_source_is_flat() {
+    let bg = Background::open(
+        &parse_source("color:#102030").unwrap(),
+        &CaptureConfig::default(),
+    )
+    .unwrap();
+    let f = bg.latest().unwrap();
+    assert_eq!((f.image.width, f.image.height), (640, 480));
+    assert!(f.image.pixels.iter().all(|p| *p == [0x10, 0x20, 0x30, 255]));
+}
+
+/// Watches a video source: every new frame must be `frames[(sequence - 1) % n]`.
+fn check_video(bg: &Background, frames: &[RgbaImage], tolerance: u8) {
+    let (mut last, mut shown) = (0, 0);
+    let deadline = Instant::now() + Duration::from_millis(1500);
+    while Instant::now() < deadline && shown < 6 {
+        if let Some(f) = bg.latest().filter(|f| f.sequence > last) {
+            let want = &frames[((f.sequence - 1) % frames.len() as u64) as usize];
+            let diff = max_difference(&f.image, want).unwrap();
+            assert!(diff <= tolerance, "frame {} differs by {diff}", f.sequence);
+            (last, shown) = (f.sequence, shown + 1);
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert!(shown >= 6, "only {shown} new frames in 1.5 s");
+}
+
+#[test]
+fn video_folder_loops_numbered_frames_at_the_configured_rate() {
+    let dir = temp_dir("video-folder");
+    let colours = [[200, 0, 0, 255], [0, 200, 0, 255], [0, 0, 200, 255]];
+    let frames: Vec<RgbaImage> = colours.iter().map(|c| RgbaImage::new(4, 4, *c)).collect();
+    // Named so that text order (f1, f10, f2) differs from frame order (f1, f2, f10).
+    for (img, name) in frames.iter().zip(["f1.png", "f2.png", "f10.png"]) {
+        img.save_png(&dir.join(name)).unwrap();
+    }
+    let cfg = CaptureConfig {
+        video_fps: 20.0,
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&SourceSpec::Video(dir.clone()), &cfg).unwrap();
+    assert!(
+        bg.description().contains("3 frames at 20.00 fps"),
+        "{}",
+        bg.description()
+    );
+    check_video(&bg, &frames, 0);
+}
+
+/// Writes a Y4M file of `frames` (each a list of per-pixel YCbCr at full resolution).
+fn write_y4m(path: &Path, w: u32, h: u32, chroma: &str, frames: &[Vec<[u8; 3]>]) {
+    let mut out = format!("YUV4MPEG2 W{w} H{h} F20:1 Ip A1:1 C{chroma}\n").into_bytes();
+    let sub = if chroma == "444" { 1 } else { 2 };
+    for f in frames {
+        out.extend(b"FRAME\n");
+        out.extend(f.iter().map(|p| p[0]));
+        for c in [1, 2] {
+            for y in (0..h).step_by(sub) {
+                for x in (0..w).step_by(sub) {
+                    out.push(f[(y * w + x) as usize][c]);
+                }
+            }
+        }
+    }
+    std::fs::write(path, out).unwrap();
+}
+
+#[test]
+fn y4m_420_and_444_play_with_bt601_colours() {
+    let dir = temp_dir("y4m");
+    let (w, h) = (4, 2);
+    for chroma in ["420jpeg", "444"] {
+        // 4:2:0 shares chroma per 2x2 block, so each 2x2 block gets one colour there.
+        let frames: Vec<Vec<[u8; 3]>> = (0..3)
+            .map(|k| {
+                (0..w * h)
+                    .map(|i| {
+                        let x = i % w;
+                        let block = if chroma == "444" {
+                            (i + k) % 8
+                        } else {
+                            (x / 2 + k) % 8
+                        };
+                        PALETTE[block as usize]
+                    })
+                    .collect()
+            })
+            .collect();
+        let path = dir.join(format!("clip-{chroma}.y4m"));
+        write_y4m(&path, w, h, chroma, &frames);
+        let expected: Vec<RgbaImage> = frames
+            .iter()
+            .map(|f| RgbaImage {
+                width: w,
+                height: h,
+                pixels: f
+                    .iter()
+                    .map(|&[y, cb, cr]| ref_limited(y, cb, cr))
+                    .collect(),
+                has_alpha: false,
+            })
+            .collect();
+        let bg = Background::open(&SourceSpec::Video(path), &CaptureConfig::default()).unwrap();
+        assert!(
+            bg.description().contains("3 frames at 20.00 fps"),
+            "{}",
+            bg.description()
+        );
+        check_video(&bg, &expected, 1);
+    }
+}
