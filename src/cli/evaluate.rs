@@ -21,6 +21,7 @@ noticeable amount (the paper's metric). Without --enhanced the method runs first
   --sweep L1,L2,...    run the method at each lambda_e and print one row per value
   --json               print the metrics as JSON (an array of rows for --sweep)
   --figure FIG.png     write a figure; one row per lambda_e for --sweep
+  --app-images         put the display and enhanced images themselves in the figure too
 
 ";
 
@@ -35,6 +36,7 @@ struct Inputs {
     engine: Engine,
     json: bool,
     figure: Option<String>,
+    app_images: bool,
 }
 
 pub fn run(args: &mut Args) -> Result<(), CliError> {
@@ -44,6 +46,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let sweep = args.value(&["--sweep"])?;
     let json = args.flag("--json");
     let figure = args.value(&["--figure"])?;
+    let app_images = args.flag("--app-images");
     let params = options::params(args)?;
     let engine = options::engine(args)?;
     args.finish()?;
@@ -62,6 +65,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         engine,
         json,
         figure,
+        app_images,
     };
     match lambdas {
         Some(l) => run_sweep(&inputs, &l),
@@ -107,7 +111,11 @@ fn run_single(inputs: &Inputs, path: Option<&str>) -> Result<(), CliError> {
         super::print(&metrics_text(&m));
     }
     if let Some(fig) = &inputs.figure {
-        let img = eval::figure(&inputs.display, &enhanced, &inputs.camera, &inputs.params);
+        let img = if inputs.app_images {
+            eval::figure_with_app_images(&inputs.display, &enhanced, &inputs.camera, &inputs.params)
+        } else {
+            eval::figure(&inputs.display, &enhanced, &inputs.camera, &inputs.params)
+        };
         options::save_image(&img, fig)?;
     }
     Ok(())

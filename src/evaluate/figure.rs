@@ -39,24 +39,51 @@ pub fn figure_row(
     params: &Params,
     title: Option<&str>,
 ) -> RgbaImage {
+    panels_row(display, enhanced, camera, params, title, false)
+}
+
+/// Like `figure`, with the app's image and the enhanced image (as rendered, before blending
+/// with the world) in front: what the demo shows of a captured frame.
+pub fn figure_with_app_images(
+    display: &RgbaImage,
+    enhanced: &RgbaImage,
+    camera: &RgbaImage,
+    params: &Params,
+) -> RgbaImage {
+    stack_rows(&[panels_row(display, enhanced, camera, params, None, true)])
+}
+
+fn panels_row(
+    display: &RgbaImage,
+    enhanced: &RgbaImage,
+    camera: &RgbaImage,
+    params: &Params,
+    title: Option<&str>,
+    app_images: bool,
+) -> RgbaImage {
     let bg = background::prepare(camera, display.width, display.height, params);
     let percent = metrics(display, enhanced, &bg).enhanced_percent;
     let mask = enhanced_mask(display, enhanced, &bg);
     let factor = display.width.div_ceil(MAX_PANEL_WIDTH).max(1);
-    let panels = [
-        (
-            shrink(&perceived(display, camera, params), factor),
-            "PERCEIVED ORIGINAL",
-        ),
-        (
-            shrink(&perceived(enhanced, camera, params), factor),
-            "PERCEIVED ENHANCED",
-        ),
-        (shrink(&cyan_map(display, &mask), factor), "ENHANCED PIXELS"),
-    ];
+    let mut panels = Vec::new();
+    if app_images {
+        panels.push((shrink(display, factor), "APP IMAGE"));
+        panels.push((shrink(enhanced, factor), "ENHANCED IMAGE"));
+    }
+    panels.push((
+        shrink(&perceived(display, camera, params), factor),
+        "PERCEIVED ORIGINAL",
+    ));
+    panels.push((
+        shrink(&perceived(enhanced, camera, params), factor),
+        "PERCEIVED ENHANCED",
+    ));
+    panels.push((shrink(&cyan_map(display, &mask), factor), "ENHANCED PIXELS"));
+    let n = panels.len() as u32;
     let (pw, ph) = (panels[0].0.width, panels[0].0.height);
     let header = title.map_or(0, |_| text_height(LABEL_SCALE) + GAP);
-    let mut row = RgbaImage::new(3 * pw + 2 * GAP, header + ph, BACKDROP);
+    let width = n * pw + (n - 1) * GAP;
+    let mut row = RgbaImage::new(width, header + ph, BACKDROP);
     row.has_alpha = false;
     if let Some(t) = title {
         draw_text(&mut row, 0, 0, t, LABEL_SCALE, TEXT);
@@ -74,7 +101,7 @@ pub fn figure_row(
     }
     let text = format!("{percent:.1}%");
     let scale = if pw >= 400 { 5 } else { 3 };
-    let x = (3 * pw + 2 * GAP).saturating_sub(text_width(&text, scale) + 3 * LABEL_PAD);
+    let x = width.saturating_sub(text_width(&text, scale) + 3 * LABEL_PAD);
     let y = (header + ph).saturating_sub(text_height(scale) + 3 * LABEL_PAD);
     label_box(&mut row, x, y, &text, scale);
     row

@@ -7,6 +7,6 @@ pub mod font;
 pub mod metric;
 pub mod perceived;
 
-pub use figure::{figure, figure_row, stack_rows};
+pub use figure::{figure, figure_row, figure_with_app_images, stack_rows};
 pub use metric::{enhanced_mask, metrics, Metrics, Stats, JND_DELTA_E};
 pub use perceived::perceived;
