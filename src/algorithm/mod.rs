@@ -11,7 +11,7 @@ mod pixel;
 mod scaled;
 
 pub use conformance::{conformant, corner_cases, PixelTrace, NEAR_ROUNDING, NEAR_THRESHOLD};
-pub use params::{Method, Params};
+pub use params::{Method, Params, ViewMode};
 pub use pixel::{enhance_linear, enhance_srgb8, enhance_srgb8_trace};
 pub use scaled::{enhance_scaled, enhance_scaled_traced, ScaledOutcome};
 

@@ -45,6 +45,51 @@ impl Method {
     }
 }
 
+/// What the layer shows (issue: live control). `Enhance` is the product; the others are for
+/// comparison and calibration while wearing the headset. Comparison methods are `Method`s.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ViewMode {
+    /// The method's output (default).
+    Enhance,
+    /// The app's frames untouched (no GPU work).
+    Off,
+    /// Left half of each view original, right half enhanced, with a thin divider.
+    Split,
+    /// The paper's cyan on enhanced pixels.
+    Heatmap,
+    /// The preprocessed background as the layer sees it (FoV calibration).
+    Background,
+}
+
+impl ViewMode {
+    pub const ALL: [ViewMode; 5] = [
+        ViewMode::Enhance,
+        ViewMode::Off,
+        ViewMode::Split,
+        ViewMode::Heatmap,
+        ViewMode::Background,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewMode::Enhance => "enhance",
+            ViewMode::Off => "off",
+            ViewMode::Split => "split",
+            ViewMode::Heatmap => "heatmap",
+            ViewMode::Background => "background",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<ViewMode> {
+        ViewMode::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The code the shaders use for this mode.
+    pub fn shader_code(self) -> u32 {
+        self as u32
+    }
+}
+
 /// Subtraction method gains (spec section 5): k_v on the display, k_b on the background.
 pub const SUBTRACTION_K_V: f32 = 1.0;
 pub const SUBTRACTION_K_B: f32 = 0.4;
@@ -69,6 +114,8 @@ pub struct Params {
     /// False: camera_uv = display_uv (`--no-fov`).
     pub fov: bool,
     pub method: Method,
+    /// What the layer shows; the CPU reference and the CLI implement `Enhance` only.
+    pub mode: ViewMode,
 }
 
 impl Default for Params {
@@ -84,6 +131,7 @@ impl Default for Params {
             fov_offset: [0.13, 0.17],
             fov: true,
             method: Method::Paper,
+            mode: ViewMode::Enhance,
         }
     }
 }

@@ -112,6 +112,7 @@ impl Settings {
             fov_offset: r.pair("CONTRASTXR_FOV_OFFSET", d.fov_offset),
             fov: !r.flag("CONTRASTXR_NO_FOV"),
             method,
+            mode: d.mode,
         };
         if let Err(e) = params.validate() {
             r.warnings
