@@ -76,7 +76,9 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
         match arg.as_str() {
             "--format" => options.format = parse_format(&value()?)?,
             "--layout" => options.layout = parse_layout(&value()?)?,
-            "--frames" => options.frames = value()?.parse().map_err(|_| "--frames needs a count")?,
+            "--frames" => {
+                options.frames = value()?.parse().map_err(|_| "--frames needs a count")?
+            }
             "--size" => options.size = Some(parse_size(&value()?)?),
             "--quad" => options.quad = true,
             "--validation" => options.validation = true,
@@ -131,13 +133,24 @@ mod tests {
     fn parses_every_flag() {
         let o = parse_str("--format b8g8r8a8_srgb --layout side-by-side --frames 7 --quad --size 64x48 --validation --json").unwrap();
         assert_eq!(o.format.unwrap().name, "B8G8R8A8_SRGB");
-        assert_eq!((o.layout, o.frames, o.quad, o.size), (Layout::SideBySide, 7, true, Some((64, 48))));
+        assert_eq!(
+            (o.layout, o.frames, o.quad, o.size),
+            (Layout::SideBySide, 7, true, Some((64, 48)))
+        );
         assert!(o.validation && o.json && !o.list_formats);
     }
 
     #[test]
     fn rejects_bad_values() {
-        for bad in ["--format RGB", "--layout grid", "--frames x", "--size 10", "--size 0x5", "--frames", "--bogus"] {
+        for bad in [
+            "--format RGB",
+            "--layout grid",
+            "--frames x",
+            "--size 10",
+            "--size 0x5",
+            "--frames",
+            "--bogus",
+        ] {
             assert!(parse_str(bad).is_err(), "{bad}");
         }
     }

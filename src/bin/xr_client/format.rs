@@ -15,18 +15,42 @@ pub struct SwapchainFormat {
 
 /// Every format of the `--format` flag, by its Vulkan name without the `VK_FORMAT_` prefix.
 pub const FORMATS: [SwapchainFormat; 7] = [
-    SwapchainFormat { name: "R8G8B8A8_SRGB", vk: vk::Format::R8G8B8A8_SRGB },
-    SwapchainFormat { name: "B8G8R8A8_SRGB", vk: vk::Format::B8G8R8A8_SRGB },
-    SwapchainFormat { name: "R8G8B8A8_UNORM", vk: vk::Format::R8G8B8A8_UNORM },
-    SwapchainFormat { name: "B8G8R8A8_UNORM", vk: vk::Format::B8G8R8A8_UNORM },
-    SwapchainFormat { name: "R16G16B16A16_UNORM", vk: vk::Format::R16G16B16A16_UNORM },
-    SwapchainFormat { name: "R16G16B16A16_SFLOAT", vk: vk::Format::R16G16B16A16_SFLOAT },
-    SwapchainFormat { name: "A2B10G10R10_UNORM", vk: vk::Format::A2B10G10R10_UNORM_PACK32 },
+    SwapchainFormat {
+        name: "R8G8B8A8_SRGB",
+        vk: vk::Format::R8G8B8A8_SRGB,
+    },
+    SwapchainFormat {
+        name: "B8G8R8A8_SRGB",
+        vk: vk::Format::B8G8R8A8_SRGB,
+    },
+    SwapchainFormat {
+        name: "R8G8B8A8_UNORM",
+        vk: vk::Format::R8G8B8A8_UNORM,
+    },
+    SwapchainFormat {
+        name: "B8G8R8A8_UNORM",
+        vk: vk::Format::B8G8R8A8_UNORM,
+    },
+    SwapchainFormat {
+        name: "R16G16B16A16_UNORM",
+        vk: vk::Format::R16G16B16A16_UNORM,
+    },
+    SwapchainFormat {
+        name: "R16G16B16A16_SFLOAT",
+        vk: vk::Format::R16G16B16A16_SFLOAT,
+    },
+    SwapchainFormat {
+        name: "A2B10G10R10_UNORM",
+        vk: vk::Format::A2B10G10R10_UNORM_PACK32,
+    },
 ];
 
 impl SwapchainFormat {
     pub fn by_name(name: &str) -> Option<Self> {
-        FORMATS.iter().copied().find(|f| f.name.eq_ignore_ascii_case(name))
+        FORMATS
+            .iter()
+            .copied()
+            .find(|f| f.name.eq_ignore_ascii_case(name))
     }
 
     pub fn by_vk(format: vk::Format) -> Option<Self> {
@@ -41,7 +65,10 @@ impl SwapchainFormat {
     }
 
     fn is_srgb(self) -> bool {
-        matches!(self.vk, vk::Format::R8G8B8A8_SRGB | vk::Format::B8G8R8A8_SRGB)
+        matches!(
+            self.vk,
+            vk::Format::R8G8B8A8_SRGB | vk::Format::B8G8R8A8_SRGB
+        )
     }
 
     /// Appends one texel. `srgb` is the colour as sRGB-encoded RGBA in [0, 1]; alpha is linear.
@@ -49,20 +76,26 @@ impl SwapchainFormat {
         let [r, g, b, a] = if self.is_srgb() {
             srgb
         } else {
-            [srgb_decode(srgb[0]), srgb_decode(srgb[1]), srgb_decode(srgb[2]), srgb[3]]
+            [
+                srgb_decode(srgb[0]),
+                srgb_decode(srgb[1]),
+                srgb_decode(srgb[2]),
+                srgb[3],
+            ]
         };
         match self.vk {
             vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM => {
                 out.extend([b, g, r, a].map(|c| unorm(c, 8) as u8))
             }
-            vk::Format::R16G16B16A16_UNORM => {
-                [r, g, b, a].iter().for_each(|&c| out.extend((unorm(c, 16) as u16).to_le_bytes()))
-            }
-            vk::Format::R16G16B16A16_SFLOAT => {
-                [r, g, b, a].iter().for_each(|&c| out.extend(f16_bits(c).to_le_bytes()))
-            }
+            vk::Format::R16G16B16A16_UNORM => [r, g, b, a]
+                .iter()
+                .for_each(|&c| out.extend((unorm(c, 16) as u16).to_le_bytes())),
+            vk::Format::R16G16B16A16_SFLOAT => [r, g, b, a]
+                .iter()
+                .for_each(|&c| out.extend(f16_bits(c).to_le_bytes())),
             vk::Format::A2B10G10R10_UNORM_PACK32 => {
-                let packed = unorm(a, 2) << 30 | unorm(b, 10) << 20 | unorm(g, 10) << 10 | unorm(r, 10);
+                let packed =
+                    unorm(a, 2) << 30 | unorm(b, 10) << 20 | unorm(g, 10) << 10 | unorm(r, 10);
                 out.extend(packed.to_le_bytes())
             }
             _ => out.extend([r, g, b, a].map(|c| unorm(c, 8) as u8)),
@@ -111,7 +144,9 @@ mod tests {
 
     fn encoded(name: &str, srgb: [f32; 4]) -> Vec<u8> {
         let mut out = Vec::new();
-        SwapchainFormat::by_name(name).unwrap().encode(srgb, &mut out);
+        SwapchainFormat::by_name(name)
+            .unwrap()
+            .encode(srgb, &mut out);
         out
     }
 
@@ -127,21 +162,39 @@ mod tests {
 
     #[test]
     fn srgb_formats_keep_encoded_values_and_unorm_formats_hold_linear_light() {
-        assert_eq!(encoded("R8G8B8A8_SRGB", [0.5, 0.0, 1.0, 1.0]), [128, 0, 255, 255]);
-        assert_eq!(encoded("B8G8R8A8_SRGB", [0.5, 0.0, 1.0, 1.0]), [255, 0, 128, 255]);
+        assert_eq!(
+            encoded("R8G8B8A8_SRGB", [0.5, 0.0, 1.0, 1.0]),
+            [128, 0, 255, 255]
+        );
+        assert_eq!(
+            encoded("B8G8R8A8_SRGB", [0.5, 0.0, 1.0, 1.0]),
+            [255, 0, 128, 255]
+        );
         // sRGB 0.5 is 0.2140 linear: 0.2140 * 255 = 54.6.
-        assert_eq!(encoded("R8G8B8A8_UNORM", [0.5, 0.0, 1.0, 1.0]), [55, 0, 255, 255]);
-        assert_eq!(encoded("B8G8R8A8_UNORM", [0.5, 0.0, 1.0, 1.0]), [255, 0, 55, 255]);
+        assert_eq!(
+            encoded("R8G8B8A8_UNORM", [0.5, 0.0, 1.0, 1.0]),
+            [55, 0, 255, 255]
+        );
+        assert_eq!(
+            encoded("B8G8R8A8_UNORM", [0.5, 0.0, 1.0, 1.0]),
+            [255, 0, 55, 255]
+        );
     }
 
     #[test]
     fn wide_formats_pack_as_vulkan_defines_them() {
         let r16 = encoded("R16G16B16A16_UNORM", [1.0, 0.0, 0.5, 1.0]);
-        assert_eq!(r16, [0xff, 0xff, 0, 0, 0x3c, 0x36, 0xff, 0xff]); // 0.21404 * 65535 = 14012.
+        assert_eq!(r16, [0xff, 0xff, 0, 0, 0xcb, 0x36, 0xff, 0xff]); // 0.214041 * 65535 = 14027 = 0x36cb.
         let f16 = encoded("R16G16B16A16_SFLOAT", [1.0, 0.0, 0.0, 1.0]);
         assert_eq!(f16, [0x00, 0x3c, 0, 0, 0, 0, 0x00, 0x3c]);
         // A2B10G10R10: red in the low 10 bits, alpha in the top 2.
-        assert_eq!(encoded("A2B10G10R10_UNORM", [1.0, 0.0, 0.0, 1.0]), 0xc000_03ffu32.to_le_bytes());
-        assert_eq!(encoded("A2B10G10R10_UNORM", [0.0, 0.0, 1.0, 0.0]), 0x3ff0_0000u32.to_le_bytes());
+        assert_eq!(
+            encoded("A2B10G10R10_UNORM", [1.0, 0.0, 0.0, 1.0]),
+            0xc000_03ffu32.to_le_bytes()
+        );
+        assert_eq!(
+            encoded("A2B10G10R10_UNORM", [0.0, 0.0, 1.0, 0.0]),
+            0x3ff0_0000u32.to_le_bytes()
+        );
     }
 }

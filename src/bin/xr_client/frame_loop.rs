@@ -60,15 +60,22 @@ pub fn run(
                         running = false;
                     }
                     xr::SessionState::EXITING => return Ok(()),
-                    xr::SessionState::LOSS_PENDING => return fail("the runtime reported session loss"),
+                    xr::SessionState::LOSS_PENDING => {
+                        return fail("the runtime reported session loss")
+                    }
                     _ => {}
                 },
-                xr::Event::InstanceLossPending(_) => return fail("the runtime reported instance loss"),
+                xr::Event::InstanceLossPending(_) => {
+                    return fail("the runtime reported instance loss")
+                }
                 _ => {}
             }
         }
         if Instant::now() > deadline {
-            return fail(format!("timed out after {} frames (wanted {})", stats.frames_submitted, options.frames));
+            return fail(format!(
+                "timed out after {} frames (wanted {})",
+                stats.frames_submitted, options.frames
+            ));
         }
         if !running {
             std::thread::sleep(Duration::from_millis(10));
@@ -94,7 +101,9 @@ fn frame(
     frame_stream.begin().ctx("xrBeginFrame")?;
     stats.frames_ended += 1;
     if !state.should_render {
-        return frame_stream.end(state.predicted_display_time, scene.blend_mode, &[]).ctx("xrEndFrame (no layers)");
+        return frame_stream
+            .end(state.predicted_display_time, scene.blend_mode, &[])
+            .ctx("xrEndFrame (no layers)");
     }
     let (_, views) = scene
         .session
@@ -108,20 +117,35 @@ fn frame(
                 Layout::Array => (i as u32, 0),
                 Layout::SideBySide => (0, i * w),
             };
-            let rect = xr::Rect2Di { offset: xr::Offset2Di { x, y: 0 }, extent: xr::Extent2Di { width: w, height: h } };
+            let rect = xr::Rect2Di {
+                offset: xr::Offset2Di { x, y: 0 },
+                extent: xr::Extent2Di {
+                    width: w,
+                    height: h,
+                },
+            };
             xr::CompositionLayerProjectionView::new()
                 .pose(views[i as usize].pose)
                 .fov(views[i as usize].fov)
-                .sub_image(xr::SwapchainSubImage::new().swapchain(&scene.projection.handle).image_array_index(index).image_rect(rect))
+                .sub_image(
+                    xr::SwapchainSubImage::new()
+                        .swapchain(&scene.projection.handle)
+                        .image_array_index(index)
+                        .image_rect(rect),
+                )
         })
         .collect();
-    let projection = xr::CompositionLayerProjection::new().space(scene.space).views(&projection_views);
+    let projection = xr::CompositionLayerProjection::new()
+        .space(scene.space)
+        .views(&projection_views);
     let quad = scene.quad.as_ref().map(|q| quad_layer(q, scene.space));
     let mut layers: Vec<&xr::CompositionLayerBase<'_, xr::Vulkan>> = vec![&projection];
     if let Some(quad) = &quad {
         layers.push(quad);
     }
-    frame_stream.end(state.predicted_display_time, scene.blend_mode, &layers).ctx("xrEndFrame")?;
+    frame_stream
+        .end(state.predicted_display_time, scene.blend_mode, &layers)
+        .ctx("xrEndFrame")?;
     stats.frames_submitted += 1;
     Ok(())
 }
@@ -131,7 +155,9 @@ fn render(scene: &mut Scene<'_>) -> Result<()> {
     let projection_index = scene.projection.acquire()?;
     let quad_index = scene.quad.as_mut().map(|q| q.acquire()).transpose()?;
     scene.gpu.submit_and_wait(|device, cmd| {
-        scene.projection.record_upload(device, cmd, projection_index);
+        scene
+            .projection
+            .record_upload(device, cmd, projection_index);
         if let (Some(quad), Some(index)) = (&scene.quad, quad_index) {
             quad.record_upload(device, cmd, index);
         }
@@ -142,16 +168,36 @@ fn render(scene: &mut Scene<'_>) -> Result<()> {
 }
 
 /// A quad 1.5 m in front of the viewer, 0.4 m wide, with the swapchain's aspect ratio.
-fn quad_layer<'a>(quad: &'a PatternSwapchain, space: &'a xr::Space) -> xr::CompositionLayerQuad<'a, xr::Vulkan> {
+fn quad_layer<'a>(
+    quad: &'a PatternSwapchain,
+    space: &'a xr::Space,
+) -> xr::CompositionLayerQuad<'a, xr::Vulkan> {
     let rect = xr::Rect2Di {
         offset: xr::Offset2Di { x: 0, y: 0 },
-        extent: xr::Extent2Di { width: quad.width as i32, height: quad.height as i32 },
+        extent: xr::Extent2Di {
+            width: quad.width as i32,
+            height: quad.height as i32,
+        },
     };
-    let pose = xr::Posef { orientation: xr::Quaternionf::IDENTITY, position: xr::Vector3f { x: 0.0, y: 0.0, z: -1.5 } };
+    let pose = xr::Posef {
+        orientation: xr::Quaternionf::IDENTITY,
+        position: xr::Vector3f {
+            x: 0.0,
+            y: 0.0,
+            z: -1.5,
+        },
+    };
     xr::CompositionLayerQuad::new()
         .space(space)
         .eye_visibility(xr::EyeVisibility::BOTH)
-        .sub_image(xr::SwapchainSubImage::new().swapchain(&quad.handle).image_rect(rect))
+        .sub_image(
+            xr::SwapchainSubImage::new()
+                .swapchain(&quad.handle)
+                .image_rect(rect),
+        )
         .pose(pose)
-        .size(xr::Extent2Df { width: 0.4, height: 0.4 * quad.height as f32 / quad.width as f32 })
+        .size(xr::Extent2Df {
+            width: 0.4,
+            height: 0.4 * quad.height as f32 / quad.width as f32,
+        })
 }

@@ -25,20 +25,35 @@ pub struct Gpu {
 
 impl Gpu {
     pub fn new(xr_instance: &xr::Instance, system: xr::SystemId, validation: bool) -> Result<Gpu> {
-        let reqs = xr_instance.graphics_requirements::<xr::Vulkan>(system).ctx("xrGetVulkanGraphicsRequirements2KHR")?;
+        let reqs = xr_instance
+            .graphics_requirements::<xr::Vulkan>(system)
+            .ctx("xrGetVulkanGraphicsRequirements2KHR")?;
         if reqs.min_api_version_supported > xr::Version::new(1, 1, 0) {
-            return fail(format!("the runtime needs Vulkan {} or newer; the client uses 1.1", reqs.min_api_version_supported));
+            return fail(format!(
+                "the runtime needs Vulkan {} or newer; the client uses 1.1",
+                reqs.min_api_version_supported
+            ));
         }
         // SAFETY: loads the system Vulkan loader; nothing else in this process loaded another one.
         let entry = unsafe { ash::Entry::load() }.ctx("loading libvulkan")?;
         let instance = create_instance(&entry, xr_instance, system, validation)?;
-        let debug = validation.then(|| create_messenger(&entry, &instance)).transpose()?;
+        let debug = validation
+            .then(|| create_messenger(&entry, &instance))
+            .transpose()?;
         // SAFETY: the instance was created through the runtime for this system.
-        let raw = unsafe { xr_instance.vulkan_graphics_device(system, instance.handle().as_raw() as _) }
-            .ctx("xrGetVulkanGraphicsDevice2KHR")?;
+        let raw =
+            unsafe { xr_instance.vulkan_graphics_device(system, instance.handle().as_raw() as _) }
+                .ctx("xrGetVulkanGraphicsDevice2KHR")?;
         let physical_device = vk::PhysicalDevice::from_raw(raw as _);
         let queue_family_index = graphics_queue_family(&instance, physical_device)?;
-        let device = create_device(&entry, &instance, xr_instance, system, physical_device, queue_family_index)?;
+        let device = create_device(
+            &entry,
+            &instance,
+            xr_instance,
+            system,
+            physical_device,
+            queue_family_index,
+        )?;
         let mut gpu = Gpu {
             instance,
             physical_device,
@@ -62,10 +77,21 @@ impl Gpu {
         // SAFETY: the device is valid; every object made here is destroyed in Drop.
         unsafe {
             self.queue = self.device.get_device_queue(self.queue_family_index, 0);
-            self.command_pool = self.device.create_command_pool(&pool_info, None).ctx("vkCreateCommandPool")?;
-            let alloc = vk::CommandBufferAllocateInfo::default().command_pool(self.command_pool).command_buffer_count(1);
-            self.command_buffer = self.device.allocate_command_buffers(&alloc).ctx("vkAllocateCommandBuffers")?[0];
-            self.fence = self.device.create_fence(&vk::FenceCreateInfo::default(), None).ctx("vkCreateFence")?;
+            self.command_pool = self
+                .device
+                .create_command_pool(&pool_info, None)
+                .ctx("vkCreateCommandPool")?;
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(self.command_pool)
+                .command_buffer_count(1);
+            self.command_buffer = self
+                .device
+                .allocate_command_buffers(&alloc)
+                .ctx("vkAllocateCommandBuffers")?[0];
+            self.fence = self
+                .device
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+                .ctx("vkCreateFence")?;
         }
         Ok(())
     }
@@ -82,20 +108,34 @@ impl Gpu {
 
     /// Records commands with `record`, submits them and waits until the GPU has run them, so the
     /// images they write can be released to the runtime right after.
-    pub fn submit_and_wait(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
+    pub fn submit_and_wait(
+        &self,
+        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> Result<()> {
         let cmd = self.command_buffer;
-        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         let commands = [cmd];
         let submit = vk::SubmitInfo::default().command_buffers(&commands);
         // SAFETY: the command buffer is not in use (the previous submission was waited for), and
         // the fence is unsignalled (reset after each wait).
         unsafe {
-            self.device.begin_command_buffer(cmd, &begin).ctx("vkBeginCommandBuffer")?;
+            self.device
+                .begin_command_buffer(cmd, &begin)
+                .ctx("vkBeginCommandBuffer")?;
             record(&self.device, cmd);
-            self.device.end_command_buffer(cmd).ctx("vkEndCommandBuffer")?;
-            self.device.queue_submit(self.queue, &[submit], self.fence).ctx("vkQueueSubmit")?;
-            self.device.wait_for_fences(&[self.fence], true, u64::MAX).ctx("vkWaitForFences")?;
-            self.device.reset_fences(&[self.fence]).ctx("vkResetFences")?;
+            self.device
+                .end_command_buffer(cmd)
+                .ctx("vkEndCommandBuffer")?;
+            self.device
+                .queue_submit(self.queue, &[submit], self.fence)
+                .ctx("vkQueueSubmit")?;
+            self.device
+                .wait_for_fences(&[self.fence], true, u64::MAX)
+                .ctx("vkWaitForFences")?;
+            self.device
+                .reset_fences(&[self.fence])
+                .ctx("vkResetFences")?;
         }
         Ok(())
     }
@@ -104,16 +144,29 @@ impl Gpu {
     pub fn host_memory_type(&self, type_bits: u32) -> Result<u32> {
         let wanted = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
         // SAFETY: the physical device belongs to this instance.
-        let props = unsafe { self.instance.get_physical_device_memory_properties(self.physical_device) };
+        let props = unsafe {
+            self.instance
+                .get_physical_device_memory_properties(self.physical_device)
+        };
         (0..props.memory_type_count)
-            .find(|&i| type_bits & (1 << i) != 0 && props.memory_types[i as usize].property_flags.contains(wanted))
-            .map_or_else(|| fail("no host-visible coherent memory type for the staging buffer"), Ok)
+            .find(|&i| {
+                type_bits & (1 << i) != 0
+                    && props.memory_types[i as usize]
+                        .property_flags
+                        .contains(wanted)
+            })
+            .map_or_else(
+                || fail("no host-visible coherent memory type for the staging buffer"),
+                Ok,
+            )
     }
 
     /// Makes one call the validation layer must report (a zero-sized buffer), to prove that
     /// validation messages are seen.
     pub fn provoke_validation_error(&self) {
-        let info = vk::BufferCreateInfo::default().size(0).usage(vk::BufferUsageFlags::TRANSFER_SRC);
+        let info = vk::BufferCreateInfo::default()
+            .size(0)
+            .usage(vk::BufferUsageFlags::TRANSFER_SRC);
         // SAFETY: invalid on purpose (VUID-VkBufferCreateInfo-size-00912); drivers accept it and
         // the buffer, if any, is destroyed at once.
         unsafe {
@@ -141,7 +194,12 @@ impl Drop for Gpu {
     }
 }
 
-fn create_instance(entry: &ash::Entry, xr_instance: &xr::Instance, system: xr::SystemId, validation: bool) -> Result<ash::Instance> {
+fn create_instance(
+    entry: &ash::Entry,
+    xr_instance: &xr::Instance,
+    system: xr::SystemId,
+    validation: bool,
+) -> Result<ash::Instance> {
     if validation && !has_validation_layer(entry)? {
         return fail("--validation: VK_LAYER_KHRONOS_validation is not installed (package vulkan-validationlayers)");
     }
@@ -153,16 +211,20 @@ fn create_instance(entry: &ash::Entry, xr_instance: &xr::Instance, system: xr::S
     let mut messenger = validation::messenger_info();
     let mut info = vk::InstanceCreateInfo::default().application_info(&app_info);
     if validation {
-        info = info.enabled_layer_names(&layers).enabled_extension_names(&extensions).push_next(&mut messenger);
+        info = info
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions)
+            .push_next(&mut messenger);
     }
     // SAFETY: the create info and everything it points to outlive the call; the runtime calls
     // vkCreateInstance through the loader's vkGetInstanceProcAddr that we pass it.
     let raw = unsafe {
         xr_instance.create_vulkan_instance(
             system,
-            std::mem::transmute::<vk::PFN_vkGetInstanceProcAddr, xr::sys::platform::VkGetInstanceProcAddr>(
-                entry.static_fn().get_instance_proc_addr,
-            ),
+            std::mem::transmute::<
+                vk::PFN_vkGetInstanceProcAddr,
+                xr::sys::platform::VkGetInstanceProcAddr,
+            >(entry.static_fn().get_instance_proc_addr),
             &info as *const _ as *const _,
         )
     }
@@ -175,25 +237,38 @@ fn create_instance(entry: &ash::Entry, xr_instance: &xr::Instance, system: xr::S
 
 fn has_validation_layer(entry: &ash::Entry) -> Result<bool> {
     // SAFETY: a plain query of the loader.
-    let layers = unsafe { entry.enumerate_instance_layer_properties() }.ctx("vkEnumerateInstanceLayerProperties")?;
-    Ok(layers.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)))
+    let layers = unsafe { entry.enumerate_instance_layer_properties() }
+        .ctx("vkEnumerateInstanceLayerProperties")?;
+    Ok(layers
+        .iter()
+        .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)))
 }
 
-fn create_messenger(entry: &ash::Entry, instance: &ash::Instance) -> Result<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+) -> Result<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
     let debug_utils = ash::ext::debug_utils::Instance::new(entry, instance);
     // SAFETY: VK_EXT_debug_utils was enabled on this instance (validation mode only).
-    let messenger = unsafe { debug_utils.create_debug_utils_messenger(&validation::messenger_info(), None) }
-        .ctx("vkCreateDebugUtilsMessengerEXT")?;
+    let messenger =
+        unsafe { debug_utils.create_debug_utils_messenger(&validation::messenger_info(), None) }
+            .ctx("vkCreateDebugUtilsMessengerEXT")?;
     Ok((debug_utils, messenger))
 }
 
-fn graphics_queue_family(instance: &ash::Instance, physical_device: vk::PhysicalDevice) -> Result<u32> {
+fn graphics_queue_family(
+    instance: &ash::Instance,
+    physical_device: vk::PhysicalDevice,
+) -> Result<u32> {
     // SAFETY: the physical device belongs to this instance.
     let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
     families
         .iter()
         .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
-        .map_or_else(|| fail("the Vulkan device has no graphics queue"), |i| Ok(i as u32))
+        .map_or_else(
+            || fail("the Vulkan device has no graphics queue"),
+            |i| Ok(i as u32),
+        )
 }
 
 fn create_device(
@@ -205,15 +280,18 @@ fn create_device(
     queue_family_index: u32,
 ) -> Result<ash::Device> {
     let priorities = [1.0];
-    let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family_index).queue_priorities(&priorities)];
+    let queues = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family_index)
+        .queue_priorities(&priorities)];
     let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
     // SAFETY: as for the instance: the create info outlives the call.
     let raw = unsafe {
         xr_instance.create_vulkan_device(
             system,
-            std::mem::transmute::<vk::PFN_vkGetInstanceProcAddr, xr::sys::platform::VkGetInstanceProcAddr>(
-                entry.static_fn().get_instance_proc_addr,
-            ),
+            std::mem::transmute::<
+                vk::PFN_vkGetInstanceProcAddr,
+                xr::sys::platform::VkGetInstanceProcAddr,
+            >(entry.static_fn().get_instance_proc_addr),
             physical_device.as_raw() as _,
             &info as *const _ as *const _,
         )

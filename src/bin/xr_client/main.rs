@@ -74,7 +74,9 @@ fn main() -> ExitCode {
 
 fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> {
     let entry = load_openxr()?;
-    let available = entry.enumerate_extensions().ctx("xrEnumerateInstanceExtensionProperties")?;
+    let available = entry
+        .enumerate_extensions()
+        .ctx("xrEnumerateInstanceExtensionProperties")?;
     if !available.khr_vulkan_enable2 {
         return fail("the runtime does not offer XR_KHR_vulkan_enable2");
     }
@@ -87,15 +89,21 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
         engine_version: 1,
         api_version: xr::Version::new(1, 0, 0),
     };
-    let instance = entry.create_instance(&app, &extensions, &[]).ctx("xrCreateInstance")?;
+    let instance = entry
+        .create_instance(&app, &extensions, &[])
+        .ctx("xrCreateInstance")?;
     let props = instance.properties().ctx("xrGetInstanceProperties")?;
     report.runtime = format!("{} {}", props.runtime_name, props.runtime_version);
     if options.provoke_xr_error {
         // Invalid on purpose: an undefined form factor, which core validation must report.
         let _ = instance.system(xr::FormFactor::from_raw(0x7fff_fff0));
     }
-    let system = instance.system(xr::FormFactor::HEAD_MOUNTED_DISPLAY).ctx("xrGetSystem")?;
-    let blend_modes = instance.enumerate_environment_blend_modes(system, VIEW_TYPE).ctx("xrEnumerateEnvironmentBlendModes")?;
+    let system = instance
+        .system(xr::FormFactor::HEAD_MOUNTED_DISPLAY)
+        .ctx("xrGetSystem")?;
+    let blend_modes = instance
+        .enumerate_environment_blend_modes(system, VIEW_TYPE)
+        .ctx("xrEnumerateEnvironmentBlendModes")?;
     let Some(&blend_mode) = blend_modes.first() else {
         return fail("the runtime offers no environment blend mode");
     };
@@ -107,8 +115,11 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     // SAFETY: the Vulkan objects were made through this instance for this system, and `gpu`
     // outlives the session (locals drop in reverse order).
     let (session, mut waiter, mut stream) =
-        unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }.ctx("xrCreateSession")?;
-    let offered = session.enumerate_swapchain_formats().ctx("xrEnumerateSwapchainFormats")?;
+        unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
+            .ctx("xrCreateSession")?;
+    let offered = session
+        .enumerate_swapchain_formats()
+        .ctx("xrEnumerateSwapchainFormats")?;
     if options.list_formats {
         offered.iter().for_each(|&f| println!("{}", format_name(f)));
         return Ok(());
@@ -126,10 +137,33 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     let projection = projection_swapchain(&session, &gpu, format, view_size, options.layout)?;
     let quad = options
         .quad
-        .then(|| PatternSwapchain::new(&session, &gpu, format, (view_size.0 / 2, view_size.1 / 2), &[LayerContent::Whole(Target::Quad)]))
+        .then(|| {
+            PatternSwapchain::new(
+                &session,
+                &gpu,
+                format,
+                (view_size.0 / 2, view_size.1 / 2),
+                &[LayerContent::Whole(Target::Quad)],
+            )
+        })
         .transpose()?;
-    let mut scene = Scene { session: &session, space: &space, gpu: &gpu, projection, quad, view_size, blend_mode };
-    frame_loop::run(&instance, &mut scene, &mut waiter, &mut stream, options, stats)
+    let mut scene = Scene {
+        session: &session,
+        space: &space,
+        gpu: &gpu,
+        projection,
+        quad,
+        view_size,
+        blend_mode,
+    };
+    frame_loop::run(
+        &instance,
+        &mut scene,
+        &mut waiter,
+        &mut stream,
+        options,
+        stats,
+    )
 }
 
 fn projection_swapchain(
@@ -141,10 +175,19 @@ fn projection_swapchain(
 ) -> Result<PatternSwapchain> {
     match layout {
         Layout::Array => {
-            let views = [LayerContent::Whole(Target::View(0)), LayerContent::Whole(Target::View(1))];
+            let views = [
+                LayerContent::Whole(Target::View(0)),
+                LayerContent::Whole(Target::View(1)),
+            ];
             PatternSwapchain::new(session, gpu, format, (w, h), &views)
         }
-        Layout::SideBySide => PatternSwapchain::new(session, gpu, format, (2 * w, h), &[LayerContent::SideBySide]),
+        Layout::SideBySide => PatternSwapchain::new(
+            session,
+            gpu,
+            format,
+            (2 * w, h),
+            &[LayerContent::SideBySide],
+        ),
     }
 }
 
@@ -152,12 +195,19 @@ fn projection_swapchain(
 /// `openxr` crate asks for) exists only where the loader's -dev package is installed.
 fn load_openxr() -> Result<xr::Entry> {
     // SAFETY: loads the system OpenXR loader, which this process has not loaded otherwise.
-    unsafe { xr::Entry::load_from(std::path::Path::new("libopenxr_loader.so.1")).or_else(|_| xr::Entry::load()) }
-        .ctx("loading the OpenXR loader (libopenxr_loader.so.1)")
+    unsafe {
+        xr::Entry::load_from(std::path::Path::new("libopenxr_loader.so.1"))
+            .or_else(|_| xr::Entry::load())
+    }
+    .ctx("loading the OpenXR loader (libopenxr_loader.so.1)")
 }
 
 fn choose_format(wanted: Option<SwapchainFormat>, offered: &[u32]) -> Result<SwapchainFormat> {
-    let offered_known = || offered.iter().filter_map(|&f| SwapchainFormat::by_vk(vk::Format::from_raw(f as i32)));
+    let offered_known = || {
+        offered
+            .iter()
+            .filter_map(|&f| SwapchainFormat::by_vk(vk::Format::from_raw(f as i32)))
+    };
     let chosen = match wanted {
         Some(format) => offered_known().find(|&f| f == format),
         None => offered_known().next(),
@@ -166,20 +216,32 @@ fn choose_format(wanted: Option<SwapchainFormat>, offered: &[u32]) -> Result<Swa
         || {
             let names: Vec<_> = offered.iter().map(|&f| format_name(f)).collect();
             let asked = wanted.map_or("any known format", |f| f.name);
-            fail(format!("the runtime does not offer {asked}; it offers {}", names.join(" ")))
+            fail(format!(
+                "the runtime does not offer {asked}; it offers {}",
+                names.join(" ")
+            ))
         },
         Ok,
     )
 }
 
 fn format_name(raw: u32) -> String {
-    SwapchainFormat::by_vk(vk::Format::from_raw(raw as i32)).map_or_else(|| format!("VkFormat({raw})"), |f| f.name.to_string())
+    SwapchainFormat::by_vk(vk::Format::from_raw(raw as i32))
+        .map_or_else(|| format!("VkFormat({raw})"), |f| f.name.to_string())
 }
 
 fn recommended_size(instance: &xr::Instance, system: xr::SystemId) -> Result<(u32, u32)> {
-    let views = instance.enumerate_view_configuration_views(system, VIEW_TYPE).ctx("xrEnumerateViewConfigurationViews")?;
+    let views = instance
+        .enumerate_view_configuration_views(system, VIEW_TYPE)
+        .ctx("xrEnumerateViewConfigurationViews")?;
     if views.len() != 2 {
-        return fail(format!("expected 2 stereo views, the runtime has {}", views.len()));
+        return fail(format!(
+            "expected 2 stereo views, the runtime has {}",
+            views.len()
+        ));
     }
-    Ok((views[0].recommended_image_rect_width, views[0].recommended_image_rect_height))
+    Ok((
+        views[0].recommended_image_rect_width,
+        views[0].recommended_image_rect_height,
+    ))
 }

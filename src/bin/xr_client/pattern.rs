@@ -53,7 +53,9 @@ pub fn texel(target: Target, x: u32, y: u32, width: u32, height: u32) -> [f32; 4
     // Sample at the texel centre, in fractions of the image.
     let u = (x as f32 + 0.5) / width as f32 - target.shift();
     let v = (y as f32 + 0.5) / height as f32;
-    let [r, g, b] = panel_colour(u, v).or_else(|| ramp_grey(u, v)).unwrap_or([0.0; 3]);
+    let [r, g, b] = panel_colour(u, v)
+        .or_else(|| ramp_grey(u, v))
+        .unwrap_or([0.0; 3]);
     [r, g, b, 1.0]
 }
 
@@ -64,7 +66,9 @@ fn panel_colour(u: f32, v: f32) -> Option<[f32; 3]> {
     }
     let (column, row) = (cu as usize, cv as usize);
     let inside = cu.fract() * PITCH_X < PANEL_W && cv.fract() * PITCH_Y < PANEL_H;
-    (column < COLUMNS && inside).then(|| PANELS.get(row * COLUMNS + column).copied()).flatten()
+    (column < COLUMNS && inside)
+        .then(|| PANELS.get(row * COLUMNS + column).copied())
+        .flatten()
 }
 
 fn ramp_grey(u: f32, v: f32) -> Option<[f32; 3]> {
@@ -105,7 +109,11 @@ mod tests {
 
     #[test]
     fn views_differ() {
-        let row = |t| (0..320).map(|x| texel(t, x, 40, 320, 240)).collect::<Vec<_>>();
+        let row = |t| {
+            (0..320)
+                .map(|x| texel(t, x, 40, 320, 240))
+                .collect::<Vec<_>>()
+        };
         assert_ne!(row(Target::View(0)), row(Target::View(1)));
         assert_ne!(row(Target::View(0)), row(Target::Quad));
     }

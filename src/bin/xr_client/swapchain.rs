@@ -39,7 +39,8 @@ impl PatternSwapchain {
         let handle = session
             .create_swapchain(&xr::SwapchainCreateInfo {
                 create_flags: xr::SwapchainCreateFlags::EMPTY,
-                usage_flags: xr::SwapchainUsageFlags::COLOR_ATTACHMENT | xr::SwapchainUsageFlags::TRANSFER_DST,
+                usage_flags: xr::SwapchainUsageFlags::COLOR_ATTACHMENT
+                    | xr::SwapchainUsageFlags::TRANSFER_DST,
                 format: format.vk.as_raw() as _,
                 sample_count: 1,
                 width,
@@ -48,8 +49,14 @@ impl PatternSwapchain {
                 array_size: content.len() as u32,
                 mip_count: 1,
             })
-            .ctx(&format!("xrCreateSwapchain ({} {width}x{height}, arraySize {})", format.name, content.len()))?;
-        let images = handle.enumerate_images().ctx("xrEnumerateSwapchainImages")?;
+            .ctx(&format!(
+                "xrCreateSwapchain ({} {width}x{height}, arraySize {})",
+                format.name,
+                content.len()
+            ))?;
+        let images = handle
+            .enumerate_images()
+            .ctx("xrEnumerateSwapchainImages")?;
         let bytes = pattern_bytes(format, width, height, content);
         let (staging, memory) = create_staging(gpu, &bytes)?;
         Ok(PatternSwapchain {
@@ -67,7 +74,9 @@ impl PatternSwapchain {
     /// Acquires and waits for the next image; returns its index.
     pub fn acquire(&mut self) -> Result<u32> {
         let index = self.handle.acquire_image().ctx("xrAcquireSwapchainImage")?;
-        self.handle.wait_image(xr::Duration::INFINITE).ctx("xrWaitSwapchainImage")?;
+        self.handle
+            .wait_image(xr::Duration::INFINITE)
+            .ctx("xrWaitSwapchainImage")?;
         Ok(index)
     }
 
@@ -84,20 +93,62 @@ impl PatternSwapchain {
             .level_count(1)
             .layer_count(self.layers);
         // The old contents are not needed: every texel is overwritten.
-        let to_transfer = barrier(image, range, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
-        let to_colour = barrier(image, range, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
+        let to_transfer = barrier(
+            image,
+            range,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+        )
+        .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
+        let to_colour = barrier(
+            image,
+            range,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        )
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(
+            vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+        );
         let copy = vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(self.layers))
-            .image_extent(vk::Extent3D { width: self.width, height: self.height, depth: 1 });
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(self.layers),
+            )
+            .image_extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            });
         // SAFETY: `cmd` is recording; the image was acquired and waited for, the staging buffer
         // holds width x height x layers texels in this format, laid out layer after layer.
         unsafe {
-            device.cmd_pipeline_barrier(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, vk::PipelineStageFlags::TRANSFER, vk::DependencyFlags::empty(), &[], &[], &[to_transfer]);
-            device.cmd_copy_buffer_to_image(cmd, self.staging, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[copy]);
-            device.cmd_pipeline_barrier(cmd, vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT, vk::DependencyFlags::empty(), &[], &[], &[to_colour]);
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[to_transfer],
+            );
+            device.cmd_copy_buffer_to_image(
+                cmd,
+                self.staging,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[copy],
+            );
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[to_colour],
+            );
         }
     }
 }
@@ -113,7 +164,12 @@ impl Drop for PatternSwapchain {
     }
 }
 
-fn barrier<'a>(image: vk::Image, range: vk::ImageSubresourceRange, old: vk::ImageLayout, new: vk::ImageLayout) -> vk::ImageMemoryBarrier<'a> {
+fn barrier<'a>(
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+) -> vk::ImageMemoryBarrier<'a> {
     vk::ImageMemoryBarrier::default()
         .image(image)
         .subresource_range(range)
@@ -124,8 +180,14 @@ fn barrier<'a>(image: vk::Image, range: vk::ImageSubresourceRange, old: vk::Imag
 }
 
 /// The texels of every layer, tightly packed, layer after layer, rows top to bottom.
-fn pattern_bytes(format: SwapchainFormat, width: u32, height: u32, content: &[LayerContent]) -> Vec<u8> {
-    let mut bytes = Vec::with_capacity(format.bytes_per_texel() * (width * height) as usize * content.len());
+fn pattern_bytes(
+    format: SwapchainFormat,
+    width: u32,
+    height: u32,
+    content: &[LayerContent],
+) -> Vec<u8> {
+    let mut bytes =
+        Vec::with_capacity(format.bytes_per_texel() * (width * height) as usize * content.len());
     for layer in content {
         for y in 0..height {
             for x in 0..width {
@@ -145,7 +207,9 @@ fn pattern_bytes(format: SwapchainFormat, width: u32, height: u32, content: &[La
 
 fn create_staging(gpu: &Gpu, bytes: &[u8]) -> Result<(vk::Buffer, vk::DeviceMemory)> {
     let device = &gpu.device;
-    let info = vk::BufferCreateInfo::default().size(bytes.len() as u64).usage(vk::BufferUsageFlags::TRANSFER_SRC);
+    let info = vk::BufferCreateInfo::default()
+        .size(bytes.len() as u64)
+        .usage(vk::BufferUsageFlags::TRANSFER_SRC);
     // SAFETY: plain object creation on a live device; the mapping covers exactly `bytes.len()`
     // bytes of host-coherent memory, so no flush is needed.
     unsafe {
@@ -154,9 +218,15 @@ fn create_staging(gpu: &Gpu, bytes: &[u8]) -> Result<(vk::Buffer, vk::DeviceMemo
         let alloc = vk::MemoryAllocateInfo::default()
             .allocation_size(reqs.size)
             .memory_type_index(gpu.host_memory_type(reqs.memory_type_bits)?);
-        let memory = device.allocate_memory(&alloc, None).ctx("vkAllocateMemory")?;
-        device.bind_buffer_memory(buffer, memory, 0).ctx("vkBindBufferMemory")?;
-        let mapped = device.map_memory(memory, 0, bytes.len() as u64, vk::MemoryMapFlags::empty()).ctx("vkMapMemory")?;
+        let memory = device
+            .allocate_memory(&alloc, None)
+            .ctx("vkAllocateMemory")?;
+        device
+            .bind_buffer_memory(buffer, memory, 0)
+            .ctx("vkBindBufferMemory")?;
+        let mapped = device
+            .map_memory(memory, 0, bytes.len() as u64, vk::MemoryMapFlags::empty())
+            .ctx("vkMapMemory")?;
         std::ptr::copy_nonoverlapping(bytes.as_ptr(), mapped.cast::<u8>(), bytes.len());
         device.unmap_memory(memory);
         Ok((buffer, memory))
