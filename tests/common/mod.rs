@@ -10,12 +10,15 @@
 //! - [`ApiDump`] records every OpenXR call of a run (LunarG api_dump) and answers questions on it.
 #![allow(dead_code)] // each test crate uses a different part
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus};
 use std::sync::OnceLock;
 
 pub const XR_CLIENT: &str = env!("CARGO_BIN_EXE_contrastxr-xr-client");
 const REQUIRE_VAR: &str = "CONTRASTXR_REQUIRE_SANDBOX";
+/// The longest one sandbox run may take; exit status 124 means it was stopped.
+const RUN_TIMEOUT_S: u32 = 300;
 
 pub struct Sandbox {
     script: PathBuf,
@@ -38,13 +41,25 @@ pub fn sandbox() -> Option<Sandbox> {
         Some(problem) => problem,
     };
     if !required {
-        eprintln!("skipped: {problem}; run `scripts/xr-sandbox setup` as root (or set {REQUIRE_VAR}=1) to run the XR runtime tests");
+        say_skipped_once(&problem);
         return None;
     }
     if let Err(reason) = setup_once(&script) {
         panic!("the XR sandbox is required ({REQUIRE_VAR}=1) but {problem}, and setting it up failed: {reason}");
     }
     Some(Sandbox { script })
+}
+
+/// One line per test binary, written past the test harness's output capture so it is seen.
+fn say_skipped_once(problem: &str) {
+    static SAID: OnceLock<()> = OnceLock::new();
+    SAID.get_or_init(|| {
+        let _ = writeln!(
+            std::io::stderr(),
+            "XR runtime tests skipped: {problem}; run `scripts/xr-sandbox setup` as root \
+             (or set {REQUIRE_VAR}=1) to run them"
+        );
+    });
 }
 
 fn unavailable_reason(script: &Path) -> Option<String> {
@@ -87,7 +102,11 @@ impl Sandbox {
     /// `env` is added to the environment of the script, which passes CONTRASTXR*, XR_*, VK_*,
     /// LP_*, RUST_*, MESA_* variables to the command. Stdin is empty.
     pub fn run(&self, cmd: &[&str], env: &[(&str, &str)]) -> SandboxRun {
-        let output = Command::new(&self.script)
+        // A hung app or runtime must fail the test, not hang it: `timeout` signals the script's
+        // whole process group, and the script's PID namespace takes everything inside down.
+        let output = Command::new("timeout")
+            .args(["--kill-after=10", &RUN_TIMEOUT_S.to_string()])
+            .arg(&self.script)
             .args(["run", "--"])
             .args(cmd)
             .envs(env.iter().copied())
