@@ -1,1 +1,247 @@
-fn main() {}
+//! contrastxr-xr-client: the project's own OpenXR test app. It creates a Vulkan session through
+//! XR_KHR_vulkan_enable2, renders known test patterns (content on black) into the swapchain format
+//! and layout asked for, submits N frames, ends the session cleanly, and exits non-zero on any
+//! OpenXR or Vulkan error (and on any Vulkan validation error with --validation).
+//! Run it inside the sandbox: `scripts/xr-sandbox run -- target/debug/contrastxr-xr-client`.
+
+mod cli;
+mod error;
+mod format;
+mod frame_loop;
+mod gpu;
+mod pattern;
+mod report;
+mod swapchain;
+mod validation;
+
+use std::process::ExitCode;
+
+use ash::vk;
+use openxr as xr;
+
+use cli::{Layout, Options};
+use error::{fail, Context, Result};
+use format::SwapchainFormat;
+use frame_loop::{Scene, Stats};
+use gpu::Gpu;
+use pattern::Target;
+use report::Report;
+use swapchain::{LayerContent, PatternSwapchain};
+
+const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
+
+fn main() -> ExitCode {
+    let options = match cli::parse(std::env::args().skip(1)) {
+        Ok(options) => options,
+        Err(message) => {
+            eprintln!("{message}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut report = Report {
+        frames_requested: options.frames,
+        layout: options.layout.name().to_string(),
+        views: 2,
+        quad: options.quad,
+        vk_validation: options.validation,
+        ..Report::default()
+    };
+    let mut stats = Stats::default();
+    if let Err(e) = run(&options, &mut report, &mut stats) {
+        report.errors.push(e.0);
+    }
+    report.frames_submitted = stats.frames_submitted;
+    report.frames_ended = stats.frames_ended;
+    report.reached_focused = stats.reached_focused;
+    report.vk_validation_errors = validation::errors();
+    report.vk_validation_warnings = validation::warnings();
+    let ran = options.list_formats || stats.frames_submitted >= options.frames;
+    report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
+    if options.json {
+        eprintln!("{}", report.summary());
+        println!("{}", report.json());
+    } else if !options.list_formats {
+        println!("{}", report.summary());
+    } else if !report.ok {
+        eprintln!("{}", report.summary());
+    }
+    if report.ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> {
+    let entry = load_openxr()?;
+    let available = entry
+        .enumerate_extensions()
+        .ctx("xrEnumerateInstanceExtensionProperties")?;
+    if !available.khr_vulkan_enable2 {
+        return fail("the runtime does not offer XR_KHR_vulkan_enable2");
+    }
+    let mut extensions = xr::ExtensionSet::default();
+    extensions.khr_vulkan_enable2 = true;
+    let app = xr::ApplicationInfo {
+        application_name: "contrastxr-xr-client",
+        application_version: 1,
+        engine_name: "contrastxr",
+        engine_version: 1,
+        api_version: xr::Version::new(1, 0, 0),
+    };
+    let instance = entry
+        .create_instance(&app, &extensions, &[])
+        .ctx("xrCreateInstance")?;
+    let props = instance.properties().ctx("xrGetInstanceProperties")?;
+    report.runtime = format!("{} {}", props.runtime_name, props.runtime_version);
+    if options.provoke_xr_error {
+        // Invalid on purpose: an undefined form factor, which core validation must report.
+        let _ = instance.system(xr::FormFactor::from_raw(0x7fff_fff0));
+    }
+    let system = instance
+        .system(xr::FormFactor::HEAD_MOUNTED_DISPLAY)
+        .ctx("xrGetSystem")?;
+    let blend_modes = instance
+        .enumerate_environment_blend_modes(system, VIEW_TYPE)
+        .ctx("xrEnumerateEnvironmentBlendModes")?;
+    let Some(&blend_mode) = blend_modes.first() else {
+        return fail("the runtime offers no environment blend mode");
+    };
+    report.blend_mode = format!("{blend_mode:?}");
+    let gpu = Gpu::new(&instance, system, options.validation)?;
+    if options.provoke_vk_error {
+        gpu.provoke_validation_error();
+    }
+    // SAFETY: the Vulkan objects were made through this instance for this system, and `gpu`
+    // outlives the session (locals drop in reverse order).
+    let (session, mut waiter, mut stream) =
+        unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
+            .ctx("xrCreateSession")?;
+    let offered = session
+        .enumerate_swapchain_formats()
+        .ctx("xrEnumerateSwapchainFormats")?;
+    if options.list_formats {
+        offered.iter().for_each(|&f| println!("{}", format_name(f)));
+        return Ok(());
+    }
+    let format = choose_format(options.format, &offered)?;
+    report.format = format.name.to_string();
+    let view_size = match options.size {
+        Some(size) => size,
+        None => recommended_size(&instance, system)?,
+    };
+    report.view_size = [view_size.0, view_size.1];
+    let space = session
+        .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
+        .ctx("xrCreateReferenceSpace")?;
+    let projection = projection_swapchain(&session, &gpu, format, view_size, options.layout)?;
+    let quad = options
+        .quad
+        .then(|| {
+            PatternSwapchain::new(
+                &session,
+                &gpu,
+                format,
+                (view_size.0 / 2, view_size.1 / 2),
+                &[LayerContent::Whole(Target::Quad)],
+            )
+        })
+        .transpose()?;
+    let mut scene = Scene {
+        session: &session,
+        space: &space,
+        gpu: &gpu,
+        projection,
+        quad,
+        view_size,
+        blend_mode,
+    };
+    frame_loop::run(
+        &instance,
+        &mut scene,
+        &mut waiter,
+        &mut stream,
+        options,
+        stats,
+    )
+}
+
+fn projection_swapchain(
+    session: &xr::Session<xr::Vulkan>,
+    gpu: &Gpu,
+    format: SwapchainFormat,
+    (w, h): (u32, u32),
+    layout: Layout,
+) -> Result<PatternSwapchain> {
+    match layout {
+        Layout::Array => {
+            let views = [
+                LayerContent::Whole(Target::View(0)),
+                LayerContent::Whole(Target::View(1)),
+            ];
+            PatternSwapchain::new(session, gpu, format, (w, h), &views)
+        }
+        Layout::SideBySide => PatternSwapchain::new(
+            session,
+            gpu,
+            format,
+            (2 * w, h),
+            &[LayerContent::SideBySide],
+        ),
+    }
+}
+
+/// The loader by its ABI name, as apps linked against it find it; the unversioned name (what the
+/// `openxr` crate asks for) exists only where the loader's -dev package is installed.
+fn load_openxr() -> Result<xr::Entry> {
+    // SAFETY: loads the system OpenXR loader, which this process has not loaded otherwise.
+    unsafe {
+        xr::Entry::load_from(std::path::Path::new("libopenxr_loader.so.1"))
+            .or_else(|_| xr::Entry::load())
+    }
+    .ctx("loading the OpenXR loader (libopenxr_loader.so.1)")
+}
+
+fn choose_format(wanted: Option<SwapchainFormat>, offered: &[u32]) -> Result<SwapchainFormat> {
+    let offered_known = || {
+        offered
+            .iter()
+            .filter_map(|&f| SwapchainFormat::by_vk(vk::Format::from_raw(f as i32)))
+    };
+    let chosen = match wanted {
+        Some(format) => offered_known().find(|&f| f == format),
+        None => offered_known().next(),
+    };
+    chosen.map_or_else(
+        || {
+            let names: Vec<_> = offered.iter().map(|&f| format_name(f)).collect();
+            let asked = wanted.map_or("any known format", |f| f.name);
+            fail(format!(
+                "the runtime does not offer {asked}; it offers {}",
+                names.join(" ")
+            ))
+        },
+        Ok,
+    )
+}
+
+fn format_name(raw: u32) -> String {
+    SwapchainFormat::by_vk(vk::Format::from_raw(raw as i32))
+        .map_or_else(|| format!("VkFormat({raw})"), |f| f.name.to_string())
+}
+
+fn recommended_size(instance: &xr::Instance, system: xr::SystemId) -> Result<(u32, u32)> {
+    let views = instance
+        .enumerate_view_configuration_views(system, VIEW_TYPE)
+        .ctx("xrEnumerateViewConfigurationViews")?;
+    if views.len() != 2 {
+        return fail(format!(
+            "expected 2 stereo views, the runtime has {}",
+            views.len()
+        ));
+    }
+    Ok((
+        views[0].recommended_image_rect_width,
+        views[0].recommended_image_rect_height,
+    ))
+}

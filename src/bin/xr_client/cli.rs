@@ -1,0 +1,157 @@
+//! Command-line flags. They are a stable interface: the runtime and layer tests drive the client
+//! with them.
+
+use crate::format::{SwapchainFormat, FORMATS};
+
+pub const USAGE: &str = "\
+usage: contrastxr-xr-client [options]
+  --format NAME           swapchain format: auto (the runtime's first) or one of
+                          R8G8B8A8_SRGB B8G8R8A8_SRGB R8G8B8A8_UNORM B8G8R8A8_UNORM
+                          R16G16B16A16_UNORM R16G16B16A16_SFLOAT A2B10G10R10_UNORM
+  --layout array|side-by-side
+                          one swapchain with arraySize 2, or one wide swapchain (default array)
+  --frames N              frames to submit before ending the session (default 60)
+  --quad                  also submit a quad layer with its own swapchain
+  --size WxH              per-view size (default: the runtime's recommended size)
+  --validation            enable VK_LAYER_KHRONOS_validation; any error fails the run
+  --list-formats          print the formats the runtime offers and exit
+  --json                  print the final report as one JSON line on stdout
+  --provoke-xr-validation-error, --provoke-vk-validation-error
+                          make one invalid call on purpose (to test that validation is seen)";
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// One swapchain with arraySize 2; view i is at imageArrayIndex i.
+    Array,
+    /// One swapchain twice as wide as a view; view i is the i-th half (imageRect).
+    SideBySide,
+}
+
+impl Layout {
+    pub fn name(self) -> &'static str {
+        match self {
+            Layout::Array => "array",
+            Layout::SideBySide => "side-by-side",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// None: the first format the runtime offers that the client knows.
+    pub format: Option<SwapchainFormat>,
+    pub layout: Layout,
+    pub frames: u32,
+    pub quad: bool,
+    pub size: Option<(u32, u32)>,
+    pub validation: bool,
+    pub list_formats: bool,
+    pub json: bool,
+    pub provoke_xr_error: bool,
+    pub provoke_vk_error: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            format: None,
+            layout: Layout::Array,
+            frames: 60,
+            quad: false,
+            size: None,
+            validation: false,
+            list_formats: false,
+            json: false,
+            provoke_xr_error: false,
+            provoke_vk_error: false,
+        }
+    }
+}
+
+pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> {
+    let mut options = Options::default();
+    let mut args = args.into_iter();
+    while let Some(arg) = args.next() {
+        let mut value = || args.next().ok_or(format!("{arg} needs a value"));
+        match arg.as_str() {
+            "--format" => options.format = parse_format(&value()?)?,
+            "--layout" => options.layout = parse_layout(&value()?)?,
+            "--frames" => {
+                options.frames = value()?.parse().map_err(|_| "--frames needs a count")?
+            }
+            "--size" => options.size = Some(parse_size(&value()?)?),
+            "--quad" => options.quad = true,
+            "--validation" => options.validation = true,
+            "--list-formats" => options.list_formats = true,
+            "--json" => options.json = true,
+            "--provoke-xr-validation-error" => options.provoke_xr_error = true,
+            "--provoke-vk-validation-error" => options.provoke_vk_error = true,
+            "-h" | "--help" => return Err(USAGE.to_string()),
+            other => return Err(format!("unknown argument {other}\n{USAGE}")),
+        }
+    }
+    Ok(options)
+}
+
+fn parse_format(name: &str) -> Result<Option<SwapchainFormat>, String> {
+    if name == "auto" {
+        return Ok(None);
+    }
+    let known = FORMATS.map(|f| f.name).join(" ");
+    SwapchainFormat::by_name(name)
+        .map(Some)
+        .ok_or(format!("unknown format {name}: use auto or one of {known}"))
+}
+
+fn parse_layout(name: &str) -> Result<Layout, String> {
+    match name {
+        "array" => Ok(Layout::Array),
+        "side-by-side" => Ok(Layout::SideBySide),
+        _ => Err(format!("unknown layout {name}: use array or side-by-side")),
+    }
+}
+
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("bad size {text}: use WxH, e.g. 640x480");
+    let (w, h) = text.split_once('x').ok_or_else(bad)?;
+    let (w, h) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
+    if w == 0 || h == 0 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_str(s: &str) -> Result<Options, String> {
+        parse(s.split_whitespace().map(String::from))
+    }
+
+    #[test]
+    fn parses_every_flag() {
+        let o = parse_str("--format b8g8r8a8_srgb --layout side-by-side --frames 7 --quad --size 64x48 --validation --json").unwrap();
+        assert_eq!(o.format.unwrap().name, "B8G8R8A8_SRGB");
+        assert_eq!(
+            (o.layout, o.frames, o.quad, o.size),
+            (Layout::SideBySide, 7, true, Some((64, 48)))
+        );
+        assert!(o.validation && o.json && !o.list_formats);
+    }
+
+    #[test]
+    fn rejects_bad_values() {
+        for bad in [
+            "--format RGB",
+            "--layout grid",
+            "--frames x",
+            "--size 10",
+            "--size 0x5",
+            "--frames",
+            "--bogus",
+        ] {
+            assert!(parse_str(bad).is_err(), "{bad}");
+        }
+    }
+}

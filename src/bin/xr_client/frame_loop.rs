@@ -1,0 +1,203 @@
+//! The session's life: wait for READY, begin, submit frames, request exit after N frames, end on
+//! STOPPING, leave on EXITING. Every OpenXR or Vulkan failure ends the loop with an error.
+
+use std::time::{Duration, Instant};
+
+use openxr as xr;
+
+use crate::cli::{Layout, Options};
+use crate::error::{fail, Context, Result};
+use crate::gpu::Gpu;
+use crate::swapchain::PatternSwapchain;
+
+const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
+/// The null compositor paces at 20 Hz; allow a slow machine several times that, plus start-up.
+const BASE_TIMEOUT: Duration = Duration::from_secs(30);
+const PER_FRAME_TIMEOUT: Duration = Duration::from_millis(250);
+
+#[derive(Default, Debug)]
+pub struct Stats {
+    /// xrEndFrame calls that carried the projection layer (and the quad layer with --quad).
+    pub frames_submitted: u32,
+    /// All xrEndFrame calls, including those with no layers when the runtime said not to render.
+    pub frames_ended: u32,
+    pub reached_focused: bool,
+}
+
+/// What the frame loop draws with.
+pub struct Scene<'a> {
+    pub session: &'a xr::Session<xr::Vulkan>,
+    pub space: &'a xr::Space,
+    pub gpu: &'a Gpu,
+    pub projection: PatternSwapchain,
+    pub quad: Option<PatternSwapchain>,
+    pub view_size: (u32, u32),
+    pub blend_mode: xr::EnvironmentBlendMode,
+}
+
+pub fn run(
+    instance: &xr::Instance,
+    scene: &mut Scene<'_>,
+    frame_waiter: &mut xr::FrameWaiter,
+    frame_stream: &mut xr::FrameStream<xr::Vulkan>,
+    options: &Options,
+    stats: &mut Stats,
+) -> Result<()> {
+    let deadline = Instant::now() + BASE_TIMEOUT + PER_FRAME_TIMEOUT * options.frames;
+    let mut events = xr::EventDataBuffer::new();
+    let (mut running, mut exit_requested) = (false, false);
+    loop {
+        while let Some(event) = instance.poll_event(&mut events).ctx("xrPollEvent")? {
+            match event {
+                xr::Event::SessionStateChanged(change) => match change.state() {
+                    xr::SessionState::READY => {
+                        scene.session.begin(VIEW_TYPE).ctx("xrBeginSession")?;
+                        running = true;
+                    }
+                    xr::SessionState::FOCUSED => stats.reached_focused = true,
+                    xr::SessionState::STOPPING => {
+                        scene.session.end().ctx("xrEndSession")?;
+                        running = false;
+                    }
+                    xr::SessionState::EXITING => return Ok(()),
+                    xr::SessionState::LOSS_PENDING => {
+                        return fail("the runtime reported session loss")
+                    }
+                    _ => {}
+                },
+                xr::Event::InstanceLossPending(_) => {
+                    return fail("the runtime reported instance loss")
+                }
+                _ => {}
+            }
+        }
+        if Instant::now() > deadline {
+            return fail(format!(
+                "timed out after {} frames (wanted {})",
+                stats.frames_submitted, options.frames
+            ));
+        }
+        if !running {
+            std::thread::sleep(Duration::from_millis(10));
+            continue;
+        }
+        if stats.frames_submitted >= options.frames && !exit_requested {
+            scene.session.request_exit().ctx("xrRequestExitSession")?;
+            exit_requested = true;
+        }
+        // Frames go on until STOPPING arrives, as the spec asks after xrRequestExitSession.
+        frame(scene, frame_waiter, frame_stream, options.layout, stats)?;
+    }
+}
+
+fn frame(
+    scene: &mut Scene<'_>,
+    frame_waiter: &mut xr::FrameWaiter,
+    frame_stream: &mut xr::FrameStream<xr::Vulkan>,
+    layout: Layout,
+    stats: &mut Stats,
+) -> Result<()> {
+    let state = frame_waiter.wait().ctx("xrWaitFrame")?;
+    frame_stream.begin().ctx("xrBeginFrame")?;
+    stats.frames_ended += 1;
+    if !state.should_render {
+        return frame_stream
+            .end(state.predicted_display_time, scene.blend_mode, &[])
+            .ctx("xrEndFrame (no layers)");
+    }
+    let (_, views) = scene
+        .session
+        .locate_views(VIEW_TYPE, state.predicted_display_time, scene.space)
+        .ctx("xrLocateViews")?;
+    render(scene)?;
+    let (w, h) = (scene.view_size.0 as i32, scene.view_size.1 as i32);
+    let projection_views: Vec<_> = (0..2)
+        .map(|i| {
+            let (index, x) = match layout {
+                Layout::Array => (i as u32, 0),
+                Layout::SideBySide => (0, i * w),
+            };
+            let rect = xr::Rect2Di {
+                offset: xr::Offset2Di { x, y: 0 },
+                extent: xr::Extent2Di {
+                    width: w,
+                    height: h,
+                },
+            };
+            xr::CompositionLayerProjectionView::new()
+                .pose(views[i as usize].pose)
+                .fov(views[i as usize].fov)
+                .sub_image(
+                    xr::SwapchainSubImage::new()
+                        .swapchain(&scene.projection.handle)
+                        .image_array_index(index)
+                        .image_rect(rect),
+                )
+        })
+        .collect();
+    let projection = xr::CompositionLayerProjection::new()
+        .space(scene.space)
+        .views(&projection_views);
+    let quad = scene.quad.as_ref().map(|q| quad_layer(q, scene.space));
+    let mut layers: Vec<&xr::CompositionLayerBase<'_, xr::Vulkan>> = vec![&projection];
+    if let Some(quad) = &quad {
+        layers.push(quad);
+    }
+    frame_stream
+        .end(state.predicted_display_time, scene.blend_mode, &layers)
+        .ctx("xrEndFrame")?;
+    stats.frames_submitted += 1;
+    Ok(())
+}
+
+/// Fills the next image of every swapchain and releases them once the GPU is done.
+fn render(scene: &mut Scene<'_>) -> Result<()> {
+    let projection_index = scene.projection.acquire()?;
+    let quad_index = scene.quad.as_mut().map(|q| q.acquire()).transpose()?;
+    scene.gpu.submit_and_wait(|device, cmd| {
+        scene
+            .projection
+            .record_upload(device, cmd, projection_index);
+        if let (Some(quad), Some(index)) = (&scene.quad, quad_index) {
+            quad.record_upload(device, cmd, index);
+        }
+    })?;
+    scene.projection.release()?;
+    scene.quad.as_mut().map(|q| q.release()).transpose()?;
+    Ok(())
+}
+
+/// A quad 1.5 m in front of the viewer, 0.4 m wide, with the swapchain's aspect ratio.
+fn quad_layer<'a>(
+    quad: &'a PatternSwapchain,
+    space: &'a xr::Space,
+) -> xr::CompositionLayerQuad<'a, xr::Vulkan> {
+    let rect = xr::Rect2Di {
+        offset: xr::Offset2Di { x: 0, y: 0 },
+        extent: xr::Extent2Di {
+            width: quad.width as i32,
+            height: quad.height as i32,
+        },
+    };
+    let pose = xr::Posef {
+        orientation: xr::Quaternionf::IDENTITY,
+        position: xr::Vector3f {
+            x: 0.0,
+            y: 0.0,
+            z: -1.5,
+        },
+    };
+    xr::CompositionLayerQuad::new()
+        .space(space)
+        .eye_visibility(xr::EyeVisibility::BOTH)
+        .sub_image(
+            xr::SwapchainSubImage::new()
+                .swapchain(&quad.handle)
+                .image_rect(rect),
+        )
+        .pose(pose)
+        .size(xr::Extent2Df {
+            width: 0.4,
+            height: 0.4 * quad.height as f32 / quad.width as f32,
+        })
+}

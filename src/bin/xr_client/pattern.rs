@@ -1,0 +1,120 @@
+//! The known test pattern: coloured panels on black.
+//!
+//! Black is what an additive (optical see-through) display shows as transparent, so the pattern is
+//! content on black: a 4 x 3 grid of panels (primaries, secondaries, white, greys, pastels) and a
+//! grey ramp, covering about 37 % of the view; the rest is exactly black. Each view is shifted
+//! horizontally by a different amount, so a layer that mixes up views changes the result.
+
+/// The panels' colours, sRGB-encoded.
+const PANELS: [[f32; 3]; 12] = [
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [0.0, 1.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [1.0, 1.0, 0.0],
+    [0.5, 0.5, 0.5],
+    [1.0, 0.75, 0.8],
+    [0.68, 0.85, 0.9],
+    [0.6, 0.9, 0.6],
+    [0.2, 0.2, 0.2],
+];
+const COLUMNS: usize = 4;
+/// Panel placement, as fractions of the view: column c starts at `LEFT + c * PITCH_X`.
+const LEFT: f32 = 0.1;
+const PITCH_X: f32 = 0.2;
+const PANEL_W: f32 = 0.15;
+const TOP: f32 = 0.08;
+const PITCH_Y: f32 = 0.22;
+const PANEL_H: f32 = 0.17;
+/// The grey ramp below the panels.
+const RAMP: (f32, f32, f32, f32) = (0.1, 0.76, 0.9, 0.84);
+
+/// Which image the pattern is for: the views of the projection layer, or the quad layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target {
+    View(u32),
+    Quad,
+}
+
+impl Target {
+    /// Horizontal shift of the whole pattern, as a fraction of the width.
+    fn shift(self) -> f32 {
+        match self {
+            Target::View(i) => 0.02 * i as f32,
+            Target::Quad => -0.04,
+        }
+    }
+}
+
+/// The colour of texel (x, y) of a `width` x `height` image, as sRGB-encoded RGBA.
+pub fn texel(target: Target, x: u32, y: u32, width: u32, height: u32) -> [f32; 4] {
+    // Sample at the texel centre, in fractions of the image.
+    let u = (x as f32 + 0.5) / width as f32 - target.shift();
+    let v = (y as f32 + 0.5) / height as f32;
+    let [r, g, b] = panel_colour(u, v)
+        .or_else(|| ramp_grey(u, v))
+        .unwrap_or([0.0; 3]);
+    [r, g, b, 1.0]
+}
+
+fn panel_colour(u: f32, v: f32) -> Option<[f32; 3]> {
+    let (cu, cv) = ((u - LEFT) / PITCH_X, (v - TOP) / PITCH_Y);
+    if cu < 0.0 || cv < 0.0 {
+        return None;
+    }
+    let (column, row) = (cu as usize, cv as usize);
+    let inside = cu.fract() * PITCH_X < PANEL_W && cv.fract() * PITCH_Y < PANEL_H;
+    (column < COLUMNS && inside)
+        .then(|| PANELS.get(row * COLUMNS + column).copied())
+        .flatten()
+}
+
+fn ramp_grey(u: f32, v: f32) -> Option<[f32; 3]> {
+    let (u0, v0, u1, v1) = RAMP;
+    let grey = (u - u0) / (u1 - u0);
+    (u >= u0 && u < u1 && v >= v0 && v < v1).then_some([grey; 3])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn coverage(target: Target) -> f32 {
+        let (w, h) = (320, 240);
+        let lit = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| texel(target, x, y, w, h)[..3] != [0.0; 3])
+            .count();
+        lit as f32 / (w * h) as f32
+    }
+
+    #[test]
+    fn content_covers_a_third_to_a_half_of_each_view() {
+        for target in [Target::View(0), Target::View(1), Target::Quad] {
+            let c = coverage(target);
+            assert!((0.3..0.5).contains(&c), "{target:?}: {c}");
+        }
+    }
+
+    #[test]
+    fn corners_are_black_and_panels_hold_their_colours() {
+        let at = |x, y| texel(Target::View(0), x, y, 1000, 1000);
+        assert_eq!(at(0, 0), [0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(at(999, 999), [0.0, 0.0, 0.0, 1.0]);
+        assert_eq!(at(150, 150), [1.0, 0.0, 0.0, 1.0]); // first panel
+        assert_eq!(at(750, 590), [0.2, 0.2, 0.2, 1.0]); // last panel
+    }
+
+    #[test]
+    fn views_differ() {
+        let row = |t| {
+            (0..320)
+                .map(|x| texel(t, x, 40, 320, 240))
+                .collect::<Vec<_>>()
+        };
+        assert_ne!(row(Target::View(0)), row(Target::View(1)));
+        assert_ne!(row(Target::View(0)), row(Target::Quad));
+    }
+}

@@ -1,0 +1,234 @@
+//! A runtime swapchain filled with the test pattern by copies from a staging buffer (no shaders).
+
+use ash::vk::{self, Handle};
+use openxr as xr;
+
+use crate::error::{Context, Result};
+use crate::format::SwapchainFormat;
+use crate::gpu::Gpu;
+use crate::pattern::{texel, Target};
+
+/// What one array layer of a swapchain image shows.
+pub enum LayerContent {
+    /// The whole layer is one target's pattern.
+    Whole(Target),
+    /// The layer is split in two halves side by side: view 0 left, view 1 right.
+    SideBySide,
+}
+
+pub struct PatternSwapchain {
+    pub handle: xr::Swapchain<xr::Vulkan>,
+    images: Vec<vk::Image>,
+    pub width: u32,
+    pub height: u32,
+    layers: u32,
+    staging: vk::Buffer,
+    memory: vk::DeviceMemory,
+    /// The device that owns `staging`; a clone of the Gpu's (ash devices are plain tables).
+    device: ash::Device,
+}
+
+impl PatternSwapchain {
+    pub fn new(
+        session: &xr::Session<xr::Vulkan>,
+        gpu: &Gpu,
+        format: SwapchainFormat,
+        (width, height): (u32, u32),
+        content: &[LayerContent],
+    ) -> Result<PatternSwapchain> {
+        let handle = session
+            .create_swapchain(&xr::SwapchainCreateInfo {
+                create_flags: xr::SwapchainCreateFlags::EMPTY,
+                usage_flags: xr::SwapchainUsageFlags::COLOR_ATTACHMENT
+                    | xr::SwapchainUsageFlags::TRANSFER_DST,
+                format: format.vk.as_raw() as _,
+                sample_count: 1,
+                width,
+                height,
+                face_count: 1,
+                array_size: content.len() as u32,
+                mip_count: 1,
+            })
+            .ctx(&format!(
+                "xrCreateSwapchain ({} {width}x{height}, arraySize {})",
+                format.name,
+                content.len()
+            ))?;
+        let images = handle
+            .enumerate_images()
+            .ctx("xrEnumerateSwapchainImages")?;
+        let bytes = pattern_bytes(format, width, height, content);
+        let (staging, memory) = create_staging(gpu, &bytes)?;
+        Ok(PatternSwapchain {
+            handle,
+            images: images.into_iter().map(vk::Image::from_raw).collect(),
+            width,
+            height,
+            layers: content.len() as u32,
+            staging,
+            memory,
+            device: gpu.device.clone(),
+        })
+    }
+
+    /// Acquires and waits for the next image; returns its index.
+    pub fn acquire(&mut self) -> Result<u32> {
+        let index = self.handle.acquire_image().ctx("xrAcquireSwapchainImage")?;
+        self.handle
+            .wait_image(xr::Duration::INFINITE)
+            .ctx("xrWaitSwapchainImage")?;
+        Ok(index)
+    }
+
+    pub fn release(&mut self) -> Result<()> {
+        self.handle.release_image().ctx("xrReleaseSwapchainImage")
+    }
+
+    /// Records the copy of the pattern into image `index`, leaving it in
+    /// COLOR_ATTACHMENT_OPTIMAL, the layout XR_KHR_vulkan_enable2 expects at release.
+    pub fn record_upload(&self, device: &ash::Device, cmd: vk::CommandBuffer, index: u32) {
+        let image = self.images[index as usize];
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(self.layers);
+        // The old contents are not needed: every texel is overwritten.
+        let to_transfer = barrier(
+            image,
+            range,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+        )
+        .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
+        let to_colour = barrier(
+            image,
+            range,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        )
+        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(
+            vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+        );
+        let copy = vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(self.layers),
+            )
+            .image_extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            });
+        // SAFETY: `cmd` is recording; the image was acquired and waited for, the staging buffer
+        // holds width x height x layers texels in this format, laid out layer after layer.
+        unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[to_transfer],
+            );
+            device.cmd_copy_buffer_to_image(
+                cmd,
+                self.staging,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[copy],
+            );
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[to_colour],
+            );
+        }
+    }
+}
+
+impl Drop for PatternSwapchain {
+    fn drop(&mut self) {
+        // SAFETY: the staging buffer is the client's and no submission using it is pending
+        // (every submission is waited for).
+        unsafe {
+            self.device.destroy_buffer(self.staging, None);
+            self.device.free_memory(self.memory, None);
+        }
+    }
+}
+
+fn barrier<'a>(
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+) -> vk::ImageMemoryBarrier<'a> {
+    vk::ImageMemoryBarrier::default()
+        .image(image)
+        .subresource_range(range)
+        .old_layout(old)
+        .new_layout(new)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+}
+
+/// The texels of every layer, tightly packed, layer after layer, rows top to bottom.
+fn pattern_bytes(
+    format: SwapchainFormat,
+    width: u32,
+    height: u32,
+    content: &[LayerContent],
+) -> Vec<u8> {
+    let mut bytes =
+        Vec::with_capacity(format.bytes_per_texel() * (width * height) as usize * content.len());
+    for layer in content {
+        for y in 0..height {
+            for x in 0..width {
+                let colour = match layer {
+                    LayerContent::Whole(target) => texel(*target, x, y, width, height),
+                    LayerContent::SideBySide => {
+                        let half = width / 2;
+                        texel(Target::View(x / half), x % half, y, half, height)
+                    }
+                };
+                format.encode(colour, &mut bytes);
+            }
+        }
+    }
+    bytes
+}
+
+fn create_staging(gpu: &Gpu, bytes: &[u8]) -> Result<(vk::Buffer, vk::DeviceMemory)> {
+    let device = &gpu.device;
+    let info = vk::BufferCreateInfo::default()
+        .size(bytes.len() as u64)
+        .usage(vk::BufferUsageFlags::TRANSFER_SRC);
+    // SAFETY: plain object creation on a live device; the mapping covers exactly `bytes.len()`
+    // bytes of host-coherent memory, so no flush is needed.
+    unsafe {
+        let buffer = device.create_buffer(&info, None).ctx("vkCreateBuffer")?;
+        let reqs = device.get_buffer_memory_requirements(buffer);
+        let alloc = vk::MemoryAllocateInfo::default()
+            .allocation_size(reqs.size)
+            .memory_type_index(gpu.host_memory_type(reqs.memory_type_bits)?);
+        let memory = device
+            .allocate_memory(&alloc, None)
+            .ctx("vkAllocateMemory")?;
+        device
+            .bind_buffer_memory(buffer, memory, 0)
+            .ctx("vkBindBufferMemory")?;
+        let mapped = device
+            .map_memory(memory, 0, bytes.len() as u64, vk::MemoryMapFlags::empty())
+            .ctx("vkMapMemory")?;
+        std::ptr::copy_nonoverlapping(bytes.as_ptr(), mapped.cast::<u8>(), bytes.len());
+        device.unmap_memory(memory);
+        Ok((buffer, memory))
+    }
+}
