@@ -146,7 +146,7 @@ fn collect(background: &Background, wanted: usize, deadline: Instant) -> Vec<(Fr
             Some(f)
                 if got
                     .last()
-                    .map_or(true, |(last, _)| f.sequence > last.sequence) =>
+                    .is_none_or(|(last, _)| f.sequence > last.sequence) =>
             {
                 got.push((f, Instant::now()))
             }

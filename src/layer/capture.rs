@@ -121,11 +121,19 @@ pub fn write_view(
     let name = |suffix: &str| stem.with_file_name(format!("frame-{frame}-view-{view}{suffix}"));
     to_srgb8(item.format, &captured.display, w, h).save_png(&name("-display.png"))?;
     to_srgb8(item.format, &captured.output, w, h).save_png(&name("-output.png"))?;
+    // The exact swapchain bytes too (rows tightly packed): 8-bit PNGs lose linear formats' bits.
+    for (suffix, bytes) in [
+        ("-display.raw", &captured.display),
+        ("-output.raw", &captured.output),
+    ] {
+        std::fs::write(name(suffix), bytes).map_err(|e| format!("cannot write capture: {e}"))?;
+    }
     background.save_png(&name("-background.png"))?;
     let json = serde_json::json!({
         "frame": frame,
         "view": view,
         "format": format!("{:?}", item.vk_format),
+        "bytes_per_pixel": item.format.bytes_per_pixel(),
         "srgb": item.format.srgb,
         "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
         "image_array_index": item.key.array_index,

@@ -12,7 +12,7 @@ use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::sync::{Arc, Mutex};
 
-pub unsafe extern "system" fn create_session(
+pub(crate) unsafe extern "system" fn create_session(
     instance: xr::Instance,
     info: *const xr::SessionCreateInfo,
     session: *mut xr::Session,
@@ -121,7 +121,7 @@ pub fn forget(session: xr::Session) {
         .retain(|_, sc| lock(sc).session != session);
 }
 
-pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Result {
+pub(crate) unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Result {
     guard(
         "xrDestroySession",
         xr::Result::ERROR_RUNTIME_FAILURE,
@@ -280,7 +280,7 @@ fn write_capture(
     }
 }
 
-pub unsafe extern "system" fn end_frame(
+pub(crate) unsafe extern "system" fn end_frame(
     session: xr::Session,
     info: *const xr::FrameEndInfo,
 ) -> xr::Result {

@@ -22,7 +22,7 @@ fn is_colour(info: &xr::SwapchainCreateInfo) -> bool {
         && !usage.contains(xr::SwapchainUsageFlags::DEPTH_STENCIL_ATTACHMENT)
 }
 
-pub unsafe extern "system" fn create_swapchain(
+pub(crate) unsafe extern "system" fn create_swapchain(
     session: xr::Session,
     info: *const xr::SwapchainCreateInfo,
     swapchain: *mut xr::Swapchain,
@@ -96,7 +96,7 @@ fn next_of_session(swapchain: xr::Swapchain) -> Option<super::dispatch::NextFns>
     state::registry().instances.values().next().map(|i| i.next)
 }
 
-pub unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain) -> xr::Result {
+pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain) -> xr::Result {
     guard(
         "xrDestroySwapchain",
         xr::Result::ERROR_RUNTIME_FAILURE,
@@ -123,7 +123,7 @@ pub unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain) -> xr:
     )
 }
 
-pub unsafe extern "system" fn enumerate_swapchain_images(
+pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
     swapchain: xr::Swapchain,
     capacity: u32,
     count: *mut u32,
@@ -198,7 +198,7 @@ pub fn release_held(session: xr::Session) {
     }
 }
 
-pub unsafe extern "system" fn acquire_swapchain_image(
+pub(crate) unsafe extern "system" fn acquire_swapchain_image(
     swapchain: xr::Swapchain,
     info: *const xr::SwapchainImageAcquireInfo,
     index: *mut u32,
@@ -235,7 +235,7 @@ pub unsafe extern "system" fn acquire_swapchain_image(
     )
 }
 
-pub unsafe extern "system" fn release_swapchain_image(
+pub(crate) unsafe extern "system" fn release_swapchain_image(
     swapchain: xr::Swapchain,
     info: *const xr::SwapchainImageReleaseInfo,
 ) -> xr::Result {

@@ -1,0 +1,518 @@
+//! The contrastxr layer inside real OpenXR apps on the real Monado runtime (sandbox), with the
+//! OpenXR core validation layer and the Vulkan validation layer (synchronisation validation
+//! too) on. The layer's captures are checked against the CPU reference, computed here from the
+//! captured display and background, within the spec's tolerance (section 6).
+
+mod common;
+
+use common::{sandbox, scratch_file, ApiDump, SandboxRun, Validation, XR_CLIENT};
+use contrastxr::algorithm::{conformant, enhance_linear, enhance_srgb8_trace, Method, Params};
+use contrastxr::background::{prepare, PreparedBackground};
+use contrastxr::image::RgbaImage;
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+
+/// The formats Monado offers (A2B10G10R10 it does not).
+const FORMATS: [&str; 6] = [
+    "R8G8B8A8_SRGB",
+    "B8G8R8A8_SRGB",
+    "R8G8B8A8_UNORM",
+    "B8G8R8A8_UNORM",
+    "R16G16B16A16_UNORM",
+    "R16G16B16A16_SFLOAT",
+];
+
+fn sample(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("samples")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// A fresh, empty capture directory under the target folder (visible inside the sandbox).
+fn capture_dir(tag: &str) -> PathBuf {
+    let dir = scratch_file(&format!("{tag}.capture"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `cmd` with validation (core + Vulkan incl. synchronisation) and the layer's `env`.
+fn run_validated(
+    tag: &str,
+    cmd: &[&str],
+    env: &[(&str, &str)],
+) -> Option<(SandboxRun, Validation)> {
+    let sandbox = sandbox()?;
+    let validation = Validation::new(tag);
+    let mut all = validation.env();
+    all.push(("VK_KHRONOS_VALIDATION_VALIDATE_SYNC", "true"));
+    all.extend_from_slice(env);
+    let run = sandbox.run(cmd, &all);
+    Some((run, validation))
+}
+
+/// The layer's variables for an enhancing run with captures into `dir`.
+fn layer_env(dir: &Path, background: &str) -> Vec<(String, String)> {
+    vec![
+        ("CONTRASTXR".into(), "1".into()),
+        ("CONTRASTXR_FORCE".into(), "1".into()),
+        ("CONTRASTXR_BACKGROUND".into(), background.into()),
+        (
+            "CONTRASTXR_CAPTURE_DIR".into(),
+            dir.to_string_lossy().into_owned(),
+        ),
+        ("CONTRASTXR_CAPTURE_SKIP".into(), "3".into()),
+        ("CONTRASTXR_CAPTURE_FRAMES".into(), "2".into()),
+    ]
+}
+
+fn as_refs(v: &[(String, String)]) -> Vec<(&str, &str)> {
+    v.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+}
+
+/// One captured view: its metadata and files.
+struct Captured {
+    json: serde_json::Value,
+    display: Vec<u8>,
+    output: Vec<u8>,
+    camera: RgbaImage,
+}
+
+fn captures(dir: &Path) -> Vec<Captured> {
+    let mut stems: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    stems.sort();
+    stems
+        .iter()
+        .map(|json| {
+            let file = |suffix: &str| {
+                let stem = json.file_stem().unwrap().to_string_lossy().into_owned();
+                json.with_file_name(format!("{stem}{suffix}"))
+            };
+            Captured {
+                json: serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap(),
+                display: std::fs::read(file("-display.raw")).unwrap(),
+                output: std::fs::read(file("-output.raw")).unwrap(),
+                camera: RgbaImage::load_png(&file("-background.png")).unwrap(),
+            }
+        })
+        .collect()
+}
+
+fn params_of(json: &serde_json::Value) -> Params {
+    let p = &json["params"];
+    let f = |k: &str| p[k].as_f64().unwrap() as f32;
+    let pair = |k: &str| {
+        [
+            p[k][0].as_f64().unwrap() as f32,
+            p[k][1].as_f64().unwrap() as f32,
+        ]
+    };
+    Params {
+        lambda_e: f("lambda_e"),
+        lambda_jnd_scaled: f("lambda_jnd_scaled"),
+        transmittance: f("transmittance"),
+        blur: p["blur"].as_bool().unwrap(),
+        blur_size: p["blur_size"].as_u64().unwrap() as u32,
+        blur_sigma: f("blur_sigma"),
+        fov: p["fov"].as_bool().unwrap(),
+        fov_scale: pair("fov_scale"),
+        fov_offset: pair("fov_offset"),
+        method: Method::parse(p["method"].as_str().unwrap()).unwrap(),
+        ..Params::default()
+    }
+}
+
+/// A raw pixel decoded independently of the layer: channel values as stored, and alpha.
+fn decode(format: &str, px: &[u8]) -> ([f64; 3], f64) {
+    let u8s = |i: usize| f64::from(px[i]) / 255.0;
+    let u16s = |i: usize| f64::from(u16::from_le_bytes([px[2 * i], px[2 * i + 1]]));
+    match format {
+        "R8G8B8A8_SRGB" | "R8G8B8A8_UNORM" => ([u8s(0), u8s(1), u8s(2)], u8s(3)),
+        "B8G8R8A8_SRGB" | "B8G8R8A8_UNORM" => ([u8s(2), u8s(1), u8s(0)], u8s(3)),
+        "R16G16B16A16_UNORM" => (
+            [u16s(0) / 65535.0, u16s(1) / 65535.0, u16s(2) / 65535.0],
+            u16s(3) / 65535.0,
+        ),
+        "R16G16B16A16_SFLOAT" => {
+            let h = |i: usize| f64::from(half(u16::from_le_bytes([px[2 * i], px[2 * i + 1]])));
+            ([h(0), h(1), h(2)], h(3))
+        }
+        f => panic!("unexpected format {f}"),
+    }
+}
+
+fn half(h: u16) -> f32 {
+    let e = i32::from((h >> 10) & 31);
+    let m = f32::from(h & 1023);
+    let v = if e == 0 {
+        m * 2f32.powi(-24)
+    } else {
+        (1.0 + m / 1024.0) * 2f32.powi(e - 15)
+    };
+    if h & 0x8000 != 0 {
+        -v
+    } else {
+        v
+    }
+}
+
+/// Largest difference a linear format may show against the f64 reference: half a step of its
+/// quantisation plus f32 noise (and f16's relative precision).
+fn linear_tolerance(format: &str, v: f64) -> f64 {
+    match format {
+        "R16G16B16A16_UNORM" => 1.0 / 65535.0 + 2e-5,
+        "R16G16B16A16_SFLOAT" => v.abs() / 1024.0 + 2e-5,
+        _ => 1.0 / 255.0 + 2e-5,
+    }
+}
+
+/// Checks one captured view against the CPU reference; returns how many pixels the method
+/// changed (so callers can insist that it did something).
+fn check_view(c: &Captured) -> usize {
+    let format = c.json["format"].as_str().unwrap().to_string();
+    let srgb = c.json["srgb"].as_bool().unwrap();
+    let (w, h) = (
+        c.json["rect"]["width"].as_u64().unwrap() as u32,
+        c.json["rect"]["height"].as_u64().unwrap() as u32,
+    );
+    let params = params_of(&c.json);
+    let bg: PreparedBackground = prepare(&c.camera, w, h, &params);
+    let bpp = c.json["bytes_per_pixel"].as_u64().unwrap() as usize;
+    assert_eq!(
+        c.display.len(),
+        (w * h) as usize * bpp,
+        "{format}: display capture size"
+    );
+    let mut changed = 0;
+    let mut bad = Vec::new();
+    for i in 0..(w * h) as usize {
+        let (d_raw, o_raw) = (
+            &c.display[i * bpp..(i + 1) * bpp],
+            &c.output[i * bpp..(i + 1) * bpp],
+        );
+        let (rgb, alpha) = decode(&format, d_raw);
+        let (out_rgb, _) = decode(&format, o_raw);
+        if srgb {
+            let code = |v: f64| (v * 255.0).round() as u8;
+            let d = [code(rgb[0]), code(rgb[1]), code(rgb[2]), code(alpha)];
+            let o = [
+                code(out_rgb[0]),
+                code(out_rgb[1]),
+                code(out_rgb[2]),
+                code(alpha),
+            ];
+            let trace = enhance_srgb8_trace(d, bg.linear[i], bg.scaled[i], &params);
+            changed += usize::from(trace.out != d);
+            if !conformant(&trace, o) {
+                bad.push(format!(
+                    "pixel {i}: display {d:?} reference {:?} layer {o:?}",
+                    trace.out
+                ));
+            }
+            continue;
+        }
+        let lin = DVec3::from_array(rgb);
+        match enhance_linear(lin, alpha, bg.linear[i], bg.scaled[i], &params) {
+            None => {
+                if d_raw != o_raw {
+                    bad.push(format!(
+                        "pixel {i}: skipped pixel changed {d_raw:?} -> {o_raw:?}"
+                    ));
+                }
+            }
+            Some(want) => {
+                changed += usize::from((want - lin).abs().max_element() > 1e-3);
+                let ok = (0..3)
+                    .all(|k| (out_rgb[k] - want[k]).abs() <= linear_tolerance(&format, want[k]));
+                if !ok {
+                    bad.push(format!(
+                        "pixel {i}: display {rgb:?} reference {want:?} layer {out_rgb:?}"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "{format}: {} of {} pixels differ from the reference, e.g. {:?}",
+        bad.len(),
+        w * h,
+        &bad[..bad.len().min(5)]
+    );
+    changed
+}
+
+fn client_through_layer(format: &str, layout: &str) {
+    let tag = format!("layer-{format}-{layout}");
+    let dir = capture_dir(&tag);
+    let env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+    let cmd = [
+        XR_CLIENT,
+        "--validation",
+        "--json",
+        "--frames",
+        "12",
+        "--size",
+        "160x120",
+        "--format",
+        format,
+        "--layout",
+        layout,
+    ];
+    let Some((run, validation)) = run_validated(&tag, &cmd, &as_refs(&env)) else {
+        return;
+    };
+    run.assert_success();
+    validation.assert_clean();
+    assert!(
+        run.stderr.contains("processing frames (2 views per frame)"),
+        "{}",
+        run.describe()
+    );
+    let views = captures(&dir);
+    assert_eq!(
+        views.len(),
+        4,
+        "2 frames x 2 views captured in {}",
+        dir.display()
+    );
+    for c in &views {
+        let changed = check_view(c);
+        assert!(
+            changed > 1000,
+            "{format} {layout}: the method changed only {changed} pixels"
+        );
+    }
+    // The two views are different images (view 1's pattern differs) at their own rects/layers.
+    let key = |c: &Captured| {
+        (
+            c.json["rect"]["x"].as_i64(),
+            c.json["image_array_index"].as_u64(),
+        )
+    };
+    assert_ne!(
+        key(&views[0]),
+        key(&views[1]),
+        "both views captured from the same region"
+    );
+}
+
+#[test]
+fn layer_enhances_rgba8_srgb() {
+    for layout in ["array", "side-by-side"] {
+        client_through_layer("R8G8B8A8_SRGB", layout);
+    }
+}
+
+#[test]
+fn layer_enhances_bgra8_srgb() {
+    for layout in ["array", "side-by-side"] {
+        client_through_layer("B8G8R8A8_SRGB", layout);
+    }
+}
+
+#[test]
+fn layer_enhances_rgba8_unorm() {
+    for layout in ["array", "side-by-side"] {
+        client_through_layer("R8G8B8A8_UNORM", layout);
+    }
+}
+
+#[test]
+fn layer_enhances_bgra8_unorm() {
+    for layout in ["array", "side-by-side"] {
+        client_through_layer("B8G8R8A8_UNORM", layout);
+    }
+}
+
+#[test]
+fn layer_enhances_rgba16_unorm() {
+    for layout in ["array", "side-by-side"] {
+        client_through_layer("R16G16B16A16_UNORM", layout);
+    }
+}
+
+#[test]
+fn layer_enhances_rgba16_float() {
+    for layout in ["array", "side-by-side"] {
+        client_through_layer("R16G16B16A16_SFLOAT", layout);
+    }
+}
+
+#[test]
+fn formats_list_matches_the_runtime() {
+    // Guards FORMATS above: if Monado starts offering another format, test it too.
+    let Some(sandbox) = sandbox() else { return };
+    let run = sandbox.run(&[XR_CLIENT, "--list-formats"], &[]);
+    run.assert_success();
+    for f in FORMATS {
+        assert!(
+            run.stdout.contains(f),
+            "runtime no longer offers {f}: {}",
+            run.stdout
+        );
+    }
+}
+
+/// Lines the layer printed (each starts with "contrastxr:").
+fn layer_lines(run: &SandboxRun) -> Vec<&str> {
+    run.stderr
+        .lines()
+        .filter(|l| l.starts_with("contrastxr:"))
+        .collect()
+}
+
+#[test]
+fn off_values_pass_everything_through() {
+    for value in ["0", "false", "off", ""] {
+        let tag = format!(
+            "layer-off-{}",
+            if value.is_empty() { "empty" } else { value }
+        );
+        let dir = capture_dir(&tag);
+        let dump = ApiDump::new(&tag);
+        let mut env = layer_env(&dir, "color:#e0d020");
+        env[0].1 = value.into();
+        env.push(("XR_ENABLE_API_LAYERS".into(), ApiDump::LAYER.into()));
+        let mut env = as_refs(&env);
+        env.extend(dump.env());
+        let Some(sandbox) = sandbox() else { return };
+        let run = sandbox.run(
+            &[
+                XR_CLIENT,
+                "--json",
+                "--frames",
+                "8",
+                "--format",
+                "R8G8B8A8_SRGB",
+            ],
+            &env,
+        );
+        run.assert_success();
+        let lines = layer_lines(&run);
+        assert_eq!(
+            lines.len(),
+            1,
+            "CONTRASTXR={value:?}: expected one log line, got {lines:?}"
+        );
+        assert!(lines[0].contains(" off "), "{lines:?}");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "captured while off"
+        );
+        // api_dump sits below the layer: the runtime saw the app's own usage flags (17 =
+        // COLOR_ATTACHMENT | TRANSFER_DST), not the TRANSFER_SRC the layer adds when on.
+        let created = dump.calls("xrCreateSwapchain");
+        assert!(!created.is_empty());
+        for call in created {
+            assert_eq!(
+                call.int("createInfo->usageFlags"),
+                Some(17),
+                "CONTRASTXR={value:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn hello_xr_runs_through_the_layer_for_ten_seconds() {
+    let dir = capture_dir("layer-hello-xr");
+    let env = layer_env(
+        &dir,
+        &format!("image:{}", sample("background-yellow-wall.png")),
+    );
+    let cmd = ["bash", "-c", "sleep 10 | hello_xr -g Vulkan2"];
+    let Some((run, validation)) = run_validated("layer-hello-xr", &cmd, &as_refs(&env)) else {
+        return;
+    };
+    run.assert_success();
+    validation.assert_clean();
+    let lines = layer_lines(&run);
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("processing frames (2 views per frame)")),
+        "{lines:?}"
+    );
+    let views = captures(&dir);
+    assert_eq!(views.len(), 4);
+    for c in &views {
+        assert!(check_view(c) > 1000);
+    }
+}
+
+/// An explicit manifest for the freshly built library, so the layer's position among other
+/// explicit layers can be chosen with XR_ENABLE_API_LAYERS.
+fn explicit_manifest_dir() -> PathBuf {
+    let dir = scratch_file("explicit-layer");
+    std::fs::create_dir_all(&dir).unwrap();
+    let lib = Path::new(XR_CLIENT).with_file_name("libcontrastxr.so");
+    let template = include_str!("../layer-manifest/contrastxr-explicit.json");
+    let text = template.replace("../target/release/libcontrastxr.so", &lib.to_string_lossy());
+    std::fs::write(dir.join("contrastxr.json"), text).unwrap();
+    dir
+}
+
+#[test]
+fn stacks_with_api_dump_and_core_validation_on_either_side() {
+    let ours = "XR_APILAYER_CONTRASTXR_color_contrast";
+    let (dump_l, core) = (ApiDump::LAYER, "XR_APILAYER_LUNARG_core_validation");
+    let path = format!(
+        "{}:/usr/share/openxr/1/api_layers/explicit.d",
+        explicit_manifest_dir().display()
+    );
+    // Core validation stays above api_dump: below it, it flags api_dump's own
+    // xrStructureTypeToString(XR_TYPE_GRAPHICS_BINDING_VULKAN_KHR) calls for a Vulkan2 app (an
+    // interaction of those two layers, not of contrastxr).
+    for (name, order) in [
+        ("before", [core, dump_l, ours]),
+        ("after", [ours, core, dump_l]),
+    ] {
+        let tag = format!("layer-stack-{name}");
+        let dir = capture_dir(&tag);
+        let (dump, validation) = (ApiDump::new(&tag), Validation::new(&tag));
+        let layers = order.join(":");
+        let mut env = layer_env(&dir, "color:#e0d020");
+        env.retain(|(k, _)| k != "CONTRASTXR"); // explicit: no implicit copy; unset means on
+        env.push(("XR_API_LAYER_PATH".into(), path.clone()));
+        let mut all: Vec<(&str, &str)> = validation
+            .env()
+            .into_iter()
+            .filter(|(k, _)| *k != "XR_ENABLE_API_LAYERS")
+            .collect();
+        all.push(("XR_ENABLE_API_LAYERS", layers.as_str()));
+        all.extend(dump.env());
+        all.extend(as_refs(&env));
+        let Some(sandbox) = sandbox() else { return };
+        let run = sandbox.run(
+            &[
+                XR_CLIENT,
+                "--validation",
+                "--json",
+                "--frames",
+                "10",
+                "--format",
+                "B8G8R8A8_SRGB",
+            ],
+            &all,
+        );
+        run.assert_success();
+        validation.assert_clean();
+        assert!(
+            run.stderr.contains("processing frames"),
+            "{name}: {}",
+            run.describe()
+        );
+        assert!(dump.calls("xrEndFrame").len() >= 10, "{name}");
+        for c in captures(&dir) {
+            assert!(check_view(&c) > 1000, "{name}");
+        }
+    }
+}
