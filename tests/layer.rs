@@ -516,3 +516,81 @@ fn stacks_with_api_dump_and_core_validation_on_either_side() {
         }
     }
 }
+
+/// Writes `n` solid-colour PNG frames (each clearly different) as a `video:` directory.
+fn video_dir(tag: &str, n: usize) -> PathBuf {
+    let dir = capture_dir(&format!("{tag}.video"));
+    let colours = [
+        [230, 210, 30],
+        [40, 90, 220],
+        [200, 40, 40],
+        [40, 200, 80],
+        [240, 240, 240],
+        [120, 60, 160],
+    ];
+    for i in 0..n {
+        let c = colours[i % colours.len()];
+        let mut img = RgbaImage::new(96, 64, [c[0], c[1], c[2], 255]);
+        // A gradient so blur and FoV mapping matter, not just a flat colour.
+        for y in 0..64 {
+            for x in 0..96 {
+                let p = img.get(x, y);
+                img.set(
+                    x,
+                    y,
+                    [
+                        p[0].saturating_sub((x / 2) as u8),
+                        p[1],
+                        p[2].saturating_sub((y / 2) as u8),
+                        255,
+                    ],
+                );
+            }
+        }
+        img.save_png(&dir.join(format!("frame-{i:03}.png")))
+            .unwrap();
+    }
+    dir
+}
+
+#[test]
+fn captures_follow_a_changing_video_background() {
+    let tag = "layer-video";
+    let dir = capture_dir(tag);
+    let video = video_dir(tag, 6);
+    let mut env = layer_env(&dir, &format!("video:{}", video.display()));
+    env.retain(|(k, _)| k != "CONTRASTXR_CAPTURE_FRAMES");
+    env.push(("CONTRASTXR_CAPTURE_FRAMES".into(), "12".into()));
+    let cmd = [
+        XR_CLIENT,
+        "--validation",
+        "--json",
+        "--frames",
+        "24",
+        "--size",
+        "128x96",
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    let Some((run, validation)) = run_validated(tag, &cmd, &as_refs(&env)) else {
+        return;
+    };
+    run.assert_success();
+    validation.assert_clean();
+    let views = captures(&dir);
+    assert_eq!(views.len(), 24, "12 frames x 2 views captured");
+    let mut distinct: Vec<Vec<[u8; 4]>> = Vec::new();
+    for c in &views {
+        assert!(check_view(c) > 100, "the method changed almost nothing");
+        if !distinct.contains(&c.camera.pixels) {
+            distinct.push(c.camera.pixels.clone());
+        }
+    }
+    // The source runs at 30 fps and the null compositor at 20 Hz: 12 frames span ~0.6 s,
+    // so several different background frames must have been used.
+    assert!(
+        distinct.len() >= 3,
+        "only {} distinct background frames in 12 captured frames",
+        distinct.len()
+    );
+}

@@ -37,7 +37,10 @@ pub fn sandbox() -> Option<Sandbox> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/xr-sandbox");
     let required = std::env::var(REQUIRE_VAR).is_ok_and(|v| v == "1");
     let problem = match unavailable_reason(&script) {
-        None => return Some(Sandbox { script }),
+        None => {
+            build_layer_once();
+            return Some(Sandbox { script });
+        }
         Some(problem) => problem,
     };
     if !required {
@@ -47,7 +50,25 @@ pub fn sandbox() -> Option<Sandbox> {
     if let Err(reason) = setup_once(&script) {
         panic!("the XR sandbox is required ({REQUIRE_VAR}=1) but {problem}, and setting it up failed: {reason}");
     }
+    build_layer_once();
     Some(Sandbox { script })
+}
+
+/// `cargo test` does not rebuild the cdylib (target/debug/libcontrastxr.so) that the sandbox
+/// installs as the layer: build it once per test binary so no test runs a stale layer.
+fn build_layer_once() {
+    static BUILT: OnceLock<()> = OnceLock::new();
+    BUILT.get_or_init(|| {
+        let status = Command::new(env!("CARGO"))
+            .args(["build", "--lib", "--quiet", "--manifest-path"])
+            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml"))
+            .status()
+            .expect("run cargo to build the layer library");
+        assert!(
+            status.success(),
+            "building the layer library (cargo build --lib) failed"
+        );
+    });
 }
 
 /// One line per test binary, written past the test harness's output capture so it is seen.
