@@ -306,3 +306,82 @@ fn gpu_background_matches_cpu_preparation() {
     }
     assert_clean(&e);
 }
+
+fn cli(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+        .args(args)
+        .envs(env.iter().copied())
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn cli_gpu_and_cpu_engines_agree_on_a_sample_scene() {
+    let dir = std::env::temp_dir().join(format!("contrastxr-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let samples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
+    let display = samples.join("display-text-swatches.png");
+    let background = samples.join("background-blue-sky.png");
+    let mut outs = Vec::new();
+    for engine in ["gpu", "cpu"] {
+        let out = dir.join(format!("{engine}.png"));
+        let o = cli(
+            &[
+                "enhance",
+                "--engine",
+                engine,
+                "--display",
+                display.to_str().unwrap(),
+                "--background",
+                background.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            &[("CONTRASTXR_VK_VALIDATION", "1")],
+        );
+        assert!(
+            o.status.success(),
+            "{engine}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(!String::from_utf8_lossy(&o.stderr).contains("validation error"));
+        outs.push(RgbaImage::load_png(&out).unwrap());
+    }
+    let input = RgbaImage::load_png(&display).unwrap();
+    let (gpu, cpu) = (&outs[0], &outs[1]);
+    assert_ne!(gpu, &input, "the GPU engine changed nothing");
+    let worst = gpu
+        .pixels
+        .iter()
+        .zip(&cpu.pixels)
+        .flat_map(|(g, c)| (0..4).map(move |k| g[k].abs_diff(c[k])))
+        .max();
+    assert!(worst <= Some(1), "engines differ by {worst:?} code values");
+}
+
+#[test]
+fn cli_without_a_vulkan_device_names_the_fix() {
+    let samples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
+    let o = cli(
+        &[
+            "enhance",
+            "--display",
+            samples.join("display-text-swatches.png").to_str().unwrap(),
+            "--background",
+            samples.join("background-blue-sky.png").to_str().unwrap(),
+            "-o",
+            "/tmp/never.png",
+        ],
+        &[
+            ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+            ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("mesa-vulkan-drivers") && err.contains("--engine cpu"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "one sentence: {err}");
+}

@@ -594,3 +594,38 @@ fn captures_follow_a_changing_video_background() {
         distinct.len()
     );
 }
+
+#[test]
+fn quad_layers_are_enhanced_when_configured() {
+    let tag = "layer-quad";
+    let dir = capture_dir(tag);
+    let mut env = layer_env(&dir, "color:#e0d020");
+    env.push(("CONTRASTXR_QUAD_LAYERS".into(), "1".into()));
+    env.retain(|(k, _)| k != "CONTRASTXR_CAPTURE_FRAMES");
+    env.push(("CONTRASTXR_CAPTURE_FRAMES".into(), "1".into()));
+    let cmd = [
+        XR_CLIENT,
+        "--validation",
+        "--json",
+        "--frames",
+        "8",
+        "--quad",
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    let Some((run, validation)) = run_validated(tag, &cmd, &as_refs(&env)) else {
+        return;
+    };
+    run.assert_success();
+    validation.assert_clean();
+    assert!(
+        run.stderr.contains("processing frames (3 views per frame)"),
+        "{}",
+        run.describe()
+    );
+    let views = captures(&dir);
+    assert_eq!(views.len(), 3, "two projection views and the quad");
+    for c in &views {
+        assert!(check_view(c) > 100);
+    }
+}
