@@ -629,3 +629,68 @@ fn quad_layers_are_enhanced_when_configured() {
         assert!(check_view(c) > 100);
     }
 }
+
+#[test]
+fn two_apps_use_the_layer_at_once() {
+    let dir = capture_dir("layer-two-apps");
+    let mut env = layer_env(&dir, "color:#e0d020");
+    env.retain(|(k, _)| !k.starts_with("CONTRASTXR_CAPTURE"));
+    let Some(sandbox) = sandbox() else { return };
+    let script = format!(
+        "{XR_CLIENT} --frames 40 --format R8G8B8A8_SRGB & a=$!; \
+         {XR_CLIENT} --frames 40 --format B8G8R8A8_UNORM --layout side-by-side & b=$!; \
+         wait $a && wait $b"
+    );
+    let run = sandbox.run(&["bash", "-c", &script], &as_refs(&env));
+    run.assert_success();
+    let processing = layer_lines(&run)
+        .iter()
+        .filter(|l| l.contains("processing frames"))
+        .count();
+    assert_eq!(processing, 2, "{}", run.describe());
+}
+
+#[test]
+fn no_camera_means_pass_through_with_one_line() {
+    let tag = "layer-no-camera";
+    let dir = capture_dir(tag);
+    let dump = ApiDump::new(tag);
+    // No V4L2 device exists here, so the default background source finds nothing.
+    let mut env = layer_env(&dir, "v4l2:auto");
+    env.push(("XR_ENABLE_API_LAYERS".into(), ApiDump::LAYER.into()));
+    let mut env = as_refs(&env);
+    env.extend(dump.env());
+    let Some(sandbox) = sandbox() else { return };
+    let run = sandbox.run(
+        &[
+            XR_CLIENT,
+            "--json",
+            "--frames",
+            "10",
+            "--format",
+            "R8G8B8A8_SRGB",
+        ],
+        &env,
+    );
+    run.assert_success();
+    let lines = layer_lines(&run);
+    let fallback: Vec<_> = lines
+        .iter()
+        .filter(|l| l.contains("passing frames through"))
+        .collect();
+    assert_eq!(fallback.len(), 1, "{lines:?}");
+    assert!(fallback[0].contains("no V4L2 capture device"), "{lines:?}");
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "captured without a background"
+    );
+    for call in dump.calls("xrCreateSwapchain") {
+        assert_eq!(
+            call.int("createInfo->usageFlags"),
+            Some(17),
+            "a pass-through session's swapchain was changed"
+        );
+    }
+    assert!(dump.calls("xrEndFrame").len() >= 10);
+}

@@ -44,7 +44,8 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 return unsafe { (next.create_swapchain)(session, info, swapchain) };
             };
             let vk_format = vk::Format::from_raw(app_info.format as i32);
-            let pixel = PixelFormat::from_vk(vk_format).filter(|_| is_colour(app_info));
+            // Pass-through sessions never have images held or touched.
+            let pixel = PixelFormat::from_vk(vk_format).filter(|_| active && is_colour(app_info));
             let mut transfer_usage = app_info.usage_flags.contains(transfer());
             let mut result = xr::Result::ERROR_RUNTIME_FAILURE;
             if active && pixel.is_some() && !transfer_usage {
@@ -63,7 +64,8 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 // SAFETY: forwarding the app's arguments unchanged.
                 result = unsafe { (next.create_swapchain)(session, info, swapchain) };
             }
-            if result.into_raw() >= 0 && active {
+            // Every swapchain is tracked (with its session's dispatch); only processable ones are touched.
+            if result.into_raw() >= 0 {
                 let state = SwapchainState {
                     session,
                     next,
@@ -90,12 +92,6 @@ pub(crate) unsafe extern "system" fn create_swapchain(
     )
 }
 
-/// The next layer's xrDestroySwapchain for a swapchain the layer does not track.
-fn next_of_session(swapchain: xr::Swapchain) -> Option<super::dispatch::NextFns> {
-    let _ = swapchain;
-    state::registry().instances.values().next().map(|i| i.next)
-}
-
 pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain) -> xr::Result {
     guard(
         "xrDestroySwapchain",
@@ -112,10 +108,7 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
                     }
                     sc.next
                 }
-                None => match next_of_session(swapchain) {
-                    Some(n) => n,
-                    None => return xr::Result::ERROR_HANDLE_INVALID,
-                },
+                None => return xr::Result::ERROR_HANDLE_INVALID,
             };
             // SAFETY: forwarding the app's call.
             unsafe { (next.destroy_swapchain)(swapchain) }
@@ -136,10 +129,7 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
             let tracked = state::swapchain(swapchain);
             let next = match &tracked {
                 Some(sc) => lock(sc).next,
-                None => match next_of_session(swapchain) {
-                    Some(n) => n,
-                    None => return xr::Result::ERROR_HANDLE_INVALID,
-                },
+                None => return xr::Result::ERROR_HANDLE_INVALID,
             };
             // SAFETY: forwarding the app's arguments.
             let result =
@@ -208,11 +198,7 @@ pub(crate) unsafe extern "system" fn acquire_swapchain_image(
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
             let Some(sc) = state::swapchain(swapchain) else {
-                let Some(next) = next_of_session(swapchain) else {
-                    return xr::Result::ERROR_HANDLE_INVALID;
-                };
-                // SAFETY: forwarding the app's arguments.
-                return unsafe { (next.acquire_swapchain_image)(swapchain, info, index) };
+                return xr::Result::ERROR_HANDLE_INVALID;
             };
             let mut sc = lock(&sc);
             if sc.held_release.is_some() {
@@ -244,11 +230,7 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
             let Some(sc) = state::swapchain(swapchain) else {
-                let Some(next) = next_of_session(swapchain) else {
-                    return xr::Result::ERROR_HANDLE_INVALID;
-                };
-                // SAFETY: forwarding the app's arguments.
-                return unsafe { (next.release_swapchain_image)(swapchain, info) };
+                return xr::Result::ERROR_HANDLE_INVALID;
             };
             let mut sc = lock(&sc);
             let holdable =
