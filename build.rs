@@ -11,6 +11,7 @@ use std::{env, fs, path::PathBuf};
 const STAGES: &[(&str, &[&str])] = &[
     ("background", &["decode_blur_h", "blur_v", "fov_map"]),
     ("enhance", &["enhance"]),
+    ("copy", &["copy_pixels"]),
 ];
 
 /// linear sRGB -> XYZ (spec section 1).

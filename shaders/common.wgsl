@@ -20,6 +20,12 @@ struct Params {
     k_b: f32,
     // Symmetric normalised taps: tap(k) = taps[k / 4][k % 4] for k = |offset|.
     taps: array<vec4<f32>, 2>,
+    // What the view shows (MODE_*).
+    mode: u32,
+    // Tiles per row of the region (TILE x TILE pixels each).
+    tile_columns: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 var<immediate> pc: Params;
@@ -36,6 +42,13 @@ var<immediate> pc: Params;
 @group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec4<f32>>;
 // The display region's raw pixels in the swapchain format (1 or 2 u32 per pixel).
 @group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
+// Tile list: words 0..3 are the indirect dispatch (count, 1, 1) of the enhancement, then the
+// index of each tile that holds a foreground pixel (see tiles.wgsl).
+@group(0) @binding(6) var<storage, read_write> tiles: array<u32>;
+// Source of the plain copy pass (the benchmark's floor); the layer binds `pixels` here.
+@group(0) @binding(7) var<storage, read> source: array<u32>;
+// sRGB decode of the 256 8-bit codes, computed in f64 and rounded once (exact).
+@group(0) @binding(8) var<storage, read> srgb_table: array<f32>;
 
 const LAYOUT_RGBA8: u32 = 0u;
 const LAYOUT_BGRA8: u32 = 1u;

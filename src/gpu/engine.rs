@@ -14,6 +14,8 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 const WORKGROUP: u32 = 8;
+/// Side of the square tiles the enhancement skips when they hold no foreground pixel.
+pub const TILE: u32 = WORKGROUP;
 
 /// One camera frame on the GPU and its blurred linear-light copy (camera grid).
 pub struct BackgroundFrame {
@@ -50,6 +52,8 @@ pub struct ViewTarget {
     pub bg_scaled: GpuBuffer,
     /// The region's raw pixels in `format`, rows tightly packed.
     pub pixels: GpuBuffer,
+    /// Indirect dispatch arguments and the list of non-empty tiles (see shaders/tiles.wgsl).
+    pub tiles: GpuBuffer,
     set: vk::DescriptorSet,
     camera_size: (u32, u32),
 }
@@ -65,6 +69,27 @@ impl ViewTarget {
 pub struct Engine {
     pipelines: Pipelines,
     pool: vk::DescriptorPool,
+    /// The sRGB decode of the 256 8-bit codes (binding 8), shared by every view.
+    srgb_table: GpuBuffer,
+}
+
+/// The exact decode table: f64 sRGB curve, rounded once to f32.
+fn srgb_table(gpu: &GpuDevice) -> Result<GpuBuffer, GpuError> {
+    let table: Vec<u8> = (0..=255u8)
+        .flat_map(|c| (crate::colour::code_to_linear(c) as f32).to_le_bytes())
+        .collect();
+    let mut buffer = GpuBuffer::new(
+        gpu,
+        table.len() as u64,
+        STORAGE,
+        MemoryLocation::CpuToGpu,
+        "srgb_table",
+    )?;
+    if let Err(e) = buffer.write(&table) {
+        buffer.destroy(gpu);
+        return Err(e);
+    }
+    Ok(buffer)
 }
 
 /// Where the engine's working buffers live: device-local inside the layer, host-visible for the
@@ -161,6 +186,13 @@ impl Engine {
     /// Builds the pipelines; `max_views` bounds how many ViewTargets may exist at once.
     pub fn new(gpu: &GpuDevice, max_views: u32) -> Result<Engine, GpuError> {
         let mut pipelines = Pipelines::new(gpu)?;
+        let mut table = match srgb_table(gpu) {
+            Ok(t) => t,
+            Err(e) => {
+                pipelines.destroy(gpu);
+                return Err(e);
+            }
+        };
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
             .descriptor_count(max_views * BINDING_COUNT)];
@@ -170,9 +202,14 @@ impl Engine {
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a valid device.
         match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
-            Ok(pool) => Ok(Engine { pipelines, pool }),
+            Ok(pool) => Ok(Engine {
+                pipelines,
+                pool,
+                srgb_table: table,
+            }),
             Err(result) => {
                 pipelines.destroy(gpu);
+                table.destroy(gpu);
                 Err(GpuError::Vulkan {
                     call: "vkCreateDescriptorPool",
                     result,
@@ -223,12 +260,18 @@ impl Engine {
         let usage = transfer_storage();
         let bpp = u64::from(format.bytes_per_pixel());
         let at = placement.working;
-        let [bg_linear, bg_scaled, pixels] = alloc_all(
+        let tile_count = u64::from(region.0.div_ceil(TILE)) * u64::from(region.1.div_ceil(TILE));
+        let tile_usage = STORAGE
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let gpu_only = MemoryLocation::GpuOnly;
+        let [bg_linear, bg_scaled, pixels, tiles] = alloc_all(
             gpu,
             [
                 (px * 16, usage, at, "bg_linear"),
                 (px * 16, usage, at, "bg_scaled"),
                 (px * bpp, usage, at, "pixels"),
+                ((4 + tile_count) * 4, tile_usage, gpu_only, "tiles"),
             ],
         )?;
         let mut view = ViewTarget {
@@ -237,6 +280,7 @@ impl Engine {
             bg_linear,
             bg_scaled,
             pixels,
+            tiles,
             set: vk::DescriptorSet::null(),
             camera_size: background.size,
         };
@@ -268,7 +312,20 @@ impl Engine {
             &view.bg_linear,
             &view.bg_scaled,
             &view.pixels,
+            &view.tiles,
+            &view.pixels,
+            &self.srgb_table,
         ];
+        self.write_set(gpu, view.set, 0, &buffers);
+        view.camera_size = background.size;
+    }
+
+    /// Points a view's copy source (binding 7, used only by `record_copy`) at `source`.
+    pub fn bind_source(&self, gpu: &GpuDevice, view: &ViewTarget, source: &GpuBuffer) {
+        self.write_set(gpu, view.set, 7, &[source]);
+    }
+
+    fn write_set(&self, gpu: &GpuDevice, set: vk::DescriptorSet, first: u32, buffers: &[&GpuBuffer]) {
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
             .map(|b| {
@@ -282,15 +339,14 @@ impl Engine {
             .enumerate()
             .map(|(i, info)| {
                 vk::WriteDescriptorSet::default()
-                    .dst_set(view.set)
-                    .dst_binding(i as u32)
+                    .dst_set(set)
+                    .dst_binding(first + i as u32)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(info)
             })
             .collect();
         // SAFETY: the set and buffers are valid; the caller guarantees the set is not in use.
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
-        view.camera_size = background.size;
     }
 
     pub fn destroy_view(&self, gpu: &GpuDevice, view: &mut ViewTarget) {
@@ -299,7 +355,12 @@ impl Engine {
             let _ = unsafe { gpu.device.free_descriptor_sets(self.pool, &[view.set]) };
             view.set = vk::DescriptorSet::null();
         }
-        for b in [&mut view.bg_linear, &mut view.bg_scaled, &mut view.pixels] {
+        for b in [
+            &mut view.bg_linear,
+            &mut view.bg_scaled,
+            &mut view.pixels,
+            &mut view.tiles,
+        ] {
             b.destroy(gpu);
         }
     }
@@ -421,10 +482,25 @@ impl Engine {
         );
     }
 
+    /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source
+    /// (`bind_source`) into its `pixels` (4-byte formats), with the enhancement's dispatch shape.
+    pub fn record_copy(&self, gpu: &GpuDevice, cmd: vk::CommandBuffer, view: &ViewTarget) {
+        let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
+        self.dispatch(
+            gpu,
+            cmd,
+            self.pipelines.copy_pixels,
+            view.set,
+            &push,
+            view.region,
+        );
+    }
+
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
         unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };
         self.pool = vk::DescriptorPool::null();
+        self.srgb_table.destroy(gpu);
         self.pipelines.destroy(gpu);
     }
 }

@@ -10,7 +10,7 @@ use crate::image::RgbaImage;
 use ash::vk;
 
 pub struct OfflineEngine {
-    engine: Engine,
+    pub(super) engine: Engine,
     pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
@@ -86,7 +86,7 @@ impl OfflineEngine {
     }
 
     /// Runs `record` in the command buffer, submits it and waits.
-    fn submit(
+    pub(super) fn submit(
         &self,
         record: impl FnOnce(vk::CommandBuffer) -> Result<(), GpuError>,
     ) -> Result<(), GpuError> {

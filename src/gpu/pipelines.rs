@@ -7,10 +7,10 @@ use super::shaders::{self, ShaderModule};
 use crate::algorithm::params::{Params, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
 
-/// Bindings 0..=5 of shaders/common.wgsl, all storage buffers.
-pub const BINDING_COUNT: u32 = 6;
+/// Bindings 0..=8 of shaders/common.wgsl, all storage buffers.
+pub const BINDING_COUNT: u32 = 9;
 
-/// The push-constant block, laid out as WGSL lays out `Params` (96 bytes).
+/// The push-constant block, laid out as WGSL lays out `Params` (112 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PushConstants {
@@ -27,6 +27,9 @@ pub struct PushConstants {
     pub k_v: f32,
     pub k_b: f32,
     pub taps: [f32; 8],
+    pub mode: u32,
+    pub tile_columns: u32,
+    pub pad: [u32; 2],
 }
 
 impl PushConstants {
@@ -52,6 +55,9 @@ impl PushConstants {
             k_v: SUBTRACTION_K_V,
             k_b: SUBTRACTION_K_B,
             taps,
+            mode: params.mode.shader_code(),
+            tile_columns: region.0.div_ceil(super::engine::TILE),
+            pad: [0; 2],
         }
     }
 
@@ -73,6 +79,7 @@ pub struct Pipelines {
     pub blur_v: vk::Pipeline,
     pub fov_map: vk::Pipeline,
     pub enhance: vk::Pipeline,
+    pub copy_pixels: vk::Pipeline,
 }
 
 impl Pipelines {
@@ -84,6 +91,7 @@ impl Pipelines {
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
             enhance: vk::Pipeline::null(),
+            copy_pixels: vk::Pipeline::null(),
         };
         // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
         if let Err(e) = p.build(gpu) {
@@ -121,6 +129,7 @@ impl Pipelines {
         self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
         self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
         self.enhance = self.compute_pipeline(gpu, &shaders::ENHANCE)?;
+        self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         Ok(())
     }
 
@@ -160,7 +169,13 @@ impl Pipelines {
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the caller guarantees the GPU no longer uses these objects.
         unsafe {
-            for p in [self.decode_blur_h, self.blur_v, self.fov_map, self.enhance] {
+            for p in [
+                self.decode_blur_h,
+                self.blur_v,
+                self.fov_map,
+                self.enhance,
+                self.copy_pixels,
+            ] {
                 gpu.device.destroy_pipeline(p, None);
             }
             gpu.device.destroy_pipeline_layout(self.layout, None);
@@ -174,6 +189,7 @@ impl Pipelines {
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
             enhance: vk::Pipeline::null(),
+            copy_pixels: vk::Pipeline::null(),
         };
     }
 }

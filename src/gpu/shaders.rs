@@ -33,6 +33,7 @@ pub const DECODE_BLUR_H: ShaderModule = spirv!("decode_blur_h");
 pub const BLUR_V: ShaderModule = spirv!("blur_v");
 pub const FOV_MAP: ShaderModule = spirv!("fov_map");
 pub const ENHANCE: ShaderModule = spirv!("enhance");
+pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
 
 /// Every embedded shader (for spirv-val in the tests).
-pub const ALL: [&ShaderModule; 4] = [&DECODE_BLUR_H, &BLUR_V, &FOV_MAP, &ENHANCE];
+pub const ALL: [&ShaderModule; 5] = [&DECODE_BLUR_H, &BLUR_V, &FOV_MAP, &ENHANCE, &COPY_PIXELS];
