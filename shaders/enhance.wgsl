@@ -159,7 +159,11 @@ fn enhance(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let srgb = (pc.format & FORMAT_SRGB_BIT) != 0u;
-    let display = select(px.rgb, srgb_decode(px.rgb), srgb);
+    var display = px.rgb;
+    if (srgb) {
+        // sRGB formats are 8-bit: the stored value is code / 255 exactly.
+        display = srgb_decode_code(vec3<u32>(px.rgb * 255.0 + 0.5));
+    }
     var out: vec3<f32>;
     if (pc.method == METHOD_SUBTRACTION) {
         out = pc.k_v * display - pc.k_b * bg_linear[i].rgb;
