@@ -42,9 +42,18 @@ var<immediate> pc: Params;
 @group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec4<f32>>;
 // The display region's raw pixels in the swapchain format (1 or 2 u32 per pixel).
 @group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
-// Tile list: words 0..3 are the indirect dispatch (count, 1, 1) of the enhancement, then the
-// index of each tile that holds a foreground pixel (see tiles.wgsl).
-@group(0) @binding(6) var<storage, read_write> tiles: array<u32>;
+// The tiles the enhancement runs on (classify and finish_tiles in enhance.wgsl).
+struct TileList {
+    // Tiles found so far by classify; finish_tiles moves it to `total` and zeroes it.
+    count: atomic<u32>,
+    // vkCmdDispatchIndirect arguments (byte offset 4): workgroups x, y, z.
+    groups: array<u32, 3>,
+    total: u32,
+    pad: array<u32, 3>,
+    // Tile index (row * tile_columns + column) of each listed tile.
+    index: array<u32>,
+}
+@group(0) @binding(6) var<storage, read_write> tiles: TileList;
 // Source of the plain copy pass (the benchmark's floor); the layer binds `pixels` here.
 @group(0) @binding(7) var<storage, read> source: array<u32>;
 // sRGB decode of the 256 8-bit codes, computed in f64 and rounded once (exact).
@@ -56,6 +65,15 @@ const LAYOUT_RGBA16_UNORM: u32 = 2u;
 const LAYOUT_RGBA16_FLOAT: u32 = 3u;
 const LAYOUT_A2B10G10R10: u32 = 4u;
 const FORMAT_SRGB_BIT: u32 = 256u;
+
+const MODE_ENHANCE: u32 = 0u;
+const MODE_OFF: u32 = 1u;
+const MODE_SPLIT: u32 = 2u;
+const MODE_HEATMAP: u32 = 3u;
+const MODE_BACKGROUND: u32 = 4u;
+
+// Side of a square tile; the workgroup size of the per-pixel passes.
+const TILE: u32 = 8u;
 
 const METHOD_PAPER: u32 = 0u;
 const METHOD_HUE_ONLY: u32 = 1u;

@@ -47,8 +47,8 @@ fn assert_clean(e: &OfflineEngine) {
 fn every_embedded_shader_passes_spirv_val() {
     let dir = std::env::temp_dir().join(format!("contrastxr-spv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for shader in contrastxr::gpu::shaders::ALL {
-        let path = dir.join(format!("{}.spv", shader.entry));
+    for shader in contrastxr::gpu::shaders::all() {
+        let path = dir.join(format!("{}.spv", shader.name));
         std::fs::write(&path, shader.bytes()).unwrap();
         let out = Command::new("spirv-val")
             .args(["--target-env", "vulkan1.0"])

@@ -272,9 +272,9 @@ impl OfflineEngine {
             self.timestamp(cmd, q, 1);
             barrier(gpu, cmd, compute, vk::PipelineStageFlags::ALL_COMMANDS);
             self.timestamp(cmd, q, 2);
-            views
-                .iter()
-                .for_each(|v| engine.record_enhance(gpu, cmd, v, params));
+            for v in &views {
+                engine.record_enhance(gpu, cmd, v, params)?;
+            }
             self.timestamp(cmd, q, 3);
             barrier(gpu, cmd, compute, vk::PipelineStageFlags::ALL_COMMANDS);
             self.timestamp(cmd, q, 4);

@@ -9,13 +9,15 @@ use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
 use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT};
-use crate::algorithm::params::Params;
+use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 const WORKGROUP: u32 = 8;
 /// Side of the square tiles the enhancement skips when they hold no foreground pixel.
 pub const TILE: u32 = WORKGROUP;
+/// Words before the tile indices in the tile buffer (struct TileList in shaders/common.wgsl).
+const TILE_LIST_HEADER: u64 = 8;
 
 /// One camera frame on the GPU and its blurred linear-light copy (camera grid).
 pub struct BackgroundFrame {
@@ -132,6 +134,9 @@ fn accesses(stages: vk::PipelineStageFlags) -> vk::AccessFlags {
     }
     if stages.contains(S::HOST) {
         access |= A::HOST_READ | A::HOST_WRITE;
+    }
+    if stages.contains(S::DRAW_INDIRECT) {
+        access |= A::INDIRECT_COMMAND_READ;
     }
     access
 }
@@ -271,7 +276,7 @@ impl Engine {
                 (px * 16, usage, at, "bg_linear"),
                 (px * 16, usage, at, "bg_scaled"),
                 (px * bpp, usage, at, "pixels"),
-                ((4 + tile_count) * 4, tile_usage, gpu_only, "tiles"),
+                ((TILE_LIST_HEADER + tile_count) * 4, tile_usage, gpu_only, "tiles"),
             ],
         )?;
         let mut view = ViewTarget {
@@ -365,6 +370,7 @@ impl Engine {
         }
     }
 
+    /// Dispatches `pipeline` over `grid` invocations (in WORKGROUP x WORKGROUP groups).
     fn dispatch(
         &self,
         gpu: &GpuDevice,
@@ -373,6 +379,20 @@ impl Engine {
         set: vk::DescriptorSet,
         push: &PushConstants,
         grid: (u32, u32),
+    ) {
+        self.bind_pipeline(gpu, cmd, pipeline, set, push);
+        let groups = (grid.0.div_ceil(WORKGROUP), grid.1.div_ceil(WORKGROUP));
+        // SAFETY: cmd is recording with the pipeline, set and push constants bound.
+        unsafe { gpu.device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
+    }
+
+    fn bind_pipeline(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        set: vk::DescriptorSet,
+        push: &PushConstants,
     ) {
         let d = &gpu.device;
         // SAFETY: cmd is recording; pipeline, layout and set belong to this engine.
@@ -392,12 +412,6 @@ impl Engine {
                 vk::ShaderStageFlags::COMPUTE,
                 0,
                 push.bytes(),
-            );
-            d.cmd_dispatch(
-                cmd,
-                grid.0.div_ceil(WORKGROUP),
-                grid.1.div_ceil(WORKGROUP),
-                1,
             );
         }
     }
@@ -457,29 +471,48 @@ impl Engine {
         Ok(())
     }
 
-    /// Records the per-pixel enhancement of one view's `pixels`, in place. The caller orders
-    /// its copy into `pixels` before this and its copy out after it (see `barrier`).
+    /// Records the per-pixel enhancement of one view's `pixels`, in place: the tile
+    /// classification, then the enhancement over the listed tiles only (indirect dispatch).
+    /// Nothing in `ViewMode::Off`. The caller orders its copy into `pixels` before this and its
+    /// copy out after it (see `barrier`).
     pub fn record_enhance(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         view: &ViewTarget,
         params: &Params,
-    ) {
+    ) -> Result<(), GpuError> {
+        if params.mode == ViewMode::Off {
+            return Ok(());
+        }
+        let pipeline = self.pipelines.enhance(
+            gpu,
+            params.method.shader_code(),
+            params.mode.shader_code(),
+        )?;
         let push = PushConstants::new(
             params,
             view.camera_size,
             view.region,
             view.format.shader_code(),
         );
-        self.dispatch(
-            gpu,
-            cmd,
-            self.pipelines.enhance,
-            view.set,
-            &push,
-            view.region,
-        );
+        let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
+        use vk::PipelineStageFlags as S;
+        barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
+        // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at least 4 bytes.
+        unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
+        barrier(gpu, cmd, S::TRANSFER, COMPUTE);
+        let classify = self.pipelines.classify;
+        self.dispatch(gpu, cmd, classify, view.set, &push, tiles);
+        barrier(gpu, cmd, COMPUTE, COMPUTE);
+        // A 1x1 grid is one workgroup of one invocation.
+        self.dispatch(gpu, cmd, self.pipelines.finish_tiles, view.set, &push, (1, 1));
+        barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
+        self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
+        // SAFETY: cmd is recording with the pipeline bound above; the tile buffer has
+        // INDIRECT_BUFFER usage and its arguments were written by finish_tiles.
+        unsafe { gpu.device.cmd_dispatch_indirect(cmd, view.tiles.raw, 4) };
+        Ok(())
     }
 
     /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source

@@ -166,8 +166,7 @@ impl OfflineEngine {
             self.submit(|cmd| {
                 self.engine
                     .record_background(&self.gpu, cmd, &bg, &[&view], params)?;
-                self.engine.record_enhance(&self.gpu, cmd, &view, params);
-                Ok(())
+                self.engine.record_enhance(&self.gpu, cmd, &view, params)
             })
         });
         let out = result.and_then(|_| {

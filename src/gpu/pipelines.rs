@@ -4,8 +4,9 @@
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::shaders::{self, ShaderModule};
-use crate::algorithm::params::{Params, SUBTRACTION_K_B, SUBTRACTION_K_V};
+use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
+use std::sync::Mutex;
 
 /// Bindings 0..=8 of shaders/common.wgsl, all storage buffers.
 pub const BINDING_COUNT: u32 = 9;
@@ -78,8 +79,12 @@ pub struct Pipelines {
     pub decode_blur_h: vk::Pipeline,
     pub blur_v: vk::Pipeline,
     pub fov_map: vk::Pipeline,
-    pub enhance: vk::Pipeline,
+    pub classify: vk::Pipeline,
+    pub finish_tiles: vk::Pipeline,
     pub copy_pixels: vk::Pipeline,
+    /// The `enhance` variants (shaders::ENHANCE_VARIANTS), built on first use: each costs a
+    /// compile in the driver and most sessions use one or two.
+    enhance: Mutex<Vec<vk::Pipeline>>,
 }
 
 impl Pipelines {
@@ -90,8 +95,10 @@ impl Pipelines {
             decode_blur_h: vk::Pipeline::null(),
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
-            enhance: vk::Pipeline::null(),
+            classify: vk::Pipeline::null(),
+            finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
+            enhance: Mutex::new(vec![vk::Pipeline::null(); shaders::ENHANCE_VARIANTS.len()]),
         };
         // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
         if let Err(e) = p.build(gpu) {
@@ -128,9 +135,27 @@ impl Pipelines {
         self.decode_blur_h = self.compute_pipeline(gpu, &shaders::DECODE_BLUR_H)?;
         self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
         self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
-        self.enhance = self.compute_pipeline(gpu, &shaders::ENHANCE)?;
+        self.classify = self.compute_pipeline(gpu, &shaders::CLASSIFY)?;
+        self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
         self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         Ok(())
+    }
+
+    /// The `enhance` pipeline for a method and view mode (shader codes), built on first use.
+    pub fn enhance(&self, gpu: &GpuDevice, method: u32, mode: u32) -> Result<vk::Pipeline, GpuError> {
+        let method = if mode == ViewMode::Background.shader_code() { 0 } else { method };
+        let k = shaders::ENHANCE_VARIANTS
+            .iter()
+            .position(|&(m, v, _)| m == method && v == mode)
+            .ok_or_else(|| GpuError::Unsupported(format!("no shader for method {method} mode {mode}")))?;
+        let mut built = self
+            .enhance
+            .lock()
+            .map_err(|_| GpuError::Unsupported("the pipeline cache was poisoned by an earlier panic".into()))?;
+        if built[k] == vk::Pipeline::null() {
+            built[k] = self.compute_pipeline(gpu, &shaders::ENHANCE_VARIANTS[k].2)?;
+        }
+        Ok(built[k])
     }
 
     fn compute_pipeline(
@@ -169,13 +194,21 @@ impl Pipelines {
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the caller guarantees the GPU no longer uses these objects.
         unsafe {
+            let variants = match self.enhance.get_mut() {
+                Ok(v) => std::mem::take(v),
+                Err(poisoned) => std::mem::take(poisoned.into_inner()),
+            };
             for p in [
                 self.decode_blur_h,
                 self.blur_v,
                 self.fov_map,
-                self.enhance,
+                self.classify,
+                self.finish_tiles,
                 self.copy_pixels,
-            ] {
+            ]
+            .into_iter()
+            .chain(variants)
+            {
                 gpu.device.destroy_pipeline(p, None);
             }
             gpu.device.destroy_pipeline_layout(self.layout, None);
@@ -188,8 +221,10 @@ impl Pipelines {
             decode_blur_h: vk::Pipeline::null(),
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
-            enhance: vk::Pipeline::null(),
+            classify: vk::Pipeline::null(),
+            finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
+            enhance: Mutex::new(vec![vk::Pipeline::null(); shaders::ENHANCE_VARIANTS.len()]),
         };
     }
 }
