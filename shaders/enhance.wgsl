@@ -11,12 +11,12 @@ struct Pixel {
 }
 
 fn pixel_words() -> u32 {
-    let pixel_layout = pc.format & 255u;
+    let pixel_layout = FORMAT & 255u;
     return select(1u, 2u, pixel_layout == LAYOUT_RGBA16_UNORM || pixel_layout == LAYOUT_RGBA16_FLOAT);
 }
 
 fn load_pixel(i: u32) -> Pixel {
-    let pixel_layout = pc.format & 255u;
+    let pixel_layout = FORMAT & 255u;
     let w0 = pixels[i * pixel_words()];
     if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
         var v = unpack4x8unorm(w0);
@@ -43,7 +43,7 @@ fn load_pixel(i: u32) -> Pixel {
 
 // Writes new colour channels (stored encoding, [0, 1]) and keeps the alpha bits as they were.
 fn store_rgb(i: u32, v: vec3<f32>) {
-    let pixel_layout = pc.format & 255u;
+    let pixel_layout = FORMAT & 255u;
     if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
         let q = vec3<u32>(floor(255.0 * v + 0.5));
         let c = select(q, q.bgr, pixel_layout == LAYOUT_BGRA8);
@@ -169,7 +169,7 @@ fn enhance_linear(i: u32, display: vec3<f32>) -> Enhanced {
 }
 
 fn is_srgb() -> bool {
-    return (pc.format & FORMAT_SRGB_BIT) != 0u;
+    return (FORMAT & FORMAT_SRGB_BIT) != 0u;
 }
 
 // Stored values are code / 255 exactly in 8-bit sRGB formats.
@@ -187,7 +187,7 @@ fn encode_stored(v: vec3<f32>) -> vec3<f32> {
 
 // What a stored value reads back as after store_rgb quantises it (float16 is taken as exact).
 fn quantised(v: vec3<f32>) -> vec3<f32> {
-    let pixel_layout = pc.format & 255u;
+    let pixel_layout = FORMAT & 255u;
     var levels = 255.0;
     if (pixel_layout == LAYOUT_A2B10G10R10) {
         levels = 1023.0;

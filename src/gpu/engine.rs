@@ -485,11 +485,14 @@ impl Engine {
         if params.mode == ViewMode::Off {
             return Ok(());
         }
+        let format = view.format.shader_code();
         let pipeline = self.pipelines.enhance(
             gpu,
             params.method.shader_code(),
             params.mode.shader_code(),
+            format,
         )?;
+        let classify = self.pipelines.classify(gpu, format)?;
         let push = PushConstants::new(
             params,
             view.camera_size,
@@ -502,7 +505,6 @@ impl Engine {
         // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at least 4 bytes.
         unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
         barrier(gpu, cmd, S::TRANSFER, COMPUTE);
-        let classify = self.pipelines.classify;
         self.dispatch(gpu, cmd, classify, view.set, &push, tiles);
         barrier(gpu, cmd, COMPUTE, COMPUTE);
         // A 1x1 grid is one workgroup of one invocation.

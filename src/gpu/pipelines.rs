@@ -79,12 +79,17 @@ pub struct Pipelines {
     pub decode_blur_h: vk::Pipeline,
     pub blur_v: vk::Pipeline,
     pub fov_map: vk::Pipeline,
-    pub classify: vk::Pipeline,
     pub finish_tiles: vk::Pipeline,
     pub copy_pixels: vk::Pipeline,
-    /// The `enhance` variants (shaders::ENHANCE_VARIANTS), built on first use: each costs a
-    /// compile in the driver and most sessions use one or two.
-    enhance: Mutex<Vec<vk::Pipeline>>,
+    /// The `enhance` and `classify` variants (shaders::ENHANCE_VARIANTS, then
+    /// shaders::CLASSIFY_VARIANTS), built on first use: each costs a compile in the driver and
+    /// a session uses a few.
+    variants: Mutex<Vec<vk::Pipeline>>,
+}
+
+fn no_variants() -> Mutex<Vec<vk::Pipeline>> {
+    let n = shaders::ENHANCE_VARIANTS.len() + shaders::CLASSIFY_VARIANTS.len();
+    Mutex::new(vec![vk::Pipeline::null(); n])
 }
 
 impl Pipelines {
@@ -95,10 +100,9 @@ impl Pipelines {
             decode_blur_h: vk::Pipeline::null(),
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
-            classify: vk::Pipeline::null(),
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
-            enhance: Mutex::new(vec![vk::Pipeline::null(); shaders::ENHANCE_VARIANTS.len()]),
+            variants: no_variants(),
         };
         // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
         if let Err(e) = p.build(gpu) {
@@ -135,25 +139,53 @@ impl Pipelines {
         self.decode_blur_h = self.compute_pipeline(gpu, &shaders::DECODE_BLUR_H)?;
         self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
         self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
-        self.classify = self.compute_pipeline(gpu, &shaders::CLASSIFY)?;
         self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
         self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         Ok(())
     }
 
-    /// The `enhance` pipeline for a method and view mode (shader codes), built on first use.
-    pub fn enhance(&self, gpu: &GpuDevice, method: u32, mode: u32) -> Result<vk::Pipeline, GpuError> {
-        let method = if mode == ViewMode::Background.shader_code() { 0 } else { method };
+    /// The `enhance` pipeline for a method, view mode and pixel format (shader codes).
+    pub fn enhance(
+        &self,
+        gpu: &GpuDevice,
+        method: u32,
+        mode: u32,
+        format: u32,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let method = if mode == ViewMode::Background.shader_code() {
+            0
+        } else {
+            method
+        };
         let k = shaders::ENHANCE_VARIANTS
             .iter()
-            .position(|&(m, v, _)| m == method && v == mode)
-            .ok_or_else(|| GpuError::Unsupported(format!("no shader for method {method} mode {mode}")))?;
-        let mut built = self
-            .enhance
-            .lock()
-            .map_err(|_| GpuError::Unsupported("the pipeline cache was poisoned by an earlier panic".into()))?;
+            .position(|&(m, v, f, _)| m == method && v == mode && f == format);
+        self.variant(gpu, k, |k| &shaders::ENHANCE_VARIANTS[k].3)
+    }
+
+    /// The `classify` pipeline for a pixel format (shader code).
+    pub fn classify(&self, gpu: &GpuDevice, format: u32) -> Result<vk::Pipeline, GpuError> {
+        let k = shaders::CLASSIFY_VARIANTS
+            .iter()
+            .position(|&(f, _)| f == format);
+        let offset = shaders::ENHANCE_VARIANTS.len();
+        self.variant(gpu, k.map(|k| k + offset), |k| {
+            &shaders::CLASSIFY_VARIANTS[k - offset].1
+        })
+    }
+
+    fn variant(
+        &self,
+        gpu: &GpuDevice,
+        k: Option<usize>,
+        module: impl Fn(usize) -> &'static ShaderModule,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let k = k.ok_or_else(|| GpuError::Unsupported("no shader for this method, mode and format".into()))?;
+        let mut built = self.variants.lock().map_err(|_| {
+            GpuError::Unsupported("the pipeline cache was poisoned by an earlier panic".into())
+        })?;
         if built[k] == vk::Pipeline::null() {
-            built[k] = self.compute_pipeline(gpu, &shaders::ENHANCE_VARIANTS[k].2)?;
+            built[k] = self.compute_pipeline(gpu, module(k))?;
         }
         Ok(built[k])
     }
@@ -194,7 +226,7 @@ impl Pipelines {
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the caller guarantees the GPU no longer uses these objects.
         unsafe {
-            let variants = match self.enhance.get_mut() {
+            let variants = match self.variants.get_mut() {
                 Ok(v) => std::mem::take(v),
                 Err(poisoned) => std::mem::take(poisoned.into_inner()),
             };
@@ -202,7 +234,6 @@ impl Pipelines {
                 self.decode_blur_h,
                 self.blur_v,
                 self.fov_map,
-                self.classify,
                 self.finish_tiles,
                 self.copy_pixels,
             ]
@@ -221,10 +252,9 @@ impl Pipelines {
             decode_blur_h: vk::Pipeline::null(),
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
-            classify: vk::Pipeline::null(),
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
-            enhance: Mutex::new(vec![vk::Pipeline::null(); shaders::ENHANCE_VARIANTS.len()]),
+            variants: no_variants(),
         };
     }
 }

@@ -38,7 +38,6 @@ macro_rules! spirv {
 pub const DECODE_BLUR_H: ShaderModule = spirv!("decode_blur_h");
 pub const BLUR_V: ShaderModule = spirv!("blur_v");
 pub const FOV_MAP: ShaderModule = spirv!("fov_map");
-pub const CLASSIFY: ShaderModule = spirv!("classify");
 pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
 pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
 
@@ -50,12 +49,12 @@ pub fn all() -> Vec<&'static ShaderModule> {
         &DECODE_BLUR_H,
         &BLUR_V,
         &FOV_MAP,
-        &CLASSIFY,
         &FINISH_TILES,
         &COPY_PIXELS,
     ];
     fixed
         .into_iter()
-        .chain(ENHANCE_VARIANTS.iter().map(|(_, _, m)| m))
+        .chain(ENHANCE_VARIANTS.iter().map(|(_, _, _, m)| m))
+        .chain(CLASSIFY_VARIANTS.iter().map(|(_, m)| m))
         .collect()
 }
