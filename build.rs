@@ -198,9 +198,8 @@ fn main() {
             let file = format!("enhance_m{method}_v{mode}_f{format}");
             let source = format!("{prefix}\n{}{body}", specialise(method, mode, format));
             write(&file, "enhance", &source, "enhance");
-            table += &format!(
-                "    ({method}, {mode}, {format}, spirv!(\"{file}\", \"enhance\")),\n"
-            );
+            table +=
+                &format!("    ({method}, {mode}, {format}, spirv!(\"{file}\", \"enhance\")),\n");
         }
     }
     table += "];\n/// (format, SPIR-V) of each `classify` variant.\n";

@@ -373,7 +373,10 @@ fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
     let mut disagree = 0;
     for (i, (d, hm)) in display.pixels.iter().zip(&heat.pixels).enumerate() {
         let cyan = *hm == [0, 255, 255, d[3]];
-        assert!(cyan || hm == d, "pixel {i}: {hm:?} is neither cyan nor the original");
+        assert!(
+            cyan || hm == d,
+            "pixel {i}: {hm:?} is neither cyan nor the original"
+        );
         marked += usize::from(cyan);
         disagree += usize::from(cyan != mask[i]);
     }
@@ -395,7 +398,8 @@ fn background_mode_shows_the_prepared_background_on_every_pixel() {
     let out = e.enhance(&display, &camera, &params).unwrap();
     let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
     for (i, (d, o)) in display.pixels.iter().zip(&out.pixels).enumerate() {
-        let want = contrastxr::colour::linear_to_srgb8(bg.linear[i] * f64::from(params.transmittance));
+        let want =
+            contrastxr::colour::linear_to_srgb8(bg.linear[i] * f64::from(params.transmittance));
         for k in 0..3 {
             assert!(
                 o[k].abs_diff(want[k]) <= 1,

@@ -37,11 +37,11 @@ fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
 fn parse_count(what: &str, s: Option<String>, default: u32) -> Result<u32, CliError> {
     match s {
         None => Ok(default),
-        Some(s) => s
-            .parse()
-            .ok()
-            .filter(|&n| n > 0)
-            .ok_or_else(|| CliError::Usage(format!("{what} must be a positive count, got '{s}'"))),
+        Some(s) => {
+            s.parse().ok().filter(|&n| n > 0).ok_or_else(|| {
+                CliError::Usage(format!("{what} must be a positive count, got '{s}'"))
+            })
+        }
     }
 }
 
@@ -60,7 +60,9 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     };
     let method = match args.value(&["--method"])? {
         None => Method::Paper,
-        Some(m) => Method::parse(&m).ok_or_else(|| CliError::Usage(format!("unknown method '{m}'")))?,
+        Some(m) => {
+            Method::parse(&m).ok_or_else(|| CliError::Usage(format!("unknown method '{m}'")))?
+        }
     };
     let json = args.flag("--json");
     args.finish()?;
@@ -68,7 +70,8 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         index: device,
         validation: false,
     };
-    let mut engine = OfflineEngine::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
+    let mut engine =
+        OfflineEngine::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
     let params = Params {
         method,
         ..Params::default()
@@ -103,7 +106,16 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 fn header() -> String {
     format!(
         "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>7} {:>9} {:>6}",
-        "size", "views", "content", "fg %", "copy ms", "enh ms", "bg ms", "ratio", "enh Mpx/s", "Mpx"
+        "size",
+        "views",
+        "content",
+        "fg %",
+        "copy ms",
+        "enh ms",
+        "bg ms",
+        "ratio",
+        "enh Mpx/s",
+        "Mpx"
     )
 }
 

@@ -81,7 +81,8 @@ pub fn content_pixel(content: Content, x: u32, y: u32, w: u32, h: u32) -> u32 {
     if content == Content::Full {
         return rgba(u.max(0.01), v, 0.5 + 0.5 * (u - v));
     }
-    let inside = |x0: f32, x1: f32, y0: f32, y1: f32| (x0..x1).contains(&u) && (y0..y1).contains(&v);
+    let inside =
+        |x0: f32, x1: f32, y0: f32, y1: f32| (x0..x1).contains(&u) && (y0..y1).contains(&v);
     if inside(0.10, 0.40, 0.30, 0.60) {
         return rgba(0.78, 0.82, 0.90);
     }
@@ -222,8 +223,8 @@ impl OfflineEngine {
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(QUERIES);
         // SAFETY: a valid create info on the engine's own device.
-        rig.queries = unsafe { self.gpu.device.create_query_pool(&info, None) }
-            .vk("vkCreateQueryPool")?;
+        rig.queries =
+            unsafe { self.gpu.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
         Ok(foreground / f64::from(w * h))
     }
 

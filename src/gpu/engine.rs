@@ -266,9 +266,8 @@ impl Engine {
         let bpp = u64::from(format.bytes_per_pixel());
         let at = placement.working;
         let tile_count = u64::from(region.0.div_ceil(TILE)) * u64::from(region.1.div_ceil(TILE));
-        let tile_usage = STORAGE
-            | vk::BufferUsageFlags::INDIRECT_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST;
+        let tile_usage =
+            STORAGE | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let gpu_only = MemoryLocation::GpuOnly;
         let [bg_linear, bg_scaled, pixels, tiles] = alloc_all(
             gpu,
@@ -276,7 +275,12 @@ impl Engine {
                 (px * 16, usage, at, "bg_linear"),
                 (px * 16, usage, at, "bg_scaled"),
                 (px * bpp, usage, at, "pixels"),
-                ((TILE_LIST_HEADER + tile_count) * 4, tile_usage, gpu_only, "tiles"),
+                (
+                    (TILE_LIST_HEADER + tile_count) * 4,
+                    tile_usage,
+                    gpu_only,
+                    "tiles",
+                ),
             ],
         )?;
         let mut view = ViewTarget {
@@ -330,7 +334,13 @@ impl Engine {
         self.write_set(gpu, view.set, 7, &[source]);
     }
 
-    fn write_set(&self, gpu: &GpuDevice, set: vk::DescriptorSet, first: u32, buffers: &[&GpuBuffer]) {
+    fn write_set(
+        &self,
+        gpu: &GpuDevice,
+        set: vk::DescriptorSet,
+        first: u32,
+        buffers: &[&GpuBuffer],
+    ) {
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
             .map(|b| {
@@ -508,7 +518,14 @@ impl Engine {
         self.dispatch(gpu, cmd, classify, view.set, &push, tiles);
         barrier(gpu, cmd, COMPUTE, COMPUTE);
         // A 1x1 grid is one workgroup of one invocation.
-        self.dispatch(gpu, cmd, self.pipelines.finish_tiles, view.set, &push, (1, 1));
+        self.dispatch(
+            gpu,
+            cmd,
+            self.pipelines.finish_tiles,
+            view.set,
+            &push,
+            (1, 1),
+        );
         barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
         self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
         // SAFETY: cmd is recording with the pipeline bound above; the tile buffer has

@@ -180,7 +180,9 @@ impl Pipelines {
         k: Option<usize>,
         module: impl Fn(usize) -> &'static ShaderModule,
     ) -> Result<vk::Pipeline, GpuError> {
-        let k = k.ok_or_else(|| GpuError::Unsupported("no shader for this method, mode and format".into()))?;
+        let k = k.ok_or_else(|| {
+            GpuError::Unsupported("no shader for this method, mode and format".into())
+        })?;
         let mut built = self.variants.lock().map_err(|_| {
             GpuError::Unsupported("the pipeline cache was poisoned by an earlier panic".into())
         })?;
