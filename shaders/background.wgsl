@@ -6,7 +6,8 @@ fn camera_linear(x: i32, y: i32) -> vec3<f32> {
     let w = i32(pc.camera_size.x);
     let h = i32(pc.camera_size.y);
     let i = u32(clamp(y, 0, h - 1) * w + clamp(x, 0, w - 1));
-    return srgb_decode(unpack4x8unorm(camera[i]).rgb);
+    let word = camera[i];
+    return srgb_decode_code(vec3<u32>(word & 255u, (word >> 8u) & 255u, (word >> 16u) & 255u));
 }
 
 @compute @workgroup_size(8, 8)

@@ -20,6 +20,12 @@ struct Params {
     k_b: f32,
     // Symmetric normalised taps: tap(k) = taps[k / 4][k % 4] for k = |offset|.
     taps: array<vec4<f32>, 2>,
+    // What the view shows (MODE_*).
+    mode: u32,
+    // Tiles per row of the region (TILE x TILE pixels each).
+    tile_columns: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 var<immediate> pc: Params;
@@ -36,6 +42,22 @@ var<immediate> pc: Params;
 @group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec4<f32>>;
 // The display region's raw pixels in the swapchain format (1 or 2 u32 per pixel).
 @group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
+// The tiles the enhancement runs on (classify and finish_tiles in enhance.wgsl).
+struct TileList {
+    // Tiles found so far by classify; finish_tiles moves it to `total` and zeroes it.
+    count: atomic<u32>,
+    // vkCmdDispatchIndirect arguments (byte offset 4): workgroups x, y, z.
+    groups: array<u32, 3>,
+    total: u32,
+    pad: array<u32, 3>,
+    // Tile index (row * tile_columns + column) of each listed tile.
+    index: array<u32>,
+}
+@group(0) @binding(6) var<storage, read_write> tiles: TileList;
+// Source of the plain copy pass (the benchmark's floor); the layer binds `pixels` here.
+@group(0) @binding(7) var<storage, read> source: array<u32>;
+// sRGB decode of the 256 8-bit codes, computed in f64 and rounded once (exact).
+@group(0) @binding(8) var<storage, read> srgb_table: array<f32>;
 
 const LAYOUT_RGBA8: u32 = 0u;
 const LAYOUT_BGRA8: u32 = 1u;
@@ -44,21 +66,42 @@ const LAYOUT_RGBA16_FLOAT: u32 = 3u;
 const LAYOUT_A2B10G10R10: u32 = 4u;
 const FORMAT_SRGB_BIT: u32 = 256u;
 
+const MODE_ENHANCE: u32 = 0u;
+const MODE_OFF: u32 = 1u;
+const MODE_SPLIT: u32 = 2u;
+const MODE_HEATMAP: u32 = 3u;
+const MODE_BACKGROUND: u32 = 4u;
+
+// Side of a square tile; the workgroup size of the per-pixel passes.
+const TILE: u32 = 8u;
+
 const METHOD_PAPER: u32 = 0u;
 const METHOD_HUE_ONLY: u32 = 1u;
 const METHOD_OTHER_HUE: u32 = 2u;
 const METHOD_LUM_CHROMA: u32 = 3u;
 const METHOD_SUBTRACTION: u32 = 4u;
 
-fn srgb_decode(v: vec3<f32>) -> vec3<f32> {
-    let lo = v / 12.92;
-    let hi = pow((v + 0.055) / 1.055, vec3<f32>(2.4));
-    return select(hi, lo, v <= vec3<f32>(0.04045));
+// sRGB decode of an 8-bit code: the exact table (binding 8), no pow per pixel.
+fn srgb_decode_code(c: vec3<u32>) -> vec3<f32> {
+    return vec3<f32>(srgb_table[c.x], srgb_table[c.y], srgb_table[c.z]);
 }
 
+// Cube root of positive values without pow: the exponent divided by 3 in the bit pattern
+// (about 5% off), then two Halley steps (cubic convergence: 1e-4, then below f32 epsilon).
+fn cbrt(x: vec3<f32>) -> vec3<f32> {
+    var y = bitcast<vec3<f32>>(bitcast<vec3<u32>>(x) / 3u + 709921077u);
+    for (var k = 0; k < 2; k++) {
+        let y3 = y * y * y;
+        y = y * (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    return y;
+}
+
+// sRGB encode without pow: v^(1/2.4) = v^(5/12) = v^(1/4) * (v^(1/2))^(1/3).
 fn srgb_encode(v: vec3<f32>) -> vec3<f32> {
     let lo = 12.92 * v;
-    let hi = 1.055 * pow(max(v, vec3<f32>(0.0031308)), vec3<f32>(1.0 / 2.4)) - 0.055;
+    let r = sqrt(max(v, vec3<f32>(0.0031308)));
+    let hi = 1.055 * sqrt(r) * cbrt(r) - 0.055;
     return select(hi, lo, v <= vec3<f32>(0.0031308));
 }
 
@@ -67,7 +110,7 @@ const LAB_DELTA: f32 = 0.20689655; // 6/29
 fn lab_f(t: vec3<f32>) -> vec3<f32> {
     let d3 = LAB_DELTA * LAB_DELTA * LAB_DELTA;
     let lin = t / (3.0 * LAB_DELTA * LAB_DELTA) + 4.0 / 29.0;
-    let cube = pow(max(t, vec3<f32>(d3)), vec3<f32>(1.0 / 3.0));
+    let cube = cbrt(max(t, vec3<f32>(d3)));
     return select(lin, cube, t > vec3<f32>(d3));
 }
 

@@ -11,12 +11,12 @@ struct Pixel {
 }
 
 fn pixel_words() -> u32 {
-    let pixel_layout = pc.format & 255u;
+    let pixel_layout = FORMAT & 255u;
     return select(1u, 2u, pixel_layout == LAYOUT_RGBA16_UNORM || pixel_layout == LAYOUT_RGBA16_FLOAT);
 }
 
 fn load_pixel(i: u32) -> Pixel {
-    let pixel_layout = pc.format & 255u;
+    let pixel_layout = FORMAT & 255u;
     let w0 = pixels[i * pixel_words()];
     if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
         var v = unpack4x8unorm(w0);
@@ -43,7 +43,7 @@ fn load_pixel(i: u32) -> Pixel {
 
 // Writes new colour channels (stored encoding, [0, 1]) and keeps the alpha bits as they were.
 fn store_rgb(i: u32, v: vec3<f32>) {
-    let pixel_layout = pc.format & 255u;
+    let pixel_layout = FORMAT & 255u;
     if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
         let q = vec3<u32>(floor(255.0 * v + 0.5));
         let c = select(q, q.bgr, pixel_layout == LAYOUT_BGRA8);
@@ -124,7 +124,7 @@ fn enhance_scaled(d: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     }
     let split = split_chroma(e.yz, d.yz);
     let hue = vec3<f32>(0.0, split.hue);
-    switch pc.method {
+    switch METHOD {
         case METHOD_HUE_ONLY: {
             return d + hue;
         }
@@ -148,29 +148,168 @@ fn enhance_scaled(d: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     }
 }
 
+// The enhanced colour of a foreground pixel in linear light, clipped; returns false when the
+// method leaves it unchanged.
+struct Enhanced {
+    linear: vec3<f32>,
+    changed: bool,
+}
+
+fn enhance_linear(i: u32, display: vec3<f32>) -> Enhanced {
+    if (METHOD == METHOD_SUBTRACTION) {
+        let out = pc.k_v * display - pc.k_b * bg_linear[i].rgb;
+        return Enhanced(clamp(out, vec3<f32>(0.0), vec3<f32>(1.0)), true);
+    }
+    let d = linear_to_scaled(display);
+    let p = enhance_scaled(d, bg_scaled[i].xyz);
+    if (all(p == d)) {
+        return Enhanced(display, false);
+    }
+    return Enhanced(clamp(scaled_to_linear(p), vec3<f32>(0.0), vec3<f32>(1.0)), true);
+}
+
+fn is_srgb() -> bool {
+    return (FORMAT & FORMAT_SRGB_BIT) != 0u;
+}
+
+// Stored values are code / 255 exactly in 8-bit sRGB formats.
+fn decode_stored(v: vec3<f32>) -> vec3<f32> {
+    if (is_srgb()) {
+        return srgb_decode_code(vec3<u32>(v * 255.0 + 0.5));
+    }
+    return v;
+}
+
+// The stored value a linear colour is written as (before quantisation).
+fn encode_stored(v: vec3<f32>) -> vec3<f32> {
+    return select(v, srgb_encode(v), is_srgb());
+}
+
+// What a stored value reads back as after store_rgb quantises it (float16 is taken as exact).
+fn quantised(v: vec3<f32>) -> vec3<f32> {
+    let pixel_layout = FORMAT & 255u;
+    var levels = 255.0;
+    if (pixel_layout == LAYOUT_A2B10G10R10) {
+        levels = 1023.0;
+    } else if (pixel_layout == LAYOUT_RGBA16_UNORM) {
+        levels = 65535.0;
+    } else if (pixel_layout == LAYOUT_RGBA16_FLOAT) {
+        return v;
+    }
+    return floor(levels * v + 0.5) / levels;
+}
+
+// Unscaled CIE76 Delta E*ab between two scaled-space colours.
+fn delta_e(x: vec3<f32>, y: vec3<f32>) -> f32 {
+    return length((x - y) * vec3<f32>(50.0, 128.0, 128.0));
+}
+
+// Spec section 4's criterion on the output as stored: dE(B, P) > dE(B, D), dE(P, D) >= 2.3.
+fn is_enhanced(i: u32, display: vec3<f32>, stored: vec3<f32>) -> bool {
+    let b = bg_scaled[i].xyz;
+    let d = linear_to_scaled(display);
+    let p = linear_to_scaled(decode_stored(quantised(stored)));
+    return delta_e(b, p) > delta_e(b, d) && delta_e(p, d) >= 2.3;
+}
+
+// The pixel of tile-list entry `group` at `local`, or none past the list or the region.
+fn tile_pixel(group: vec3<u32>, local: vec3<u32>) -> vec2<u32> {
+    let k = group.y * 32768u + group.x;
+    if (k >= tiles.total) {
+        return vec2<u32>(0xffffffffu);
+    }
+    let tile = tiles.index[k];
+    return vec2<u32>(tile % pc.tile_columns, tile / pc.tile_columns) * TILE + local.xy;
+}
+
+// Runs once per listed tile (vkCmdDispatchIndirect): empty tiles cost nothing.
 @compute @workgroup_size(8, 8)
-fn enhance(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= pc.region_size.x || id.y >= pc.region_size.y) {
+fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let xy = tile_pixel(group, local);
+    if (xy.x >= pc.region_size.x || xy.y >= pc.region_size.y) {
         return;
     }
-    let i = id.y * pc.region_size.x + id.x;
+    let i = xy.y * pc.region_size.x + xy.x;
+    if (MODE == MODE_BACKGROUND) {
+        store_rgb(i, encode_stored(pc.transmittance * bg_linear[i].rgb));
+        return;
+    }
+    if (MODE == MODE_SPLIT) {
+        let half = pc.region_size.x / 2u;
+        if (xy.x + 1u == half || xy.x == half) {
+            store_rgb(i, vec3<f32>(1.0));
+            return;
+        }
+        if (xy.x < half) {
+            return;
+        }
+    }
     let px = load_pixel(i);
     if (px.black || px.alpha == 0.0) {
         return;
     }
-    let srgb = (pc.format & FORMAT_SRGB_BIT) != 0u;
-    let display = select(px.rgb, srgb_decode(px.rgb), srgb);
-    var out: vec3<f32>;
-    if (pc.method == METHOD_SUBTRACTION) {
-        out = pc.k_v * display - pc.k_b * bg_linear[i].rgb;
-    } else {
-        let d = linear_to_scaled(display);
-        let p = enhance_scaled(d, bg_scaled[i].xyz);
-        if (all(p == d)) {
-            return;
-        }
-        out = scaled_to_linear(p);
+    let display = decode_stored(px.rgb);
+    let e = enhance_linear(i, display);
+    if (!e.changed) {
+        return;
     }
-    out = clamp(out, vec3<f32>(0.0), vec3<f32>(1.0));
-    store_rgb(i, select(out, srgb_encode(out), srgb));
+    let stored = encode_stored(e.linear);
+    if (MODE == MODE_HEATMAP) {
+        if (is_enhanced(i, display, stored)) {
+            store_rgb(i, vec3<f32>(0.0, 1.0, 1.0));
+        }
+        return;
+    }
+    store_rgb(i, stored);
+}
+
+// Whether a tile needs the enhancement pass in the current mode.
+fn tile_wanted(tx: u32, ty: u32) -> bool {
+    let x0 = tx * TILE;
+    let y0 = ty * TILE;
+    if (pc.mode == MODE_BACKGROUND) {
+        return true;
+    }
+    var first_x = x0;
+    if (pc.mode == MODE_SPLIT) {
+        // The divider columns half - 1 and half are drawn on every row.
+        let half = pc.region_size.x / 2u;
+        if (x0 <= half && half < x0 + TILE + 1u) {
+            return true;
+        }
+        first_x = max(x0, half + 1u);
+    }
+    let x1 = min(x0 + TILE, pc.region_size.x);
+    let y1 = min(y0 + TILE, pc.region_size.y);
+    var found = false;
+    for (var y = y0; y < y1; y++) {
+        for (var x = first_x; x < x1; x++) {
+            let px = load_pixel(y * pc.region_size.x + x);
+            found = found || !(px.black || px.alpha == 0.0);
+        }
+    }
+    return found;
+}
+
+// One invocation per tile: lists the tiles with any foreground pixel. A loop over the tile's
+// pixels in one invocation (not one invocation per pixel) keeps this pass cheaper than a copy.
+@compute @workgroup_size(8, 8)
+fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
+    let rows = (pc.region_size.y + TILE - 1u) / TILE;
+    if (id.x >= pc.tile_columns || id.y >= rows || !tile_wanted(id.x, id.y)) {
+        return;
+    }
+    let k = atomicAdd(&tiles.count, 1u);
+    tiles.index[k] = id.y * pc.tile_columns + id.x;
+}
+
+// Turns the tile count into the enhancement's indirect dispatch (at most 32768 workgroups per
+// row: maxComputeWorkGroupCount is only guaranteed to be 65535) and zeroes the count.
+@compute @workgroup_size(1)
+fn finish_tiles() {
+    let n = atomicExchange(&tiles.count, 0u);
+    tiles.total = n;
+    tiles.groups[0] = min(n, 32768u);
+    tiles.groups[1] = (n + 32767u) / 32768u;
+    tiles.groups[2] = 1u;
 }

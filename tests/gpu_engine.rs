@@ -1,7 +1,7 @@
 //! The GPU engine on the first Vulkan device (lavapipe in CI) with the validation layer on:
 //! every validation error fails the test.
 
-use contrastxr::algorithm::{Method, Params};
+use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
 use contrastxr::image::RgbaImage;
 use std::process::Command;
@@ -47,8 +47,8 @@ fn assert_clean(e: &OfflineEngine) {
 fn every_embedded_shader_passes_spirv_val() {
     let dir = std::env::temp_dir().join(format!("contrastxr-spv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for shader in contrastxr::gpu::shaders::ALL {
-        let path = dir.join(format!("{}.spv", shader.entry));
+    for shader in contrastxr::gpu::shaders::all() {
+        let path = dir.join(format!("{}.spv", shader.name));
         std::fs::write(&path, shader.bytes()).unwrap();
         let out = Command::new("spirv-val")
             .args(["--target-env", "vulkan1.0"])
@@ -384,4 +384,122 @@ fn cli_without_a_vulkan_device_names_the_fix() {
         "{err}"
     );
     assert_eq!(err.trim().lines().count(), 1, "one sentence: {err}");
+}
+
+fn with_mode(mode: ViewMode) -> Params {
+    Params {
+        mode,
+        ..Params::default()
+    }
+}
+
+#[test]
+fn off_mode_leaves_every_pixel_as_it_was() {
+    let mut e = engine();
+    let display = noise(50, 30, 31);
+    let camera = noise(64, 40, 2);
+    let out = e
+        .enhance(&display, &camera, &with_mode(ViewMode::Off))
+        .unwrap();
+    assert_eq!(out, display);
+    assert_clean(&e);
+}
+
+#[test]
+fn split_mode_is_original_left_enhanced_right_with_a_white_divider() {
+    let mut e = engine();
+    let (w, h) = (45, 37);
+    let display = noise(w, h, 41);
+    let camera = noise(70, 50, 13);
+    let enhanced = e.enhance(&display, &camera, &Params::default()).unwrap();
+    let split = e
+        .enhance(&display, &camera, &with_mode(ViewMode::Split))
+        .unwrap();
+    let half = w / 2;
+    let mut right_changed = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let (d, s) = (display.pixels[i], split.pixels[i]);
+            if x + 1 == half || x == half {
+                assert_eq!(s, [255, 255, 255, d[3]], "divider at ({x}, {y})");
+            } else if x < half {
+                assert_eq!(s, d, "left half changed at ({x}, {y})");
+            } else {
+                assert_eq!(s, enhanced.pixels[i], "right half at ({x}, {y})");
+                right_changed += usize::from(s != d);
+            }
+        }
+    }
+    assert!(right_changed > 100, "the right half was not enhanced");
+    assert_clean(&e);
+}
+
+#[test]
+fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
+    let mut e = engine();
+    let display = noise(60, 40, 51);
+    let camera = noise(80, 50, 17);
+    let params = Params::default();
+    let enhanced = e.enhance(&display, &camera, &params).unwrap();
+    let heat = e
+        .enhance(&display, &camera, &with_mode(ViewMode::Heatmap))
+        .unwrap();
+    // The CPU metric of spec section 4 (f64) on the GPU's own enhanced output.
+    let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+    let mask = contrastxr::evaluate::metric::enhanced_mask(&display, &enhanced, &bg);
+    let mut marked = 0;
+    let mut disagree = 0;
+    for (i, (d, hm)) in display.pixels.iter().zip(&heat.pixels).enumerate() {
+        let cyan = *hm == [0, 255, 255, d[3]];
+        assert!(
+            cyan || hm == d,
+            "pixel {i}: {hm:?} is neither cyan nor the original"
+        );
+        marked += usize::from(cyan);
+        disagree += usize::from(cyan != mask[i]);
+    }
+    // f32 against f64 may flip a pixel sitting exactly on a criterion threshold.
+    assert!(marked > 100, "only {marked} pixels marked");
+    assert!(
+        disagree * 1000 <= display.pixels.len(),
+        "{disagree} pixels disagree with the metric"
+    );
+    assert_clean(&e);
+}
+
+#[test]
+fn background_mode_shows_the_prepared_background_on_every_pixel() {
+    let mut e = engine();
+    let display = noise(48, 27, 61);
+    let camera = noise(90, 60, 19);
+    let params = with_mode(ViewMode::Background);
+    let out = e.enhance(&display, &camera, &params).unwrap();
+    let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+    for (i, (d, o)) in display.pixels.iter().zip(&out.pixels).enumerate() {
+        let want =
+            contrastxr::colour::linear_to_srgb8(bg.linear[i] * f64::from(params.transmittance));
+        for k in 0..3 {
+            assert!(
+                o[k].abs_diff(want[k]) <= 1,
+                "pixel {i}: {o:?}, CPU background {want:?}"
+            );
+        }
+        assert_eq!(o[3], d[3], "alpha changed");
+    }
+    assert_clean(&e);
+}
+
+#[test]
+fn every_tile_is_enhanced_when_the_list_needs_more_than_one_dispatch_row() {
+    // 257 x 129 = 33153 tiles of 8x8: more than the 32768 workgroups of one indirect row.
+    let mut e = engine();
+    let display = RgbaImage::new(257 * 8, 129 * 8, [30, 200, 60, 255]);
+    let camera = RgbaImage::new(16, 16, [250, 230, 20, 255]);
+    let out = e.enhance(&display, &camera, &Params::default()).unwrap();
+    let first = out.pixels[0];
+    assert_ne!(first, display.pixels[0], "nothing changed");
+    let missed = out.pixels.iter().filter(|p| **p != first).count();
+    assert_eq!(missed, 0, "{missed} pixels not enhanced like the others");
+    assert_clean(&e);
 }

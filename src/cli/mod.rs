@@ -2,6 +2,7 @@
 //! `usage() -> String` and `run(&mut Args) -> Result<(), CliError>`, and one line in `COMMANDS`.
 
 mod args;
+mod bench;
 mod camera;
 mod engine;
 mod enhance;
@@ -48,6 +49,12 @@ const COMMANDS: &[Subcommand] = &[
         summary: "list V4L2 cameras, or test one as the layer would use it",
         usage: camera::usage,
         run: camera::run,
+    },
+    Subcommand {
+        name: "bench",
+        summary: "time the enhancement against a plain copy on a Vulkan device",
+        usage: bench::usage,
+        run: bench::run,
     },
     Subcommand {
         name: "install",

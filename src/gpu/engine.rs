@@ -9,11 +9,15 @@ use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
 use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT};
-use crate::algorithm::params::Params;
+use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 const WORKGROUP: u32 = 8;
+/// Side of the square tiles the enhancement skips when they hold no foreground pixel.
+pub const TILE: u32 = WORKGROUP;
+/// Words before the tile indices in the tile buffer (struct TileList in shaders/common.wgsl).
+const TILE_LIST_HEADER: u64 = 8;
 
 /// One camera frame on the GPU and its blurred linear-light copy (camera grid).
 pub struct BackgroundFrame {
@@ -50,6 +54,8 @@ pub struct ViewTarget {
     pub bg_scaled: GpuBuffer,
     /// The region's raw pixels in `format`, rows tightly packed.
     pub pixels: GpuBuffer,
+    /// Indirect dispatch arguments and the list of non-empty tiles (see shaders/tiles.wgsl).
+    pub tiles: GpuBuffer,
     set: vk::DescriptorSet,
     camera_size: (u32, u32),
 }
@@ -65,6 +71,27 @@ impl ViewTarget {
 pub struct Engine {
     pipelines: Pipelines,
     pool: vk::DescriptorPool,
+    /// The sRGB decode of the 256 8-bit codes (binding 8), shared by every view.
+    srgb_table: GpuBuffer,
+}
+
+/// The exact decode table: f64 sRGB curve, rounded once to f32.
+fn srgb_table(gpu: &GpuDevice) -> Result<GpuBuffer, GpuError> {
+    let table: Vec<u8> = (0..=255u8)
+        .flat_map(|c| (crate::colour::code_to_linear(c) as f32).to_le_bytes())
+        .collect();
+    let mut buffer = GpuBuffer::new(
+        gpu,
+        table.len() as u64,
+        STORAGE,
+        MemoryLocation::CpuToGpu,
+        "srgb_table",
+    )?;
+    if let Err(e) = buffer.write(&table) {
+        buffer.destroy(gpu);
+        return Err(e);
+    }
+    Ok(buffer)
 }
 
 /// Where the engine's working buffers live: device-local inside the layer, host-visible for the
@@ -107,6 +134,9 @@ fn accesses(stages: vk::PipelineStageFlags) -> vk::AccessFlags {
     }
     if stages.contains(S::HOST) {
         access |= A::HOST_READ | A::HOST_WRITE;
+    }
+    if stages.contains(S::DRAW_INDIRECT) {
+        access |= A::INDIRECT_COMMAND_READ;
     }
     access
 }
@@ -161,6 +191,13 @@ impl Engine {
     /// Builds the pipelines; `max_views` bounds how many ViewTargets may exist at once.
     pub fn new(gpu: &GpuDevice, max_views: u32) -> Result<Engine, GpuError> {
         let mut pipelines = Pipelines::new(gpu)?;
+        let mut table = match srgb_table(gpu) {
+            Ok(t) => t,
+            Err(e) => {
+                pipelines.destroy(gpu);
+                return Err(e);
+            }
+        };
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
             .descriptor_count(max_views * BINDING_COUNT)];
@@ -170,9 +207,14 @@ impl Engine {
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a valid device.
         match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
-            Ok(pool) => Ok(Engine { pipelines, pool }),
+            Ok(pool) => Ok(Engine {
+                pipelines,
+                pool,
+                srgb_table: table,
+            }),
             Err(result) => {
                 pipelines.destroy(gpu);
+                table.destroy(gpu);
                 Err(GpuError::Vulkan {
                     call: "vkCreateDescriptorPool",
                     result,
@@ -223,12 +265,22 @@ impl Engine {
         let usage = transfer_storage();
         let bpp = u64::from(format.bytes_per_pixel());
         let at = placement.working;
-        let [bg_linear, bg_scaled, pixels] = alloc_all(
+        let tile_count = u64::from(region.0.div_ceil(TILE)) * u64::from(region.1.div_ceil(TILE));
+        let tile_usage =
+            STORAGE | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let gpu_only = MemoryLocation::GpuOnly;
+        let [bg_linear, bg_scaled, pixels, tiles] = alloc_all(
             gpu,
             [
                 (px * 16, usage, at, "bg_linear"),
                 (px * 16, usage, at, "bg_scaled"),
                 (px * bpp, usage, at, "pixels"),
+                (
+                    (TILE_LIST_HEADER + tile_count) * 4,
+                    tile_usage,
+                    gpu_only,
+                    "tiles",
+                ),
             ],
         )?;
         let mut view = ViewTarget {
@@ -237,6 +289,7 @@ impl Engine {
             bg_linear,
             bg_scaled,
             pixels,
+            tiles,
             set: vk::DescriptorSet::null(),
             camera_size: background.size,
         };
@@ -268,7 +321,26 @@ impl Engine {
             &view.bg_linear,
             &view.bg_scaled,
             &view.pixels,
+            &view.tiles,
+            &view.pixels,
+            &self.srgb_table,
         ];
+        self.write_set(gpu, view.set, 0, &buffers);
+        view.camera_size = background.size;
+    }
+
+    /// Points a view's copy source (binding 7, used only by `record_copy`) at `source`.
+    pub fn bind_source(&self, gpu: &GpuDevice, view: &ViewTarget, source: &GpuBuffer) {
+        self.write_set(gpu, view.set, 7, &[source]);
+    }
+
+    fn write_set(
+        &self,
+        gpu: &GpuDevice,
+        set: vk::DescriptorSet,
+        first: u32,
+        buffers: &[&GpuBuffer],
+    ) {
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
             .map(|b| {
@@ -282,15 +354,14 @@ impl Engine {
             .enumerate()
             .map(|(i, info)| {
                 vk::WriteDescriptorSet::default()
-                    .dst_set(view.set)
-                    .dst_binding(i as u32)
+                    .dst_set(set)
+                    .dst_binding(first + i as u32)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(info)
             })
             .collect();
         // SAFETY: the set and buffers are valid; the caller guarantees the set is not in use.
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
-        view.camera_size = background.size;
     }
 
     pub fn destroy_view(&self, gpu: &GpuDevice, view: &mut ViewTarget) {
@@ -299,11 +370,17 @@ impl Engine {
             let _ = unsafe { gpu.device.free_descriptor_sets(self.pool, &[view.set]) };
             view.set = vk::DescriptorSet::null();
         }
-        for b in [&mut view.bg_linear, &mut view.bg_scaled, &mut view.pixels] {
+        for b in [
+            &mut view.bg_linear,
+            &mut view.bg_scaled,
+            &mut view.pixels,
+            &mut view.tiles,
+        ] {
             b.destroy(gpu);
         }
     }
 
+    /// Dispatches `pipeline` over `grid` invocations (in WORKGROUP x WORKGROUP groups).
     fn dispatch(
         &self,
         gpu: &GpuDevice,
@@ -312,6 +389,20 @@ impl Engine {
         set: vk::DescriptorSet,
         push: &PushConstants,
         grid: (u32, u32),
+    ) {
+        self.bind_pipeline(gpu, cmd, pipeline, set, push);
+        let groups = (grid.0.div_ceil(WORKGROUP), grid.1.div_ceil(WORKGROUP));
+        // SAFETY: cmd is recording with the pipeline, set and push constants bound.
+        unsafe { gpu.device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
+    }
+
+    fn bind_pipeline(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        set: vk::DescriptorSet,
+        push: &PushConstants,
     ) {
         let d = &gpu.device;
         // SAFETY: cmd is recording; pipeline, layout and set belong to this engine.
@@ -331,12 +422,6 @@ impl Engine {
                 vk::ShaderStageFlags::COMPUTE,
                 0,
                 push.bytes(),
-            );
-            d.cmd_dispatch(
-                cmd,
-                grid.0.div_ceil(WORKGROUP),
-                grid.1.div_ceil(WORKGROUP),
-                1,
             );
         }
     }
@@ -396,25 +481,67 @@ impl Engine {
         Ok(())
     }
 
-    /// Records the per-pixel enhancement of one view's `pixels`, in place. The caller orders
-    /// its copy into `pixels` before this and its copy out after it (see `barrier`).
+    /// Records the per-pixel enhancement of one view's `pixels`, in place: the tile
+    /// classification, then the enhancement over the listed tiles only (indirect dispatch).
+    /// Nothing in `ViewMode::Off`. The caller orders its copy into `pixels` before this and its
+    /// copy out after it (see `barrier`).
     pub fn record_enhance(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         view: &ViewTarget,
         params: &Params,
-    ) {
+    ) -> Result<(), GpuError> {
+        if params.mode == ViewMode::Off {
+            return Ok(());
+        }
+        let format = view.format.shader_code();
+        let pipeline = self.pipelines.enhance(
+            gpu,
+            params.method.shader_code(),
+            params.mode.shader_code(),
+            format,
+        )?;
+        let classify = self.pipelines.classify(gpu, format)?;
         let push = PushConstants::new(
             params,
             view.camera_size,
             view.region,
             view.format.shader_code(),
         );
+        let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
+        use vk::PipelineStageFlags as S;
+        barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
+        // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at least 4 bytes.
+        unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
+        barrier(gpu, cmd, S::TRANSFER, COMPUTE);
+        self.dispatch(gpu, cmd, classify, view.set, &push, tiles);
+        barrier(gpu, cmd, COMPUTE, COMPUTE);
+        // A 1x1 grid is one workgroup of one invocation.
         self.dispatch(
             gpu,
             cmd,
-            self.pipelines.enhance,
+            self.pipelines.finish_tiles,
+            view.set,
+            &push,
+            (1, 1),
+        );
+        barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
+        self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
+        // SAFETY: cmd is recording with the pipeline bound above; the tile buffer has
+        // INDIRECT_BUFFER usage and its arguments were written by finish_tiles.
+        unsafe { gpu.device.cmd_dispatch_indirect(cmd, view.tiles.raw, 4) };
+        Ok(())
+    }
+
+    /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source
+    /// (`bind_source`) into its `pixels` (4-byte formats), with the enhancement's dispatch shape.
+    pub fn record_copy(&self, gpu: &GpuDevice, cmd: vk::CommandBuffer, view: &ViewTarget) {
+        let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
+        self.dispatch(
+            gpu,
+            cmd,
+            self.pipelines.copy_pixels,
             view.set,
             &push,
             view.region,
@@ -425,6 +552,7 @@ impl Engine {
         // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
         unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };
         self.pool = vk::DescriptorPool::null();
+        self.srgb_table.destroy(gpu);
         self.pipelines.destroy(gpu);
     }
 }

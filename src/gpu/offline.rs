@@ -10,7 +10,7 @@ use crate::image::RgbaImage;
 use ash::vk;
 
 pub struct OfflineEngine {
-    engine: Engine,
+    pub(super) engine: Engine,
     pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
@@ -86,7 +86,7 @@ impl OfflineEngine {
     }
 
     /// Runs `record` in the command buffer, submits it and waits.
-    fn submit(
+    pub(super) fn submit(
         &self,
         record: impl FnOnce(vk::CommandBuffer) -> Result<(), GpuError>,
     ) -> Result<(), GpuError> {
@@ -166,8 +166,7 @@ impl OfflineEngine {
             self.submit(|cmd| {
                 self.engine
                     .record_background(&self.gpu, cmd, &bg, &[&view], params)?;
-                self.engine.record_enhance(&self.gpu, cmd, &view, params);
-                Ok(())
+                self.engine.record_enhance(&self.gpu, cmd, &view, params)
             })
         });
         let out = result.and_then(|_| {

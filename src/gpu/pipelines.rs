@@ -4,13 +4,14 @@
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::shaders::{self, ShaderModule};
-use crate::algorithm::params::{Params, SUBTRACTION_K_B, SUBTRACTION_K_V};
+use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
+use std::sync::Mutex;
 
-/// Bindings 0..=5 of shaders/common.wgsl, all storage buffers.
-pub const BINDING_COUNT: u32 = 6;
+/// Bindings 0..=8 of shaders/common.wgsl, all storage buffers.
+pub const BINDING_COUNT: u32 = 9;
 
-/// The push-constant block, laid out as WGSL lays out `Params` (96 bytes).
+/// The push-constant block, laid out as WGSL lays out `Params` (112 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PushConstants {
@@ -27,6 +28,9 @@ pub struct PushConstants {
     pub k_v: f32,
     pub k_b: f32,
     pub taps: [f32; 8],
+    pub mode: u32,
+    pub tile_columns: u32,
+    pub pad: [u32; 2],
 }
 
 impl PushConstants {
@@ -52,6 +56,9 @@ impl PushConstants {
             k_v: SUBTRACTION_K_V,
             k_b: SUBTRACTION_K_B,
             taps,
+            mode: params.mode.shader_code(),
+            tile_columns: region.0.div_ceil(super::engine::TILE),
+            pad: [0; 2],
         }
     }
 
@@ -72,7 +79,17 @@ pub struct Pipelines {
     pub decode_blur_h: vk::Pipeline,
     pub blur_v: vk::Pipeline,
     pub fov_map: vk::Pipeline,
-    pub enhance: vk::Pipeline,
+    pub finish_tiles: vk::Pipeline,
+    pub copy_pixels: vk::Pipeline,
+    /// The `enhance` and `classify` variants (shaders::ENHANCE_VARIANTS, then
+    /// shaders::CLASSIFY_VARIANTS), built on first use: each costs a compile in the driver and
+    /// a session uses a few.
+    variants: Mutex<Vec<vk::Pipeline>>,
+}
+
+fn no_variants() -> Mutex<Vec<vk::Pipeline>> {
+    let n = shaders::ENHANCE_VARIANTS.len() + shaders::CLASSIFY_VARIANTS.len();
+    Mutex::new(vec![vk::Pipeline::null(); n])
 }
 
 impl Pipelines {
@@ -83,7 +100,9 @@ impl Pipelines {
             decode_blur_h: vk::Pipeline::null(),
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
-            enhance: vk::Pipeline::null(),
+            finish_tiles: vk::Pipeline::null(),
+            copy_pixels: vk::Pipeline::null(),
+            variants: no_variants(),
         };
         // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
         if let Err(e) = p.build(gpu) {
@@ -120,8 +139,57 @@ impl Pipelines {
         self.decode_blur_h = self.compute_pipeline(gpu, &shaders::DECODE_BLUR_H)?;
         self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
         self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
-        self.enhance = self.compute_pipeline(gpu, &shaders::ENHANCE)?;
+        self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
+        self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         Ok(())
+    }
+
+    /// The `enhance` pipeline for a method, view mode and pixel format (shader codes).
+    pub fn enhance(
+        &self,
+        gpu: &GpuDevice,
+        method: u32,
+        mode: u32,
+        format: u32,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let method = if mode == ViewMode::Background.shader_code() {
+            0
+        } else {
+            method
+        };
+        let k = shaders::ENHANCE_VARIANTS
+            .iter()
+            .position(|&(m, v, f, _)| m == method && v == mode && f == format);
+        self.variant(gpu, k, |k| &shaders::ENHANCE_VARIANTS[k].3)
+    }
+
+    /// The `classify` pipeline for a pixel format (shader code).
+    pub fn classify(&self, gpu: &GpuDevice, format: u32) -> Result<vk::Pipeline, GpuError> {
+        let k = shaders::CLASSIFY_VARIANTS
+            .iter()
+            .position(|&(f, _)| f == format);
+        let offset = shaders::ENHANCE_VARIANTS.len();
+        self.variant(gpu, k.map(|k| k + offset), |k| {
+            &shaders::CLASSIFY_VARIANTS[k - offset].1
+        })
+    }
+
+    fn variant(
+        &self,
+        gpu: &GpuDevice,
+        k: Option<usize>,
+        module: impl Fn(usize) -> &'static ShaderModule,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let k = k.ok_or_else(|| {
+            GpuError::Unsupported("no shader for this method, mode and format".into())
+        })?;
+        let mut built = self.variants.lock().map_err(|_| {
+            GpuError::Unsupported("the pipeline cache was poisoned by an earlier panic".into())
+        })?;
+        if built[k] == vk::Pipeline::null() {
+            built[k] = self.compute_pipeline(gpu, module(k))?;
+        }
+        Ok(built[k])
     }
 
     fn compute_pipeline(
@@ -160,7 +228,20 @@ impl Pipelines {
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the caller guarantees the GPU no longer uses these objects.
         unsafe {
-            for p in [self.decode_blur_h, self.blur_v, self.fov_map, self.enhance] {
+            let variants = match self.variants.get_mut() {
+                Ok(v) => std::mem::take(v),
+                Err(poisoned) => std::mem::take(poisoned.into_inner()),
+            };
+            for p in [
+                self.decode_blur_h,
+                self.blur_v,
+                self.fov_map,
+                self.finish_tiles,
+                self.copy_pixels,
+            ]
+            .into_iter()
+            .chain(variants)
+            {
                 gpu.device.destroy_pipeline(p, None);
             }
             gpu.device.destroy_pipeline_layout(self.layout, None);
@@ -173,7 +254,9 @@ impl Pipelines {
             decode_blur_h: vk::Pipeline::null(),
             blur_v: vk::Pipeline::null(),
             fov_map: vk::Pipeline::null(),
-            enhance: vk::Pipeline::null(),
+            finish_tiles: vk::Pipeline::null(),
+            copy_pixels: vk::Pipeline::null(),
+            variants: no_variants(),
         };
     }
 }

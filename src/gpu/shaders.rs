@@ -2,6 +2,8 @@
 
 /// One compute entry point's SPIR-V words.
 pub struct ShaderModule {
+    /// The SPIR-V file's name (the entry, or the entry and its specialisation).
+    pub name: &'static str,
     pub entry: &'static str,
     bytes: &'static [u8],
 }
@@ -22,9 +24,13 @@ impl ShaderModule {
 
 macro_rules! spirv {
     ($entry:literal) => {
+        spirv!($entry, $entry)
+    };
+    ($name:literal, $entry:literal) => {
         ShaderModule {
+            name: $name,
             entry: $entry,
-            bytes: include_bytes!(concat!(env!("OUT_DIR"), "/", $entry, ".spv")),
+            bytes: include_bytes!(concat!(env!("OUT_DIR"), "/", $name, ".spv")),
         }
     };
 }
@@ -32,7 +38,23 @@ macro_rules! spirv {
 pub const DECODE_BLUR_H: ShaderModule = spirv!("decode_blur_h");
 pub const BLUR_V: ShaderModule = spirv!("blur_v");
 pub const FOV_MAP: ShaderModule = spirv!("fov_map");
-pub const ENHANCE: ShaderModule = spirv!("enhance");
+pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
+pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
+
+include!(concat!(env!("OUT_DIR"), "/enhance_variants.rs"));
 
 /// Every embedded shader (for spirv-val in the tests).
-pub const ALL: [&ShaderModule; 4] = [&DECODE_BLUR_H, &BLUR_V, &FOV_MAP, &ENHANCE];
+pub fn all() -> Vec<&'static ShaderModule> {
+    let fixed = [
+        &DECODE_BLUR_H,
+        &BLUR_V,
+        &FOV_MAP,
+        &FINISH_TILES,
+        &COPY_PIXELS,
+    ];
+    fixed
+        .into_iter()
+        .chain(ENHANCE_VARIANTS.iter().map(|(_, _, _, m)| m))
+        .chain(CLASSIFY_VARIANTS.iter().map(|(_, m)| m))
+        .collect()
+}

@@ -452,7 +452,7 @@ impl Processor {
         }
         for i in items {
             self.engine
-                .record_enhance(&self.gpu, self.cmd, &self.views[&i.key].target, params);
+                .record_enhance(&self.gpu, self.cmd, &self.views[&i.key].target, params)?;
         }
         barrier(&self.gpu, self.cmd, S::COMPUTE_SHADER, S::TRANSFER);
         for (i, (_, after)) in items.iter().zip(staging) {

@@ -16,6 +16,8 @@ usage: contrastxr-xr-client [options]
   --validation            enable VK_LAYER_KHRONOS_validation; any error fails the run
   --list-formats          print the formats the runtime offers and exit
   --json                  print the final report as one JSON line on stdout
+  --timing                report the time spent in xrEndFrame and, after it, waiting for the
+                          queue to drain (a layer's GPU work), per frame (median, p95)
   --provoke-xr-validation-error, --provoke-vk-validation-error
                           make one invalid call on purpose (to test that validation is seen)";
 
@@ -47,6 +49,7 @@ pub struct Options {
     pub validation: bool,
     pub list_formats: bool,
     pub json: bool,
+    pub timing: bool,
     pub provoke_xr_error: bool,
     pub provoke_vk_error: bool,
 }
@@ -62,6 +65,7 @@ impl Default for Options {
             validation: false,
             list_formats: false,
             json: false,
+            timing: false,
             provoke_xr_error: false,
             provoke_vk_error: false,
         }
@@ -84,6 +88,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--validation" => options.validation = true,
             "--list-formats" => options.list_formats = true,
             "--json" => options.json = true,
+            "--timing" => options.timing = true,
             "--provoke-xr-validation-error" => options.provoke_xr_error = true,
             "--provoke-vk-validation-error" => options.provoke_vk_error = true,
             "-h" | "--help" => return Err(USAGE.to_string()),

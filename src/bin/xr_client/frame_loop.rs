@@ -22,6 +22,9 @@ pub struct Stats {
     /// All xrEndFrame calls, including those with no layers when the runtime said not to render.
     pub frames_ended: u32,
     pub reached_focused: bool,
+    /// With --timing: milliseconds inside xrEndFrame, and waiting for the queue after it.
+    pub end_frame_ms: Vec<f64>,
+    pub drain_ms: Vec<f64>,
 }
 
 /// What the frame loop draws with.
@@ -86,7 +89,7 @@ pub fn run(
             exit_requested = true;
         }
         // Frames go on until STOPPING arrives, as the spec asks after xrRequestExitSession.
-        frame(scene, frame_waiter, frame_stream, options.layout, stats)?;
+        frame(scene, frame_waiter, frame_stream, options, stats)?;
     }
 }
 
@@ -94,9 +97,10 @@ fn frame(
     scene: &mut Scene<'_>,
     frame_waiter: &mut xr::FrameWaiter,
     frame_stream: &mut xr::FrameStream<xr::Vulkan>,
-    layout: Layout,
+    options: &Options,
     stats: &mut Stats,
 ) -> Result<()> {
+    let layout = options.layout;
     let state = frame_waiter.wait().ctx("xrWaitFrame")?;
     frame_stream.begin().ctx("xrBeginFrame")?;
     stats.frames_ended += 1;
@@ -143,9 +147,16 @@ fn frame(
     if let Some(quad) = &quad {
         layers.push(quad);
     }
+    let start = Instant::now();
     frame_stream
         .end(state.predicted_display_time, scene.blend_mode, &layers)
         .ctx("xrEndFrame")?;
+    if options.timing {
+        let ended = Instant::now();
+        scene.gpu.wait_idle()?;
+        stats.end_frame_ms.push((ended - start).as_secs_f64() * 1e3);
+        stats.drain_ms.push(ended.elapsed().as_secs_f64() * 1e3);
+    }
     stats.frames_submitted += 1;
     Ok(())
 }

@@ -106,6 +106,13 @@ impl Gpu {
         }
     }
 
+    /// Waits until the queue has run everything submitted to it, including what a layer
+    /// submitted inside xrEndFrame (for --timing).
+    pub fn wait_idle(&self) -> Result<()> {
+        // SAFETY: the queue is the client's; no other thread uses it during this call.
+        unsafe { self.device.queue_wait_idle(self.queue) }.ctx("vkQueueWaitIdle")
+    }
+
     /// Records commands with `record`, submits them and waits until the GPU has run them, so the
     /// images they write can be released to the runtime right after.
     pub fn submit_and_wait(

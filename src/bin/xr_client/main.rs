@@ -53,6 +53,9 @@ fn main() -> ExitCode {
     report.frames_submitted = stats.frames_submitted;
     report.frames_ended = stats.frames_ended;
     report.reached_focused = stats.reached_focused;
+    if options.timing {
+        report.timing = Some(report::Timing::new(&stats.end_frame_ms, &stats.drain_ms));
+    }
     report.vk_validation_errors = validation::errors();
     report.vk_validation_warnings = validation::warnings();
     let ran = options.list_formats || stats.frames_submitted >= options.frames;

@@ -21,6 +21,46 @@ pub struct Report {
     pub vk_validation_errors: u32,
     pub vk_validation_warnings: u32,
     pub errors: Vec<String>,
+    /// With --timing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timing: Option<Timing>,
+}
+
+/// Per-frame times in milliseconds over the frames after the first `warm_up`.
+#[derive(Serialize, Debug, Default)]
+pub struct Timing {
+    pub frames: usize,
+    pub warm_up: usize,
+    pub end_frame_ms_median: f64,
+    pub end_frame_ms_p95: f64,
+    pub drain_ms_median: f64,
+    pub drain_ms_p95: f64,
+}
+
+/// Frames left out of the timing (pipeline compiles, first allocations).
+const WARM_UP_FRAMES: usize = 10;
+
+fn percentile(v: &[f64], p: f64) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    v.get(((v.len() as f64 - 1.0) * p).round() as usize)
+        .copied()
+        .unwrap_or(f64::NAN)
+}
+
+impl Timing {
+    pub fn new(end_frame_ms: &[f64], drain_ms: &[f64]) -> Timing {
+        let skip = WARM_UP_FRAMES.min(end_frame_ms.len() / 2);
+        let (e, d) = (&end_frame_ms[skip..], &drain_ms[skip..]);
+        Timing {
+            frames: e.len(),
+            warm_up: skip,
+            end_frame_ms_median: percentile(e, 0.5),
+            end_frame_ms_p95: percentile(e, 0.95),
+            drain_ms_median: percentile(d, 0.5),
+            drain_ms_p95: percentile(d, 0.95),
+        }
+    }
 }
 
 impl Report {

@@ -1,0 +1,158 @@
+//! `contrastxr bench`: GPU time of the enhancement against a plain copy of the same pixels.
+
+use super::args::Args;
+use super::CliError;
+use contrastxr::algorithm::{Method, Params};
+use contrastxr::gpu::bench::{BenchCase, BenchResult, Content};
+use contrastxr::gpu::{DeviceOptions, OfflineEngine};
+
+const DEFAULT_SIZES: &str = "1268x720,2064x2208,3840x3840";
+
+pub fn usage() -> String {
+    format!(
+        "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
+         \x20                       [--method NAME]\n\n\
+         Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
+         --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
+         the per-frame enhancement, and the per-camera-frame background preparation\n\
+         (camera {}x{}). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
+         with typical content (mostly black: panels and an object) and full frames.\n\
+         Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
+        contrastxr::gpu::bench::WARM_UP_RUNS,
+        contrastxr::gpu::bench::CAMERA_SIZE.0,
+        contrastxr::gpu::bench::CAMERA_SIZE.1,
+    )
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
+    let bad = || CliError::Usage(format!("size '{s}' is not WIDTHxHEIGHT"));
+    let (w, h) = s.trim().split_once('x').ok_or_else(bad)?;
+    let (w, h) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
+    if w == 0 || h == 0 || u64::from(w) * u64::from(h) > 1 << 26 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn parse_count(what: &str, s: Option<String>, default: u32) -> Result<u32, CliError> {
+    match s {
+        None => Ok(default),
+        Some(s) => {
+            s.parse().ok().filter(|&n| n > 0).ok_or_else(|| {
+                CliError::Usage(format!("{what} must be a positive count, got '{s}'"))
+            })
+        }
+    }
+}
+
+pub fn run(args: &mut Args) -> Result<(), CliError> {
+    let sizes = args
+        .value(&["--sizes"])?
+        .unwrap_or_else(|| DEFAULT_SIZES.into());
+    let sizes: Vec<(u32, u32)> = sizes.split(',').map(parse_size).collect::<Result<_, _>>()?;
+    let views = parse_count("--views", args.value(&["--views"])?, 2)?;
+    let runs = parse_count("--runs", args.value(&["--runs"])?, 30)?;
+    let device = match args.value(&["--device"])? {
+        None => 0,
+        Some(d) => d
+            .parse()
+            .map_err(|_| CliError::Usage(format!("--device must be an index, got '{d}'")))?,
+    };
+    let method = match args.value(&["--method"])? {
+        None => Method::Paper,
+        Some(m) => {
+            Method::parse(&m).ok_or_else(|| CliError::Usage(format!("unknown method '{m}'")))?
+        }
+    };
+    let json = args.flag("--json");
+    args.finish()?;
+    let options = DeviceOptions {
+        index: device,
+        validation: false,
+    };
+    let mut engine =
+        OfflineEngine::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
+    let params = Params {
+        method,
+        ..Params::default()
+    };
+    let mut results = Vec::new();
+    if !json {
+        super::print(&format!("device: {}\n{}\n", engine.device_name(), header()));
+    }
+    for &region in &sizes {
+        for content in Content::ALL {
+            let case = BenchCase {
+                region,
+                views,
+                content,
+                runs,
+            };
+            let r = engine
+                .bench(&case, &params)
+                .map_err(|e| CliError::Failure(e.to_string()))?;
+            if !json {
+                super::print(&row(&r));
+            }
+            results.push(r);
+        }
+    }
+    if json {
+        super::print(&format!("{}\n", to_json(engine.device_name(), &results)));
+    }
+    Ok(())
+}
+
+fn header() -> String {
+    format!(
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>7} {:>9} {:>6}",
+        "size",
+        "views",
+        "content",
+        "fg %",
+        "copy ms",
+        "enh ms",
+        "bg ms",
+        "ratio",
+        "enh Mpx/s",
+        "Mpx"
+    )
+}
+
+fn row(r: &BenchResult) -> String {
+    let (w, h) = r.case.region;
+    format!(
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9.3} {:>9.3} {:>7.2} {:>9.0} {:>6.2}\n",
+        format!("{w}x{h}"),
+        r.case.views,
+        r.case.content.name(),
+        100.0 * r.foreground,
+        r.copy_ms,
+        r.enhance_ms,
+        r.background_ms,
+        r.ratio(),
+        r.megapixels() / (r.enhance_ms / 1e3),
+        r.megapixels(),
+    )
+}
+
+fn to_json(device: &str, results: &[BenchResult]) -> String {
+    let rows: Vec<serde_json::Value> = results
+        .iter()
+        .map(|r| {
+            serde_json::json!({
+                "width": r.case.region.0,
+                "height": r.case.region.1,
+                "views": r.case.views,
+                "content": r.case.content.name(),
+                "foreground_fraction": r.foreground,
+                "runs": r.case.runs,
+                "copy_ms": r.copy_ms,
+                "enhance_ms": r.enhance_ms,
+                "background_ms": r.background_ms,
+                "ratio": r.ratio(),
+            })
+        })
+        .collect();
+    serde_json::json!({ "device": device, "results": rows }).to_string()
+}
