@@ -279,13 +279,16 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
         }
         first_x = max(x0, half + 1u);
     }
-    let x1 = min(x0 + TILE, pc.region_size.x);
-    let y1 = min(y0 + TILE, pc.region_size.y);
+    // Constant trip counts (8 x 8) so the shader compiler unrolls the loops; pixels outside
+    // the region or left of the split divider are masked instead of looped around.
     var found = false;
-    for (var y = y0; y < y1; y++) {
-        for (var x = first_x; x < x1; x++) {
-            let px = load_pixel(y * pc.region_size.x + x);
-            found = found || !(px.black || px.alpha == 0.0);
+    for (var dy = 0u; dy < TILE; dy++) {
+        let y = y0 + dy;
+        for (var dx = 0u; dx < TILE; dx++) {
+            let x = x0 + dx;
+            let inside = y < pc.region_size.y && x < pc.region_size.x && x >= first_x;
+            let px = load_pixel(select(0u, y * pc.region_size.x + x, inside));
+            found = found || (inside && !(px.black || px.alpha == 0.0));
         }
     }
     return found;

@@ -503,3 +503,35 @@ fn every_tile_is_enhanced_when_the_list_needs_more_than_one_dispatch_row() {
     assert_eq!(missed, 0, "{missed} pixels not enhanced like the others");
     assert_clean(&e);
 }
+
+#[test]
+fn isolated_pixels_in_edge_and_partial_tiles_are_enhanced() {
+    let mut e = engine();
+    // 67x41: the last tile column and row are partial. Black (skipped) except a few pixels.
+    let mut display = RgbaImage::new(67, 41, [0, 0, 0, 255]);
+    let spots = [
+        (0, 0),
+        (66, 0),
+        (0, 40),
+        (66, 40),
+        (33, 20),
+        (8, 8),
+        (7, 7),
+        (64, 39),
+    ];
+    for (k, &(x, y)) in spots.iter().enumerate() {
+        display.set(x, y, [200, 60 + 20 * k as u8, 90, 255]);
+    }
+    let camera = RgbaImage::new(20, 20, [230, 220, 40, 255]);
+    let params = Params::default();
+    let out = e.enhance(&display, &camera, &params).unwrap();
+    for &(x, y) in &spots {
+        assert_ne!(
+            out.get(x, y),
+            display.get(x, y),
+            "pixel ({x},{y}) was not enhanced"
+        );
+    }
+    assert!(nonconformant(&mut e, &display, &camera, &params).is_empty());
+    assert_clean(&e);
+}
