@@ -24,8 +24,9 @@ struct Params {
     mode: u32,
     // Tiles per row of the region (TILE x TILE pixels each).
     tile_columns: u32,
-    pad0: u32,
-    pad1: u32,
+    // Beyond the paper (0 = off): chroma boost on near-grey backgrounds; luminance cap.
+    achromatic_boost: f32,
+    luminance_cap: f32,
 }
 
 var<immediate> pc: Params;

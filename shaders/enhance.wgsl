@@ -110,6 +110,31 @@ fn jnd_constraint(d: vec3<f32>, p: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     return d + s * pd;
 }
 
+// Beyond the paper (off at 0): on a near-grey background, move P further along D's own chroma
+// direction by achromatic_boost x the room left under lambda_e (see src/algorithm/scaled.rs).
+const ACHROMATIC_CHROMA: f32 = 0.08;
+
+fn achromatic_boost(d: vec3<f32>, p: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    let b_chroma = length(b.yz);
+    let d_chroma = length(d.yz);
+    if (pc.achromatic_boost <= 0.0 || b_chroma >= ACHROMATIC_CHROMA || d_chroma <= 1e-6) {
+        return p;
+    }
+    let room = max(pc.lambda_e - length(p - d), 0.0);
+    let k = pc.achromatic_boost * (1.0 - b_chroma / ACHROMATIC_CHROMA) * room / d_chroma;
+    return p + vec3<f32>(0.0, k * d.yz);
+}
+
+// Beyond the paper (off at 0): the output's luminance Y at most (1 + luminance_cap) x the input's.
+fn cap_luminance(display: vec3<f32>, out: vec3<f32>) -> vec3<f32> {
+    if (pc.luminance_cap <= 0.0) {
+        return out;
+    }
+    let limit = (1.0 + pc.luminance_cap) * dot(RGB_TO_XYZ_1, display);
+    let y = dot(RGB_TO_XYZ_1, out);
+    return select(out, out * (limit / y), y > limit);
+}
+
 // Algorithm 1 in the scaled space; returns P (== D where nothing changes).
 fn enhance_scaled(d: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     let nb = length(b);
@@ -143,7 +168,7 @@ fn enhance_scaled(d: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
             let ne = length(e);
             let cos_l = select(0.0, e.x / ne, ne > 0.0);
             let p = d + vec3<f32>((1.0 - abs(cos_l)) * e.x, dir_ab);
-            return jnd_constraint(d, p, b);
+            return jnd_constraint(d, achromatic_boost(d, p, b), b);
         }
     }
 }
@@ -158,14 +183,14 @@ struct Enhanced {
 fn enhance_linear(i: u32, display: vec3<f32>) -> Enhanced {
     if (METHOD == METHOD_SUBTRACTION) {
         let out = pc.k_v * display - pc.k_b * bg_linear[i].rgb;
-        return Enhanced(clamp(out, vec3<f32>(0.0), vec3<f32>(1.0)), true);
+        return Enhanced(cap_luminance(display, clamp(out, vec3<f32>(0.0), vec3<f32>(1.0))), true);
     }
     let d = linear_to_scaled(display);
     let p = enhance_scaled(d, bg_scaled[i].xyz);
     if (all(p == d)) {
         return Enhanced(display, false);
     }
-    return Enhanced(clamp(scaled_to_linear(p), vec3<f32>(0.0), vec3<f32>(1.0)), true);
+    return Enhanced(cap_luminance(display, clamp(scaled_to_linear(p), vec3<f32>(0.0), vec3<f32>(1.0))), true);
 }
 
 fn is_srgb() -> bool {

@@ -535,3 +535,22 @@ fn isolated_pixels_in_edge_and_partial_tiles_are_enhanced() {
     assert!(nonconformant(&mut e, &display, &camera, &params).is_empty());
     assert_clean(&e);
 }
+
+#[test]
+fn gpu_matches_cpu_with_the_options_beyond_the_paper() {
+    let mut e = engine();
+    let display = noise(61, 47, 33);
+    // A greyish camera so the achromatic boost is active on much of the frame.
+    let mut camera = noise(40, 30, 8);
+    for p in camera.pixels.iter_mut() {
+        let g = p[0] / 2 + 64;
+        *p = [g, g.saturating_add(p[1] % 6), g, 255];
+    }
+    let base = Params {
+        achromatic_boost: 1.0,
+        luminance_cap: 0.1,
+        ..Params::default()
+    };
+    check_all_methods(&mut e, &display, &camera, &base);
+    assert_clean(&e);
+}

@@ -116,7 +116,18 @@ pub struct Params {
     pub method: Method,
     /// What the layer shows; the CPU reference and the CLI implement `Enhance` only.
     pub mode: ViewMode,
+    /// Beyond the paper (its first limitation): on a near-grey background the complementary
+    /// direction is mostly luminance, which the luminance constraint suppresses. With a boost
+    /// in (0, 1], the paper method also raises the display colour's own chroma there, by up to
+    /// this fraction of the room left under lambda_e. 0 = off (the paper's method exactly).
+    pub achromatic_boost: f32,
+    /// Beyond the paper (its second limitation): the output's luminance Y is at most
+    /// (1 + luminance_cap) times the input's, scaling the colour down if needed. 0 = off.
+    pub luminance_cap: f32,
 }
+
+/// Background chroma (scaled a'b' length, ~10 a*b* units) below which it counts as near grey.
+pub const ACHROMATIC_CHROMA: f64 = 0.08;
 
 impl Default for Params {
     fn default() -> Self {
@@ -132,6 +143,8 @@ impl Default for Params {
             fov: true,
             method: Method::Paper,
             mode: ViewMode::Enhance,
+            achromatic_boost: 0.0,
+            luminance_cap: 0.0,
         }
     }
 }
@@ -176,6 +189,8 @@ impl Params {
             ("fov_scale.y", self.fov_scale[1]),
             ("fov_offset.x", self.fov_offset[0]),
             ("fov_offset.y", self.fov_offset[1]),
+            ("achromatic_boost", self.achromatic_boost),
+            ("luminance_cap", self.luminance_cap),
         ];
         for (name, v) in finite {
             if !v.is_finite() {
@@ -189,6 +204,18 @@ impl Params {
             return Err(format!(
                 "lambda_jnd_scaled must be >= 0, got {}",
                 self.lambda_jnd_scaled
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.achromatic_boost) {
+            return Err(format!(
+                "achromatic_boost must be in [0, 1], got {}",
+                self.achromatic_boost
+            ));
+        }
+        if self.luminance_cap < 0.0 {
+            return Err(format!(
+                "luminance_cap must be >= 0 (0 = off), got {}",
+                self.luminance_cap
             ));
         }
         if !(0.0..=1.0).contains(&self.transmittance) {

@@ -13,11 +13,28 @@ struct LinearOutcome {
     /// Before the [0, 1] clip.
     unclipped: DVec3,
     margin: f64,
+    /// The luminance cap's factor on the clipped colour (1 when off or not reached).
+    cap_scale: f64,
 }
 
 impl LinearOutcome {
     fn linear(&self) -> DVec3 {
-        self.unclipped.clamp(DVec3::ZERO, DVec3::ONE)
+        self.unclipped.clamp(DVec3::ZERO, DVec3::ONE) * self.cap_scale
+    }
+}
+
+/// The optional cap beyond the paper: the factor that keeps the clipped output's luminance Y
+/// at most (1 + cap) times the display's (display power never rises beyond that fraction).
+fn luminance_cap_scale(display_linear: DVec3, unclipped: DVec3, cap: f32) -> f64 {
+    if cap <= 0.0 {
+        return 1.0;
+    }
+    let limit = (1.0 + f64::from(cap)) * colour::linear_to_xyz(display_linear).y;
+    let y = colour::linear_to_xyz(unclipped.clamp(DVec3::ZERO, DVec3::ONE)).y;
+    if y > limit {
+        limit / y
+    } else {
+        1.0
     }
 }
 
@@ -39,6 +56,7 @@ fn enhance_linear_traced(
         return LinearOutcome {
             unclipped,
             margin: f64::INFINITY,
+            cap_scale: luminance_cap_scale(display_linear, unclipped, params.luminance_cap),
         };
     }
     let display = colour::linear_to_scaled(display_linear);
@@ -53,6 +71,7 @@ fn enhance_linear_traced(
     LinearOutcome {
         unclipped,
         margin: out.margin,
+        cap_scale: luminance_cap_scale(display_linear, unclipped, params.luminance_cap),
     }
 }
 

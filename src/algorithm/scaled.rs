@@ -7,6 +7,7 @@ use super::constraints::{
     ab_plane, change_vector, chroma_constraint, jnd_constraint, luminance_constraint, split_chroma,
     Margin,
 };
+use super::params::ACHROMATIC_CHROMA;
 use super::{Method, Params, DIRECTION_EPSILON};
 
 /// P and how close the computation came to a branch flip.
@@ -44,8 +45,36 @@ pub fn enhance_scaled_traced(display: DVec3, background: DVec3, params: &Params)
 fn paper(display: DVec3, background: DVec3, e: DVec3, params: &Params, m: &mut Margin) -> DVec3 {
     let dir_ab = chroma_constraint(display, e, m);
     let dir = DVec3::new(luminance_constraint(e), dir_ab.y, dir_ab.z);
+    let p = achromatic_boost(display, display + dir, background, params, m);
     let r = f64::from(params.lambda_jnd_scaled);
-    jnd_constraint(display, display + dir, background, r, m)
+    jnd_constraint(display, p, background, r, m)
+}
+
+/// The optional boost beyond the paper: on a near-grey background, move P further along the
+/// display colour's own chroma direction by `achromatic_boost` x (the room left under lambda_e),
+/// fading out as the background's chroma reaches ACHROMATIC_CHROMA. |P - D| stays <= lambda_e
+/// (triangle inequality) and chroma only grows.
+fn achromatic_boost(
+    display: DVec3,
+    p: DVec3,
+    background: DVec3,
+    params: &Params,
+    m: &mut Margin,
+) -> DVec3 {
+    let boost = f64::from(params.achromatic_boost);
+    if boost <= 0.0 {
+        return p;
+    }
+    let b_chroma = ab_plane(background).length();
+    let d_ab = ab_plane(display);
+    let d_chroma = d_ab.length();
+    m.note(b_chroma, ACHROMATIC_CHROMA);
+    m.note(d_chroma, DIRECTION_EPSILON);
+    if b_chroma >= ACHROMATIC_CHROMA || d_chroma <= DIRECTION_EPSILON {
+        return p;
+    }
+    let room = (f64::from(params.lambda_e) - (p - display).length()).max(0.0);
+    p + boost * (1.0 - b_chroma / ACHROMATIC_CHROMA) * room * (d_ab / d_chroma)
 }
 
 /// E'_h, the hue part of E'. For an achromatic D all of E' counts as hue change, as in the

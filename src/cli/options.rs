@@ -12,6 +12,8 @@ method and preprocessing options (defaults are the paper's):
   --lambda-e F             maximum colour change, scaled LAB units (0.4; 0 = no change)
   --lambda-jnd-scaled F    JND sphere radius, scaled units (0.046 = Delta E 2.3)
   --transmittance F        lens transmittance applied to the background (0.4)
+  --achromatic-boost F     beyond the paper: raise chroma on near-grey backgrounds (0 = off, <= 1)
+  --luminance-cap F        beyond the paper: output luminance <= (1 + F) x input (0 = off)
   --blur-size N            Gaussian kernel size on the camera grid, odd (3)
   --blur-sigma F           Gaussian sigma in camera pixels (1.5)
   --no-blur                no background blur
@@ -34,6 +36,8 @@ pub fn params(args: &mut Args) -> Result<Params, CliError> {
     number(args, "--lambda-e", &mut p.lambda_e)?;
     number(args, "--lambda-jnd-scaled", &mut p.lambda_jnd_scaled)?;
     number(args, "--transmittance", &mut p.transmittance)?;
+    number(args, "--achromatic-boost", &mut p.achromatic_boost)?;
+    number(args, "--luminance-cap", &mut p.luminance_cap)?;
     number(args, "--blur-sigma", &mut p.blur_sigma)?;
     if let Some(v) = args.value(&["--blur-size"])? {
         p.blur_size = v.trim().parse().map_err(|_| {

@@ -30,7 +30,8 @@ pub struct PushConstants {
     pub taps: [f32; 8],
     pub mode: u32,
     pub tile_columns: u32,
-    pub pad: [u32; 2],
+    pub achromatic_boost: f32,
+    pub luminance_cap: f32,
 }
 
 impl PushConstants {
@@ -58,7 +59,8 @@ impl PushConstants {
             taps,
             mode: params.mode.shader_code(),
             tile_columns: region.0.div_ceil(super::engine::TILE),
-            pad: [0; 2],
+            achromatic_boost: params.achromatic_boost,
+            luminance_cap: params.luminance_cap,
         }
     }
 

@@ -113,6 +113,7 @@ impl Settings {
             fov: !r.flag("CONTRASTXR_NO_FOV"),
             method,
             mode: d.mode,
+            ..Params::default()
         };
         if let Err(e) = params.validate() {
             r.warnings
