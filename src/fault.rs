@@ -67,9 +67,15 @@ pub fn hit(name: &str) -> bool {
     }
 }
 
-/// The error text an injected fault carries, so its one log line names it.
-pub fn message(name: &str) -> String {
-    format!("fault injected at {name} (CONTRASTXR_FAULT)")
+/// `Err` with the text an injected fault carries (so its one log line names it) when the
+/// fault point `name` must fail now. Call sites stay one line:
+/// `crate::fault::check("allocation").map_err(GpuError::Unsupported)?;`
+pub fn check(name: &str) -> Result<(), String> {
+    if hit(name) {
+        Err(format!("fault injected at {name} (CONTRASTXR_FAULT)"))
+    } else {
+        Ok(())
+    }
 }
 
 #[cfg(test)]
