@@ -17,7 +17,14 @@ usage: contrastxr-xr-client [options]
   --list-formats          print the formats the runtime offers and exit
   --json                  print the final report as one JSON line on stdout
   --provoke-xr-validation-error, --provoke-vk-validation-error
-                          make one invalid call on purpose (to test that validation is seen)";
+                          make one invalid call on purpose (to test that validation is seen)
+  --provoke-vk-sync-hazard
+                          record two unsynchronised writes (to test that sync validation is on)
+  --sessions N            create, run (--frames each) and destroy N sessions in turn (default 1)
+  --check-untouched       read each swapchain image back when it is acquired again and report
+                          the frames whose pixels changed after the client wrote them
+  The JSON report holds resident memory and open file descriptors every 50 frames
+  (`memory`) and after each session (`sessions`).";
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
@@ -49,6 +56,9 @@ pub struct Options {
     pub json: bool,
     pub provoke_xr_error: bool,
     pub provoke_vk_error: bool,
+    pub provoke_sync_hazard: bool,
+    pub sessions: u32,
+    pub check_untouched: bool,
 }
 
 impl Default for Options {
@@ -64,6 +74,9 @@ impl Default for Options {
             json: false,
             provoke_xr_error: false,
             provoke_vk_error: false,
+            provoke_sync_hazard: false,
+            sessions: 1,
+            check_untouched: false,
         }
     }
 }
@@ -86,6 +99,11 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--json" => options.json = true,
             "--provoke-xr-validation-error" => options.provoke_xr_error = true,
             "--provoke-vk-validation-error" => options.provoke_vk_error = true,
+            "--provoke-vk-sync-hazard" => options.provoke_sync_hazard = true,
+            "--check-untouched" => options.check_untouched = true,
+            "--sessions" => {
+                options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?
+            }
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown argument {other}\n{USAGE}")),
         }
