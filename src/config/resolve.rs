@@ -165,7 +165,7 @@ impl Resolved {
                 self.offer(index, value, Origin::Env(key.env));
             }
         }
-        self.settings.enabled = env.get("CONTRASTXR").is_none_or(|v| !is_off(&v));
+        self.settings.enabled = !env.get("CONTRASTXR").is_some_and(|v| is_off(&v));
     }
 }
 

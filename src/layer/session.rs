@@ -18,6 +18,8 @@ use std::collections::HashMap;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrCreateSession.
 pub unsafe extern "system" fn create_session(
     instance: xr::Instance,
     info: *const xr::SessionCreateInfo,
@@ -197,6 +199,8 @@ pub fn forget(session: xr::Session) {
         .retain(|_, sc| lock(sc).session != session);
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrDestroySession.
 pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Result {
     guard(
         "xrDestroySession",
@@ -382,6 +386,8 @@ fn write_capture(
     }
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrEndFrame.
 pub unsafe extern "system" fn end_frame(
     session: xr::Session,
     info: *const xr::FrameEndInfo,

@@ -346,3 +346,27 @@ impl Call {
         }
     }
 }
+
+/// The `contrastxr` CLI built with the tests.
+pub const CLI: &str = env!("CARGO_BIN_EXE_contrastxr");
+
+/// The lines the contrastxr layer logged in a run (its stderr lines start with `contrastxr: `).
+pub fn layer_lines(run: &SandboxRun) -> Vec<String> {
+    run.stderr
+        .lines()
+        .filter_map(|l| l.strip_prefix("contrastxr: "))
+        .map(String::from)
+        .collect()
+}
+
+/// Turns on the Vulkan validation layer's synchronisation validation (the app enables the
+/// layer itself; this is its documented settings variable).
+pub const SYNC_VALIDATION: (&str, &str) = ("VK_KHRONOS_VALIDATION_VALIDATE_SYNC", "true");
+
+/// A fresh scratch folder under the target directory (visible inside the sandbox).
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = scratch_file(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create a scratch folder");
+    dir
+}

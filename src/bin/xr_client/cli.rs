@@ -20,6 +20,7 @@ usage: contrastxr-xr-client [options]
                           make one invalid call on purpose (to test that validation is seen)
   --provoke-vk-sync-hazard
                           record two unsynchronised writes (to test that sync validation is on)
+  --provoke-vk-leak       leave one buffer undestroyed (to test that leaks are reported)
   --sessions N            create, run (--frames each) and destroy N sessions in turn (default 1)
   --check-untouched       read each swapchain image back when it is acquired again and report
                           the frames whose pixels changed after the client wrote them
@@ -57,6 +58,7 @@ pub struct Options {
     pub provoke_xr_error: bool,
     pub provoke_vk_error: bool,
     pub provoke_sync_hazard: bool,
+    pub provoke_leak: bool,
     pub sessions: u32,
     pub check_untouched: bool,
 }
@@ -75,6 +77,7 @@ impl Default for Options {
             provoke_xr_error: false,
             provoke_vk_error: false,
             provoke_sync_hazard: false,
+            provoke_leak: false,
             sessions: 1,
             check_untouched: false,
         }
@@ -100,6 +103,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--provoke-xr-validation-error" => options.provoke_xr_error = true,
             "--provoke-vk-validation-error" => options.provoke_vk_error = true,
             "--provoke-vk-sync-hazard" => options.provoke_sync_hazard = true,
+            "--provoke-vk-leak" => options.provoke_leak = true,
             "--check-untouched" => options.check_untouched = true,
             "--sessions" => {
                 options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?

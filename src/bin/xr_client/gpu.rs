@@ -186,7 +186,10 @@ impl Gpu {
             .usage(vk::BufferUsageFlags::TRANSFER_DST);
         // SAFETY: a valid buffer bound to fresh memory; both are destroyed after the wait.
         unsafe {
-            let buffer = self.device.create_buffer(&info, None).ctx("vkCreateBuffer")?;
+            let buffer = self
+                .device
+                .create_buffer(&info, None)
+                .ctx("vkCreateBuffer")?;
             let reqs = self.device.get_buffer_memory_requirements(buffer);
             let alloc = vk::MemoryAllocateInfo::default()
                 .allocation_size(reqs.size)
@@ -206,6 +209,19 @@ impl Gpu {
             self.device.free_memory(memory, None);
             result
         }
+    }
+}
+
+impl Gpu {
+    /// Creates a buffer and never destroys it: validation must report it when the device is
+    /// destroyed (what the session-cycle test relies on to see the layer's leaks).
+    pub fn provoke_leak(&self) -> Result<()> {
+        let info = vk::BufferCreateInfo::default()
+            .size(256)
+            .usage(vk::BufferUsageFlags::TRANSFER_DST);
+        // SAFETY: a valid create info; leaking the buffer is the point.
+        unsafe { self.device.create_buffer(&info, None) }.ctx("vkCreateBuffer")?;
+        Ok(())
     }
 }
 

@@ -56,8 +56,7 @@ fn main() -> ExitCode {
     report.reached_focused = stats.reached_focused;
     report.vk_validation_errors = validation::errors();
     report.vk_validation_warnings = validation::warnings();
-    let ran =
-        options.list_formats || stats.frames_submitted >= options.frames * options.sessions;
+    let ran = options.list_formats || stats.frames_submitted >= options.frames * options.sessions;
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     if options.json {
         eprintln!("{}", report.summary());
@@ -113,6 +112,9 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     let gpu = Gpu::new(&instance, system, options.validation)?;
     if options.provoke_vk_error {
         gpu.provoke_validation_error();
+    }
+    if options.provoke_leak {
+        gpu.provoke_leak()?;
     }
     if options.provoke_sync_hazard {
         gpu.provoke_sync_hazard()?;

@@ -207,7 +207,10 @@ impl PatternSwapchain {
         index: u32,
         range: vk::ImageSubresourceRange,
     ) -> bool {
-        let Some(check) = self.check.as_ref().filter(|c| c.written[index as usize].is_some())
+        let Some(check) = self
+            .check
+            .as_ref()
+            .filter(|c| c.written[index as usize].is_some())
         else {
             return false;
         };
@@ -268,8 +271,7 @@ impl PatternSwapchain {
                 device
                     .map_memory(check.memory, 0, len as u64, vk::MemoryMapFlags::empty())
                     .map(|p| {
-                        let same =
-                            std::slice::from_raw_parts(p.cast::<u8>(), len) == check.pattern;
+                        let same = std::slice::from_raw_parts(p.cast::<u8>(), len) == check.pattern;
                         device.unmap_memory(check.memory);
                         same
                     })
