@@ -533,3 +533,33 @@ proptest! {
         }
     }
 }
+
+/// The commented example config in the repository is valid and shows every key.
+#[test]
+fn example_config_is_valid_and_complete() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("contrastxr.example.toml");
+    let text = std::fs::read_to_string(&path).expect("contrastxr.example.toml");
+    let problems = config::check(Source {
+        path: &path,
+        text: &text,
+    });
+    assert!(problems.is_empty(), "{problems:#?}");
+    for key in KEYS {
+        assert!(
+            text.contains(&format!("\n{} = ", key.name)),
+            "{} is not shown",
+            key.name
+        );
+        assert!(text.contains(key.env), "{} is not named", key.env);
+    }
+    // Its top-level values are the defaults.
+    let r = config::resolve(
+        "",
+        Some(Source {
+            path: &path,
+            text: &text,
+        }),
+        &Env::default(),
+    );
+    assert_eq!(r.settings, config::Settings::default());
+}
