@@ -77,7 +77,13 @@ fn client(tag: &str, config: &Path, env: &[(&str, &str)], args: &[&str]) -> Opti
     all.extend(env);
     let mut cmd = vec![XR_CLIENT, "--validation", "--json"];
     cmd.extend(args);
-    let run = sandbox.run(&cmd, &all);
+    // 20 Hz, plus start-up and slack for a slow machine.
+    let frames: u64 = args
+        .windows(2)
+        .find(|w| w[0] == "--frames")
+        .and_then(|w| w[1].parse().ok())
+        .unwrap_or(60);
+    let run = sandbox.run_for(&cmd, &all, 120 + frames / 5);
     validation.assert_clean();
     let report = run.client_report();
     let lines = layer_lines(&run);

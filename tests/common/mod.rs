@@ -370,3 +370,23 @@ pub fn scratch_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).expect("create a scratch folder");
     dir
 }
+
+impl Sandbox {
+    /// [`Sandbox::run`] with its own time limit in seconds (long soaks).
+    pub fn run_for(&self, cmd: &[&str], env: &[(&str, &str)], timeout_s: u64) -> SandboxRun {
+        let output = Command::new("timeout")
+            .args(["--kill-after=10", &timeout_s.to_string()])
+            .arg(&self.script)
+            .args(["run", "--"])
+            .args(cmd)
+            .envs(env.iter().copied())
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap_or_else(|e| panic!("cannot run {}: {e}", self.script.display()));
+        SandboxRun {
+            status: output.status,
+            stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+            stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+        }
+    }
+}
