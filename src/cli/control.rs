@@ -2,7 +2,8 @@
 //! file, which every running app's layer watches (a change applies within a second).
 
 use super::{print, Args, CliError};
-use contrastxr::config::{self, edit, Env};
+use contrastxr::config::{self, edit, Env, Source};
+use std::path::Path;
 
 pub fn usage() -> String {
     "usage: contrastxr toggle [--app NAME] [MODE]\n\
@@ -19,6 +20,18 @@ pub fn usage() -> String {
 
 fn target() -> Result<(std::path::PathBuf, Option<std::path::PathBuf>), CliError> {
     config::path::for_writing(&Env::capture()).map_err(CliError::Failure)
+}
+
+fn current_settings(path: &Path, seed: Option<&Path>, app: Option<&str>) -> config::Settings {
+    let file = [Some(path), seed]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file());
+    let text = file.and_then(|p| std::fs::read_to_string(p).ok());
+    let source = file
+        .zip(text.as_deref())
+        .map(|(path, text)| Source { path, text });
+    config::resolve(app.unwrap_or(""), source, &Env::default()).settings
 }
 
 fn warn_if_overridden(key: &config::Key) {
@@ -64,9 +77,11 @@ pub fn run_set(args: &mut Args) -> Result<(), CliError> {
     let value = key
         .parse_setting(text)
         .map_err(|e| CliError::Failure(format!("{}: {e}", key.name)))?;
-    key.apply(&mut config::Settings::default(), value.clone())
-        .map_err(|e| CliError::Failure(format!("{}: {e}", key.name)))?;
     let (path, seed) = target()?;
+    // Checked against what the file already says (e.g. an even blur_size needs blur = false).
+    let mut current = current_settings(&path, seed.as_deref(), app.as_deref());
+    key.apply(&mut current, value.clone())
+        .map_err(|e| CliError::Failure(format!("{}: {e}", key.name)))?;
     warn_if_overridden(key);
     edit::set(&path, seed.as_deref(), app.as_deref(), key, &value).map_err(CliError::Failure)?;
     print(&format!("{} = {value} in {}\n", key.name, path.display()));
