@@ -29,6 +29,7 @@ enum Source {
 
 impl Background {
     pub fn open(spec: &SourceSpec, cfg: &CaptureConfig) -> Result<Self, CameraError> {
+        crate::fault::check("camera-open").map_err(CameraError::Device)?;
         let (source, description) = match spec {
             SourceSpec::Image(path) => (
                 Source::Static(image_frame(path)?),
@@ -66,6 +67,7 @@ impl Background {
 
     /// The newest frame, without waiting; `None` before the first frame and once `Lost`.
     pub fn latest(&self) -> Option<Frame> {
+        crate::fault::check("camera-loss").ok()?;
         match &self.source {
             Source::Static(frame) => Some(frame.clone()),
             Source::Threaded { shared, .. } => match self.status() {

@@ -4,6 +4,8 @@
 mod args;
 mod bench;
 mod camera;
+mod config;
+mod control;
 mod engine;
 mod enhance;
 mod evaluate;
@@ -67,6 +69,24 @@ const COMMANDS: &[Subcommand] = &[
         summary: "remove the OpenXR layer's implicit manifest",
         usage: install::usage,
         run: install::run_uninstall,
+    },
+    Subcommand {
+        name: "config",
+        summary: "check a config file, print an app's effective settings, show the path",
+        usage: config::usage,
+        run: config::run,
+    },
+    Subcommand {
+        name: "toggle",
+        summary: "switch running apps between mode off and a mode (through the config file)",
+        usage: control::usage,
+        run: control::run_toggle,
+    },
+    Subcommand {
+        name: "set",
+        summary: "change one setting of running apps, e.g. `set lambda_e 0.6`",
+        usage: control::usage,
+        run: control::run_set,
     },
 ];
 

@@ -52,6 +52,7 @@ impl GpuBuffer {
         let mut allocator = gpu.allocator.lock().map_err(|_| {
             GpuError::Unsupported("the GPU allocator was poisoned by an earlier panic".into())
         })?;
+        crate::fault::check("allocation").map_err(GpuError::Unsupported)?;
         let allocation = allocator.allocate(&AllocationCreateDesc {
             name,
             requirements,

@@ -273,6 +273,7 @@ impl GpuDevice {
         queue_family: u32,
         queue_index: u32,
     ) -> Result<GpuDevice, GpuError> {
+        crate::fault::check("device-setup").map_err(GpuError::Unsupported)?;
         let entry = load_entry()?;
         // SAFETY: the caller guarantees the instance handle is valid.
         let instance = unsafe { ash::Instance::load(entry.static_fn(), raw_instance) };

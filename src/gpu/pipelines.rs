@@ -115,6 +115,7 @@ impl Pipelines {
     }
 
     fn build(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
+        crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
         let bindings: Vec<_> = (0..BINDING_COUNT)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()

@@ -4,9 +4,10 @@
 
 use super::dispatch::NextFns;
 use super::ffi::{c_str, guard};
-use super::settings::Settings;
+use super::settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
 use super::{log, session, swapchain};
+use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};
 use openxr_sys::pfn;
@@ -103,6 +104,38 @@ unsafe extern "system" fn create_api_layer_instance(
     )
 }
 
+/// Logs where the settings came from: the file, every effective value with its origin, and
+/// each problem (an invalid value names its file, line and key).
+fn log_resolved(r: &config::Resolved) {
+    let file = r.file.as_ref().map_or_else(
+        || "none found (CONTRASTXR_CONFIG, $XDG_CONFIG_HOME/contrastxr/config.toml, /etc/xdg/contrastxr/config.toml)".into(),
+        |p| format!("{}, watched for changes", p.display()),
+    );
+    log::info(&format!("config file: {file}"));
+    for i in 0..KEYS.len() {
+        log::info(&format!("setting {}", r.line(i)));
+    }
+    for p in &r.problems {
+        log::info(p);
+    }
+}
+
+/// The settings for `app`; when the layer is on, a watcher keeps them current from now on.
+fn start_settings(handle: xr::Instance, app: &str) -> Settings {
+    let env = config::Env::capture();
+    let off = env.get("CONTRASTXR").is_some_and(|v| config::is_off(&v));
+    if off {
+        let s = config::resolve(app, None, &env).settings;
+        log::info(&startup_line(&s, app));
+        return s;
+    }
+    let (live, resolved) = Live::start(app, env, Box::new(log::info));
+    log::info(&startup_line(&resolved.settings, app));
+    log_resolved(&resolved);
+    settings::register_live(handle.into_raw(), live);
+    resolved.settings
+}
+
 fn register_instance(
     handle: xr::Instance,
     gipa: pfn::GetInstanceProcAddr,
@@ -113,12 +146,8 @@ fn register_instance(
         .and_then(|i| unsafe { c_str(i.application_info.application_name.as_ptr()) })
         .unwrap_or("")
         .to_string();
-    let settings = Settings::from_env();
     crate::camera::set_log_sink(Box::new(log::info));
-    log::info(&startup_line(&settings, &app));
-    for w in &settings.warnings {
-        log::info(w);
-    }
+    let settings = start_settings(handle, &app);
     // SAFETY: gipa is the next layer's and handle was created by it.
     match unsafe { NextFns::load(gipa, handle) } {
         Ok(next) => {
@@ -130,7 +159,10 @@ fn register_instance(
                 .instances
                 .insert(handle.into_raw(), Arc::new(state));
         }
-        Err(e) => log::info(&format!("{e}: passing everything through")),
+        Err(e) => {
+            settings::forget_live(handle.into_raw());
+            log::info(&format!("{e}: passing everything through"));
+        }
     }
 }
 
@@ -241,6 +273,7 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
                 session::forget(xr::Session::from_raw(s));
             }
             state::registry().instances.remove(&instance.into_raw());
+            settings::forget_live(instance.into_raw());
             // SAFETY: forwarding the app's call.
             unsafe { (state.next.destroy_instance)(instance) }
         },

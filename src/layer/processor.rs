@@ -227,6 +227,7 @@ impl Processor {
         params: &Params,
         capture: bool,
     ) -> Result<Vec<CapturedView>, GpuError> {
+        crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
         self.frame += 1;
         self.wait_idle()?;
         self.update_background(background, sequence)?;

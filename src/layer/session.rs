@@ -1,18 +1,26 @@
 //! Sessions: read the Vulkan graphics binding at xrCreateSession, and at xrEndFrame enhance
 //! every projection view (and quad layers when configured) before the runtime composes it.
+//! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
+//! a changed background source is reopened on a helper thread while frames pass through.
 
 use super::capture;
 use super::ffi::{find_in_chain, guard};
 use super::processor::{Processor, ViewKey, WorkItem};
+use super::settings::{self, Settings};
 use super::state::{self, lock, SessionState};
 use super::{log, swapchain};
+use crate::algorithm::params::ViewMode;
 use crate::camera::{self, Background, CaptureConfig};
 use crate::gpu::GpuDevice;
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
-use std::sync::{Arc, Mutex};
+use std::collections::HashMap;
+use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
-pub(crate) unsafe extern "system" fn create_session(
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrCreateSession.
+pub unsafe extern "system" fn create_session(
     instance: xr::Instance,
     info: *const xr::SessionCreateInfo,
     session: *mut xr::Session,
@@ -65,19 +73,24 @@ fn open_background(spec: &str) -> Result<Background, String> {
     Background::open(&source, &CaptureConfig::default()).map_err(|e| e.to_string())
 }
 
-fn set_up(
-    b: &xr::GraphicsBindingVulkanKHR,
-    background_spec: &str,
-) -> (Option<Processor>, Option<Background>) {
-    let background = match open_background(background_spec) {
-        Ok(bg) => bg,
+/// Opens the background, logging once why not: the session then passes frames through until
+/// the config names a source that opens.
+fn open_background_logged(spec: &str) -> Option<Background> {
+    match open_background(spec) {
+        Ok(bg) => Some(bg),
         Err(e) => {
             log::info(&format!(
                 "no background ({e}): passing frames through untouched"
             ));
-            return (None, None);
+            None
         }
-    };
+    }
+}
+
+fn set_up(
+    b: &xr::GraphicsBindingVulkanKHR,
+    background_spec: &str,
+) -> (Option<Processor>, Option<Background>) {
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
     // alive until after xrDestroySession, where the processor is dropped first.
     let gpu = unsafe {
@@ -89,27 +102,92 @@ fn set_up(
             b.queue_index,
         )
     };
-    match gpu.and_then(Processor::new) {
-        Ok(p) => {
-            log::info(&format!(
-                "session on Vulkan device {:?}, background {}: enhancing",
-                p.gpu.name,
-                background.description()
-            ));
-            (Some(p), Some(background))
-        }
+    let processor = match gpu.and_then(Processor::new) {
+        Ok(p) => p,
         Err(e) => {
             log::info(&format!(
                 "GPU set-up failed ({e}): passing frames through untouched"
             ));
-            (None, None)
+            return (None, None);
+        }
+    };
+    // Opened after the GPU set-up: a camera stays closed for a session that cannot use it.
+    let background = open_background_logged(background_spec);
+    if let Some(bg) = &background {
+        log::info(&format!(
+            "session on Vulkan device {:?}, background {}: enhancing",
+            processor.gpu.name,
+            bg.description()
+        ));
+    }
+    (Some(processor), background)
+}
+
+/// Background sources being reopened after a config change, by session: the helper thread
+/// closes the old source, opens the new one and sends it (None if it failed).
+fn reopening() -> MutexGuard<'static, HashMap<u64, Receiver<Option<Background>>>> {
+    static REOPENING: OnceLock<Mutex<HashMap<u64, Receiver<Option<Background>>>>> = OnceLock::new();
+    let m = REOPENING.get_or_init(Default::default);
+    // Only map operations happen under this lock.
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+fn start_reopen(session: xr::Session, old: Option<Background>, spec: String) {
+    let (tx, rx) = mpsc::channel();
+    let spawned = std::thread::Builder::new()
+        .name("contrastxr-reopen".into())
+        .spawn(move || {
+            drop(old);
+            let _ = tx.send(open_background_logged(&spec));
+        });
+    match spawned {
+        Ok(_) => {
+            reopening().insert(session.into_raw(), rx);
+        }
+        Err(e) => log::info(&format!("cannot reopen the background ({e})")),
+    }
+}
+
+/// A reopened background, if the helper thread has finished.
+fn take_reopened(session: xr::Session, s: &mut SessionState) {
+    let mut pending = reopening();
+    let Some(rx) = pending.get(&session.into_raw()) else {
+        return;
+    };
+    match rx.try_recv() {
+        Ok(bg) => {
+            if let Some(bg) = &bg {
+                log::info(&format!("background is now {}", bg.description()));
+            }
+            s.background = bg;
+            pending.remove(&session.into_raw());
+        }
+        Err(TryRecvError::Empty) => {}
+        Err(TryRecvError::Disconnected) => {
+            pending.remove(&session.into_raw());
         }
     }
+}
+
+/// Takes newer settings from the config watcher, if any, without waiting.
+fn pick_up_settings(session: xr::Session, s: &mut SessionState) {
+    take_reopened(session, s);
+    let Some(live) = settings::live(s.instance.into_raw()) else {
+        return;
+    };
+    let Some(newer) = live.newer(s.settings.generation) else {
+        return;
+    };
+    if newer.background != s.settings.background && s.processor.is_some() {
+        start_reopen(session, s.background.take(), newer.background.clone());
+    }
+    s.settings = newer;
 }
 
 /// Drops the layer's state of a session (its GPU objects first) and of its swapchains.
 pub fn forget(session: xr::Session) {
     let removed = state::registry().sessions.remove(&session.into_raw());
+    reopening().remove(&session.into_raw());
     if let Some(s) = removed {
         let mut s = lock(&s);
         s.processor = None;
@@ -121,7 +199,9 @@ pub fn forget(session: xr::Session) {
         .retain(|_, sc| lock(sc).session != session);
 }
 
-pub(crate) unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Result {
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrDestroySession.
+pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Result {
     guard(
         "xrDestroySession",
         xr::Result::ERROR_RUNTIME_FAILURE,
@@ -211,14 +291,42 @@ fn acts_on(s: &SessionState, mode: xr::EnvironmentBlendMode) -> bool {
 fn capturing(s: &SessionState) -> bool {
     // Frames are numbered by the layer's processed count: capture [skip, skip + frames).
     s.settings
-        .capture
-        .as_ref()
+        .capture()
         .is_some_and(|c| s.processed >= c.skip && s.processed < c.skip + c.frames)
+}
+
+/// The newest background frame, or None (logged once: lost after frames came, or not yet).
+fn background_frame(s: &SessionState) -> Option<camera::Frame> {
+    // No source at all: why was logged when it failed to open.
+    let bg = s.background.as_ref()?;
+    let frame = bg.latest();
+    if frame.is_none() && s.processed > 0 {
+        log::once(
+            "background-lost",
+            &format!(
+                "background {} lost: passing frames through untouched until it returns",
+                bg.description()
+            ),
+        );
+    } else if frame.is_none() {
+        log::debug("no background frame yet: passing this frame through");
+    }
+    frame
+}
+
+/// The background's identity for the processor: a new camera frame, or new settings (the
+/// background is preprocessed with the settings' blur and FoV mapping), count as new.
+fn background_sequence(frame_sequence: u64, s: &Settings) -> u64 {
+    frame_sequence.wrapping_add(s.generation << 40)
 }
 
 /// Enhances the held images of this frame; any failure turns the session into pass-through.
 fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
-    if s.processor.is_none() || !acts_on(s, info.environment_blend_mode) {
+    // Mode off: the app's frames untouched, no GPU work at all.
+    if s.settings.params.mode == ViewMode::Off
+        || s.processor.is_none()
+        || !acts_on(s, info.environment_blend_mode)
+    {
         return;
     }
     // SAFETY: the app's frame end info, valid for this call.
@@ -227,18 +335,14 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     if items.is_empty() {
         return;
     }
-    // No frame yet, or the source was lost past its grace period: pass this frame through.
-    let Some(frame) = s.background.as_ref().and_then(|b| b.latest()) else {
-        log::once(
-            "no-background-frame",
-            "no background frame (not yet, or the source is lost): passing frames through until one arrives",
-        );
+    let Some(frame) = background_frame(s) else {
         return;
     };
     let capture = capturing(s);
     let params = s.settings.params.clone();
+    let sequence = background_sequence(frame.sequence, &s.settings);
     let processor = s.processor.as_mut().expect("checked above");
-    match processor.process(&items, &frame.image, frame.sequence, &params, capture) {
+    match processor.process(&items, &frame.image, sequence, &params, capture) {
         Ok(views) => {
             if capture {
                 write_capture(s, &views, &frame.image);
@@ -263,7 +367,9 @@ fn write_capture(
     views: &[super::processor::CapturedView],
     bg: &crate::image::RgbaImage,
 ) {
-    let Some(c) = &s.settings.capture else { return };
+    let Some(c) = s.settings.capture() else {
+        return;
+    };
     for (k, v) in views.iter().enumerate() {
         let written = capture::write_view(
             &c.dir,
@@ -280,7 +386,9 @@ fn write_capture(
     }
 }
 
-pub(crate) unsafe extern "system" fn end_frame(
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrEndFrame.
+pub unsafe extern "system" fn end_frame(
     session: xr::Session,
     info: *const xr::FrameEndInfo,
 ) -> xr::Result {
@@ -290,6 +398,7 @@ pub(crate) unsafe extern "system" fn end_frame(
         };
         let mut s = lock(&s);
         s.frames += 1;
+        pick_up_settings(session, &mut s);
         // SAFETY: the app's frame end info (null is left for the runtime to reject).
         if let Some(info) = unsafe { info.as_ref() } {
             let processed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {

@@ -367,3 +367,47 @@ impl Call {
         }
     }
 }
+
+/// The `contrastxr` CLI built with the tests.
+pub const CLI: &str = env!("CARGO_BIN_EXE_contrastxr");
+
+/// The lines the contrastxr layer logged in a run (its stderr lines start with `contrastxr: `).
+pub fn layer_lines(run: &SandboxRun) -> Vec<String> {
+    run.stderr
+        .lines()
+        .filter_map(|l| l.strip_prefix("contrastxr: "))
+        .map(String::from)
+        .collect()
+}
+
+/// Turns on the Vulkan validation layer's synchronisation validation (the app enables the
+/// layer itself; this is its documented settings variable).
+pub const SYNC_VALIDATION: (&str, &str) = ("VK_KHRONOS_VALIDATION_VALIDATE_SYNC", "true");
+
+/// A fresh scratch folder under the target directory (visible inside the sandbox).
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = scratch_file(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create a scratch folder");
+    dir
+}
+
+impl Sandbox {
+    /// [`Sandbox::run`] with its own time limit in seconds (long soaks).
+    pub fn run_for(&self, cmd: &[&str], env: &[(&str, &str)], timeout_s: u64) -> SandboxRun {
+        let output = Command::new("timeout")
+            .args(["--kill-after=10", &timeout_s.to_string()])
+            .arg(&self.script)
+            .args(["run", "--"])
+            .args(cmd)
+            .envs(env.iter().copied())
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap_or_else(|e| panic!("cannot run {}: {e}", self.script.display()));
+        SandboxRun {
+            status: output.status,
+            stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+            stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+        }
+    }
+}

@@ -19,7 +19,15 @@ usage: contrastxr-xr-client [options]
   --timing                report the time spent in xrEndFrame and, after it, waiting for the
                           queue to drain (a layer's GPU work), per frame (median, p95)
   --provoke-xr-validation-error, --provoke-vk-validation-error
-                          make one invalid call on purpose (to test that validation is seen)";
+                          make one invalid call on purpose (to test that validation is seen)
+  --provoke-vk-sync-hazard
+                          record two unsynchronised writes (to test that sync validation is on)
+  --provoke-vk-leak       leave one buffer undestroyed (to test that leaks are reported)
+  --sessions N            create, run (--frames each) and destroy N sessions in turn (default 1)
+  --check-untouched       read each swapchain image back when it is acquired again and report
+                          the frames whose pixels changed after the client wrote them
+  The JSON report holds resident memory and open file descriptors every 50 frames
+  (`memory`) and after each session (`sessions`).";
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
@@ -52,6 +60,10 @@ pub struct Options {
     pub timing: bool,
     pub provoke_xr_error: bool,
     pub provoke_vk_error: bool,
+    pub provoke_sync_hazard: bool,
+    pub provoke_leak: bool,
+    pub sessions: u32,
+    pub check_untouched: bool,
 }
 
 impl Default for Options {
@@ -68,6 +80,10 @@ impl Default for Options {
             timing: false,
             provoke_xr_error: false,
             provoke_vk_error: false,
+            provoke_sync_hazard: false,
+            provoke_leak: false,
+            sessions: 1,
+            check_untouched: false,
         }
     }
 }
@@ -91,6 +107,12 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--timing" => options.timing = true,
             "--provoke-xr-validation-error" => options.provoke_xr_error = true,
             "--provoke-vk-validation-error" => options.provoke_vk_error = true,
+            "--provoke-vk-sync-hazard" => options.provoke_sync_hazard = true,
+            "--provoke-vk-leak" => options.provoke_leak = true,
+            "--check-untouched" => options.check_untouched = true,
+            "--sessions" => {
+                options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?
+            }
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown argument {other}\n{USAGE}")),
         }

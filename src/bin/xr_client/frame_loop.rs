@@ -25,6 +25,8 @@ pub struct Stats {
     /// With --timing: milliseconds inside xrEndFrame, and waiting for the queue after it.
     pub end_frame_ms: Vec<f64>,
     pub drain_ms: Vec<f64>,
+    /// Resident memory and descriptors every 50 submitted frames.
+    pub memory: Vec<crate::report::Sample>,
 }
 
 /// What the frame loop draws with.
@@ -47,6 +49,8 @@ pub fn run(
     stats: &mut Stats,
 ) -> Result<()> {
     let deadline = Instant::now() + BASE_TIMEOUT + PER_FRAME_TIMEOUT * options.frames;
+    // Frames of earlier sessions (--sessions) count in `stats`, not towards this one.
+    let first_frame = stats.frames_submitted;
     let mut events = xr::EventDataBuffer::new();
     let (mut running, mut exit_requested) = (false, false);
     loop {
@@ -77,14 +81,15 @@ pub fn run(
         if Instant::now() > deadline {
             return fail(format!(
                 "timed out after {} frames (wanted {})",
-                stats.frames_submitted, options.frames
+                stats.frames_submitted - first_frame,
+                options.frames
             ));
         }
         if !running {
             std::thread::sleep(Duration::from_millis(10));
             continue;
         }
-        if stats.frames_submitted >= options.frames && !exit_requested {
+        if stats.frames_submitted - first_frame >= options.frames && !exit_requested {
             scene.session.request_exit().ctx("xrRequestExitSession")?;
             exit_requested = true;
         }
@@ -113,7 +118,7 @@ fn frame(
         .session
         .locate_views(VIEW_TYPE, state.predicted_display_time, scene.space)
         .ctx("xrLocateViews")?;
-    render(scene)?;
+    render(scene, stats.frames_submitted)?;
     let (w, h) = (scene.view_size.0 as i32, scene.view_size.1 as i32);
     let projection_views: Vec<_> = (0..2)
         .map(|i| {
@@ -158,11 +163,16 @@ fn frame(
         stats.drain_ms.push(ended.elapsed().as_secs_f64() * 1e3);
     }
     stats.frames_submitted += 1;
+    if stats.frames_submitted % 50 == 0 {
+        stats
+            .memory
+            .push(crate::report::Sample::now(stats.frames_submitted));
+    }
     Ok(())
 }
 
 /// Fills the next image of every swapchain and releases them once the GPU is done.
-fn render(scene: &mut Scene<'_>) -> Result<()> {
+fn render(scene: &mut Scene<'_>, frame: u32) -> Result<()> {
     let projection_index = scene.projection.acquire()?;
     let quad_index = scene.quad.as_mut().map(|q| q.acquire()).transpose()?;
     scene.gpu.submit_and_wait(|device, cmd| {
@@ -173,6 +183,10 @@ fn render(scene: &mut Scene<'_>) -> Result<()> {
             quad.record_upload(device, cmd, index);
         }
     })?;
+    scene.projection.finish_check(projection_index, frame);
+    if let (Some(quad), Some(index)) = (scene.quad.as_mut(), quad_index) {
+        quad.finish_check(index, frame);
+    }
     scene.projection.release()?;
     scene.quad.as_mut().map(|q| q.release()).transpose()?;
     Ok(())

@@ -184,6 +184,54 @@ impl Gpu {
     }
 }
 
+impl Gpu {
+    /// Records two writes of one buffer with no barrier between them: synchronisation
+    /// validation must report SYNC-HAZARD-WRITE-AFTER-WRITE (core validation does not).
+    pub fn provoke_sync_hazard(&self) -> Result<()> {
+        let info = vk::BufferCreateInfo::default()
+            .size(256)
+            .usage(vk::BufferUsageFlags::TRANSFER_DST);
+        // SAFETY: a valid buffer bound to fresh memory; both are destroyed after the wait.
+        unsafe {
+            let buffer = self
+                .device
+                .create_buffer(&info, None)
+                .ctx("vkCreateBuffer")?;
+            let reqs = self.device.get_buffer_memory_requirements(buffer);
+            let alloc = vk::MemoryAllocateInfo::default()
+                .allocation_size(reqs.size)
+                .memory_type_index(self.host_memory_type(reqs.memory_type_bits)?);
+            let memory = self
+                .device
+                .allocate_memory(&alloc, None)
+                .ctx("vkAllocateMemory")?;
+            self.device
+                .bind_buffer_memory(buffer, memory, 0)
+                .ctx("vkBindBufferMemory")?;
+            let result = self.submit_and_wait(|device, cmd| {
+                device.cmd_fill_buffer(cmd, buffer, 0, 256, 1);
+                device.cmd_fill_buffer(cmd, buffer, 0, 256, 2);
+            });
+            self.device.destroy_buffer(buffer, None);
+            self.device.free_memory(memory, None);
+            result
+        }
+    }
+}
+
+impl Gpu {
+    /// Creates a buffer and never destroys it: validation must report it when the device is
+    /// destroyed (what the session-cycle test relies on to see the layer's leaks).
+    pub fn provoke_leak(&self) -> Result<()> {
+        let info = vk::BufferCreateInfo::default()
+            .size(256)
+            .usage(vk::BufferUsageFlags::TRANSFER_DST);
+        // SAFETY: a valid create info; leaking the buffer is the point.
+        unsafe { self.device.create_buffer(&info, None) }.ctx("vkCreateBuffer")?;
+        Ok(())
+    }
+}
+
 impl Drop for Gpu {
     fn drop(&mut self) {
         // SAFETY: the OpenXR session using this device is gone (main drops it first) and the

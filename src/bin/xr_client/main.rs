@@ -51,6 +51,7 @@ fn main() -> ExitCode {
         report.errors.push(e.0);
     }
     report.frames_submitted = stats.frames_submitted;
+    report.memory = std::mem::take(&mut stats.memory);
     report.frames_ended = stats.frames_ended;
     report.reached_focused = stats.reached_focused;
     if options.timing {
@@ -58,7 +59,7 @@ fn main() -> ExitCode {
     }
     report.vk_validation_errors = validation::errors();
     report.vk_validation_warnings = validation::warnings();
-    let ran = options.list_formats || stats.frames_submitted >= options.frames;
+    let ran = options.list_formats || stats.frames_submitted >= options.frames * options.sessions;
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     if options.json {
         eprintln!("{}", report.summary());
@@ -115,8 +116,49 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     if options.provoke_vk_error {
         gpu.provoke_validation_error();
     }
+    if options.provoke_leak {
+        gpu.provoke_leak()?;
+    }
+    if options.provoke_sync_hazard {
+        gpu.provoke_sync_hazard()?;
+    }
+    let world = World {
+        instance: &instance,
+        system,
+        gpu: &gpu,
+        blend_mode,
+    };
+    for _ in 0..options.sessions.max(1) {
+        run_session(&world, options, report, stats)?;
+        report.sessions_run += 1;
+        report
+            .sessions
+            .push(report::Sample::now(stats.frames_submitted));
+        if options.list_formats {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// What every session of the run shares.
+struct World<'a> {
+    instance: &'a xr::Instance,
+    system: xr::SystemId,
+    gpu: &'a Gpu,
+    blend_mode: xr::EnvironmentBlendMode,
+}
+
+/// One session: create it, run its frames, end it; dropping it here destroys it.
+fn run_session(
+    world: &World<'_>,
+    options: &Options,
+    report: &mut Report,
+    stats: &mut Stats,
+) -> Result<()> {
+    let (instance, system, gpu) = (world.instance, world.system, world.gpu);
     // SAFETY: the Vulkan objects were made through this instance for this system, and `gpu`
-    // outlives the session (locals drop in reverse order).
+    // outlives the session (it is dropped after `run` returns).
     let (session, mut waiter, mut stream) =
         unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
             .ctx("xrCreateSession")?;
@@ -131,42 +173,50 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     report.format = format.name.to_string();
     let view_size = match options.size {
         Some(size) => size,
-        None => recommended_size(&instance, system)?,
+        None => recommended_size(instance, system)?,
     };
     report.view_size = [view_size.0, view_size.1];
     let space = session
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
-    let projection = projection_swapchain(&session, &gpu, format, view_size, options.layout)?;
+    let check = options.check_untouched;
+    let projection = projection_swapchain(&session, gpu, format, view_size, options.layout, check)?;
     let quad = options
         .quad
         .then(|| {
             PatternSwapchain::new(
                 &session,
-                &gpu,
+                gpu,
                 format,
                 (view_size.0 / 2, view_size.1 / 2),
                 &[LayerContent::Whole(Target::Quad)],
+                check,
             )
         })
         .transpose()?;
     let mut scene = Scene {
         session: &session,
         space: &space,
-        gpu: &gpu,
+        gpu,
         projection,
         quad,
         view_size,
-        blend_mode,
+        blend_mode: world.blend_mode,
     };
-    frame_loop::run(
-        &instance,
+    let result = frame_loop::run(
+        instance,
         &mut scene,
         &mut waiter,
         &mut stream,
         options,
         stats,
-    )
+    );
+    for swapchain in std::iter::once(&scene.projection).chain(scene.quad.as_ref()) {
+        let (checked, modified) = swapchain.check_result();
+        report.frames_checked += checked;
+        report.frames_modified.extend(modified);
+    }
+    result
 }
 
 fn projection_swapchain(
@@ -175,6 +225,7 @@ fn projection_swapchain(
     format: SwapchainFormat,
     (w, h): (u32, u32),
     layout: Layout,
+    check: bool,
 ) -> Result<PatternSwapchain> {
     match layout {
         Layout::Array => {
@@ -182,7 +233,7 @@ fn projection_swapchain(
                 LayerContent::Whole(Target::View(0)),
                 LayerContent::Whole(Target::View(1)),
             ];
-            PatternSwapchain::new(session, gpu, format, (w, h), &views)
+            PatternSwapchain::new(session, gpu, format, (w, h), &views, check)
         }
         Layout::SideBySide => PatternSwapchain::new(
             session,
@@ -190,6 +241,7 @@ fn projection_swapchain(
             format,
             (2 * w, h),
             &[LayerContent::SideBySide],
+            check,
         ),
     }
 }

@@ -26,6 +26,18 @@ pub struct PatternSwapchain {
     memory: vk::DeviceMemory,
     /// The device that owns `staging`; a clone of the Gpu's (ash devices are plain tables).
     device: ash::Device,
+    /// With --check-untouched: the pattern's bytes, a buffer to read images back into, and for
+    /// each image the frame that last wrote it.
+    check: Option<Check>,
+}
+
+struct Check {
+    pattern: Vec<u8>,
+    readback: vk::Buffer,
+    memory: vk::DeviceMemory,
+    written: Vec<Option<u32>>,
+    checked: u32,
+    modified: Vec<u32>,
 }
 
 impl PatternSwapchain {
@@ -35,12 +47,19 @@ impl PatternSwapchain {
         format: SwapchainFormat,
         (width, height): (u32, u32),
         content: &[LayerContent],
+        check: bool,
     ) -> Result<PatternSwapchain> {
+        let read_back = if check {
+            xr::SwapchainUsageFlags::TRANSFER_SRC
+        } else {
+            xr::SwapchainUsageFlags::EMPTY
+        };
         let handle = session
             .create_swapchain(&xr::SwapchainCreateInfo {
                 create_flags: xr::SwapchainCreateFlags::EMPTY,
                 usage_flags: xr::SwapchainUsageFlags::COLOR_ATTACHMENT
-                    | xr::SwapchainUsageFlags::TRANSFER_DST,
+                    | xr::SwapchainUsageFlags::TRANSFER_DST
+                    | read_back,
                 format: format.vk.as_raw() as _,
                 sample_count: 1,
                 width,
@@ -58,8 +77,23 @@ impl PatternSwapchain {
             .enumerate_images()
             .ctx("xrEnumerateSwapchainImages")?;
         let bytes = pattern_bytes(format, width, height, content);
-        let (staging, memory) = create_staging(gpu, &bytes)?;
+        let (staging, memory) = create_staging(gpu, &bytes, vk::BufferUsageFlags::TRANSFER_SRC)?;
+        let check = if check {
+            let (readback, memory) =
+                create_staging(gpu, &bytes, vk::BufferUsageFlags::TRANSFER_DST)?;
+            Some(Check {
+                written: vec![None; images.len()],
+                pattern: bytes,
+                readback,
+                memory,
+                checked: 0,
+                modified: Vec::new(),
+            })
+        } else {
+            None
+        };
         Ok(PatternSwapchain {
+            check,
             handle,
             images: images.into_iter().map(vk::Image::from_raw).collect(),
             width,
@@ -92,13 +126,23 @@ impl PatternSwapchain {
             .aspect_mask(vk::ImageAspectFlags::COLOR)
             .level_count(1)
             .layer_count(self.layers);
-        // The old contents are not needed: every texel is overwritten.
-        let to_transfer = barrier(
-            image,
-            range,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-        )
+        // The old contents are not needed (every texel is overwritten) unless read back first.
+        let to_transfer = if self.record_readback(device, cmd, index, range) {
+            barrier(
+                image,
+                range,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            )
+            .src_access_mask(vk::AccessFlags::TRANSFER_READ)
+        } else {
+            barrier(
+                image,
+                range,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            )
+        }
         .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
         let to_colour = barrier(
             image,
@@ -126,7 +170,7 @@ impl PatternSwapchain {
         unsafe {
             device.cmd_pipeline_barrier(
                 cmd,
-                vk::PipelineStageFlags::TOP_OF_PIPE,
+                vk::PipelineStageFlags::TOP_OF_PIPE | vk::PipelineStageFlags::TRANSFER,
                 vk::PipelineStageFlags::TRANSFER,
                 vk::DependencyFlags::empty(),
                 &[],
@@ -153,13 +197,113 @@ impl PatternSwapchain {
     }
 }
 
+impl PatternSwapchain {
+    /// With --check-untouched and an image written before: records the copy of the image as the
+    /// runtime left it (COLOR_ATTACHMENT_OPTIMAL after acquire) into the readback buffer.
+    fn record_readback(
+        &self,
+        device: &ash::Device,
+        cmd: vk::CommandBuffer,
+        index: u32,
+        range: vk::ImageSubresourceRange,
+    ) -> bool {
+        let Some(check) = self
+            .check
+            .as_ref()
+            .filter(|c| c.written[index as usize].is_some())
+        else {
+            return false;
+        };
+        let image = self.images[index as usize];
+        let to_source = barrier(
+            image,
+            range,
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        )
+        .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+        .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
+        let copy = vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(self.layers),
+            )
+            .image_extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            });
+        // SAFETY: `cmd` is recording; the image is acquired and the readback buffer holds
+        // exactly the image's texels (the pattern's size).
+        unsafe {
+            device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[to_source],
+            );
+            device.cmd_copy_image_to_buffer(
+                cmd,
+                image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                check.readback,
+                &[copy],
+            );
+        }
+        true
+    }
+
+    /// After the upload of `frame` into image `index` ran: compares what was read back (the
+    /// image as the client last left it, plus whatever happened after) with the pattern.
+    pub fn finish_check(&mut self, index: u32, frame: u32) {
+        let device = &self.device;
+        let Some(check) = self.check.as_mut() else {
+            return;
+        };
+        if let Some(previous) = check.written[index as usize] {
+            let len = check.pattern.len();
+            // SAFETY: host-coherent memory of `len` bytes, written by a finished submission.
+            let same = unsafe {
+                device
+                    .map_memory(check.memory, 0, len as u64, vk::MemoryMapFlags::empty())
+                    .map(|p| {
+                        let same = std::slice::from_raw_parts(p.cast::<u8>(), len) == check.pattern;
+                        device.unmap_memory(check.memory);
+                        same
+                    })
+                    .unwrap_or(false)
+            };
+            check.checked += 1;
+            if !same {
+                check.modified.push(previous);
+            }
+        }
+        check.written[index as usize] = Some(frame);
+    }
+
+    /// (images checked, frames whose image had changed).
+    pub fn check_result(&self) -> (u32, Vec<u32>) {
+        self.check
+            .as_ref()
+            .map_or((0, Vec::new()), |c| (c.checked, c.modified.clone()))
+    }
+}
+
 impl Drop for PatternSwapchain {
     fn drop(&mut self) {
-        // SAFETY: the staging buffer is the client's and no submission using it is pending
+        // SAFETY: the buffers are the client's and no submission using them is pending
         // (every submission is waited for).
         unsafe {
             self.device.destroy_buffer(self.staging, None);
             self.device.free_memory(self.memory, None);
+            if let Some(check) = &self.check {
+                self.device.destroy_buffer(check.readback, None);
+                self.device.free_memory(check.memory, None);
+            }
         }
     }
 }
@@ -205,11 +349,15 @@ fn pattern_bytes(
     bytes
 }
 
-fn create_staging(gpu: &Gpu, bytes: &[u8]) -> Result<(vk::Buffer, vk::DeviceMemory)> {
+fn create_staging(
+    gpu: &Gpu,
+    bytes: &[u8],
+    usage: vk::BufferUsageFlags,
+) -> Result<(vk::Buffer, vk::DeviceMemory)> {
     let device = &gpu.device;
     let info = vk::BufferCreateInfo::default()
         .size(bytes.len() as u64)
-        .usage(vk::BufferUsageFlags::TRANSFER_SRC);
+        .usage(usage);
     // SAFETY: plain object creation on a live device; the mapping covers exactly `bytes.len()`
     // bytes of host-coherent memory, so no flush is needed.
     unsafe {

@@ -1,0 +1,91 @@
+//! `contrastxr config check [FILE]`, `config print [--app NAME]` and `config path`.
+
+use super::{print, Args, CliError};
+use contrastxr::config::{self, Env, Source, KEYS};
+use std::path::PathBuf;
+
+pub fn usage() -> String {
+    "usage: contrastxr config check [FILE]\n\
+     \x20      contrastxr config print [--app NAME]\n\
+     \x20      contrastxr config path\n\n\
+     check: reads FILE (default: the file the layer reads) and prints every problem with its\n\
+     \x20      file, line and key; exit code 1 if there is one.\n\
+     print: the settings an app named NAME (its XrApplicationInfo.applicationName) would run\n\
+     \x20      with, as TOML, each with where it came from (default, file:line or env VAR),\n\
+     \x20      including this shell's CONTRASTXR_* variables.\n\
+     path:  the file the layer reads: $CONTRASTXR_CONFIG, else\n\
+     \x20      $XDG_CONFIG_HOME/contrastxr/config.toml, else /etc/xdg/contrastxr/config.toml.\n"
+        .to_string()
+}
+
+pub fn run(args: &mut Args) -> Result<(), CliError> {
+    let app = args.value(&["--app"])?;
+    let mut pos = args.positional().into_iter();
+    args.finish()?;
+    let what = pos
+        .next()
+        .ok_or(CliError::Usage("say check, print or path".into()))?;
+    let rest: Vec<String> = pos.collect();
+    match (what.as_str(), rest.as_slice()) {
+        ("check", [file]) => check(PathBuf::from(file)),
+        ("check", []) => check(found()?),
+        ("print", []) => {
+            print_settings(app.as_deref().unwrap_or(""));
+            Ok(())
+        }
+        ("path", []) => {
+            print(&format!("{}\n", found()?.display()));
+            Ok(())
+        }
+        _ => Err(CliError::Usage(format!(
+            "unknown or misused config subcommand {what:?}"
+        ))),
+    }
+}
+
+fn found() -> Result<PathBuf, CliError> {
+    config::path::find(&Env::capture()).ok_or(CliError::Failure(
+        "no config file: none of $CONTRASTXR_CONFIG, $XDG_CONFIG_HOME/contrastxr/config.toml, \
+         /etc/xdg/contrastxr/config.toml exists"
+            .into(),
+    ))
+}
+
+fn check(path: PathBuf) -> Result<(), CliError> {
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| CliError::Failure(format!("cannot read {}: {e}", path.display())))?;
+    let problems = config::check(Source {
+        path: &path,
+        text: &text,
+    });
+    if problems.is_empty() {
+        print(&format!("{}: ok\n", path.display()));
+        return Ok(());
+    }
+    for p in &problems {
+        eprintln!("{p}");
+    }
+    Err(CliError::Failure(format!(
+        "{} problem(s) in {}",
+        problems.len(),
+        path.display()
+    )))
+}
+
+fn print_settings(app: &str) {
+    let r = config::load(app, &Env::capture());
+    let mut out = format!(
+        "# contrastxr settings for app {app:?}; config file: {}\n",
+        r.file
+            .as_ref()
+            .map_or("none".into(), |p| p.display().to_string())
+    );
+    for i in 0..KEYS.len() {
+        out += &r.line(i);
+        out.push('\n');
+    }
+    print(&out);
+    for p in &r.problems {
+        eprintln!("{p}");
+    }
+}

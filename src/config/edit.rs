@@ -1,0 +1,159 @@
+//! Edits of the config file for `contrastxr set` and `toggle`: one key changes, comments and
+//! everything else stay, and the new file replaces the old in one rename, so a running app's
+//! watcher never reads half a file.
+
+use super::keys::{key, Key};
+use super::path::Env;
+use super::resolve::{resolve, Source};
+use super::value::Value;
+use crate::algorithm::params::ViewMode;
+use std::path::Path;
+use toml_edit::{DocumentMut, Item};
+
+fn read(path: &Path, seed: Option<&Path>) -> Result<String, String> {
+    let from = if path.exists() { Some(path) } else { seed };
+    match from {
+        None => Ok(String::new()),
+        Some(p) => {
+            std::fs::read_to_string(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
+        }
+    }
+}
+
+/// Writes `text` to `path` through a temporary file in the same folder and a rename.
+pub fn write_atomically(path: &Path, text: &str) -> Result<(), String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    let tmp = path.with_extension(format!("toml.tmp-{}", std::process::id()));
+    std::fs::write(&tmp, text).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("cannot replace {}: {e}", path.display())
+    })
+}
+
+fn table<'d>(
+    doc: &'d mut DocumentMut,
+    app: Option<&str>,
+) -> Result<&'d mut dyn toml_edit::TableLike, String> {
+    let Some(app) = app else {
+        return Ok(doc.as_table_mut());
+    };
+    let apps = doc.as_table_mut().entry("app").or_insert_with(|| {
+        let mut t = toml_edit::Table::new();
+        t.set_implicit(true);
+        Item::Table(t)
+    });
+    let apps = apps
+        .as_table_like_mut()
+        .ok_or("`app` in the file is not a table")?;
+    apps.entry(app)
+        .or_insert_with(|| Item::Table(toml_edit::Table::new()))
+        .as_table_like_mut()
+        .ok_or_else(|| format!("app.{app:?} in the file is not a table"))
+}
+
+/// Sets `key` to `value` in the file at `path` (created from `seed`, or empty, if missing), in
+/// `[app."NAME"]` when `app` is given. The file must parse: a broken file is not overwritten.
+pub fn set(
+    path: &Path,
+    seed: Option<&Path>,
+    app: Option<&str>,
+    key: &Key,
+    value: &Value,
+) -> Result<(), String> {
+    let text = read(path, seed)?;
+    let mut doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
+        format!(
+            "{} is not valid TOML ({}); fix it first (contrastxr config check)",
+            path.display(),
+            e.message().trim()
+        )
+    })?;
+    let t = table(&mut doc, app)?;
+    match t.get_mut(key.name) {
+        Some(Item::Value(old)) => {
+            // Keep the line's comment and spacing.
+            let decor = old.decor().clone();
+            *old = value.to_toml();
+            *old.decor_mut() = decor;
+        }
+        _ => {
+            t.insert(key.name, Item::Value(value.to_toml()));
+        }
+    }
+    write_atomically(path, &doc.to_string())
+}
+
+/// Flips `mode` between `off` and `on_mode` in the file (for `app` when given) and returns the
+/// mode now written.
+pub fn toggle(
+    path: &Path,
+    seed: Option<&Path>,
+    app: Option<&str>,
+    on_mode: &str,
+) -> Result<String, String> {
+    let text = read(path, seed)?;
+    let source = Source { path, text: &text };
+    let current = resolve(app.unwrap_or(""), Some(source), &Env::default());
+    let next = if current.settings.params.mode == ViewMode::Off {
+        on_mode
+    } else {
+        "off"
+    };
+    let mode = key("mode").expect("mode is a key");
+    let value = mode.parse_setting(next)?;
+    // Check the value before writing it.
+    mode.apply(&mut current.settings.clone(), value.clone())?;
+    set(path, seed, app, mode, &value)?;
+    Ok(next.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("contrastxr-edit-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        dir.join("config.toml")
+    }
+
+    #[test]
+    fn set_keeps_comments_and_adds_app_tables() {
+        let path = temp("set");
+        write_atomically(&path, "# mine\nlambda_e = 0.4 # why\n").unwrap();
+        let k = key("lambda_e").unwrap();
+        set(&path, None, None, k, &Value::Float(0.6)).unwrap();
+        set(&path, None, Some("hello xr"), k, &Value::Float(0.2)).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with("# mine\nlambda_e = 0.6 # why\n"), "{text}");
+        assert!(
+            text.contains("[app.\"hello xr\"]\nlambda_e = 0.2"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn toggle_flips_between_off_and_the_mode() {
+        let path = temp("toggle");
+        assert_eq!(toggle(&path, None, None, "split").unwrap(), "off");
+        assert_eq!(toggle(&path, None, None, "split").unwrap(), "split");
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "mode = \"split\"\n"
+        );
+    }
+
+    #[test]
+    fn a_broken_file_is_not_overwritten() {
+        let path = temp("broken");
+        write_atomically(&path, "lambda_e = \n").unwrap();
+        let k = key("lambda_e").unwrap();
+        assert!(set(&path, None, None, k, &Value::Float(0.6)).is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "lambda_e = \n");
+    }
+}

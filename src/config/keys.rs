@@ -1,0 +1,428 @@
+//! Every setting, once: its TOML key, its environment variable, its kind and how it reads and
+//! writes [`Settings`]. The file, the environment, `config print` and `contrastxr set` all go
+//! through this table.
+
+use super::settings::Settings;
+use super::value::{Kind, Value};
+use crate::algorithm::params::{Method, ViewMode};
+use std::path::PathBuf;
+
+pub struct Key {
+    /// The TOML key (and the name `contrastxr set` takes).
+    pub name: &'static str,
+    /// The environment variable that overrides the file.
+    pub env: &'static str,
+    /// The variable is a `NO_` switch: on means the setting is false.
+    pub env_negated: bool,
+    pub kind: Kind,
+    pub doc: &'static str,
+    set: fn(&mut Settings, Value) -> Result<(), String>,
+    get: fn(&Settings) -> Value,
+}
+
+/// The values of `mode`: the view modes, and the comparison methods (shown in mode enhance).
+pub const MODES: [&str; 9] = [
+    "enhance",
+    "off",
+    "split",
+    "heatmap",
+    "background",
+    "subtraction",
+    "hue-only",
+    "other-hue",
+    "lum-chroma",
+];
+
+fn float(v: Value) -> Result<f32, String> {
+    match v {
+        Value::Float(x) if x.is_finite() => Ok(x),
+        Value::Float(x) => Err(format!("{x} is not a finite number")),
+        other => Err(format!("{other} is not a number")),
+    }
+}
+
+fn count(v: Value) -> Result<u64, String> {
+    match v {
+        Value::Count(n) => Ok(n),
+        other => Err(format!("{other} is not a whole number")),
+    }
+}
+
+fn boolean(v: Value) -> Result<bool, String> {
+    match v {
+        Value::Bool(b) => Ok(b),
+        other => Err(format!("{other} is not true or false")),
+    }
+}
+
+fn pair(v: Value) -> Result<[f32; 2], String> {
+    match v {
+        Value::Pair(p) if p.iter().all(|x| x.is_finite()) => Ok(p),
+        other => Err(format!("{other} is not two finite numbers")),
+    }
+}
+
+fn text(v: Value) -> Result<String, String> {
+    match v {
+        Value::Text(t) => Ok(t),
+        other => Err(format!("{other} is not a string")),
+    }
+}
+
+fn set_mode(s: &mut Settings, v: Value) -> Result<(), String> {
+    let name = text(v)?;
+    if let Some(mode) = ViewMode::parse(&name) {
+        s.params.mode = mode;
+    } else if let Some(method) = Method::parse(&name).filter(|m| *m != Method::Paper) {
+        // A comparison method is shown like the paper's: mode enhance with that method.
+        s.params.mode = ViewMode::Enhance;
+        s.params.method = method;
+    } else {
+        return Err(format!(
+            "{name:?} is not a mode: use one of {}",
+            MODES.join(", ")
+        ));
+    }
+    Ok(())
+}
+
+fn set_method(s: &mut Settings, v: Value) -> Result<(), String> {
+    let name = text(v)?;
+    s.params.method = Method::parse(&name).ok_or_else(|| {
+        let all: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        format!("{name:?} is not a method: use one of {}", all.join(", "))
+    })?;
+    Ok(())
+}
+
+fn set_background(s: &mut Settings, v: Value) -> Result<(), String> {
+    let spec = text(v)?;
+    crate::camera::parse_source(&spec)?;
+    s.background = spec.trim().to_string();
+    Ok(())
+}
+
+fn set_capture_dir(s: &mut Settings, v: Value) -> Result<(), String> {
+    let dir = text(v)?;
+    s.capture_dir = (!dir.trim().is_empty()).then(|| PathBuf::from(dir.trim()));
+    Ok(())
+}
+
+/// Every setting, in the order they are applied and printed. `method` comes before `mode`
+/// (a comparison mode sets the method) and `blur` before `blur_size` (an even size is valid
+/// only without blur).
+pub const KEYS: &[Key] = &[
+    Key {
+        name: "method",
+        env: "CONTRASTXR_METHOD",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "paper, hue-only, other-hue, lum-chroma or subtraction",
+        set: set_method,
+        get: |s| Value::Text(s.params.method.name().into()),
+    },
+    Key {
+        name: "mode",
+        env: "CONTRASTXR_MODE",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "enhance, off, split, heatmap, background, or a comparison method (subtraction, hue-only, other-hue, lum-chroma)",
+        set: set_mode,
+        get: |s| Value::Text(s.params.mode.name().into()),
+    },
+    Key {
+        name: "lambda_e",
+        env: "CONTRASTXR_LAMBDA_E",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "largest colour change in the scaled space (the paper's lambda'_E)",
+        set: |s, v| {
+            s.params.lambda_e = float(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.lambda_e),
+    },
+    Key {
+        name: "lambda_jnd_scaled",
+        env: "CONTRASTXR_LAMBDA_JND_SCALED",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "JND radius in the scaled space",
+        set: |s, v| {
+            s.params.lambda_jnd_scaled = float(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.lambda_jnd_scaled),
+    },
+    Key {
+        name: "transmittance",
+        env: "CONTRASTXR_TRANSMITTANCE",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "lens transmittance applied to the background, in [0, 1]",
+        set: |s, v| {
+            s.params.transmittance = float(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.transmittance),
+    },
+    Key {
+        name: "achromatic_boost",
+        env: "CONTRASTXR_ACHROMATIC_BOOST",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "beyond the paper: raise chroma on near-grey backgrounds, in [0, 1] (0 = off)",
+        set: |s, v| {
+            s.params.achromatic_boost = float(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.achromatic_boost),
+    },
+    Key {
+        name: "luminance_cap",
+        env: "CONTRASTXR_LUMINANCE_CAP",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "beyond the paper: output luminance at most (1 + cap) x input (0 = off)",
+        set: |s, v| {
+            s.params.luminance_cap = float(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.luminance_cap),
+    },
+    Key {
+        name: "blur",
+        env: "CONTRASTXR_NO_BLUR",
+        env_negated: true,
+        kind: Kind::Bool,
+        doc: "blur the background before use",
+        set: |s, v| {
+            s.params.blur = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.params.blur),
+    },
+    Key {
+        name: "blur_size",
+        env: "CONTRASTXR_BLUR_SIZE",
+        env_negated: false,
+        kind: Kind::Count,
+        doc: "Gaussian kernel size in camera pixels (odd, at most 15)",
+        set: |s, v| {
+            s.params.blur_size = u32::try_from(count(v)?).map_err(|_| "too large")?;
+            Ok(())
+        },
+        get: |s| Value::Count(u64::from(s.params.blur_size)),
+    },
+    Key {
+        name: "blur_sigma",
+        env: "CONTRASTXR_BLUR_SIGMA",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "Gaussian sigma in camera pixels",
+        set: |s, v| {
+            s.params.blur_sigma = float(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.blur_sigma),
+    },
+    Key {
+        name: "fov",
+        env: "CONTRASTXR_NO_FOV",
+        env_negated: true,
+        kind: Kind::Bool,
+        doc: "map display to camera coordinates with fov_scale and fov_offset",
+        set: |s, v| {
+            s.params.fov = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.params.fov),
+    },
+    Key {
+        name: "fov_scale",
+        env: "CONTRASTXR_FOV_SCALE",
+        env_negated: false,
+        kind: Kind::Pair,
+        doc: "camera_uv = fov_scale * display_uv + fov_offset",
+        set: |s, v| {
+            s.params.fov_scale = pair(v)?;
+            Ok(())
+        },
+        get: |s| Value::Pair(s.params.fov_scale),
+    },
+    Key {
+        name: "fov_offset",
+        env: "CONTRASTXR_FOV_OFFSET",
+        env_negated: false,
+        kind: Kind::Pair,
+        doc: "see fov_scale",
+        set: |s, v| {
+            s.params.fov_offset = pair(v)?;
+            Ok(())
+        },
+        get: |s| Value::Pair(s.params.fov_offset),
+    },
+    Key {
+        name: "background",
+        env: "CONTRASTXR_BACKGROUND",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH or color:#RRGGBB",
+        set: set_background,
+        get: |s| Value::Text(s.background.clone()),
+    },
+    Key {
+        name: "force",
+        env: "CONTRASTXR_FORCE",
+        env_negated: false,
+        kind: Kind::Bool,
+        doc: "act on any environment blend mode, not only ADDITIVE",
+        set: |s, v| {
+            s.force = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.force),
+    },
+    Key {
+        name: "quad_layers",
+        env: "CONTRASTXR_QUAD_LAYERS",
+        env_negated: false,
+        kind: Kind::Bool,
+        doc: "also enhance quad layers",
+        set: |s, v| {
+            s.quad_layers = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.quad_layers),
+    },
+    Key {
+        name: "capture_dir",
+        env: "CONTRASTXR_CAPTURE_DIR",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "write display/output/background PNGs of processed frames here (\"\" = off)",
+        set: set_capture_dir,
+        get: |s| {
+            Value::Text(
+                s.capture_dir
+                    .as_ref()
+                    .map_or(String::new(), |d| d.display().to_string()),
+            )
+        },
+    },
+    Key {
+        name: "capture_frames",
+        env: "CONTRASTXR_CAPTURE_FRAMES",
+        env_negated: false,
+        kind: Kind::Count,
+        doc: "how many processed frames to capture",
+        set: |s, v| {
+            s.capture_frames = count(v)?;
+            Ok(())
+        },
+        get: |s| Value::Count(s.capture_frames),
+    },
+    Key {
+        name: "capture_skip",
+        env: "CONTRASTXR_CAPTURE_SKIP",
+        env_negated: false,
+        kind: Kind::Count,
+        doc: "processed frames to let pass before capturing",
+        set: |s, v| {
+            s.capture_skip = count(v)?;
+            Ok(())
+        },
+        get: |s| Value::Count(s.capture_skip),
+    },
+];
+
+pub fn key(name: &str) -> Option<&'static Key> {
+    KEYS.iter().find(|k| k.name == name)
+}
+
+impl Key {
+    /// Sets this key on `settings` if the value is valid for it and leaves the method's
+    /// settings valid as a whole; otherwise `settings` is unchanged and the error says why.
+    pub fn apply(&self, settings: &mut Settings, value: Value) -> Result<(), String> {
+        let mut candidate = settings.clone();
+        (self.set)(&mut candidate, value)?;
+        candidate.params.validate()?;
+        *settings = candidate;
+        Ok(())
+    }
+
+    pub fn get(&self, settings: &Settings) -> Value {
+        (self.get)(settings)
+    }
+
+    /// Parses this key's text form (environment variable or command line).
+    pub fn parse_text(&self, text: &str) -> Result<Value, String> {
+        match (self.kind.from_text(text)?, self.env_negated) {
+            (Value::Bool(b), true) => Ok(Value::Bool(!b)),
+            (v, _) => Ok(v),
+        }
+    }
+
+    /// Parses the text form of the value itself (`contrastxr set blur false`), never negated.
+    pub fn parse_setting(&self, text: &str) -> Result<Value, String> {
+        self.kind.from_text(text)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_key_round_trips_its_default() {
+        let defaults = Settings::default();
+        for k in KEYS {
+            let mut s = defaults.clone();
+            k.apply(&mut s, k.get(&defaults))
+                .unwrap_or_else(|e| panic!("{}: {e}", k.name));
+            assert_eq!(s, defaults, "{}", k.name);
+        }
+    }
+
+    #[test]
+    fn comparison_modes_set_the_method() {
+        let mut s = Settings::default();
+        key("mode")
+            .unwrap()
+            .apply(&mut s, Value::Text("hue-only".into()))
+            .unwrap();
+        assert_eq!(
+            (s.params.mode, s.params.method),
+            (ViewMode::Enhance, Method::HueOnly)
+        );
+        for bad in ["paper", "fancy", ""] {
+            assert!(key("mode")
+                .unwrap()
+                .apply(&mut s, Value::Text(bad.into()))
+                .is_err());
+        }
+    }
+
+    #[test]
+    fn invalid_values_leave_settings_unchanged() {
+        let mut s = Settings::default();
+        let k = key("transmittance").unwrap();
+        assert!(k.apply(&mut s, Value::Float(7.0)).is_err());
+        assert!(key("blur_size")
+            .unwrap()
+            .apply(&mut s, Value::Count(4))
+            .is_err());
+        assert!(key("background")
+            .unwrap()
+            .apply(&mut s, Value::Text("webcam".into()))
+            .is_err());
+        assert_eq!(s, Settings::default());
+    }
+
+    #[test]
+    fn no_switches_are_negated() {
+        let k = key("blur").unwrap();
+        assert_eq!(k.parse_text("1"), Ok(Value::Bool(false)));
+        assert_eq!(k.parse_setting("false"), Ok(Value::Bool(false)));
+    }
+}

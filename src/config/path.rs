@@ -1,0 +1,102 @@
+//! Where the config file is: `$CONTRASTXR_CONFIG`, else `$XDG_CONFIG_HOME/contrastxr/config.toml`
+//! (`~/.config` when unset), else `/etc/xdg/contrastxr/config.toml`.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+pub const SYSTEM_PATH: &str = "/etc/xdg/contrastxr/config.toml";
+
+/// The variables the config depends on, captured once: the layer's watcher thread re-reads the
+/// file, but a process's environment does not change under it.
+#[derive(Clone, Debug, Default)]
+pub struct Env {
+    vars: HashMap<String, String>,
+}
+
+impl Env {
+    pub fn capture() -> Env {
+        let wanted = |k: &str| k.starts_with("CONTRASTXR") || k == "XDG_CONFIG_HOME" || k == "HOME";
+        Env {
+            vars: std::env::vars_os()
+                .filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?)))
+                .filter(|(k, _)| wanted(k))
+                .collect(),
+        }
+    }
+
+    pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, &'a str)>) -> Env {
+        Env {
+            vars: pairs
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+        }
+    }
+
+    pub fn get(&self, name: &str) -> Option<String> {
+        self.vars.get(name).cloned()
+    }
+
+    fn non_empty(&self, name: &str) -> Option<String> {
+        self.get(name).filter(|v| !v.is_empty())
+    }
+}
+
+/// The per-user file, whether or not it exists.
+pub fn user_path(env: &Env) -> Option<PathBuf> {
+    let base = env
+        .non_empty("XDG_CONFIG_HOME")
+        .map(PathBuf::from)
+        .or_else(|| env.non_empty("HOME").map(|h| Path::new(&h).join(".config")))?;
+    Some(base.join("contrastxr").join("config.toml"))
+}
+
+/// The file to read: `$CONTRASTXR_CONFIG` (even if missing: it was asked for), else the first of
+/// the user and system files that exists; None when there is none.
+pub fn find(env: &Env) -> Option<PathBuf> {
+    if let Some(p) = env.non_empty("CONTRASTXR_CONFIG") {
+        return Some(PathBuf::from(p));
+    }
+    [user_path(env), Some(PathBuf::from(SYSTEM_PATH))]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file())
+}
+
+/// The file `contrastxr set` and `toggle` write: the one apps read, except that the system
+/// file is not edited in place: its content is the start of a new user file.
+pub fn for_writing(env: &Env) -> Result<(PathBuf, Option<PathBuf>), String> {
+    if let Some(p) = env.non_empty("CONTRASTXR_CONFIG") {
+        return Ok((PathBuf::from(p), None));
+    }
+    let user = user_path(env).ok_or("neither XDG_CONFIG_HOME nor HOME is set")?;
+    let seed = (!user.is_file())
+        .then(|| PathBuf::from(SYSTEM_PATH))
+        .filter(|p| p.is_file());
+    Ok((user, seed))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn explicit_path_wins_even_when_missing() {
+        let env = Env::from_pairs([("CONTRASTXR_CONFIG", "/nowhere/c.toml"), ("HOME", "/h")]);
+        assert_eq!(find(&env), Some(PathBuf::from("/nowhere/c.toml")));
+    }
+
+    #[test]
+    fn user_path_follows_xdg() {
+        let env = Env::from_pairs([("HOME", "/h")]);
+        assert_eq!(
+            user_path(&env),
+            Some(PathBuf::from("/h/.config/contrastxr/config.toml"))
+        );
+        let env = Env::from_pairs([("HOME", "/h"), ("XDG_CONFIG_HOME", "/x")]);
+        assert_eq!(
+            user_path(&env),
+            Some(PathBuf::from("/x/contrastxr/config.toml"))
+        );
+    }
+}

@@ -1,0 +1,338 @@
+//! Effective settings for one app: the defaults, then the file's top-level keys, then its
+//! `[app."NAME"]` table, then the environment. An invalid value gets one message naming its
+//! file, line and key (or its variable), and is ignored: the key keeps the value it had
+//! without it (its default, unless an earlier source set it).
+
+use super::file::{self, Entry};
+use super::keys::{Key, KEYS};
+use super::path::{self, Env};
+use super::settings::Settings;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Where an effective value came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Origin {
+    Default,
+    File { path: PathBuf, line: usize },
+    Env(&'static str),
+}
+
+impl fmt::Display for Origin {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Origin::Default => f.write_str("default"),
+            Origin::File { path, line } => write!(f, "{}:{line}", path.display()),
+            Origin::Env(var) => write!(f, "env {var}"),
+        }
+    }
+}
+
+pub struct Resolved {
+    pub settings: Settings,
+    /// One per entry of [`KEYS`], in that order.
+    pub origins: Vec<Origin>,
+    /// One sentence per problem, each naming file and line (or variable) and key.
+    pub problems: Vec<String>,
+    /// The file that was read, if any.
+    pub file: Option<PathBuf>,
+    /// The file could not be read or parsed, so none of it applies.
+    pub file_failed: bool,
+}
+
+/// A config file's path and text.
+#[derive(Clone, Copy)]
+pub struct Source<'a> {
+    pub path: &'a Path,
+    pub text: &'a str,
+}
+
+/// The loader enables an implicit layer when its variable is merely set: these values mean off.
+pub fn is_off(value: &str) -> bool {
+    matches!(
+        value.trim().to_ascii_lowercase().as_str(),
+        "" | "0" | "false" | "off" | "no"
+    )
+}
+
+impl Resolved {
+    fn new() -> Resolved {
+        Resolved {
+            settings: Settings::default(),
+            origins: vec![Origin::Default; KEYS.len()],
+            problems: Vec::new(),
+            file: None,
+            file_failed: false,
+        }
+    }
+
+    /// `key = value  # origin` for the key at `index` in [`KEYS`].
+    pub fn line(&self, index: usize) -> String {
+        let k = &KEYS[index];
+        format!(
+            "{} = {}  # {}",
+            k.name,
+            k.get(&self.settings),
+            self.origins[index]
+        )
+    }
+
+    /// Applies `value` to key `index`, or records why not.
+    fn offer(&mut self, index: usize, value: Result<super::Value, String>, from: Origin) {
+        let key: &Key = &KEYS[index];
+        let applied = value.and_then(|v| key.apply(&mut self.settings, v));
+        match applied {
+            Ok(()) => self.origins[index] = from,
+            Err(why) => {
+                let place = match &from {
+                    Origin::File { path, line } => format!("config {}:{line}", path.display()),
+                    Origin::Env(var) => format!("environment variable {var}"),
+                    Origin::Default => "default".into(),
+                };
+                self.problems.push(format!(
+                    "{place}: {}: {why}; {} stays {} ({})",
+                    key.name,
+                    key.name,
+                    key.get(&self.settings),
+                    self.origins[index]
+                ));
+            }
+        }
+    }
+
+    fn apply_entries(&mut self, path: &Path, entries: &[Entry]) {
+        for e in entries
+            .iter()
+            .filter(|e| super::keys::key(&e.key).is_none())
+        {
+            let known: Vec<&str> = KEYS.iter().map(|k| k.name).collect();
+            self.problems.push(format!(
+                "config {}:{}: unknown key {:?} (known keys: {})",
+                path.display(),
+                e.line,
+                e.key,
+                known.join(", ")
+            ));
+        }
+        for (index, key) in KEYS.iter().enumerate() {
+            for e in entries.iter().filter(|e| e.key == key.name) {
+                let value = match &e.value {
+                    Ok(v) => key.kind.from_toml(v),
+                    Err(found) => Err(format!("expected {}, found a {found}", key.kind.describe())),
+                };
+                let from = Origin::File {
+                    path: path.to_path_buf(),
+                    line: e.line,
+                };
+                self.offer(index, value, from);
+            }
+        }
+    }
+
+    fn apply_file(&mut self, app: &str, source: Source) {
+        self.file = Some(source.path.to_path_buf());
+        let parsed = match file::parse(source.text) {
+            Ok(parsed) => parsed,
+            Err(e) => {
+                self.file_failed = true;
+                self.problems.push(format!(
+                    "config {}:{}: not valid TOML ({}); the whole file is ignored",
+                    source.path.display(),
+                    e.line,
+                    e.message.lines().next().unwrap_or("syntax error")
+                ));
+                return;
+            }
+        };
+        for (line, problem) in &parsed.problems {
+            let p = source.path.display();
+            self.problems.push(format!("config {p}:{line}: {problem}"));
+        }
+        self.apply_entries(source.path, &parsed.defaults);
+        for (name, entries) in &parsed.apps {
+            if name == app {
+                self.apply_entries(source.path, entries);
+            }
+        }
+    }
+
+    fn apply_env(&mut self, env: &Env) {
+        for (index, key) in KEYS.iter().enumerate() {
+            if let Some(text) = env.get(key.env) {
+                let value = key
+                    .parse_text(&text)
+                    .map_err(|e| format!("{}={text:?}: {e}", key.env));
+                self.offer(index, value, Origin::Env(key.env));
+            }
+        }
+        self.settings.enabled = !env.get("CONTRASTXR").is_some_and(|v| is_off(&v));
+    }
+}
+
+/// The effective settings for `app` from a file (if any) and the environment.
+pub fn resolve(app: &str, file: Option<Source>, env: &Env) -> Resolved {
+    let mut r = Resolved::new();
+    if let Some(source) = file {
+        r.apply_file(app, source);
+    }
+    r.apply_env(env);
+    r
+}
+
+/// Finds and reads the config file for `env`, then resolves.
+pub fn load(app: &str, env: &Env) -> Resolved {
+    let Some(path) = path::find(env) else {
+        return resolve(app, None, env);
+    };
+    match std::fs::read_to_string(&path) {
+        Ok(text) => resolve(
+            app,
+            Some(Source {
+                path: &path,
+                text: &text,
+            }),
+            env,
+        ),
+        Err(e) => {
+            let mut r = resolve(app, None, env);
+            r.file = Some(path.clone());
+            r.file_failed = true;
+            r.problems.insert(
+                0,
+                format!(
+                    "config {}: cannot read it ({e}); using defaults",
+                    path.display()
+                ),
+            );
+            r
+        }
+    }
+}
+
+/// Every problem of a file: its top level and each `[app."NAME"]` table (no environment).
+pub fn check(source: Source) -> Vec<String> {
+    let env = Env::default();
+    let mut all: Vec<String> = resolve("", Some(source), &env).problems;
+    let apps: Vec<String> = file::parse(source.text)
+        .map(|f| f.apps.into_iter().map(|(name, _)| name).collect())
+        .unwrap_or_default();
+    for app in apps {
+        for p in resolve(&app, Some(source), &env).problems {
+            if !all.contains(&p) {
+                all.push(p);
+            }
+        }
+    }
+    all
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::algorithm::params::{Method, ViewMode};
+
+    fn with(text: &str, app: &str, env: &[(&str, &str)]) -> Resolved {
+        let source = Source {
+            path: Path::new("/c.toml"),
+            text,
+        };
+        resolve(app, Some(source), &Env::from_pairs(env.iter().copied()))
+    }
+
+    fn origin(r: &Resolved, key: &str) -> String {
+        let i = KEYS.iter().position(|k| k.name == key).unwrap();
+        r.origins[i].to_string()
+    }
+
+    #[test]
+    fn precedence_default_file_app_env() {
+        let text = "lambda_e = 0.5\ntransmittance = 0.3\n[app.\"game\"]\nlambda_e = 0.6\nmode = \"split\"\n";
+        let r = with(text, "other", &[]);
+        assert_eq!(r.settings.params.lambda_e, 0.5);
+        assert_eq!(r.settings.params.mode, ViewMode::Enhance);
+        assert_eq!(origin(&r, "lambda_e"), "/c.toml:1");
+        let r = with(text, "game", &[("CONTRASTXR_TRANSMITTANCE", "0.2")]);
+        assert_eq!(r.settings.params.lambda_e, 0.6);
+        assert_eq!(origin(&r, "lambda_e"), "/c.toml:4");
+        assert_eq!(r.settings.params.mode, ViewMode::Split);
+        assert_eq!(r.settings.params.transmittance, 0.2);
+        assert_eq!(origin(&r, "transmittance"), "env CONTRASTXR_TRANSMITTANCE");
+        assert_eq!(origin(&r, "blur_sigma"), "default");
+        assert!(r.problems.is_empty(), "{:?}", r.problems);
+    }
+
+    #[test]
+    fn wrong_types_name_file_line_and_key_and_keep_the_default() {
+        let r = with("\n\nlambda_e = \"high\"\nmethod = 3\n", "", &[]);
+        assert_eq!(r.settings, Settings::default());
+        assert_eq!(r.problems.len(), 2, "{:?}", r.problems);
+        assert!(
+            r.problems[1]
+                .starts_with("config /c.toml:3: lambda_e: expected a number, found a string"),
+            "{:?}",
+            r.problems
+        );
+        assert!(
+            r.problems[0].contains("/c.toml:4: method:"),
+            "{:?}",
+            r.problems
+        );
+    }
+
+    #[test]
+    fn a_syntax_error_ignores_the_file_and_names_the_line() {
+        let r = with(
+            "lambda_e = 0.6\n[app.\"x\"\n",
+            "",
+            &[("CONTRASTXR_METHOD", "hue-only")],
+        );
+        assert!(r.file_failed);
+        assert_eq!(r.settings.params.lambda_e, 0.4);
+        assert_eq!(r.settings.params.method, Method::HueOnly);
+        assert_eq!(r.problems.len(), 1);
+        assert!(
+            r.problems[0].starts_with("config /c.toml:2: not valid TOML"),
+            "{:?}",
+            r.problems
+        );
+    }
+
+    #[test]
+    fn bad_environment_values_keep_the_file_value() {
+        let r = with(
+            "lambda_e = 0.6\n",
+            "",
+            &[
+                ("CONTRASTXR_LAMBDA_E", "lots"),
+                ("CONTRASTXR_FOV_SCALE", "1"),
+            ],
+        );
+        assert_eq!(r.settings.params.lambda_e, 0.6);
+        assert_eq!(r.problems.len(), 2, "{:?}", r.problems);
+        assert!(
+            r.problems[0].contains("CONTRASTXR_LAMBDA_E=\"lots\""),
+            "{:?}",
+            r.problems
+        );
+    }
+
+    #[test]
+    fn unknown_keys_and_off_values() {
+        let r = with("lamda_e = 1\n", "", &[("CONTRASTXR", "0")]);
+        assert!(!r.settings.enabled);
+        assert!(r.problems[0].contains("/c.toml:1: unknown key \"lamda_e\""));
+        for v in ["0", "false", "off", "", " OFF "] {
+            assert!(is_off(v), "{v:?}");
+        }
+    }
+
+    #[test]
+    fn check_covers_every_app_table() {
+        let text = "lambda_e = -1\n[app.\"a\"]\nblur_size = 4\n[app.\"b\"]\nfov = 2\n";
+        let problems = check(Source {
+            path: Path::new("/c.toml"),
+            text,
+        });
+        assert_eq!(problems.len(), 3, "{problems:?}");
+    }
+}

@@ -1,0 +1,184 @@
+//! Hot reload: a thread polls the config file's metadata and, when it changes, resolves the
+//! settings again and publishes them. Readers (the render thread, at xrEndFrame) never wait:
+//! they compare a generation counter and take the new `Arc<Settings>` with `try_lock`; if the
+//! watcher holds the lock at that instant, the next frame takes it.
+
+use super::keys::KEYS;
+use super::path::{self, Env};
+use super::resolve::{load, Resolved};
+use super::settings::Settings;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, TryLockError};
+use std::thread::JoinHandle;
+use std::time::{Duration, SystemTime};
+
+/// How often the file is checked: a change applies within this plus one frame.
+pub const POLL: Duration = Duration::from_millis(200);
+
+pub type Sink = Box<dyn Fn(&str) + Send + Sync>;
+
+/// The settings of one app, kept current by the watcher thread.
+pub struct Live {
+    /// The generation of `current`; written after `current`.
+    generation: AtomicU64,
+    current: Mutex<Arc<Settings>>,
+    stop: AtomicBool,
+    thread: Mutex<Option<JoinHandle<()>>>,
+}
+
+/// What identifies a version of the file: replacing it (rename) or writing it changes this.
+#[derive(Clone, Debug, PartialEq)]
+struct Fingerprint {
+    path: PathBuf,
+    modified: Option<SystemTime>,
+    len: u64,
+    inode: u64,
+}
+
+fn fingerprint(env: &Env) -> Option<Fingerprint> {
+    use std::os::unix::fs::MetadataExt;
+    let path = path::find(env)?;
+    let meta = std::fs::metadata(&path).ok()?;
+    Some(Fingerprint {
+        modified: meta.modified().ok(),
+        len: meta.len(),
+        inode: meta.ino(),
+        path,
+    })
+}
+
+struct Watcher {
+    app: String,
+    env: Env,
+    seen: Option<Fingerprint>,
+    sink: Sink,
+    live: Arc<Live>,
+}
+
+impl Live {
+    /// Resolves the settings for `app` and starts watching the file. Returns the first
+    /// resolution for the caller to log.
+    pub fn start(app: &str, env: Env, sink: Sink) -> (Arc<Live>, Resolved) {
+        let seen = fingerprint(&env);
+        let resolved = load(app, &env);
+        let live = Arc::new(Live {
+            generation: AtomicU64::new(0),
+            current: Mutex::new(Arc::new(resolved.settings.clone())),
+            stop: AtomicBool::new(false),
+            thread: Mutex::new(None),
+        });
+        let mut watcher = Watcher {
+            app: app.to_string(),
+            env,
+            seen,
+            sink,
+            live: live.clone(),
+        };
+        let spawned = std::thread::Builder::new()
+            .name("contrastxr-config".into())
+            .spawn(move || watcher.run());
+        match spawned {
+            Ok(handle) => *lock(&live.thread) = Some(handle),
+            Err(e) => (watcher_failed())(&format!(
+                "cannot start the config watcher ({e}): no hot reload"
+            )),
+        }
+        (live, resolved)
+    }
+
+    /// The settings now in force (may wait for the watcher; not for the render thread).
+    pub fn current(&self) -> Arc<Settings> {
+        lock(&self.current).clone()
+    }
+
+    /// Settings newer than generation `have`, without waiting.
+    pub fn newer(&self, have: u64) -> Option<Arc<Settings>> {
+        if self.generation.load(Ordering::Acquire) == have {
+            return None;
+        }
+        match self.current.try_lock() {
+            Ok(current) => Some(current.clone()),
+            Err(TryLockError::Poisoned(p)) => Some(p.into_inner().clone()),
+            Err(TryLockError::WouldBlock) => None,
+        }
+    }
+
+    /// Stops the watcher thread and waits for it (at most one reload).
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::Release);
+        if let Some(handle) = lock(&self.thread).take() {
+            handle.thread().unpark();
+            let _ = handle.join();
+        }
+    }
+
+    fn publish(&self, mut settings: Settings) {
+        let mut current = lock(&self.current);
+        settings.generation = current.generation + 1;
+        let generation = settings.generation;
+        *current = Arc::new(settings);
+        drop(current);
+        self.generation.store(generation, Ordering::Release);
+    }
+}
+
+fn watcher_failed() -> fn(&str) {
+    |line| eprintln!("contrastxr: {line}")
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+impl Watcher {
+    fn run(&mut self) {
+        let body = std::panic::AssertUnwindSafe(|| {
+            while !self.live.stop.load(Ordering::Acquire) {
+                std::thread::park_timeout(POLL);
+                let now = fingerprint(&self.env);
+                if now != self.seen && !self.live.stop.load(Ordering::Acquire) {
+                    self.seen = now;
+                    self.reload();
+                }
+            }
+        });
+        if std::panic::catch_unwind(body).is_err() {
+            (self.sink)("internal error in the config watcher: no more hot reload");
+        }
+    }
+
+    fn reload(&self) {
+        let r = load(&self.app, &self.env);
+        let file = r
+            .file
+            .as_ref()
+            .map_or("(no file)".into(), |p| p.display().to_string());
+        for p in &r.problems {
+            (self.sink)(p);
+        }
+        if r.file_failed && r.file.as_ref().is_some_and(|p| p.is_file()) {
+            // Most likely caught half-written: keep what runs; the finished write reloads.
+            (self.sink)(&format!(
+                "config {file} changed but cannot be used: keeping the settings in use"
+            ));
+            return;
+        }
+        let old = self.live.current();
+        let changes: Vec<String> = KEYS
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| k.get(&old) != k.get(&r.settings))
+            .map(|(i, k)| {
+                let (was, now) = (k.get(&old), k.get(&r.settings));
+                format!("{} {was} -> {now} ({})", k.name, r.origins[i])
+            })
+            .collect();
+        if changes.is_empty() {
+            (self.sink)(&format!("config {file} reloaded: no setting changed"));
+            return;
+        }
+        (self.sink)(&format!("config {file} reloaded: {}", changes.join("; ")));
+        self.live.publish(r.settings);
+    }
+}

@@ -1,0 +1,93 @@
+//! Named fault points for the hardening tests: `CONTRASTXR_FAULT=NAME` (or `NAME@N`, to fire
+//! from the N-th time the point is reached on, counting from 0) makes that point fail as the
+//! real failure would. The variable is read once; with it unset a fault point costs one
+//! atomic load and a branch, so the calls stay in release builds.
+//!
+//! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
+//! `camera-loss` (see [`POINTS`]). This module must not depend on anything else in the crate.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
+
+/// Every fault point, with where it fires.
+pub const POINTS: [(&str, &str); 6] = [
+    (
+        "device-setup",
+        "wrapping the app's Vulkan device (GpuDevice::borrow)",
+    ),
+    ("pipeline-creation", "building the compute pipelines"),
+    ("allocation", "allocating GPU memory for a buffer"),
+    (
+        "image-capture",
+        "copying a view out of the app's swapchain image",
+    ),
+    ("camera-open", "opening the background source"),
+    (
+        "camera-loss",
+        "taking the newest background frame (the source is lost)",
+    ),
+];
+
+/// The armed point and the hit from which it fires.
+struct Armed {
+    name: String,
+    from_hit: u64,
+    hits: AtomicU64,
+}
+
+fn parse(spec: &str) -> Option<Armed> {
+    let spec = spec.trim();
+    let (name, from_hit) = match spec.split_once('@') {
+        Some((name, n)) => (name, n.trim().parse().ok()?),
+        None => (spec, 0),
+    };
+    (!name.is_empty()).then(|| Armed {
+        name: name.trim().to_string(),
+        from_hit,
+        hits: AtomicU64::new(0),
+    })
+}
+
+fn armed() -> Option<&'static Armed> {
+    static ARMED: OnceLock<Option<Armed>> = OnceLock::new();
+    ARMED
+        .get_or_init(|| {
+            std::env::var("CONTRASTXR_FAULT")
+                .ok()
+                .and_then(|v| parse(&v))
+        })
+        .as_ref()
+}
+
+/// True when the fault point `name` must fail now.
+pub fn hit(name: &str) -> bool {
+    match armed() {
+        Some(a) if a.name == name => a.hits.fetch_add(1, Ordering::Relaxed) >= a.from_hit,
+        _ => false,
+    }
+}
+
+/// `Err` with the text an injected fault carries (so its one log line names it) when the
+/// fault point `name` must fail now. Call sites stay one line:
+/// `crate::fault::check("allocation").map_err(GpuError::Unsupported)?;`
+pub fn check(name: &str) -> Result<(), String> {
+    if hit(name) {
+        Err(format!("fault injected at {name} (CONTRASTXR_FAULT)"))
+    } else {
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_name_and_first_hit() {
+        let a = parse(" camera-loss@10 ").unwrap();
+        assert_eq!((a.name.as_str(), a.from_hit), ("camera-loss", 10));
+        assert_eq!(parse("allocation").unwrap().from_hit, 0);
+        assert!(parse("").is_none());
+        assert!(parse("x@many").is_none());
+    }
+}

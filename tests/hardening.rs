@@ -1,0 +1,571 @@
+//! Hardening and live control, against the real Monado runtime in the sandbox (see
+//! tests/common/mod.rs for the skip/require rule): every named fault point leaves the app
+//! running with its frames untouched and one log line; broken configs are named by file, line
+//! and key while the app runs on; config edits reach a running app; a soak and 100 session
+//! cycles under Vulkan (incl. synchronisation) and OpenXR core validation stay clean and flat.
+//!
+//! "Untouched" is checked by the XR client, not the layer: with --check-untouched it reads
+//! each swapchain image back when it gets it again and compares it with what it wrote.
+//! The config parser and environment parsing are fuzzed with proptest (no sandbox needed).
+
+mod common;
+
+use common::{
+    layer_lines, sandbox, scratch_dir, SandboxRun, Validation, CLI, SYNC_VALIDATION, XR_CLIENT,
+};
+use contrastxr::config::{self, Env, Source, KEYS};
+use contrastxr::image::RgbaImage;
+use proptest::prelude::*;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant, SystemTime};
+
+const SIZE: &str = "64x48";
+const APP: &str = "contrastxr-xr-client";
+
+struct LayerRun {
+    run: SandboxRun,
+    report: Value,
+    lines: Vec<String>,
+}
+
+impl LayerRun {
+    fn modified(&self) -> Vec<u64> {
+        self.report["frames_modified"]
+            .as_array()
+            .expect("frames_modified")
+            .iter()
+            .filter_map(Value::as_u64)
+            .collect()
+    }
+
+    fn checked(&self) -> u64 {
+        self.report["frames_checked"].as_u64().unwrap_or(0)
+    }
+
+    /// The layer's lines that contain `text`.
+    fn lines_with(&self, text: &str) -> Vec<&String> {
+        self.lines.iter().filter(|l| l.contains(text)).collect()
+    }
+
+    #[track_caller]
+    fn assert_ran(&self, frames: u64) {
+        self.run.assert_success();
+        assert_eq!(self.report["ok"], true, "{}", self.run.describe());
+        let submitted = self.report["frames_submitted"].as_u64().unwrap_or(0);
+        assert!(
+            submitted >= frames,
+            "{submitted} frames: {}",
+            self.run.describe()
+        );
+    }
+}
+
+/// Runs the client through the layer (on, forced: the simulated HMD is OPAQUE) with both
+/// validation layers. `config` is the layer's config file (it need not exist).
+fn client(tag: &str, config: &Path, env: &[(&str, &str)], args: &[&str]) -> Option<LayerRun> {
+    let sandbox = sandbox()?;
+    let validation = Validation::new(tag);
+    let config = config.to_string_lossy().into_owned();
+    let mut all = vec![
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_CONFIG", config.as_str()),
+    ];
+    all.extend(validation.env());
+    all.extend(env);
+    let mut cmd = vec![XR_CLIENT, "--validation", "--json"];
+    cmd.extend(args);
+    // 20 Hz, plus start-up and slack for a slow machine.
+    let frames: u64 = args
+        .windows(2)
+        .find(|w| w[0] == "--frames")
+        .and_then(|w| w[1].parse().ok())
+        .unwrap_or(60);
+    let run = sandbox.run_for(&cmd, &all, 120 + frames / 5);
+    validation.assert_clean();
+    let report = run.client_report();
+    let lines = layer_lines(&run);
+    Some(LayerRun { run, report, lines })
+}
+
+fn no_config(tag: &str) -> PathBuf {
+    scratch_dir(tag).join("absent.toml")
+}
+
+fn config_file(tag: &str, text: &str) -> PathBuf {
+    let path = scratch_dir(tag).join("config.toml");
+    std::fs::write(&path, text).expect("write the config");
+    path
+}
+
+const CHECKED: &[&str] = &["--frames", "20", "--size", SIZE, "--check-untouched"];
+
+// ---- fault points ----
+
+/// A fault point: the app runs to its end, no frame is changed (for the mid-stream ones: none
+/// after the fault), and the layer says so in exactly one line.
+fn fault(point: &str, says: &str) {
+    let tag = format!("fault-{}", point.replace('@', "-"));
+    let env = [("CONTRASTXR_FAULT", point)];
+    let Some(r) = client(&tag, &no_config(&tag), &env, CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    assert!(r.checked() >= 10, "{} images checked", r.checked());
+    let modified = r.modified();
+    if point.starts_with("camera-loss") {
+        // Frames before the loss were enhanced; none after it.
+        assert!(
+            !modified.is_empty() && modified.iter().all(|&f| f < 10),
+            "{modified:?}"
+        );
+    } else {
+        assert!(modified.is_empty(), "frames changed: {modified:?}");
+    }
+    let about = r.lines_with("passing");
+    assert_eq!(about.len(), 1, "{about:#?}");
+    assert!(about[0].contains(says), "{about:?}");
+}
+
+#[test]
+fn fault_at_device_setup() {
+    fault("device-setup", "fault injected at device-setup");
+}
+
+#[test]
+fn fault_at_pipeline_creation() {
+    fault("pipeline-creation", "fault injected at pipeline-creation");
+}
+
+#[test]
+fn fault_at_allocation() {
+    fault("allocation", "fault injected at allocation");
+}
+
+#[test]
+fn fault_at_image_capture() {
+    fault("image-capture", "fault injected at image-capture");
+}
+
+#[test]
+fn fault_at_camera_open() {
+    fault("camera-open", "fault injected at camera-open");
+}
+
+#[test]
+fn fault_at_mid_stream_camera_loss() {
+    fault("camera-loss@5", "lost: passing frames through");
+}
+
+/// The untouched check can fail: without a fault the layer changes the frames.
+#[test]
+fn without_a_fault_frames_are_enhanced() {
+    let tag = "no-fault";
+    let Some(r) = client(tag, &no_config(tag), &[], CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    assert!(
+        r.modified().len() as u64 + 2 >= r.checked(),
+        "{:?}",
+        r.report
+    );
+    assert!(r.lines_with("passing").is_empty(), "{:?}", r.lines);
+}
+
+#[test]
+fn mode_off_does_no_gpu_work() {
+    let tag = "mode-off";
+    let env = [("CONTRASTXR_MODE", "off")];
+    let Some(r) = client(tag, &no_config(tag), &env, CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    assert!(
+        r.checked() >= 10 && r.modified().is_empty(),
+        "{:?}",
+        r.report
+    );
+    assert!(
+        r.lines_with("processing frames").is_empty(),
+        "{:?}",
+        r.lines
+    );
+}
+
+// ---- broken configs ----
+
+#[test]
+fn corrupt_config_is_named_and_ignored() {
+    let path = config_file("corrupt", "lambda_e = 0.6\n[app.\"x\"\nmode = \"off\"\n");
+    let Some(r) = client("corrupt", &path, &[], CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    let named = r.lines_with(&format!("config {}:2: not valid TOML", path.display()));
+    assert_eq!(named.len(), 1, "{:#?}", r.lines);
+    assert_eq!(
+        r.lines_with(&path.display().to_string()).len(),
+        2,
+        "{:#?}",
+        r.lines
+    );
+    assert!(
+        r.lines
+            .contains(&"setting lambda_e = 0.4  # default".to_string()),
+        "{:#?}",
+        r.lines
+    );
+    assert!(
+        !r.modified().is_empty(),
+        "the layer runs on with the defaults"
+    );
+}
+
+#[test]
+fn wrong_types_are_named_by_file_line_and_key() {
+    let text = "lambda_e = \"high\"\nmode = 3\nblur_size = 4\ntransmittance = 0.3\n\
+                [app.\"contrastxr-xr-client\"]\nfov = \"yes\"\n";
+    let path = config_file("wrong-types", text);
+    let Some(r) = client("wrong-types", &path, &[], CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    let p = path.display();
+    for (line, key) in [(1, "lambda_e"), (2, "mode"), (3, "blur_size"), (6, "fov")] {
+        let named = r.lines_with(&format!("config {p}:{line}: {key}: "));
+        assert_eq!(named.len(), 1, "{key}: {:#?}", r.lines);
+        assert!(named[0].contains(&format!("{key} stays")), "{named:?}");
+    }
+    let setting = format!("setting transmittance = 0.3  # {p}:4");
+    assert!(r.lines.contains(&setting), "{:#?}", r.lines);
+    assert!(r
+        .lines
+        .contains(&"setting blur_size = 3  # default".to_string()));
+    assert!(!r.modified().is_empty(), "the layer runs on");
+}
+
+/// The app's own table (by its applicationName) overrides the top level.
+#[test]
+fn app_table_turns_one_app_off() {
+    let text = format!("mode = \"enhance\"\n[app.\"{APP}\"]\nmode = \"off\"\n");
+    let path = config_file("app-table", &text);
+    let Some(r) = client("app-table", &path, &[], CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    assert!(r.modified().is_empty(), "{:?}", r.report);
+    let setting = format!("setting mode = \"off\"  # {}:3", path.display());
+    assert!(r.lines.contains(&setting), "{:#?}", r.lines);
+}
+
+// ---- live control ----
+
+fn wait_for(path: &Path, timeout: Duration) -> bool {
+    let end = Instant::now() + timeout;
+    while Instant::now() < end {
+        if path.exists() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    false
+}
+
+fn cli(config: &Path, args: &[&str]) -> (SystemTime, String) {
+    let out = std::process::Command::new(CLI)
+        .args(args)
+        .env("CONTRASTXR_CONFIG", config)
+        .output()
+        .expect("run contrastxr");
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (
+        SystemTime::now(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+    )
+}
+
+fn capture_lambda(json: &Path) -> f64 {
+    let text = std::fs::read_to_string(json).expect("capture json");
+    let v: Value = serde_json::from_str(&text).expect("capture json parses");
+    v["params"]["lambda_e"].as_f64().expect("lambda_e")
+}
+
+fn differs(dir: &Path, frame: u64) -> bool {
+    let png = |kind: &str| {
+        RgbaImage::load_png(&dir.join(format!("frame-{frame}-view-0-{kind}.png")))
+            .expect("capture png")
+    };
+    png("display").pixels != png("output").pixels
+}
+
+/// `contrastxr set` changes a running app's output within a second (seen in the captured
+/// pixels), and `contrastxr toggle` then turns it off (seen by the client's own check).
+#[test]
+fn config_edits_reach_a_running_app() {
+    if sandbox().is_none() {
+        return;
+    }
+    let dir = scratch_dir("live-edit");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, "lambda_e = 0.0\n").expect("write the config");
+    let capture = dir.join("capture");
+    let capture_s = capture.to_string_lossy().into_owned();
+    let env = [
+        ("CONTRASTXR_CAPTURE_DIR", capture_s.as_str()),
+        ("CONTRASTXR_CAPTURE_FRAMES", "100000"),
+    ];
+    let args = ["--frames", "120", "--size", SIZE, "--check-untouched"];
+    let (r, set_at, toggled_at) = std::thread::scope(|s| {
+        let run = s.spawn(|| client("live-edit", &config, &env, &args));
+        assert!(wait_for(
+            &capture.join("frame-5-view-0.json"),
+            Duration::from_secs(60)
+        ));
+        let (set_at, out) = cli(&config, &["set", "lambda_e", "0.6"]);
+        assert!(out.starts_with("lambda_e = 0.6"), "{out}");
+        std::thread::sleep(Duration::from_secs(2));
+        let (toggled_at, out) = cli(&config, &["toggle"]);
+        assert!(out.starts_with("mode = \"off\""), "{out}");
+        (run.join().expect("client thread"), set_at, toggled_at)
+    });
+    let Some(r) = r else { return };
+    r.assert_ran(120);
+    // Pixels: unchanged at lambda_e 0, changed at 0.6.
+    assert!(
+        !differs(&capture, 1),
+        "lambda_e 0 must leave the frame as it is"
+    );
+    let frames: Vec<(u64, f64, SystemTime)> = (0..)
+        .map(|f| (f, capture.join(format!("frame-{f}-view-0.json"))))
+        .take_while(|(_, p)| p.exists())
+        .map(|(f, p)| {
+            (
+                f,
+                capture_lambda(&p),
+                p.metadata().unwrap().modified().unwrap(),
+            )
+        })
+        .collect();
+    let first_new = frames
+        .iter()
+        .find(|(_, l, _)| *l > 0.5)
+        .expect("a frame at 0.6");
+    assert!(
+        differs(&capture, first_new.0),
+        "lambda_e 0.6 changes the frame"
+    );
+    let delay = first_new.2.duration_since(set_at).unwrap_or_default();
+    assert!(delay < Duration::from_secs(1), "applied after {delay:?}");
+    let reloaded = r.lines_with("reloaded: lambda_e 0 -> 0.6");
+    assert_eq!(reloaded.len(), 1, "{:#?}", r.lines);
+    // After the toggle nothing is processed: the last capture is from before it, and the
+    // client's own check sees no change in the frames of the last second.
+    let last = frames.last().expect("captures");
+    assert!(
+        last.2 < toggled_at + Duration::from_secs(1),
+        "captured after toggle"
+    );
+    let modified = r.modified();
+    let submitted = r.report["frames_submitted"].as_u64().unwrap();
+    assert!(modified.iter().all(|&f| f + 20 < submitted), "{modified:?}");
+}
+
+// ---- soak and session cycles ----
+
+/// `CONTRASTXR_SOAK_FRAMES` (default 1000; the README gives the 10,000-frame command).
+fn soak_frames() -> String {
+    std::env::var("CONTRASTXR_SOAK_FRAMES").unwrap_or_else(|_| "1000".into())
+}
+
+fn samples(report: &Value, field: &str) -> Vec<(u64, u64)> {
+    report[field]
+        .as_array()
+        .expect("samples")
+        .iter()
+        .map(|s| (s["rss_kb"].as_u64().unwrap(), s["fds"].as_u64().unwrap()))
+        .collect()
+}
+
+#[test]
+fn soak_with_vulkan_sync_and_openxr_validation() {
+    let tag = "soak";
+    let frames = soak_frames();
+    let args = ["--frames", frames.as_str()];
+    let Some(r) = client(tag, &no_config(tag), &[SYNC_VALIDATION], &args) else {
+        return;
+    };
+    r.assert_ran(frames.parse().unwrap());
+    assert_eq!(r.lines_with("processing frames").len(), 1, "{:#?}", r.lines);
+    assert!(r.lines_with("passing").is_empty(), "{:#?}", r.lines);
+    // Warm-up: the first 200 frames.
+    let memory = samples(&r.report, "memory");
+    let (warm, end) = (memory[3], *memory.last().unwrap());
+    eprintln!(
+        "soak: rss {} KiB after 200 frames, {} KiB at the end",
+        warm.0, end.0
+    );
+    assert!(end.0 < warm.0 + 1024, "resident memory grew: {memory:?}");
+    assert_eq!(warm.1, end.1, "file descriptors: {memory:?}");
+}
+
+#[test]
+fn hundred_session_cycles_leak_nothing() {
+    let tag = "cycles";
+    let args = ["--sessions", "100", "--frames", "2", "--size", SIZE];
+    let Some(r) = client(tag, &no_config(tag), &[SYNC_VALIDATION], &args) else {
+        return;
+    };
+    r.assert_ran(200);
+    assert_eq!(r.report["sessions_run"], 100);
+    assert_eq!(
+        r.lines_with("session on Vulkan device").len(),
+        100,
+        "the layer ran each time"
+    );
+    let sessions = samples(&r.report, "sessions");
+    let (warm, end) = (sessions[9], sessions[99]);
+    eprintln!(
+        "cycles: rss {} KiB after 10 sessions, {} KiB after 100",
+        warm.0, end.0
+    );
+    assert!(end.0 < warm.0 + 1024, "resident memory grew: {sessions:?}");
+    assert!(
+        sessions.iter().all(|s| s.1 == sessions[0].1),
+        "file descriptors: {sessions:?}"
+    );
+}
+
+/// The checks above rely on these: synchronisation validation is really on with
+/// [`SYNC_VALIDATION`], and undestroyed objects are reported when the device is destroyed.
+#[test]
+fn sync_validation_and_leak_reports_are_on() {
+    let Some(sandbox) = sandbox() else { return };
+    for (flag, seen) in [
+        ("--provoke-vk-sync-hazard", "SYNC-HAZARD-WRITE-AFTER-WRITE"),
+        ("--provoke-vk-leak", "VUID-vkDestroyDevice-device-05137"),
+    ] {
+        let validation = Validation::new(&format!("provoke{flag}"));
+        let env = [validation.env(), vec![SYNC_VALIDATION]].concat();
+        let run = sandbox.run(&[XR_CLIENT, "--validation", "--frames", "2", flag], &env);
+        assert!(!run.success(), "{flag} must fail the client");
+        let errors = validation.vk_errors();
+        assert!(
+            errors.iter().any(|e| e.contains(seen)),
+            "{flag}: {errors:?}"
+        );
+    }
+}
+
+// ---- parsing never panics ----
+
+fn resolve_text(text: &str, app: &str) {
+    let source = Source {
+        path: Path::new("/fuzz.toml"),
+        text,
+    };
+    let r = config::resolve(app, Some(source), &Env::default());
+    for i in 0..KEYS.len() {
+        let _ = r.line(i);
+    }
+    let _ = config::check(source);
+}
+
+fn toml_fragment() -> impl Strategy<Value = String> {
+    prop_oneof![
+        any::<f64>().prop_map(|f| format!("{f:?}")),
+        any::<i64>().prop_map(|i| i.to_string()),
+        any::<bool>().prop_map(|b| b.to_string()),
+        ".{0,12}".prop_map(|s| format!("{s:?}")),
+        Just("nan".to_string()),
+        Just("-inf".to_string()),
+        Just("[1, 2]".to_string()),
+        Just("[1e40, -0.0]".to_string()),
+        Just("{ a = 1 }".to_string()),
+        Just("1979-05-27T07:32:00Z".to_string()),
+        Just("[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[1".to_string()),
+    ]
+}
+
+fn toml_line() -> impl Strategy<Value = String> {
+    let key = prop_oneof![
+        proptest::sample::select(KEYS.iter().map(|k| k.name).collect::<Vec<_>>())
+            .prop_map(String::from),
+        "[a-z_.\"]{1,10}",
+    ];
+    prop_oneof![
+        (key, toml_fragment()).prop_map(|(k, v)| format!("{k} = {v}")),
+        Just("[app.\"a\"]".to_string()),
+        Just("[app]".to_string()),
+        Just("[[app]]".to_string()),
+        "\\[[a-z.\"]{0,8}\\]",
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn config_parser_never_panics_on_any_text(text in "\\PC{0,200}") {
+        resolve_text(&text, "a");
+    }
+
+    #[test]
+    fn config_parser_never_panics_on_toml_like_text(lines in proptest::collection::vec(toml_line(), 0..12)) {
+        resolve_text(&lines.join("\n"), "a");
+    }
+
+    #[test]
+    fn environment_parsing_never_panics(values in proptest::collection::vec((0..KEYS.len(), "\\PC{0,24}"), 0..8)) {
+        let pairs: Vec<(&str, &str)> = values.iter().map(|(i, v)| (KEYS[*i].env, v.as_str())).collect();
+        let r = config::resolve("a", None, &Env::from_pairs(pairs));
+        prop_assert!(r.settings.params.validate().is_ok());
+    }
+
+    #[test]
+    fn cli_values_never_panic(i in 0..KEYS.len(), text in "\\PC{0,24}") {
+        let key = &KEYS[i];
+        if let Ok(v) = key.parse_setting(&text) {
+            let mut s = config::Settings::default();
+            if key.apply(&mut s, v).is_ok() {
+                prop_assert!(s.params.validate().is_ok());
+            }
+        }
+    }
+}
+
+/// The commented example config in the repository is valid and shows every key.
+#[test]
+fn example_config_is_valid_and_complete() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("contrastxr.example.toml");
+    let text = std::fs::read_to_string(&path).expect("contrastxr.example.toml");
+    let problems = config::check(Source {
+        path: &path,
+        text: &text,
+    });
+    assert!(problems.is_empty(), "{problems:#?}");
+    for key in KEYS {
+        assert!(
+            text.contains(&format!("\n{} = ", key.name)),
+            "{} is not shown",
+            key.name
+        );
+        assert!(text.contains(key.env), "{} is not named", key.env);
+    }
+    // Its top-level values are the defaults.
+    let r = config::resolve(
+        "",
+        Some(Source {
+            path: &path,
+            text: &text,
+        }),
+        &Env::default(),
+    );
+    assert_eq!(r.settings, config::Settings::default());
+}
