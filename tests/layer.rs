@@ -665,6 +665,7 @@ fn no_camera_means_pass_through_with_one_line() {
         &[
             XR_CLIENT,
             "--json",
+            "--check-untouched",
             "--frames",
             "10",
             "--format",
@@ -673,6 +674,14 @@ fn no_camera_means_pass_through_with_one_line() {
         &env,
     );
     run.assert_success();
+    // The client re-reads each image when it acquires it again: nothing may have changed it.
+    let report = run.client_report();
+    assert!(report["frames_checked"].as_u64().unwrap() >= 5, "{report}");
+    assert_eq!(
+        report["frames_modified"],
+        serde_json::json!([]),
+        "frames were changed"
+    );
     let lines = layer_lines(&run);
     let fallback: Vec<_> = lines
         .iter()
@@ -685,12 +694,7 @@ fn no_camera_means_pass_through_with_one_line() {
         0,
         "captured without a background"
     );
-    for call in dump.calls("xrCreateSwapchain") {
-        assert_eq!(
-            call.int("createInfo->usageFlags"),
-            Some(17),
-            "a pass-through session's swapchain was changed"
-        );
-    }
+    // (The session keeps its GPU set-up so that a background arriving through a config change
+    // is picked up, so its swapchains do get the transfer usage; the frames stay untouched.)
     assert!(dump.calls("xrEndFrame").len() >= 10);
 }

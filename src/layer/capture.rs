@@ -4,6 +4,7 @@
 
 use super::processor::CapturedView;
 use crate::algorithm::params::Params;
+use crate::colour;
 use crate::gpu::{PixelFormat, PixelLayout};
 use crate::image::RgbaImage;
 use std::path::Path;
@@ -19,26 +20,11 @@ fn half_to_f32(h: u16) -> f32 {
     }
 }
 
-fn encode_srgb8(linear: f32) -> u8 {
-    let v = f64::from(linear.clamp(0.0, 1.0));
-    let e = if v <= 0.0031308 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (255.0 * e + 0.5).floor() as u8
-}
-
 /// One raw pixel as (r, g, b, a) channel values in [0, 1] in the format's own encoding.
 fn channels(format: PixelFormat, px: &[u8]) -> [f32; 4] {
     let word = |i: usize| u32::from_le_bytes([px[i], px[i + 1], px[i + 2], px[i + 3]]);
     match format.layout {
-        PixelLayout::Rgba8 => px[..4]
-            .iter()
-            .map(|&b| f32::from(b) / 255.0)
-            .collect::<Vec<_>>()
-            .try_into()
-            .unwrap(),
+        PixelLayout::Rgba8 => [px[0], px[1], px[2], px[3]].map(|b| f32::from(b) / 255.0),
         PixelLayout::Bgra8 => [px[2], px[1], px[0], px[3]].map(|b| f32::from(b) / 255.0),
         PixelLayout::A2b10g10r10 => {
             let w = word(0);
@@ -61,24 +47,21 @@ pub fn to_srgb8(format: PixelFormat, raw: &[u8], width: u32, height: u32) -> Rgb
         .chunks_exact(bpp)
         .take((width * height) as usize)
         .map(|px| {
-            let c = channels(format, px);
-            let alpha = (255.0 * c[3].clamp(0.0, 1.0) + 0.5).floor() as u8;
-            if format.srgb {
-                [c[0], c[1], c[2]]
-                    .map(|v| (255.0 * v + 0.5).floor() as u8)
-                    .into_iter()
-                    .chain([alpha])
-                    .collect::<Vec<_>>()
-                    .try_into()
-                    .unwrap()
-            } else {
-                [
-                    encode_srgb8(c[0]),
-                    encode_srgb8(c[1]),
-                    encode_srgb8(c[2]),
-                    alpha,
-                ]
-            }
+            let c = channels(format, px).map(f64::from);
+            // sRGB formats already hold encoded values; linear ones are encoded here.
+            let encode = |v: f64| {
+                if format.srgb {
+                    v
+                } else {
+                    colour::srgb_encode(v.clamp(0.0, 1.0))
+                }
+            };
+            [
+                colour::quantize(encode(c[0])),
+                colour::quantize(encode(c[1])),
+                colour::quantize(encode(c[2])),
+                colour::quantize(c[3]),
+            ]
         })
         .collect();
     RgbaImage {
