@@ -303,46 +303,25 @@ fn client_through_layer(format: &str, layout: &str) {
     );
 }
 
-#[test]
-fn layer_enhances_rgba8_srgb() {
-    for layout in ["array", "side-by-side"] {
-        client_through_layer("R8G8B8A8_SRGB", layout);
-    }
+/// One test per format (they run in parallel), each through both layouts.
+macro_rules! through_the_layer {
+    ($($name:ident: $format:literal,)*) => {$(
+        #[test]
+        fn $name() {
+            for layout in ["array", "side-by-side"] {
+                client_through_layer($format, layout);
+            }
+        }
+    )*};
 }
 
-#[test]
-fn layer_enhances_bgra8_srgb() {
-    for layout in ["array", "side-by-side"] {
-        client_through_layer("B8G8R8A8_SRGB", layout);
-    }
-}
-
-#[test]
-fn layer_enhances_rgba8_unorm() {
-    for layout in ["array", "side-by-side"] {
-        client_through_layer("R8G8B8A8_UNORM", layout);
-    }
-}
-
-#[test]
-fn layer_enhances_bgra8_unorm() {
-    for layout in ["array", "side-by-side"] {
-        client_through_layer("B8G8R8A8_UNORM", layout);
-    }
-}
-
-#[test]
-fn layer_enhances_rgba16_unorm() {
-    for layout in ["array", "side-by-side"] {
-        client_through_layer("R16G16B16A16_UNORM", layout);
-    }
-}
-
-#[test]
-fn layer_enhances_rgba16_float() {
-    for layout in ["array", "side-by-side"] {
-        client_through_layer("R16G16B16A16_SFLOAT", layout);
-    }
+through_the_layer! {
+    layer_enhances_rgba8_srgb: "R8G8B8A8_SRGB",
+    layer_enhances_bgra8_srgb: "B8G8R8A8_SRGB",
+    layer_enhances_rgba8_unorm: "R8G8B8A8_UNORM",
+    layer_enhances_bgra8_unorm: "B8G8R8A8_UNORM",
+    layer_enhances_rgba16_unorm: "R16G16B16A16_UNORM",
+    layer_enhances_rgba16_float: "R16G16B16A16_SFLOAT",
 }
 
 #[test]

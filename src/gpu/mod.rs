@@ -4,6 +4,7 @@
 
 pub mod bench;
 pub mod buffer;
+pub mod commands;
 pub mod device;
 pub mod engine;
 pub mod error;

@@ -1,19 +1,20 @@
 //! The engine on a device of its own, for the command-line tool and the tests: upload, record,
 //! submit, wait, read back.
 
+use super::commands::Commands;
 use super::device::{DeviceOptions, GpuDevice};
-use super::engine::{barrier, begin, BackgroundFrame, Engine, Placement, ViewTarget};
-use super::error::{GpuError, VkResultExt};
+use super::engine::{barrier, BackgroundFrame, Engine, Placement, ViewTarget};
+use super::error::GpuError;
 use super::format::PixelFormat;
 use crate::algorithm::params::Params;
 use crate::image::RgbaImage;
 use ash::vk;
+use std::cell::RefCell;
 
 pub struct OfflineEngine {
     pub(super) engine: Engine,
-    pool: vk::CommandPool,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
+    /// RefCell: `submit` records through `&self` (the engine and device are only read).
+    commands: RefCell<Commands>,
     // Declared last: dropped after the objects above are destroyed in Drop.
     pub gpu: GpuDevice,
 }
@@ -46,39 +47,12 @@ impl OfflineEngine {
     pub fn with_options(options: &DeviceOptions) -> Result<OfflineEngine, GpuError> {
         let gpu = GpuDevice::create(options)?;
         let engine = Engine::new(&gpu, 4)?;
-        let mut this = OfflineEngine {
+        let commands = RefCell::new(Commands::new(&gpu)?);
+        Ok(OfflineEngine {
             engine,
-            pool: vk::CommandPool::null(),
-            cmd: vk::CommandBuffer::null(),
-            fence: vk::Fence::null(),
+            commands,
             gpu,
-        };
-        this.create_commands()?;
-        Ok(this)
-    }
-
-    fn create_commands(&mut self) -> Result<(), GpuError> {
-        let d = &self.gpu.device;
-        let info = vk::CommandPoolCreateInfo::default()
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER)
-            .queue_family_index(self.gpu.queue_family);
-        // SAFETY: valid create infos on the engine's own device.
-        unsafe {
-            self.pool = d
-                .create_command_pool(&info, None)
-                .vk("vkCreateCommandPool")?;
-            let alloc = vk::CommandBufferAllocateInfo::default()
-                .command_pool(self.pool)
-                .level(vk::CommandBufferLevel::PRIMARY)
-                .command_buffer_count(1);
-            self.cmd = d
-                .allocate_command_buffers(&alloc)
-                .vk("vkAllocateCommandBuffers")?[0];
-            self.fence = d
-                .create_fence(&vk::FenceCreateInfo::default(), None)
-                .vk("vkCreateFence")?;
-        }
-        Ok(())
+        })
     }
 
     pub fn device_name(&self) -> &str {
@@ -90,28 +64,17 @@ impl OfflineEngine {
         &self,
         record: impl FnOnce(vk::CommandBuffer) -> Result<(), GpuError>,
     ) -> Result<(), GpuError> {
-        let d = &self.gpu.device;
-        begin(&self.gpu, self.cmd)?;
-        record(self.cmd)?;
+        let mut commands = self.commands.borrow_mut();
+        commands.begin(&self.gpu)?;
+        record(commands.cmd)?;
         barrier(
             &self.gpu,
-            self.cmd,
+            commands.cmd,
             vk::PipelineStageFlags::ALL_COMMANDS,
             vk::PipelineStageFlags::HOST,
         );
-        let cmds = [self.cmd];
-        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-        // SAFETY: the command buffer was recorded above; the queue is ours; we wait on the
-        // fence before anything it uses is touched again.
-        unsafe {
-            d.end_command_buffer(self.cmd).vk("vkEndCommandBuffer")?;
-            d.queue_submit(self.gpu.queue, &submit, self.fence)
-                .vk("vkQueueSubmit")?;
-            d.wait_for_fences(&[self.fence], true, u64::MAX)
-                .vk("vkWaitForFences")?;
-            d.reset_fences(&[self.fence]).vk("vkResetFences")?;
-        }
-        Ok(())
+        commands.submit(&self.gpu)?;
+        commands.wait(&self.gpu, u64::MAX)
     }
 
     /// Uploads a camera frame and makes one view bound to it; the caller destroys both.
@@ -241,13 +204,7 @@ impl OfflineEngine {
 
 impl Drop for OfflineEngine {
     fn drop(&mut self) {
-        let d = &self.gpu.device;
-        // SAFETY: every submission was waited for; these objects are ours.
-        unsafe {
-            let _ = d.device_wait_idle();
-            d.destroy_fence(self.fence, None);
-            d.destroy_command_pool(self.pool, None);
-        }
+        self.commands.get_mut().destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
     }
 }

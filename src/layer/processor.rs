@@ -3,8 +3,8 @@
 //! The image is still the app's at that point (its release is held until xrEndFrame).
 
 use crate::algorithm::params::Params;
-use crate::gpu::engine::{barrier, begin};
-use crate::gpu::error::VkResultExt;
+use crate::gpu::commands::Commands;
+use crate::gpu::engine::barrier;
 use crate::gpu::{
     BackgroundFrame, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
 };
@@ -49,10 +49,7 @@ pub struct CapturedView {
 
 pub struct Processor {
     engine: Engine,
-    pool: vk::CommandPool,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
-    in_flight: bool,
+    commands: Commands,
     background: Option<BackgroundFrame>,
     background_sequence: u64,
     views: HashMap<ViewKey, PreparedView>,
@@ -71,60 +68,28 @@ fn subresource(layer: u32) -> vk::ImageSubresourceRange {
 
 impl Processor {
     pub fn new(gpu: GpuDevice) -> Result<Processor, GpuError> {
-        let engine = Engine::new(&gpu, MAX_VIEWS)?;
-        let mut p = Processor {
+        let mut engine = Engine::new(&gpu, MAX_VIEWS)?;
+        let commands = match Commands::new(&gpu) {
+            Ok(c) => c,
+            Err(e) => {
+                engine.destroy(&gpu);
+                return Err(e);
+            }
+        };
+        Ok(Processor {
             engine,
-            pool: vk::CommandPool::null(),
-            cmd: vk::CommandBuffer::null(),
-            fence: vk::Fence::null(),
-            in_flight: false,
+            commands,
             background: None,
             background_sequence: 0,
             views: HashMap::new(),
             frame: 0,
             gpu,
-        };
-        p.create_commands()?;
-        Ok(p)
-    }
-
-    fn create_commands(&mut self) -> Result<(), GpuError> {
-        let d = &self.gpu.device;
-        let info = vk::CommandPoolCreateInfo::default()
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER)
-            .queue_family_index(self.gpu.queue_family);
-        // SAFETY: valid create infos on the app's device; the objects are ours.
-        unsafe {
-            self.pool = d
-                .create_command_pool(&info, None)
-                .vk("vkCreateCommandPool")?;
-            let alloc = vk::CommandBufferAllocateInfo::default()
-                .command_pool(self.pool)
-                .level(vk::CommandBufferLevel::PRIMARY)
-                .command_buffer_count(1);
-            self.cmd = d
-                .allocate_command_buffers(&alloc)
-                .vk("vkAllocateCommandBuffers")?[0];
-            self.fence = d
-                .create_fence(&vk::FenceCreateInfo::default(), None)
-                .vk("vkCreateFence")?;
-        }
-        Ok(())
+        })
     }
 
     /// Waits for the previous submission (normally long done) so its buffers can be reused.
     fn wait_idle(&mut self) -> Result<(), GpuError> {
-        if self.in_flight {
-            let d = &self.gpu.device;
-            // SAFETY: the fence is ours and was submitted.
-            unsafe {
-                d.wait_for_fences(&[self.fence], true, 5_000_000_000)
-                    .vk("vkWaitForFences")?;
-                d.reset_fences(&[self.fence]).vk("vkResetFences")?;
-            }
-            self.in_flight = false;
-        }
-        Ok(())
+        self.commands.wait(&self.gpu, 5_000_000_000)
     }
 
     /// Makes the GPU background frame hold `image` (sequence identifies a new camera frame).
@@ -273,22 +238,9 @@ impl Processor {
     }
 
     fn submit(&mut self) -> Result<(), GpuError> {
-        let cmds = [self.cmd];
-        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-        // SAFETY: recorded above; the app's queue is ours to use inside xrEndFrame (the OpenXR
-        // spec gives the runtime, and so its layers, the queue during this call).
-        unsafe {
-            self.gpu
-                .device
-                .end_command_buffer(self.cmd)
-                .vk("vkEndCommandBuffer")?;
-            self.gpu
-                .device
-                .queue_submit(self.gpu.queue, &submit, self.fence)
-                .vk("vkQueueSubmit")?;
-        }
-        self.in_flight = true;
-        Ok(())
+        // Inside xrEndFrame: the OpenXR spec gives the runtime, and so its layers, the app's
+        // queue during this call.
+        self.commands.submit(&self.gpu)
     }
 
     fn image_barriers(&self, items: &[WorkItem], to_general: bool) {
@@ -337,7 +289,7 @@ impl Processor {
         // SAFETY: cmd is recording; the images are the app's, held by the layer until release.
         unsafe {
             self.gpu.device.cmd_pipeline_barrier(
-                self.cmd,
+                self.commands.cmd,
                 src,
                 dst,
                 vk::DependencyFlags::empty(),
@@ -373,7 +325,7 @@ impl Processor {
         unsafe {
             if to_buffer {
                 d.cmd_copy_image_to_buffer(
-                    self.cmd,
+                    self.commands.cmd,
                     item.image,
                     vk::ImageLayout::GENERAL,
                     target.pixels.raw,
@@ -381,7 +333,7 @@ impl Processor {
                 );
             } else {
                 d.cmd_copy_buffer_to_image(
-                    self.cmd,
+                    self.commands.cmd,
                     target.pixels.raw,
                     item.image,
                     vk::ImageLayout::GENERAL,
@@ -398,7 +350,7 @@ impl Processor {
         unsafe {
             self.gpu
                 .device
-                .cmd_copy_buffer(self.cmd, src.raw, dst.raw, &region)
+                .cmd_copy_buffer(self.commands.cmd, src.raw, dst.raw, &region)
         };
     }
 
@@ -408,7 +360,7 @@ impl Processor {
         params: &Params,
         staging: &[(crate::gpu::buffer::GpuBuffer, crate::gpu::buffer::GpuBuffer)],
     ) -> Result<(), GpuError> {
-        begin(&self.gpu, self.cmd)?;
+        self.commands.begin(&self.gpu)?;
         let seq = self.background_sequence;
         let stale: Vec<ViewKey> = {
             let mut seen = HashSet::new();
@@ -422,7 +374,7 @@ impl Processor {
             let bg = self.background.as_ref().expect("set in process");
             let targets: Vec<&ViewTarget> = stale.iter().map(|k| &self.views[k].target).collect();
             self.engine
-                .record_background(&self.gpu, self.cmd, bg, &targets, params)?;
+                .record_background(&self.gpu, self.commands.cmd, bg, &targets, params)?;
         }
         for k in &stale {
             if let Some(v) = self.views.get_mut(k) {
@@ -440,7 +392,7 @@ impl Processor {
         items.iter().for_each(|i| self.copy_region(i, true));
         barrier(
             &self.gpu,
-            self.cmd,
+            self.commands.cmd,
             S::TRANSFER,
             S::COMPUTE_SHADER | S::TRANSFER,
         );
@@ -449,19 +401,23 @@ impl Processor {
         }
         if !staging.is_empty() {
             // The capture copies read `pixels` before the enhancement writes it.
-            barrier(&self.gpu, self.cmd, S::TRANSFER, S::COMPUTE_SHADER);
+            barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::COMPUTE_SHADER);
         }
         for i in items {
-            self.engine
-                .record_enhance(&self.gpu, self.cmd, &self.views[&i.key].target, params)?;
+            self.engine.record_enhance(
+                &self.gpu,
+                self.commands.cmd,
+                &self.views[&i.key].target,
+                params,
+            )?;
         }
-        barrier(&self.gpu, self.cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        barrier(&self.gpu, self.commands.cmd, S::COMPUTE_SHADER, S::TRANSFER);
         for (i, (_, after)) in items.iter().zip(staging) {
             self.copy_to_capture(i, after);
         }
         items.iter().for_each(|i| self.copy_region(i, false));
         self.image_barriers(items, false);
-        barrier(&self.gpu, self.cmd, S::TRANSFER, S::HOST);
+        barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::HOST);
         Ok(())
     }
 }
@@ -476,10 +432,6 @@ impl Drop for Processor {
             bg.destroy(&self.gpu);
         }
         self.engine.destroy(&self.gpu);
-        // SAFETY: our own objects; the fence wait above means the GPU is done with them.
-        unsafe {
-            self.gpu.device.destroy_fence(self.fence, None);
-            self.gpu.device.destroy_command_pool(self.pool, None);
-        }
+        self.commands.destroy(&self.gpu);
     }
 }
