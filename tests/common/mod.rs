@@ -123,22 +123,7 @@ impl Sandbox {
     /// `env` is added to the environment of the script, which passes CONTRASTXR*, XR_*, VK_*,
     /// LP_*, RUST_*, MESA_* variables to the command. Stdin is empty.
     pub fn run(&self, cmd: &[&str], env: &[(&str, &str)]) -> SandboxRun {
-        // A hung app or runtime must fail the test, not hang it: `timeout` signals the script's
-        // whole process group, and the script's PID namespace takes everything inside down.
-        let output = Command::new("timeout")
-            .args(["--kill-after=10", &RUN_TIMEOUT_S.to_string()])
-            .arg(&self.script)
-            .args(["run", "--"])
-            .args(cmd)
-            .envs(env.iter().copied())
-            .stdin(std::process::Stdio::null())
-            .output()
-            .unwrap_or_else(|e| panic!("cannot run {}: {e}", self.script.display()));
-        SandboxRun {
-            status: output.status,
-            stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
-            stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
-        }
+        self.run_for(cmd, env, u64::from(RUN_TIMEOUT_S))
     }
 }
 
@@ -395,6 +380,8 @@ pub fn scratch_dir(name: &str) -> PathBuf {
 impl Sandbox {
     /// [`Sandbox::run`] with its own time limit in seconds (long soaks).
     pub fn run_for(&self, cmd: &[&str], env: &[(&str, &str)], timeout_s: u64) -> SandboxRun {
+        // A hung app or runtime must fail the test, not hang it: `timeout` signals the script's
+        // whole process group, and the script's PID namespace takes everything inside down.
         let output = Command::new("timeout")
             .args(["--kill-after=10", &timeout_s.to_string()])
             .arg(&self.script)
