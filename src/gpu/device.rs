@@ -197,7 +197,15 @@ impl GpuDevice {
         // From here on, a failure must destroy the instance: build the device in a helper.
         match Self::create_device(&entry, &instance, options.index) {
             Ok((physical, device, family)) => {
-                let allocator = create_allocator(&instance, &device, physical)?;
+                let allocator = match create_allocator(&instance, &device, physical) {
+                    Ok(a) => a,
+                    Err(e) => {
+                        // SAFETY: the device was just created and has no children.
+                        unsafe { device.destroy_device(None) };
+                        Self::destroy_instance(&instance, messenger);
+                        return Err(e);
+                    }
+                };
                 // SAFETY: family was used to create the device with one queue.
                 let queue = unsafe { device.get_device_queue(family, 0) };
                 Ok(GpuDevice {
@@ -214,15 +222,20 @@ impl GpuDevice {
                 })
             }
             Err(e) => {
-                if let Some(m) = messenger {
-                    // SAFETY: the messenger was created from this instance and is unused.
-                    unsafe { m.loader.destroy_debug_utils_messenger(m.raw, None) };
-                }
-                // SAFETY: the instance has no children left.
-                unsafe { instance.destroy_instance(None) };
+                Self::destroy_instance(&instance, messenger);
                 Err(e)
             }
         }
+    }
+
+    /// Destroys an instance this object created (and its messenger) after a failed set-up.
+    fn destroy_instance(instance: &ash::Instance, messenger: Option<Messenger>) {
+        if let Some(m) = messenger {
+            // SAFETY: the messenger was created from this instance and is unused.
+            unsafe { m.loader.destroy_debug_utils_messenger(m.raw, None) };
+        }
+        // SAFETY: the instance has no children left.
+        unsafe { instance.destroy_instance(None) };
     }
 
     fn create_device(

@@ -95,8 +95,9 @@ fn no_variants() -> Mutex<Vec<vk::Pipeline>> {
 }
 
 impl Pipelines {
-    pub fn new(gpu: &GpuDevice) -> Result<Pipelines, GpuError> {
-        let mut p = Pipelines {
+    /// No objects yet (null handles, which vkDestroy* ignores).
+    fn empty() -> Pipelines {
+        Pipelines {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
             decode_blur_h: vk::Pipeline::null(),
@@ -105,7 +106,11 @@ impl Pipelines {
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
             variants: no_variants(),
-        };
+        }
+    }
+
+    pub fn new(gpu: &GpuDevice) -> Result<Pipelines, GpuError> {
+        let mut p = Pipelines::empty();
         // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
         if let Err(e) = p.build(gpu) {
             p.destroy(gpu);
@@ -251,15 +256,6 @@ impl Pipelines {
             gpu.device
                 .destroy_descriptor_set_layout(self.set_layout, None);
         }
-        *self = Pipelines {
-            set_layout: vk::DescriptorSetLayout::null(),
-            layout: vk::PipelineLayout::null(),
-            decode_blur_h: vk::Pipeline::null(),
-            blur_v: vk::Pipeline::null(),
-            fov_map: vk::Pipeline::null(),
-            finish_tiles: vk::Pipeline::null(),
-            copy_pixels: vk::Pipeline::null(),
-            variants: no_variants(),
-        };
+        *self = Pipelines::empty();
     }
 }
