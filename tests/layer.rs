@@ -677,3 +677,47 @@ fn no_camera_means_pass_through_with_one_line() {
     // is picked up, so its swapchains do get the transfer usage; the frames stay untouched.)
     assert!(dump.calls("xrEndFrame").len() >= 10);
 }
+
+#[test]
+fn background_smoothing_blends_successive_frames() {
+    let tag = "layer-smoothing";
+    let dir = capture_dir(tag);
+    let video = video_dir(tag, 6);
+    let originals: Vec<Vec<[u8; 4]>> = (0..6)
+        .map(|i| {
+            RgbaImage::load_png(&video.join(format!("frame-{i:03}.png")))
+                .unwrap()
+                .pixels
+        })
+        .collect();
+    let mut env = layer_env(&dir, &format!("video:{}", video.display()));
+    env.retain(|(k, _)| k != "CONTRASTXR_CAPTURE_FRAMES");
+    env.push(("CONTRASTXR_CAPTURE_FRAMES".into(), "10".into()));
+    env.push(("CONTRASTXR_BACKGROUND_SMOOTHING".into(), "0.5".into()));
+    let cmd = [
+        XR_CLIENT,
+        "--json",
+        "--frames",
+        "20",
+        "--size",
+        "96x64",
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    let Some(sandbox) = sandbox() else { return };
+    let run = sandbox.run(&cmd, &as_refs(&env));
+    run.assert_success();
+    let views = captures(&dir);
+    assert_eq!(views.len(), 20);
+    let blended = views
+        .iter()
+        .filter(|c| !originals.contains(&c.camera.pixels))
+        .count();
+    assert!(
+        blended > 0,
+        "smoothing on, yet every background used was an unblended video frame"
+    );
+    for c in &views {
+        check_view(c);
+    }
+}

@@ -167,6 +167,58 @@ pub const KEYS: &[Key] = &[
         get: |s| Value::Float(s.params.transmittance),
     },
     Key {
+        name: "camera_width",
+        env: "CONTRASTXR_CAMERA_WIDTH",
+        env_negated: false,
+        kind: Kind::Count,
+        doc: "wanted camera width: the smallest offered size at least this wide",
+        set: |s, v| {
+            s.camera.width = u32::try_from(count(v)?).map_err(|_| "too large")?;
+            Ok(())
+        },
+        get: |s| Value::Count(u64::from(s.camera.width)),
+    },
+    Key {
+        name: "camera_height",
+        env: "CONTRASTXR_CAMERA_HEIGHT",
+        env_negated: false,
+        kind: Kind::Count,
+        doc: "wanted camera height",
+        set: |s, v| {
+            s.camera.height = u32::try_from(count(v)?).map_err(|_| "too large")?;
+            Ok(())
+        },
+        get: |s| Value::Count(u64::from(s.camera.height)),
+    },
+    Key {
+        name: "camera_fps",
+        env: "CONTRASTXR_CAMERA_FPS",
+        env_negated: false,
+        kind: Kind::Count,
+        doc: "wanted camera rate: the lowest offered rate at least this high",
+        set: |s, v| {
+            s.camera.fps = u32::try_from(count(v)?).map_err(|_| "too large")?;
+            Ok(())
+        },
+        get: |s| Value::Count(u64::from(s.camera.fps)),
+    },
+    Key {
+        name: "background_smoothing",
+        env: "CONTRASTXR_BACKGROUND_SMOOTHING",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "temporal smoothing: weight of the newest camera frame in a moving average, in (0, 1]; 0 = off",
+        set: |s, v| {
+            let w = float(v)?;
+            if !(0.0..=1.0).contains(&w) {
+                return Err(format!("{w} is not in [0, 1]"));
+            }
+            s.camera.smoothing = (w > 0.0 && w < 1.0).then_some(w);
+            Ok(())
+        },
+        get: |s| Value::Float(s.camera.smoothing.unwrap_or(0.0)),
+    },
+    Key {
         name: "achromatic_boost",
         env: "CONTRASTXR_ACHROMATIC_BOOST",
         env_negated: false,

@@ -1,6 +1,7 @@
 //! The layer's effective settings: what one app's sessions run with.
 
 use crate::algorithm::params::Params;
+use crate::camera::CaptureConfig;
 use std::path::PathBuf;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -25,6 +26,8 @@ pub struct Settings {
     /// Background source spec: `v4l2:auto` (default), `v4l2:/dev/videoN`, `image:PATH`,
     /// `video:PATH` or `color:#RRGGBB`.
     pub background: String,
+    /// How a camera source is opened: wanted size and rate, temporal smoothing.
+    pub camera: CaptureConfig,
     /// Where captures go; None: no capture.
     pub capture_dir: Option<PathBuf>,
     pub capture_frames: u64,
@@ -42,6 +45,7 @@ impl Default for Settings {
             quad_layers: false,
             params: Params::default(),
             background: "v4l2:auto".into(),
+            camera: CaptureConfig::default(),
             capture_dir: None,
             capture_frames: 1,
             capture_skip: 0,

@@ -44,7 +44,7 @@ pub unsafe extern "system" fn create_session(
         let settings = inst.settings.clone();
         let (processor, background) = match binding {
             // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
-            Some(b) => set_up(unsafe { &*b }, &settings.background),
+            Some(b) => set_up(unsafe { &*b }, &settings.background, &settings.camera),
             None => {
                 log::info("session is not a Vulkan session: passing its frames through untouched");
                 (None, None)
@@ -68,15 +68,15 @@ pub unsafe extern "system" fn create_session(
     })
 }
 
-fn open_background(spec: &str) -> Result<Background, String> {
+fn open_background(spec: &str, camera: &CaptureConfig) -> Result<Background, String> {
     let source = camera::parse_source(spec)?;
-    Background::open(&source, &CaptureConfig::default()).map_err(|e| e.to_string())
+    Background::open(&source, camera).map_err(|e| e.to_string())
 }
 
 /// Opens the background, logging once why not: the session then passes frames through until
 /// the config names a source that opens.
-fn open_background_logged(spec: &str) -> Option<Background> {
-    match open_background(spec) {
+fn open_background_logged(spec: &str, camera: &CaptureConfig) -> Option<Background> {
+    match open_background(spec, camera) {
         Ok(bg) => Some(bg),
         Err(e) => {
             log::info(&format!(
@@ -90,6 +90,7 @@ fn open_background_logged(spec: &str) -> Option<Background> {
 fn set_up(
     b: &xr::GraphicsBindingVulkanKHR,
     background_spec: &str,
+    camera: &CaptureConfig,
 ) -> (Option<Processor>, Option<Background>) {
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
     // alive until after xrDestroySession, where the processor is dropped first.
@@ -112,7 +113,7 @@ fn set_up(
         }
     };
     // Opened after the GPU set-up: a camera stays closed for a session that cannot use it.
-    let background = open_background_logged(background_spec);
+    let background = open_background_logged(background_spec, camera);
     if let Some(bg) = &background {
         log::info(&format!(
             "session on Vulkan device {:?}, background {}: enhancing",
@@ -132,13 +133,18 @@ fn reopening() -> MutexGuard<'static, HashMap<u64, Receiver<Option<Background>>>
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-fn start_reopen(session: xr::Session, old: Option<Background>, spec: String) {
+fn start_reopen(
+    session: xr::Session,
+    old: Option<Background>,
+    spec: String,
+    camera: CaptureConfig,
+) {
     let (tx, rx) = mpsc::channel();
     let spawned = std::thread::Builder::new()
         .name("contrastxr-reopen".into())
         .spawn(move || {
             drop(old);
-            let _ = tx.send(open_background_logged(&spec));
+            let _ = tx.send(open_background_logged(&spec, &camera));
         });
     match spawned {
         Ok(_) => {
@@ -178,8 +184,15 @@ fn pick_up_settings(session: xr::Session, s: &mut SessionState) {
     let Some(newer) = live.newer(s.settings.generation) else {
         return;
     };
-    if newer.background != s.settings.background && s.processor.is_some() {
-        start_reopen(session, s.background.take(), newer.background.clone());
+    let source_changed =
+        newer.background != s.settings.background || newer.camera != s.settings.camera;
+    if source_changed && s.processor.is_some() {
+        start_reopen(
+            session,
+            s.background.take(),
+            newer.background.clone(),
+            newer.camera.clone(),
+        );
     }
     s.settings = newer;
 }
