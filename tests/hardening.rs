@@ -430,9 +430,13 @@ fn hundred_session_cycles_leak_nothing() {
         "the layer ran each time"
     );
     let sessions = samples(&r.report, "sessions");
-    let (warm, end) = (sessions[9], sessions[99]);
+    // Warm-up: 25 sessions. Measured here with the layer OFF (CONTRASTXR=0), the same client,
+    // loader, Monado client and validation layer alone grow 572 KiB from session 10 to 100 and
+    // 352 KiB from 25 to 100 (heap caches settling); with the layer on 940 / 488 KiB. Counting
+    // from session 10 made the 1 MiB bound fail on noise (1,104 KiB once in CI).
+    let (warm, end) = (sessions[24], sessions[99]);
     eprintln!(
-        "cycles: rss {} KiB after 10 sessions, {} KiB after 100",
+        "cycles: rss {} KiB after 25 sessions, {} KiB after 100",
         warm.0, end.0
     );
     assert!(end.0 < warm.0 + 1024, "resident memory grew: {sessions:?}");
