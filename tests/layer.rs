@@ -721,3 +721,42 @@ fn background_smoothing_blends_successive_frames() {
         check_view(c);
     }
 }
+
+#[test]
+fn opaque_sessions_pass_through_unless_forced() {
+    // The simulated HMD offers only OPAQUE; an optical see-through headset is ADDITIVE.
+    let tag = "layer-opaque";
+    let dir = capture_dir(tag);
+    let mut env = layer_env(&dir, "color:#e0d020");
+    env.retain(|(k, _)| k != "CONTRASTXR_FORCE");
+    let Some(sandbox) = sandbox() else { return };
+    let cmd = [
+        XR_CLIENT,
+        "--json",
+        "--check-untouched",
+        "--frames",
+        "12",
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    let run = sandbox.run(&cmd, &as_refs(&env));
+    run.assert_success();
+    let report = run.client_report();
+    assert!(report["frames_checked"].as_u64().unwrap() >= 5, "{report}");
+    assert_eq!(
+        report["frames_modified"],
+        serde_json::json!([]),
+        "an OPAQUE session's frames were changed"
+    );
+    let lines = layer_lines(&run);
+    let blend: Vec<_> = lines
+        .iter()
+        .filter(|l| l.contains("not ADDITIVE"))
+        .collect();
+    assert_eq!(blend.len(), 1, "one line about the blend mode: {lines:?}");
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        0,
+        "captured an OPAQUE session"
+    );
+}
