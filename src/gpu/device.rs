@@ -206,20 +206,12 @@ impl GpuDevice {
                         return Err(e);
                     }
                 };
-                // SAFETY: family was used to create the device with one queue.
-                let queue = unsafe { device.get_device_queue(family, 0) };
-                Ok(GpuDevice {
-                    name: device_name(&instance, physical),
-                    entry,
-                    instance,
-                    physical,
-                    device,
-                    queue,
-                    queue_family: family,
-                    allocator: ManuallyDrop::new(Mutex::new(allocator)),
-                    validation: log,
-                    owned: Some(Owned { messenger }),
-                })
+                let handles = (entry, instance, physical, device, allocator);
+                // SAFETY: the device was created with one queue of `family`.
+                let mut gpu = unsafe { Self::assemble(handles, family, 0) };
+                gpu.validation = log;
+                gpu.owned = Some(Owned { messenger });
+                Ok(gpu)
             }
             Err(e) => {
                 Self::destroy_instance(&instance, messenger);
@@ -292,10 +284,30 @@ impl GpuDevice {
         let instance = unsafe { ash::Instance::load(entry.static_fn(), raw_instance) };
         // SAFETY: the caller guarantees the device handle is valid and from this instance.
         let device = unsafe { ash::Device::load(instance.fp_v1_0(), raw_device) };
-        // SAFETY: the caller guarantees the family and index exist on this device.
-        let queue = unsafe { device.get_device_queue(queue_family, queue_index) };
         let allocator = create_allocator(&instance, &device, physical)?;
-        Ok(GpuDevice {
+        let handles = (entry, instance, physical, device, allocator);
+        // SAFETY: the caller guarantees the family and index exist on this device.
+        Ok(unsafe { Self::assemble(handles, queue_family, queue_index) })
+    }
+
+    /// The object around handles (borrowed: no validation log, nothing owned).
+    ///
+    /// # Safety
+    /// `queue_family` and `queue_index` must name a queue the device was created with.
+    unsafe fn assemble(
+        (entry, instance, physical, device, allocator): (
+            ash::Entry,
+            ash::Instance,
+            vk::PhysicalDevice,
+            ash::Device,
+            Allocator,
+        ),
+        queue_family: u32,
+        queue_index: u32,
+    ) -> GpuDevice {
+        // SAFETY: guaranteed by the caller.
+        let queue = unsafe { device.get_device_queue(queue_family, queue_index) };
+        GpuDevice {
             name: device_name(&instance, physical),
             entry,
             instance,
@@ -306,7 +318,7 @@ impl GpuDevice {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             validation: None,
             owned: None,
-        })
+        }
     }
 
     /// Validation errors seen so far (0 when validation is off).
