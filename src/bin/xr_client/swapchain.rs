@@ -118,6 +118,21 @@ impl PatternSwapchain {
         self.handle.release_image().ctx("xrReleaseSwapchainImage")
     }
 
+    /// Every texel of every layer, tightly packed layer after layer in the buffer.
+    fn whole_image_copy(&self) -> vk::BufferImageCopy {
+        vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(self.layers),
+            )
+            .image_extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            })
+    }
+
     /// Records the copy of the pattern into image `index`, leaving it in
     /// COLOR_ATTACHMENT_OPTIMAL, the layout XR_KHR_vulkan_enable2 expects at release.
     pub fn record_upload(&self, device: &ash::Device, cmd: vk::CommandBuffer, index: u32) {
@@ -154,17 +169,7 @@ impl PatternSwapchain {
         .dst_access_mask(
             vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
         );
-        let copy = vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .layer_count(self.layers),
-            )
-            .image_extent(vk::Extent3D {
-                width: self.width,
-                height: self.height,
-                depth: 1,
-            });
+        let copy = self.whole_image_copy();
         // SAFETY: `cmd` is recording; the image was acquired and waited for, the staging buffer
         // holds width x height x layers texels in this format, laid out layer after layer.
         unsafe {
@@ -223,17 +228,7 @@ impl PatternSwapchain {
         )
         .src_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
         .dst_access_mask(vk::AccessFlags::TRANSFER_READ);
-        let copy = vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .layer_count(self.layers),
-            )
-            .image_extent(vk::Extent3D {
-                width: self.width,
-                height: self.height,
-                depth: 1,
-            });
+        let copy = self.whole_image_copy();
         // SAFETY: `cmd` is recording; the image is acquired and the readback buffer holds
         // exactly the image's texels (the pattern's size).
         unsafe {
