@@ -42,6 +42,20 @@ fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).expect("valid JSON")
 }
 
+/// `contrastxr enhance` on the sample scene (output x.png) with extra arguments.
+fn enhance_with(extra: &[&str]) -> Output {
+    let mut args = vec![
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        "x.png",
+    ];
+    args.extend_from_slice(extra);
+    contrastxr(&args)
+}
 #[test]
 fn enhance_keeps_black_and_changes_content() {
     let out = scratch("enhanced.png");
@@ -289,57 +303,17 @@ fn usage_errors_exit_2_and_bad_values_exit_1() {
     let o = contrastxr(&["enhance", "--background", YELLOW, "-o", "x.png"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--display is required"));
-    let o = contrastxr(&[
-        "enhance",
-        "--display",
-        DISPLAY,
-        "--background",
-        YELLOW,
-        "-o",
-        "x.png",
-        "--colour",
-        "red",
-    ]);
+    let o = enhance_with(&["--colour", "red"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("unknown option --colour"));
     assert_eq!(contrastxr(&["frobnicate"]).status.code(), Some(2));
-    let o = contrastxr(&[
-        "enhance",
-        "--display",
-        DISPLAY,
-        "--background",
-        YELLOW,
-        "-o",
-        "x.png",
-        "--lambda-e",
-        "lots",
-    ]);
+    let o = enhance_with(&["--lambda-e", "lots"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--lambda-e must be a number"));
-    let o = contrastxr(&[
-        "enhance",
-        "--display",
-        DISPLAY,
-        "--background",
-        YELLOW,
-        "-o",
-        "x.png",
-        "--method",
-        "magic",
-    ]);
+    let o = enhance_with(&["--method", "magic"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("paper, hue-only"));
-    let o = contrastxr(&[
-        "enhance",
-        "--display",
-        DISPLAY,
-        "--background",
-        YELLOW,
-        "-o",
-        "x.png",
-        "--blur-size",
-        "4",
-    ]);
+    let o = enhance_with(&["--blur-size", "4"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(contrastxr(&["--help"]).status.success());
     let help = contrastxr(&["evaluate", "--help"]);

@@ -339,6 +339,14 @@ fn formats_list_matches_the_runtime() {
     }
 }
 
+/// The client's re-read of each image when it acquires it again found no change made to it.
+#[track_caller]
+fn assert_frames_untouched(run: &SandboxRun, why: &str) {
+    let report = run.client_report();
+    assert!(report["frames_checked"].as_u64().unwrap() >= 5, "{report}");
+    assert_eq!(report["frames_modified"], serde_json::json!([]), "{why}");
+}
+
 /// Lines the layer printed (each starts with "contrastxr:").
 fn layer_lines(run: &SandboxRun) -> Vec<&str> {
     run.stderr
@@ -653,14 +661,7 @@ fn no_camera_means_pass_through_with_one_line() {
         &env,
     );
     run.assert_success();
-    // The client re-reads each image when it acquires it again: nothing may have changed it.
-    let report = run.client_report();
-    assert!(report["frames_checked"].as_u64().unwrap() >= 5, "{report}");
-    assert_eq!(
-        report["frames_modified"],
-        serde_json::json!([]),
-        "frames were changed"
-    );
+    assert_frames_untouched(&run, "frames were changed");
     let lines = layer_lines(&run);
     let fallback: Vec<_> = lines
         .iter()
@@ -741,13 +742,7 @@ fn opaque_sessions_pass_through_unless_forced() {
     ];
     let run = sandbox.run(&cmd, &as_refs(&env));
     run.assert_success();
-    let report = run.client_report();
-    assert!(report["frames_checked"].as_u64().unwrap() >= 5, "{report}");
-    assert_eq!(
-        report["frames_modified"],
-        serde_json::json!([]),
-        "an OPAQUE session's frames were changed"
-    );
+    assert_frames_untouched(&run, "an OPAQUE session's frames were changed");
     let lines = layer_lines(&run);
     let blend: Vec<_> = lines
         .iter()
