@@ -39,10 +39,9 @@ var<immediate> pc: Params;
 @group(0) @binding(2) var<storage, read_write> blurred: array<vec4<f32>>;
 // Display-grid background, FoV-mapped, linear light, not attenuated (for subtraction).
 @group(0) @binding(3) var<storage, read_write> bg_linear: array<vec4<f32>>;
-// Display-grid background in the scaled LAB space, attenuated: the paper's B.
-@group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec4<f32>>;
-// The display region's raw pixels in the swapchain format (1 or 2 u32 per pixel).
-@group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
+// Bindings 4 (bg_scaled: the paper's B, packed by pack_background, 8 bytes per pixel) and 5
+// (pixels: the display region's raw pixels in the swapchain format, 1 or 2 u32 per pixel) are
+// declared by access_wide.wgsl or access_narrow.wgsl, which build.rs puts after this file.
 // The tiles the enhancement runs on (classify and finish_tiles in enhance.wgsl).
 struct TileList {
     // Tiles found so far by classify; finish_tiles moves it to `total` and zeroes it.
@@ -135,6 +134,25 @@ fn scaled_to_linear(s: vec3<f32>) -> vec3<f32> {
     let f = vec3<f32>(fy + lab.y / 500.0, fy, fy - lab.z / 200.0);
     let xyz = lab_f_inv(f) * WHITE_XYZ;
     return vec3<f32>(dot(XYZ_TO_RGB_0, xyz), dot(XYZ_TO_RGB_1, xyz), dot(XYZ_TO_RGB_2, xyz));
+}
+
+// B in 8 bytes, a quarter of the f32 traffic per pixel: L', a' and b' each as 21-bit fixed
+// point over [-2, 2) (steps of 1.9e-6, close to f32's own precision near 1; 16 bits were too
+// coarse: I = -B/|B| amplifies B's error by 1/|B| on near-grey backgrounds). L' in bits 0-20,
+// a' in 21-41, b' in 42-62. Mirrored by src/gpu/offline.rs (unpack_background).
+const B_SCALE: f32 = 524288.0; // 2^19 steps per unit
+const B_OFFSET: f32 = 1048576.0; // 2^20: the code of 0
+const B_MAX_CODE: f32 = 2097151.0; // 2^21 - 1
+
+fn pack_background(b: vec3<f32>) -> vec2<u32> {
+    let q = vec3<u32>(clamp(round(b * B_SCALE) + B_OFFSET, vec3<f32>(0.0), vec3<f32>(B_MAX_CODE)));
+    return vec2<u32>(q.x | (q.y << 21u), (q.y >> 11u) | (q.z << 10u));
+}
+
+fn unpack_background(w: vec2<u32>) -> vec3<f32> {
+    let q = vec3<u32>(w.x & 0x1fffffu, (w.x >> 21u) | ((w.y & 0x3ffu) << 11u), w.y >> 10u);
+    // Exact in f32: codes below 2^24, scale a power of two.
+    return (vec3<f32>(q) - B_OFFSET) * (1.0 / B_SCALE);
 }
 
 fn blur_tap(k: u32) -> f32 {

@@ -10,14 +10,15 @@ struct Pixel {
     black: bool,
 }
 
-fn pixel_words() -> u32 {
-    let pixel_layout = FORMAT & 255u;
-    return select(1u, 2u, pixel_layout == LAYOUT_RGBA16_UNORM || pixel_layout == LAYOUT_RGBA16_FLOAT);
-}
+// u32 words per pixel: 2 for the 16-bit formats.
+const WORDS: u32 = select(1u, 2u, (FORMAT & 255u) == LAYOUT_RGBA16_UNORM || (FORMAT & 255u) == LAYOUT_RGBA16_FLOAT);
+// Pixels per group of 4 words (one 16-byte access).
+const CHUNK_PIXELS: u32 = 4u / WORDS;
 
-fn load_pixel(i: u32) -> Pixel {
+// A pixel's channels from its words (w.y is used by the 2-word formats only).
+fn decode_words(w: vec2<u32>) -> Pixel {
     let pixel_layout = FORMAT & 255u;
-    let w0 = pixels[i * pixel_words()];
+    let w0 = w.x;
     if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
         var v = unpack4x8unorm(w0);
         if (pixel_layout == LAYOUT_BGRA8) {
@@ -29,7 +30,7 @@ fn load_pixel(i: u32) -> Pixel {
         let rgb = vec3<u32>(w0 & 1023u, (w0 >> 10u) & 1023u, (w0 >> 20u) & 1023u);
         return Pixel(vec3<f32>(rgb) / 1023.0, f32(w0 >> 30u) / 3.0, (w0 & 0x3fffffffu) == 0u);
     }
-    let w1 = pixels[i * 2u + 1u];
+    let w1 = w.y;
     if (pixel_layout == LAYOUT_RGBA16_UNORM) {
         let rg = unpack2x16unorm(w0);
         let ba = unpack2x16unorm(w1);
@@ -41,34 +42,31 @@ fn load_pixel(i: u32) -> Pixel {
     return Pixel(rgb, ba.y, all(rgb == vec3<f32>(0.0)));
 }
 
-// Writes new colour channels (stored encoding, [0, 1]) and keeps the alpha bits as they were.
-fn store_rgb(i: u32, v: vec3<f32>) {
+// True for pixels the enhancement leaves alone: black (transparent on an additive display) or
+// alpha 0 (spec section 3, "Skip").
+fn is_see_through(w: vec2<u32>) -> bool {
+    let px = decode_words(w);
+    return px.black || px.alpha == 0.0;
+}
+
+// The words of a pixel with new colour channels (stored encoding, [0, 1]); alpha bits kept.
+fn encode_words(old: vec2<u32>, v: vec3<f32>) -> vec2<u32> {
     let pixel_layout = FORMAT & 255u;
     if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
         let q = vec3<u32>(floor(255.0 * v + 0.5));
         let c = select(q, q.bgr, pixel_layout == LAYOUT_BGRA8);
-        let old = pixels[i];
-        pixels[i] = (old & 0xff000000u) | c.x | (c.y << 8u) | (c.z << 16u);
-        return;
+        return vec2<u32>((old.x & 0xff000000u) | c.x | (c.y << 8u) | (c.z << 16u), old.y);
     }
     if (pixel_layout == LAYOUT_A2B10G10R10) {
         let q = vec3<u32>(floor(1023.0 * v + 0.5));
-        let old = pixels[i];
-        pixels[i] = (old & 0xc0000000u) | q.x | (q.y << 10u) | (q.z << 20u);
-        return;
+        return vec2<u32>((old.x & 0xc0000000u) | q.x | (q.y << 10u) | (q.z << 20u), old.y);
     }
-    var w0: u32;
-    var b: u32;
     if (pixel_layout == LAYOUT_RGBA16_UNORM) {
         let q = vec3<u32>(floor(65535.0 * v + 0.5));
-        w0 = q.x | (q.y << 16u);
-        b = q.z;
-    } else {
-        w0 = pack2x16float(v.rg);
-        b = pack2x16float(vec2<f32>(v.b, 0.0)) & 0xffffu;
+        return vec2<u32>(q.x | (q.y << 16u), (old.y & 0xffff0000u) | q.z);
     }
-    pixels[i * 2u] = w0;
-    pixels[i * 2u + 1u] = (pixels[i * 2u + 1u] & 0xffff0000u) | b;
+    let b = pack2x16float(vec2<f32>(v.b, 0.0)) & 0xffffu;
+    return vec2<u32>(pack2x16float(v.rg), (old.y & 0xffff0000u) | b);
 }
 
 struct Split {
@@ -180,13 +178,13 @@ struct Enhanced {
     changed: bool,
 }
 
-fn enhance_linear(i: u32, display: vec3<f32>) -> Enhanced {
+fn enhance_linear(i: u32, display: vec3<f32>, b: vec3<f32>) -> Enhanced {
     if (METHOD == METHOD_SUBTRACTION) {
         let out = pc.k_v * display - pc.k_b * bg_linear[i].rgb;
         return Enhanced(cap_luminance(display, clamp(out, vec3<f32>(0.0), vec3<f32>(1.0))), true);
     }
     let d = linear_to_scaled(display);
-    let p = enhance_scaled(d, bg_scaled[i].xyz);
+    let p = enhance_scaled(d, b);
     if (all(p == d)) {
         return Enhanced(display, false);
     }
@@ -210,7 +208,7 @@ fn encode_stored(v: vec3<f32>) -> vec3<f32> {
     return select(v, srgb_encode(v), is_srgb());
 }
 
-// What a stored value reads back as after store_rgb quantises it (float16 is taken as exact).
+// What a stored value reads back as after encode_words quantises it (float16 is taken as exact).
 fn quantised(v: vec3<f32>) -> vec3<f32> {
     let pixel_layout = FORMAT & 255u;
     var levels = 255.0;
@@ -230,97 +228,127 @@ fn delta_e(x: vec3<f32>, y: vec3<f32>) -> f32 {
 }
 
 // Spec section 4's criterion on the output as stored: dE(B, P) > dE(B, D), dE(P, D) >= 2.3.
-fn is_enhanced(i: u32, display: vec3<f32>, stored: vec3<f32>) -> bool {
-    let b = bg_scaled[i].xyz;
+fn is_enhanced(b: vec3<f32>, display: vec3<f32>, stored: vec3<f32>) -> bool {
     let d = linear_to_scaled(display);
     let p = linear_to_scaled(decode_stored(quantised(stored)));
     return delta_e(b, p) > delta_e(b, d) && delta_e(p, d) >= 2.3;
 }
 
-// The pixel of tile-list entry `group` at `local`, or none past the list or the region.
-fn tile_pixel(group: vec3<u32>, local: vec3<u32>) -> vec2<u32> {
-    let k = group.y * 32768u + group.x;
-    if (k >= tiles.total) {
-        return vec2<u32>(0xffffffffu);
-    }
-    let tile = tiles.index[k];
-    return vec2<u32>(tile % pc.tile_columns, tile / pc.tile_columns) * TILE + local.xy;
-}
-
-// Runs once per listed tile (vkCmdDispatchIndirect): empty tiles cost nothing.
-@compute @workgroup_size(8, 8)
-fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    let xy = tile_pixel(group, local);
-    if (xy.x >= pc.region_size.x || xy.y >= pc.region_size.y) {
-        return;
-    }
-    let i = xy.y * pc.region_size.x + xy.x;
+// The new words of pixel p (column x) given its words and packed B; unchanged words where the
+// method or mode leaves the pixel alone.
+fn enhance_pixel(p: u32, x: u32, w: vec2<u32>, packed_b: vec2<u32>) -> vec2<u32> {
     if (MODE == MODE_BACKGROUND) {
-        store_rgb(i, encode_stored(pc.transmittance * bg_linear[i].rgb));
-        return;
+        return encode_words(w, encode_stored(pc.transmittance * bg_linear[p].rgb));
     }
     if (MODE == MODE_SPLIT) {
         let half = pc.region_size.x / 2u;
-        if (xy.x + 1u == half || xy.x == half) {
-            store_rgb(i, vec3<f32>(1.0));
-            return;
+        if (x + 1u == half || x == half) {
+            return encode_words(w, vec3<f32>(1.0));
         }
-        if (xy.x < half) {
-            return;
+        if (x < half) {
+            return w;
         }
     }
-    let px = load_pixel(i);
+    let px = decode_words(w);
     if (px.black || px.alpha == 0.0) {
-        return;
+        return w;
     }
     let display = decode_stored(px.rgb);
-    let e = enhance_linear(i, display);
+    let b = unpack_background(packed_b);
+    let e = enhance_linear(p, display, b);
     if (!e.changed) {
-        return;
+        return w;
     }
     let stored = encode_stored(e.linear);
     if (MODE == MODE_HEATMAP) {
-        if (is_enhanced(i, display, stored)) {
-            store_rgb(i, vec3<f32>(0.0, 1.0, 1.0));
+        if (is_enhanced(b, display, stored)) {
+            return encode_words(w, vec3<f32>(0.0, 1.0, 1.0));
         }
+        return w;
+    }
+    return encode_words(w, stored);
+}
+
+// One invocation per tile row: 8 tiles per workgroup (local.y), 8 rows per tile (local.x).
+// The row's pixels are read and written in groups of 4 words (load_words4), each group once.
+@compute @workgroup_size(8, 8)
+fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let k = (group.y * 32768u + group.x) * TILE + local.y;
+    if (k >= tiles.total) {
         return;
     }
-    store_rgb(i, stored);
+    let tile = tiles.index[k];
+    let x0 = (tile % pc.tile_columns) * TILE;
+    let y = (tile / pc.tile_columns) * TILE + local.x;
+    let width = pc.region_size.x;
+    if (y >= pc.region_size.y) {
+        return;
+    }
+    for (var c = 0u; c < TILE / CHUNK_PIXELS; c++) {
+        let x = x0 + c * CHUNK_PIXELS;
+        if (x >= width) {
+            break;
+        }
+        let p = y * width + x;
+        let v = load_words4(p * WORDS);
+        let b_lo = load_background2(p);
+        var b_hi = vec4<u32>(0u);
+        if (CHUNK_PIXELS == 4u) {
+            b_hi = load_background2(p + 2u);
+        }
+        var out = v;
+        let n = min(CHUNK_PIXELS, width - x);
+        for (var j = 0u; j < n; j++) {
+            let b4 = select(b_lo, b_hi, j >= 2u);
+            let packed_b = select(b4.xy, b4.zw, (j & 1u) == 1u);
+            let w = vec2<u32>(v[j * WORDS], v[j * WORDS + WORDS - 1u]);
+            let r = enhance_pixel(p + j, x + j, w, packed_b);
+            out[j * WORDS] = r.x;
+            out[j * WORDS + WORDS - 1u] = select(r.x, r.y, WORDS == 2u);
+        }
+        store_words4(p * WORDS, out, n * WORDS);
+    }
 }
 
 // Whether a tile needs the enhancement pass in the current mode.
 fn tile_wanted(tx: u32, ty: u32) -> bool {
     let x0 = tx * TILE;
     let y0 = ty * TILE;
+    let width = pc.region_size.x;
     if (pc.mode == MODE_BACKGROUND) {
         return true;
     }
     var first_x = x0;
     if (pc.mode == MODE_SPLIT) {
         // The divider columns half - 1 and half are drawn on every row.
-        let half = pc.region_size.x / 2u;
+        let half = width / 2u;
         if (x0 <= half && half < x0 + TILE + 1u) {
             return true;
         }
         first_x = max(x0, half + 1u);
     }
-    // Constant trip counts (8 x 8) so the shader compiler unrolls the loops; pixels outside
-    // the region or left of the split divider are masked instead of looped around.
+    // Row by row, stopping at the first row with a foreground pixel (a full frame reads one
+    // row per tile). Pixels outside the region or left of the split divider are masked.
     var found = false;
-    for (var dy = 0u; dy < TILE; dy++) {
+    for (var dy = 0u; dy < TILE && !found; dy++) {
         let y = y0 + dy;
-        for (var dx = 0u; dx < TILE; dx++) {
-            let x = x0 + dx;
-            let inside = y < pc.region_size.y && x < pc.region_size.x && x >= first_x;
-            let px = load_pixel(select(0u, y * pc.region_size.x + x, inside));
-            found = found || (inside && !(px.black || px.alpha == 0.0));
+        if (y >= pc.region_size.y) {
+            break;
+        }
+        for (var c = 0u; c < TILE / CHUNK_PIXELS; c++) {
+            let x = x0 + c * CHUNK_PIXELS;
+            let v = load_words4(select(0u, (y * width + x) * WORDS, x < width));
+            for (var j = 0u; j < CHUNK_PIXELS; j++) {
+                let w = vec2<u32>(v[j * WORDS], v[j * WORDS + WORDS - 1u]);
+                let inside = x + j < width && x + j >= first_x;
+                found = found || (inside && !is_see_through(w));
+            }
         }
     }
     return found;
 }
 
-// One invocation per tile: lists the tiles with any foreground pixel. A loop over the tile's
-// pixels in one invocation (not one invocation per pixel) keeps this pass cheaper than a copy.
+// One invocation per tile: lists the tiles with any foreground pixel.
 @compute @workgroup_size(8, 8)
 fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     let rows = (pc.region_size.y + TILE - 1u) / TILE;
@@ -331,13 +359,15 @@ fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     tiles.index[k] = id.y * pc.tile_columns + id.x;
 }
 
-// Turns the tile count into the enhancement's indirect dispatch (at most 32768 workgroups per
-// row: maxComputeWorkGroupCount is only guaranteed to be 65535) and zeroes the count.
+// Turns the tile count into the enhancement's indirect dispatch: TILE tiles per workgroup, at
+// most 32768 workgroups per row (maxComputeWorkGroupCount is only guaranteed to be 65535).
+// Zeroes the count for the next frame.
 @compute @workgroup_size(1)
 fn finish_tiles() {
     let n = atomicExchange(&tiles.count, 0u);
+    let groups = (n + TILE - 1u) / TILE;
     tiles.total = n;
-    tiles.groups[0] = min(n, 32768u);
-    tiles.groups[1] = (n + 32767u) / 32768u;
+    tiles.groups[0] = min(groups, 32768u);
+    tiles.groups[1] = (groups + 32767u) / 32768u;
     tiles.groups[2] = 1u;
 }

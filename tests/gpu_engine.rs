@@ -149,12 +149,22 @@ fn formats_agree_with_the_8bit_srgb_path() {
         [30, 200, 60, 255],
         [128, 128, 128, 255],
         [250, 20, 20, 255],
+        [90, 60, 200, 255],
     ];
+    // 4 pixels: rows 16-byte aligned in every format (the 16-byte access path); 5 pixels: in
+    // none (the one-word path).
+    for n in [4, 5] {
+        formats_agree_on(&mut e, &camera, &colours[..n]);
+    }
+    assert_clean(&e);
+}
+
+fn formats_agree_on(e: &mut OfflineEngine, camera: &RgbaImage, colours: &[[u8; 4]]) {
     let region = (colours.len() as u32, 1);
     let params = Params::default();
     let srgb: Vec<u32> = colours.iter().map(|p| u32::from_le_bytes(*p)).collect();
     let want = e
-        .enhance_raw(&srgb, region, PixelFormat::SRGB8, &camera, &params)
+        .enhance_raw(&srgb, region, PixelFormat::SRGB8, camera, &params)
         .unwrap();
     for (layout, srgb_flag) in [
         (PixelLayout::Bgra8, true),
@@ -167,7 +177,7 @@ fn formats_agree_with_the_8bit_srgb_path() {
         };
         let raw: Vec<u32> = colours.iter().flat_map(|p| encode(format, *p)).collect();
         let got = e
-            .enhance_raw(&raw, region, format, &camera, &params)
+            .enhance_raw(&raw, region, format, camera, &params)
             .unwrap();
         let expect: Vec<u32> = want
             .iter()
@@ -196,7 +206,6 @@ fn formats_agree_with_the_8bit_srgb_path() {
             }
         }
     }
-    assert_clean(&e);
 }
 
 /// Counts pixels where the GPU output does not conform to the CPU reference (spec section 6),
@@ -251,9 +260,13 @@ fn check_all_methods(
 #[test]
 fn gpu_matches_cpu_on_random_images() {
     let mut e = engine();
-    let display = noise(97, 61, 21);
     let camera = noise(131, 83, 5);
-    check_all_methods(&mut e, &display, &camera, &Params::default());
+    // Width 96: rows 16-byte aligned, the 16-byte access path (shaders/access_wide.wgsl);
+    // width 97: not aligned, the one-word path (access_narrow.wgsl).
+    for width in [96, 97] {
+        let display = noise(width, 61, 21);
+        check_all_methods(&mut e, &display, &camera, &Params::default());
+    }
     assert_clean(&e);
 }
 

@@ -50,7 +50,8 @@ pub struct ViewTarget {
     pub format: PixelFormat,
     /// Display-grid background, linear light, not attenuated (vec4<f32> per pixel).
     pub bg_linear: GpuBuffer,
-    /// Display-grid background in scaled LAB (vec4<f32> per pixel): the paper's B.
+    /// Display-grid background in scaled LAB, packed (shaders/common.wgsl, pack_background):
+    /// the paper's B.
     pub bg_scaled: GpuBuffer,
     /// The region's raw pixels in `format`, rows tightly packed.
     pub pixels: GpuBuffer,
@@ -61,6 +62,12 @@ pub struct ViewTarget {
 }
 
 impl ViewTarget {
+    /// Whether every row starts on a 16-byte boundary, so the per-pixel passes may read and
+    /// write 16 bytes at a time (shaders/access_wide.wgsl). True for most widths in use.
+    pub fn rows_aligned(&self) -> bool {
+        (self.region.0 * self.format.bytes_per_pixel()) % 16 == 0
+    }
+
     pub fn pixel_bytes(&self) -> u64 {
         u64::from(self.region.0)
             * u64::from(self.region.1)
@@ -273,7 +280,7 @@ impl Engine {
             gpu,
             [
                 (px * 16, usage, at, "bg_linear"),
-                (px * 16, usage, at, "bg_scaled"),
+                (px * 8, usage, at, "bg_scaled"),
                 (px * bpp, usage, at, "pixels"),
                 (
                     (TILE_LIST_HEADER + tile_count) * 4,
@@ -496,13 +503,15 @@ impl Engine {
             return Ok(());
         }
         let format = view.format.shader_code();
+        let wide = view.rows_aligned();
         let pipeline = self.pipelines.enhance(
             gpu,
             params.method.shader_code(),
             params.mode.shader_code(),
             format,
+            wide,
         )?;
-        let classify = self.pipelines.classify(gpu, format)?;
+        let classify = self.pipelines.classify(gpu, format, wide)?;
         let push = PushConstants::new(
             params,
             view.camera_size,

@@ -19,10 +19,11 @@ pub struct OfflineEngine {
     pub gpu: GpuDevice,
 }
 
-/// The prepared background read back from the GPU (display grid, vec4 per pixel).
+/// The prepared background read back from the GPU (display grid, one entry per pixel).
 pub struct GpuBackground {
     pub linear: Vec<[f32; 4]>,
-    pub scaled: Vec<[f32; 4]>,
+    /// B (L', a', b'), unpacked from the shader's 8-byte form.
+    pub scaled: Vec<[f32; 3]>,
 }
 
 fn words_to_bytes(words: &[u32]) -> Vec<u8> {
@@ -34,6 +35,21 @@ fn bytes_to_vec4(bytes: &[u8], n: usize) -> Vec<[f32; 4]> {
         .chunks_exact(16)
         .map(|c| {
             std::array::from_fn(|k| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap()))
+        })
+        .collect()
+}
+
+/// Mirrors `unpack_background` in shaders/common.wgsl: three 21-bit fixed-point codes in two
+/// little-endian u32 words, 2^19 steps per unit, code 2^20 = 0.
+fn unpack_background(bytes: &[u8], n: usize) -> Vec<[f32; 3]> {
+    bytes[..n * 8]
+        .chunks_exact(8)
+        .map(|c| {
+            let packed = u64::from_le_bytes(c.try_into().unwrap());
+            std::array::from_fn(|k| {
+                let code = (packed >> (21 * k)) & 0x1f_ffff;
+                (code as f32 - 1_048_576.0) / 524_288.0
+            })
         })
         .collect()
 }
@@ -186,7 +202,7 @@ impl OfflineEngine {
             match (lin, sc) {
                 (Some(l), Some(s)) => Ok(GpuBackground {
                     linear: bytes_to_vec4(l, n),
-                    scaled: bytes_to_vec4(s, n),
+                    scaled: unpack_background(s, n),
                 }),
                 _ => Err(GpuError::Unsupported(
                     "background buffers are not host-visible".into(),

@@ -152,13 +152,15 @@ impl Pipelines {
         Ok(())
     }
 
-    /// The `enhance` pipeline for a method, view mode and pixel format (shader codes).
+    /// The `enhance` pipeline for a method, view mode and pixel format (shader codes); `wide`
+    /// for regions whose rows are 16-byte aligned (see `rows_aligned`).
     pub fn enhance(
         &self,
         gpu: &GpuDevice,
         method: u32,
         mode: u32,
         format: u32,
+        wide: bool,
     ) -> Result<vk::Pipeline, GpuError> {
         let method = if mode == ViewMode::Background.shader_code() {
             0
@@ -167,18 +169,23 @@ impl Pipelines {
         };
         let k = shaders::ENHANCE_VARIANTS
             .iter()
-            .position(|&(m, v, f, _)| m == method && v == mode && f == format);
-        self.variant(gpu, k, |k| &shaders::ENHANCE_VARIANTS[k].3)
+            .position(|&(m, v, f, w, _)| m == method && v == mode && f == format && w == wide);
+        self.variant(gpu, k, |k| &shaders::ENHANCE_VARIANTS[k].4)
     }
 
-    /// The `classify` pipeline for a pixel format (shader code).
-    pub fn classify(&self, gpu: &GpuDevice, format: u32) -> Result<vk::Pipeline, GpuError> {
+    /// The `classify` pipeline for a pixel format (shader code) and row alignment.
+    pub fn classify(
+        &self,
+        gpu: &GpuDevice,
+        format: u32,
+        wide: bool,
+    ) -> Result<vk::Pipeline, GpuError> {
         let k = shaders::CLASSIFY_VARIANTS
             .iter()
-            .position(|&(f, _)| f == format);
+            .position(|&(f, w, _)| f == format && w == wide);
         let offset = shaders::ENHANCE_VARIANTS.len();
         self.variant(gpu, k.map(|k| k + offset), |k| {
-            &shaders::CLASSIFY_VARIANTS[k - offset].1
+            &shaders::CLASSIFY_VARIANTS[k - offset].2
         })
     }
 

@@ -1,0 +1,26 @@
+// Pixel and background access for regions whose rows are not 16-byte aligned (and for the
+// passes that are not per-pixel hot paths): one u32 / one vec2<u32> per load.
+
+@group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec2<u32>>;
+@group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
+
+// Words w..w+3 of the region (any w; words past the buffer read as 0).
+fn load_words4(w: u32) -> vec4<u32> {
+    return vec4<u32>(pixels[w], pixels[w + 1u], pixels[w + 2u], pixels[w + 3u]);
+}
+
+// Stores the first n (1..=4) of v at words w..
+fn store_words4(w: u32, v: vec4<u32>, n: u32) {
+    for (var k = 0u; k < n; k++) {
+        pixels[w + k] = v[k];
+    }
+}
+
+// Packed B of pixels p and p + 1.
+fn load_background2(p: u32) -> vec4<u32> {
+    return vec4<u32>(bg_scaled[p], bg_scaled[p + 1u]);
+}
+
+fn store_background(p: u32, w: vec2<u32>) {
+    bg_scaled[p] = w;
+}
