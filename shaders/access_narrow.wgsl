@@ -3,6 +3,8 @@
 
 @group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
+// The copy passes' source (the benchmark's floor); the layer binds `pixels` here.
+@group(0) @binding(7) var<storage, read> source: array<u32>;
 
 // Words w..w+3 of the region (any w; words past the buffer read as 0).
 fn load_words4(w: u32) -> vec4<u32> {

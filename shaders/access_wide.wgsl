@@ -5,6 +5,7 @@
 
 @group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec4<u32>>;
 @group(0) @binding(5) var<storage, read_write> pixels: array<vec4<u32>>;
+@group(0) @binding(7) var<storage, read> source: array<vec4<u32>>;
 
 // Words w..w+3 of the region (w a multiple of 4).
 fn load_words4(w: u32) -> vec4<u32> {
@@ -14,6 +15,11 @@ fn load_words4(w: u32) -> vec4<u32> {
 // Stores words w..w+3 (w a multiple of 4; rows hold whole groups of 4 words, so n is 4).
 fn store_words4(w: u32, v: vec4<u32>, n: u32) {
     pixels[w / 4u] = v;
+}
+
+// Words w..w+3 of the copy source (w a multiple of 4).
+fn load_source4(w: u32) -> vec4<u32> {
+    return source[w / 4u];
 }
 
 // Packed B of pixels p and p + 1 (p even).

@@ -54,8 +54,7 @@ struct TileList {
     index: array<u32>,
 }
 @group(0) @binding(6) var<storage, read_write> tiles: TileList;
-// Source of the plain copy pass (the benchmark's floor); the layer binds `pixels` here.
-@group(0) @binding(7) var<storage, read> source: array<u32>;
+// Binding 7 (source: the copy passes' source, the benchmark's floor) is declared with 4 and 5.
 // sRGB decode of the 256 8-bit codes, computed in f64 and rounded once (exact).
 @group(0) @binding(8) var<storage, read> srgb_table: array<f32>;
 

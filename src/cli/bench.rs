@@ -14,7 +14,9 @@ pub fn usage() -> String {
          \x20                       [--method NAME]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
-         the per-frame enhancement, and the per-camera-frame background preparation\n\
+         the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
+         floor, where rows are 16-byte aligned), the per-frame enhancement, and the\n\
+         per-camera-frame background preparation\n\
          (camera {}x{}). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
          with typical content (mostly black: panels and an object) and full frames.\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
@@ -105,15 +107,17 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>7} {:>9} {:>6}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>10} {:>9} {:>6}",
         "size",
         "views",
         "content",
         "fg %",
         "copy ms",
+        "copy16 ms",
         "enh ms",
         "bg ms",
         "ratio",
+        "ratio16",
         "enh Mpx/s",
         "Mpx"
     )
@@ -122,18 +126,25 @@ fn header() -> String {
 fn row(r: &BenchResult) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9.3} {:>9.3} {:>7.2} {:>9.0} {:>6.2}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>9.0} {:>6.2}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
         100.0 * r.foreground,
         r.copy_ms,
+        optional(r.copy_wide_ms, 3),
         r.enhance_ms,
         r.background_ms,
         r.ratio(),
+        optional(r.ratio_wide(), 2),
         r.megapixels() / (r.enhance_ms / 1e3),
         r.megapixels(),
     )
+}
+
+/// A figure, or "-" where it was not measured.
+fn optional(v: Option<f64>, decimals: usize) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.decimals$}"))
 }
 
 fn to_json(device: &str, results: &[BenchResult]) -> String {
@@ -148,9 +159,11 @@ fn to_json(device: &str, results: &[BenchResult]) -> String {
                 "foreground_fraction": r.foreground,
                 "runs": r.case.runs,
                 "copy_ms": r.copy_ms,
+                "copy_wide_ms": r.copy_wide_ms,
                 "enhance_ms": r.enhance_ms,
                 "background_ms": r.background_ms,
                 "ratio": r.ratio(),
+                "ratio_wide": r.ratio_wide(),
             })
         })
         .collect();

@@ -53,6 +53,8 @@ pub struct BenchCase {
 pub struct BenchResult {
     pub case: BenchCase,
     pub copy_ms: f64,
+    /// The copy with the enhancement's 16-byte accesses (None where rows are not aligned).
+    pub copy_wide_ms: Option<f64>,
     pub enhance_ms: f64,
     pub background_ms: f64,
     /// Fraction of pixels that are foreground (neither black nor alpha 0).
@@ -63,6 +65,11 @@ impl BenchResult {
     /// Enhancement time over copy time.
     pub fn ratio(&self) -> f64 {
         self.enhance_ms / self.copy_ms
+    }
+
+    /// Enhancement time over the 16-byte copy's time.
+    pub fn ratio_wide(&self) -> Option<f64> {
+        self.copy_wide_ms.map(|c| self.enhance_ms / c)
     }
 
     pub fn megapixels(&self) -> f64 {
@@ -125,8 +132,8 @@ struct Rig {
     queries: vk::QueryPool,
 }
 
-/// Timestamps per run: copy start/end, enhancement start/end, background start/end.
-const QUERIES: u32 = 6;
+/// Timestamps per run: copy, enhancement, background and 16-byte copy, start and end each.
+const QUERIES: u32 = 8;
 
 impl OfflineEngine {
     /// Times one case; `params` are the enhancement's settings (method, blur, ...).
@@ -151,7 +158,7 @@ impl OfflineEngine {
         params: &Params,
     ) -> Result<BenchResult, GpuError> {
         let foreground = self.build_rig(rig, case)?;
-        let mut samples: [Vec<f64>; 3] = Default::default();
+        let mut samples: [Vec<f64>; 4] = Default::default();
         for run in 0..WARM_UP_RUNS + case.runs {
             let times = self.timed_run(rig, params)?;
             if run >= WARM_UP_RUNS {
@@ -160,10 +167,15 @@ impl OfflineEngine {
                 }
             }
         }
-        let [copy_ms, enhance_ms, background_ms] = samples.map(median);
+        let [copy_ms, enhance_ms, background_ms, copy_wide_ms] = samples.map(median);
         Ok(BenchResult {
             case: *case,
             copy_ms,
+            copy_wide_ms: rig
+                .views
+                .iter()
+                .all(ViewTarget::rows_aligned)
+                .then_some(copy_wide_ms),
             enhance_ms,
             background_ms,
             foreground,
@@ -257,9 +269,10 @@ impl OfflineEngine {
         };
     }
 
-    /// One run: copy (which also restores the pristine pixels), enhancement, background.
-    /// Returns the three GPU times in milliseconds.
-    fn timed_run(&mut self, rig: &Rig, params: &Params) -> Result<[f64; 3], GpuError> {
+    /// One run: 16-byte copy, copy (which also restores the pristine pixels), enhancement,
+    /// background. Returns the GPU times in milliseconds: copy, enhancement, background, 16-byte
+    /// copy (0 where the rows do not allow it).
+    fn timed_run(&mut self, rig: &Rig, params: &Params) -> Result<[f64; 4], GpuError> {
         let compute = vk::PipelineStageFlags::COMPUTE_SHADER;
         let views: Vec<&ViewTarget> = rig.views.iter().collect();
         let background = rig.background.as_ref().expect("made before");
@@ -268,6 +281,12 @@ impl OfflineEngine {
             // SAFETY: cmd is recording; the pool is ours and not in use by pending work.
             unsafe { gpu.device.cmd_reset_query_pool(cmd, q, 0, QUERIES) };
             barrier(gpu, cmd, vk::PipelineStageFlags::ALL_COMMANDS, compute);
+            self.timestamp(cmd, q, 6);
+            views.iter().for_each(|v| {
+                engine.record_copy_wide(gpu, cmd, v);
+            });
+            self.timestamp(cmd, q, 7);
+            barrier(gpu, cmd, compute, compute);
             self.timestamp(cmd, q, 0);
             views.iter().for_each(|v| engine.record_copy(gpu, cmd, v));
             self.timestamp(cmd, q, 1);
@@ -284,7 +303,7 @@ impl OfflineEngine {
             Ok(())
         })?;
         let mut ticks = [0u64; QUERIES as usize];
-        // SAFETY: the submission was waited for; the six queries were written by it.
+        // SAFETY: the submission was waited for; the eight queries were written by it.
         unsafe {
             self.gpu.device.get_query_pool_results(
                 rig.queries,
@@ -296,7 +315,7 @@ impl OfflineEngine {
         .vk("vkGetQueryPoolResults")?;
         let ms = f64::from(self.gpu.timestamp_period()) / 1e6;
         let span = |a: usize| ticks[a + 1].wrapping_sub(ticks[a]) as f64 * ms;
-        Ok([span(0), span(2), span(4)])
+        Ok([span(0), span(2), span(4), span(6)])
     }
 
     fn destroy_rig(&mut self, mut rig: Rig) {

@@ -557,6 +557,24 @@ impl Engine {
         );
     }
 
+    /// Records the benchmark's second floor: the same copy with the enhancement's memory access
+    /// shape (a tile row per invocation, 16-byte accesses). None where the view's rows are not
+    /// 16-byte aligned or its pixels are not 4 bytes.
+    pub fn record_copy_wide(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        view: &ViewTarget,
+    ) -> Option<()> {
+        if !view.rows_aligned() || view.format.bytes_per_pixel() != 4 {
+            return None;
+        }
+        let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
+        let grid = (view.region.0.div_ceil(TILE), view.region.1);
+        self.dispatch(gpu, cmd, self.pipelines.copy_rows, view.set, &push, grid);
+        Some(())
+    }
+
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
         unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };

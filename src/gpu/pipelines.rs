@@ -83,6 +83,7 @@ pub struct Pipelines {
     pub fov_map: vk::Pipeline,
     pub finish_tiles: vk::Pipeline,
     pub copy_pixels: vk::Pipeline,
+    pub copy_rows: vk::Pipeline,
     /// The `enhance` and `classify` variants (shaders::ENHANCE_VARIANTS, then
     /// shaders::CLASSIFY_VARIANTS), built on first use: each costs a compile in the driver and
     /// a session uses a few.
@@ -105,6 +106,7 @@ impl Pipelines {
             fov_map: vk::Pipeline::null(),
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
+            copy_rows: vk::Pipeline::null(),
             variants: no_variants(),
         }
     }
@@ -149,6 +151,7 @@ impl Pipelines {
         self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
         self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
         self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
+        self.copy_rows = self.compute_pipeline(gpu, &shaders::COPY_ROWS)?;
         Ok(())
     }
 
@@ -253,6 +256,7 @@ impl Pipelines {
                 self.fov_map,
                 self.finish_tiles,
                 self.copy_pixels,
+                self.copy_rows,
             ]
             .into_iter()
             .chain(variants)

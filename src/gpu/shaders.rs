@@ -40,6 +40,7 @@ pub const BLUR_V: ShaderModule = spirv!("blur_v");
 pub const FOV_MAP: ShaderModule = spirv!("fov_map");
 pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
 pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
+pub const COPY_ROWS: ShaderModule = spirv!("copy_rows");
 
 include!(concat!(env!("OUT_DIR"), "/enhance_variants.rs"));
 
@@ -51,6 +52,7 @@ pub fn all() -> Vec<&'static ShaderModule> {
         &FOV_MAP,
         &FINISH_TILES,
         &COPY_PIXELS,
+        &COPY_ROWS,
     ];
     fixed
         .into_iter()
