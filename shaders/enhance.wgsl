@@ -42,6 +42,11 @@ fn decode_words(w: vec2<u32>) -> Pixel {
     return Pixel(rgb, ba.y, all(rgb == vec3<f32>(0.0)));
 }
 
+// The words of pixel j of a 4-word group (w.y is used by the 2-word formats only).
+fn group_pixel(v: vec4<u32>, j: u32) -> vec2<u32> {
+    return vec2<u32>(v[j * WORDS], v[j * WORDS + WORDS - 1u]);
+}
+
 // True for pixels the enhancement leaves alone: black (transparent on an additive display) or
 // alpha 0 (spec section 3, "Skip").
 fn is_see_through(w: vec2<u32>) -> bool {
@@ -301,8 +306,7 @@ fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id
         for (var j = 0u; j < n; j++) {
             let b4 = select(b_lo, b_hi, j >= 2u);
             let packed_b = select(b4.xy, b4.zw, (j & 1u) == 1u);
-            let w = vec2<u32>(v[j * WORDS], v[j * WORDS + WORDS - 1u]);
-            let r = enhance_pixel(p + j, x + j, w, packed_b);
+            let r = enhance_pixel(p + j, x + j, group_pixel(v, j), packed_b);
             out[j * WORDS] = r.x;
             out[j * WORDS + WORDS - 1u] = select(r.x, r.y, WORDS == 2u);
         }
@@ -339,9 +343,8 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
             let x = x0 + c * CHUNK_PIXELS;
             let v = load_words4(select(0u, (y * width + x) * WORDS, x < width));
             for (var j = 0u; j < CHUNK_PIXELS; j++) {
-                let w = vec2<u32>(v[j * WORDS], v[j * WORDS + WORDS - 1u]);
                 let inside = x + j < width && x + j >= first_x;
-                found = found || (inside && !is_see_through(w));
+                found = found || (inside && !is_see_through(group_pixel(v, j)));
             }
         }
     }

@@ -174,7 +174,7 @@ impl OfflineEngine {
             copy_wide_ms: rig
                 .views
                 .iter()
-                .all(ViewTarget::rows_aligned)
+                .all(ViewTarget::copies_wide)
                 .then_some(copy_wide_ms),
             enhance_ms,
             background_ms,

@@ -68,6 +68,12 @@ impl ViewTarget {
         (self.region.0 * self.format.bytes_per_pixel()) % 16 == 0
     }
 
+    /// Whether the benchmark's 16-byte copy (`record_copy_wide`) can run on this view:
+    /// aligned rows of 4-byte pixels.
+    pub fn copies_wide(&self) -> bool {
+        self.rows_aligned() && self.format.bytes_per_pixel() == 4
+    }
+
     pub fn pixel_bytes(&self) -> u64 {
         u64::from(self.region.0)
             * u64::from(self.region.1)
@@ -558,15 +564,15 @@ impl Engine {
     }
 
     /// Records the benchmark's second floor: the same copy with the enhancement's memory access
-    /// shape (a tile row per invocation, 16-byte accesses). None where the view's rows are not
-    /// 16-byte aligned or its pixels are not 4 bytes.
+    /// shape (a tile row per invocation, 16-byte accesses). None where the view does not allow
+    /// it (`ViewTarget::copies_wide`).
     pub fn record_copy_wide(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         view: &ViewTarget,
     ) -> Option<()> {
-        if !view.rows_aligned() || view.format.bytes_per_pixel() != 4 {
+        if !view.copies_wide() {
             return None;
         }
         let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
