@@ -85,54 +85,66 @@ fn srgb_decode_code(c: vec3<u32>) -> vec3<f32> {
     return vec3<f32>(srgb_table[c.x], srgb_table[c.y], srgb_table[c.z]);
 }
 
-// Cube root of positive values without pow: the exponent divided by 3 in the bit pattern
-// (about 5% off), then two Halley steps (cubic convergence: 1e-4, then below f32 epsilon).
-fn cbrt(x: vec3<f32>) -> vec3<f32> {
-    var y = bitcast<vec3<f32>>(bitcast<vec3<u32>>(x) / 3u + 709921077u);
-    for (var k = 0; k < 2; k++) {
-        let y3 = y * y * y;
-        y = y * (y3 + 2.0 * x) / (2.0 * y3 + x);
-    }
-    return y;
+// sRGB decode of stored values v in [0, 1] without a table: the linear segment, else a
+// polynomial (src/gpu/approx_constants.rs, 1.3e-5 largest relative error over the 8-bit codes).
+fn srgb_decode(v: vec3<f32>) -> vec3<f32> {
+    return select(v * (1.0 / 12.92), srgb_decode_poly(v), v > vec3<f32>(0.04045));
 }
 
-// sRGB encode without pow: v^(1/2.4) = v^(5/12) = v^(1/4) * (v^(1/2))^(1/3).
+// Cube root of positive values without pow or division: Newton's method on x^(-1/3) from a
+// bit-pattern seed (src/gpu/approx_constants.rs; 4e-7 relative error), then x * x^(-2/3).
+fn cbrt(x: vec3<f32>) -> vec3<f32> {
+    let third_bits = vec3<u32>(vec3<f32>(bitcast<vec3<u32>>(x)) * (1.0 / 3.0));
+    var r = bitcast<vec3<f32>>(vec3<u32>(CBRT_SEED_MAGIC) - third_bits);
+    let x3 = x * (1.0 / 3.0);
+    for (var k = 0; k < CBRT_NEWTON_STEPS; k++) {
+        r = r * fma(-x3, r * r * r, vec3<f32>(4.0 / 3.0));
+    }
+    return x * r * r;
+}
+
+// sRGB encode without pow: v^(1/2.4) = q^(5/3) for q = v^(1/4), a polynomial in q
+// (src/gpu/approx_constants.rs; 0.002 of an 8-bit code at most).
 fn srgb_encode(v: vec3<f32>) -> vec3<f32> {
-    let lo = 12.92 * v;
-    let r = sqrt(max(v, vec3<f32>(0.0031308)));
-    let hi = 1.055 * sqrt(r) * cbrt(r) - 0.055;
-    return select(hi, lo, v <= vec3<f32>(0.0031308));
+    let q = sqrt(sqrt(max(v, vec3<f32>(0.0031308))));
+    return select(srgb_encode_poly(q), 12.92 * v, v <= vec3<f32>(0.0031308));
+}
+
+// A matrix row times a colour in fused multiply-adds.
+fn row_times(m: vec3<f32>, v: vec3<f32>) -> f32 {
+    return fma(m.x, v.x, fma(m.y, v.y, m.z * v.z));
 }
 
 const LAB_DELTA: f32 = 0.20689655; // 6/29
 
 fn lab_f(t: vec3<f32>) -> vec3<f32> {
     let d3 = LAB_DELTA * LAB_DELTA * LAB_DELTA;
-    let lin = t / (3.0 * LAB_DELTA * LAB_DELTA) + 4.0 / 29.0;
+    let lin = fma(t, vec3<f32>(1.0 / (3.0 * LAB_DELTA * LAB_DELTA)), vec3<f32>(4.0 / 29.0));
     let cube = cbrt(max(t, vec3<f32>(d3)));
     return select(lin, cube, t > vec3<f32>(d3));
 }
 
 fn lab_f_inv(f: vec3<f32>) -> vec3<f32> {
-    let lin = 3.0 * LAB_DELTA * LAB_DELTA * (f - 4.0 / 29.0);
+    let lin = fma(f, vec3<f32>(3.0 * LAB_DELTA * LAB_DELTA), vec3<f32>(-3.0 * LAB_DELTA * LAB_DELTA * 4.0 / 29.0));
     return select(lin, f * f * f, f > vec3<f32>(LAB_DELTA));
 }
 
-// linear sRGB -> scaled LAB (L' = (L*-50)/50, a' = a*/128, b' = b*/128).
+// linear sRGB -> scaled LAB (L' = (L*-50)/50, a' = a*/128, b' = b*/128), the white point and
+// the scaling folded into the constants.
 fn linear_to_scaled(rgb: vec3<f32>) -> vec3<f32> {
-    let xyz = vec3<f32>(dot(RGB_TO_XYZ_0, rgb), dot(RGB_TO_XYZ_1, rgb), dot(RGB_TO_XYZ_2, rgb));
-    let f = lab_f(xyz / WHITE_XYZ);
-    let lab = vec3<f32>(116.0 * f.y - 16.0, 500.0 * (f.x - f.y), 200.0 * (f.y - f.z));
-    return vec3<f32>((lab.x - 50.0) / 50.0, lab.y / 128.0, lab.z / 128.0);
+    let t = vec3<f32>(row_times(RGB_TO_T_0, rgb), row_times(RGB_TO_T_1, rgb), row_times(RGB_TO_T_2, rgb));
+    let f = lab_f(t);
+    // L' = (116 fy - 16 - 50) / 50, a' = 500 (fx - fy) / 128, b' = 200 (fy - fz) / 128.
+    return vec3<f32>(fma(f.y, 2.32, -1.32), (500.0 / 128.0) * (f.x - f.y), (200.0 / 128.0) * (f.y - f.z));
 }
 
 // scaled LAB -> linear sRGB (not clipped).
 fn scaled_to_linear(s: vec3<f32>) -> vec3<f32> {
-    let lab = vec3<f32>(s.x * 50.0 + 50.0, s.y * 128.0, s.z * 128.0);
-    let fy = (lab.x + 16.0) / 116.0;
-    let f = vec3<f32>(fy + lab.y / 500.0, fy, fy - lab.z / 200.0);
-    let xyz = lab_f_inv(f) * WHITE_XYZ;
-    return vec3<f32>(dot(XYZ_TO_RGB_0, xyz), dot(XYZ_TO_RGB_1, xyz), dot(XYZ_TO_RGB_2, xyz));
+    // fy = (L* + 16) / 116 with L* = 50 L' + 50; fx = fy + a* / 500; fz = fy - b* / 200.
+    let fy = fma(s.x, 50.0 / 116.0, 66.0 / 116.0);
+    let f = vec3<f32>(fma(s.y, 128.0 / 500.0, fy), fy, fma(s.z, -128.0 / 200.0, fy));
+    let t = lab_f_inv(f);
+    return vec3<f32>(row_times(T_TO_RGB_0, t), row_times(T_TO_RGB_1, t), row_times(T_TO_RGB_2, t));
 }
 
 // B in 8 bytes, a quarter of the f32 traffic per pixel: L', a' and b' each as 21-bit fixed

@@ -74,41 +74,20 @@ fn encode_words(old: vec2<u32>, v: vec3<f32>) -> vec2<u32> {
     return vec2<u32>(pack2x16float(v.rg), (old.y & 0xffff0000u) | b);
 }
 
-struct Split {
-    // Chroma component of E' along D' (the paper's E'_ch) and the hue component E'_h.
-    chroma: vec2<f32>,
-    hue: vec2<f32>,
-    // E'.D' >= 0: the change does not reduce chroma.
-    keeps_chroma: bool,
-}
-
-// Splits the a*b* part of E against the display colour's a*b* direction (chroma constraint).
-fn split_chroma(e_ab: vec2<f32>, d_ab: vec2<f32>) -> Split {
-    let d2 = dot(d_ab, d_ab);
-    if (sqrt(d2) <= 1e-6) {
-        // Achromatic display colour: no chroma direction, all of E' counts as hue.
-        return Split(vec2<f32>(0.0), e_ab, true);
-    }
-    let ed = dot(e_ab, d_ab);
-    let chroma = (ed / d2) * d_ab;
-    return Split(chroma, e_ab - chroma, ed >= 0.0);
-}
-
 // The JND constraint: if P is strictly inside the sphere |X - B| = r and D is not, move P back
-// to the first point where the segment D->P meets the sphere.
+// to the first point where the segment D->P meets the sphere. Squared lengths against r^2:
+// the same tests as the spec's lengths up to float rounding at the boundary.
 fn jnd_constraint(d: vec3<f32>, p: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    let r = pc.lambda_jnd;
-    if (length(p - b) >= r) {
-        return p;
-    }
+    let r2 = pc.lambda_jnd * pc.lambda_jnd;
+    let pb = p - b;
     let db = d - b;
     let pd = p - d;
     let a = dot(pd, pd);
-    if (length(db) < r || a == 0.0) {
+    let c = dot(db, db) - r2;
+    if (dot(pb, pb) >= r2 || c < 0.0 || a == 0.0) {
         return p;
     }
     let h = dot(pd, db);
-    let c = dot(db, db) - r * r;
     let s = c / (-h + sqrt(max(h * h - a * c, 0.0)));
     return d + s * pd;
 }
@@ -120,7 +99,7 @@ const ACHROMATIC_CHROMA: f32 = 0.08;
 fn achromatic_boost(d: vec3<f32>, p: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
     let b_chroma = length(b.yz);
     let d_chroma = length(d.yz);
-    if (pc.achromatic_boost <= 0.0 || b_chroma >= ACHROMATIC_CHROMA || d_chroma <= 1e-6) {
+    if (!EXTRAS || pc.achromatic_boost <= 0.0 || b_chroma >= ACHROMATIC_CHROMA || d_chroma <= 1e-6) {
         return p;
     }
     let room = max(pc.lambda_e - length(p - d), 0.0);
@@ -130,7 +109,7 @@ fn achromatic_boost(d: vec3<f32>, p: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
 
 // Beyond the paper (off at 0): the output's luminance Y at most (1 + luminance_cap) x the input's.
 fn cap_luminance(display: vec3<f32>, out: vec3<f32>) -> vec3<f32> {
-    if (pc.luminance_cap <= 0.0) {
+    if (!EXTRAS || pc.luminance_cap <= 0.0) {
         return out;
     }
     let limit = (1.0 + pc.luminance_cap) * dot(RGB_TO_XYZ_1, display);
@@ -138,20 +117,27 @@ fn cap_luminance(display: vec3<f32>, out: vec3<f32>) -> vec3<f32> {
     return select(out, out * (limit / y), y > limit);
 }
 
-// Algorithm 1 in the scaled space; returns P (== D where nothing changes).
+// The hue part E'_h of E's a*b* part against D's a*b* direction (chroma constraint); E'_ch is
+// e_ab - E'_h. An achromatic D (|D'| <= 1e-6) has no chroma direction: all of E' is hue.
+fn hue_part(e_ab: vec2<f32>, d_ab: vec2<f32>) -> vec2<f32> {
+    let d2 = dot(d_ab, d_ab);
+    let chroma = (dot(e_ab, d_ab) / max(d2, 1e-30)) * d_ab;
+    return select(e_ab - chroma, e_ab, d2 <= 1e-12);
+}
+
+// Algorithm 1 in the scaled space; returns P (== D where nothing changes). One reciprocal of
+// |I - D| serves both E's length and cos_l, since |E| = min(|I - D|, lambda_e).
 fn enhance_scaled(d: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    let nb = length(b);
-    if (nb <= 1e-6) {
+    let nb2 = dot(b, b);
+    if (nb2 <= 1e-12) {
         return d;
     }
-    let to_i = -b / nb - d;
-    let n = length(to_i);
-    var e = vec3<f32>(0.0);
-    if (n > 0.0) {
-        e = (min(n, pc.lambda_e) / n) * to_i;
-    }
-    let split = split_chroma(e.yz, d.yz);
-    let hue = vec3<f32>(0.0, split.hue);
+    let to_i = -b * (1.0 / sqrt(nb2)) - d;
+    let n = sqrt(dot(to_i, to_i));
+    let inv_n = select(0.0, 1.0 / n, n > 0.0);
+    let e = (min(n, pc.lambda_e) * inv_n) * to_i;
+    let hue_ab = hue_part(e.yz, d.yz);
+    let hue = vec3<f32>(0.0, hue_ab);
     switch METHOD {
         case METHOD_HUE_ONLY: {
             return d + hue;
@@ -164,12 +150,13 @@ fn enhance_scaled(d: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
             if (nd <= 1e-6) {
                 return d;
             }
-            return d + (length(split.hue) / nd) * d;
+            return d + (length(hue_ab) / nd) * d;
         }
         default: {
-            let dir_ab = select(vec2<f32>(0.0), split.chroma, split.keeps_chroma) + split.hue;
-            let ne = length(e);
-            let cos_l = select(0.0, e.x / ne, ne > 0.0);
+            // E'_ch kept only when it does not reduce chroma (E'.D' >= 0).
+            let keeps_chroma = dot(e.yz, d.yz) >= 0.0;
+            let dir_ab = select(hue_ab, e.yz, keeps_chroma);
+            let cos_l = to_i.x * inv_n;
             let p = d + vec3<f32>((1.0 - abs(cos_l)) * e.x, dir_ab);
             return jnd_constraint(d, achromatic_boost(d, p, b), b);
         }
@@ -200,12 +187,9 @@ fn is_srgb() -> bool {
     return (FORMAT & FORMAT_SRGB_BIT) != 0u;
 }
 
-// Stored values are code / 255 exactly in 8-bit sRGB formats.
+// Linear light of stored values (only the 8-bit formats are sRGB-encoded).
 fn decode_stored(v: vec3<f32>) -> vec3<f32> {
-    if (is_srgb()) {
-        return srgb_decode_code(vec3<u32>(v * 255.0 + 0.5));
-    }
-    return v;
+    return select(v, srgb_decode(v), is_srgb());
 }
 
 // The stored value a linear colour is written as (before quantisation).
@@ -274,43 +258,59 @@ fn enhance_pixel(p: u32, x: u32, w: vec2<u32>, packed_b: vec2<u32>) -> vec2<u32>
     return encode_words(w, stored);
 }
 
-// One invocation per tile row: 8 tiles per workgroup (local.y), 8 rows per tile (local.x).
-// The row's pixels are read and written in groups of 4 words (load_words4), each group once.
+// One of four values by index (constant-indexed selects: no local array in memory).
+fn pick4(a: vec4<u32>, b: vec4<u32>, c: vec4<u32>, d: vec4<u32>, i: u32) -> vec4<u32> {
+    return select(select(a, b, i == 1u), select(c, d, i == 3u), i >= 2u);
+}
+
+// One invocation per tile row: 8 tiles per workgroup (local.x, so the 8 SIMD lanes of a CPU
+// driver read neighbouring tiles of one row), 8 rows per tile (local.y). The row's pixels and
+// B are all loaded first, in groups of 4 words, so that their cache misses overlap; each
+// group of pixels is stored once.
 @compute @workgroup_size(8, 8)
 fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    let k = (group.y * 32768u + group.x) * TILE + local.y;
+    let k = (group.y * 32768u + group.x) * TILE + local.x;
     if (k >= tiles.total) {
         return;
     }
     let tile = tiles.index[k];
     let x0 = (tile % pc.tile_columns) * TILE;
-    let y = (tile / pc.tile_columns) * TILE + local.x;
+    let y = (tile / pc.tile_columns) * TILE + local.y;
     let width = pc.region_size.x;
     if (y >= pc.region_size.y) {
         return;
     }
+    let row = y * width + x0;
+    let valid = min(TILE, width - x0);
+    // Loads past the row's last pixel re-read its first group instead (never used).
+    let b0 = load_background2(row);
+    let b1 = load_background2(row + select(0u, 2u, 2u < valid));
+    let b2 = load_background2(row + select(0u, 4u, 4u < valid));
+    let b3 = load_background2(row + select(0u, 6u, 6u < valid));
+    let w0 = load_words4(row * WORDS);
+    let w1 = load_words4((row + select(0u, CHUNK_PIXELS, CHUNK_PIXELS < valid)) * WORDS);
+    var w2 = w0;
+    var w3 = w0;
+    if (CHUNK_PIXELS == 2u) {
+        w2 = load_words4((row + select(0u, 4u, 4u < valid)) * WORDS);
+        w3 = load_words4((row + select(0u, 6u, 6u < valid)) * WORDS);
+    }
     for (var c = 0u; c < TILE / CHUNK_PIXELS; c++) {
-        let x = x0 + c * CHUNK_PIXELS;
-        if (x >= width) {
+        let first = c * CHUNK_PIXELS;
+        if (first >= valid) {
             break;
         }
-        let p = y * width + x;
-        let v = load_words4(p * WORDS);
-        let b_lo = load_background2(p);
-        var b_hi = vec4<u32>(0u);
-        if (CHUNK_PIXELS == 4u) {
-            b_hi = load_background2(p + 2u);
-        }
+        let v = pick4(w0, w1, w2, w3, c);
         var out = v;
-        let n = min(CHUNK_PIXELS, width - x);
+        let n = min(CHUNK_PIXELS, valid - first);
         for (var j = 0u; j < n; j++) {
-            let b4 = select(b_lo, b_hi, j >= 2u);
-            let packed_b = select(b4.xy, b4.zw, (j & 1u) == 1u);
-            let r = enhance_pixel(p + j, x + j, group_pixel(v, j), packed_b);
+            let b4 = pick4(b0, b1, b2, b3, (first + j) / 2u);
+            let packed_b = select(b4.xy, b4.zw, ((first + j) & 1u) == 1u);
+            let r = enhance_pixel(row + first + j, x0 + first + j, group_pixel(v, j), packed_b);
             out[j * WORDS] = r.x;
             out[j * WORDS + WORDS - 1u] = select(r.x, r.y, WORDS == 2u);
         }
-        store_words4(p * WORDS, out, n * WORDS);
+        store_words4((row + first) * WORDS, out, n * WORDS);
     }
 }
 

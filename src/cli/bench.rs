@@ -11,14 +11,15 @@ const DEFAULT_SIZES: &str = "1268x720,2064x2208,3840x3840";
 pub fn usage() -> String {
     format!(
         "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
-         \x20                       [--method NAME]\n\n\
+         \x20                       [--method NAME] [--content typical,full]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
          floor, where rows are 16-byte aligned), the per-frame enhancement, and the\n\
          per-camera-frame background preparation\n\
          (camera {}x{}). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
-         with typical content (mostly black: panels and an object) and full frames.\n\
+         with typical content (mostly black: panels and an object) and full frames\n\
+         (--content picks one or both).\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
         contrastxr::gpu::bench::WARM_UP_RUNS,
         contrastxr::gpu::bench::CAMERA_SIZE.0,
@@ -34,6 +35,13 @@ fn parse_size(s: &str) -> Result<(u32, u32), CliError> {
         return Err(bad());
     }
     Ok((w, h))
+}
+
+fn parse_content(s: &str) -> Result<Content, CliError> {
+    Content::ALL
+        .into_iter()
+        .find(|c| c.name() == s.trim())
+        .ok_or_else(|| CliError::Usage(format!("content '{s}' is not typical or full")))
 }
 
 fn parse_count(what: &str, s: Option<String>, default: u32) -> Result<u32, CliError> {
@@ -66,6 +74,13 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             Method::parse(&m).ok_or_else(|| CliError::Usage(format!("unknown method '{m}'")))?
         }
     };
+    let contents = match args.value(&["--content"])? {
+        None => Content::ALL.to_vec(),
+        Some(list) => list
+            .split(',')
+            .map(parse_content)
+            .collect::<Result<_, _>>()?,
+    };
     let json = args.flag("--json");
     args.finish()?;
     let options = DeviceOptions {
@@ -83,7 +98,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         super::print(&format!("device: {}\n{}\n", engine.device_name(), header()));
     }
     for &region in &sizes {
-        for content in Content::ALL {
+        for &content in &contents {
             let case = BenchCase {
                 region,
                 views,

@@ -510,13 +510,13 @@ impl Engine {
         }
         let format = view.format.shader_code();
         let wide = view.rows_aligned();
-        let pipeline = self.pipelines.enhance(
-            gpu,
+        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
+        let codes = (
             params.method.shader_code(),
             params.mode.shader_code(),
             format,
-            wide,
-        )?;
+        );
+        let pipeline = self.pipelines.enhance(gpu, codes, wide, extras)?;
         let classify = self.pipelines.classify(gpu, format, wide)?;
         let push = PushConstants::new(
             params,

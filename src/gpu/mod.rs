@@ -2,6 +2,7 @@
 //! preparation and per-pixel enhancement, usable offline on its own device and recorded into
 //! someone else's command buffer inside an app. Knows nothing of OpenXR.
 
+pub mod approx;
 pub mod bench;
 pub mod buffer;
 pub mod commands;

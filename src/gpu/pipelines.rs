@@ -156,24 +156,27 @@ impl Pipelines {
     }
 
     /// The `enhance` pipeline for a method, view mode and pixel format (shader codes); `wide`
-    /// for regions whose rows are 16-byte aligned (see `rows_aligned`).
+    /// for regions whose rows are 16-byte aligned (see `rows_aligned`); `extras` where the
+    /// achromatic boost or the luminance cap is on.
     pub fn enhance(
         &self,
         gpu: &GpuDevice,
-        method: u32,
-        mode: u32,
-        format: u32,
+        (method, mode, format): (u32, u32, u32),
         wide: bool,
+        extras: bool,
     ) -> Result<vk::Pipeline, GpuError> {
-        let method = if mode == ViewMode::Background.shader_code() {
-            0
+        let background = mode == ViewMode::Background.shader_code();
+        let (method, extras) = if background {
+            (0, false)
         } else {
-            method
+            (method, extras)
         };
         let k = shaders::ENHANCE_VARIANTS
             .iter()
-            .position(|&(m, v, f, w, _)| m == method && v == mode && f == format && w == wide);
-        self.variant(gpu, k, |k| &shaders::ENHANCE_VARIANTS[k].4)
+            .position(|&(m, v, f, w, e, _)| {
+                (m, v, f, w, e) == (method, mode, format, wide, extras)
+            });
+        self.variant(gpu, k, |k| &shaders::ENHANCE_VARIANTS[k].5)
     }
 
     /// The `classify` pipeline for a pixel format (shader code) and row alignment.
