@@ -72,17 +72,17 @@ fn wgsl_rows(name: &str, m: [[f64; 3]; 3]) -> String {
 }
 
 /// A WGSL function evaluating a polynomial (coefficients lowest power first) per component
-/// with Horner's rule in fused multiply-adds, `scale * p(x) + offset` folded into the
+/// with Horner's rule, `scale * p(x) + offset` folded into the
 /// coefficients.
 fn wgsl_polynomial(name: &str, coefficients: &[f64], scale: f64, offset: f64) -> String {
     let c: Vec<f64> = coefficients.iter().map(|c| c * scale).collect();
     let mut s = format!(
-        "fn {name}(x: vec3<f32>) -> vec3<f32> {{\n    var r = vec3<f32>({:.9e});\n",
+        "fn {name}(x: vec4<f32>) -> vec4<f32> {{\n    var r = vec4<f32>({:.9e});\n",
         c[c.len() - 1]
     );
     for (k, ck) in c.iter().enumerate().rev().skip(1) {
         let ck = if k == 0 { ck + offset } else { *ck };
-        s += &format!("    r = fma(r, x, vec3<f32>({ck:.9e}));\n");
+        s += &format!("    r = r * x + {ck:.9e};\n");
     }
     s + "    return r;\n}\n"
 }

@@ -69,5 +69,5 @@ fn fov_map(@builtin(global_invocation_id) id: vec3<u32>) {
     let linear = mix(top, bottom, t.y);
     let i = id.y * pc.region_size.x + id.x;
     bg_linear[i] = vec4<f32>(linear, 1.0);
-    store_background(i, pack_background(linear_to_scaled(pc.transmittance * linear)));
+    store_background(i, pack_background(first_of(linear_to_scaled(single(pc.transmittance * linear)))));
 }

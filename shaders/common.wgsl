@@ -85,66 +85,95 @@ fn srgb_decode_code(c: vec3<u32>) -> vec3<f32> {
     return vec3<f32>(srgb_table[c.x], srgb_table[c.y], srgb_table[c.z]);
 }
 
+// Four pixels' colours, one column per channel: column k holds channel k (R, G, B or L', a',
+// b') of pixels 0..3. The per-pixel pass works on four pixels at once in this form, so that a
+// CPU driver (lavapipe) sees four independent chains of arithmetic instead of one long one.
+alias Colours = mat3x4<f32>;
+
+// Each pixel's colour times its own factor.
+fn per_pixel(s: vec4<f32>, c: Colours) -> Colours {
+    return Colours(s * c[0], s * c[1], s * c[2]);
+}
+
+// Each pixel's dot product.
+fn dots(a: Colours, b: Colours) -> vec4<f32> {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+// Per pixel: b where m, else a.
+fn pick(a: Colours, b: Colours, m: vec4<bool>) -> Colours {
+    return Colours(select(a[0], b[0], m), select(a[1], b[1], m), select(a[2], b[2], m));
+}
+
+// A matrix row times each pixel's colour.
+fn row_times(m: vec3<f32>, c: Colours) -> vec4<f32> {
+    return m.x * c[0] + m.y * c[1] + m.z * c[2];
+}
+
+// One colour as pixel 0 of a group (the background pass works a pixel at a time).
+fn single(v: vec3<f32>) -> Colours {
+    return Colours(vec4<f32>(v.x), vec4<f32>(v.y), vec4<f32>(v.z));
+}
+
+fn first_of(c: Colours) -> vec3<f32> {
+    return vec3<f32>(c[0].x, c[1].x, c[2].x);
+}
+
 // sRGB decode of stored values v in [0, 1] without a table: the linear segment, else a
 // polynomial (src/gpu/approx_constants.rs, 1.3e-5 largest relative error over the 8-bit codes).
-fn srgb_decode(v: vec3<f32>) -> vec3<f32> {
-    return select(v * (1.0 / 12.92), srgb_decode_poly(v), v > vec3<f32>(0.04045));
+fn srgb_decode(v: vec4<f32>) -> vec4<f32> {
+    return select(v * (1.0 / 12.92), srgb_decode_poly(v), v > vec4<f32>(0.04045));
 }
 
 // Cube root of positive values without pow or division: Newton's method on x^(-1/3) from a
 // bit-pattern seed (src/gpu/approx_constants.rs; 4e-7 relative error), then x * x^(-2/3).
-fn cbrt(x: vec3<f32>) -> vec3<f32> {
-    let third_bits = vec3<u32>(vec3<f32>(bitcast<vec3<u32>>(x)) * (1.0 / 3.0));
-    var r = bitcast<vec3<f32>>(vec3<u32>(CBRT_SEED_MAGIC) - third_bits);
+fn cbrt(x: vec4<f32>) -> vec4<f32> {
+    let third_bits = vec4<u32>(vec4<f32>(bitcast<vec4<u32>>(x)) * (1.0 / 3.0));
+    var r = bitcast<vec4<f32>>(vec4<u32>(CBRT_SEED_MAGIC) - third_bits);
     let x3 = x * (1.0 / 3.0);
     for (var k = 0; k < CBRT_NEWTON_STEPS; k++) {
-        r = r * fma(-x3, r * r * r, vec3<f32>(4.0 / 3.0));
+        r = r * (vec4<f32>(4.0 / 3.0) - x3 * (r * r * r));
     }
     return x * r * r;
 }
 
 // sRGB encode without pow: v^(1/2.4) = q^(5/3) for q = v^(1/4), a polynomial in q
 // (src/gpu/approx_constants.rs; 0.002 of an 8-bit code at most).
-fn srgb_encode(v: vec3<f32>) -> vec3<f32> {
-    let q = sqrt(sqrt(max(v, vec3<f32>(0.0031308))));
-    return select(srgb_encode_poly(q), 12.92 * v, v <= vec3<f32>(0.0031308));
-}
-
-// A matrix row times a colour in fused multiply-adds.
-fn row_times(m: vec3<f32>, v: vec3<f32>) -> f32 {
-    return fma(m.x, v.x, fma(m.y, v.y, m.z * v.z));
+fn srgb_encode(v: vec4<f32>) -> vec4<f32> {
+    let q = sqrt(sqrt(max(v, vec4<f32>(0.0031308))));
+    return select(srgb_encode_poly(q), 12.92 * v, v <= vec4<f32>(0.0031308));
 }
 
 const LAB_DELTA: f32 = 0.20689655; // 6/29
 
-fn lab_f(t: vec3<f32>) -> vec3<f32> {
+fn lab_f(t: vec4<f32>) -> vec4<f32> {
     let d3 = LAB_DELTA * LAB_DELTA * LAB_DELTA;
-    let lin = fma(t, vec3<f32>(1.0 / (3.0 * LAB_DELTA * LAB_DELTA)), vec3<f32>(4.0 / 29.0));
-    let cube = cbrt(max(t, vec3<f32>(d3)));
-    return select(lin, cube, t > vec3<f32>(d3));
+    let lin = t * (1.0 / (3.0 * LAB_DELTA * LAB_DELTA)) + 4.0 / 29.0;
+    let cube = cbrt(max(t, vec4<f32>(d3)));
+    return select(lin, cube, t > vec4<f32>(d3));
 }
 
-fn lab_f_inv(f: vec3<f32>) -> vec3<f32> {
-    let lin = fma(f, vec3<f32>(3.0 * LAB_DELTA * LAB_DELTA), vec3<f32>(-3.0 * LAB_DELTA * LAB_DELTA * 4.0 / 29.0));
-    return select(lin, f * f * f, f > vec3<f32>(LAB_DELTA));
+fn lab_f_inv(f: vec4<f32>) -> vec4<f32> {
+    let lin = (3.0 * LAB_DELTA * LAB_DELTA) * (f - 4.0 / 29.0);
+    return select(lin, f * f * f, f > vec4<f32>(LAB_DELTA));
 }
 
 // linear sRGB -> scaled LAB (L' = (L*-50)/50, a' = a*/128, b' = b*/128), the white point and
 // the scaling folded into the constants.
-fn linear_to_scaled(rgb: vec3<f32>) -> vec3<f32> {
-    let t = vec3<f32>(row_times(RGB_TO_T_0, rgb), row_times(RGB_TO_T_1, rgb), row_times(RGB_TO_T_2, rgb));
-    let f = lab_f(t);
+fn linear_to_scaled(rgb: Colours) -> Colours {
+    let fx = lab_f(row_times(RGB_TO_T_0, rgb));
+    let fy = lab_f(row_times(RGB_TO_T_1, rgb));
+    let fz = lab_f(row_times(RGB_TO_T_2, rgb));
     // L' = (116 fy - 16 - 50) / 50, a' = 500 (fx - fy) / 128, b' = 200 (fy - fz) / 128.
-    return vec3<f32>(fma(f.y, 2.32, -1.32), (500.0 / 128.0) * (f.x - f.y), (200.0 / 128.0) * (f.y - f.z));
+    return Colours(2.32 * fy - 1.32, (500.0 / 128.0) * (fx - fy), (200.0 / 128.0) * (fy - fz));
 }
 
 // scaled LAB -> linear sRGB (not clipped).
-fn scaled_to_linear(s: vec3<f32>) -> vec3<f32> {
+fn scaled_to_linear(s: Colours) -> Colours {
     // fy = (L* + 16) / 116 with L* = 50 L' + 50; fx = fy + a* / 500; fz = fy - b* / 200.
-    let fy = fma(s.x, 50.0 / 116.0, 66.0 / 116.0);
-    let f = vec3<f32>(fma(s.y, 128.0 / 500.0, fy), fy, fma(s.z, -128.0 / 200.0, fy));
-    let t = lab_f_inv(f);
-    return vec3<f32>(row_times(T_TO_RGB_0, t), row_times(T_TO_RGB_1, t), row_times(T_TO_RGB_2, t));
+    let fy = s[0] * (50.0 / 116.0) + 66.0 / 116.0;
+    let t = Colours(lab_f_inv(fy + s[1] * (128.0 / 500.0)), lab_f_inv(fy), lab_f_inv(fy - s[2] * (128.0 / 200.0)));
+    return Colours(row_times(T_TO_RGB_0, t), row_times(T_TO_RGB_1, t), row_times(T_TO_RGB_2, t));
 }
 
 // B in 8 bytes, a quarter of the f32 traffic per pixel: L', a' and b' each as 21-bit fixed

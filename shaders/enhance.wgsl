@@ -1,186 +1,155 @@
 // The per-pixel enhancement of spec section 3 (Algorithm 1 and its four constraints) and the
-// comparison methods of section 5, on one display region's raw pixels, in place.
-// A pixel the method leaves unchanged is not written, so its bits stay exactly as they were.
-
-struct Pixel {
-    // Stored channel values in [0, 1] (sRGB-encoded or linear, as the format says).
-    rgb: vec3<f32>,
-    alpha: f32,
-    // True when the stored colour is exactly zero (black is transparent on an additive display).
-    black: bool,
-}
+// comparison methods of section 5, on one display region's raw pixels, in place, four pixels
+// at a time (Colours in common.wgsl). Every branch is a per-pixel select: a CPU driver runs all
+// of them anyway. A pixel the method leaves unchanged keeps its words, bit for bit.
 
 // u32 words per pixel: 2 for the 16-bit formats.
 const WORDS: u32 = select(1u, 2u, (FORMAT & 255u) == LAYOUT_RGBA16_UNORM || (FORMAT & 255u) == LAYOUT_RGBA16_FLOAT);
-// Pixels per group of 4 words (one 16-byte access).
-const CHUNK_PIXELS: u32 = 4u / WORDS;
 
-// A pixel's channels from its words (w.y is used by the 2-word formats only).
-fn decode_words(w: vec2<u32>) -> Pixel {
-    let pixel_layout = FORMAT & 255u;
-    let w0 = w.x;
-    if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
-        var v = unpack4x8unorm(w0);
-        if (pixel_layout == LAYOUT_BGRA8) {
-            v = v.bgra;
+// Word 0 and (2-word formats) word 1 of four pixels.
+struct Words {
+    w0: vec4<u32>,
+    w1: vec4<u32>,
+}
+
+// Pixels p..p+3 (one 16-byte access, two for the 2-word formats).
+fn load_group(p: u32) -> Words {
+    let lo = load_words4(p * WORDS);
+    if (WORDS == 1u) {
+        return Words(lo, lo);
+    }
+    let hi = load_words4((p + 2u) * WORDS);
+    return Words(vec4<u32>(lo.xz, hi.xz), vec4<u32>(lo.yw, hi.yw));
+}
+
+// Stores the first n (1..=4) of pixels p..p+3.
+fn store_group(p: u32, w: Words, n: u32) {
+    if (WORDS == 1u) {
+        store_words4(p, w.w0, n);
+        return;
+    }
+    store_words4(p * 2u, vec4<u32>(w.w0.x, w.w1.x, w.w0.y, w.w1.y), min(n, 2u) * 2u);
+    if (n > 2u) {
+        store_words4((p + 2u) * 2u, vec4<u32>(w.w0.z, w.w1.z, w.w0.w, w.w1.w), (n - 2u) * 2u);
+    }
+}
+
+fn lo16(w: vec4<u32>) -> vec4<f32> {
+    return vec4<f32>(w & vec4<u32>(0xffffu)) * (1.0 / 65535.0);
+}
+
+fn hi16(w: vec4<u32>) -> vec4<f32> {
+    return vec4<f32>(w >> vec4<u32>(16u)) * (1.0 / 65535.0);
+}
+
+fn half_lo(w: vec4<u32>) -> vec4<f32> {
+    return vec4<f32>(unpack2x16float(w.x).x, unpack2x16float(w.y).x, unpack2x16float(w.z).x, unpack2x16float(w.w).x);
+}
+
+fn half_hi(w: vec4<u32>) -> vec4<f32> {
+    return vec4<f32>(unpack2x16float(w.x).y, unpack2x16float(w.y).y, unpack2x16float(w.z).y, unpack2x16float(w.w).y);
+}
+
+fn byte(w: vec4<u32>, shift: u32) -> vec4<f32> {
+    return vec4<f32>((w >> vec4<u32>(shift)) & vec4<u32>(255u)) * (1.0 / 255.0);
+}
+
+fn bits10(w: vec4<u32>, shift: u32) -> vec4<f32> {
+    return vec4<f32>((w >> vec4<u32>(shift)) & vec4<u32>(1023u)) * (1.0 / 1023.0);
+}
+
+// Stored channel values in [0, 1] (sRGB-encoded or linear, as the format says).
+fn stored_colours(w: Words) -> Colours {
+    switch FORMAT & 255u {
+        case LAYOUT_RGBA8: {
+            return Colours(byte(w.w0, 0u), byte(w.w0, 8u), byte(w.w0, 16u));
         }
-        return Pixel(v.rgb, v.a, (w0 & 0xffffffu) == 0u);
-    }
-    if (pixel_layout == LAYOUT_A2B10G10R10) {
-        let rgb = vec3<u32>(w0 & 1023u, (w0 >> 10u) & 1023u, (w0 >> 20u) & 1023u);
-        return Pixel(vec3<f32>(rgb) / 1023.0, f32(w0 >> 30u) / 3.0, (w0 & 0x3fffffffu) == 0u);
-    }
-    let w1 = w.y;
-    if (pixel_layout == LAYOUT_RGBA16_UNORM) {
-        let rg = unpack2x16unorm(w0);
-        let ba = unpack2x16unorm(w1);
-        return Pixel(vec3<f32>(rg, ba.x), ba.y, w0 == 0u && (w1 & 0xffffu) == 0u);
-    }
-    let rg = unpack2x16float(w0);
-    let ba = unpack2x16float(w1);
-    let rgb = vec3<f32>(rg, ba.x);
-    return Pixel(rgb, ba.y, all(rgb == vec3<f32>(0.0)));
-}
-
-// The words of pixel j of a 4-word group (w.y is used by the 2-word formats only).
-fn group_pixel(v: vec4<u32>, j: u32) -> vec2<u32> {
-    return vec2<u32>(v[j * WORDS], v[j * WORDS + WORDS - 1u]);
-}
-
-// True for pixels the enhancement leaves alone: black (transparent on an additive display) or
-// alpha 0 (spec section 3, "Skip").
-fn is_see_through(w: vec2<u32>) -> bool {
-    let px = decode_words(w);
-    return px.black || px.alpha == 0.0;
-}
-
-// The words of a pixel with new colour channels (stored encoding, [0, 1]); alpha bits kept.
-fn encode_words(old: vec2<u32>, v: vec3<f32>) -> vec2<u32> {
-    let pixel_layout = FORMAT & 255u;
-    if (pixel_layout == LAYOUT_RGBA8 || pixel_layout == LAYOUT_BGRA8) {
-        let q = vec3<u32>(floor(255.0 * v + 0.5));
-        let c = select(q, q.bgr, pixel_layout == LAYOUT_BGRA8);
-        return vec2<u32>((old.x & 0xff000000u) | c.x | (c.y << 8u) | (c.z << 16u), old.y);
-    }
-    if (pixel_layout == LAYOUT_A2B10G10R10) {
-        let q = vec3<u32>(floor(1023.0 * v + 0.5));
-        return vec2<u32>((old.x & 0xc0000000u) | q.x | (q.y << 10u) | (q.z << 20u), old.y);
-    }
-    if (pixel_layout == LAYOUT_RGBA16_UNORM) {
-        let q = vec3<u32>(floor(65535.0 * v + 0.5));
-        return vec2<u32>(q.x | (q.y << 16u), (old.y & 0xffff0000u) | q.z);
-    }
-    let b = pack2x16float(vec2<f32>(v.b, 0.0)) & 0xffffu;
-    return vec2<u32>(pack2x16float(v.rg), (old.y & 0xffff0000u) | b);
-}
-
-// The JND constraint: if P is strictly inside the sphere |X - B| = r and D is not, move P back
-// to the first point where the segment D->P meets the sphere. Squared lengths against r^2:
-// the same tests as the spec's lengths up to float rounding at the boundary.
-fn jnd_constraint(d: vec3<f32>, p: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    let r2 = pc.lambda_jnd * pc.lambda_jnd;
-    let pb = p - b;
-    let db = d - b;
-    let pd = p - d;
-    let a = dot(pd, pd);
-    let c = dot(db, db) - r2;
-    if (dot(pb, pb) >= r2 || c < 0.0 || a == 0.0) {
-        return p;
-    }
-    let h = dot(pd, db);
-    let s = c / (-h + sqrt(max(h * h - a * c, 0.0)));
-    return d + s * pd;
-}
-
-// Beyond the paper (off at 0): on a near-grey background, move P further along D's own chroma
-// direction by achromatic_boost x the room left under lambda_e (see src/algorithm/scaled.rs).
-const ACHROMATIC_CHROMA: f32 = 0.08;
-
-fn achromatic_boost(d: vec3<f32>, p: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    let b_chroma = length(b.yz);
-    let d_chroma = length(d.yz);
-    if (!EXTRAS || pc.achromatic_boost <= 0.0 || b_chroma >= ACHROMATIC_CHROMA || d_chroma <= 1e-6) {
-        return p;
-    }
-    let room = max(pc.lambda_e - length(p - d), 0.0);
-    let k = pc.achromatic_boost * (1.0 - b_chroma / ACHROMATIC_CHROMA) * room / d_chroma;
-    return p + vec3<f32>(0.0, k * d.yz);
-}
-
-// Beyond the paper (off at 0): the output's luminance Y at most (1 + luminance_cap) x the input's.
-fn cap_luminance(display: vec3<f32>, out: vec3<f32>) -> vec3<f32> {
-    if (!EXTRAS || pc.luminance_cap <= 0.0) {
-        return out;
-    }
-    let limit = (1.0 + pc.luminance_cap) * dot(RGB_TO_XYZ_1, display);
-    let y = dot(RGB_TO_XYZ_1, out);
-    return select(out, out * (limit / y), y > limit);
-}
-
-// The hue part E'_h of E's a*b* part against D's a*b* direction (chroma constraint); E'_ch is
-// e_ab - E'_h. An achromatic D (|D'| <= 1e-6) has no chroma direction: all of E' is hue.
-fn hue_part(e_ab: vec2<f32>, d_ab: vec2<f32>) -> vec2<f32> {
-    let d2 = dot(d_ab, d_ab);
-    let chroma = (dot(e_ab, d_ab) / max(d2, 1e-30)) * d_ab;
-    return select(e_ab - chroma, e_ab, d2 <= 1e-12);
-}
-
-// Algorithm 1 in the scaled space; returns P (== D where nothing changes). One reciprocal of
-// |I - D| serves both E's length and cos_l, since |E| = min(|I - D|, lambda_e).
-fn enhance_scaled(d: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    let nb2 = dot(b, b);
-    if (nb2 <= 1e-12) {
-        return d;
-    }
-    let to_i = -b * (1.0 / sqrt(nb2)) - d;
-    let n = sqrt(dot(to_i, to_i));
-    let inv_n = select(0.0, 1.0 / n, n > 0.0);
-    let e = (min(n, pc.lambda_e) * inv_n) * to_i;
-    let hue_ab = hue_part(e.yz, d.yz);
-    let hue = vec3<f32>(0.0, hue_ab);
-    switch METHOD {
-        case METHOD_HUE_ONLY: {
-            return d + hue;
+        case LAYOUT_BGRA8: {
+            return Colours(byte(w.w0, 16u), byte(w.w0, 8u), byte(w.w0, 0u));
         }
-        case METHOD_OTHER_HUE: {
-            return d - hue;
+        case LAYOUT_A2B10G10R10: {
+            return Colours(bits10(w.w0, 0u), bits10(w.w0, 10u), bits10(w.w0, 20u));
         }
-        case METHOD_LUM_CHROMA: {
-            let nd = length(d);
-            if (nd <= 1e-6) {
-                return d;
-            }
-            return d + (length(hue_ab) / nd) * d;
+        case LAYOUT_RGBA16_UNORM: {
+            return Colours(lo16(w.w0), hi16(w.w0), lo16(w.w1));
         }
         default: {
-            // E'_ch kept only when it does not reduce chroma (E'.D' >= 0).
-            let keeps_chroma = dot(e.yz, d.yz) >= 0.0;
-            let dir_ab = select(hue_ab, e.yz, keeps_chroma);
-            let cos_l = to_i.x * inv_n;
-            let p = d + vec3<f32>((1.0 - abs(cos_l)) * e.x, dir_ab);
-            return jnd_constraint(d, achromatic_boost(d, p, b), b);
+            return Colours(half_lo(w.w0), half_hi(w.w0), half_lo(w.w1));
         }
     }
 }
 
-// The enhanced colour of a foreground pixel in linear light, clipped; returns false when the
-// method leaves it unchanged.
-struct Enhanced {
-    linear: vec3<f32>,
-    changed: bool,
+// Pixels the enhancement leaves alone: exactly black (transparent on an additive display) or
+// alpha 0 (spec section 3, "Skip").
+fn see_through(w: Words) -> vec4<bool> {
+    switch FORMAT & 255u {
+        case LAYOUT_RGBA8, LAYOUT_BGRA8: {
+            return ((w.w0 & vec4<u32>(0xffffffu)) == vec4<u32>(0u)) | ((w.w0 >> vec4<u32>(24u)) == vec4<u32>(0u));
+        }
+        case LAYOUT_A2B10G10R10: {
+            return ((w.w0 & vec4<u32>(0x3fffffffu)) == vec4<u32>(0u)) | ((w.w0 >> vec4<u32>(30u)) == vec4<u32>(0u));
+        }
+        case LAYOUT_RGBA16_UNORM: {
+            return ((w.w0 == vec4<u32>(0u)) & ((w.w1 & vec4<u32>(0xffffu)) == vec4<u32>(0u))) | ((w.w1 >> vec4<u32>(16u)) == vec4<u32>(0u));
+        }
+        default: {
+            let c = stored_colours(w);
+            return ((c[0] == vec4<f32>(0.0)) & (c[1] == vec4<f32>(0.0)) & (c[2] == vec4<f32>(0.0))) | (half_hi(w.w1) == vec4<f32>(0.0));
+        }
+    }
 }
 
-fn enhance_linear(i: u32, display: vec3<f32>, b: vec3<f32>) -> Enhanced {
-    if (METHOD == METHOD_SUBTRACTION) {
-        let out = pc.k_v * display - pc.k_b * bg_linear[i].rgb;
-        return Enhanced(cap_luminance(display, clamp(out, vec3<f32>(0.0), vec3<f32>(1.0))), true);
+fn quantise(v: vec4<f32>, levels: f32) -> vec4<u32> {
+    return vec4<u32>(floor(levels * v + 0.5));
+}
+
+fn pack_halves(lo: vec4<f32>, hi: vec4<f32>) -> vec4<u32> {
+    return vec4<u32>(pack2x16float(vec2<f32>(lo.x, hi.x)), pack2x16float(vec2<f32>(lo.y, hi.y)), pack2x16float(vec2<f32>(lo.z, hi.z)), pack2x16float(vec2<f32>(lo.w, hi.w)));
+}
+
+// The words of pixels with new colour channels (stored encoding, [0, 1]); alpha bits kept.
+fn encode_words(old: Words, v: Colours) -> Words {
+    switch FORMAT & 255u {
+        case LAYOUT_RGBA8, LAYOUT_BGRA8: {
+            var c = Colours(v[0], v[1], v[2]);
+            if ((FORMAT & 255u) == LAYOUT_BGRA8) {
+                c = Colours(v[2], v[1], v[0]);
+            }
+            let q = quantise(c[0], 255.0) | (quantise(c[1], 255.0) << vec4<u32>(8u)) | (quantise(c[2], 255.0) << vec4<u32>(16u));
+            return Words((old.w0 & vec4<u32>(0xff000000u)) | q, old.w1);
+        }
+        case LAYOUT_A2B10G10R10: {
+            let q = quantise(v[0], 1023.0) | (quantise(v[1], 1023.0) << vec4<u32>(10u)) | (quantise(v[2], 1023.0) << vec4<u32>(20u));
+            return Words((old.w0 & vec4<u32>(0xc0000000u)) | q, old.w1);
+        }
+        case LAYOUT_RGBA16_UNORM: {
+            let rg = quantise(v[0], 65535.0) | (quantise(v[1], 65535.0) << vec4<u32>(16u));
+            return Words(rg, (old.w1 & vec4<u32>(0xffff0000u)) | quantise(v[2], 65535.0));
+        }
+        default: {
+            let b = pack_halves(v[2], vec4<f32>(0.0)) & vec4<u32>(0xffffu);
+            return Words(pack_halves(v[0], v[1]), (old.w1 & vec4<u32>(0xffff0000u)) | b);
+        }
     }
-    let d = linear_to_scaled(display);
-    let p = enhance_scaled(d, b);
-    if (all(p == d)) {
-        return Enhanced(display, false);
+}
+
+// What stored values read back as after encode_words quantises them (float16 taken as exact).
+fn quantised(v: Colours) -> Colours {
+    var levels = 255.0;
+    switch FORMAT & 255u {
+        case LAYOUT_A2B10G10R10: {
+            levels = 1023.0;
+        }
+        case LAYOUT_RGBA16_UNORM: {
+            levels = 65535.0;
+        }
+        case LAYOUT_RGBA16_FLOAT: {
+            return v;
+        }
+        default: {}
     }
-    return Enhanced(cap_luminance(display, clamp(scaled_to_linear(p), vec3<f32>(0.0), vec3<f32>(1.0))), true);
+    let q = Colours(floor(levels * v[0] + 0.5), floor(levels * v[1] + 0.5), floor(levels * v[2] + 0.5));
+    return (1.0 / levels) * q;
 }
 
 fn is_srgb() -> bool {
@@ -188,85 +157,189 @@ fn is_srgb() -> bool {
 }
 
 // Linear light of stored values (only the 8-bit formats are sRGB-encoded).
-fn decode_stored(v: vec3<f32>) -> vec3<f32> {
-    return select(v, srgb_decode(v), is_srgb());
-}
-
-// The stored value a linear colour is written as (before quantisation).
-fn encode_stored(v: vec3<f32>) -> vec3<f32> {
-    return select(v, srgb_encode(v), is_srgb());
-}
-
-// What a stored value reads back as after encode_words quantises it (float16 is taken as exact).
-fn quantised(v: vec3<f32>) -> vec3<f32> {
-    let pixel_layout = FORMAT & 255u;
-    var levels = 255.0;
-    if (pixel_layout == LAYOUT_A2B10G10R10) {
-        levels = 1023.0;
-    } else if (pixel_layout == LAYOUT_RGBA16_UNORM) {
-        levels = 65535.0;
-    } else if (pixel_layout == LAYOUT_RGBA16_FLOAT) {
-        return v;
+fn decode_stored(v: Colours) -> Colours {
+    if (is_srgb()) {
+        return Colours(srgb_decode(v[0]), srgb_decode(v[1]), srgb_decode(v[2]));
     }
-    return floor(levels * v + 0.5) / levels;
+    return v;
 }
 
-// Unscaled CIE76 Delta E*ab between two scaled-space colours.
-fn delta_e(x: vec3<f32>, y: vec3<f32>) -> f32 {
-    return length((x - y) * vec3<f32>(50.0, 128.0, 128.0));
+// The stored values linear colours are written as (before quantisation).
+fn encode_stored(v: Colours) -> Colours {
+    if (is_srgb()) {
+        return Colours(srgb_encode(v[0]), srgb_encode(v[1]), srgb_encode(v[2]));
+    }
+    return v;
+}
+
+fn clip(c: Colours) -> Colours {
+    let lo = vec4<f32>(0.0);
+    let hi = vec4<f32>(1.0);
+    return Colours(clamp(c[0], lo, hi), clamp(c[1], lo, hi), clamp(c[2], lo, hi));
+}
+
+// The JND constraint: where P is strictly inside the sphere |X - B| = r and D is not, P moves
+// back to the first point where the segment D->P meets the sphere. Squared lengths against
+// r^2: the spec's tests up to float rounding at the boundary.
+fn jnd_constraint(d: Colours, p: Colours, b: Colours) -> Colours {
+    let r2 = pc.lambda_jnd * pc.lambda_jnd;
+    let pb = p - b;
+    let db = d - b;
+    let pd = p - d;
+    let a = dots(pd, pd);
+    let c = dots(db, db) - r2;
+    let h = dots(pd, db);
+    let s = c / (-h + sqrt(max(h * h - a * c, vec4<f32>(0.0))));
+    let keep = (dots(pb, pb) >= vec4<f32>(r2)) | (c < vec4<f32>(0.0)) | (a == vec4<f32>(0.0));
+    return pick(d + per_pixel(s, pd), p, keep);
+}
+
+// Beyond the paper (off at 0, compiled out unless EXTRAS): on a near-grey background, move P
+// further along D's own chroma direction by achromatic_boost x the room left under lambda_e
+// (see src/algorithm/scaled.rs).
+const ACHROMATIC_CHROMA: f32 = 0.08;
+
+fn achromatic_boost(d: Colours, p: Colours, b: Colours) -> Colours {
+    if (!EXTRAS) {
+        return p;
+    }
+    let b_chroma = sqrt(b[1] * b[1] + b[2] * b[2]);
+    let d_chroma = sqrt(d[1] * d[1] + d[2] * d[2]);
+    let pd = p - d;
+    let room = max(pc.lambda_e - sqrt(dots(pd, pd)), vec4<f32>(0.0));
+    let k = pc.achromatic_boost * (1.0 - b_chroma / ACHROMATIC_CHROMA) * room / d_chroma;
+    let skip = vec4<bool>(pc.achromatic_boost <= 0.0) | (b_chroma >= vec4<f32>(ACHROMATIC_CHROMA)) | (d_chroma <= vec4<f32>(1e-6));
+    return pick(p + Colours(vec4<f32>(0.0), k * d[1], k * d[2]), p, skip);
+}
+
+// Beyond the paper (off at 0, compiled out unless EXTRAS): the output's luminance Y at most
+// (1 + luminance_cap) x the input's.
+fn cap_luminance(display: Colours, out: Colours) -> Colours {
+    if (!EXTRAS) {
+        return out;
+    }
+    let limit = (1.0 + pc.luminance_cap) * row_times(RGB_TO_XYZ_1, display);
+    let y = row_times(RGB_TO_XYZ_1, out);
+    return pick(out, per_pixel(limit / y, out), (y > limit) & vec4<bool>(pc.luminance_cap > 0.0));
+}
+
+// Algorithm 1 in the scaled space; returns P (== D where nothing changes). One reciprocal of
+// |I - D| serves both E and cos_l, since |E| = min(|I - D|, lambda_e).
+fn enhance_scaled(d: Colours, b: Colours) -> Colours {
+    let nb2 = dots(b, b);
+    let to_i = per_pixel(-1.0 / sqrt(nb2), b) - d;
+    let n = sqrt(dots(to_i, to_i));
+    let inv_n = select(vec4<f32>(0.0), 1.0 / n, n > vec4<f32>(0.0));
+    let e = per_pixel(min(n, vec4<f32>(pc.lambda_e)) * inv_n, to_i);
+    // Chroma constraint: E'_ch is E's a*b* part along D's a*b* direction, E'_h the rest; an
+    // achromatic D (|D'| <= 1e-6) has no chroma direction, so all of E' is hue.
+    let d2 = d[1] * d[1] + d[2] * d[2];
+    let ed = e[1] * d[1] + e[2] * d[2];
+    let along = select(ed / d2, vec4<f32>(0.0), d2 <= vec4<f32>(1e-12));
+    let hue_a = e[1] - along * d[1];
+    let hue_b = e[2] - along * d[2];
+    var p: Colours;
+    switch METHOD {
+        case METHOD_HUE_ONLY: {
+            p = d + Colours(vec4<f32>(0.0), hue_a, hue_b);
+        }
+        case METHOD_OTHER_HUE: {
+            p = d - Colours(vec4<f32>(0.0), hue_a, hue_b);
+        }
+        case METHOD_LUM_CHROMA: {
+            let nd = sqrt(dots(d, d));
+            let moved = d + per_pixel(sqrt(hue_a * hue_a + hue_b * hue_b) / nd, d);
+            p = pick(moved, d, nd <= vec4<f32>(1e-6));
+        }
+        default: {
+            // E'_ch kept only where it does not reduce chroma (E'.D' >= 0); luminance scaled
+            // by 1 - |cos_l|.
+            let keeps = ed >= vec4<f32>(0.0);
+            let cos_l = to_i[0] * inv_n;
+            let dir = Colours((1.0 - abs(cos_l)) * e[0], select(hue_a, e[1], keeps), select(hue_b, e[2], keeps));
+            p = jnd_constraint(d, achromatic_boost(d, d + dir, b), b);
+        }
+    }
+    // |B| <= 1e-6: no complementary direction.
+    return pick(p, d, nb2 <= vec4<f32>(1e-12));
+}
+
+struct Enhanced {
+    // The enhanced colours in linear light, clipped.
+    linear: Colours,
+    // False where the method leaves the pixel unchanged.
+    changed: vec4<bool>,
+}
+
+// Pixels p..p+3 of the linear, display-grid background (subtraction and the background view).
+fn background_linear(p: u32) -> Colours {
+    let c = transpose(mat4x3<f32>(bg_linear[p].rgb, bg_linear[p + 1u].rgb, bg_linear[p + 2u].rgb, bg_linear[p + 3u].rgb));
+    return Colours(c[0], c[1], c[2]);
+}
+
+fn enhance_linear(p: u32, display: Colours, b: Colours) -> Enhanced {
+    if (METHOD == METHOD_SUBTRACTION) {
+        let out = pc.k_v * display - pc.k_b * background_linear(p);
+        return Enhanced(cap_luminance(display, clip(out)), vec4<bool>(true));
+    }
+    let d = linear_to_scaled(display);
+    let s = enhance_scaled(d, b);
+    let changed = (s[0] != d[0]) | (s[1] != d[1]) | (s[2] != d[2]);
+    return Enhanced(cap_luminance(display, clip(scaled_to_linear(s))), changed);
+}
+
+// Unscaled CIE76 Delta E*ab between scaled-space colours.
+fn delta_e(x: Colours, y: Colours) -> vec4<f32> {
+    let d = x - y;
+    return sqrt(2500.0 * d[0] * d[0] + 16384.0 * (d[1] * d[1] + d[2] * d[2]));
 }
 
 // Spec section 4's criterion on the output as stored: dE(B, P) > dE(B, D), dE(P, D) >= 2.3.
-fn is_enhanced(b: vec3<f32>, display: vec3<f32>, stored: vec3<f32>) -> bool {
+fn is_enhanced(b: Colours, display: Colours, stored: Colours) -> vec4<bool> {
     let d = linear_to_scaled(display);
     let p = linear_to_scaled(decode_stored(quantised(stored)));
-    return delta_e(b, p) > delta_e(b, d) && delta_e(p, d) >= 2.3;
+    return (delta_e(b, p) > delta_e(b, d)) & (delta_e(p, d) >= vec4<f32>(2.3));
 }
 
-// The new words of pixel p (column x) given its words and packed B; unchanged words where the
-// method or mode leaves the pixel alone.
-fn enhance_pixel(p: u32, x: u32, w: vec2<u32>, packed_b: vec2<u32>) -> vec2<u32> {
+// Packed B of pixels p..p+3 (p even) as scaled colours.
+fn background_scaled(p: u32) -> Colours {
+    let lo = load_background2(p);
+    let hi = load_background2(p + 2u);
+    let c = transpose(mat4x3<f32>(unpack_background(lo.xy), unpack_background(lo.zw), unpack_background(hi.xy), unpack_background(hi.zw)));
+    return Colours(c[0], c[1], c[2]);
+}
+
+// The new words of pixels p..p+3 (columns x..x+3) given their words and B; unchanged words
+// where the method or mode leaves a pixel alone.
+fn enhance_group(p: u32, x: u32, w: Words, b: Colours) -> Words {
     if (MODE == MODE_BACKGROUND) {
-        return encode_words(w, encode_stored(pc.transmittance * bg_linear[p].rgb));
+        return encode_words(w, encode_stored(pc.transmittance * background_linear(p)));
+    }
+    let display = decode_stored(stored_colours(w));
+    let e = enhance_linear(p, display, b);
+    let stored = encode_stored(e.linear);
+    var out = encode_words(w, stored);
+    var changed = e.changed & !see_through(w);
+    if (MODE == MODE_HEATMAP) {
+        let cyan = encode_words(w, Colours(vec4<f32>(0.0), vec4<f32>(1.0), vec4<f32>(1.0)));
+        out = cyan;
+        changed = changed & is_enhanced(b, display, stored);
     }
     if (MODE == MODE_SPLIT) {
+        // Original left of the middle, a white divider on columns half - 1 and half.
         let half = pc.region_size.x / 2u;
-        if (x + 1u == half || x == half) {
-            return encode_words(w, vec3<f32>(1.0));
-        }
-        if (x < half) {
-            return w;
-        }
+        let xs = vec4<u32>(x) + vec4<u32>(0u, 1u, 2u, 3u);
+        let divider = (xs + 1u == vec4<u32>(half)) | (xs == vec4<u32>(half));
+        let white = encode_words(w, Colours(vec4<f32>(1.0), vec4<f32>(1.0), vec4<f32>(1.0)));
+        changed = (changed & (xs > vec4<u32>(half))) | divider;
+        out = Words(select(out.w0, white.w0, divider), select(out.w1, white.w1, divider));
     }
-    let px = decode_words(w);
-    if (px.black || px.alpha == 0.0) {
-        return w;
-    }
-    let display = decode_stored(px.rgb);
-    let b = unpack_background(packed_b);
-    let e = enhance_linear(p, display, b);
-    if (!e.changed) {
-        return w;
-    }
-    let stored = encode_stored(e.linear);
-    if (MODE == MODE_HEATMAP) {
-        if (is_enhanced(b, display, stored)) {
-            return encode_words(w, vec3<f32>(0.0, 1.0, 1.0));
-        }
-        return w;
-    }
-    return encode_words(w, stored);
-}
-
-// One of four values by index (constant-indexed selects: no local array in memory).
-fn pick4(a: vec4<u32>, b: vec4<u32>, c: vec4<u32>, d: vec4<u32>, i: u32) -> vec4<u32> {
-    return select(select(a, b, i == 1u), select(c, d, i == 3u), i >= 2u);
+    return Words(select(w.w0, out.w0, changed), select(w.w1, out.w1, changed));
 }
 
 // One invocation per tile row: 8 tiles per workgroup (local.x, so the 8 SIMD lanes of a CPU
 // driver read neighbouring tiles of one row), 8 rows per tile (local.y). The row's pixels and
-// B are all loaded first, in groups of 4 words, so that their cache misses overlap; each
-// group of pixels is stored once.
+// B are all loaded first, so that their cache misses overlap, then enhanced 4 at a time.
 @compute @workgroup_size(8, 8)
 fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
     let k = (group.y * 32768u + group.x) * TILE + local.x;
@@ -282,35 +355,15 @@ fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id
     }
     let row = y * width + x0;
     let valid = min(TILE, width - x0);
-    // Loads past the row's last pixel re-read its first group instead (never used).
-    let b0 = load_background2(row);
-    let b1 = load_background2(row + select(0u, 2u, 2u < valid));
-    let b2 = load_background2(row + select(0u, 4u, 4u < valid));
-    let b3 = load_background2(row + select(0u, 6u, 6u < valid));
-    let w0 = load_words4(row * WORDS);
-    let w1 = load_words4((row + select(0u, CHUNK_PIXELS, CHUNK_PIXELS < valid)) * WORDS);
-    var w2 = w0;
-    var w3 = w0;
-    if (CHUNK_PIXELS == 2u) {
-        w2 = load_words4((row + select(0u, 4u, 4u < valid)) * WORDS);
-        w3 = load_words4((row + select(0u, 6u, 6u < valid)) * WORDS);
-    }
-    for (var c = 0u; c < TILE / CHUNK_PIXELS; c++) {
-        let first = c * CHUNK_PIXELS;
-        if (first >= valid) {
-            break;
-        }
-        let v = pick4(w0, w1, w2, w3, c);
-        var out = v;
-        let n = min(CHUNK_PIXELS, valid - first);
-        for (var j = 0u; j < n; j++) {
-            let b4 = pick4(b0, b1, b2, b3, (first + j) / 2u);
-            let packed_b = select(b4.xy, b4.zw, ((first + j) & 1u) == 1u);
-            let r = enhance_pixel(row + first + j, x0 + first + j, group_pixel(v, j), packed_b);
-            out[j * WORDS] = r.x;
-            out[j * WORDS + WORDS - 1u] = select(r.x, r.y, WORDS == 2u);
-        }
-        store_words4((row + first) * WORDS, out, n * WORDS);
+    // The second group re-reads the first where the row ends before it (never stored).
+    let second = row + select(0u, 4u, valid > 4u);
+    let w_first = load_group(row);
+    let w_second = load_group(second);
+    let b_first = background_scaled(row);
+    let b_second = background_scaled(second);
+    store_group(row, enhance_group(row, x0, w_first, b_first), min(valid, 4u));
+    if (valid > 4u) {
+        store_group(second, enhance_group(second, x0 + 4u, w_second, b_second), valid - 4u);
     }
 }
 
@@ -339,13 +392,12 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
         if (y >= pc.region_size.y) {
             break;
         }
-        for (var c = 0u; c < TILE / CHUNK_PIXELS; c++) {
-            let x = x0 + c * CHUNK_PIXELS;
-            let v = load_words4(select(0u, (y * width + x) * WORDS, x < width));
-            for (var j = 0u; j < CHUNK_PIXELS; j++) {
-                let inside = x + j < width && x + j >= first_x;
-                found = found || (inside && !is_see_through(group_pixel(v, j)));
-            }
+        for (var c = 0u; c < TILE; c += 4u) {
+            let x = x0 + c;
+            let xs = vec4<u32>(x) + vec4<u32>(0u, 1u, 2u, 3u);
+            let w = load_group(select(0u, y * width + x, x < width));
+            let inside = (xs < vec4<u32>(width)) & (xs >= vec4<u32>(first_x));
+            found = found || any(inside & !see_through(w));
         }
     }
     return found;
