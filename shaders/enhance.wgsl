@@ -403,8 +403,9 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
     return found;
 }
 
-// One invocation per tile: lists the tiles with any foreground pixel.
-@compute @workgroup_size(8, 8)
+// One invocation per tile: lists the tiles with any foreground pixel, a row of tiles per
+// workgroup (CLASSIFY_WORKGROUP in src/gpu/engine.rs) so that the list runs in row order.
+@compute @workgroup_size(64, 1)
 fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     let rows = (pc.region_size.y + TILE - 1u) / TILE;
     if (id.x >= pc.tile_columns || id.y >= rows || !tile_wanted(id.x, id.y)) {

@@ -14,6 +14,9 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 const WORKGROUP: u32 = 8;
+/// `classify` runs a row of tiles per workgroup, so that tiles are listed (and then enhanced)
+/// in row order: neighbouring memory, which a CPU driver's caches and prefetchers follow.
+const CLASSIFY_WORKGROUP: (u32, u32) = (64, 1);
 /// Side of the square tiles the enhancement skips when they hold no foreground pixel.
 pub const TILE: u32 = WORKGROUP;
 /// Words before the tile indices in the tile buffer (struct TileList in shaders/common.wgsl).
@@ -403,8 +406,22 @@ impl Engine {
         push: &PushConstants,
         grid: (u32, u32),
     ) {
+        let workgroup = (WORKGROUP, WORKGROUP);
+        self.dispatch_in(gpu, cmd, (pipeline, workgroup), set, push, grid);
+    }
+
+    /// Dispatches `pipeline`, whose workgroup size is given, over `grid` invocations.
+    fn dispatch_in(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        (pipeline, workgroup): (vk::Pipeline, (u32, u32)),
+        set: vk::DescriptorSet,
+        push: &PushConstants,
+        grid: (u32, u32),
+    ) {
         self.bind_pipeline(gpu, cmd, pipeline, set, push);
-        let groups = (grid.0.div_ceil(WORKGROUP), grid.1.div_ceil(WORKGROUP));
+        let groups = (grid.0.div_ceil(workgroup.0), grid.1.div_ceil(workgroup.1));
         // SAFETY: cmd is recording with the pipeline, set and push constants bound.
         unsafe { gpu.device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
     }
@@ -530,7 +547,8 @@ impl Engine {
         // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at least 4 bytes.
         unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
         barrier(gpu, cmd, S::TRANSFER, COMPUTE);
-        self.dispatch(gpu, cmd, classify, view.set, &push, tiles);
+        let classify = (classify, CLASSIFY_WORKGROUP);
+        self.dispatch_in(gpu, cmd, classify, view.set, &push, tiles);
         barrier(gpu, cmd, COMPUTE, COMPUTE);
         // A 1x1 grid is one workgroup of one invocation.
         self.dispatch(
