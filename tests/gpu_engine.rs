@@ -567,3 +567,45 @@ fn gpu_matches_cpu_with_the_options_beyond_the_paper() {
     check_all_methods(&mut e, &display, &camera, &base);
     assert_clean(&e);
 }
+
+#[test]
+fn bench_reports_every_figure_for_the_contents_asked_for() {
+    let o = cli(
+        &[
+            "bench",
+            "--sizes",
+            "64x40",
+            "--views",
+            "1",
+            "--runs",
+            "3",
+            "--content",
+            "full",
+            "--json",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert!(v["device"].as_str().is_some_and(|d| !d.is_empty()));
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 1, "only the full content was asked for");
+    let r = &results[0];
+    assert_eq!(
+        (r["width"].as_u64(), r["height"].as_u64()),
+        (Some(64), Some(40))
+    );
+    assert_eq!(r["content"], "full");
+    assert_eq!(r["foreground_fraction"].as_f64(), Some(1.0));
+    let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
+    for k in ["copy_ms", "copy_wide_ms", "enhance_ms", "background_ms"] {
+        assert!(ms(k) > 0.0, "{k} {}", ms(k));
+    }
+    let ratio = ms("enhance_ms") / ms("copy_ms");
+    assert!((ms("ratio") - ratio).abs() < 1e-9 * ratio);
+    // Width 64 x 4 bytes: rows 16-byte aligned, so the stricter floor is measured too.
+    assert!((ms("ratio_wide") - ms("enhance_ms") / ms("copy_wide_ms")).abs() < 1e-9 * ratio);
+    let bad = cli(&["bench", "--content", "sparse"], &[]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("'sparse' is not typical or full"));
+}
