@@ -434,12 +434,19 @@ fn hundred_session_cycles_leak_nothing() {
     // loader, Monado client and validation layer alone grow 572 KiB from session 10 to 100 and
     // 352 KiB from 25 to 100 (heap caches settling); with the layer on 940 / 488 KiB. Counting
     // from session 10 made the 1 MiB bound fail on noise (1,104 KiB once in CI).
+    // The layer compiles its pipelines per session, and lavapipe keeps memory in step with the
+    // size of the compiled code: from 25 to 100 sessions, 756-892 KiB with the one-pixel
+    // enhancement shader (2,351 x86 instructions), 1,104 KiB with a 3,939-instruction build of
+    // the four-pixel one, 1,420 KiB with the shipped 5,008-instruction build (1,352 KiB with no
+    // validation layer at all). So the bound is 2 MiB: 28 KiB per session. Leaks of the
+    // layer's own objects are also caught by the validation layer's undestroyed-object report
+    // (`sync_validation_and_leak_reports_are_on`) and by the file descriptor check below.
     let (warm, end) = (sessions[24], sessions[99]);
     eprintln!(
         "cycles: rss {} KiB after 25 sessions, {} KiB after 100",
         warm.0, end.0
     );
-    assert!(end.0 < warm.0 + 1024, "resident memory grew: {sessions:?}");
+    assert!(end.0 < warm.0 + 2048, "resident memory grew: {sessions:?}");
     assert!(
         sessions.iter().all(|s| s.1 == sessions[0].1),
         "file descriptors: {sessions:?}"
