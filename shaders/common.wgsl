@@ -110,6 +110,13 @@ fn row_times(m: vec3<f32>, c: Colours) -> vec4<f32> {
     return m.x * c[0] + m.y * c[1] + m.z * c[2];
 }
 
+// A row of a matrix whose rows sum to 1 (RGB_TO_T, T_TO_RGB) times each pixel's colour, as
+// c.y + m.x (c.x - c.y) + m.z (c.z - c.y): equal channels give exactly that value, so greys
+// stay exactly grey (a* = b* = 0) whatever the rounding of the matrix.
+fn unit_row_times(m: vec3<f32>, c: Colours) -> vec4<f32> {
+    return c[1] + m.x * (c[0] - c[1]) + m.z * (c[2] - c[1]);
+}
+
 // One colour as pixel 0 of a group (the background pass works a pixel at a time).
 fn single(v: vec3<f32>) -> Colours {
     return Colours(vec4<f32>(v.x), vec4<f32>(v.y), vec4<f32>(v.z));
@@ -161,9 +168,9 @@ fn lab_f_inv(f: vec4<f32>) -> vec4<f32> {
 // linear sRGB -> scaled LAB (L' = (L*-50)/50, a' = a*/128, b' = b*/128), the white point and
 // the scaling folded into the constants.
 fn linear_to_scaled(rgb: Colours) -> Colours {
-    let fx = lab_f(row_times(RGB_TO_T_0, rgb));
-    let fy = lab_f(row_times(RGB_TO_T_1, rgb));
-    let fz = lab_f(row_times(RGB_TO_T_2, rgb));
+    let fx = lab_f(unit_row_times(RGB_TO_T_0, rgb));
+    let fy = lab_f(unit_row_times(RGB_TO_T_1, rgb));
+    let fz = lab_f(unit_row_times(RGB_TO_T_2, rgb));
     // L' = (116 fy - 16 - 50) / 50, a' = 500 (fx - fy) / 128, b' = 200 (fy - fz) / 128.
     return Colours(2.32 * fy - 1.32, (500.0 / 128.0) * (fx - fy), (200.0 / 128.0) * (fy - fz));
 }
@@ -173,7 +180,7 @@ fn scaled_to_linear(s: Colours) -> Colours {
     // fy = (L* + 16) / 116 with L* = 50 L' + 50; fx = fy + a* / 500; fz = fy - b* / 200.
     let fy = s[0] * (50.0 / 116.0) + 66.0 / 116.0;
     let t = Colours(lab_f_inv(fy + s[1] * (128.0 / 500.0)), lab_f_inv(fy), lab_f_inv(fy - s[2] * (128.0 / 200.0)));
-    return Colours(row_times(T_TO_RGB_0, t), row_times(T_TO_RGB_1, t), row_times(T_TO_RGB_2, t));
+    return Colours(unit_row_times(T_TO_RGB_0, t), unit_row_times(T_TO_RGB_1, t), unit_row_times(T_TO_RGB_2, t));
 }
 
 // B in 8 bytes, a quarter of the f32 traffic per pixel: L', a' and b' each as 21-bit fixed
