@@ -80,7 +80,9 @@ const METHOD_OTHER_HUE: u32 = 2u;
 const METHOD_LUM_CHROMA: u32 = 3u;
 const METHOD_SUBTRACTION: u32 = 4u;
 
-// sRGB decode of an 8-bit code: the exact table (binding 8), no pow per pixel.
+// sRGB decode of an 8-bit camera code: the exact table (binding 8). The background pass uses
+// it once per camera pixel; the per-pixel enhancement uses srgb_decode (a polynomial, no
+// memory access).
 fn srgb_decode_code(c: vec3<u32>) -> vec3<f32> {
     return vec3<f32>(srgb_table[c.x], srgb_table[c.y], srgb_table[c.z]);
 }
@@ -117,7 +119,7 @@ fn unit_row_times(m: vec3<f32>, c: Colours) -> vec4<f32> {
     return c[1] + m.x * (c[0] - c[1]) + m.z * (c[2] - c[1]);
 }
 
-// One colour as pixel 0 of a group (the background pass works a pixel at a time).
+// One colour in all four pixels of a group (the background pass works a pixel at a time).
 fn single(v: vec3<f32>) -> Colours {
     return Colours(vec4<f32>(v.x), vec4<f32>(v.y), vec4<f32>(v.z));
 }
