@@ -72,8 +72,7 @@ fn wgsl_rows(name: &str, m: [[f64; 3]; 3]) -> String {
 }
 
 /// A WGSL function evaluating a polynomial (coefficients lowest power first) per component
-/// with Horner's rule, `scale * p(x) + offset` folded into the
-/// coefficients.
+/// with Horner's rule, `scale * p(x) + offset` folded into the coefficients.
 fn wgsl_polynomial(name: &str, coefficients: &[f64], scale: f64, offset: f64) -> String {
     let c: Vec<f64> = coefficients.iter().map(|c| c * scale).collect();
     let mut s = format!(

@@ -128,6 +128,12 @@ fn first_of(c: Colours) -> vec3<f32> {
     return vec3<f32>(c[0].x, c[1].x, c[2].x);
 }
 
+// Four colours as a group, pixel j from the j-th argument.
+fn group_of(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, p3: vec3<f32>) -> Colours {
+    let c = transpose(mat4x3<f32>(p0, p1, p2, p3));
+    return Colours(c[0], c[1], c[2]);
+}
+
 // sRGB decode of stored values v in [0, 1] without a table: the linear segment, else a
 // polynomial (src/gpu/approx_constants.rs, 1.3e-5 largest relative error over the 8-bit codes).
 fn srgb_decode(v: vec4<f32>) -> vec4<f32> {

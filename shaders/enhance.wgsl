@@ -111,7 +111,7 @@ fn pack_halves(lo: vec4<f32>, hi: vec4<f32>) -> vec4<u32> {
 fn encode_words(old: Words, v: Colours) -> Words {
     switch FORMAT & 255u {
         case LAYOUT_RGBA8, LAYOUT_BGRA8: {
-            var c = Colours(v[0], v[1], v[2]);
+            var c = v;
             if ((FORMAT & 255u) == LAYOUT_BGRA8) {
                 c = Colours(v[2], v[1], v[0]);
             }
@@ -273,8 +273,7 @@ struct Enhanced {
 
 // Pixels p..p+3 of the linear, display-grid background (subtraction and the background view).
 fn background_linear(p: u32) -> Colours {
-    let c = transpose(mat4x3<f32>(bg_linear[p].rgb, bg_linear[p + 1u].rgb, bg_linear[p + 2u].rgb, bg_linear[p + 3u].rgb));
-    return Colours(c[0], c[1], c[2]);
+    return group_of(bg_linear[p].rgb, bg_linear[p + 1u].rgb, bg_linear[p + 2u].rgb, bg_linear[p + 3u].rgb);
 }
 
 fn enhance_linear(p: u32, display: Colours, b: Colours) -> Enhanced {
@@ -305,8 +304,7 @@ fn is_enhanced(b: Colours, display: Colours, stored: Colours) -> vec4<bool> {
 fn background_scaled(p: u32) -> Colours {
     let lo = load_background2(p);
     let hi = load_background2(p + 2u);
-    let c = transpose(mat4x3<f32>(unpack_background(lo.xy), unpack_background(lo.zw), unpack_background(hi.xy), unpack_background(hi.zw)));
-    return Colours(c[0], c[1], c[2]);
+    return group_of(unpack_background(lo.xy), unpack_background(lo.zw), unpack_background(hi.xy), unpack_background(hi.zw));
 }
 
 // The new words of pixels p..p+3 (columns x..x+3) given their words and B; unchanged words
@@ -321,8 +319,7 @@ fn enhance_group(p: u32, x: u32, w: Words, b: Colours) -> Words {
     var out = encode_words(w, stored);
     var changed = e.changed & !see_through(w);
     if (MODE == MODE_HEATMAP) {
-        let cyan = encode_words(w, Colours(vec4<f32>(0.0), vec4<f32>(1.0), vec4<f32>(1.0)));
-        out = cyan;
+        out = encode_words(w, Colours(vec4<f32>(0.0), vec4<f32>(1.0), vec4<f32>(1.0)));
         changed = changed & is_enhanced(b, display, stored);
     }
     if (MODE == MODE_SPLIT) {
