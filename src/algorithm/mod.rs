@@ -6,11 +6,13 @@
 
 pub mod conformance;
 mod constraints;
+pub mod mapping;
 pub mod params;
 mod pixel;
 mod scaled;
 
 pub use conformance::{conformant, corner_cases, PixelTrace, NEAR_ROUNDING, NEAR_THRESHOLD};
+pub use mapping::CameraMapping;
 pub use params::{Method, Params, ViewMode};
 pub use pixel::{enhance_linear, enhance_srgb8, enhance_srgb8_trace};
 pub use scaled::{enhance_scaled, enhance_scaled_traced, ScaledOutcome};

@@ -178,6 +178,12 @@ impl Params {
         }
     }
 
+    /// The manual FoV mapping as a `CameraMapping` (identity with `--no-fov`).
+    pub fn camera_mapping(&self) -> super::mapping::CameraMapping {
+        let (scale, offset) = self.fov_mapping();
+        super::mapping::CameraMapping::affine(scale.map(f64::from), offset.map(f64::from))
+    }
+
     /// Checks ranges; the message names the setting.
     pub fn validate(&self) -> Result<(), String> {
         let finite = [
