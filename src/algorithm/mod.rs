@@ -9,6 +9,7 @@ mod constraints;
 pub mod mapping;
 pub mod params;
 mod pixel;
+pub mod registration;
 mod scaled;
 
 pub use conformance::{conformant, corner_cases, PixelTrace, NEAR_ROUNDING, NEAR_THRESHOLD};

@@ -1,5 +1,6 @@
 //! The config file's TOML, read into entries that remember their line. Knows the file's shape
-//! (top-level keys, `[app."NAME"]` tables) but not the keys: those are checked by `resolve`.
+//! (top-level keys, `[device."SYSTEM"]` and `[app."NAME"]` tables) but not the keys: those are
+//! checked by `resolve`.
 
 use toml_edit::{Document, Item, TableLike};
 
@@ -17,6 +18,8 @@ pub struct Entry {
 pub struct ParsedFile {
     /// Top-level keys: the defaults for every app.
     pub defaults: Vec<Entry>,
+    /// `[device."SYSTEM"]` tables, in file order.
+    pub devices: Vec<(String, Vec<Entry>)>,
     /// `[app."NAME"]` tables, in file order.
     pub apps: Vec<(String, Vec<Entry>)>,
     /// Shape problems (unknown tables), with their line.
@@ -65,23 +68,31 @@ fn entries(text: &str, table: &dyn TableLike) -> Vec<Entry> {
         .collect()
 }
 
-fn app_tables(text: &str, root: &dyn TableLike, out: &mut ParsedFile) {
-    let line = key_line(text, root, "app");
-    let Some(apps) = root.get("app").and_then(Item::as_table_like) else {
-        let problem = "`app` must hold tables: write [app.\"NAME\"]".to_string();
-        out.problems.push((line, problem));
-        return;
+/// The `[KIND."NAME"]` tables (KIND is `app` or `device`).
+fn named_tables(
+    text: &str,
+    root: &dyn TableLike,
+    kind: &str,
+    problems: &mut Vec<(usize, String)>,
+) -> Vec<(String, Vec<Entry>)> {
+    let line = key_line(text, root, kind);
+    let Some(tables) = root.get(kind).and_then(Item::as_table_like) else {
+        let problem = format!("`{kind}` must hold tables: write [{kind}.\"NAME\"]");
+        problems.push((line, problem));
+        return Vec::new();
     };
-    for (name, item) in apps.iter() {
-        let line = key_line(text, apps, name);
+    let mut out = Vec::new();
+    for (name, item) in tables.iter() {
+        let line = key_line(text, tables, name);
         match item.as_table_like() {
-            Some(table) => out.apps.push((name.to_string(), entries(text, table))),
-            None => out.problems.push((
+            Some(table) => out.push((name.to_string(), entries(text, table))),
+            None => problems.push((
                 line,
-                format!("app.{name:?} must be a table: write [app.{name:?}]"),
+                format!("{kind}.{name:?} must be a table: write [{kind}.{name:?}]"),
             )),
         }
     }
+    out
 }
 
 /// Reads `text` as a config file.
@@ -94,11 +105,13 @@ pub fn parse(text: &str) -> Result<ParsedFile, SyntaxError> {
     let mut out = ParsedFile::default();
     for (key, item) in root.iter() {
         if key == "app" {
-            app_tables(text, root, &mut out);
+            out.apps = named_tables(text, root, "app", &mut out.problems);
+        } else if key == "device" {
+            out.devices = named_tables(text, root, "device", &mut out.problems);
         } else if item.is_table_like() && !item.is_inline_table() {
             out.problems.push((
                 key_line(text, root, key),
-                format!("unknown table [{key}]: settings go at the top or in [app.\"NAME\"]"),
+                format!("unknown table [{key}]: settings go at the top, in [device.\"SYSTEM\"] or in [app.\"NAME\"]"),
             ));
         } else {
             out.defaults.push(entry(text, root, key, item));
@@ -128,6 +141,20 @@ mod tests {
     fn syntax_errors_have_a_line() {
         let e = parse("lambda_e = 0.6\nmode = \n").unwrap_err();
         assert_eq!(e.line, 2, "{e:?}");
+    }
+
+    #[test]
+    fn device_tables_are_read_like_app_tables() {
+        let text = "[device.\"Monado: Simulated HMD\"]\ncamera_fov = [90, 70]\n";
+        let f = parse(text).unwrap();
+        assert_eq!(f.devices.len(), 1, "{f:?}");
+        assert_eq!(f.devices[0].0, "Monado: Simulated HMD");
+        assert_eq!(
+            (f.devices[0].1[0].key.as_str(), f.devices[0].1[0].line),
+            ("camera_fov", 2)
+        );
+        let f = parse("device = 3\n").unwrap();
+        assert!(f.problems[0].1.contains("[device.\"NAME\"]"), "{f:?}");
     }
 
     #[test]

@@ -62,6 +62,64 @@ fn pair(v: Value) -> Result<[f32; 2], String> {
     }
 }
 
+fn numbers<const N: usize>(v: Value) -> Result<[f32; N], String> {
+    let list = match v {
+        Value::Numbers(list) => list,
+        Value::Pair(p) => p.to_vec(),
+        other => return Err(format!("{other} is not {N} numbers")),
+    };
+    let array: [f32; N] = list
+        .try_into()
+        .map_err(|l: Vec<f32>| format!("{} numbers, not {N}", l.len()))?;
+    if array.iter().all(|x| x.is_finite()) {
+        Ok(array)
+    } else {
+        Err(format!("{array:?} are not {N} finite numbers"))
+    }
+}
+
+fn set_camera_fov(s: &mut Settings, v: Value) -> Result<(), String> {
+    let fov = pair(v)?;
+    let zero = fov == [0.0, 0.0];
+    if !zero && !fov.iter().all(|a| *a > 0.0 && *a < 180.0) {
+        return Err(format!(
+            "{fov:?}: both angles must be in (0, 180) degrees, or [0, 0] for none"
+        ));
+    }
+    s.registration.camera_fov = fov;
+    Ok(())
+}
+
+fn set_camera_intrinsics(s: &mut Settings, v: Value) -> Result<(), String> {
+    let k: [f32; 6] = numbers(v)?;
+    let [fx, fy, _, _, w, h] = k;
+    if k != [0.0; 6] && !(fx > 0.0 && fy > 0.0 && w > 0.0 && h > 0.0) {
+        return Err(format!(
+            "{k:?}: fx, fy, width and height must be > 0, or all six 0 for none"
+        ));
+    }
+    s.registration.camera_intrinsics = k;
+    Ok(())
+}
+
+fn set_scene_distance(s: &mut Settings, v: Value) -> Result<(), String> {
+    let d = float(v)?;
+    if d <= 0.0 {
+        return Err(format!("{d} is not a distance > 0 (metres)"));
+    }
+    s.registration.scene_distance = d;
+    Ok(())
+}
+
+fn eye_scale(v: Value) -> Result<[f32; 2], String> {
+    let scale = pair(v)?;
+    if scale.iter().all(|x| *x > 0.0) {
+        Ok(scale)
+    } else {
+        Err(format!("{scale:?}: both scales must be > 0"))
+    }
+}
+
 fn text(v: Value) -> Result<String, String> {
     match v {
         Value::Text(t) => Ok(t),
@@ -283,7 +341,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_NO_FOV",
         env_negated: true,
         kind: Kind::Bool,
-        doc: "map display to camera coordinates with fov_scale and fov_offset",
+        doc: "map display to camera coordinates (false: camera_uv = display_uv, no registration)",
         set: |s, v| {
             s.params.fov = boolean(v)?;
             Ok(())
@@ -295,7 +353,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_FOV_SCALE",
         env_negated: false,
         kind: Kind::Pair,
-        doc: "camera_uv = fov_scale * display_uv + fov_offset",
+        doc: "manual mapping camera_uv = fov_scale * display_uv + fov_offset, for both eyes; setting it (or fov_offset) overrides the camera profile",
         set: |s, v| {
             s.params.fov_scale = pair(v)?;
             Ok(())
@@ -313,6 +371,105 @@ pub const KEYS: &[Key] = &[
             Ok(())
         },
         get: |s| Value::Pair(s.params.fov_offset),
+    },
+    Key {
+        name: "camera_fov",
+        env: "CONTRASTXR_CAMERA_FOV",
+        env_negated: false,
+        kind: Kind::Pair,
+        doc: "camera profile: the camera's full field of view [horizontal, vertical] in degrees ([0, 0] = not given)",
+        set: set_camera_fov,
+        get: |s| Value::Pair(s.registration.camera_fov),
+    },
+    Key {
+        name: "camera_intrinsics",
+        env: "CONTRASTXR_CAMERA_INTRINSICS",
+        env_negated: false,
+        kind: Kind::Numbers(6),
+        doc: "camera profile: [fx, fy, cx, cy, width, height] in pixels as OpenCV calibrates them (all 0 = not given; used instead of camera_fov)",
+        set: set_camera_intrinsics,
+        get: |s| Value::Numbers(s.registration.camera_intrinsics.to_vec()),
+    },
+    Key {
+        name: "camera_position",
+        env: "CONTRASTXR_CAMERA_POSITION",
+        env_negated: false,
+        kind: Kind::Numbers(3),
+        doc: "camera profile: [x, y, z] metres from the point between the eyes (+x right, +y up, -z forward)",
+        set: |s, v| {
+            s.registration.camera_position = numbers(v)?;
+            Ok(())
+        },
+        get: |s| Value::Numbers(s.registration.camera_position.to_vec()),
+    },
+    Key {
+        name: "camera_rotation",
+        env: "CONTRASTXR_CAMERA_ROTATION",
+        env_negated: false,
+        kind: Kind::Numbers(3),
+        doc: "camera profile: [pitch, yaw, roll] degrees relative to the head (pitch > 0 tilts it up, yaw > 0 turns it left)",
+        set: |s, v| {
+            s.registration.camera_rotation = numbers(v)?;
+            Ok(())
+        },
+        get: |s| Value::Numbers(s.registration.camera_rotation.to_vec()),
+    },
+    Key {
+        name: "scene_distance",
+        env: "CONTRASTXR_SCENE_DISTANCE",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "camera profile: the distance in metres at which camera and eyes line up exactly",
+        set: set_scene_distance,
+        get: |s| Value::Float(s.registration.scene_distance),
+    },
+    Key {
+        name: "left_eye_offset",
+        env: "CONTRASTXR_LEFT_EYE_OFFSET",
+        env_negated: false,
+        kind: Kind::Pair,
+        doc: "left eye's correction: move the background picture by [x, y] (fractions of the view, +y down); written by contrastxr calibrate",
+        set: |s, v| {
+            s.registration.eye_offset[0] = pair(v)?;
+            Ok(())
+        },
+        get: |s| Value::Pair(s.registration.eye_offset[0]),
+    },
+    Key {
+        name: "left_eye_scale",
+        env: "CONTRASTXR_LEFT_EYE_SCALE",
+        env_negated: false,
+        kind: Kind::Pair,
+        doc: "left eye's correction: scale the background picture by [x, y] about the view's centre",
+        set: |s, v| {
+            s.registration.eye_scale[0] = eye_scale(v)?;
+            Ok(())
+        },
+        get: |s| Value::Pair(s.registration.eye_scale[0]),
+    },
+    Key {
+        name: "right_eye_offset",
+        env: "CONTRASTXR_RIGHT_EYE_OFFSET",
+        env_negated: false,
+        kind: Kind::Pair,
+        doc: "right eye's correction, as left_eye_offset",
+        set: |s, v| {
+            s.registration.eye_offset[1] = pair(v)?;
+            Ok(())
+        },
+        get: |s| Value::Pair(s.registration.eye_offset[1]),
+    },
+    Key {
+        name: "right_eye_scale",
+        env: "CONTRASTXR_RIGHT_EYE_SCALE",
+        env_negated: false,
+        kind: Kind::Pair,
+        doc: "right eye's correction, as left_eye_scale",
+        set: |s, v| {
+            s.registration.eye_scale[1] = eye_scale(v)?;
+            Ok(())
+        },
+        get: |s| Value::Pair(s.registration.eye_scale[1]),
     },
     Key {
         name: "background",

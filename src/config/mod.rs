@@ -1,8 +1,9 @@
 //! The layer's configuration: a TOML file with per-app tables, environment overrides, every
 //! value's origin, hot reload, and the edits behind `contrastxr set` and `toggle`.
 //!
-//! Sources, lowest first: defaults, the file's top level, its `[app."NAME"]` table (NAME is
-//! XrApplicationInfo.applicationName), the `CONTRASTXR_*` environment variables. The file is
+//! Sources, lowest first: defaults, the file's top level, its `[device."SYSTEM"]` table (SYSTEM
+//! is XrSystemProperties.systemName, known once the app creates a session), its `[app."NAME"]`
+//! table (NAME is XrApplicationInfo.applicationName), the `CONTRASTXR_*` environment variables. The file is
 //! `$CONTRASTXR_CONFIG`, else `$XDG_CONFIG_HOME/contrastxr/config.toml`, else
 //! `/etc/xdg/contrastxr/config.toml`. Nothing here panics on any input, and nothing here knows
 //! about OpenXR or the GPU: the layer and the CLI use it.
@@ -18,7 +19,9 @@ pub mod watch;
 
 pub use keys::{key, Key, KEYS};
 pub use path::Env;
-pub use resolve::{check, is_off, load, resolve, Origin, Resolved, Source};
-pub use settings::{Capture, Settings};
+pub use resolve::{
+    check, is_off, load, load_for, resolve, resolve_for, Origin, Resolved, Source, Who,
+};
+pub use settings::{Capture, Registration, Settings, EYES};
 pub use value::{Kind, Value};
 pub use watch::Live;

@@ -1,5 +1,6 @@
-//! Effective settings for one app: the defaults, then the file's top-level keys, then its
-//! `[app."NAME"]` table, then the environment. An invalid value gets one message naming its
+//! Effective settings for one app on one device: the defaults, then the file's top-level keys,
+//! then its `[device."SYSTEM"]` table (once the system is known), then its `[app."NAME"]`
+//! table, then the environment. An invalid value gets one message naming its
 //! file, line and key (or its variable), and is ignored: the key keeps the value it had
 //! without it (its default, unless an earlier source set it).
 
@@ -129,7 +130,7 @@ impl Resolved {
         }
     }
 
-    fn apply_file(&mut self, app: &str, source: Source) {
+    fn apply_file(&mut self, who: Who, source: Source) {
         self.file = Some(source.path.to_path_buf());
         let parsed = match file::parse(source.text) {
             Ok(parsed) => parsed,
@@ -149,11 +150,27 @@ impl Resolved {
             self.problems.push(format!("config {p}:{line}: {problem}"));
         }
         self.apply_entries(source.path, &parsed.defaults);
-        for (name, entries) in &parsed.apps {
-            if name == app {
+        for (name, entries) in &parsed.devices {
+            if Some(name.as_str()) == who.device {
                 self.apply_entries(source.path, entries);
             }
         }
+        for (name, entries) in &parsed.apps {
+            if name == who.app {
+                self.apply_entries(source.path, entries);
+            }
+        }
+    }
+
+    /// What the origins say that a value alone cannot: whether the manual mapping was set.
+    fn derive(&mut self) {
+        let set = |name: &str| {
+            KEYS.iter()
+                .position(|k| k.name == name)
+                .is_some_and(|i| self.origins[i] != Origin::Default)
+        };
+        let manual = set("fov_scale") || set("fov_offset");
+        self.settings.registration.manual_override = manual;
     }
 
     fn apply_env(&mut self, env: &Env) {
@@ -169,24 +186,43 @@ impl Resolved {
     }
 }
 
+/// Whose settings: an app (XrApplicationInfo.applicationName) on a device
+/// (XrSystemProperties.systemName; None before the app has chosen a system).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Who<'a> {
+    pub app: &'a str,
+    pub device: Option<&'a str>,
+}
+
 /// The effective settings for `app` from a file (if any) and the environment.
 pub fn resolve(app: &str, file: Option<Source>, env: &Env) -> Resolved {
+    resolve_for(Who { app, device: None }, file, env)
+}
+
+/// The effective settings for an app on a device from a file (if any) and the environment.
+pub fn resolve_for(who: Who, file: Option<Source>, env: &Env) -> Resolved {
     let mut r = Resolved::new();
     if let Some(source) = file {
-        r.apply_file(app, source);
+        r.apply_file(who, source);
     }
     r.apply_env(env);
+    r.derive();
     r
 }
 
 /// Finds and reads the config file for `env`, then resolves.
 pub fn load(app: &str, env: &Env) -> Resolved {
+    load_for(Who { app, device: None }, env)
+}
+
+/// [`load`] for an app on a device.
+pub fn load_for(who: Who, env: &Env) -> Resolved {
     let Some(path) = path::find(env) else {
-        return resolve(app, None, env);
+        return resolve_for(who, None, env);
     };
     match std::fs::read_to_string(&path) {
-        Ok(text) => resolve(
-            app,
+        Ok(text) => resolve_for(
+            who,
             Some(Source {
                 path: &path,
                 text: &text,
@@ -194,7 +230,7 @@ pub fn load(app: &str, env: &Env) -> Resolved {
             env,
         ),
         Err(e) => {
-            let mut r = resolve(app, None, env);
+            let mut r = resolve_for(who, None, env);
             r.file = Some(path.clone());
             r.file_failed = true;
             r.problems.insert(
@@ -209,15 +245,27 @@ pub fn load(app: &str, env: &Env) -> Resolved {
     }
 }
 
-/// Every problem of a file: its top level and each `[app."NAME"]` table (no environment).
+/// Every problem of a file: its top level and each `[device."SYSTEM"]` and `[app."NAME"]`
+/// table (no environment).
 pub fn check(source: Source) -> Vec<String> {
     let env = Env::default();
     let mut all: Vec<String> = resolve("", Some(source), &env).problems;
-    let apps: Vec<String> = file::parse(source.text)
-        .map(|f| f.apps.into_iter().map(|(name, _)| name).collect())
+    let (devices, apps): (Vec<String>, Vec<String>) = file::parse(source.text)
+        .map(|f| {
+            let names = |t: Vec<(String, Vec<Entry>)>| t.into_iter().map(|(n, _)| n).collect();
+            (names(f.devices), names(f.apps))
+        })
         .unwrap_or_default();
-    for app in apps {
-        for p in resolve(&app, Some(source), &env).problems {
+    let devices = devices.iter().map(|d| Who {
+        app: "",
+        device: Some(d.as_str()),
+    });
+    let apps = apps.iter().map(|a| Who {
+        app: a.as_str(),
+        device: None,
+    });
+    for who in devices.chain(apps) {
+        for p in resolve_for(who, Some(source), &env).problems {
             if !all.contains(&p) {
                 all.push(p);
             }
@@ -327,12 +375,71 @@ mod tests {
     }
 
     #[test]
-    fn check_covers_every_app_table() {
-        let text = "lambda_e = -1\n[app.\"a\"]\nblur_size = 4\n[app.\"b\"]\nfov = 2\n";
+    fn check_covers_every_app_and_device_table() {
+        let text = "lambda_e = -1\n[app.\"a\"]\nblur_size = 4\n[app.\"b\"]\nfov = 2\n[device.\"d\"]\nscene_distance = 0\n";
         let problems = check(Source {
             path: Path::new("/c.toml"),
             text,
         });
-        assert_eq!(problems.len(), 3, "{problems:?}");
+        assert_eq!(problems.len(), 4, "{problems:?}");
+    }
+
+    #[test]
+    fn device_tables_sit_between_the_top_level_and_app_tables() {
+        let text = "camera_fov = [80, 60]\nlambda_e = 0.5\n\
+                    [device.\"HMD\"]\ncamera_fov = [100, 75]\nlambda_e = 0.6\nscene_distance = 3\n\
+                    [app.\"game\"]\nlambda_e = 0.7\n";
+        let source = Source {
+            path: Path::new("/c.toml"),
+            text,
+        };
+        let env = Env::default();
+        let on = |app, device| resolve_for(Who { app, device }, Some(source), &env);
+        let r = on("game", Some("HMD"));
+        assert_eq!(r.settings.registration.camera_fov, [100.0, 75.0]);
+        assert_eq!(r.settings.registration.scene_distance, 3.0);
+        assert_eq!(r.settings.params.lambda_e, 0.7);
+        assert_eq!(origin(&r, "camera_fov"), "/c.toml:4");
+        let r = on("other", Some("HMD"));
+        assert_eq!(r.settings.params.lambda_e, 0.6);
+        let r = on("other", Some("another HMD"));
+        assert_eq!(r.settings.registration.camera_fov, [80.0, 60.0]);
+        assert_eq!(r.settings.params.lambda_e, 0.5);
+        let r = on("other", None);
+        assert_eq!(r.settings.registration.scene_distance, 2.0);
+    }
+
+    #[test]
+    fn a_set_manual_mapping_overrides_the_profile() {
+        let r = with("camera_fov = [90, 70]\n", "", &[]);
+        assert!(!r.settings.registration.manual_override);
+        assert!(r.settings.registration.profile().is_some());
+        let r = with("camera_fov = [90, 70]\nfov_offset = [0.1, 0.1]\n", "", &[]);
+        assert!(r.settings.registration.manual_override);
+        let r = with("", "", &[("CONTRASTXR_FOV_SCALE", "0.7,0.7")]);
+        assert!(r.settings.registration.manual_override);
+    }
+
+    #[test]
+    fn camera_profile_values_are_checked() {
+        let r = with(
+            "camera_fov = [190, 70]\ncamera_intrinsics = [500, 500, 320, 240, 0, 480]\n\
+             camera_position = [0, 0]\nleft_eye_scale = [0, 1]\nscene_distance = -1\n",
+            "",
+            &[],
+        );
+        assert_eq!(r.problems.len(), 5, "{:#?}", r.problems);
+        assert_eq!(r.settings, Settings::default());
+        let r = with(
+            "camera_intrinsics = [500, 510, 319.5, 239.5, 640, 480]\ncamera_position = [0, 0.02, -0.05]\n",
+            "",
+            &[("CONTRASTXR_CAMERA_ROTATION", "-10,0,0")],
+        );
+        assert!(r.problems.is_empty(), "{:?}", r.problems);
+        let profile = r.settings.registration.profile().unwrap();
+        assert!(matches!(
+            profile.lens,
+            crate::algorithm::registration::Lens::Pixels { fx, .. } if fx == 500.0
+        ));
     }
 }

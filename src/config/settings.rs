@@ -1,6 +1,7 @@
 //! The layer's effective settings: what one app's sessions run with.
 
 use crate::algorithm::params::Params;
+use crate::algorithm::registration::{CameraProfile, Lens, Nudge, Pose};
 use crate::camera::CaptureConfig;
 use std::path::PathBuf;
 
@@ -28,6 +29,8 @@ pub struct Settings {
     pub background: String,
     /// How a camera source is opened: wanted size and rate, temporal smoothing.
     pub camera: CaptureConfig,
+    /// Where the camera is and what it sees: per-view registration, per-eye corrections.
+    pub registration: Registration,
     /// Where captures go; None: no capture.
     pub capture_dir: Option<PathBuf>,
     pub capture_frames: u64,
@@ -46,10 +49,96 @@ impl Default for Settings {
             params: Params::default(),
             background: "v4l2:auto".into(),
             camera: CaptureConfig::default(),
+            registration: Registration::default(),
             capture_dir: None,
             capture_frames: 1,
             capture_skip: 0,
             generation: 0,
+        }
+    }
+}
+
+/// The camera profile and the per-eye corrections, as the config gives them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Registration {
+    /// The camera's full field of view [horizontal, vertical], degrees; [0, 0]: not given.
+    pub camera_fov: [f32; 2],
+    /// [fx, fy, cx, cy, width, height], pixels (OpenCV's); all 0: not given. Beats camera_fov.
+    pub camera_intrinsics: [f32; 6],
+    /// The camera's position relative to the head (OpenXR VIEW space: the point between the
+    /// eyes, +x right, +y up, -z forward), metres.
+    pub camera_position: [f32; 3],
+    /// [pitch, yaw, roll] of the camera relative to the head, degrees.
+    pub camera_rotation: [f32; 3],
+    /// The distance registered exactly, metres (> 0).
+    pub scene_distance: f32,
+    /// Per-eye corrections on top of the mapping (see [`Nudge`]): [left, right].
+    pub eye_offset: [[f32; 2]; 2],
+    /// Per-eye scale of the background picture (> 0): [left, right].
+    pub eye_scale: [[f32; 2]; 2],
+    /// `fov_scale` or `fov_offset` was set (file, device, app or environment): the manual
+    /// mapping then overrides the camera profile. Derived from the values' origins.
+    pub manual_override: bool,
+}
+
+impl Default for Registration {
+    fn default() -> Self {
+        Registration {
+            camera_fov: [0.0, 0.0],
+            camera_intrinsics: [0.0; 6],
+            camera_position: [0.0; 3],
+            camera_rotation: [0.0; 3],
+            scene_distance: 2.0,
+            eye_offset: [[0.0, 0.0]; 2],
+            eye_scale: [[1.0, 1.0]; 2],
+            manual_override: false,
+        }
+    }
+}
+
+/// The eyes as the config names them; a projection layer's view 0 is the left eye, 1 the right.
+pub const EYES: [&str; 2] = ["left", "right"];
+
+impl Registration {
+    /// The camera profile, if the config gives the camera's lens.
+    pub fn profile(&self) -> Option<CameraProfile> {
+        let f = |x: f32| f64::from(x);
+        let lens = if self.camera_intrinsics != [0.0; 6] {
+            let [fx, fy, cx, cy, width, height] = self.camera_intrinsics.map(f);
+            Lens::Pixels {
+                fx,
+                fy,
+                cx,
+                cy,
+                width,
+                height,
+            }
+        } else if self.camera_fov != [0.0, 0.0] {
+            Lens::Fov {
+                horizontal: f(self.camera_fov[0]).to_radians(),
+                vertical: f(self.camera_fov[1]).to_radians(),
+            }
+        } else {
+            return None;
+        };
+        Some(CameraProfile {
+            lens,
+            pose: Pose::from_position_pitch_yaw_roll(
+                self.camera_position.map(f),
+                self.camera_rotation.map(f),
+            ),
+            scene_distance: f(self.scene_distance),
+        })
+    }
+
+    /// The correction of eye `eye` (0 left, 1 right); none for other views.
+    pub fn nudge(&self, eye: usize) -> Nudge {
+        match (self.eye_offset.get(eye), self.eye_scale.get(eye)) {
+            (Some(o), Some(s)) => Nudge {
+                offset: glam::DVec2::new(f64::from(o[0]), f64::from(o[1])),
+                scale: glam::DVec2::new(f64::from(s[0]), f64::from(s[1])),
+            },
+            _ => Nudge::NONE,
         }
     }
 }

@@ -12,6 +12,8 @@ pub enum Kind {
     Count,
     /// Two numbers: `[x, y]` in TOML, `x,y` as text.
     Pair,
+    /// This many numbers: `[a, b, c]` in TOML, `a,b,c` as text.
+    Numbers(usize),
     Text,
 }
 
@@ -21,18 +23,20 @@ pub enum Value {
     Float(f32),
     Count(u64),
     Pair([f32; 2]),
+    Numbers(Vec<f32>),
     Text(String),
 }
 
 impl Kind {
     /// What a value of this kind is, for messages ("expected a number").
-    pub fn describe(self) -> &'static str {
+    pub fn describe(self) -> String {
         match self {
-            Kind::Bool => "true or false",
-            Kind::Float => "a number",
-            Kind::Count => "a whole number >= 0",
-            Kind::Pair => "two numbers [x, y]",
-            Kind::Text => "a string",
+            Kind::Bool => "true or false".into(),
+            Kind::Float => "a number".into(),
+            Kind::Count => "a whole number >= 0".into(),
+            Kind::Pair => "two numbers [x, y]".into(),
+            Kind::Numbers(n) => format!("{n} numbers [a, b, ...]"),
+            Kind::Text => "a string".into(),
         }
     }
 
@@ -58,6 +62,18 @@ impl Kind {
                 match parts.as_slice() {
                     [Some(x), Some(y)] => Ok(Value::Pair([*x, *y])),
                     _ => Err(format!("{t:?} is not X,Y")),
+                }
+            }
+            Kind::Numbers(n) => {
+                let parts: Option<Vec<f32>> = t
+                    .trim_start_matches('[')
+                    .trim_end_matches(']')
+                    .split(',')
+                    .map(|p| p.trim().parse().ok())
+                    .collect();
+                match parts {
+                    Some(v) if v.len() == n => Ok(Value::Numbers(v)),
+                    _ => Err(format!("{t:?} is not {n} numbers separated by commas")),
                 }
             }
             Kind::Text => Ok(Value::Text(t.to_string())),
@@ -92,6 +108,13 @@ impl Kind {
                     _ => Err(format!("expected {}", self.describe())),
                 }
             }
+            (Kind::Numbers(n), T::Array(a)) => {
+                let numbers: Option<Vec<f32>> = a.iter().map(number).collect();
+                match numbers {
+                    Some(v) if v.len() == n => Ok(Value::Numbers(v)),
+                    _ => Err(format!("expected {}", self.describe())),
+                }
+            }
             (Kind::Text, T::String(s)) => Ok(Value::Text(s.value().clone())),
             _ => Err(wrong()),
         }
@@ -117,6 +140,7 @@ impl Value {
             Value::Pair([x, y]) => {
                 toml_edit::Value::Array([short_f64(*x), short_f64(*y)].into_iter().collect())
             }
+            Value::Numbers(v) => v.iter().map(|x| short_f64(*x)).collect(),
             Value::Text(s) => s.as_str().into(),
         }
     }
@@ -144,6 +168,11 @@ mod tests {
         assert_eq!(Kind::Float.from_text("0.6"), Ok(Value::Float(0.6)));
         assert_eq!(Kind::Pair.from_text("1, 2"), Ok(Value::Pair([1.0, 2.0])));
         assert!(Kind::Pair.from_text("1").is_err());
+        assert_eq!(
+            Kind::Numbers(3).from_text("[1, 2,3]"),
+            Ok(Value::Numbers(vec![1.0, 2.0, 3.0]))
+        );
+        assert!(Kind::Numbers(3).from_text("1,2").is_err());
         assert!(Kind::Count.from_text("-1").is_err());
     }
 
@@ -161,6 +190,12 @@ mod tests {
             Ok(Value::Pair([0.5, 1.0]))
         );
         assert!(Kind::Pair.from_toml(&v("[0.5]")).is_err());
+        assert_eq!(
+            Kind::Numbers(3).from_toml(&v("[0, -0.5, 2]")),
+            Ok(Value::Numbers(vec![0.0, -0.5, 2.0]))
+        );
+        assert!(Kind::Numbers(3).from_toml(&v("[0, 1]")).is_err());
+        assert!(Kind::Numbers(3).from_toml(&v("[0, 1, \"x\"]")).is_err());
     }
 
     #[test]

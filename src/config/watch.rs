@@ -5,7 +5,7 @@
 
 use super::keys::KEYS;
 use super::path::{self, Env};
-use super::resolve::{load, Resolved};
+use super::resolve::{load_for, Resolved, Who};
 use super::settings::Settings;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -20,6 +20,10 @@ pub type Sink = Box<dyn Fn(&str) + Send + Sync>;
 
 /// The settings of one app, kept current by the watcher thread.
 pub struct Live {
+    app: String,
+    env: Env,
+    /// The system's name once the app has created a session: its `[device."..."]` table applies.
+    device: Mutex<Option<String>>,
     /// The generation of `current`; written after `current`.
     generation: AtomicU64,
     current: Mutex<Arc<Settings>>,
@@ -49,8 +53,6 @@ fn fingerprint(env: &Env) -> Option<Fingerprint> {
 }
 
 struct Watcher {
-    app: String,
-    env: Env,
     seen: Option<Fingerprint>,
     sink: Sink,
     live: Arc<Live>,
@@ -61,16 +63,17 @@ impl Live {
     /// resolution for the caller to log.
     pub fn start(app: &str, env: Env, sink: Sink) -> (Arc<Live>, Resolved) {
         let seen = fingerprint(&env);
-        let resolved = load(app, &env);
+        let resolved = load_for(Who { app, device: None }, &env);
         let live = Arc::new(Live {
+            app: app.to_string(),
+            env,
+            device: Mutex::new(None),
             generation: AtomicU64::new(0),
             current: Mutex::new(Arc::new(resolved.settings.clone())),
             stop: AtomicBool::new(false),
             thread: Mutex::new(None),
         });
         let mut watcher = Watcher {
-            app: app.to_string(),
-            env,
             seen,
             sink,
             live: live.clone(),
@@ -85,6 +88,33 @@ impl Live {
             )),
         }
         (live, resolved)
+    }
+
+    /// Resolves again for the app on the system named `device` (its `[device."..."]` table)
+    /// and publishes the result if it changed anything. Returns the resolution, for the log;
+    /// None if the device is the one already in use.
+    pub fn set_device(&self, device: &str) -> Option<Resolved> {
+        let mut current = lock(&self.device);
+        if current.as_deref() == Some(device) {
+            return None;
+        }
+        *current = Some(device.to_string());
+        drop(current);
+        let r = self.resolve();
+        let old = self.current();
+        if !old.same_values(&r.settings) {
+            self.publish(r.settings.clone());
+        }
+        Some(r)
+    }
+
+    fn resolve(&self) -> Resolved {
+        let device = lock(&self.device).clone();
+        let who = Who {
+            app: &self.app,
+            device: device.as_deref(),
+        };
+        load_for(who, &self.env)
     }
 
     /// The settings now in force (may wait for the watcher; not for the render thread).
@@ -136,7 +166,7 @@ impl Watcher {
         let body = std::panic::AssertUnwindSafe(|| {
             while !self.live.stop.load(Ordering::Acquire) {
                 std::thread::park_timeout(POLL);
-                let now = fingerprint(&self.env);
+                let now = fingerprint(&self.live.env);
                 if now != self.seen && !self.live.stop.load(Ordering::Acquire) {
                     self.seen = now;
                     self.reload();
@@ -149,7 +179,7 @@ impl Watcher {
     }
 
     fn reload(&self) {
-        let r = load(&self.app, &self.env);
+        let r = self.live.resolve();
         let file = r
             .file
             .as_ref()

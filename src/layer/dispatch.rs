@@ -17,6 +17,7 @@ pub struct NextFns {
     pub acquire_swapchain_image: pfn::AcquireSwapchainImage,
     pub release_swapchain_image: pfn::ReleaseSwapchainImage,
     pub end_frame: pfn::EndFrame,
+    pub get_system_properties: pfn::GetSystemProperties,
 }
 
 /// Looks up `name` in the next layer.
@@ -87,6 +88,12 @@ impl NextFns {
                 pfn::ReleaseSwapchainImage
             ),
             end_frame: resolve!(gipa, instance, c"xrEndFrame", pfn::EndFrame),
+            get_system_properties: resolve!(
+                gipa,
+                instance,
+                c"xrGetSystemProperties",
+                pfn::GetSystemProperties
+            ),
         })
     }
 }

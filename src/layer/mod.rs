@@ -4,12 +4,14 @@
 //! failure turns the affected session into pass-through with one log line.
 
 pub mod capture;
+mod device;
 mod dispatch;
 mod entry;
 mod ffi;
 pub mod install;
 pub mod log;
 mod processor;
+mod registration;
 pub mod session;
 pub mod settings;
 mod state;

@@ -2,6 +2,7 @@
 //! into the engine's buffer, enhance it, and copy it back, on the app's device and queue.
 //! The image is still the app's at that point (its release is held until xrEndFrame).
 
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::commands::Commands;
 use crate::gpu::engine::barrier;
@@ -23,6 +24,8 @@ pub struct WorkItem {
     pub image: vk::Image,
     pub format: PixelFormat,
     pub vk_format: vk::Format,
+    /// Where this view's display pixels lie in the camera image.
+    pub mapping: CameraMapping,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

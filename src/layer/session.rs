@@ -1,14 +1,17 @@
 //! Sessions: read the Vulkan graphics binding at xrCreateSession, and at xrEndFrame enhance
 //! every projection view (and quad layers when configured) before the runtime composes it.
+//! At xrCreateSession the system's `[device."..."]` config table applies ([`device`]).
 //! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
 //! a changed background source is reopened on a helper thread while frames pass through.
 
 use super::capture;
 use super::ffi::{find_in_chain, guard};
 use super::processor::{Processor, ViewKey, WorkItem};
+use super::registration::{self, ViewGeometry};
 use super::settings::{self, Settings};
 use super::state::{self, lock, SessionState};
-use super::{log, swapchain};
+use super::{device, log, swapchain};
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::camera::{self, Background, CaptureConfig};
 use crate::gpu::GpuDevice;
@@ -41,7 +44,9 @@ pub unsafe extern "system" fn create_session(
                 xr::StructureType::GRAPHICS_BINDING_VULKAN_KHR,
             )
         });
-        let settings = inst.settings.clone();
+        // SAFETY: the runtime accepted info, so its systemId is the app's system.
+        let system = unsafe { info.as_ref() }.map(|i| i.system_id);
+        let settings = device::settings_on(instance, &inst, system);
         let (processor, background) = match binding {
             // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
             Some(b) => set_up(unsafe { &*b }, &settings.background, &settings.camera),
@@ -230,11 +235,15 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
     )
 }
 
-/// The sub-images of the frame's layers that the layer enhances.
+/// The sub-images of the frame's layers that the layer enhances, each with its camera mapping
+/// (projection views registered one by one, see [`registration`]).
 ///
 /// # Safety
 /// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
-unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<xr::SwapchainSubImage> {
+unsafe fn sub_images(
+    info: &xr::FrameEndInfo,
+    settings: &Settings,
+) -> Vec<(xr::SwapchainSubImage, CameraMapping)> {
     let mut out = Vec::new();
     if info.layers.is_null() {
         return out;
@@ -248,20 +257,28 @@ unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<xr::SwapchainS
         if base.ty == xr::StructureType::COMPOSITION_LAYER_PROJECTION {
             // SAFETY: the type tag says this is a projection layer.
             let proj = unsafe { &*(layer as *const xr::CompositionLayerProjection) };
-            for v in 0..proj.view_count as usize {
-                // SAFETY: view_count valid views.
-                out.push(unsafe { (*proj.views.add(v)).sub_image });
+            if proj.views.is_null() {
+                continue;
             }
-        } else if quads && base.ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
+            // SAFETY: view_count valid views.
+            let views = unsafe { std::slice::from_raw_parts(proj.views, proj.view_count as usize) };
+            let geometry: Vec<_> = views.iter().map(ViewGeometry::from_xr).collect();
+            let mappings = registration::projection_mappings(settings, &geometry);
+            for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
+                registration::log_mapping(settings, k, &mapping, &source);
+                out.push((view.sub_image, mapping));
+            }
+        } else if settings.quad_layers && base.ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
             // SAFETY: the type tag says this is a quad layer.
-            out.push(unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image });
+            let quad = unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image };
+            out.push((quad, registration::quad_mapping(settings)));
         }
     }
     out
 }
 
 /// A work item for a sub-image whose image the layer holds, with a rect inside the image.
-fn work_item(sub: &xr::SwapchainSubImage) -> Option<WorkItem> {
+fn work_item(sub: &xr::SwapchainSubImage, mapping: CameraMapping) -> Option<WorkItem> {
     let sc = state::swapchain(sub.swapchain)?;
     let sc = lock(&sc);
     let format = sc.info.pixel.filter(|_| sc.info.processable())?;
@@ -288,6 +305,7 @@ fn work_item(sub: &xr::SwapchainSubImage) -> Option<WorkItem> {
         image,
         format,
         vk_format: sc.info.vk_format,
+        mapping,
     })
 }
 
@@ -343,8 +361,8 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
         return;
     }
     // SAFETY: the app's frame end info, valid for this call.
-    let subs = unsafe { sub_images(info, s.settings.quad_layers) };
-    let items: Vec<WorkItem> = subs.iter().filter_map(work_item).collect();
+    let subs = unsafe { sub_images(info, &s.settings) };
+    let items: Vec<WorkItem> = subs.iter().filter_map(|(u, m)| work_item(u, *m)).collect();
     if items.is_empty() {
         return;
     }
