@@ -319,3 +319,82 @@ fn usage_errors_exit_2_and_bad_values_exit_1() {
     let help = contrastxr(&["evaluate", "--help"]);
     assert!(String::from_utf8_lossy(&help.stdout).contains("--sweep"));
 }
+
+/// `contrastxr calibrate` driven line by line on stdin (not a terminal) against a config file.
+fn calibrate(config: &Path, args: &[&str], stdin: &str) -> Output {
+    use std::io::Write;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+        .arg("calibrate")
+        .args(args)
+        .env("CONTRASTXR_CONFIG", config)
+        .env_remove("CONTRASTXR_MODE")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run contrastxr calibrate");
+    let mut input = child.stdin.take().expect("stdin");
+    input.write_all(stdin.as_bytes()).expect("write stdin");
+    drop(input);
+    child.wait_with_output().expect("calibrate ends")
+}
+
+fn effective(config: &Path, app: &str) -> contrastxr::config::Settings {
+    let text = std::fs::read_to_string(config).expect("config");
+    let source = contrastxr::config::Source {
+        path: config,
+        text: &text,
+    };
+    let r = contrastxr::config::resolve(app, Some(source), &contrastxr::config::Env::default());
+    assert!(r.problems.is_empty(), "{:?}", r.problems);
+    r.settings
+}
+
+#[test]
+fn calibrate_saves_each_eyes_nudges_and_puts_the_mode_back() {
+    let config = scratch("calibrate.toml");
+    std::fs::write(&config, "# mine\nmode = \"split\"\nlambda_e = 0.5\n").unwrap();
+    // Left eye: 2 steps right, 1 up, one step bigger; right eye: 1 step left at half the step,
+    // then 1 step shorter.
+    let o = calibrate(
+        &config,
+        &[],
+        "right right\nup bigger\nsideways\nnext\nfiner left\nshorter\nnext\n",
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("mode = \"background\""), "{out}");
+    assert!(out.contains("unknown command \"sideways\""), "{out}");
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert!(
+        text.starts_with("# mine\nmode = \"split\"\nlambda_e = 0.5\n"),
+        "{text}"
+    );
+    let r = effective(&config, "").registration;
+    assert_eq!(r.eye_offset, [[0.01, -0.005], [-0.0025, 0.0]]);
+    // 1 / (1 + 2 * 0.0025) = 0.995025, kept to 5 decimals.
+    assert_eq!(r.eye_scale, [[1.01, 1.01], [1.0, 0.99502]]);
+    // Cancelled: both eyes back as they were, and still no mode line added.
+    let o = calibrate(&config, &["--step", "0.02"], "left\nnext\nup\nquit\n");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&config).unwrap(), text);
+}
+
+#[test]
+fn calibrate_writes_an_app_table_and_removes_the_mode_it_added() {
+    let config = scratch("calibrate-app.toml");
+    std::fs::write(&config, "lambda_e = 0.5\n").unwrap();
+    let o = calibrate(&config, &["--app", "hello_xr"], "next\ndown\n");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = effective(&config, "hello_xr");
+    assert_eq!(s.registration.eye_offset, [[0.0, 0.0], [0.0, 0.005]]);
+    assert_eq!(s.params.mode.name(), "enhance");
+    assert_eq!(
+        effective(&config, "other").registration.eye_offset[1],
+        [0.0, 0.0]
+    );
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert!(!text.contains("mode"), "{text}");
+    let o = calibrate(&config, &["--step", "3"], "");
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+}

@@ -3,6 +3,7 @@
 
 mod args;
 mod bench;
+mod calibrate;
 mod camera;
 mod config;
 mod control;
@@ -87,6 +88,12 @@ const COMMANDS: &[Subcommand] = &[
         summary: "change one setting of running apps, e.g. `set lambda_e 0.6`",
         usage: control::usage,
         run: control::run_set,
+    },
+    Subcommand {
+        name: "calibrate",
+        summary: "line the camera's background up with each eye, with keys, while the app runs",
+        usage: calibrate::usage,
+        run: calibrate::run,
     },
 ];
 

@@ -87,6 +87,52 @@ pub fn set(
     write_atomically(path, &doc.to_string())
 }
 
+/// The value `key` has in the file itself (in `[app."NAME"]` when `app` is given), if any:
+/// what to put back after a temporary change.
+pub fn entry(
+    path: &Path,
+    seed: Option<&Path>,
+    app: Option<&str>,
+    key: &Key,
+) -> Result<Option<Value>, String> {
+    let text = read(path, seed)?;
+    let doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
+        format!(
+            "{} is not valid TOML ({})",
+            path.display(),
+            e.message().trim()
+        )
+    })?;
+    let table: Option<&dyn toml_edit::TableLike> = match app {
+        None => Some(doc.as_table()),
+        Some(app) => doc
+            .get("app")
+            .and_then(Item::as_table_like)
+            .and_then(|apps| apps.get(app))
+            .and_then(Item::as_table_like),
+    };
+    let value = table.and_then(|t| t.get(key.name)).and_then(Item::as_value);
+    value.map(|v| key.kind.from_toml(v)).transpose()
+}
+
+/// Removes `key` from the file (from `[app."NAME"]` when `app` is given); nothing to do if it
+/// is not there.
+pub fn unset(path: &Path, app: Option<&str>, key: &Key) -> Result<(), String> {
+    let text = read(path, None)?;
+    let mut doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
+        format!(
+            "{} is not valid TOML ({})",
+            path.display(),
+            e.message().trim()
+        )
+    })?;
+    let removed = table(&mut doc, app)?.remove(key.name).is_some();
+    if removed {
+        write_atomically(path, &doc.to_string())?;
+    }
+    Ok(())
+}
+
 /// Flips `mode` between `off` and `on_mode` in the file (for `app` when given) and returns the
 /// mode now written.
 pub fn toggle(
@@ -145,6 +191,29 @@ mod tests {
         assert_eq!(
             std::fs::read_to_string(&path).unwrap(),
             "mode = \"split\"\n"
+        );
+    }
+
+    #[test]
+    fn entry_and_unset_put_a_key_back() {
+        let path = temp("entry");
+        write_atomically(&path, "mode = \"split\"\n[app.\"a\"]\nlambda_e = 0.5\n").unwrap();
+        let mode = key("mode").unwrap();
+        let lambda = key("lambda_e").unwrap();
+        assert_eq!(
+            entry(&path, None, None, mode).unwrap(),
+            Some(Value::Text("split".into()))
+        );
+        assert_eq!(entry(&path, None, Some("a"), mode).unwrap(), None);
+        assert_eq!(
+            entry(&path, None, Some("a"), lambda).unwrap(),
+            Some(Value::Float(0.5))
+        );
+        unset(&path, Some("a"), lambda).unwrap();
+        unset(&path, None, lambda).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "mode = \"split\"\n[app.\"a\"]\n"
         );
     }
 
