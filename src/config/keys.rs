@@ -353,7 +353,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_FOV_SCALE",
         env_negated: false,
         kind: Kind::Pair,
-        doc: "manual mapping camera_uv = fov_scale * display_uv + fov_offset, for both eyes; setting it (or fov_offset) overrides the camera profile",
+        doc: "manual mapping camera_uv = fov_scale * display_uv + fov_offset, for both eyes; other than the default (or fov_offset other than its default), it overrides the camera profile",
         set: |s, v| {
             s.params.fov_scale = pair(v)?;
             Ok(())

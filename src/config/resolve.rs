@@ -162,17 +162,6 @@ impl Resolved {
         }
     }
 
-    /// What the origins say that a value alone cannot: whether the manual mapping was set.
-    fn derive(&mut self) {
-        let set = |name: &str| {
-            KEYS.iter()
-                .position(|k| k.name == name)
-                .is_some_and(|i| self.origins[i] != Origin::Default)
-        };
-        let manual = set("fov_scale") || set("fov_offset");
-        self.settings.registration.manual_override = manual;
-    }
-
     fn apply_env(&mut self, env: &Env) {
         for (index, key) in KEYS.iter().enumerate() {
             if let Some(text) = env.get(key.env) {
@@ -206,7 +195,6 @@ pub fn resolve_for(who: Who, file: Option<Source>, env: &Env) -> Resolved {
         r.apply_file(who, source);
     }
     r.apply_env(env);
-    r.derive();
     r
 }
 
@@ -411,13 +399,13 @@ mod tests {
 
     #[test]
     fn a_set_manual_mapping_overrides_the_profile() {
-        let r = with("camera_fov = [90, 70]\n", "", &[]);
-        assert!(!r.settings.registration.manual_override);
+        let r = with("camera_fov = [90, 70]\nfov_scale = [0.65, 0.65]\n", "", &[]);
+        assert!(!r.settings.manual_mapping_set());
         assert!(r.settings.registration.profile().is_some());
         let r = with("camera_fov = [90, 70]\nfov_offset = [0.1, 0.1]\n", "", &[]);
-        assert!(r.settings.registration.manual_override);
+        assert!(r.settings.manual_mapping_set());
         let r = with("", "", &[("CONTRASTXR_FOV_SCALE", "0.7,0.7")]);
-        assert!(r.settings.registration.manual_override);
+        assert!(r.settings.manual_mapping_set());
     }
 
     #[test]

@@ -76,9 +76,6 @@ pub struct Registration {
     pub eye_offset: [[f32; 2]; 2],
     /// Per-eye scale of the background picture (> 0): [left, right].
     pub eye_scale: [[f32; 2]; 2],
-    /// `fov_scale` or `fov_offset` was set (file, device, app or environment): the manual
-    /// mapping then overrides the camera profile. Derived from the values' origins.
-    pub manual_override: bool,
 }
 
 impl Default for Registration {
@@ -91,7 +88,6 @@ impl Default for Registration {
             scene_distance: 2.0,
             eye_offset: [[0.0, 0.0]; 2],
             eye_scale: [[1.0, 1.0]; 2],
-            manual_override: false,
         }
     }
 }
@@ -144,6 +140,14 @@ impl Registration {
 }
 
 impl Settings {
+    /// Whether `fov_scale`/`fov_offset` differ from their defaults: the manual mapping then
+    /// overrides the camera profile. (By value, not by where it was written: the example
+    /// config, which spells out every default, must not switch registration off.)
+    pub fn manual_mapping_set(&self) -> bool {
+        let defaults = Params::default();
+        self.params.fov_scale != defaults.fov_scale || self.params.fov_offset != defaults.fov_offset
+    }
+
     pub fn capture(&self) -> Option<Capture> {
         self.capture_dir.as_ref().map(|dir| Capture {
             dir: dir.clone(),

@@ -120,6 +120,7 @@ pub fn write_view(
         "srgb": item.format.srgb,
         "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
         "image_array_index": item.key.array_index,
+        "camera_mapping": item.mapping.rows,
         "background": background_spec,
         "params": params_json(params),
     });

@@ -37,7 +37,7 @@ fn system_name(next: &NextFns, instance: xr::Instance, system: xr::SystemId) -> 
 /// Logs what the device table changed: each changed value with its origin, and its problems.
 fn log_device(name: &str, before: &Settings, r: &Resolved) {
     log::info(&format!(
-        "system {name:?}: its [device.{name:?}] config table applies"
+        "system {name:?}: settings in a [device.{name:?}] config table apply to it"
     ));
     for (i, k) in KEYS.iter().enumerate() {
         if k.get(before) != k.get(&r.settings) {

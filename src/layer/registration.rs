@@ -1,6 +1,6 @@
 //! Each view's camera mapping at xrEndFrame: from the projection view's XrFovf and pose and the
 //! config's camera profile ([`crate::algorithm::registration`]), unless the manual
-//! `fov_scale`/`fov_offset` were set (an explicit override) or no profile is given (the
+//! `fov_scale`/`fov_offset` were set to other than their defaults (an explicit override) or no profile is given (the
 //! default manual mapping); then the eye's correction (`left_eye_*`, `right_eye_*`). Cheap: a
 //! few 3x3 products per view and frame. Where each view's mapping comes from is logged once
 //! per settings generation.
@@ -8,7 +8,7 @@
 use super::log;
 use super::settings::Settings;
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::registration::{head_pose, view_mapping, Fov, Pose};
+use crate::algorithm::registration::{head_pose, view_mapping, Fov, Nudge, Pose};
 use crate::config::EYES;
 use glam::{DQuat, DVec3};
 use openxr_sys as xr;
@@ -18,7 +18,7 @@ use openxr_sys as xr;
 pub enum Source {
     /// `fov = false`: camera_uv = display_uv.
     Off,
-    /// `fov_scale`/`fov_offset` set in the config or environment.
+    /// `fov_scale`/`fov_offset` set (to other than their defaults) in the config or environment.
     Manual,
     /// The camera profile and the view's field of view and pose.
     Profile,
@@ -83,7 +83,7 @@ impl ViewGeometry {
 fn manual(settings: &Settings) -> (CameraMapping, Source) {
     let source = if !settings.params.fov {
         Source::Off
-    } else if settings.registration.manual_override {
+    } else if settings.manual_mapping_set() {
         Source::Manual
     } else {
         Source::Default
@@ -129,21 +129,23 @@ pub fn quad_mapping(settings: &Settings) -> CameraMapping {
 
 /// Logs, once per settings generation and view, where the view's mapping came from.
 pub fn log_mapping(settings: &Settings, view: usize, mapping: &CameraMapping, source: &Source) {
+    let r = &settings.registration;
     let (label, correction) = match EYES.get(view) {
-        Some(eye) => {
-            let r = &settings.registration;
-            (
-                format!("view {view} ({eye} eye)"),
-                format!(
-                    ", corrected by {eye}_eye_offset {:?} and {eye}_eye_scale {:?}",
-                    r.eye_offset[view], r.eye_scale[view]
-                ),
-            )
-        }
+        Some(eye) if r.nudge(view) != Nudge::NONE => (
+            format!("view {view} ({eye} eye)"),
+            format!(
+                ", corrected by {eye}_eye_offset {:?} and {eye}_eye_scale {:?}",
+                r.eye_offset[view], r.eye_scale[view]
+            ),
+        ),
+        Some(eye) => (format!("view {view} ({eye} eye)"), String::new()),
         None => (format!("view {view}"), String::new()),
     };
     let key = format!("mapping-{}-{view}-{source:?}", settings.generation);
-    let rows = mapping.rows.map(|r| r.map(|x| (x * 1e5).round() / 1e5));
+    // Adding 0.0 turns -0.0 into 0.0.
+    let rows = mapping
+        .rows
+        .map(|r| r.map(|x| (x * 1e5).round() / 1e5 + 0.0));
     log::once(
         &key,
         &format!(

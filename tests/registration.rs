@@ -1,0 +1,209 @@
+//! Per-eye registration in the layer, against the real Monado runtime in the sandbox (see
+//! tests/common/mod.rs for the skip/require rule): the system's `[device."..."]` table applies
+//! once the session names the system, each projection view gets its own mapping from the
+//! camera profile (or the manual one when set, or the default without a profile), and
+//! `contrastxr calibrate` reaches a running app: its nudges change the mapping of the eye it
+//! calibrates, seen in the captured frames' `camera_mapping`. The geometry itself is tested
+//! against plain pinhole math in src/algorithm/registration.rs.
+
+mod common;
+
+use common::{layer_lines, sandbox, scratch_dir, CLI, XR_CLIENT};
+use serde_json::Value;
+use std::io::Write;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+const SYSTEM: &str = "Monado: Simulated HMD";
+
+fn run_client(config: &Path, env: &[(&str, &str)], frames: &str) -> Option<Vec<String>> {
+    let sandbox = sandbox()?;
+    let config = config.to_string_lossy().into_owned();
+    let mut all = vec![
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_CONFIG", config.as_str()),
+    ];
+    all.extend(env);
+    let cmd = [XR_CLIENT, "--json", "--frames", frames, "--size", "64x48"];
+    let run = sandbox.run_for(&cmd, &all, 180);
+    run.assert_success();
+    Some(layer_lines(&run))
+}
+
+fn mapping_lines(lines: &[String], view: usize) -> Vec<&String> {
+    let prefix = format!("view {view} (");
+    lines.iter().filter(|l| l.starts_with(&prefix)).collect()
+}
+
+#[test]
+fn each_eye_is_registered_from_the_device_profile() {
+    let dir = scratch_dir("registration-device");
+    let config = dir.join("config.toml");
+    let profile = "camera_fov = [100, 80]\ncamera_position = [0, 0.02, -0.06]\n";
+    std::fs::write(
+        &config,
+        format!("lambda_e = 0.5\n[device.\"{SYSTEM}\"]\n{profile}[device.\"Other HMD\"]\nscene_distance = 9\n"),
+    )
+    .unwrap();
+    let Some(lines) = run_client(&config, &[], "10") else {
+        return;
+    };
+    let system = format!("system \"{SYSTEM}\"");
+    assert!(lines.iter().any(|l| l.starts_with(&system)), "{lines:#?}");
+    // The device table's values are logged with their origin (file and line).
+    let origin = format!(
+        "setting camera_fov = [100.0, 80.0]  # {}:3",
+        config.display()
+    );
+    assert!(lines.contains(&origin), "{lines:#?}");
+    assert!(
+        !lines.iter().any(|l| l.contains("scene_distance = 9")),
+        "{lines:#?}"
+    );
+    let (left, right) = (mapping_lines(&lines, 0), mapping_lines(&lines, 1));
+    assert_eq!((left.len(), right.len()), (1, 1), "{lines:#?}");
+    for l in [left[0], right[0]] {
+        assert!(l.contains("from the camera profile"), "{l}");
+    }
+    // The eyes sit either side of the camera: their mappings differ.
+    let rows = |l: &str| l.split("camera_uv = ").nth(1).unwrap().to_string();
+    assert_ne!(rows(left[0]), rows(right[0]));
+
+    // The manual mapping, set, overrides the profile; without a profile it is the default.
+    std::fs::write(&config, format!("{profile}fov_offset = [0.1, 0.2]\n")).unwrap();
+    let Some(lines) = run_client(&config, &[], "10") else {
+        return;
+    };
+    let left = mapping_lines(&lines, 0);
+    assert!(
+        left[0].contains("the manual fov_scale/fov_offset (set"),
+        "{left:#?}"
+    );
+    std::fs::write(&config, "lambda_e = 0.5\n").unwrap();
+    let Some(lines) = run_client(&config, &[], "10") else {
+        return;
+    };
+    let left = mapping_lines(&lines, 0);
+    assert!(
+        left[0].contains("the default fov_scale/fov_offset"),
+        "{left:#?}"
+    );
+}
+
+fn wait_for(path: &Path, timeout: Duration) -> bool {
+    let end = Instant::now() + timeout;
+    while Instant::now() < end {
+        if path.exists() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    false
+}
+
+/// Runs `contrastxr calibrate` on `config`, feeding it `steps` one by one, `pause` apart.
+fn calibrate_slowly(config: &Path, steps: &[&str], pause: Duration) -> String {
+    let mut child = std::process::Command::new(CLI)
+        .arg("calibrate")
+        .env("CONTRASTXR_CONFIG", config)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("run contrastxr calibrate");
+    let mut input = child.stdin.take().expect("stdin");
+    for step in steps {
+        std::thread::sleep(pause);
+        writeln!(input, "{step}").expect("write to calibrate");
+    }
+    std::thread::sleep(pause);
+    drop(input);
+    let out = child.wait_with_output().expect("calibrate ends");
+    assert!(out.status.success());
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Each captured frame's view-0 and view-1 JSON, in frame order.
+fn captured(dir: &Path) -> Vec<[Value; 2]> {
+    let json = |f: u64, v: usize| -> Option<Value> {
+        let text = std::fs::read_to_string(dir.join(format!("frame-{f}-view-{v}.json"))).ok()?;
+        serde_json::from_str(&text).ok()
+    };
+    (0..)
+        .map_while(|f| Some([json(f, 0)?, json(f, 1)?]))
+        .collect()
+}
+
+fn offset_x(view: &Value) -> f64 {
+    view["camera_mapping"][0][2]
+        .as_f64()
+        .expect("camera_mapping")
+}
+
+#[test]
+fn calibrate_reaches_a_running_app() {
+    if sandbox().is_none() {
+        return;
+    }
+    let dir = scratch_dir("registration-calibrate");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, "lambda_e = 0.5\n").unwrap();
+    let capture = dir.join("capture");
+    let capture_s = capture.to_string_lossy().into_owned();
+    let env = [
+        ("CONTRASTXR_CAPTURE_DIR", capture_s.as_str()),
+        ("CONTRASTXR_CAPTURE_FRAMES", "100000"),
+    ];
+    let (lines, out) = std::thread::scope(|s| {
+        let run = s.spawn(|| run_client(&config, &env, "240"));
+        assert!(wait_for(
+            &capture.join("frame-5-view-1.json"),
+            Duration::from_secs(60)
+        ));
+        // Left eye: 4 steps (0.02 of the view) right; right eye untouched.
+        let steps = ["right right", "right right", "next"];
+        let out = calibrate_slowly(&config, &steps, Duration::from_millis(1500));
+        (run.join().expect("client thread"), out)
+    });
+    let Some(lines) = lines else { return };
+    assert!(out.contains("left_eye_offset = [0.02, 0]"), "{out}");
+    // Mode background while calibrating, and back to the file's own (none: enhance) after.
+    let reloads: Vec<&String> = lines.iter().filter(|l| l.contains("reloaded:")).collect();
+    assert!(
+        reloads
+            .iter()
+            .any(|l| l.contains("mode \"enhance\" -> \"background\"")),
+        "{reloads:#?}"
+    );
+    assert!(
+        reloads
+            .iter()
+            .any(|l| l.contains("mode \"background\" -> \"enhance\"")),
+        "{reloads:#?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&config)
+            .unwrap()
+            .matches("mode")
+            .count(),
+        0
+    );
+    // The captures: the left eye's picture moved right by 0.02 of the view, so the left view's
+    // mapping shifts by -0.02 times its x scale; the right view's stays.
+    let frames = captured(&capture);
+    let (first, last) = (&frames[0], frames.last().expect("captures"));
+    let scale = first[0]["camera_mapping"][0][0].as_f64().unwrap();
+    let moved = offset_x(&last[0]) - offset_x(&first[0]);
+    assert!(
+        (moved + 0.02 * scale).abs() < 1e-6,
+        "{moved} vs {}",
+        -0.02 * scale
+    );
+    assert_eq!(offset_x(&last[1]), offset_x(&first[1]));
+    let corrected: Vec<&String> = mapping_lines(&lines, 0)
+        .into_iter()
+        .filter(|l| l.contains("corrected by left_eye_offset [0.02, 0.0]"))
+        .collect();
+    assert!(!corrected.is_empty(), "{lines:#?}");
+}
