@@ -226,7 +226,7 @@ pub fn head_pose(views: &[Pose]) -> Option<Pose> {
     let mut centre = DVec3::ZERO;
     for v in &checked {
         let q = v.orientation;
-        sum = sum + if q.dot(first) < 0.0 { -q } else { q };
+        sum += if q.dot(first) < 0.0 { -q } else { q };
         centre += v.position;
     }
     let length = sum.length();
