@@ -86,8 +86,16 @@ fn main() {
     let truth = CameraMapping::affine(TRUE_SCALE.map(f64::from), TRUE_OFFSET.map(f64::from));
     let nudge = solve(&default.camera_mapping(), &truth);
     let corrected = nudge.apply(&default.camera_mapping());
-    for (a, b) in corrected.rows.iter().flatten().zip(truth.rows.iter().flatten()) {
-        assert!((a - b).abs() < 1e-9, "the solved correction must reach the truth");
+    for (a, b) in corrected
+        .rows
+        .iter()
+        .flatten()
+        .zip(truth.rows.iter().flatten())
+    {
+        assert!(
+            (a - b).abs() < 1e-9,
+            "the solved correction must reach the truth"
+        );
     }
     println!(
         "left_eye_offset = [{:.4}, {:.4}], left_eye_scale = [{:.4}, {:.4}]",

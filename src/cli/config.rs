@@ -20,6 +20,7 @@ pub fn usage() -> String {
 
 pub fn run(args: &mut Args) -> Result<(), CliError> {
     let app = args.value(&["--app"])?;
+    let device = args.value(&["--device"])?;
     let mut pos = args.positional().into_iter();
     args.finish()?;
     let what = pos
@@ -30,7 +31,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         ("check", [file]) => check(PathBuf::from(file)),
         ("check", []) => check(found()?),
         ("print", []) => {
-            print_settings(app.as_deref().unwrap_or(""));
+            print_settings(app.as_deref().unwrap_or(""), device.as_deref());
             Ok(())
         }
         ("path", []) => {
@@ -72,10 +73,11 @@ fn check(path: PathBuf) -> Result<(), CliError> {
     )))
 }
 
-fn print_settings(app: &str) {
-    let r = config::load(app, &Env::capture());
+fn print_settings(app: &str, device: Option<&str>) {
+    let r = config::load_for(config::Who { app, device }, &Env::capture());
+    let on = device.map_or(String::new(), |d| format!(" on system {d:?}"));
     let mut out = format!(
-        "# contrastxr settings for app {app:?}; config file: {}\n",
+        "# contrastxr settings for app {app:?}{on}; config file: {}\n",
         r.file
             .as_ref()
             .map_or("none".into(), |p| p.display().to_string())

@@ -164,11 +164,22 @@ impl Settings {
         } == *other
     }
 
+    fn describe_profile(&self) -> String {
+        let r = &self.registration;
+        if r.camera_intrinsics != [0.0; 6] {
+            format!("intrinsics{:?}", r.camera_intrinsics)
+        } else if r.camera_fov != [0.0, 0.0] {
+            format!("fov{:?}", r.camera_fov)
+        } else {
+            "none".into()
+        }
+    }
+
     /// The one startup line's parameter part.
     pub fn describe(&self) -> String {
         let p = &self.params;
         format!(
-            "mode={} method={} lambda_e={} lambda_jnd_scaled={} transmittance={} achromatic_boost={} luminance_cap={} blur={}x{}/{} fov_scale={:?} fov_offset={:?} fov={} background={} force={} quad_layers={} capture={}",
+            "mode={} method={} lambda_e={} lambda_jnd_scaled={} transmittance={} achromatic_boost={} luminance_cap={} blur={}x{}/{} fov_scale={:?} fov_offset={:?} fov={} camera_profile={} background={} force={} quad_layers={} capture={}",
             p.mode.name(),
             p.method.name(),
             p.lambda_e,
@@ -182,6 +193,7 @@ impl Settings {
             p.fov_scale,
             p.fov_offset,
             p.fov,
+            self.describe_profile(),
             self.background,
             self.force,
             self.quad_layers,

@@ -12,6 +12,9 @@ use crate::algorithm::registration::{head_pose, view_mapping, Fov, Nudge, Pose};
 use crate::config::EYES;
 use glam::{DQuat, DVec3};
 use openxr_sys as xr;
+use std::collections::HashSet;
+use std::mem::{discriminant, Discriminant};
+use std::sync::{Mutex, OnceLock};
 
 /// Where a view's mapping came from (before the eye's correction).
 #[derive(Clone, Debug, PartialEq)]
@@ -127,8 +130,21 @@ pub fn quad_mapping(settings: &Settings) -> CameraMapping {
     manual(settings).0
 }
 
+/// Whether (generation, view, kind of source) is new: checked every frame, so no allocation.
+fn first_time(generation: u64, view: usize, source: &Source) -> bool {
+    type Seen = HashSet<(u64, usize, Discriminant<Source>)>;
+    static SEEN: OnceLock<Mutex<Seen>> = OnceLock::new();
+    let seen = SEEN.get_or_init(Default::default);
+    // Only set operations happen under this lock.
+    let mut seen = seen.lock().unwrap_or_else(|p| p.into_inner());
+    seen.insert((generation, view, discriminant(source)))
+}
+
 /// Logs, once per settings generation and view, where the view's mapping came from.
 pub fn log_mapping(settings: &Settings, view: usize, mapping: &CameraMapping, source: &Source) {
+    if !first_time(settings.generation, view, source) {
+        return;
+    }
     let r = &settings.registration;
     let (label, correction) = match EYES.get(view) {
         Some(eye) if r.nudge(view) != Nudge::NONE => (
@@ -141,18 +157,14 @@ pub fn log_mapping(settings: &Settings, view: usize, mapping: &CameraMapping, so
         Some(eye) => (format!("view {view} ({eye} eye)"), String::new()),
         None => (format!("view {view}"), String::new()),
     };
-    let key = format!("mapping-{}-{view}-{source:?}", settings.generation);
     // Adding 0.0 turns -0.0 into 0.0.
     let rows = mapping
         .rows
         .map(|r| r.map(|x| (x * 1e5).round() / 1e5 + 0.0));
-    log::once(
-        &key,
-        &format!(
-            "{label}: camera mapping from {}{correction}: camera_uv = {rows:?} (display_uv, 1)",
-            source.describe()
-        ),
-    );
+    log::info(&format!(
+        "{label}: camera mapping from {}{correction}: camera_uv = {rows:?} (display_uv, 1)",
+        source.describe()
+    ));
 }
 
 #[cfg(test)]
