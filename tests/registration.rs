@@ -42,9 +42,10 @@ fn each_eye_is_registered_from_the_device_profile() {
     let dir = scratch_dir("registration-device");
     let config = dir.join("config.toml");
     let profile = "camera_fov = [100, 80]\ncamera_position = [0, 0.02, -0.06]\n";
+    // Line 1: a problem at the top level; line 6: one in the device table.
     std::fs::write(
         &config,
-        format!("lambda_e = 0.5\n[device.\"{SYSTEM}\"]\n{profile}[device.\"Other HMD\"]\nscene_distance = 9\n"),
+        format!("blur_size = 4\nlambda_e = 0.5\n[device.\"{SYSTEM}\"]\n{profile}scene_distance = -1\n[device.\"Other HMD\"]\nscene_distance = 9\n"),
     )
     .unwrap();
     let Some(lines) = run_client(&config, &[], "10") else {
@@ -54,10 +55,16 @@ fn each_eye_is_registered_from_the_device_profile() {
     assert!(lines.iter().any(|l| l.starts_with(&system)), "{lines:#?}");
     // The device table's values are logged with their origin (file and line).
     let origin = format!(
-        "setting camera_fov = [100.0, 80.0]  # {}:3",
+        "setting camera_fov = [100.0, 80.0]  # {}:4",
         config.display()
     );
     assert!(lines.contains(&origin), "{lines:#?}");
+    // Each problem is named once: the top level's at start, the device table's when it applies.
+    for (line, key) in [(1, "blur_size"), (6, "scene_distance")] {
+        let named = format!("config {}:{line}: {key}: ", config.display());
+        let n = lines.iter().filter(|l| l.starts_with(&named)).count();
+        assert_eq!(n, 1, "{key}: {lines:#?}");
+    }
     assert!(
         !lines.iter().any(|l| l.contains("scene_distance = 9")),
         "{lines:#?}"
@@ -206,4 +213,90 @@ fn calibrate_reaches_a_running_app() {
         .filter(|l| l.contains("corrected by left_eye_offset [0.02, 0.0]"))
         .collect();
     assert!(!corrected.is_empty(), "{lines:#?}");
+}
+
+/// A scene point drawn as a dot in a synthetic camera frame shows at the right display pixel of
+/// each eye after the CPU reference maps the frame through that eye's registered mapping
+/// (parallel axes: affine, so the manual form of the reference applies). Where the point is in
+/// the camera and in each eye is plain pinhole math here. No sandbox needed.
+#[test]
+fn a_scene_point_lands_on_its_display_pixel_in_each_eye() {
+    use contrastxr::algorithm::registration::{
+        head_pose, view_mapping, CameraProfile, Fov, Lens, Pose,
+    };
+    use contrastxr::algorithm::Params;
+    use contrastxr::image::RgbaImage;
+    use glam::{DQuat, DVec3};
+
+    let (hfov, vfov) = (100f64.to_radians(), 80f64.to_radians());
+    let profile = CameraProfile {
+        lens: Lens::Fov {
+            horizontal: hfov,
+            vertical: vfov,
+        },
+        pose: Pose::from_position_pitch_yaw_roll([0.0, 0.02, -0.06], [0.0; 3]),
+        scene_distance: 2.0,
+    };
+    let fov = Fov {
+        angle_left: -0.8,
+        angle_right: 0.7,
+        angle_up: 0.65,
+        angle_down: -0.75,
+    };
+    let eyes = [-0.032, 0.032].map(|x| Pose {
+        position: DVec3::new(x, 1.6, 0.0),
+        orientation: DQuat::IDENTITY,
+    });
+    let head = head_pose(&eyes).unwrap();
+    let camera_pose = head.then(&profile.pose);
+    // A point 2 m in front of the eyes, up and to the right.
+    let p = DVec3::new(0.5, 1.9, -2.0);
+    let (cw, ch) = (320u32, 240u32);
+    let q = p - camera_pose.position;
+    let cx = (0.5 + (q.x / -q.z) / (2.0 * (hfov / 2.0).tan())) * f64::from(cw);
+    let cy = (0.5 - (q.y / -q.z) / (2.0 * (vfov / 2.0).tan())) * f64::from(ch);
+    let mut camera = RgbaImage::new(cw, ch, [0, 0, 0, 255]);
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            camera.set(
+                (cx as i64 + dx) as u32,
+                (cy as i64 + dy) as u32,
+                [255, 255, 255, 255],
+            );
+        }
+    }
+    let (dw, dh) = (200u32, 160u32);
+    for eye in &eyes {
+        let m = view_mapping(&fov, eye, &head, &profile).unwrap();
+        assert!(
+            m.is_affine() && m.rows[0][1] == 0.0 && m.rows[1][0] == 0.0,
+            "{m:?}"
+        );
+        let params = Params {
+            fov_scale: [m.rows[0][0] as f32, m.rows[1][1] as f32],
+            fov_offset: [m.rows[0][2] as f32, m.rows[1][2] as f32],
+            ..Params::default()
+        };
+        let shown = contrastxr::background::fov_sharp(&camera, dw, dh, &params);
+        let brightest = (0..shown.len())
+            .max_by(|&a, &b| shown[a].x.total_cmp(&shown[b].x))
+            .unwrap();
+        let got = (
+            (brightest as u32 % dw) as f64,
+            (brightest as u32 / dw) as f64,
+        );
+        let e = p - eye.position;
+        let (x, y) = (e.x / -e.z, e.y / -e.z);
+        let (l, r) = (fov.angle_left.tan(), fov.angle_right.tan());
+        let (u, d) = (fov.angle_up.tan(), fov.angle_down.tan());
+        let want = (
+            (x - l) / (r - l) * f64::from(dw),
+            (u - y) / (u - d) * f64::from(dh),
+        );
+        assert!(
+            (got.0 + 0.5 - want.0).abs() <= 1.5 && (got.1 + 0.5 - want.1).abs() <= 1.5,
+            "eye at {}: the dot shows at {got:?}, the eye sees the point at {want:?}",
+            eye.position
+        );
+    }
 }

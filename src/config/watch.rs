@@ -91,16 +91,26 @@ impl Live {
     }
 
     /// Resolves again for the app on the system named `device` (its `[device."..."]` table)
-    /// and publishes the result if it changed anything. Returns the resolution, for the log;
+    /// and publishes the result if it changed anything. Returns the resolution for the log,
+    /// with only the problems that the device table adds (the others were logged at start);
     /// None if the device is the one already in use.
     pub fn set_device(&self, device: &str) -> Option<Resolved> {
         let mut current = lock(&self.device);
         if current.as_deref() == Some(device) {
             return None;
         }
-        *current = Some(device.to_string());
+        let before = current.replace(device.to_string());
         drop(current);
-        let r = self.resolve();
+        let known = load_for(
+            Who {
+                app: &self.app,
+                device: before.as_deref(),
+            },
+            &self.env,
+        )
+        .problems;
+        let mut r = self.resolve();
+        r.problems.retain(|p| !known.contains(p));
         let old = self.current();
         if !old.same_values(&r.settings) {
             self.publish(r.settings.clone());

@@ -45,7 +45,7 @@ fn log_device(name: &str, before: &Settings, r: &Resolved) {
         }
     }
     for p in &r.problems {
-        log::once(p, p);
+        log::info(p);
     }
 }
 
