@@ -398,3 +398,43 @@ fn calibrate_writes_an_app_table_and_removes_the_mode_it_added() {
     let o = calibrate(&config, &["--step", "3"], "");
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
 }
+
+/// On a terminal calibrate reads single keys (raw mode: arrows, no Enter needed, no echo).
+/// The terminal is a pseudo-terminal from util-linux's `script`, fed keys a moment apart.
+#[test]
+fn calibrate_takes_single_keys_on_a_terminal() {
+    use std::io::Write;
+    if Command::new("script").arg("--version").output().is_err() {
+        eprintln!("skipped: no `script` (util-linux) to make a terminal");
+        return;
+    }
+    let config = scratch("calibrate-tty.toml");
+    std::fs::write(&config, "lambda_e = 0.5\n").unwrap();
+    let mut child = Command::new("script")
+        .args([
+            "-qec",
+            &format!("{} calibrate", env!("CARGO_BIN_EXE_contrastxr")),
+            "/dev/null",
+        ])
+        .env("CONTRASTXR_CONFIG", &config)
+        .env_remove("CONTRASTXR_MODE")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("run script");
+    let mut keys = child.stdin.take().expect("stdin");
+    // Right arrow twice and ']' on the left eye, Enter, 's' (down) on the right eye, Enter.
+    for k in ["", "\x1b[C", "\x1b[C", "]", "\r", "s", "\r"] {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        keys.write_all(k.as_bytes()).unwrap();
+        keys.flush().unwrap();
+    }
+    let out = child.wait_with_output().expect("script ends");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(!text.contains("[C"), "keys are not echoed: {text}");
+    let r = effective(&config, "").registration;
+    assert_eq!(r.eye_offset, [[0.01, 0.0], [0.0, 0.005]], "{text}");
+    assert_eq!(r.eye_scale, [[1.01, 1.0], [1.0, 1.0]], "{text}");
+    assert!(!std::fs::read_to_string(&config).unwrap().contains("mode"));
+}
