@@ -1,6 +1,13 @@
 //! `contrastxr install [--user|--system] [--library PATH]` and `contrastxr uninstall`.
 
-use super::{print, Args, CliError};
+use super::{print, Args, CliError, Opt};
+
+pub const SCOPE_OPTIONS: &[Opt] = &[Opt::flag("--user"), Opt::flag("--system")];
+pub const OPTIONS: &[Opt] = &[
+    Opt::flag("--user"),
+    Opt::flag("--system"),
+    Opt::value("--library", "PATH"),
+];
 use contrastxr::layer::install::{self, Scope};
 
 pub fn usage() -> String {
