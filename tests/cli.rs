@@ -423,7 +423,11 @@ fn negative_values_reach_the_checks() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("lambda_e must be >= 0"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("lambda_e must be >= 0"),
+        "{}",
+        stderr(&o)
+    );
     assert!(!config.exists());
     let o = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
         .args(["set", "fov_offset=-0.1,0.2"])

@@ -58,6 +58,8 @@ fn layer_env(dir: &Path, background: &str) -> Vec<(String, String)> {
     vec![
         ("CONTRASTXR".into(), "1".into()),
         ("CONTRASTXR_FORCE".into(), "1".into()),
+        // The captures are compared with the CPU reference: no indicator text in them.
+        ("CONTRASTXR_INDICATOR".into(), "0".into()),
         ("CONTRASTXR_BACKGROUND".into(), background.into()),
         (
             "CONTRASTXR_CAPTURE_DIR".into(),

@@ -82,7 +82,10 @@ pub struct Args {
 }
 
 fn id_of(names: &[&str]) -> String {
-    let long = names.iter().find(|n| n.starts_with("--")).unwrap_or(&names[0]);
+    let long = names
+        .iter()
+        .find(|n| n.starts_with("--"))
+        .unwrap_or(&names[0]);
     long.trim_start_matches('-').to_string()
 }
 
@@ -105,7 +108,10 @@ impl Args {
         let id = id_of(names);
         match self.matches.try_get_one::<String>(&id) {
             Ok(v) => Ok(v.cloned()),
-            Err(e) => panic!("the option {} is not declared for this command: {e}", names[0]),
+            Err(e) => panic!(
+                "the option {} is not declared for this command: {e}",
+                names[0]
+            ),
         }
     }
 

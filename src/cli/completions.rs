@@ -24,7 +24,12 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         _ => return Err(CliError::Usage("say which shell: bash, zsh or fish".into())),
     };
     let mut script = Vec::new();
-    clap_complete::generate(shell, &mut super::parse::command(), "contrastxr", &mut script);
+    clap_complete::generate(
+        shell,
+        &mut super::parse::command(),
+        "contrastxr",
+        &mut script,
+    );
     super::print(&String::from_utf8_lossy(&script));
     Ok(())
 }

@@ -72,7 +72,10 @@ fn sentence(e: &clap::Error) -> String {
         (ErrorKind::InvalidValue, Some(a))
             if context(e, ContextKind::InvalidValue).is_none_or(|v| v.is_empty()) =>
         {
-            format!("{} needs a value", a.split_whitespace().next().unwrap_or(&a))
+            format!(
+                "{} needs a value",
+                a.split_whitespace().next().unwrap_or(&a)
+            )
         }
         _ => {
             let text = e.render().to_string();

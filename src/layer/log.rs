@@ -88,9 +88,8 @@ fn log() -> &'static Mutex<Log> {
             seen: HashSet::new(),
             debug: std::env::var("CONTRASTXR_LOG").is_ok_and(|v| v == "debug"),
         };
-        let exe = std::env::current_exe().map_or("an unknown program".into(), |p| {
-            p.display().to_string()
-        });
+        let exe = std::env::current_exe()
+            .map_or("an unknown program".into(), |p| p.display().to_string());
         write_file(&mut log, &format!("{LOADED}{exe}"));
         Mutex::new(log)
     })
@@ -105,7 +104,8 @@ fn keep_in_bounds(log: &mut Log) {
     };
     let ours = log.file.as_ref().and_then(|f| f.metadata().ok());
     let at_path = std::fs::metadata(&path).ok();
-    let same = matches!((&ours, &at_path), (Some(a), Some(b)) if a.ino() == b.ino() && a.dev() == b.dev());
+    let same =
+        matches!((&ours, &at_path), (Some(a), Some(b)) if a.ino() == b.ino() && a.dev() == b.dev());
     if at_path.as_ref().is_some_and(|m| m.len() >= MAX_BYTES) {
         let _ = std::fs::rename(&path, rotated(&path));
         log.file = open_file(&path);
@@ -172,9 +172,9 @@ pub fn parse_line(line: &str) -> Option<Line<'_>> {
 /// the log's text (the rotated file's text first); empty if no process is in it.
 pub fn last_app(text: &str) -> Vec<&str> {
     let lines: Vec<&str> = text.lines().collect();
-    let start = lines.iter().rposition(|l| {
-        parse_line(l).is_some_and(|p| p.text.starts_with(LOADED))
-    });
+    let start = lines
+        .iter()
+        .rposition(|l| parse_line(l).is_some_and(|p| p.text.starts_with(LOADED)));
     let Some(start) = start else {
         return Vec::new();
     };
@@ -219,7 +219,7 @@ mod tests {
         }
         let size = |p: &Path| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
         let (current, old) = (size(&path), size(&rotated(&path)));
-        assert!(old >= MAX_BYTES && old < MAX_BYTES + 1100, "{old}");
+        assert!((MAX_BYTES..MAX_BYTES + 1100).contains(&old), "{old}");
         assert!(current > 0 && current < MAX_BYTES, "{current}");
         // Every line is kept across the two files.
         assert_eq!(

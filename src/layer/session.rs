@@ -355,6 +355,8 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     let params = s.settings.params.clone();
     let sequence = background_sequence(frame.sequence, &s.settings);
     let processor = s.processor.as_mut().expect("checked above");
+    let now = std::time::Instant::now();
+    processor.indicator.timer.update(&s.settings, now);
     match processor.process(&items, &frame.image, sequence, &params, capture) {
         Ok(views) => {
             if capture {
@@ -384,15 +386,7 @@ fn write_capture(
         return;
     };
     for (k, v) in views.iter().enumerate() {
-        let written = capture::write_view(
-            &c.dir,
-            s.processed,
-            k,
-            v,
-            bg,
-            &s.settings.background,
-            &s.settings.params,
-        );
+        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings);
         if let Err(e) = written {
             log::once("capture-failed", &format!("capture failed: {e}"));
         }
