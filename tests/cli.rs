@@ -438,3 +438,40 @@ fn negative_values_reach_the_checks() {
     let text = std::fs::read_to_string(&config).unwrap();
     assert!(text.contains("fov_offset = [-0.1, 0.2]"), "{text}");
 }
+
+/// `install --user` copies the library to a stable place and the manifest names the copy, so
+/// removing or rebuilding the original does not unload the layer; `uninstall` removes both.
+#[test]
+fn install_user_copies_the_library_and_uninstall_removes_it() {
+    let home = scratch("xdg-data");
+    let _ = std::fs::remove_dir_all(&home);
+    let original = scratch("built/libcontrastxr.so");
+    std::fs::create_dir_all(original.parent().unwrap()).unwrap();
+    std::fs::write(&original, b"\x7fELF stand-in for the built library").unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+            .args(args)
+            .env("XDG_DATA_HOME", &home)
+            .output()
+            .unwrap()
+    };
+    let o = run(&["install", "--user", "--library", original.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let copy = home.join("contrastxr/libcontrastxr.so");
+    let manifest = home.join("openxr/1/api_layers/implicit.d/contrastxr.json");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    assert_eq!(v["api_layer"]["library_path"], copy.to_str().unwrap());
+    assert_eq!(v["api_layer"]["enable_environment"], "CONTRASTXR");
+    // `cargo clean` removes the original: the installed copy stays as it was.
+    std::fs::remove_file(&original).unwrap();
+    assert_eq!(
+        std::fs::read(&copy).unwrap(),
+        b"\x7fELF stand-in for the built library"
+    );
+    let o = run(&["uninstall", "--user"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!manifest.exists() && !copy.exists());
+    let o = run(&["uninstall"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("was not installed"));
+}
