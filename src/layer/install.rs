@@ -85,7 +85,10 @@ pub fn find_library() -> Result<PathBuf, String> {
     .map(|p| p.canonicalize().unwrap_or(p))
     .ok_or_else(|| {
         format!(
-            "{LIBRARY_NAME} is not next to {}: build it with `cargo build --release`",
+            "{LIBRARY_NAME} is not next to {} (`cargo install` installs no libraries): build \
+             it with `cargo build --release` in the source tree and run `contrastxr install \
+             --library target/release/{LIBRARY_NAME}`, or install the Debian package \
+             (scripts/package)",
             exe.display()
         )
     })
