@@ -2,12 +2,13 @@
 //! Monado runtime with core, Vulkan and synchronisation validation: the test client's frames
 //! through the layer with the indicator on and with it off are the same except for the
 //! indicator's text, which is there in the first frames, in its colour, where it belongs, and
-//! gone once it expired.
+//! gone once it expired; and it shows again, with the new value, after `contrastxr set`.
 
 mod common;
 
-use common::{sandbox, scratch_dir, Validation, SYNC_VALIDATION, XR_CLIENT};
+use common::{sandbox, scratch_dir, Validation, CLI, SYNC_VALIDATION, XR_CLIENT};
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 const WIDTH: usize = 320;
 const HEIGHT: usize = 240;
@@ -19,10 +20,17 @@ const TEXT_WIDTH: usize = 26 * 6 - 1;
 
 /// Runs the client for FRAMES frames, capturing every frame; returns the capture folder.
 fn run(tag: &str, extra: &[(&str, &str)]) -> Option<PathBuf> {
-    let sandbox = sandbox()?;
     let dir = scratch_dir(&format!("{tag}.capture"));
+    run_into(tag, &dir, FRAMES, extra).then_some(dir)
+}
+
+/// Runs the client for `frames` frames, capturing every frame into `dir`; false without sandbox.
+fn run_into(tag: &str, dir: &Path, frames: usize, extra: &[(&str, &str)]) -> bool {
+    let Some(sandbox) = sandbox() else {
+        return false;
+    };
     let dir_s = dir.to_string_lossy().into_owned();
-    let frames = FRAMES.to_string();
+    let frames = frames.to_string();
     let validation = Validation::new(tag);
     let mut env = validation.env();
     env.extend([
@@ -49,17 +57,35 @@ fn run(tag: &str, extra: &[(&str, &str)]) -> Option<PathBuf> {
     let r = sandbox.run(&cmd, &env);
     r.assert_success();
     validation.assert_clean();
-    Some(dir)
+    true
 }
 
-fn output(dir: &Path, frame: usize, view: usize) -> Vec<[u8; 4]> {
-    let path = dir.join(format!("frame-{frame}-view-{view}-output.raw"));
+fn raw(dir: &Path, frame: usize, view: usize, kind: &str) -> Vec<[u8; 4]> {
+    let path = dir.join(format!("frame-{frame}-view-{view}-{kind}.raw"));
     let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     assert_eq!(bytes.len(), WIDTH * HEIGHT * 4, "{}", path.display());
     bytes
         .chunks_exact(4)
         .map(|p| [p[0], p[1], p[2], p[3]])
         .collect()
+}
+
+/// Indicator pixels in a captured view, found without a reference run: the indicator's colour
+/// where the app drew black (the enhancement leaves black exactly as it is).
+fn indicator_pixels(dir: &Path, frame: usize, view: usize) -> usize {
+    let (display, output) = (
+        raw(dir, frame, view, "display"),
+        raw(dir, frame, view, "output"),
+    );
+    display
+        .iter()
+        .zip(&output)
+        .filter(|(d, o)| d[..3] == [0, 0, 0] && **o == GREEN)
+        .count()
+}
+
+fn output(dir: &Path, frame: usize, view: usize) -> Vec<[u8; 4]> {
+    raw(dir, frame, view, "output")
 }
 
 /// The pixels (x, y) where the two outputs differ.
@@ -120,4 +146,73 @@ fn indicator_shows_in_the_first_frames_then_expires_and_can_be_switched_off() {
             diff.len()
         );
     }
+}
+
+fn wait_for(path: &Path, timeout: Duration) -> bool {
+    let end = Instant::now() + timeout;
+    while Instant::now() < end {
+        if path.exists() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    false
+}
+
+#[test]
+fn indicator_shows_again_after_a_settings_change() {
+    if sandbox().is_none() {
+        return;
+    }
+    let dir = scratch_dir("indicator-change");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, "indicator_seconds = 1.0\n").unwrap();
+    let capture = dir.join("capture");
+    let config_s = config.to_string_lossy().into_owned();
+    let frames = 120; // 6 s at the null compositor's 20 Hz, longer with captures
+    std::thread::scope(|s| {
+        let app = s.spawn(|| {
+            run_into(
+                "indicator-change",
+                &capture,
+                frames,
+                &[("CONTRASTXR_CONFIG", config_s.as_str())],
+            )
+        });
+        assert!(wait_for(
+            &capture.join("frame-5-view-0.json"),
+            Duration::from_secs(60)
+        ));
+        // Well after the first indicator expired (1 s after the first frame).
+        std::thread::sleep(Duration::from_millis(1500));
+        let o = std::process::Command::new(CLI)
+            .args(["set", "lambda_e", "0.6"])
+            .env("CONTRASTXR_CONFIG", &config)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(app.join().unwrap());
+    });
+    let lambda = |f: usize| {
+        let text = std::fs::read_to_string(capture.join(format!("frame-{f}-view-0.json")));
+        let v: serde_json::Value = serde_json::from_str(&text.unwrap()).unwrap();
+        v["params"]["lambda_e"].as_f64().unwrap()
+    };
+    let shown: Vec<usize> = (0..frames)
+        .map(|f| indicator_pixels(&capture, f, 0))
+        .collect();
+    let first_new = (0..frames)
+        .find(|&f| lambda(f) > 0.5)
+        .expect("a frame at lambda_e 0.6");
+    println!("indicator pixels on black per frame: {shown:?}; lambda_e 0.6 from frame {first_new}");
+    assert!(shown[0] > 10, "not at start: {shown:?}");
+    assert!(
+        shown[..first_new].contains(&0),
+        "it never expired before the change: {shown:?}"
+    );
+    assert!(
+        shown[first_new] > 10,
+        "not shown with the change: {shown:?}"
+    );
+    assert_eq!(shown[frames - 1], 0, "still shown at the end: {shown:?}");
 }
