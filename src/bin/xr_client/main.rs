@@ -11,6 +11,7 @@ mod frame_loop;
 mod gpu;
 mod pattern;
 mod report;
+mod script;
 mod swapchain;
 mod validation;
 
@@ -51,6 +52,7 @@ fn main() -> ExitCode {
         report.errors.push(e.0);
     }
     report.frames_submitted = stats.frames_submitted;
+    report.script = std::mem::take(&mut stats.script);
     report.memory = std::mem::take(&mut stats.memory);
     report.frames_ended = stats.frames_ended;
     report.reached_focused = stats.reached_focused;
@@ -59,7 +61,10 @@ fn main() -> ExitCode {
     }
     report.vk_validation_errors = validation::errors();
     report.vk_validation_warnings = validation::warnings();
-    let ran = options.list_formats || stats.frames_submitted >= options.frames * options.sessions;
+    let ran = options.list_formats
+        || stats.script_ran
+        || (options.script.is_none()
+            && stats.frames_submitted >= options.frames * options.sessions);
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     if options.json {
         eprintln!("{}", report.summary());
@@ -202,6 +207,8 @@ fn run_session(
         quad,
         view_size,
         blend_mode: world.blend_mode,
+        format,
+        ahead: None,
     };
     let result = frame_loop::run(
         instance,
