@@ -132,3 +132,39 @@ cases! {
     // A frame ended with the image still acquired: the runtime refuses the layer (not released).
     end_without_release: "begin,acquire,wait,end,release,end-empty", "end ERROR_", 0;
 }
+
+/// xrDestroySwapchain on one thread while xrEndFrame runs on another: the layer takes its locks
+/// in one order everywhere (session, then swapchain), so neither waits forever. A deadlock shows
+/// as the run's time limit. (Vulkan validation stays off here: Monado itself uses the app's
+/// queue inside xrCreateSwapchain/xrDestroySwapchain, which the threading checks report with
+/// the layer off as well.)
+#[test]
+fn destroying_swapchains_while_frames_end_never_deadlocks() {
+    let Some(sandbox) = sandbox() else { return };
+    let cmd = [
+        XR_CLIENT,
+        "--json",
+        "--size",
+        "160x120",
+        "--frames",
+        "100",
+        "--churn-swapchains",
+    ];
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let run = sandbox.run_for(&cmd, &env, 120);
+    assert!(run.success(), "{}", run.describe());
+    let report = run.client_report();
+    assert!(
+        report["swapchains_churned"].as_u64().unwrap() >= 100,
+        "too few swapchains destroyed during the frames to race: {report}"
+    );
+    assert!(
+        run.stderr.contains("processing frames"),
+        "the layer did not enhance while racing: {}",
+        run.describe()
+    );
+}

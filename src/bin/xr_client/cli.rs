@@ -26,6 +26,7 @@ usage: contrastxr-xr-client [options]
   --sessions N            create, run (--frames each) and destroy N sessions in turn (default 1)
   --pipelined             acquire and wait for the next frame's image before xrEndFrame of the
                           current one, as engines with a render thread running ahead do
+  --churn-swapchains      create and destroy swapchains on a second thread while frames run
   --script OPS            instead of frames, run one scripted sequence of raw swapchain and
                           frame calls (comma-separated: acquire wait release begin end
                           end-empty destroy create) and report each call's XrResult (`script`)
@@ -70,6 +71,7 @@ pub struct Options {
     pub sessions: u32,
     pub check_untouched: bool,
     pub pipelined: bool,
+    pub churn_swapchains: bool,
     pub script: Option<Vec<crate::script::Op>>,
 }
 
@@ -92,6 +94,7 @@ impl Default for Options {
             sessions: 1,
             check_untouched: false,
             pipelined: false,
+            churn_swapchains: false,
             script: None,
         }
     }
@@ -120,6 +123,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--provoke-vk-leak" => options.provoke_leak = true,
             "--check-untouched" => options.check_untouched = true,
             "--pipelined" => options.pipelined = true,
+            "--churn-swapchains" => options.churn_swapchains = true,
             "--script" => options.script = Some(crate::script::parse(&value()?)?),
             "--sessions" => {
                 options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?

@@ -4,6 +4,7 @@
 //! OpenXR or Vulkan error (and on any Vulkan validation error with --validation).
 //! Run it inside the sandbox: `scripts/xr-sandbox run -- target/debug/contrastxr-xr-client`.
 
+mod churn;
 mod cli;
 mod error;
 mod format;
@@ -210,14 +211,29 @@ fn run_session(
         format,
         ahead: None,
     };
-    let result = frame_loop::run(
-        instance,
-        &mut scene,
-        &mut waiter,
-        &mut stream,
-        options,
-        stats,
-    );
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let churned = std::sync::atomic::AtomicU32::new(0);
+    let result = std::thread::scope(|threads| {
+        let churner = options
+            .churn_swapchains
+            .then(|| threads.spawn(|| churn::churn(&session, format, &stop, &churned)));
+        let result = frame_loop::run(
+            instance,
+            &mut scene,
+            &mut waiter,
+            &mut stream,
+            options,
+            stats,
+        );
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        match churner.map(|t| t.join()) {
+            Some(Ok(Some(e))) => report.errors.push(e),
+            Some(Err(_)) => report.errors.push("the churn thread panicked".into()),
+            _ => {}
+        }
+        result
+    });
+    report.swapchains_churned += churned.into_inner();
     for swapchain in std::iter::once(&scene.projection).chain(scene.quad.as_ref()) {
         let (checked, modified) = swapchain.check_result();
         report.frames_checked += checked;
