@@ -135,7 +135,10 @@ cases! {
 
 /// xrDestroySwapchain on one thread while xrEndFrame runs on another: the layer takes its locks
 /// in one order everywhere (session, then swapchain), so neither waits forever. A deadlock shows
-/// as the run's time limit. (Vulkan validation stays off here: Monado itself uses the app's
+/// as the run's time limit. The `release-held` pause point widens the window in which
+/// xrEndFrame has listed the swapchains but not yet locked them (with the old order, destroy
+/// locked the swapchain and then waited for the session: a deadlock within a few frames).
+/// (Vulkan validation stays off here: Monado itself uses the app's
 /// queue inside xrCreateSwapchain/xrDestroySwapchain, which the threading checks report with
 /// the layer off as well.)
 #[test]
@@ -154,6 +157,7 @@ fn destroying_swapchains_while_frames_end_never_deadlocks() {
         ("CONTRASTXR", "1"),
         ("CONTRASTXR_FORCE", "1"),
         ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_FAULT", "release-held"),
     ];
     let run = sandbox.run_for(&cmd, &env, 120);
     assert!(run.success(), "{}", run.describe());

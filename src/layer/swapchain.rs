@@ -199,6 +199,7 @@ pub fn release_held(session: xr::Session) {
         .map(|(k, v)| (*k, v.clone()))
         .collect();
     for (handle, sc) in all {
+        crate::fault::pause("release-held");
         let mut sc = lock(&sc);
         if sc.session == session {
             forward_held(&mut sc, xr::Swapchain::from_raw(handle));

@@ -8,6 +8,10 @@ use openxr as xr;
 
 use crate::format::SwapchainFormat;
 
+/// Swapchains alive at once: each lives while the next few are made, so a layer's xrEndFrame
+/// finds some of them tracked when one is destroyed.
+const ALIVE: usize = 4;
+
 /// Creates, enumerates and destroys swapchains until `stop`; counts them in `churned`.
 /// Returns the first error, if any.
 pub fn churn(
@@ -16,6 +20,7 @@ pub fn churn(
     stop: &AtomicBool,
     churned: &AtomicU32,
 ) -> Option<String> {
+    let mut alive = std::collections::VecDeque::new();
     while !stop.load(Ordering::Relaxed) {
         let created = session.create_swapchain(&xr::SwapchainCreateInfo {
             create_flags: xr::SwapchainCreateFlags::EMPTY,
@@ -35,9 +40,12 @@ pub fn churn(
         if let Err(e) = swapchain.enumerate_images() {
             return Some(format!("xrEnumerateSwapchainImages (churn) failed: {e}"));
         }
-        // Dropping it calls xrDestroySwapchain.
-        drop(swapchain);
-        churned.fetch_add(1, Ordering::Relaxed);
+        alive.push_back(swapchain);
+        if alive.len() > ALIVE {
+            // Dropping it calls xrDestroySwapchain.
+            alive.pop_front();
+            churned.fetch_add(1, Ordering::Relaxed);
+        }
     }
     None
 }
