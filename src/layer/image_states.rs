@@ -32,6 +32,9 @@ pub struct ImageStates {
     waited: Option<u32>,
     /// The waited image's release was made by the app and is held by the layer.
     held: bool,
+    /// The wait answered plain XR_SUCCESS. After another success code (XR_SESSION_LOSS_PENDING)
+    /// the runtime may answer a release with that code too, which a held release could not.
+    plain_wait: bool,
 }
 
 impl ImageStates {
@@ -45,11 +48,13 @@ impl ImageStates {
         self.acquired.push_back(index);
     }
 
-    /// The app's xrWaitSwapchainImage returned XR_SUCCESS: the oldest acquired image is waited.
-    pub fn waited(&mut self) {
+    /// The app's xrWaitSwapchainImage succeeded (`plain`: with XR_SUCCESS itself): the oldest
+    /// acquired image is waited.
+    pub fn waited(&mut self, plain: bool) {
         if let Some(i) = self.acquired.pop_front() {
             self.waited = Some(i);
             self.held = false;
+            self.plain_wait = plain;
         }
     }
 
@@ -69,7 +74,9 @@ impl ImageStates {
     pub fn plan_release(&self, holdable: bool) -> ReleasePlan {
         match (self.waited, self.held) {
             (Some(i), true) => ReleasePlan::FlushHeldThenForward(i),
-            (Some(i), false) if holdable && self.acquired.is_empty() => ReleasePlan::Hold(i),
+            (Some(i), false) if holdable && self.acquired.is_empty() && self.plain_wait => {
+                ReleasePlan::Hold(i)
+            }
             (Some(i), false) if holdable => ReleasePlan::EnhanceThenForward(i),
             _ => ReleasePlan::Forward,
         }
@@ -85,7 +92,7 @@ mod tests {
         let mut s = ImageStates::default();
         s.acquired(2);
         assert_eq!(s.plan_release(true), ReleasePlan::Forward, "not waited yet");
-        s.waited();
+        s.waited(true);
         assert_eq!(s.plan_release(true), ReleasePlan::Hold(2));
         s.hold();
         assert_eq!(s.held(), Some(2));
@@ -97,7 +104,7 @@ mod tests {
     fn nothing_is_held_for_swapchains_the_layer_leaves_alone() {
         let mut s = ImageStates::default();
         s.acquired(0);
-        s.waited();
+        s.waited(true);
         assert_eq!(s.plan_release(false), ReleasePlan::Forward);
     }
 
@@ -105,7 +112,7 @@ mod tests {
     fn a_release_after_the_next_acquire_is_enhanced_at_once() {
         let mut s = ImageStates::default();
         s.acquired(0);
-        s.waited();
+        s.waited(true);
         s.acquired(1);
         assert_eq!(s.plan_release(true), ReleasePlan::EnhanceThenForward(0));
     }
@@ -114,7 +121,7 @@ mod tests {
     fn a_second_release_flushes_the_held_one_first() {
         let mut s = ImageStates::default();
         s.acquired(0);
-        s.waited();
+        s.waited(true);
         s.hold();
         assert_eq!(s.plan_release(true), ReleasePlan::FlushHeldThenForward(0));
     }
@@ -122,9 +129,17 @@ mod tests {
     #[test]
     fn waiting_without_an_acquired_image_changes_nothing() {
         let mut s = ImageStates::default();
-        s.waited();
+        s.waited(true);
         assert_eq!(s.plan_release(true), ReleasePlan::Forward);
         assert_eq!(s.held(), None);
+    }
+
+    #[test]
+    fn a_release_after_another_success_code_is_not_held() {
+        let mut s = ImageStates::default();
+        s.acquired(0);
+        s.waited(false);
+        assert_eq!(s.plan_release(true), ReleasePlan::EnhanceThenForward(0));
     }
 
     #[test]
@@ -132,10 +147,10 @@ mod tests {
         let mut s = ImageStates::default();
         s.acquired(1);
         s.acquired(2);
-        s.waited();
+        s.waited(true);
         assert_eq!(s.plan_release(true), ReleasePlan::EnhanceThenForward(1));
         s.released();
-        s.waited();
+        s.waited(true);
         assert_eq!(s.plan_release(true), ReleasePlan::Hold(2));
     }
 }

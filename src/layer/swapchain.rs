@@ -274,7 +274,7 @@ pub(crate) unsafe extern "system" fn wait_swapchain_image(
             // SAFETY: forwarding the app's arguments.
             let result = unsafe { (next.wait_swapchain_image)(swapchain, info) };
             if result.into_raw() >= 0 && result != xr::Result::TIMEOUT_EXPIRED {
-                lock(&sc).states.waited();
+                lock(&sc).states.waited(result == xr::Result::SUCCESS);
             }
             result
         },
@@ -293,7 +293,11 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
                 return xr::Result::ERROR_HANDLE_INVALID;
             };
             let (plan, next) = with_session(&sc, |s, sc| {
-                let holdable = sc.info.processable() && !sc.images.is_empty();
+                // SAFETY: the app's release info, null or valid (its type is checked here and
+                // by the runtime when forwarded).
+                let info_ok =
+                    info.is_null() || unsafe { (*info).ty } == xr::SwapchainImageReleaseInfo::TYPE;
+                let holdable = info_ok && sc.info.processable() && !sc.images.is_empty();
                 let plan = sc.states.plan_release(holdable);
                 match plan {
                     ReleasePlan::Hold(_) => sc.states.hold(),
