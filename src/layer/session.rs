@@ -244,11 +244,17 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
     )
 }
 
+/// A sub-image a layer names, with its projection view's field of view and pose (None for quads).
+struct SubImage {
+    sub: xr::SwapchainSubImage,
+    eye: Option<(xr::Fovf, xr::Posef)>,
+}
+
 /// The sub-images of the frame's layers that the layer enhances.
 ///
 /// # Safety
 /// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
-unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<xr::SwapchainSubImage> {
+unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<SubImage> {
     let mut out = Vec::new();
     if info.layers.is_null() {
         return out;
@@ -264,11 +270,16 @@ unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<xr::SwapchainS
             let proj = unsafe { &*(layer as *const xr::CompositionLayerProjection) };
             for v in 0..proj.view_count as usize {
                 // SAFETY: view_count valid views.
-                out.push(unsafe { (*proj.views.add(v)).sub_image });
+                let view = unsafe { &*proj.views.add(v) };
+                out.push(SubImage {
+                    sub: view.sub_image,
+                    eye: Some((view.fov, view.pose)),
+                });
             }
         } else if quads && base.ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
             // SAFETY: the type tag says this is a quad layer.
-            out.push(unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image });
+            let sub = unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image };
+            out.push(SubImage { sub, eye: None });
         }
     }
     out
@@ -309,12 +320,13 @@ fn work_item(
 }
 
 /// Each enhanced sub-image's swapchain with its regions in this frame, in submission order.
-fn regions_by_swapchain(subs: &[xr::SwapchainSubImage]) -> Vec<(xr::Swapchain, Vec<ViewRegion>)> {
+fn regions_by_swapchain(subs: &[SubImage]) -> Vec<(xr::Swapchain, Vec<ViewRegion>)> {
     let mut out: Vec<(xr::Swapchain, Vec<ViewRegion>)> = Vec::new();
-    for sub in subs {
+    for SubImage { sub, eye } in subs {
         let region = ViewRegion {
             rect: sub.image_rect,
             array_index: sub.image_array_index,
+            eye: *eye,
         };
         match out.iter_mut().find(|(h, _)| *h == sub.swapchain) {
             Some((_, regions)) => regions.push(region),
@@ -326,7 +338,7 @@ fn regions_by_swapchain(subs: &[xr::SwapchainSubImage]) -> Vec<(xr::Swapchain, V
 
 /// Remembers each swapchain's regions for images released ahead of their xrEndFrame, and
 /// returns the work for the images the layer holds now. The caller holds the session's lock.
-fn frame_items(subs: &[xr::SwapchainSubImage]) -> Vec<WorkItem> {
+fn frame_items(subs: &[SubImage]) -> Vec<WorkItem> {
     let mut items = Vec::new();
     for (handle, regions) in regions_by_swapchain(subs) {
         let Some(sc) = state::swapchain(handle) else {
@@ -359,7 +371,11 @@ fn regions_ahead(s: &SessionState, sc: &SwapchainState) -> Vec<ViewRegion> {
         },
     };
     (0..sc.info.array_size)
-        .map(|array_index| ViewRegion { rect, array_index })
+        .map(|array_index| ViewRegion {
+            rect,
+            array_index,
+            eye: None,
+        })
         .collect()
 }
 

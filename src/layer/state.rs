@@ -47,6 +47,9 @@ pub struct SessionState {
 pub struct ViewRegion {
     pub rect: xr::Rect2Di,
     pub array_index: u32,
+    /// A projection view's field of view and pose (None for quad layers, and for the whole-image
+    /// regions used before the first xrEndFrame).
+    pub eye: Option<(xr::Fovf, xr::Posef)>,
 }
 
 #[derive(Clone, Debug)]
