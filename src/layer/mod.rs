@@ -7,6 +7,7 @@ pub mod capture;
 mod dispatch;
 mod entry;
 mod ffi;
+mod image_states;
 pub mod indicator;
 pub mod install;
 pub mod log;
