@@ -397,7 +397,8 @@ fn pipelined_apps_have_every_frame_enhanced() {
     assert_eq!(
         report["frames_modified"].as_array().unwrap().len() as u64,
         checked,
-        "every frame read back again must have been enhanced: {report}"
+        "every frame read back again must have been enhanced: {report}\nlayer: {:#?}",
+        layer_lines(&run)
     );
     let views = captures(&dir);
     let submitted = report["frames_submitted"].as_u64().unwrap() as usize;
