@@ -67,6 +67,20 @@ pub fn hit(name: &str) -> bool {
     }
 }
 
+/// Pause points: no failure, a short sleep that widens a race window, for the tests that race
+/// two threads through the layer (`CONTRASTXR_FAULT=NAME` arms one as it arms a fault point).
+pub const PAUSES: [(&str, &str); 1] = [(
+    "release-held",
+    "at xrEndFrame, between listing the swapchains and locking each to hand over its release",
+)];
+
+/// Sleeps a few milliseconds when the pause point `name` is armed.
+pub fn pause(name: &str) {
+    if hit(name) {
+        std::thread::sleep(std::time::Duration::from_millis(3));
+    }
+}
+
 /// `Err` with the text an injected fault carries (so its one log line names it) when the
 /// fault point `name` must fail now. Call sites stay one line:
 /// `crate::fault::check("allocation").map_err(GpuError::Unsupported)?;`

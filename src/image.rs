@@ -1,6 +1,13 @@
-//! 8-bit RGBA images and PNG input/output. Pixels are sRGB-encoded code values.
+//! 8-bit RGBA images: PNG and JPEG input, PNG output. Pixels are sRGB-encoded code values.
 
 use std::path::Path;
+use zune_jpeg::zune_core::bytestream::ZCursor;
+use zune_jpeg::zune_core::colorspace::ColorSpace;
+use zune_jpeg::zune_core::options::DecoderOptions;
+use zune_jpeg::JpegDecoder;
+
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1A, b'\n'];
+const JPEG_SIGNATURE: [u8; 3] = [0xFF, 0xD8, 0xFF];
 
 /// An 8-bit sRGB image, always stored as RGBA (RGB input gets alpha 255).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -29,6 +36,50 @@ impl RgbaImage {
 
     pub fn set(&mut self, x: u32, y: u32, v: [u8; 4]) {
         self.pixels[(y * self.width + x) as usize] = v;
+    }
+
+    /// Reads a PNG or a JPEG, told apart by their first bytes (not by the file name).
+    pub fn load(path: &Path) -> Result<RgbaImage, String> {
+        let bytes =
+            std::fs::read(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+        if bytes.starts_with(&PNG_SIGNATURE) {
+            RgbaImage::load_png(path)
+        } else if bytes.starts_with(&JPEG_SIGNATURE) {
+            RgbaImage::decode_jpeg(&bytes)
+                .map_err(|e| format!("{} is not a readable JPEG: {e}", path.display()))
+        } else {
+            Err(format!(
+                "{} is not a readable PNG or JPEG image",
+                path.display()
+            ))
+        }
+    }
+
+    /// Decodes a baseline or progressive JPEG (colour or grey) to RGB with alpha 255.
+    pub fn decode_jpeg(data: &[u8]) -> Result<RgbaImage, String> {
+        let options = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGBA);
+        let mut decoder = JpegDecoder::new_with_options(ZCursor::new(data), options);
+        let pixels = decoder
+            .decode()
+            .map_err(|e| format!("it does not decode ({e:?})"))?;
+        let info = decoder.info().ok_or("it has no JPEG header")?;
+        let (width, height) = (u32::from(info.width), u32::from(info.height));
+        if pixels.len() != (width * height * 4) as usize {
+            return Err(format!(
+                "it decoded to {} bytes for {width}x{height}",
+                pixels.len()
+            ));
+        }
+        let pixels = pixels
+            .chunks_exact(4)
+            .map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        Ok(RgbaImage {
+            width,
+            height,
+            pixels,
+            has_alpha: false,
+        })
     }
 
     /// Reads an 8-bit or 16-bit, RGB, RGBA, grey or palette PNG.

@@ -722,6 +722,77 @@ fn image_source_serves_the_png_unchanged_and_static() {
     assert!(Background::open(&missing, &CaptureConfig::default()).is_err());
 }
 
+/// A smooth image (gradients and soft colour fields): what a camera sees, and what JPEG keeps
+/// well, so the decoded pixels can be held to a small tolerance.
+fn smooth_scene(w: u32, h: u32) -> RgbaImage {
+    let mut img = RgbaImage::new(w, h, [0, 0, 0, 255]);
+    img.has_alpha = false;
+    for y in 0..h {
+        for x in 0..w {
+            let (u, v) = (f64::from(x) / f64::from(w), f64::from(y) / f64::from(h));
+            let r = 40.0 + 180.0 * u;
+            let g = 200.0 - 120.0 * v;
+            let b = 128.0 + 90.0 * (6.0 * u + 3.0 * v).sin();
+            img.set(x, y, [r as u8, g as u8, b as u8, 255]);
+        }
+    }
+    img
+}
+
+/// Writes `img` as a JPEG with an independent encoder (the jpeg-encoder crate: 4:2:0, standard
+/// Huffman tables), under a name that does not end in .jpg: sources tell formats by content.
+fn write_jpeg(path: &Path, img: &RgbaImage, quality: u8) {
+    let rgb: Vec<u8> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+    jpeg_encoder::Encoder::new_file(path, quality)
+        .unwrap()
+        .encode(
+            &rgb,
+            img.width as u16,
+            img.height as u16,
+            jpeg_encoder::ColorType::Rgb,
+        )
+        .unwrap();
+}
+
+fn differences(a: &RgbaImage, b: &RgbaImage) -> (u8, f64) {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    let diffs: Vec<u8> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .flat_map(|(p, q)| (0..3).map(move |c| p[c].abs_diff(q[c])))
+        .collect();
+    let mean = diffs.iter().map(|&d| f64::from(d)).sum::<f64>() / diffs.len() as f64;
+    (*diffs.iter().max().unwrap(), mean)
+}
+
+#[test]
+fn image_source_reads_a_jpeg() {
+    let dir = temp_dir("image-jpeg");
+    let scene = smooth_scene(96, 64);
+    let path = dir.join("background.camera");
+    write_jpeg(&path, &scene, 95);
+    let spec = parse_source(&format!("image:{}", path.display())).unwrap();
+    let bg = Background::open(&spec, &CaptureConfig::default()).unwrap();
+    let frame = bg.latest().unwrap();
+    let (max, mean) = differences(&frame.image, &scene);
+    println!("JPEG q95 decoded: max difference {max}, mean {mean:.2} code values");
+    assert!(max <= 12 && mean <= 2.0, "max {max}, mean {mean}");
+    // A different image must not pass the same check (the comparison can fail).
+    let mut other = scene.clone();
+    other.pixels.iter_mut().for_each(|p| p[0] = 255 - p[0]);
+    assert!(differences(&frame.image, &other).0 > 12);
+    // Not a PNG nor a JPEG: one sentence naming both.
+    let text = dir.join("notes.txt");
+    std::fs::write(&text, "hello").unwrap();
+    let spec = parse_source(&format!("image:{}", text.display())).unwrap();
+    let err = Background::open(&spec, &CaptureConfig::default())
+        .err()
+        .expect("a text file is no image")
+        .to_string();
+    assert!(err.contains("not a readable PNG or JPEG"), "{err}");
+}
+
 #[test]
 fn color_source_is_flat() {
     let bg = Background::open(

@@ -320,6 +320,162 @@ fn usage_errors_exit_2_and_bad_values_exit_1() {
     assert!(String::from_utf8_lossy(&help.stdout).contains("--sweep"));
 }
 
+/// The enhancement against a JPEG of the background (written by an independent encoder) is
+/// the enhancement against the PNG within a small tolerance: the JPEG was read, not refused.
+#[test]
+fn jpeg_background_is_accepted() {
+    let sky = sample(SKY);
+    let rgb: Vec<u8> = sky.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let jpeg = scratch("sky.jpg");
+    jpeg_encoder::Encoder::new_file(&jpeg, 95)
+        .unwrap()
+        .encode(
+            &rgb,
+            sky.width as u16,
+            sky.height as u16,
+            jpeg_encoder::ColorType::Rgb,
+        )
+        .unwrap();
+    let run = |background: &str, out: &Path| {
+        let o = contrastxr(&[
+            "enhance",
+            "--display",
+            DISPLAY,
+            "--background",
+            background,
+            "-o",
+            out.to_str().unwrap(),
+            "--engine",
+            "cpu",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        load(out)
+    };
+    let (from_png, from_jpeg) = (
+        run(SKY, &scratch("sky-png.png")),
+        run(jpeg.to_str().unwrap(), &scratch("sky-jpeg.png")),
+    );
+    let diffs: Vec<u8> = from_png
+        .pixels
+        .iter()
+        .zip(&from_jpeg.pixels)
+        .flat_map(|(a, b)| (0..3).map(move |c| a[c].abs_diff(b[c])))
+        .collect();
+    let mean = diffs.iter().map(|&d| f64::from(d)).sum::<f64>() / diffs.len() as f64;
+    assert!(mean < 1.0, "mean difference {mean}");
+    // The enhancement did act on the JPEG background (not a pass-through).
+    assert_ne!(from_jpeg.pixels, sample(DISPLAY).pixels);
+}
+
+#[test]
+fn version_and_completions() {
+    let o = contrastxr(&["--version"]);
+    assert!(o.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout).trim(),
+        format!("contrastxr {}", env!("CARGO_PKG_VERSION"))
+    );
+    for (shell, marker) in [
+        ("bash", "complete -F"),
+        ("zsh", "#compdef contrastxr"),
+        ("fish", "complete -c contrastxr"),
+    ] {
+        let o = contrastxr(&["completions", shell]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let script = String::from_utf8_lossy(&o.stdout);
+        assert!(script.contains(marker), "{shell}: {script}");
+        // Every subcommand and a few options of theirs are in every script.
+        for word in ["enhance", "set", "log", "lambda-e", "fov-offset"] {
+            assert!(script.contains(word), "{shell} lacks {word}");
+        }
+    }
+    let o = contrastxr(&["completions", "tcsh"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn negative_values_reach_the_checks() {
+    // An option's value may start with '-': parsed, then checked by the method's validation.
+    let o = enhance_with(&["--engine", "cpu", "--lambda-e", "-0.1"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("lambda_e"), "{}", stderr(&o));
+    let out = scratch("negative-offset.png");
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        out.to_str().unwrap(),
+        "--engine",
+        "cpu",
+        "--fov-offset",
+        "-0.1,0.2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // `set lambda_e -0.1` reaches the setting's range check (and writes nothing).
+    let config = scratch("negative.toml");
+    let _ = std::fs::remove_file(&config);
+    let o = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+        .args(["set", "lambda_e", "-0.1"])
+        .env("CONTRASTXR_CONFIG", &config)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("lambda_e must be >= 0"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!config.exists());
+    let o = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+        .args(["set", "fov_offset=-0.1,0.2"])
+        .env("CONTRASTXR_CONFIG", &config)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert!(text.contains("fov_offset = [-0.1, 0.2]"), "{text}");
+}
+
+/// `install --user` copies the library to a stable place and the manifest names the copy, so
+/// removing or rebuilding the original does not unload the layer; `uninstall` removes both.
+#[test]
+fn install_user_copies_the_library_and_uninstall_removes_it() {
+    let home = scratch("xdg-data");
+    let _ = std::fs::remove_dir_all(&home);
+    let original = scratch("built/libcontrastxr.so");
+    std::fs::create_dir_all(original.parent().unwrap()).unwrap();
+    std::fs::write(&original, b"\x7fELF stand-in for the built library").unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+            .args(args)
+            .env("XDG_DATA_HOME", &home)
+            .output()
+            .unwrap()
+    };
+    let o = run(&["install", "--user", "--library", original.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let copy = home.join("contrastxr/libcontrastxr.so");
+    let manifest = home.join("openxr/1/api_layers/implicit.d/contrastxr.json");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    assert_eq!(v["api_layer"]["library_path"], copy.to_str().unwrap());
+    assert_eq!(v["api_layer"]["enable_environment"], "CONTRASTXR");
+    // `cargo clean` removes the original: the installed copy stays as it was.
+    std::fs::remove_file(&original).unwrap();
+    assert_eq!(
+        std::fs::read(&copy).unwrap(),
+        b"\x7fELF stand-in for the built library"
+    );
+    let o = run(&["uninstall", "--user"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!manifest.exists() && !copy.exists());
+    let o = run(&["uninstall"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("was not installed"));
+}
+
 /// `contrastxr calibrate` driven line by line on stdin (not a terminal) against a config file.
 fn calibrate(config: &Path, args: &[&str], stdin: &str) -> Output {
     use std::io::Write;

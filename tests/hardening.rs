@@ -70,6 +70,8 @@ fn client(tag: &str, config: &Path, env: &[(&str, &str)], args: &[&str]) -> Opti
     let mut all = vec![
         ("CONTRASTXR", "1"),
         ("CONTRASTXR_FORCE", "1"),
+        // Frames are compared with what the app rendered: no indicator text in them.
+        ("CONTRASTXR_INDICATOR", "0"),
         ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
         ("CONTRASTXR_CONFIG", config.as_str()),
     ];

@@ -58,6 +58,8 @@ fn layer_env(dir: &Path, background: &str) -> Vec<(String, String)> {
     vec![
         ("CONTRASTXR".into(), "1".into()),
         ("CONTRASTXR_FORCE".into(), "1".into()),
+        // The captures are compared with the CPU reference: no indicator text in them.
+        ("CONTRASTXR_INDICATOR".into(), "0".into()),
         ("CONTRASTXR_BACKGROUND".into(), background.into()),
         (
             "CONTRASTXR_CAPTURE_DIR".into(),
@@ -353,6 +355,67 @@ fn layer_lines(run: &SandboxRun) -> Vec<&str> {
         .lines()
         .filter(|l| l.starts_with("contrastxr:"))
         .collect()
+}
+
+/// An app that acquires and waits for its next image before xrEndFrame of the current frame (a
+/// render thread running ahead) still has every frame enhanced: the client reads each image back
+/// when it renders into it again and finds every earlier frame changed, and the layer's
+/// captures (one per frame) match the CPU reference. With the layer off nothing changes.
+#[test]
+fn pipelined_apps_have_every_frame_enhanced() {
+    let tag = "layer-pipelined";
+    let dir = capture_dir(tag);
+    let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+    env.retain(|(k, _)| {
+        !k.starts_with("CONTRASTXR_CAPTURE_SKIP") && !k.starts_with("CONTRASTXR_CAPTURE_FRAMES")
+    });
+    env.push(("CONTRASTXR_CAPTURE_FRAMES".into(), "1000".into()));
+    let cmd = [
+        XR_CLIENT,
+        "--validation",
+        "--json",
+        "--frames",
+        "12",
+        "--size",
+        "160x120",
+        "--pipelined",
+        "--check-untouched",
+    ];
+    let Some((run, validation)) = run_validated(tag, &cmd, &as_refs(&env)) else {
+        return;
+    };
+    run.assert_success();
+    validation.assert_clean();
+    assert!(
+        run.stderr.contains("pipelined renderer"),
+        "{}",
+        run.describe()
+    );
+    let report = run.client_report();
+    let checked = report["frames_checked"].as_u64().unwrap();
+    assert!(checked >= 5, "{report}");
+    assert_eq!(
+        report["frames_modified"].as_array().unwrap().len() as u64,
+        checked,
+        "every frame read back again must have been enhanced: {report}\nlayer: {:#?}",
+        layer_lines(&run)
+    );
+    let views = captures(&dir);
+    let submitted = report["frames_submitted"].as_u64().unwrap() as usize;
+    assert_eq!(
+        views.len(),
+        2 * submitted,
+        "2 views of every frame captured"
+    );
+    for c in &views {
+        assert!(check_view(c) > 1000, "a frame was barely changed");
+    }
+    let off = sandbox().unwrap().run(&cmd, &[("CONTRASTXR", "0")]);
+    off.assert_success();
+    assert_frames_untouched(
+        &off,
+        "with the layer off the client's frames stay as written",
+    );
 }
 
 #[test]

@@ -1,4 +1,4 @@
-//! File sources: a PNG image, a flat colour, and videos (numbered PNG frames or Y4M) played
+//! File sources: a PNG or JPEG image, a flat colour, and videos (numbered PNG frames or Y4M) played
 //! in a loop at their frame rate, following wall-clock time.
 
 use crate::camera::frame::{Frame, Shared};
@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub(crate) fn image_frame(path: &Path) -> Result<Frame, CameraError> {
-    let image = RgbaImage::load_png(path).map_err(CameraError::File)?;
+    let image = RgbaImage::load(path).map_err(CameraError::File)?;
     Ok(static_frame(image))
 }
 

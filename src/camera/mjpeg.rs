@@ -5,10 +5,6 @@
 //! an `AVI1` APP0 segment, so a frame with neither DHT nor `AVI1` gets that segment spliced in.
 
 use crate::image::RgbaImage;
-use zune_jpeg::zune_core::bytestream::ZCursor;
-use zune_jpeg::zune_core::colorspace::ColorSpace;
-use zune_jpeg::zune_core::options::DecoderOptions;
-use zune_jpeg::JpegDecoder;
 
 /// An APP0 segment naming the data AVI MJPEG: length 8, "AVI1\0", one padding byte.
 const AVI1_APP0: [u8; 10] = [0xFF, 0xE0, 0x00, 0x08, b'A', b'V', b'I', b'1', 0, 0];
@@ -21,29 +17,7 @@ pub(crate) fn decode(data: &[u8]) -> Result<RgbaImage, String> {
     } else {
         data
     };
-    let options = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGBA);
-    let mut decoder = JpegDecoder::new_with_options(ZCursor::new(data), options);
-    let pixels = decoder
-        .decode()
-        .map_err(|e| format!("MJPEG frame does not decode: {e:?}"))?;
-    let info = decoder.info().ok_or("MJPEG frame has no header")?;
-    let (width, height) = (u32::from(info.width), u32::from(info.height));
-    if pixels.len() != (width * height * 4) as usize {
-        return Err(format!(
-            "MJPEG frame decoded to {} bytes for {width}x{height}",
-            pixels.len()
-        ));
-    }
-    let pixels = pixels
-        .chunks_exact(4)
-        .map(|p| [p[0], p[1], p[2], 255])
-        .collect();
-    Ok(RgbaImage {
-        width,
-        height,
-        pixels,
-        has_alpha: false,
-    })
+    RgbaImage::decode_jpeg(data).map_err(|e| format!("MJPEG frame does not decode: {e}"))
 }
 
 /// True for a JPEG with no DHT and no AVI1 marker before its first scan.

@@ -10,7 +10,7 @@ pub enum SourceSpec {
     V4l2Device(PathBuf),
     /// `v4l2:auto`: the first capture device, looked up again on each reopen.
     V4l2Auto,
-    /// `image:PATH`: one PNG, static.
+    /// `image:PATH`: one PNG or JPEG, static.
     Image(PathBuf),
     /// `video:PATH`: a folder of numbered PNG frames or a Y4M file, looped.
     Video(PathBuf),

@@ -1,44 +1,118 @@
-//! A small command-line parser: options are taken out by name, whatever is left is an error.
-//! (Hand-written instead of clap to keep build time down on small machines.)
+//! The command line as the subcommands see it: each subcommand declares its options as [`Opt`]s,
+//! clap parses the whole line against them (unknown options, missing values, `--help`,
+//! `--version` and the completions all come from there), and [`Args`] hands the parsed values
+//! to the subcommand by option name. An option's value is always the next argument, so
+//! negative numbers work (`--fov-offset -0.1,0.2`), and positionals may be negative too
+//! (`contrastxr set lambda_e -0.1`).
 
 use super::CliError;
+use clap::{Arg, ArgAction, ArgMatches};
 
+/// One option a subcommand accepts: `--long` (with an optional `-s`), a flag or taking a value.
+#[derive(Clone, Copy, Debug)]
+pub struct Opt {
+    /// `--name`, with the dashes.
+    pub long: &'static str,
+    pub short: Option<char>,
+    /// The value's name in the help (`FILE`); None for a flag.
+    pub value: Option<&'static str>,
+}
+
+impl Opt {
+    pub const fn flag(long: &'static str) -> Opt {
+        Opt {
+            long,
+            short: None,
+            value: None,
+        }
+    }
+
+    pub const fn value(long: &'static str, value: &'static str) -> Opt {
+        Opt {
+            long,
+            short: None,
+            value: Some(value),
+        }
+    }
+
+    pub const fn short(self, short: char) -> Opt {
+        Opt {
+            short: Some(short),
+            ..self
+        }
+    }
+
+    fn id(&self) -> &'static str {
+        self.long.trim_start_matches('-')
+    }
+
+    /// The clap argument; the id is the long name without dashes.
+    pub fn arg(&self) -> Arg {
+        let mut arg = Arg::new(self.id()).long(self.id());
+        if let Some(s) = self.short {
+            arg = arg.short(s);
+        }
+        match self.value {
+            None => arg.action(ArgAction::SetTrue),
+            // The next argument is the value even when it starts with '-' (negative numbers).
+            Some(v) => arg
+                .action(ArgAction::Set)
+                .value_name(v)
+                .allow_hyphen_values(true),
+        }
+    }
+}
+
+/// The id of the positional arguments of a subcommand that takes them.
+pub const POSITIONALS: &str = "args";
+
+/// The positionals argument: any number of them, negative numbers among them
+/// (`set lambda_e -0.1`); other values starting with '-' need `KEY=VALUE` or `--` before them.
+pub fn positionals_arg(name: &'static str) -> Arg {
+    Arg::new(POSITIONALS)
+        .value_name(name)
+        .num_args(0..)
+        .action(ArgAction::Append)
+        .allow_negative_numbers(true)
+}
+
+/// A subcommand's parsed command line, taken out option by option.
 pub struct Args {
-    rest: Vec<String>,
+    matches: ArgMatches,
+}
+
+fn id_of(names: &[&str]) -> String {
+    let long = names
+        .iter()
+        .find(|n| n.starts_with("--"))
+        .unwrap_or(&names[0]);
+    long.trim_start_matches('-').to_string()
 }
 
 impl Args {
-    pub fn new(rest: Vec<String>) -> Self {
-        Args { rest }
+    pub fn new(matches: ArgMatches) -> Self {
+        Args { matches }
     }
 
-    /// Removes a boolean flag; true if it was present.
+    /// Whether a boolean flag was given.
     pub fn flag(&mut self, name: &str) -> bool {
-        let before = self.rest.len();
-        self.rest.retain(|a| a != name);
-        self.rest.len() != before
+        let id = id_of(&[name]);
+        match self.matches.try_get_one::<bool>(&id) {
+            Ok(v) => v.copied().unwrap_or(false),
+            Err(e) => panic!("the option {name} is not declared for this command: {e}"),
+        }
     }
 
-    /// Removes `NAME VALUE` or `NAME=VALUE` for any of `names`; the last occurrence wins.
+    /// The value of `--name VALUE` / `--name=VALUE` (any of `names`); the last occurrence wins.
     pub fn value(&mut self, names: &[&str]) -> Result<Option<String>, CliError> {
-        let mut found = None;
-        let mut i = 0;
-        while i < self.rest.len() {
-            let arg = &self.rest[i];
-            if names.contains(&arg.as_str()) {
-                if i + 1 >= self.rest.len() {
-                    return Err(CliError::Usage(format!("{arg} needs a value")));
-                }
-                found = Some(self.rest.remove(i + 1));
-                self.rest.remove(i);
-            } else if let Some((_, v)) = arg.split_once('=').filter(|(n, _)| names.contains(n)) {
-                found = Some(v.to_string());
-                self.rest.remove(i);
-            } else {
-                i += 1;
-            }
+        let id = id_of(names);
+        match self.matches.try_get_one::<String>(&id) {
+            Ok(v) => Ok(v.cloned()),
+            Err(e) => panic!(
+                "the option {} is not declared for this command: {e}",
+                names[0]
+            ),
         }
-        Ok(found)
     }
 
     pub fn required(&mut self, names: &[&str]) -> Result<String, CliError> {
@@ -46,21 +120,17 @@ impl Args {
             .ok_or_else(|| CliError::Usage(format!("{} is required", names[0])))
     }
 
-    /// Takes the remaining arguments as positionals; an unknown `-option` is an error later.
+    /// The positional arguments (empty for a subcommand that takes none).
     pub fn positional(&mut self) -> Vec<String> {
-        let (pos, opts): (Vec<String>, Vec<String>) =
-            self.rest.drain(..).partition(|a| !a.starts_with('-'));
-        self.rest = opts;
-        pos
+        match self.matches.try_get_many::<String>(POSITIONALS) {
+            Ok(Some(v)) => v.cloned().collect(),
+            _ => Vec::new(),
+        }
     }
 
-    /// Fails on anything not taken out by the command.
+    /// Nothing is left over: the parser already refused unknown options and arguments.
     pub fn finish(&self) -> Result<(), CliError> {
-        match self.rest.first() {
-            None => Ok(()),
-            Some(a) if a.starts_with('-') => Err(CliError::Usage(format!("unknown option {a}"))),
-            Some(a) => Err(CliError::Usage(format!("unexpected argument '{a}'"))),
-        }
+        Ok(())
     }
 }
 
@@ -93,13 +163,34 @@ pub fn parse_list(what: &str, s: &str) -> Result<Vec<f32>, CliError> {
 mod tests {
     use super::*;
 
-    fn args(s: &str) -> Args {
-        Args::new(s.split_whitespace().map(String::from).collect())
+    fn parse(opts: &[Opt], positional: bool, line: &str) -> Result<Args, clap::Error> {
+        let mut cmd = clap::Command::new("t")
+            .args_override_self(true)
+            .args(opts.iter().map(Opt::arg));
+        if positional {
+            cmd = cmd.arg(positionals_arg("ARGS"));
+        }
+        cmd.try_get_matches_from(std::iter::once("t").chain(line.split_whitespace()))
+            .map(Args::new)
     }
+
+    const OPTS: &[Opt] = &[
+        Opt::value("--display", "FILE"),
+        Opt::value("--output", "FILE").short('o'),
+        Opt::flag("--no-blur"),
+        Opt::flag("--no-fov"),
+        Opt::value("--lambda-e", "F"),
+        Opt::value("--fov-offset", "X,Y"),
+    ];
 
     #[test]
     fn values_flags_and_leftovers() {
-        let mut a = args("--display d.png -o=o.png --no-blur --lambda-e 0.3 --lambda-e 0.5 extra");
+        let mut a = parse(
+            OPTS,
+            false,
+            "--display d.png -o=o.png --no-blur --lambda-e 0.3 --lambda-e=0.5",
+        )
+        .unwrap();
         assert_eq!(a.value(&["--display"]).unwrap().as_deref(), Some("d.png"));
         assert_eq!(
             a.value(&["-o", "--output"]).unwrap().as_deref(),
@@ -107,11 +198,27 @@ mod tests {
         );
         assert!(a.flag("--no-blur") && !a.flag("--no-fov"));
         assert_eq!(a.value(&["--lambda-e"]).unwrap().as_deref(), Some("0.5"));
-        assert!(matches!(a.finish(), Err(CliError::Usage(m)) if m.contains("extra")));
-        assert!(matches!(
-            args("--display").value(&["--display"]),
-            Err(CliError::Usage(_))
-        ));
+        let unknown = parse(OPTS, false, "--display d.png extra").err().unwrap();
+        assert_eq!(unknown.kind(), clap::error::ErrorKind::UnknownArgument);
+        let missing = parse(OPTS, false, "--display").err().unwrap();
+        assert_eq!(missing.kind(), clap::error::ErrorKind::InvalidValue);
+    }
+
+    #[test]
+    fn negative_values_are_values() {
+        let mut a = parse(OPTS, false, "--fov-offset -0.1,0.2 --lambda-e -1").unwrap();
+        assert_eq!(
+            a.value(&["--fov-offset"]).unwrap().as_deref(),
+            Some("-0.1,0.2")
+        );
+        assert_eq!(a.value(&["--lambda-e"]).unwrap().as_deref(), Some("-1"));
+        let mut a = parse(&[Opt::value("--app", "NAME")], true, "lambda_e -0.1").unwrap();
+        assert_eq!(a.positional(), ["lambda_e", "-0.1"]);
+        let mut a = parse(&[Opt::value("--app", "NAME")], true, "x -2 --app a").unwrap();
+        assert_eq!(a.positional(), ["x", "-2"]);
+        assert_eq!(a.value(&["--app"]).unwrap().as_deref(), Some("a"));
+        let mut a = parse(&[Opt::value("--app", "NAME")], true, "-- x -2,1").unwrap();
+        assert_eq!(a.positional(), ["x", "-2,1"]);
     }
 
     #[test]

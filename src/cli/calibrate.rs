@@ -6,10 +6,12 @@
 //! `mode` back as it was at the end. On a terminal it reads single keys (raw mode); otherwise
 //! one or more commands per line, so a script can drive it.
 
-use super::{print, Args, CliError};
+use super::{print, Args, CliError, Opt};
 use contrastxr::config::{self, edit, Env, Key, Value, EYES};
 use std::io::{BufRead, Read};
 use std::path::PathBuf;
+
+pub const OPTIONS: &[Opt] = &[Opt::value("--app", "NAME"), Opt::value("--step", "F")];
 
 pub fn usage() -> String {
     "usage: contrastxr calibrate [--app NAME] [--step F]\n\n\

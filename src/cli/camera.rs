@@ -1,7 +1,12 @@
 //! `contrastxr camera list` and `contrastxr camera test DEVICE [--frames N] [-o DIR]`: how a
 //! user checks their camera before putting on the headset.
 
-use super::{Args, CliError};
+use super::{Args, CliError, Opt};
+
+pub const OPTIONS: &[Opt] = &[
+    Opt::value("--frames", "N"),
+    Opt::value("--output", "DIR").short('o'),
+];
 use contrastxr::camera::cli;
 use std::path::PathBuf;
 

@@ -1,18 +1,22 @@
 //! `contrastxr config check [FILE]`, `config print [--app NAME]` and `config path`.
 
-use super::{print, Args, CliError};
+use super::{print, Args, CliError, Opt};
 use contrastxr::config::{self, Env, Source, KEYS};
 use std::path::PathBuf;
 
+/// `--device SYSTEM` (with control's `--app NAME`).
+pub const OPTIONS: &[Opt] = &[Opt::value("--device", "SYSTEM")];
+
 pub fn usage() -> String {
     "usage: contrastxr config check [FILE]\n\
-     \x20      contrastxr config print [--app NAME]\n\
+     \x20      contrastxr config print [--app NAME] [--device SYSTEM]\n\
      \x20      contrastxr config path\n\n\
      check: reads FILE (default: the file the layer reads) and prints every problem with its\n\
      \x20      file, line and key; exit code 1 if there is one.\n\
      print: the settings an app named NAME (its XrApplicationInfo.applicationName) would run\n\
      \x20      with, as TOML, each with where it came from (default, file:line or env VAR),\n\
-     \x20      including this shell's CONTRASTXR_* variables.\n\
+     \x20      including this shell's CONTRASTXR_* variables; with --device, on the headset\n\
+     \x20      whose XrSystemProperties.systemName is SYSTEM (its [device.\"SYSTEM\"] table).\n\
      path:  the file the layer reads: $CONTRASTXR_CONFIG, else\n\
      \x20      $XDG_CONFIG_HOME/contrastxr/config.toml, else /etc/xdg/contrastxr/config.toml.\n"
         .to_string()

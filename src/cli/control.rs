@@ -1,7 +1,10 @@
 //! `contrastxr toggle` and `contrastxr set`: live control of running apps through the config
 //! file, which every running app's layer watches (a change applies within a second).
 
-use super::{print, Args, CliError};
+use super::{print, Args, CliError, Opt};
+
+/// `--app NAME`, also taken by `config`.
+pub const OPTIONS: &[Opt] = &[Opt::value("--app", "NAME")];
 use contrastxr::config::{self, edit, Env, Source};
 use std::path::Path;
 
@@ -13,7 +16,8 @@ pub fn usage() -> String {
      change reaches every running app within a second; with --app, only [app.\"NAME\"].\n\
      toggle: mode off <-> MODE (default enhance), for A/B comparison.\n\
      set:    one setting, checked first, e.g. `contrastxr set lambda_e 0.6`,\n\
-     \x20       `contrastxr set mode split`, `contrastxr set fov_offset=-0.1,0.2`.\n\
+     \x20       `contrastxr set mode split`, `contrastxr set lambda_e -0.1` (refused: out of range),\n\
+     \x20       `contrastxr set fov_offset=-0.1,0.2` (or `set -- fov_offset -0.1,0.2`).\n\
      An app started with the setting's CONTRASTXR_* variable keeps the variable's value.\n"
         .to_string()
 }

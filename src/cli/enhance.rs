@@ -3,7 +3,13 @@
 use std::time::Instant;
 
 use super::options::{self, PARAMS_USAGE};
-use super::{engine, Args, CliError};
+use super::{engine, Args, CliError, Opt};
+
+pub const OPTIONS: &[Opt] = &[
+    Opt::value("--display", "D.png"),
+    Opt::value("--background", "B.png"),
+    Opt::value("--output", "OUT.png").short('o'),
+];
 
 const USAGE: &str =
     "usage: contrastxr enhance --display D.png --background B.png -o OUT.png [options]\n\n\

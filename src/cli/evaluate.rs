@@ -9,7 +9,17 @@ use contrastxr::image::RgbaImage;
 use super::args::parse_list;
 use super::engine::{self, Engine};
 use super::options::{self, PARAMS_USAGE};
-use super::{Args, CliError};
+use super::{Args, CliError, Opt};
+
+pub const OPTIONS: &[Opt] = &[
+    Opt::value("--display", "D.png"),
+    Opt::value("--background", "B.png"),
+    Opt::value("--enhanced", "OUT.png"),
+    Opt::value("--sweep", "L1,L2,..."),
+    Opt::flag("--json"),
+    Opt::value("--figure", "FIG.png"),
+    Opt::flag("--app-images"),
+];
 
 const USAGE: &str = "\
 usage: contrastxr evaluate --display D.png --background B.png [--enhanced OUT.png] [options]

@@ -1,15 +1,29 @@
 //! `contrastxr install [--user|--system] [--library PATH]` and `contrastxr uninstall`.
 
-use super::{print, Args, CliError};
+use super::{print, Args, CliError, Opt};
+
+pub const SCOPE_OPTIONS: &[Opt] = &[Opt::flag("--user"), Opt::flag("--system")];
+pub const OPTIONS: &[Opt] = &[
+    Opt::flag("--user"),
+    Opt::flag("--system"),
+    Opt::value("--library", "PATH"),
+];
 use contrastxr::layer::install::{self, Scope};
 
 pub fn usage() -> String {
     "usage: contrastxr install [--user|--system] [--library PATH]\n\
      \x20      contrastxr uninstall [--user|--system]\n\n\
-     Writes (or removes) the implicit OpenXR layer manifest for the built libcontrastxr.so:\n\
-     --user (default) into $XDG_DATA_HOME/openxr/1/api_layers/implicit.d,\n\
-     --system into /etc/xdg/openxr/1/api_layers/implicit.d.\n\
-     The layer then loads into OpenXR apps started with CONTRASTXR=1.\n"
+     Installs the OpenXR layer: copies the layer library (the libcontrastxr.so built with this\n\
+     tool, or --library PATH) to a stable place and writes the implicit layer manifest naming\n\
+     that copy, so rebuilding or `cargo clean` does not unload the layer:\n\
+     --user (default): $XDG_DATA_HOME/contrastxr/libcontrastxr.so and\n\
+     \x20                 $XDG_DATA_HOME/openxr/1/api_layers/implicit.d/contrastxr.json\n\
+     \x20                 ($XDG_DATA_HOME defaults to ~/.local/share);\n\
+     --system:         /usr/local/lib/contrastxr/libcontrastxr.so and\n\
+     \x20                 /etc/xdg/openxr/1/api_layers/implicit.d/contrastxr.json.\n\
+     Run it again after rebuilding to update the copy. The layer then loads into OpenXR apps\n\
+     started with CONTRASTXR=1. uninstall removes the manifest and the copy. (The Debian\n\
+     package installs the layer system-wide itself; no install step is needed with it.)\n"
         .to_string()
 }
 
@@ -30,11 +44,12 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .map_err(|e| CliError::Failure(format!("cannot find the library {p}: {e}")))?,
         None => install::find_library().map_err(CliError::Failure)?,
     };
-    let path = install::install(scope, &library).map_err(CliError::Failure)?;
+    let done = install::install(scope, &library).map_err(CliError::Failure)?;
     print(&format!(
-        "installed {} (library {}); enable the layer with CONTRASTXR=1\n",
-        path.display(),
-        library.display()
+        "installed {} (library copied from {} to {}); enable the layer with CONTRASTXR=1\n",
+        done.manifest.display(),
+        library.display(),
+        done.library.display()
     ));
     Ok(())
 }

@@ -3,7 +3,7 @@
 use contrastxr::algorithm::{Method, Params};
 use contrastxr::image::RgbaImage;
 
-use super::args::{parse_f32, parse_pair};
+use super::args::{parse_f32, parse_pair, Opt};
 use super::engine::Engine;
 use super::{Args, CliError};
 
@@ -23,6 +23,23 @@ method and preprocessing options (defaults are the paper's):
   --method M               paper|hue-only|other-hue|lum-chroma|subtraction (paper)
   --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)
 ";
+
+/// The options [`params`] and [`engine`] read.
+pub const PARAMS_OPTIONS: &[Opt] = &[
+    Opt::value("--lambda-e", "F"),
+    Opt::value("--lambda-jnd-scaled", "F"),
+    Opt::value("--transmittance", "F"),
+    Opt::value("--achromatic-boost", "F"),
+    Opt::value("--luminance-cap", "F"),
+    Opt::value("--blur-size", "N"),
+    Opt::value("--blur-sigma", "F"),
+    Opt::flag("--no-blur"),
+    Opt::value("--fov-scale", "X,Y"),
+    Opt::value("--fov-offset", "X,Y"),
+    Opt::flag("--no-fov"),
+    Opt::value("--method", "M"),
+    Opt::value("--engine", "E"),
+];
 
 /// Takes the method and preprocessing options out of `args`, starting from the defaults.
 pub fn params(args: &mut Args) -> Result<Params, CliError> {
@@ -76,7 +93,7 @@ pub fn engine(args: &mut Args) -> Result<Engine, CliError> {
 }
 
 pub fn load_path(path: &str, what: &str) -> Result<RgbaImage, CliError> {
-    RgbaImage::load_png(std::path::Path::new(path))
+    RgbaImage::load(std::path::Path::new(path))
         .map_err(|e| CliError::Failure(format!("cannot read the {what} image: {e}")))
 }
 

@@ -543,6 +543,34 @@ pub const KEYS: &[Key] = &[
         },
         get: |s| Value::Count(s.capture_skip),
     },
+    Key {
+        name: "indicator",
+        env: "CONTRASTXR_INDICATOR",
+        env_negated: false,
+        kind: Kind::Bool,
+        doc: "show the mode and lambda_e in the eye image for a few seconds after start and after each change",
+        set: |s, v| {
+            s.indicator = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.indicator),
+    },
+    Key {
+        name: "indicator_seconds",
+        env: "CONTRASTXR_INDICATOR_SECONDS",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "how long the indicator shows, in seconds (0 to 60)",
+        set: |s, v| {
+            let seconds = float(v)?;
+            if !(0.0..=60.0).contains(&seconds) {
+                return Err(format!("{seconds} is not in [0, 60]"));
+            }
+            s.indicator_seconds = seconds;
+            Ok(())
+        },
+        get: |s| Value::Float(s.indicator_seconds),
+    },
 ];
 
 pub fn key(name: &str) -> Option<&'static Key> {

@@ -35,6 +35,10 @@ pub struct Settings {
     pub capture_dir: Option<PathBuf>,
     pub capture_frames: u64,
     pub capture_skip: u64,
+    /// Show the mode and lambda_e in the eye image for `indicator_seconds` after the first
+    /// processed frame and after each change of settings.
+    pub indicator: bool,
+    pub indicator_seconds: f32,
     /// Grows by one with each reload that changed a value: a session holding an older
     /// generation picks up the newer settings at its next xrEndFrame.
     pub generation: u64,
@@ -53,6 +57,8 @@ impl Default for Settings {
             capture_dir: None,
             capture_frames: 1,
             capture_skip: 0,
+            indicator: true,
+            indicator_seconds: 3.0,
             generation: 0,
         }
     }

@@ -3,8 +3,8 @@
 //! layer works, and how the tests see the null compositor's frames.
 
 use super::processor::CapturedView;
-use crate::algorithm::params::Params;
 use crate::colour;
+use crate::config::{Settings, Value, KEYS};
 use crate::gpu::{PixelFormat, PixelLayout};
 use crate::image::RgbaImage;
 use std::path::Path;
@@ -72,19 +72,30 @@ pub fn to_srgb8(format: PixelFormat, raw: &[u8], width: u32, height: u32) -> Rgb
     }
 }
 
-fn params_json(p: &Params) -> serde_json::Value {
-    serde_json::json!({
-        "method": p.method.name(),
-        "lambda_e": p.lambda_e,
-        "lambda_jnd_scaled": p.lambda_jnd_scaled,
-        "transmittance": p.transmittance,
-        "blur": p.blur,
-        "blur_size": p.blur_size,
-        "blur_sigma": p.blur_sigma,
-        "fov": p.fov,
-        "fov_scale": p.fov_scale,
-        "fov_offset": p.fov_offset,
-    })
+fn json_value(v: Value) -> serde_json::Value {
+    match v {
+        Value::Bool(b) => b.into(),
+        // Through the shortest decimal, so 0.4 is written 0.4, not 0.4000000059604645.
+        Value::Float(x) => serde_json::json!(short(x)),
+        Value::Count(n) => n.into(),
+        Value::Pair([x, y]) => serde_json::json!([short(x), short(y)]),
+        Value::Numbers(v) => v.into_iter().map(short).collect(),
+        Value::Text(t) => t.into(),
+    }
+}
+
+fn short(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::from(x))
+}
+
+/// Every setting the frame was processed with, by its config key: the same table the config
+/// file, the environment and `contrastxr set` use, so no key can be missing.
+pub fn settings_json(settings: &Settings) -> serde_json::Value {
+    let map = KEYS
+        .iter()
+        .map(|k| (k.name.to_string(), json_value(k.get(settings))))
+        .collect();
+    serde_json::Value::Object(map)
 }
 
 /// Writes the files of one captured view; errors are returned as one sentence.
@@ -94,8 +105,7 @@ pub fn write_view(
     view: usize,
     captured: &CapturedView,
     background: &RgbaImage,
-    background_spec: &str,
-    params: &Params,
+    settings: &Settings,
 ) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let item = &captured.item;
@@ -121,8 +131,8 @@ pub fn write_view(
         "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
         "image_array_index": item.key.array_index,
         "camera_mapping": item.mapping.rows,
-        "background": background_spec,
-        "params": params_json(params),
+        "background": settings.background,
+        "params": settings_json(settings),
     });
     let text = serde_json::to_string_pretty(&json).expect("plain JSON");
     std::fs::write(name(".json"), text).map_err(|e| format!("cannot write capture JSON: {e}"))
@@ -131,6 +141,25 @@ pub fn write_view(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_config_key_is_in_the_capture_json() {
+        let mut settings = Settings::default();
+        settings.params.achromatic_boost = 0.25;
+        let json = settings_json(&settings);
+        let object = json.as_object().unwrap();
+        assert_eq!(object.len(), KEYS.len());
+        for k in KEYS {
+            assert!(object.contains_key(k.name), "{} missing", k.name);
+        }
+        assert_eq!(json["mode"], "enhance");
+        assert_eq!(json["lambda_e"], 0.4);
+        assert_eq!(json["achromatic_boost"], 0.25);
+        assert_eq!(json["luminance_cap"], 0.0);
+        assert_eq!(json["fov_scale"], serde_json::json!([0.65, 0.65]));
+        assert_eq!(json["blur_size"], 3);
+        assert_eq!(json["blur"], true);
+    }
 
     #[test]
     fn half_floats_decode() {

@@ -15,6 +15,7 @@ pub struct NextFns {
     pub destroy_swapchain: pfn::DestroySwapchain,
     pub enumerate_swapchain_images: pfn::EnumerateSwapchainImages,
     pub acquire_swapchain_image: pfn::AcquireSwapchainImage,
+    pub wait_swapchain_image: pfn::WaitSwapchainImage,
     pub release_swapchain_image: pfn::ReleaseSwapchainImage,
     pub end_frame: pfn::EndFrame,
     pub get_system_properties: pfn::GetSystemProperties,
@@ -80,6 +81,12 @@ impl NextFns {
                 instance,
                 c"xrAcquireSwapchainImage",
                 pfn::AcquireSwapchainImage
+            ),
+            wait_swapchain_image: resolve!(
+                gipa,
+                instance,
+                c"xrWaitSwapchainImage",
+                pfn::WaitSwapchainImage
             ),
             release_swapchain_image: resolve!(
                 gipa,

@@ -204,6 +204,10 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
                 pfn::AcquireSwapchainImage,
                 pfn::VoidFunction,
             >(swapchain::acquire_swapchain_image),
+            "xrWaitSwapchainImage" => std::mem::transmute::<
+                pfn::WaitSwapchainImage,
+                pfn::VoidFunction,
+            >(swapchain::wait_swapchain_image),
             "xrReleaseSwapchainImage" => std::mem::transmute::<
                 pfn::ReleaseSwapchainImage,
                 pfn::VoidFunction,
@@ -261,14 +265,17 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
                 return xr::Result::ERROR_HANDLE_INVALID;
             };
             // Sessions left alive by the app die with the instance: drop our GPU state first.
-            let sessions: Vec<u64> = {
-                let reg = state::registry();
-                reg.sessions
-                    .iter()
-                    .filter(|(_, s)| lock(s).instance == instance)
-                    .map(|(k, _)| *k)
-                    .collect()
-            };
+            // Lock order: sessions are locked only after the registry lock is dropped.
+            let all: Vec<(u64, Arc<std::sync::Mutex<state::SessionState>>)> = state::registry()
+                .sessions
+                .iter()
+                .map(|(k, s)| (*k, s.clone()))
+                .collect();
+            let sessions: Vec<u64> = all
+                .into_iter()
+                .filter(|(_, s)| lock(s).instance == instance)
+                .map(|(k, _)| k)
+                .collect();
             for s in sessions {
                 session::forget(xr::Session::from_raw(s));
             }

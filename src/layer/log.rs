@@ -1,19 +1,30 @@
 //! The layer's log: one startup line, then only changes and warnings, each once. Lines go to
-//! stderr and to `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state`).
-//! `CONTRASTXR_LOG=debug` adds debug lines.
+//! stderr and to `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state`), each with
+//! an RFC 3339 UTC timestamp and the process id. The file is capped at [`MAX_BYTES`]: past that
+//! it becomes `layer.log.1` (replacing the previous one) and a new file starts, so two files
+//! at most. The first line a process writes is a [`LOADED`] marker, which is how
+//! `contrastxr log` finds the last app's lines. `CONTRASTXR_LOG=debug` adds debug lines.
 
 use std::collections::HashSet;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+/// Size past which the log file is rotated.
+pub const MAX_BYTES: u64 = 1 << 20;
+/// The file-only line each process writes first: `[pid N] layer loaded into EXE`.
+pub const LOADED: &str = "layer loaded into ";
 
 struct Log {
+    path: Option<PathBuf>,
     file: Option<std::fs::File>,
     seen: HashSet<String>,
     debug: bool,
 }
 
-fn log_path() -> Option<PathBuf> {
+/// `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state/...`).
+pub fn path() -> Option<PathBuf> {
     let state = std::env::var_os("XDG_STATE_HOME")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
@@ -21,8 +32,14 @@ fn log_path() -> Option<PathBuf> {
     Some(state.join("contrastxr").join("layer.log"))
 }
 
-fn open_file() -> Option<std::fs::File> {
-    let path = log_path()?;
+/// The rotated file beside `path`: `layer.log.1`.
+pub fn rotated(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".1");
+    PathBuf::from(name)
+}
+
+fn open_file(path: &Path) -> Option<std::fs::File> {
     std::fs::create_dir_all(path.parent()?).ok()?;
     std::fs::OpenOptions::new()
         .create(true)
@@ -31,22 +48,83 @@ fn open_file() -> Option<std::fs::File> {
         .ok()
 }
 
+/// Days since 1970-01-01 to (year, month, day) in the proleptic Gregorian calendar
+/// (Howard Hinnant's `civil_from_days`).
+fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    (year, month, day)
+}
+
+/// `time` as RFC 3339 in UTC with milliseconds: `2026-11-22T19:04:05.123Z`.
+pub fn rfc3339(time: SystemTime) -> String {
+    let since = time.duration_since(UNIX_EPOCH).unwrap_or_default();
+    let secs = since.as_secs() as i64;
+    let (year, month, day) = civil_from_days(secs.div_euclid(86_400));
+    let s = secs.rem_euclid(86_400);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}.{:03}Z",
+        s / 3600,
+        s / 60 % 60,
+        s % 60,
+        since.subsec_millis()
+    )
+}
+
 fn log() -> &'static Mutex<Log> {
     static LOG: OnceLock<Mutex<Log>> = OnceLock::new();
     LOG.get_or_init(|| {
-        Mutex::new(Log {
-            file: open_file(),
+        let path = path();
+        let mut log = Log {
+            file: path.as_deref().and_then(open_file),
+            path,
             seen: HashSet::new(),
             debug: std::env::var("CONTRASTXR_LOG").is_ok_and(|v| v == "debug"),
-        })
+        };
+        let exe = std::env::current_exe()
+            .map_or("an unknown program".into(), |p| p.display().to_string());
+        write_file(&mut log, &format!("{LOADED}{exe}"));
+        Mutex::new(log)
     })
+}
+
+/// Rotates when the file at the path is over the cap, and follows a rotation another process
+/// did (the path then names a different file than ours).
+fn keep_in_bounds(log: &mut Log) {
+    use std::os::unix::fs::MetadataExt;
+    let Some(path) = log.path.clone() else {
+        return;
+    };
+    let ours = log.file.as_ref().and_then(|f| f.metadata().ok());
+    let at_path = std::fs::metadata(&path).ok();
+    let same =
+        matches!((&ours, &at_path), (Some(a), Some(b)) if a.ino() == b.ino() && a.dev() == b.dev());
+    if at_path.as_ref().is_some_and(|m| m.len() >= MAX_BYTES) {
+        let _ = std::fs::rename(&path, rotated(&path));
+        log.file = open_file(&path);
+    } else if !same {
+        log.file = open_file(&path);
+    }
+}
+
+fn write_file(log: &mut Log, line: &str) {
+    keep_in_bounds(log);
+    if let Some(f) = log.file.as_mut() {
+        let stamp = rfc3339(SystemTime::now());
+        let _ = writeln!(f, "{stamp} [pid {}] {line}", std::process::id());
+    }
 }
 
 fn write_line(log: &mut Log, line: &str) {
     eprintln!("contrastxr: {line}");
-    if let Some(f) = log.file.as_mut() {
-        let _ = writeln!(f, "[pid {}] {line}", std::process::id());
-    }
+    write_file(log, line);
 }
 
 /// Logs a line unconditionally (startup, state changes).
@@ -70,5 +148,103 @@ pub fn debug(line: &str) {
         if log.debug {
             write_line(&mut log, line);
         }
+    }
+}
+
+/// One line of the log file, split into its parts; None for a line of another shape.
+pub struct Line<'a> {
+    pub time: &'a str,
+    pub pid: u32,
+    pub text: &'a str,
+}
+
+pub fn parse_line(line: &str) -> Option<Line<'_>> {
+    let (time, rest) = line.split_once(" [pid ")?;
+    let (pid, text) = rest.split_once("] ")?;
+    Some(Line {
+        time,
+        pid: pid.parse().ok()?,
+        text,
+    })
+}
+
+/// The lines of the last process that loaded the layer, from its [`LOADED`] line on, out of
+/// the log's text (the rotated file's text first); empty if no process is in it.
+pub fn last_app(text: &str) -> Vec<&str> {
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines
+        .iter()
+        .rposition(|l| parse_line(l).is_some_and(|p| p.text.starts_with(LOADED)));
+    let Some(start) = start else {
+        return Vec::new();
+    };
+    let pid = parse_line(lines[start]).map(|p| p.pid);
+    lines[start..]
+        .iter()
+        .copied()
+        .filter(|l| parse_line(l).map(|p| p.pid) == pid)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    #[test]
+    fn timestamps_are_rfc3339_utc() {
+        assert_eq!(rfc3339(UNIX_EPOCH), "1970-01-01T00:00:00.000Z");
+        // 2000-02-29 is a leap day; 951782400 s after the epoch (date -ud 2000-02-29 +%s).
+        let t = UNIX_EPOCH + Duration::from_millis(951_782_400_000 + 3_723_045);
+        assert_eq!(rfc3339(t), "2000-02-29T01:02:03.045Z");
+        // date -ud @1795374245 +%FT%TZ: 2026-11-22T19:04:05Z.
+        let t = UNIX_EPOCH + Duration::from_secs(1_795_374_245);
+        assert_eq!(rfc3339(t), "2026-11-22T19:04:05.000Z");
+    }
+
+    #[test]
+    fn the_file_is_rotated_at_the_cap() {
+        let dir = std::env::temp_dir().join(format!("contrastxr-log-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let path = dir.join("layer.log");
+        let mut log = Log {
+            file: open_file(&path),
+            path: Some(path.clone()),
+            seen: HashSet::new(),
+            debug: false,
+        };
+        let line = "x".repeat(1000);
+        for _ in 0..1100 {
+            write_file(&mut log, &line);
+        }
+        let size = |p: &Path| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
+        let (current, old) = (size(&path), size(&rotated(&path)));
+        assert!((MAX_BYTES..MAX_BYTES + 1100).contains(&old), "{old}");
+        assert!(current > 0 && current < MAX_BYTES, "{current}");
+        // Every line is kept across the two files.
+        assert_eq!(
+            (current + old) as usize,
+            1100 * (line.len() + "2026-01-01T00:00:00.000Z [pid ] \n".len())
+                + 1100 * std::process::id().to_string().len()
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn last_app_is_the_last_loaded_process() {
+        let text = "\
+2026-01-01T00:00:00.000Z [pid 7] layer loaded into /usr/bin/a
+2026-01-01T00:00:00.001Z [pid 7] contrastxr 0.1.0 on, app \"a\"
+2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b
+2026-01-01T00:00:01.001Z [pid 7] a's late line
+2026-01-01T00:00:01.002Z [pid 9] contrastxr 0.1.0 on, app \"b\"
+not a log line
+2026-01-01T00:00:02.000Z [pid 9] processing frames (2 views per frame)
+";
+        let lines = last_app(text);
+        assert_eq!(lines.len(), 3, "{lines:?}");
+        assert!(lines[0].ends_with("layer loaded into /usr/bin/b"));
+        assert!(lines[2].ends_with("processing frames (2 views per frame)"));
+        assert!(last_app("no log lines\n").is_empty());
     }
 }

@@ -8,6 +8,8 @@ mod device;
 mod dispatch;
 mod entry;
 mod ffi;
+mod image_states;
+pub mod indicator;
 pub mod install;
 pub mod log;
 mod processor;

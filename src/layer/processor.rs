@@ -57,6 +57,8 @@ pub struct Processor {
     background_sequence: u64,
     views: HashMap<ViewKey, PreparedView>,
     frame: u64,
+    /// The in-headset indicator drawn after the enhancement (its timer is set by the session).
+    pub indicator: super::indicator::Indicator,
     // Last: dropped after everything above was destroyed in Drop.
     pub gpu: GpuDevice,
 }
@@ -86,6 +88,7 @@ impl Processor {
             background_sequence: 0,
             views: HashMap::new(),
             frame: 0,
+            indicator: Default::default(),
             gpu,
         })
     }
@@ -415,6 +418,15 @@ impl Processor {
             )?;
         }
         barrier(&self.gpu, self.commands.cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        let views = items.iter().map(|i| (i.key, &self.views[&i.key].target));
+        let now = std::time::Instant::now();
+        if self
+            .indicator
+            .record(&self.gpu, self.commands.cmd, views, now)?
+        {
+            // The capture and the copy back read what the indicator wrote.
+            barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::TRANSFER);
+        }
         for (i, (_, after)) in items.iter().zip(staging) {
             self.copy_to_capture(i, after);
         }
@@ -434,6 +446,7 @@ impl Drop for Processor {
         if let Some(mut bg) = self.background.take() {
             bg.destroy(&self.gpu);
         }
+        self.indicator.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
         self.commands.destroy(&self.gpu);
     }

@@ -9,7 +9,7 @@ use super::ffi::{find_in_chain, guard};
 use super::processor::{Processor, ViewKey, WorkItem};
 use super::registration::{self, ViewGeometry};
 use super::settings::{self, Settings};
-use super::state::{self, lock, SessionState};
+use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
 use super::{device, log, swapchain};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
@@ -63,6 +63,8 @@ pub unsafe extern "system" fn create_session(
             background,
             frames: 0,
             processed: 0,
+            last_blend_mode: None,
+            regions_seen: false,
         };
         // SAFETY: session was written by the successful create call.
         let handle = unsafe { *session };
@@ -212,9 +214,21 @@ pub fn forget(session: xr::Session) {
         // Closes the camera: it is open only while a session runs.
         s.background = None;
     }
-    state::registry()
+    // Lock order: the registry is never held while a swapchain is locked.
+    let all: Vec<(u64, Arc<Mutex<state::SwapchainState>>)> = state::registry()
         .swapchains
-        .retain(|_, sc| lock(sc).session != session);
+        .iter()
+        .map(|(k, v)| (*k, v.clone()))
+        .collect();
+    let gone: Vec<u64> = all
+        .into_iter()
+        .filter(|(_, sc)| lock(sc).session == session)
+        .map(|(k, _)| k)
+        .collect();
+    let mut reg = state::registry();
+    gone.iter().for_each(|k| {
+        reg.swapchains.remove(k);
+    });
 }
 
 /// # Safety
@@ -235,15 +249,18 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
     )
 }
 
-/// The sub-images of the frame's layers that the layer enhances, each with its camera mapping
-/// (projection views registered one by one, see [`registration`]).
+/// A sub-image a layer names, with its camera mapping when it is a projection view (each
+/// view registered from its field of view and pose, see [`registration`]; None for quads).
+struct SubImage {
+    sub: xr::SwapchainSubImage,
+    mapping: Option<CameraMapping>,
+}
+
+/// The sub-images of the frame's layers that the layer enhances.
 ///
 /// # Safety
 /// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
-unsafe fn sub_images(
-    info: &xr::FrameEndInfo,
-    settings: &Settings,
-) -> Vec<(xr::SwapchainSubImage, CameraMapping)> {
+unsafe fn sub_images(info: &xr::FrameEndInfo, settings: &Settings) -> Vec<SubImage> {
     let mut out = Vec::new();
     if info.layers.is_null() {
         return out;
@@ -266,53 +283,145 @@ unsafe fn sub_images(
             let mappings = registration::projection_mappings(settings, &geometry);
             for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
                 registration::log_mapping(settings, k, &mapping, &source);
-                out.push((view.sub_image, mapping));
+                out.push(SubImage {
+                    sub: view.sub_image,
+                    mapping: Some(mapping),
+                });
             }
         } else if settings.quad_layers && base.ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
             // SAFETY: the type tag says this is a quad layer.
-            let quad = unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image };
-            out.push((quad, registration::quad_mapping(settings)));
+            let sub = unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image };
+            out.push(SubImage { sub, mapping: None });
         }
     }
     out
 }
 
-/// A work item for a sub-image whose image the layer holds, with a rect inside the image.
-fn work_item(sub: &xr::SwapchainSubImage, mapping: CameraMapping) -> Option<WorkItem> {
-    let sc = state::swapchain(sub.swapchain)?;
-    let sc = lock(&sc);
+/// A work item for one view region of image `image` of a swapchain, if the region lies inside it.
+fn work_item(
+    swapchain: xr::Swapchain,
+    sc: &SwapchainState,
+    image: u32,
+    region: &ViewRegion,
+    settings: &Settings,
+) -> Option<WorkItem> {
     let format = sc.info.pixel.filter(|_| sc.info.processable())?;
-    let image = *sc.images.get(sc.held_release? as usize)?;
-    let r = sub.image_rect;
+    let vk_image = *sc.images.get(image as usize)?;
+    let r = region.rect;
     let fits = r.offset.x >= 0
         && r.offset.y >= 0
         && r.extent.width > 0
         && r.extent.height > 0
         && (r.offset.x + r.extent.width) as u32 <= sc.info.width
         && (r.offset.y + r.extent.height) as u32 <= sc.info.height
-        && sub.image_array_index < sc.info.array_size;
+        && region.array_index < sc.info.array_size;
     if !fits {
         log::once("bad-rect", "a layer's imageRect/imageArrayIndex lies outside its swapchain: that view passes through");
         return None;
     }
     Some(WorkItem {
         key: ViewKey {
-            swapchain: sub.swapchain.into_raw(),
+            swapchain: swapchain.into_raw(),
             offset: (r.offset.x, r.offset.y),
             extent: (r.extent.width as u32, r.extent.height as u32),
-            array_index: sub.image_array_index,
+            array_index: region.array_index,
         },
-        image,
+        image: vk_image,
         format,
         vk_format: sc.info.vk_format,
-        mapping,
+        // Quads, and whole images before the first xrEndFrame, take the manual mapping.
+        mapping: region
+            .mapping
+            .unwrap_or_else(|| registration::quad_mapping(settings)),
     })
 }
 
-fn acts_on(s: &SessionState, mode: xr::EnvironmentBlendMode) -> bool {
-    if mode == xr::EnvironmentBlendMode::ADDITIVE || s.settings.force {
+/// Each enhanced sub-image's swapchain with its regions in this frame, in submission order.
+fn regions_by_swapchain(subs: &[SubImage]) -> Vec<(xr::Swapchain, Vec<ViewRegion>)> {
+    let mut out: Vec<(xr::Swapchain, Vec<ViewRegion>)> = Vec::new();
+    for SubImage { sub, mapping } in subs {
+        let region = ViewRegion {
+            rect: sub.image_rect,
+            array_index: sub.image_array_index,
+            mapping: *mapping,
+        };
+        match out.iter_mut().find(|(h, _)| *h == sub.swapchain) {
+            Some((_, regions)) => regions.push(region),
+            None => out.push((sub.swapchain, vec![region])),
+        }
+    }
+    out
+}
+
+/// Remembers each swapchain's regions for images released ahead of their xrEndFrame, and
+/// returns the work for the images the layer holds now. The caller holds the session's lock.
+fn frame_items(subs: &[SubImage], settings: &Settings) -> Vec<WorkItem> {
+    let mut items = Vec::new();
+    for (handle, regions) in regions_by_swapchain(subs) {
+        let Some(sc) = state::swapchain(handle) else {
+            continue;
+        };
+        let mut sc = lock(&sc);
+        if let Some(image) = sc.states.held() {
+            items.extend(
+                regions
+                    .iter()
+                    .filter_map(|r| work_item(handle, &sc, image, r, settings)),
+            );
+        }
+        sc.last_views = regions;
+    }
+    items
+}
+
+/// The regions to enhance an image released ahead of its xrEndFrame with: the swapchain's
+/// last submitted ones; before the session's first xrEndFrame named any, each array layer whole.
+fn regions_ahead(s: &SessionState, sc: &SwapchainState) -> Vec<ViewRegion> {
+    if s.regions_seen {
+        return sc.last_views.clone();
+    }
+    let rect = xr::Rect2Di {
+        offset: xr::Offset2Di { x: 0, y: 0 },
+        extent: xr::Extent2Di {
+            width: sc.info.width as i32,
+            height: sc.info.height as i32,
+        },
+    };
+    (0..sc.info.array_size)
+        .map(|array_index| ViewRegion {
+            rect,
+            array_index,
+            mapping: None,
+        })
+        .collect()
+}
+
+/// Enhances image `image` of a swapchain now, before the app's xrEndFrame for it (a pipelined
+/// app released it and took its next image first). The caller holds the session's lock, then
+/// the swapchain's.
+pub fn enhance_ahead(
+    s: &mut SessionState,
+    sc: &SwapchainState,
+    swapchain: xr::Swapchain,
+    image: u32,
+) {
+    let items: Vec<WorkItem> = regions_ahead(s, sc)
+        .iter()
+        .filter_map(|r| work_item(swapchain, sc, image, r, &s.settings))
+        .collect();
+    let blend = s.last_blend_mode;
+    guarded_process(s, items, blend);
+}
+
+/// Whether the layer acts on frames of this blend mode (None: not known yet, before the first
+/// xrEndFrame; only a forced layer acts then).
+fn acts_on(s: &SessionState, mode: Option<xr::EnvironmentBlendMode>) -> bool {
+    if mode == Some(xr::EnvironmentBlendMode::ADDITIVE) || s.settings.force {
         return true;
     }
+    let Some(mode) = mode else {
+        return false;
+    };
     log::once("blend-mode", &format!(
         "environment blend mode {mode:?} is not ADDITIVE: passing frames through (set CONTRASTXR_FORCE=1 to act anyway)"
     ));
@@ -351,19 +460,40 @@ fn background_sequence(frame_sequence: u64, s: &Settings) -> u64 {
     frame_sequence.wrapping_add(s.generation << 40)
 }
 
-/// Enhances the held images of this frame; any failure turns the session into pass-through.
+/// Enhances the held images of this frame and remembers its regions; any failure turns the
+/// session into pass-through.
 fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
-    // Mode off: the app's frames untouched, no GPU work at all.
-    if s.settings.params.mode == ViewMode::Off
-        || s.processor.is_none()
-        || !acts_on(s, info.environment_blend_mode)
-    {
-        return;
-    }
     // SAFETY: the app's frame end info, valid for this call.
     let subs = unsafe { sub_images(info, &s.settings) };
-    let items: Vec<WorkItem> = subs.iter().filter_map(|(u, m)| work_item(u, *m)).collect();
-    if items.is_empty() {
+    let items = frame_items(&subs, &s.settings);
+    s.regions_seen |= !subs.is_empty();
+    s.last_blend_mode = Some(info.environment_blend_mode);
+    process(s, items, Some(info.environment_blend_mode));
+}
+
+/// `process` with panics caught: a panic turns the session into pass-through.
+fn guarded_process(
+    s: &mut SessionState,
+    items: Vec<WorkItem>,
+    blend: Option<xr::EnvironmentBlendMode>,
+) {
+    let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(s, items, blend)));
+    if done.is_err() {
+        log::info(
+            "internal error while enhancing: passing this session's frames through from now on",
+        );
+        s.processor = None;
+    }
+}
+
+/// Enhances `items` in place on the app's queue; any failure turns the session into pass-through.
+fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::EnvironmentBlendMode>) {
+    // Mode off: the app's frames untouched, no GPU work at all.
+    if items.is_empty()
+        || s.settings.params.mode == ViewMode::Off
+        || s.processor.is_none()
+        || !acts_on(s, blend)
+    {
         return;
     }
     let Some(frame) = background_frame(s) else {
@@ -373,6 +503,8 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     let params = s.settings.params.clone();
     let sequence = background_sequence(frame.sequence, &s.settings);
     let processor = s.processor.as_mut().expect("checked above");
+    let now = std::time::Instant::now();
+    processor.indicator.timer.update(&s.settings, now);
     match processor.process(&items, &frame.image, sequence, &params, capture) {
         Ok(views) => {
             if capture {
@@ -402,15 +534,7 @@ fn write_capture(
         return;
     };
     for (k, v) in views.iter().enumerate() {
-        let written = capture::write_view(
-            &c.dir,
-            s.processed,
-            k,
-            v,
-            bg,
-            &s.settings.background,
-            &s.settings.params,
-        );
+        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings);
         if let Err(e) = written {
             log::once("capture-failed", &format!("capture failed: {e}"));
         }
@@ -427,22 +551,25 @@ pub unsafe extern "system" fn end_frame(
         let Some(s) = state::session(session) else {
             return xr::Result::ERROR_HANDLE_INVALID;
         };
-        let mut s = lock(&s);
-        s.frames += 1;
-        pick_up_settings(session, &mut s);
-        // SAFETY: the app's frame end info (null is left for the runtime to reject).
-        if let Some(info) = unsafe { info.as_ref() } {
-            let processed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                enhance_frame(&mut s, info)
-            }));
-            if processed.is_err() {
-                log::info("internal error while enhancing: passing this session's frames through from now on");
-                s.processor = None;
+        let next = {
+            let mut s = lock(&s);
+            s.frames += 1;
+            pick_up_settings(session, &mut s);
+            // SAFETY: the app's frame end info (null is left for the runtime to reject).
+            if let Some(info) = unsafe { info.as_ref() } {
+                let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    enhance_frame(&mut s, info)
+                }));
+                if done.is_err() {
+                    log::info("internal error while enhancing: passing this session's frames through from now on");
+                    s.processor = None;
+                }
             }
-        }
-        // The runtime composes only released images: hand over every image we held.
-        swapchain::release_held(session);
-        // SAFETY: forwarding the app's call.
-        unsafe { (s.next.end_frame)(session, info) }
+            // The runtime composes only released images: hand over every image we held.
+            swapchain::release_held(session);
+            s.next
+        };
+        // SAFETY: forwarding the app's call (no layer lock is held while the runtime works).
+        unsafe { (next.end_frame)(session, info) }
     })
 }

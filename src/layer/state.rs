@@ -1,13 +1,21 @@
 //! What the layer tracks per instance, session and swapchain, keyed by raw handle.
-//! Lock order: a session before any of its swapchains.
+//!
+//! Lock order, everywhere: a session, then its swapchains (one at a time), then the registry.
+//! The registry lock is held only for map operations (look up, insert, remove, clone out the
+//! `Arc`s), never while taking another lock. Code that starts from a swapchain handle and needs
+//! its session reads the session handle, drops the swapchain lock, and locks the session first
+//! (`swapchain::with_session`). No lock is held across a runtime call that may block
+//! (xrWaitSwapchainImage, xrEndFrame), so a render thread and the frame thread never wait on
+//! each other through the layer.
 
 use super::dispatch::NextFns;
+use super::image_states::ImageStates;
 use super::processor::Processor;
 use super::settings::Settings;
 use crate::gpu::PixelFormat;
 use ash::vk;
 use openxr_sys as xr;
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
 pub struct InstanceState {
@@ -27,6 +35,22 @@ pub struct SessionState {
     pub frames: u64,
     /// Frames the layer processed (captures are numbered by this).
     pub processed: u64,
+    /// The blend mode of the last xrEndFrame (None before the first).
+    pub last_blend_mode: Option<xr::EnvironmentBlendMode>,
+    /// Whether any xrEndFrame has named sub-images yet (before that, a swapchain's view
+    /// regions are unknown).
+    pub regions_seen: bool,
+}
+
+/// One view's region of a swapchain image, as a composition layer names it.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewRegion {
+    pub rect: xr::Rect2Di,
+    pub array_index: u32,
+    /// A projection view's camera mapping, registered from its field of view and pose at the
+    /// frame's xrEndFrame (None for quad layers, and for the whole-image regions used before the
+    /// first xrEndFrame: they take the manual mapping).
+    pub mapping: Option<crate::algorithm::mapping::CameraMapping>,
 }
 
 #[derive(Clone, Debug)]
@@ -53,10 +77,11 @@ pub struct SwapchainState {
     pub next: NextFns,
     pub info: SwapchainInfo,
     pub images: Vec<vk::Image>,
-    /// Image indices acquired by the app and not yet released by it, oldest first.
-    pub acquired: VecDeque<u32>,
-    /// An image the app released whose release the layer holds until xrEndFrame.
-    pub held_release: Option<u32>,
+    /// The images' states as the runtime sees them, and the release the layer holds.
+    pub states: ImageStates,
+    /// The regions the app's last xrEndFrame named in this swapchain (enhanced layers only):
+    /// what an image released ahead of its xrEndFrame is enhanced with.
+    pub last_views: Vec<ViewRegion>,
 }
 
 #[derive(Default)]

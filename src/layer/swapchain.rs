@@ -1,15 +1,19 @@
-//! Swapchains: track creation info and images, and hold the app's release of a colour image
-//! until xrEndFrame, so the layer writes the image while it is still the app's to give.
-//! (On Monado a released image is handed to an external queue at once: writing it after the
-//! release would be outside the spec.)
+//! Swapchains: track creation info, images and image states, and hold the app's release of a
+//! colour image until xrEndFrame, so the layer writes the image while it is still the app's to
+//! give. (On Monado a released image is handed to an external queue at once: writing it after
+//! the release would be outside the spec.) Every call reaches the runtime at once except a
+//! release the runtime would accept; anything that needs the runtime to see the app's own state
+//! (another acquire, another release) hands a held release over first, enhanced, so each call
+//! gets the runtime's own answer. Queue work happens only in calls the spec lets use the app's
+//! queue: xrAcquireSwapchainImage, xrReleaseSwapchainImage, xrEndFrame.
 
 use super::ffi::guard;
+use super::image_states::{ImageStates, ReleasePlan};
 use super::log;
-use super::state::{self, lock, SwapchainInfo, SwapchainState};
+use super::state::{self, lock, SessionState, SwapchainInfo, SwapchainState};
 use crate::gpu::PixelFormat;
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
-use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
 fn transfer() -> xr::SwapchainUsageFlags {
@@ -78,8 +82,8 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                         transfer_usage,
                     },
                     images: Vec::new(),
-                    acquired: VecDeque::new(),
-                    held_release: None,
+                    states: ImageStates::default(),
+                    last_views: Vec::new(),
                 };
                 // SAFETY: written by the successful create call.
                 let handle = unsafe { *swapchain };
@@ -97,19 +101,18 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
         "xrDestroySwapchain",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let removed = state::registry().swapchains.remove(&swapchain.into_raw());
-            let next = match &removed {
-                Some(sc) => {
-                    let sc = lock(sc);
-                    if let Some(s) = state::session(sc.session) {
-                        if let Some(p) = lock(&s).processor.as_mut() {
-                            p.forget_swapchain(swapchain.into_raw());
-                        }
-                    }
-                    sc.next
-                }
-                None => return xr::Result::ERROR_HANDLE_INVALID,
+            let Some(sc) = state::swapchain(swapchain) else {
+                return xr::Result::ERROR_HANDLE_INVALID;
             };
+            let next = with_session(&sc, |s, sc| {
+                // A held release goes with the swapchain: the image is never composed again.
+                sc.states = ImageStates::default();
+                if let Some(p) = s.and_then(|s| s.processor.as_mut()) {
+                    p.forget_swapchain(swapchain.into_raw());
+                }
+                sc.next
+            });
+            state::registry().swapchains.remove(&swapchain.into_raw());
             // SAFETY: forwarding the app's call.
             unsafe { (next.destroy_swapchain)(swapchain) }
         },
@@ -153,38 +156,71 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
     )
 }
 
-/// Forwards a held release to the runtime (the image becomes the runtime's).
-fn forward_release(sc: &mut SwapchainState, swapchain: xr::Swapchain) -> xr::Result {
-    if sc.held_release.take().is_none() {
-        return xr::Result::SUCCESS;
+/// Runs `f` with the swapchain's session (if the layer tracks it) and the swapchain locked, in
+/// the documented lock order: the session first (see `state`).
+pub fn with_session<R>(
+    sc: &Arc<Mutex<SwapchainState>>,
+    f: impl FnOnce(Option<&mut SessionState>, &mut SwapchainState) -> R,
+) -> R {
+    let session = lock(sc).session;
+    let s = state::session(session);
+    let mut s = s.as_ref().map(|s| lock(s));
+    let mut sc = lock(sc);
+    f(s.as_deref_mut(), &mut sc)
+}
+
+/// Forwards the held release to the runtime (the image becomes the runtime's).
+fn forward_held(sc: &mut SwapchainState, swapchain: xr::Swapchain) {
+    if sc.states.held().is_none() {
+        return;
     }
     let info = xr::SwapchainImageReleaseInfo {
         ty: xr::SwapchainImageReleaseInfo::TYPE,
         next: std::ptr::null(),
     };
-    // SAFETY: releasing an image the app released earlier, with a valid release info.
+    // SAFETY: releasing the waited image the app released earlier, with a valid release info.
     let result = unsafe { (sc.next.release_swapchain_image)(swapchain, &info) };
     if result.into_raw() < 0 {
+        // Not expected: a release is held only while the runtime counts the image as waited.
         log::once(
             "release-failed",
             &format!("forwarding a held image release failed: {result:?}"),
         );
     }
-    result
+    sc.states.released();
 }
 
 /// Forwards every held release of a session's swapchains (at xrEndFrame, before the runtime's).
+/// The caller holds the session's lock.
 pub fn release_held(session: xr::Session) {
-    let held: Vec<(u64, Arc<Mutex<SwapchainState>>)> = state::registry()
+    let all: Vec<(u64, Arc<Mutex<SwapchainState>>)> = state::registry()
         .swapchains
         .iter()
         .map(|(k, v)| (*k, v.clone()))
         .collect();
-    for (handle, sc) in held {
+    for (handle, sc) in all {
+        crate::fault::pause("release-held");
         let mut sc = lock(&sc);
         if sc.session == session {
-            forward_release(&mut sc, xr::Swapchain::from_raw(handle));
+            forward_held(&mut sc, xr::Swapchain::from_raw(handle));
         }
+    }
+}
+
+/// Enhances a released image now, with the regions last submitted for its swapchain: its
+/// xrEndFrame comes after the runtime must have it (a pipelined app).
+fn enhance_ahead(
+    s: Option<&mut SessionState>,
+    sc: &SwapchainState,
+    swapchain: xr::Swapchain,
+    image: u32,
+) {
+    log::once(
+        "pipelined",
+        "the app works ahead of xrEndFrame (a pipelined renderer): its images are enhanced when released, with the view regions it last submitted",
+    );
+    if let Some(s) = s {
+        super::session::enhance_ahead(s, sc, swapchain, image);
     }
 }
 
@@ -200,21 +236,45 @@ pub(crate) unsafe extern "system" fn acquire_swapchain_image(
             let Some(sc) = state::swapchain(swapchain) else {
                 return xr::Result::ERROR_HANDLE_INVALID;
             };
-            let mut sc = lock(&sc);
-            if sc.held_release.is_some() {
-                // The app wants another image before xrEndFrame: the held one goes as it is.
-                log::once(
-                    "reacquire",
-                    "an app acquired again before xrEndFrame: that image passed through unenhanced",
-                );
-                forward_release(&mut sc, swapchain);
-            }
+            // The app takes its next image before xrEndFrame: the held one goes now, enhanced
+            // (acquire may use the app's queue), so the runtime sees what the app sees.
+            let next = with_session(&sc, |s, sc| {
+                if let Some(i) = sc.states.held() {
+                    enhance_ahead(s, sc, swapchain, i);
+                    forward_held(sc, swapchain);
+                }
+                sc.next
+            });
             // SAFETY: forwarding the app's arguments.
-            let result = unsafe { (sc.next.acquire_swapchain_image)(swapchain, info, index) };
+            let result = unsafe { (next.acquire_swapchain_image)(swapchain, info, index) };
             if result.into_raw() >= 0 {
                 // SAFETY: written by the successful call.
-                let i = unsafe { *index };
-                sc.acquired.push_back(i);
+                lock(&sc).states.acquired(unsafe { *index });
+            }
+            result
+        },
+    )
+}
+
+pub(crate) unsafe extern "system" fn wait_swapchain_image(
+    swapchain: xr::Swapchain,
+    info: *const xr::SwapchainImageWaitInfo,
+) -> xr::Result {
+    guard(
+        "xrWaitSwapchainImage",
+        xr::Result::ERROR_RUNTIME_FAILURE,
+        || {
+            let Some(sc) = state::swapchain(swapchain) else {
+                return xr::Result::ERROR_HANDLE_INVALID;
+            };
+            // No lock is held while the runtime blocks. A held release here means the app has
+            // no acquired image: the runtime answers CALL_ORDER_INVALID either way ("already
+            // waited" for the held image, as "nothing acquired" without the layer).
+            let next = lock(&sc).next;
+            // SAFETY: forwarding the app's arguments.
+            let result = unsafe { (next.wait_swapchain_image)(swapchain, info) };
+            if result.into_raw() >= 0 && result != xr::Result::TIMEOUT_EXPIRED {
+                lock(&sc).states.waited(result == xr::Result::SUCCESS);
             }
             result
         },
@@ -232,19 +292,33 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
             let Some(sc) = state::swapchain(swapchain) else {
                 return xr::Result::ERROR_HANDLE_INVALID;
             };
-            let mut sc = lock(&sc);
-            let holdable =
-                sc.info.processable() && !sc.images.is_empty() && sc.held_release.is_none();
-            if holdable {
-                if let Some(i) = sc.acquired.pop_front() {
-                    sc.held_release = Some(i);
-                    return xr::Result::SUCCESS;
+            let (plan, next) = with_session(&sc, |s, sc| {
+                // SAFETY: the app's release info, null or valid (its type is checked here and
+                // by the runtime when forwarded).
+                let info_ok =
+                    info.is_null() || unsafe { (*info).ty } == xr::SwapchainImageReleaseInfo::TYPE;
+                let holdable = info_ok && sc.info.processable() && !sc.images.is_empty();
+                let plan = sc.states.plan_release(holdable);
+                match plan {
+                    ReleasePlan::Hold(_) => sc.states.hold(),
+                    ReleasePlan::EnhanceThenForward(i) => enhance_ahead(s, sc, swapchain, i),
+                    ReleasePlan::FlushHeldThenForward(i) => {
+                        enhance_ahead(s, sc, swapchain, i);
+                        forward_held(sc, swapchain);
+                    }
+                    ReleasePlan::Forward => {}
                 }
+                (plan, sc.next)
+            });
+            if let ReleasePlan::Hold(_) = plan {
+                // The runtime would accept this release (an image is waited): it answers the
+                // same when the layer forwards it at xrEndFrame.
+                return xr::Result::SUCCESS;
             }
             // SAFETY: forwarding the app's arguments.
-            let result = unsafe { (sc.next.release_swapchain_image)(swapchain, info) };
+            let result = unsafe { (next.release_swapchain_image)(swapchain, info) };
             if result.into_raw() >= 0 {
-                sc.acquired.pop_front();
+                lock(&sc).states.released();
             }
             result
         },

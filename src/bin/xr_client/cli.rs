@@ -24,6 +24,12 @@ usage: contrastxr-xr-client [options]
                           record two unsynchronised writes (to test that sync validation is on)
   --provoke-vk-leak       leave one buffer undestroyed (to test that leaks are reported)
   --sessions N            create, run (--frames each) and destroy N sessions in turn (default 1)
+  --pipelined             acquire and wait for the next frame's image before xrEndFrame of the
+                          current one, as engines with a render thread running ahead do
+  --churn-swapchains      create and destroy swapchains on a second thread while frames run
+  --script OPS            instead of frames, run one scripted sequence of raw swapchain and
+                          frame calls (comma-separated: acquire wait release begin end
+                          end-empty destroy create) and report each call's XrResult (`script`)
   --check-untouched       read each swapchain image back when it is acquired again and report
                           the frames whose pixels changed after the client wrote them
   The JSON report holds resident memory and open file descriptors every 50 frames
@@ -64,6 +70,9 @@ pub struct Options {
     pub provoke_leak: bool,
     pub sessions: u32,
     pub check_untouched: bool,
+    pub pipelined: bool,
+    pub churn_swapchains: bool,
+    pub script: Option<Vec<crate::script::Op>>,
 }
 
 impl Default for Options {
@@ -84,6 +93,9 @@ impl Default for Options {
             provoke_leak: false,
             sessions: 1,
             check_untouched: false,
+            pipelined: false,
+            churn_swapchains: false,
+            script: None,
         }
     }
 }
@@ -110,6 +122,9 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--provoke-vk-sync-hazard" => options.provoke_sync_hazard = true,
             "--provoke-vk-leak" => options.provoke_leak = true,
             "--check-untouched" => options.check_untouched = true,
+            "--pipelined" => options.pipelined = true,
+            "--churn-swapchains" => options.churn_swapchains = true,
+            "--script" => options.script = Some(crate::script::parse(&value()?)?),
             "--sessions" => {
                 options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?
             }
@@ -165,6 +180,9 @@ mod tests {
             (Layout::SideBySide, 7, true, Some((64, 48)))
         );
         assert!(o.validation && o.json && !o.list_formats);
+        let o = parse_str("--pipelined --script acquire,wait,release,end-empty").unwrap();
+        assert!(o.pipelined);
+        assert_eq!(o.script.unwrap().len(), 4);
     }
 
     #[test]
@@ -177,6 +195,7 @@ mod tests {
             "--size 0x5",
             "--frames",
             "--bogus",
+            "--script acquire,jump",
         ] {
             assert!(parse_str(bad).is_err(), "{bad}");
         }

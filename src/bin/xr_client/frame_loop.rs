@@ -27,6 +27,9 @@ pub struct Stats {
     pub drain_ms: Vec<f64>,
     /// Resident memory and descriptors every 50 submitted frames.
     pub memory: Vec<crate::report::Sample>,
+    /// With --script: each op's XrResult, and whether the script ran to its end.
+    pub script: Vec<String>,
+    pub script_ran: bool,
 }
 
 /// What the frame loop draws with.
@@ -38,6 +41,9 @@ pub struct Scene<'a> {
     pub quad: Option<PatternSwapchain>,
     pub view_size: (u32, u32),
     pub blend_mode: xr::EnvironmentBlendMode,
+    pub format: crate::format::SwapchainFormat,
+    /// With --pipelined: the projection image already acquired and waited for the next frame.
+    pub ahead: Option<u32>,
 }
 
 pub fn run(
@@ -89,7 +95,16 @@ pub fn run(
             std::thread::sleep(Duration::from_millis(10));
             continue;
         }
-        if stats.frames_submitted - first_frame >= options.frames && !exit_requested {
+        if let (Some(ops), false) = (&options.script, stats.script_ran) {
+            stats.script = crate::script::run(scene, scene.format, ops)?;
+            stats.script_ran = true;
+        }
+        let done = if options.script.is_some() {
+            stats.script_ran
+        } else {
+            stats.frames_submitted - first_frame >= options.frames
+        };
+        if done && !exit_requested {
             scene.session.request_exit().ctx("xrRequestExitSession")?;
             exit_requested = true;
         }
@@ -109,7 +124,7 @@ fn frame(
     let state = frame_waiter.wait().ctx("xrWaitFrame")?;
     frame_stream.begin().ctx("xrBeginFrame")?;
     stats.frames_ended += 1;
-    if !state.should_render {
+    if !state.should_render || options.script.is_some() {
         return frame_stream
             .end(state.predicted_display_time, scene.blend_mode, &[])
             .ctx("xrEndFrame (no layers)");
@@ -119,6 +134,10 @@ fn frame(
         .locate_views(VIEW_TYPE, state.predicted_display_time, scene.space)
         .ctx("xrLocateViews")?;
     render(scene, stats.frames_submitted)?;
+    if options.pipelined {
+        // The next frame's image, before this frame's xrEndFrame (a render thread running ahead).
+        scene.ahead = Some(scene.projection.acquire()?);
+    }
     let (w, h) = (scene.view_size.0 as i32, scene.view_size.1 as i32);
     let projection_views: Vec<_> = (0..2)
         .map(|i| {
@@ -173,7 +192,10 @@ fn frame(
 
 /// Fills the next image of every swapchain and releases them once the GPU is done.
 fn render(scene: &mut Scene<'_>, frame: u32) -> Result<()> {
-    let projection_index = scene.projection.acquire()?;
+    let projection_index = match scene.ahead.take() {
+        Some(index) => index,
+        None => scene.projection.acquire()?,
+    };
     let quad_index = scene.quad.as_mut().map(|q| q.acquire()).transpose()?;
     scene.gpu.submit_and_wait(|device, cmd| {
         scene

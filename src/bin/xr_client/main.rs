@@ -4,6 +4,7 @@
 //! OpenXR or Vulkan error (and on any Vulkan validation error with --validation).
 //! Run it inside the sandbox: `scripts/xr-sandbox run -- target/debug/contrastxr-xr-client`.
 
+mod churn;
 mod cli;
 mod error;
 mod format;
@@ -11,6 +12,7 @@ mod frame_loop;
 mod gpu;
 mod pattern;
 mod report;
+mod script;
 mod swapchain;
 mod validation;
 
@@ -51,6 +53,7 @@ fn main() -> ExitCode {
         report.errors.push(e.0);
     }
     report.frames_submitted = stats.frames_submitted;
+    report.script = std::mem::take(&mut stats.script);
     report.memory = std::mem::take(&mut stats.memory);
     report.frames_ended = stats.frames_ended;
     report.reached_focused = stats.reached_focused;
@@ -59,7 +62,10 @@ fn main() -> ExitCode {
     }
     report.vk_validation_errors = validation::errors();
     report.vk_validation_warnings = validation::warnings();
-    let ran = options.list_formats || stats.frames_submitted >= options.frames * options.sessions;
+    let ran = options.list_formats
+        || stats.script_ran
+        || (options.script.is_none()
+            && stats.frames_submitted >= options.frames * options.sessions);
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     if options.json {
         eprintln!("{}", report.summary());
@@ -202,15 +208,32 @@ fn run_session(
         quad,
         view_size,
         blend_mode: world.blend_mode,
+        format,
+        ahead: None,
     };
-    let result = frame_loop::run(
-        instance,
-        &mut scene,
-        &mut waiter,
-        &mut stream,
-        options,
-        stats,
-    );
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let churned = std::sync::atomic::AtomicU32::new(0);
+    let result = std::thread::scope(|threads| {
+        let churner = options
+            .churn_swapchains
+            .then(|| threads.spawn(|| churn::churn(&session, format, &stop, &churned)));
+        let result = frame_loop::run(
+            instance,
+            &mut scene,
+            &mut waiter,
+            &mut stream,
+            options,
+            stats,
+        );
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        match churner.map(|t| t.join()) {
+            Some(Ok(Some(e))) => report.errors.push(e),
+            Some(Err(_)) => report.errors.push("the churn thread panicked".into()),
+            _ => {}
+        }
+        result
+    });
+    report.swapchains_churned += churned.into_inner();
     for swapchain in std::iter::once(&scene.projection).chain(scene.quad.as_ref()) {
         let (checked, modified) = swapchain.check_result();
         report.frames_checked += checked;

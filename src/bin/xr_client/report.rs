@@ -29,6 +29,11 @@ pub struct Report {
     pub memory: Vec<Sample>,
     /// After each session was destroyed.
     pub sessions: Vec<Sample>,
+    /// With --churn-swapchains: swapchains created and destroyed by the second thread.
+    pub swapchains_churned: u32,
+    /// With --script: each op and the XrResult it got (`acquire SUCCESS 0`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub script: Vec<String>,
     /// With --timing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timing: Option<Timing>,

@@ -1,0 +1,388 @@
+//! `--script`: a scripted sequence of raw swapchain and frame calls, each one's XrResult
+//! recorded as the runtime (or a layer) returned it, whatever the call order. Used to compare
+//! call semantics with and without an API layer: the calls go through the raw function table,
+//! so nothing in the client checks or reorders them.
+//!
+//! Ops (comma-separated): `acquire`, `wait`, `release` (the script's swapchain), `begin`
+//! (xrWaitFrame, then xrBeginFrame: the recorded result is xrBeginFrame's), `end` (xrEndFrame
+//! with one projection layer, both views on the script's swapchain, array layers 0 and 1),
+//! `end-empty` (xrEndFrame with no layers), `destroy` (xrDestroySwapchain), `create` (a new
+//! swapchain replaces the script's one). The script's swapchain is created before the first op.
+//! After a successful `wait` the client clears the waited image to a colour, so a layer has
+//! content to work on.
+
+use std::ptr;
+
+use ash::vk::{self, Handle};
+use openxr as xr;
+use openxr::sys;
+
+use crate::error::{fail, Context, Result};
+use crate::format::SwapchainFormat;
+use crate::frame_loop::Scene;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op {
+    Acquire,
+    Wait,
+    Release,
+    Begin,
+    End,
+    EndEmpty,
+    Destroy,
+    Create,
+}
+
+pub fn parse(text: &str) -> std::result::Result<Vec<Op>, String> {
+    text.split(',')
+        .map(|op| match op.trim() {
+            "acquire" => Ok(Op::Acquire),
+            "wait" => Ok(Op::Wait),
+            "release" => Ok(Op::Release),
+            "begin" => Ok(Op::Begin),
+            "end" => Ok(Op::End),
+            "end-empty" => Ok(Op::EndEmpty),
+            "destroy" => Ok(Op::Destroy),
+            "create" => Ok(Op::Create),
+            other => Err(format!(
+                "unknown script op {other:?}: use acquire wait release begin end end-empty destroy create"
+            )),
+        })
+        .collect()
+}
+
+fn op_name(op: Op) -> &'static str {
+    match op {
+        Op::Acquire => "acquire",
+        Op::Wait => "wait",
+        Op::Release => "release",
+        Op::Begin => "begin",
+        Op::End => "end",
+        Op::EndEmpty => "end-empty",
+        Op::Destroy => "destroy",
+        Op::Create => "create",
+    }
+}
+
+/// A swapchain driven only through raw calls (the `openxr` crate's wrapper checks call order
+/// itself and would destroy the handle a second time).
+struct RawSwapchain {
+    raw: sys::Swapchain,
+    images: Vec<vk::Image>,
+    /// Acquired and not yet waited, oldest first; then the waited one (the client's own view).
+    acquired: std::collections::VecDeque<u32>,
+    destroyed: bool,
+}
+
+/// What a script runs against.
+struct Runner<'s, 'a> {
+    scene: &'s Scene<'a>,
+    format: SwapchainFormat,
+    swapchain: RawSwapchain,
+    display_time: sys::Time,
+    results: Vec<String>,
+}
+
+fn fp<'s>(scene: &'s Scene<'_>) -> &'s xr::raw::Instance {
+    scene.session.instance().fp()
+}
+
+fn create(scene: &Scene<'_>, format: SwapchainFormat) -> Result<RawSwapchain> {
+    let (width, height) = scene.view_size;
+    let info = sys::SwapchainCreateInfo {
+        ty: sys::SwapchainCreateInfo::TYPE,
+        next: ptr::null(),
+        create_flags: sys::SwapchainCreateFlags::EMPTY,
+        usage_flags: sys::SwapchainUsageFlags::COLOR_ATTACHMENT
+            | sys::SwapchainUsageFlags::TRANSFER_DST,
+        format: format.vk.as_raw() as i64,
+        sample_count: 1,
+        width,
+        height,
+        face_count: 1,
+        array_size: 2,
+        mip_count: 1,
+    };
+    let mut raw = sys::Swapchain::NULL;
+    // SAFETY: a valid create info and out pointer for this session.
+    let r = unsafe { (fp(scene).create_swapchain)(scene.session.as_raw(), &info, &mut raw) };
+    if r != sys::Result::SUCCESS {
+        return fail(format!("xrCreateSwapchain (script) failed: {r:?}"));
+    }
+    Ok(RawSwapchain {
+        raw,
+        images: enumerate_images(scene, raw)?,
+        acquired: Default::default(),
+        destroyed: false,
+    })
+}
+
+fn enumerate_images(scene: &Scene<'_>, raw: sys::Swapchain) -> Result<Vec<vk::Image>> {
+    let enumerate = fp(scene).enumerate_swapchain_images;
+    let mut count = 0;
+    // SAFETY: the two-call idiom with a null array first.
+    let r = unsafe { enumerate(raw, 0, &mut count, ptr::null_mut()) };
+    if r != sys::Result::SUCCESS {
+        return fail(format!("xrEnumerateSwapchainImages failed: {r:?}"));
+    }
+    let blank = sys::SwapchainImageVulkanKHR {
+        ty: sys::SwapchainImageVulkanKHR::TYPE,
+        next: ptr::null_mut(),
+        image: 0,
+    };
+    let mut images = vec![blank; count as usize];
+    // SAFETY: `count` Vulkan image structs of the right type.
+    let r = unsafe { enumerate(raw, count, &mut count, images.as_mut_ptr().cast()) };
+    if r != sys::Result::SUCCESS {
+        return fail(format!("xrEnumerateSwapchainImages failed: {r:?}"));
+    }
+    Ok(images
+        .iter()
+        .map(|i| vk::Image::from_raw(i.image))
+        .collect())
+}
+
+impl Runner<'_, '_> {
+    fn record(&mut self, op: Op, result: sys::Result, extra: Option<u32>) {
+        let extra = extra.map(|i| format!(" {i}")).unwrap_or_default();
+        self.results
+            .push(format!("{} {result:?}{extra}", op_name(op)));
+    }
+
+    fn run(&mut self, op: Op) -> Result<()> {
+        let sc = self.swapchain.raw;
+        let f = fp(self.scene);
+        match op {
+            Op::Acquire => {
+                let mut index = u32::MAX;
+                // SAFETY: raw call with a valid out pointer (the handle may be destroyed: that
+                // is what some scripts test, and the answer is recorded).
+                let r = unsafe { (f.acquire_swapchain_image)(sc, ptr::null(), &mut index) };
+                if r.into_raw() >= 0 {
+                    self.swapchain.acquired.push_back(index);
+                }
+                self.record(op, r, (r.into_raw() >= 0).then_some(index));
+            }
+            Op::Wait => {
+                let info = sys::SwapchainImageWaitInfo {
+                    ty: sys::SwapchainImageWaitInfo::TYPE,
+                    next: ptr::null(),
+                    timeout: sys::Duration::INFINITE,
+                };
+                // SAFETY: raw call with a valid wait info.
+                let r = unsafe { (f.wait_swapchain_image)(sc, &info) };
+                if r == sys::Result::SUCCESS {
+                    if let Some(&index) = self.swapchain.acquired.front() {
+                        self.clear(index)?;
+                    }
+                }
+                self.record(op, r, None);
+            }
+            Op::Release => {
+                // SAFETY: raw call; a null release info is allowed.
+                let r = unsafe { (f.release_swapchain_image)(sc, ptr::null()) };
+                if r.into_raw() >= 0 {
+                    self.swapchain.acquired.pop_front();
+                }
+                self.record(op, r, None);
+            }
+            Op::Begin => self.begin()?,
+            Op::End => {
+                let r = self.end(true)?;
+                self.record(op, r, None);
+            }
+            Op::EndEmpty => {
+                let r = self.end(false)?;
+                self.record(op, r, None);
+            }
+            Op::Destroy => {
+                // SAFETY: raw destroy; the handle is not used by the client afterwards except
+                // by later ops of the script, whose answers are recorded.
+                let r = unsafe { (f.destroy_swapchain)(sc) };
+                self.swapchain.destroyed = r == sys::Result::SUCCESS;
+                self.record(op, r, None);
+            }
+            Op::Create => {
+                self.drop_swapchain();
+                self.swapchain = create(self.scene, self.format)?;
+                self.record(op, sys::Result::SUCCESS, None);
+            }
+        }
+        Ok(())
+    }
+
+    fn begin(&mut self) -> Result<()> {
+        let f = fp(self.scene);
+        let session = self.scene.session.as_raw();
+        let mut state = sys::FrameState {
+            ty: sys::FrameState::TYPE,
+            next: ptr::null_mut(),
+            predicted_display_time: sys::Time::from_nanos(0),
+            predicted_display_period: sys::Duration::from_nanos(0),
+            should_render: false.into(),
+        };
+        // SAFETY: raw xrWaitFrame with a null wait info (allowed) and a valid out struct.
+        let r = unsafe { (f.wait_frame)(session, ptr::null(), &mut state) };
+        if r != sys::Result::SUCCESS {
+            return fail(format!("xrWaitFrame (script) failed: {r:?}"));
+        }
+        self.display_time = state.predicted_display_time;
+        // SAFETY: raw xrBeginFrame with a null begin info (allowed).
+        let r = unsafe { (f.begin_frame)(session, ptr::null()) };
+        self.record(Op::Begin, r, None);
+        Ok(())
+    }
+
+    /// xrEndFrame with the projection layer on the script's swapchain, or with no layers.
+    fn end(&mut self, with_layer: bool) -> Result<sys::Result> {
+        let scene = self.scene;
+        let (_, views) = scene
+            .session
+            .locate_views(
+                xr::ViewConfigurationType::PRIMARY_STEREO,
+                self.display_time,
+                scene.space,
+            )
+            .ctx("xrLocateViews")?;
+        let (w, h) = (scene.view_size.0 as i32, scene.view_size.1 as i32);
+        let projection_views: Vec<sys::CompositionLayerProjectionView> = (0..2)
+            .map(|i| sys::CompositionLayerProjectionView {
+                ty: sys::CompositionLayerProjectionView::TYPE,
+                next: ptr::null(),
+                pose: views[i].pose,
+                fov: views[i].fov,
+                sub_image: sys::SwapchainSubImage {
+                    swapchain: self.swapchain.raw,
+                    image_rect: sys::Rect2Di {
+                        offset: sys::Offset2Di { x: 0, y: 0 },
+                        extent: sys::Extent2Di {
+                            width: w,
+                            height: h,
+                        },
+                    },
+                    image_array_index: i as u32,
+                },
+            })
+            .collect();
+        let projection = sys::CompositionLayerProjection {
+            ty: sys::CompositionLayerProjection::TYPE,
+            next: ptr::null(),
+            layer_flags: sys::CompositionLayerFlags::EMPTY,
+            space: scene.space.as_raw(),
+            view_count: 2,
+            views: projection_views.as_ptr(),
+        };
+        let layers = [&projection as *const _ as *const sys::CompositionLayerBaseHeader];
+        let info = sys::FrameEndInfo {
+            ty: sys::FrameEndInfo::TYPE,
+            next: ptr::null(),
+            display_time: self.display_time,
+            environment_blend_mode: scene.blend_mode,
+            layer_count: u32::from(with_layer),
+            layers: if with_layer {
+                layers.as_ptr()
+            } else {
+                ptr::null()
+            },
+        };
+        // SAFETY: every struct above lives until the call returns.
+        Ok(unsafe { (fp(scene).end_frame)(scene.session.as_raw(), &info) })
+    }
+
+    /// Clears both layers of image `index` to a colour, leaving COLOR_ATTACHMENT_OPTIMAL.
+    fn clear(&self, index: u32) -> Result<()> {
+        let Some(&image) = self.swapchain.images.get(index as usize) else {
+            return Ok(());
+        };
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(2);
+        let colour = vk::ClearColorValue {
+            float32: [0.8, 0.35, 0.2, 1.0],
+        };
+        self.scene.gpu.submit_and_wait(|device, cmd| {
+            let to_transfer = layout_barrier(
+                image,
+                range,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            )
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
+            let to_colour = layout_barrier(
+                image,
+                range,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            )
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
+            // SAFETY: `cmd` is recording; the image is acquired and waited by the client.
+            unsafe {
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[to_transfer],
+                );
+                device.cmd_clear_color_image(
+                    cmd,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &colour,
+                    &[range],
+                );
+                device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[to_colour],
+                );
+            }
+        })
+    }
+
+    fn drop_swapchain(&mut self) {
+        if !self.swapchain.destroyed {
+            // SAFETY: the script's own live swapchain.
+            unsafe { (fp(self.scene).destroy_swapchain)(self.swapchain.raw) };
+            self.swapchain.destroyed = true;
+        }
+    }
+}
+
+fn layout_barrier(
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+) -> vk::ImageMemoryBarrier<'static> {
+    vk::ImageMemoryBarrier::default()
+        .image(image)
+        .subresource_range(range)
+        .old_layout(old)
+        .new_layout(new)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+}
+
+/// Runs `ops` on a fresh swapchain of `format`; returns each op's name and XrResult.
+pub fn run(scene: &Scene<'_>, format: SwapchainFormat, ops: &[Op]) -> Result<Vec<String>> {
+    let mut runner = Runner {
+        scene,
+        format,
+        swapchain: create(scene, format)?,
+        display_time: sys::Time::from_nanos(0),
+        results: Vec::new(),
+    };
+    let outcome = ops.iter().try_for_each(|&op| runner.run(op));
+    // The swapchain goes with the script; the frame loop goes on with empty frames.
+    runner.drop_swapchain();
+    outcome.map(|_| runner.results)
+}
