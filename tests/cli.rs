@@ -594,3 +594,22 @@ fn calibrate_takes_single_keys_on_a_terminal() {
     assert_eq!(r.eye_scale, [[1.01, 1.0], [1.0, 1.0]], "{text}");
     assert!(!std::fs::read_to_string(&config).unwrap().contains("mode"));
 }
+
+#[test]
+fn calibrate_with_device_starts_from_and_saves_to_the_headsets_table() {
+    let config = scratch("calibrate-device.toml");
+    std::fs::write(
+        &config,
+        "left_eye_offset = [0.5, 0.5]\n[device.\"HMD\"]\nleft_eye_offset = [0.1, 0]\n",
+    )
+    .unwrap();
+    let o = calibrate(&config, &["--device", "HMD"], "right\nnext\n");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert_eq!(
+        text,
+        "left_eye_offset = [0.5, 0.5]\n[device.\"HMD\"]\nleft_eye_offset = [0.105, 0.0]\n"
+    );
+    let o = calibrate(&config, &["--device", "HMD", "--app", "x"], "");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}

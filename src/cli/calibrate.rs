@@ -7,20 +7,27 @@
 //! one or more commands per line, so a script can drive it.
 
 use super::{print, Args, CliError, Opt};
-use contrastxr::config::{self, edit, Env, Key, Value, EYES};
+use contrastxr::config::edit::{self, Table};
+use contrastxr::config::{self, Env, Key, Value, EYES};
 use std::io::{BufRead, Read};
 use std::path::PathBuf;
 
-pub const OPTIONS: &[Opt] = &[Opt::value("--app", "NAME"), Opt::value("--step", "F")];
+pub const OPTIONS: &[Opt] = &[
+    Opt::value("--app", "NAME"),
+    Opt::value("--device", "SYSTEM"),
+    Opt::value("--step", "F"),
+];
 
 pub fn usage() -> String {
-    "usage: contrastxr calibrate [--app NAME] [--step F]\n\n\
+    "usage: contrastxr calibrate [--app NAME | --device SYSTEM] [--step F]\n\n\
      Lines the camera's background up with what each eye sees, with the app running and the\n\
      headset on. Running apps show the background (mode background) until the end; for each\n\
      eye in turn (close the other one), move and scale the picture until its edges sit on the\n\
      real edges behind it. Every change is written to the config file at once (the app\n\
      follows within a second) as left_eye_offset/left_eye_scale and\n\
-     right_eye_offset/right_eye_scale; with --app, in [app.\"NAME\"].\n\n\
+     right_eye_offset/right_eye_scale: at the file's top level, or with --app in\n\
+     [app.\"NAME\"], with --device in [device.\"SYSTEM\"] (the headset's systemName, as the\n\
+     layer logs it; `mode` is switched in the same table).\n\n\
      keys:   arrows or w a s d   move the picture up, left, down, right\n\
      \x20       + -                 bigger, smaller      ] [   wider, narrower\n\
      \x20       } {                 taller, shorter      > <   coarser, finer steps\n\
@@ -205,11 +212,12 @@ impl Eye {
     }
 }
 
-/// The config file being edited, and the app table (if any).
+/// The config file being edited, and the table the calibration goes to.
 struct Target {
     path: PathBuf,
     seed: Option<PathBuf>,
     app: Option<String>,
+    device: Option<String>,
 }
 
 fn key(name: &str) -> &'static Key {
@@ -226,10 +234,17 @@ fn pair(v: [f64; 2]) -> Value {
 }
 
 impl Target {
+    fn table(&self) -> Table<'_> {
+        match (&self.app, &self.device) {
+            (Some(app), _) => Table::App(app),
+            (None, Some(device)) => Table::Device(device),
+            (None, None) => Table::Top,
+        }
+    }
+
     fn set(&self, name: &str, value: &Value) -> Result<(), CliError> {
         let seed = self.seed.as_deref();
-        edit::set(&self.path, seed, self.app.as_deref(), key(name), value)
-            .map_err(CliError::Failure)
+        edit::set_in(&self.path, seed, self.table(), key(name), value).map_err(CliError::Failure)
     }
 
     /// The eye's correction as the config gives it now.
@@ -256,9 +271,7 @@ impl Target {
     fn restore_mode(&self, previous: &Option<Value>) -> Result<(), CliError> {
         match previous {
             Some(v) => self.set("mode", v),
-            None => {
-                edit::unset(&self.path, self.app.as_deref(), key("mode")).map_err(CliError::Failure)
-            }
+            None => edit::unset(&self.path, self.table(), key("mode")).map_err(CliError::Failure),
         }
     }
 }
@@ -272,8 +285,11 @@ fn settings_now(target: &Target) -> config::Settings {
     let source = file
         .zip(text.as_deref())
         .map(|(path, text)| config::Source { path, text });
-    let app = target.app.as_deref().unwrap_or("");
-    config::resolve(app, source, &Env::default()).settings
+    let who = config::Who {
+        app: target.app.as_deref().unwrap_or(""),
+        device: target.device.as_deref(),
+    };
+    config::resolve_for(who, source, &Env::default()).settings
 }
 
 fn say(input: &Input, line: &str) {
@@ -350,6 +366,7 @@ fn calibrate_eyes(
 
 pub fn run(args: &mut Args) -> Result<(), CliError> {
     let app = args.value(&["--app"])?;
+    let device = args.value(&["--device"])?;
     let step = match args.value(&["--step"])? {
         Some(s) => short(super::args::parse_f32("--step", &s)?),
         None => 0.005,
@@ -361,11 +378,19 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         )));
     }
     let (path, seed) = config::path::for_writing(&Env::capture()).map_err(CliError::Failure)?;
-    let target = Target { path, seed, app };
+    if app.is_some() && device.is_some() {
+        return Err(CliError::Usage("give --app or --device, not both".into()));
+    }
+    let target = Target {
+        path,
+        seed,
+        app,
+        device,
+    };
     let previous = edit::entry(
         &target.path,
         target.seed.as_deref(),
-        target.app.as_deref(),
+        target.table(),
         key("mode"),
     )
     .map_err(CliError::Failure)?;

@@ -34,25 +34,51 @@ pub fn write_atomically(path: &Path, text: &str) -> Result<(), String> {
     })
 }
 
+/// Which table of the file an edit goes to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Table<'a> {
+    /// The top level: every app on every headset.
+    Top,
+    /// `[app."NAME"]`.
+    App(&'a str),
+    /// `[device."SYSTEM"]`.
+    Device(&'a str),
+}
+
+impl<'a> Table<'a> {
+    /// `[app."NAME"]` when `app` is given, else the top level.
+    pub fn of_app(app: Option<&'a str>) -> Table<'a> {
+        app.map_or(Table::Top, Table::App)
+    }
+
+    fn kind_and_name(self) -> Option<(&'static str, &'a str)> {
+        match self {
+            Table::Top => None,
+            Table::App(name) => Some(("app", name)),
+            Table::Device(name) => Some(("device", name)),
+        }
+    }
+}
+
 fn table<'d>(
     doc: &'d mut DocumentMut,
-    app: Option<&str>,
+    which: Table,
 ) -> Result<&'d mut dyn toml_edit::TableLike, String> {
-    let Some(app) = app else {
+    let Some((kind, name)) = which.kind_and_name() else {
         return Ok(doc.as_table_mut());
     };
-    let apps = doc.as_table_mut().entry("app").or_insert_with(|| {
+    let all = doc.as_table_mut().entry(kind).or_insert_with(|| {
         let mut t = toml_edit::Table::new();
         t.set_implicit(true);
         Item::Table(t)
     });
-    let apps = apps
+    let all = all
         .as_table_like_mut()
-        .ok_or("`app` in the file is not a table")?;
-    apps.entry(app)
+        .ok_or_else(|| format!("`{kind}` in the file is not a table"))?;
+    all.entry(name)
         .or_insert_with(|| Item::Table(toml_edit::Table::new()))
         .as_table_like_mut()
-        .ok_or_else(|| format!("app.{app:?} in the file is not a table"))
+        .ok_or_else(|| format!("{kind}.{name:?} in the file is not a table"))
 }
 
 /// Sets `key` to `value` in the file at `path` (created from `seed`, or empty, if missing), in
@@ -64,6 +90,17 @@ pub fn set(
     key: &Key,
     value: &Value,
 ) -> Result<(), String> {
+    set_in(path, seed, Table::of_app(app), key, value)
+}
+
+/// [`set`] in any table of the file.
+pub fn set_in(
+    path: &Path,
+    seed: Option<&Path>,
+    which: Table,
+    key: &Key,
+    value: &Value,
+) -> Result<(), String> {
     let text = read(path, seed)?;
     let mut doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
         format!(
@@ -72,7 +109,7 @@ pub fn set(
             e.message().trim()
         )
     })?;
-    let t = table(&mut doc, app)?;
+    let t = table(&mut doc, which)?;
     match t.get_mut(key.name) {
         Some(Item::Value(old)) => {
             // Keep the line's comment and spacing.
@@ -87,12 +124,12 @@ pub fn set(
     write_atomically(path, &doc.to_string())
 }
 
-/// The value `key` has in the file itself (in `[app."NAME"]` when `app` is given), if any:
-/// what to put back after a temporary change.
+/// The value `key` has in the file itself, in table `which`, if any: what to put back after a
+/// temporary change.
 pub fn entry(
     path: &Path,
     seed: Option<&Path>,
-    app: Option<&str>,
+    which: Table,
     key: &Key,
 ) -> Result<Option<Value>, String> {
     let text = read(path, seed)?;
@@ -103,21 +140,20 @@ pub fn entry(
             e.message().trim()
         )
     })?;
-    let table: Option<&dyn toml_edit::TableLike> = match app {
+    let table: Option<&dyn toml_edit::TableLike> = match which.kind_and_name() {
         None => Some(doc.as_table()),
-        Some(app) => doc
-            .get("app")
+        Some((kind, name)) => doc
+            .get(kind)
             .and_then(Item::as_table_like)
-            .and_then(|apps| apps.get(app))
+            .and_then(|all| all.get(name))
             .and_then(Item::as_table_like),
     };
     let value = table.and_then(|t| t.get(key.name)).and_then(Item::as_value);
     value.map(|v| key.kind.from_toml(v)).transpose()
 }
 
-/// Removes `key` from the file (from `[app."NAME"]` when `app` is given); nothing to do if it
-/// is not there.
-pub fn unset(path: &Path, app: Option<&str>, key: &Key) -> Result<(), String> {
+/// Removes `key` from table `which` of the file; nothing to do if it is not there.
+pub fn unset(path: &Path, which: Table, key: &Key) -> Result<(), String> {
     let text = read(path, None)?;
     let mut doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
         format!(
@@ -126,7 +162,7 @@ pub fn unset(path: &Path, app: Option<&str>, key: &Key) -> Result<(), String> {
             e.message().trim()
         )
     })?;
-    let removed = table(&mut doc, app)?.remove(key.name).is_some();
+    let removed = table(&mut doc, which)?.remove(key.name).is_some();
     if removed {
         write_atomically(path, &doc.to_string())?;
     }
@@ -201,20 +237,34 @@ mod tests {
         let mode = key("mode").unwrap();
         let lambda = key("lambda_e").unwrap();
         assert_eq!(
-            entry(&path, None, None, mode).unwrap(),
+            entry(&path, None, Table::Top, mode).unwrap(),
             Some(Value::Text("split".into()))
         );
-        assert_eq!(entry(&path, None, Some("a"), mode).unwrap(), None);
+        assert_eq!(entry(&path, None, Table::App("a"), mode).unwrap(), None);
         assert_eq!(
-            entry(&path, None, Some("a"), lambda).unwrap(),
+            entry(&path, None, Table::App("a"), lambda).unwrap(),
             Some(Value::Float(0.5))
         );
-        unset(&path, Some("a"), lambda).unwrap();
-        unset(&path, None, lambda).unwrap();
+        unset(&path, Table::App("a"), lambda).unwrap();
+        unset(&path, Table::Top, lambda).unwrap();
         assert_eq!(
             std::fs::read_to_string(&path).unwrap(),
             "mode = \"split\"\n[app.\"a\"]\n"
         );
+        set_in(
+            &path,
+            None,
+            Table::Device("HMD"),
+            lambda,
+            &Value::Float(0.7),
+        )
+        .unwrap();
+        assert_eq!(
+            entry(&path, None, Table::Device("HMD"), lambda).unwrap(),
+            Some(Value::Float(0.7))
+        );
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("[device.HMD]\nlambda_e = 0.7\n"), "{text}");
     }
 
     #[test]
