@@ -11,7 +11,7 @@ include!("src/gpu/approx_constants.rs");
 
 /// Stage files and their entry points.
 const STAGES: &[(&str, &[&str])] = &[
-    ("background", &["decode_blur_h", "blur_v", "fov_map"]),
+    ("background", &["decode_blur_h", "blur_v"]),
     ("enhance", &["finish_tiles"]),
     ("copy", &["copy_pixels"]),
 ];

@@ -1,5 +1,6 @@
-//! The engine: records the background preparation and the per-pixel enhancement into a command
-//! buffer that the caller owns and submits. It works the same on a device it created (the CLI)
+//! The engine: records the background preparation (once per camera frame, on the camera grid)
+//! and the per-pixel enhancement (per view, sampling that image through the view's
+//! CameraMapping) into a command buffer that the caller owns and submits. It works the same on a device it created (the CLI)
 //! and on someone else's device and queue (the app's, in the layer): it never submits, waits or
 //! touches images itself. Data lives in storage buffers, so the swapchain's format never has to
 //! be a storage-image format: the caller copies a view's region into `ViewTarget::pixels` and back.
@@ -9,6 +10,7 @@ use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
 use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT};
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -22,13 +24,21 @@ pub const TILE: u32 = WORKGROUP;
 /// Words before the tile indices in the tile buffer (struct TileList in shaders/common.wgsl).
 const TILE_LIST_HEADER: u64 = 8;
 
+/// Background frames that may exist at once besides the views (their descriptor sets).
+const MAX_BACKGROUNDS: u32 = 2;
+
 /// One camera frame on the GPU and its blurred linear-light copy (camera grid).
 pub struct BackgroundFrame {
     pub size: (u32, u32),
     /// RGBA8 sRGB, one u32 per pixel; host-visible, written with `upload`.
     pub camera: GpuBuffer,
     blur_tmp: GpuBuffer,
-    blurred: GpuBuffer,
+    /// Decoded and blurred, linear light, not attenuated: two texels per 16 bytes (see
+    /// `blurred` in shaders/common.wgsl). What every view's enhancement samples.
+    pub blurred: GpuBuffer,
+    /// The preparation passes' descriptor set (camera, blur_tmp, blurred, sRGB table).
+    set: vk::DescriptorSet,
+    pool: vk::DescriptorPool,
 }
 
 impl BackgroundFrame {
@@ -41,24 +51,28 @@ impl BackgroundFrame {
     }
 
     pub fn destroy(&mut self, gpu: &GpuDevice) {
+        free_set(gpu, self.pool, &mut self.set);
         for b in [&mut self.camera, &mut self.blur_tmp, &mut self.blurred] {
             b.destroy(gpu);
         }
     }
 }
 
-/// One display region (a view): its prepared background and its pixels.
+fn free_set(gpu: &GpuDevice, pool: vk::DescriptorPool, set: &mut vk::DescriptorSet) {
+    if *set != vk::DescriptorSet::null() {
+        // SAFETY: the set came from this pool and the GPU no longer uses it.
+        let _ = unsafe { gpu.device.free_descriptor_sets(pool, &[*set]) };
+        *set = vk::DescriptorSet::null();
+    }
+}
+
+/// One display region (a view): its pixels and tile list, bound to a background frame.
 pub struct ViewTarget {
     pub region: (u32, u32),
     pub format: PixelFormat,
-    /// Display-grid background, linear light, not attenuated (vec4<f32> per pixel).
-    pub bg_linear: GpuBuffer,
-    /// Display-grid background in scaled LAB, packed (shaders/common.wgsl, pack_background):
-    /// the paper's B.
-    pub bg_scaled: GpuBuffer,
     /// The region's raw pixels in `format`, rows tightly packed.
     pub pixels: GpuBuffer,
-    /// Indirect dispatch arguments and the list of non-empty tiles (see shaders/tiles.wgsl).
+    /// Indirect dispatch arguments and the list of non-empty tiles (TileList in shaders/common.wgsl).
     pub tiles: GpuBuffer,
     set: vk::DescriptorSet,
     camera_size: (u32, u32),
@@ -87,7 +101,7 @@ impl ViewTarget {
 pub struct Engine {
     pipelines: Pipelines,
     pool: vk::DescriptorPool,
-    /// The sRGB decode of the 256 8-bit codes (binding 8), shared by every view.
+    /// The sRGB decode of the 256 8-bit codes (binding 6), shared by every view.
     srgb_table: GpuBuffer,
 }
 
@@ -201,6 +215,10 @@ fn alloc_all<const N: usize>(
         .unwrap_or_else(|_| unreachable!("N buffers were made")))
 }
 
+/// Bindings of shaders/common.wgsl the engine points somewhere other than at set creation.
+const SOURCE_BINDING: u32 = 5;
+const SRGB_TABLE_BINDING: u32 = 6;
+
 const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
 
 impl Engine {
@@ -214,12 +232,13 @@ impl Engine {
                 return Err(e);
             }
         };
+        let max_sets = max_views + MAX_BACKGROUNDS;
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(max_views * BINDING_COUNT)];
+            .descriptor_count(max_sets * BINDING_COUNT)];
         let info = vk::DescriptorPoolCreateInfo::default()
             .flags(vk::DescriptorPoolCreateFlags::FREE_DESCRIPTOR_SET)
-            .max_sets(max_views)
+            .max_sets(max_sets)
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a valid device.
         match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
@@ -255,15 +274,44 @@ impl Engine {
             [
                 (px * 4, STORAGE, placement.camera, "camera"),
                 (px * 16, STORAGE, gpu_only, "blur_tmp"),
-                (px * 16, STORAGE, gpu_only, "blurred"),
+                (px * 16, STORAGE, placement.working, "blurred"),
             ],
         )?;
-        Ok(BackgroundFrame {
+        let mut bg = BackgroundFrame {
             size,
             camera,
             blur_tmp,
             blurred,
-        })
+            set: vk::DescriptorSet::null(),
+            pool: self.pool,
+        };
+        match self.allocate_set(gpu) {
+            Ok(set) => bg.set = set,
+            Err(e) => {
+                bg.destroy(gpu);
+                return Err(e);
+            }
+        }
+        let buffers = [&bg.camera, &bg.blur_tmp, &bg.blurred];
+        self.write_set(gpu, bg.set, 0, &buffers);
+        self.write_set(gpu, bg.set, SRGB_TABLE_BINDING, &[&self.srgb_table]);
+        Ok(bg)
+    }
+
+    fn allocate_set(&self, gpu: &GpuDevice) -> Result<vk::DescriptorSet, GpuError> {
+        let layouts = [self.pipelines.set_layout];
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.pool)
+            .set_layouts(&layouts);
+        // SAFETY: pool and layout are valid; the pool was sized for max_views views plus
+        // MAX_BACKGROUNDS background frames.
+        match unsafe { gpu.device.allocate_descriptor_sets(&info) } {
+            Ok(sets) => Ok(sets[0]),
+            Err(result) => Err(GpuError::Vulkan {
+                call: "vkAllocateDescriptorSets",
+                result,
+            }),
+        }
     }
 
     pub fn create_view(
@@ -285,11 +333,9 @@ impl Engine {
         let tile_usage =
             STORAGE | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let gpu_only = MemoryLocation::GpuOnly;
-        let [bg_linear, bg_scaled, pixels, tiles] = alloc_all(
+        let [pixels, tiles] = alloc_all(
             gpu,
             [
-                (px * 16, usage, at, "bg_linear"),
-                (px * 8, usage, at, "bg_scaled"),
                 (px * bpp, usage, at, "pixels"),
                 (
                     (TILE_LIST_HEADER + tile_count) * 4,
@@ -302,26 +348,16 @@ impl Engine {
         let mut view = ViewTarget {
             region,
             format,
-            bg_linear,
-            bg_scaled,
             pixels,
             tiles,
             set: vk::DescriptorSet::null(),
             camera_size: background.size,
         };
-        let layouts = [self.pipelines.set_layout];
-        let info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.pool)
-            .set_layouts(&layouts);
-        // SAFETY: pool and layout are valid; the pool was sized for max_views sets.
-        match unsafe { gpu.device.allocate_descriptor_sets(&info) } {
-            Ok(sets) => view.set = sets[0],
-            Err(result) => {
+        match self.allocate_set(gpu) {
+            Ok(set) => view.set = set,
+            Err(e) => {
                 self.destroy_view(gpu, &mut view);
-                return Err(GpuError::Vulkan {
-                    call: "vkAllocateDescriptorSets",
-                    result,
-                });
+                return Err(e);
             }
         }
         self.bind(gpu, &mut view, background);
@@ -334,8 +370,6 @@ impl Engine {
             &background.camera,
             &background.blur_tmp,
             &background.blurred,
-            &view.bg_linear,
-            &view.bg_scaled,
             &view.pixels,
             &view.tiles,
             &view.pixels,
@@ -345,9 +379,9 @@ impl Engine {
         view.camera_size = background.size;
     }
 
-    /// Points a view's copy source (binding 7, used only by `record_copy`) at `source`.
+    /// Points a view's copy source (binding 5, used only by `record_copy`) at `source`.
     pub fn bind_source(&self, gpu: &GpuDevice, view: &ViewTarget, source: &GpuBuffer) {
-        self.write_set(gpu, view.set, 7, &[source]);
+        self.write_set(gpu, view.set, SOURCE_BINDING, &[source]);
     }
 
     fn write_set(
@@ -381,17 +415,8 @@ impl Engine {
     }
 
     pub fn destroy_view(&self, gpu: &GpuDevice, view: &mut ViewTarget) {
-        if view.set != vk::DescriptorSet::null() {
-            // SAFETY: the set came from this pool and the GPU no longer uses it.
-            let _ = unsafe { gpu.device.free_descriptor_sets(self.pool, &[view.set]) };
-            view.set = vk::DescriptorSet::null();
-        }
-        for b in [
-            &mut view.bg_linear,
-            &mut view.bg_scaled,
-            &mut view.pixels,
-            &mut view.tiles,
-        ] {
+        free_set(gpu, self.pool, &mut view.set);
+        for b in [&mut view.pixels, &mut view.tiles] {
             b.destroy(gpu);
         }
     }
@@ -457,70 +482,41 @@ impl Engine {
     }
 
     /// Records the background preparation of spec section 2 for a camera frame already
-    /// uploaded: the blur once on the camera grid, then the FoV mapping for each view.
-    /// Every view must be bound to `background`.
+    /// uploaded: decode and blur on the camera grid, once per camera frame whatever the number
+    /// of views (each view's enhancement samples the result through its own mapping).
     pub fn record_background(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         background: &BackgroundFrame,
-        views: &[&ViewTarget],
         params: &Params,
     ) -> Result<(), GpuError> {
-        let Some(first) = views.first() else {
-            return Ok(());
-        };
-        if views.iter().any(|v| v.camera_size != background.size) {
-            return Err(GpuError::Unsupported(
-                "view bound to another background frame".into(),
-            ));
-        }
         let all = vk::PipelineStageFlags::ALL_COMMANDS;
         barrier(gpu, cmd, all, COMPUTE);
-        let push = PushConstants::new(params, background.size, first.region, 0);
-        self.dispatch(
-            gpu,
-            cmd,
-            self.pipelines.decode_blur_h,
-            first.set,
-            &push,
-            background.size,
-        );
+        let identity = CameraMapping::IDENTITY;
+        let push = PushConstants::new(params, background.size, background.size, &identity);
+        let (pipelines, set, size) = (&self.pipelines, background.set, background.size);
+        self.dispatch(gpu, cmd, pipelines.decode_blur_h, set, &push, size);
         barrier(gpu, cmd, COMPUTE, COMPUTE);
-        self.dispatch(
-            gpu,
-            cmd,
-            self.pipelines.blur_v,
-            first.set,
-            &push,
-            background.size,
-        );
-        barrier(gpu, cmd, COMPUTE, COMPUTE);
-        for view in views {
-            let push = PushConstants::new(params, background.size, view.region, 0);
-            self.dispatch(
-                gpu,
-                cmd,
-                self.pipelines.fov_map,
-                view.set,
-                &push,
-                view.region,
-            );
-        }
+        // Four texels per invocation (shaders/background.wgsl).
+        let grid = (size.0.div_ceil(4), size.1);
+        self.dispatch(gpu, cmd, pipelines.blur_v, set, &push, grid);
         barrier(gpu, cmd, COMPUTE, all);
         Ok(())
     }
 
     /// Records the per-pixel enhancement of one view's `pixels`, in place: the tile
-    /// classification, then the enhancement over the listed tiles only (indirect dispatch).
+    /// classification, then the enhancement over the listed tiles only (indirect dispatch),
+    /// which samples the view's background through `mapping` (display uv -> camera uv).
     /// Nothing in `ViewMode::Off`. The caller orders its copy into `pixels` before this and its
-    /// copy out after it (see `barrier`).
+    /// copy out after it (see `barrier`), and the background's preparation before it.
     pub fn record_enhance(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         view: &ViewTarget,
         params: &Params,
+        mapping: &CameraMapping,
     ) -> Result<(), GpuError> {
         if params.mode == ViewMode::Off {
             return Ok(());
@@ -535,12 +531,7 @@ impl Engine {
         );
         let pipeline = self.pipelines.enhance(gpu, codes, wide, extras)?;
         let classify = self.pipelines.classify(gpu, format, wide)?;
-        let push = PushConstants::new(
-            params,
-            view.camera_size,
-            view.region,
-            view.format.shader_code(),
-        );
+        let push = PushConstants::new(params, view.camera_size, view.region, mapping);
         let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
         use vk::PipelineStageFlags as S;
         barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
@@ -570,7 +561,12 @@ impl Engine {
     /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source
     /// (`bind_source`) into its `pixels` (4-byte formats), with the enhancement's dispatch shape.
     pub fn record_copy(&self, gpu: &GpuDevice, cmd: vk::CommandBuffer, view: &ViewTarget) {
-        let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
+        let push = PushConstants::new(
+            &Params::default(),
+            view.camera_size,
+            view.region,
+            &CameraMapping::IDENTITY,
+        );
         self.dispatch(
             gpu,
             cmd,
@@ -593,7 +589,12 @@ impl Engine {
         if !view.copies_wide() {
             return None;
         }
-        let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
+        let push = PushConstants::new(
+            &Params::default(),
+            view.camera_size,
+            view.region,
+            &CameraMapping::IDENTITY,
+        );
         let grid = (view.region.0.div_ceil(TILE), view.region.1);
         self.dispatch(gpu, cmd, self.pipelines.copy_rows, view.set, &push, grid);
         Some(())

@@ -4,63 +4,69 @@
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::shaders::{self, ShaderModule};
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
 use std::sync::Mutex;
 
-/// Bindings 0..=8 of shaders/common.wgsl, all storage buffers.
-pub const BINDING_COUNT: u32 = 9;
+/// Bindings 0..=6 of shaders/common.wgsl, all storage buffers.
+pub const BINDING_COUNT: u32 = 7;
 
-/// The push-constant block, laid out as WGSL lays out `Params` (112 bytes).
+/// The push-constant block, laid out as WGSL lays out `Params`: 128 bytes, the least
+/// maxPushConstantsSize Vulkan guarantees.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PushConstants {
     pub camera_size: [u32; 2],
     pub region_size: [u32; 2],
-    pub fov_scale: [f32; 2],
-    pub fov_offset: [f32; 2],
     pub lambda_e: f32,
     pub lambda_jnd: f32,
     pub transmittance: f32,
     pub blur_half: u32,
-    pub format: u32,
-    pub method: u32,
+    pub taps: [f32; 8],
     pub k_v: f32,
     pub k_b: f32,
-    pub taps: [f32; 8],
     pub mode: u32,
     pub tile_columns: u32,
     pub achromatic_boost: f32,
     pub luminance_cap: f32,
+    /// The view's CameraMapping, row-major.
+    pub mapping: [[f32; 3]; 3],
+    /// WGSL rounds the struct's size up to its 16-byte alignment (the taps).
+    pub pad: u32,
 }
 
+const _: () = assert!(std::mem::size_of::<PushConstants>() == 128);
+
 impl PushConstants {
-    pub fn new(params: &Params, camera: (u32, u32), region: (u32, u32), format: u32) -> Self {
+    pub fn new(
+        params: &Params,
+        camera: (u32, u32),
+        region: (u32, u32),
+        mapping: &CameraMapping,
+    ) -> Self {
         let taps64 = params.blur_taps();
         let half = taps64.len() / 2;
         let mut taps = [0.0f32; 8];
         for (k, t) in taps.iter_mut().enumerate().take(half + 1) {
             *t = taps64[half + k] as f32;
         }
-        let (fov_scale, fov_offset) = params.fov_mapping();
         PushConstants {
             camera_size: [camera.0, camera.1],
             region_size: [region.0, region.1],
-            fov_scale,
-            fov_offset,
             lambda_e: params.lambda_e,
             lambda_jnd: params.lambda_jnd_scaled,
             transmittance: params.transmittance,
             blur_half: half as u32,
-            format,
-            method: params.method.shader_code(),
+            taps,
             k_v: SUBTRACTION_K_V,
             k_b: SUBTRACTION_K_B,
-            taps,
             mode: params.mode.shader_code(),
             tile_columns: region.0.div_ceil(super::engine::TILE),
             achromatic_boost: params.achromatic_boost,
             luminance_cap: params.luminance_cap,
+            mapping: mapping.to_f32_rows(),
+            pad: 0,
         }
     }
 
@@ -80,7 +86,6 @@ pub struct Pipelines {
     pub layout: vk::PipelineLayout,
     pub decode_blur_h: vk::Pipeline,
     pub blur_v: vk::Pipeline,
-    pub fov_map: vk::Pipeline,
     pub finish_tiles: vk::Pipeline,
     pub copy_pixels: vk::Pipeline,
     pub copy_rows: vk::Pipeline,
@@ -103,7 +108,6 @@ impl Pipelines {
             layout: vk::PipelineLayout::null(),
             decode_blur_h: vk::Pipeline::null(),
             blur_v: vk::Pipeline::null(),
-            fov_map: vk::Pipeline::null(),
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
             copy_rows: vk::Pipeline::null(),
@@ -148,7 +152,6 @@ impl Pipelines {
             .vk("vkCreatePipelineLayout")?;
         self.decode_blur_h = self.compute_pipeline(gpu, &shaders::DECODE_BLUR_H)?;
         self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
-        self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
         self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
         self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         self.copy_rows = self.compute_pipeline(gpu, &shaders::COPY_ROWS)?;
@@ -256,7 +259,6 @@ impl Pipelines {
             for p in [
                 self.decode_blur_h,
                 self.blur_v,
-                self.fov_map,
                 self.finish_tiles,
                 self.copy_pixels,
                 self.copy_rows,

@@ -37,7 +37,6 @@ macro_rules! spirv {
 
 pub const DECODE_BLUR_H: ShaderModule = spirv!("decode_blur_h");
 pub const BLUR_V: ShaderModule = spirv!("blur_v");
-pub const FOV_MAP: ShaderModule = spirv!("fov_map");
 pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
 pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
 pub const COPY_ROWS: ShaderModule = spirv!("copy_rows");
@@ -49,7 +48,6 @@ pub fn all() -> Vec<&'static ShaderModule> {
     let fixed = [
         &DECODE_BLUR_H,
         &BLUR_V,
-        &FOV_MAP,
         &FINISH_TILES,
         &COPY_PIXELS,
         &COPY_ROWS,

@@ -9,6 +9,7 @@ use super::processor::{Processor, ViewKey, WorkItem};
 use super::settings::{self, Settings};
 use super::state::{self, lock, SessionState};
 use super::{log, swapchain};
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::camera::{self, Background, CaptureConfig};
 use crate::gpu::GpuDevice;
@@ -261,7 +262,7 @@ unsafe fn sub_images(info: &xr::FrameEndInfo, quads: bool) -> Vec<xr::SwapchainS
 }
 
 /// A work item for a sub-image whose image the layer holds, with a rect inside the image.
-fn work_item(sub: &xr::SwapchainSubImage) -> Option<WorkItem> {
+fn work_item(sub: &xr::SwapchainSubImage, mapping: CameraMapping) -> Option<WorkItem> {
     let sc = state::swapchain(sub.swapchain)?;
     let sc = lock(&sc);
     let format = sc.info.pixel.filter(|_| sc.info.processable())?;
@@ -288,6 +289,7 @@ fn work_item(sub: &xr::SwapchainSubImage) -> Option<WorkItem> {
         image,
         format,
         vk_format: sc.info.vk_format,
+        mapping,
     })
 }
 
@@ -344,7 +346,9 @@ fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     }
     // SAFETY: the app's frame end info, valid for this call.
     let subs = unsafe { sub_images(info, s.settings.quad_layers) };
-    let items: Vec<WorkItem> = subs.iter().filter_map(work_item).collect();
+    // The manual FoV calibration for every view, until views are registered one by one.
+    let mapping = s.settings.params.camera_mapping();
+    let items: Vec<WorkItem> = subs.iter().filter_map(|u| work_item(u, mapping)).collect();
     if items.is_empty() {
         return;
     }

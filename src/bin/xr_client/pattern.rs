@@ -84,7 +84,8 @@ pub fn texel(target: Target, x: u32, y: u32, width: u32, height: u32) -> [f32; 4
 
 /// Two UI panels and a shaded disc of radius 0.12 x the shorter side, on black.
 fn typical_colour(u: f32, v: f32, width: u32, height: u32) -> Option<[f32; 3]> {
-    let inside = |u0: f32, u1: f32, v0: f32, v1: f32| (u0..u1).contains(&u) && (v0..v1).contains(&v);
+    let inside =
+        |u0: f32, u1: f32, v0: f32, v1: f32| (u0..u1).contains(&u) && (v0..v1).contains(&v);
     if inside(0.10, 0.40, 0.30, 0.60) {
         return Some([0.78, 0.82, 0.90]);
     }
