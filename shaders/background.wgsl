@@ -3,63 +3,114 @@
 // sampling, transmittance, scaled LAB) runs in the enhancement pass (enhance.wgsl,
 // sampled_background), only for the display pixels it enhances: per camera frame the work is
 // proportional to the camera's pixels, never to the display's or the number of views.
+//
+// One pass, built once per blur half-width BLUR_HALF (0..=7, a constant here, so every loop
+// has a constant trip count and a CPU driver unrolls it into registers). Each invocation
+// makes four neighbouring texels of one row (and the right neighbour each entry of `blurred`
+// also holds): it reads the camera rows y - BLUR_HALF..y + BLUR_HALF 16 bytes (4 pixels) at a
+// time, decodes them, blurs each row horizontally, then the rows vertically. Decoding a texel
+// again for each row it serves costs arithmetic; it saves the intermediate image and the
+// memory accesses (each a loop over the SIMD lanes on lavapipe) of a two-pass blur. The
+// decode is the enhancement's (srgb_decode: a polynomial, 1.3e-5 relative error at most over
+// the 8-bit codes, src/gpu/approx.rs); the exact table cost a memory access per channel, and
+// a Newton step refining the polynomial more than doubled this pass on lavapipe (its division).
 
-fn camera_linear(x: i32, y: i32) -> vec3<f32> {
+const H: i32 = i32(BLUR_HALF);
+// Texels of the window left of the first output, a whole number of 4-pixel entries.
+const LEFT: i32 = 4 * ((H + 3) / 4);
+// 4-pixel entries per window row: outputs x0..x0+4 need texels x0-H..x0+4+H.
+const GROUPS: i32 = (LEFT + 5 + H + 3) / 4;
+
+// Camera row stride in pixels (BackgroundFrame::upload pads rows to a multiple of 4).
+fn camera_stride() -> u32 {
+    return (pc.camera_size.x + 3u) & ~3u;
+}
+
+fn bytes_at(w: vec4<u32>, shift: u32) -> vec4<f32> {
+    return vec4<f32>((w >> vec4<u32>(shift)) & vec4<u32>(255u)) * (1.0 / 255.0);
+}
+
+// Texel coordinate x0 - LEFT + k of window position k.
+const WINDOW: i32 = 4 * GROUPS;
+// Texels the taps read: x0 - H..x0 + 4 + H, decoded in groups of four.
+const NEEDED_PADDED: i32 = 4 * ((5 + 2 * H + 3) / 4);
+
+// Row `row` of the camera, decoded and blurred horizontally at texels x0..x0+4 (clamp-to-edge;
+// entries past the row's end are garbage the caller never stores).
+fn hblur_row(row: i32, x0: i32) -> array<vec3<f32>, 5> {
+    let w = i32(pc.camera_size.x);
+    let first = row * i32(camera_stride() / 4u) + x0 / 4 - LEFT / 4;
+    var words: array<u32, WINDOW>;
+    for (var g = 0; g < GROUPS; g++) {
+        // Entries before the row's start or past its end read a neighbouring row (or 0 past
+        // the buffer): replaced below.
+        let e = camera[u32(first + g)];
+        words[4 * g] = e.x;
+        words[4 * g + 1] = e.y;
+        words[4 * g + 2] = e.z;
+        words[4 * g + 3] = e.w;
+    }
+    // Clamp-to-edge: texels right of the row repeat its last, left of it its first.
+    for (var k = 1; k < WINDOW; k++) {
+        words[k] = select(words[k], words[k - 1], x0 - LEFT + k >= w);
+    }
+    for (var k = WINDOW - 2; k >= 0; k--) {
+        words[k] = select(words[k], words[k + 1], x0 - LEFT + k < 0);
+    }
+    // Decode only the NEEDED texels the taps use (window positions LEFT - H onwards), four
+    // at a time: the decode is most of this pass's arithmetic.
+    var lin: array<vec3<f32>, NEEDED_PADDED>;
+    for (var g = 0; g < NEEDED_PADDED / 4; g++) {
+        let k = LEFT - H + 4 * g;
+        let at = vec4<i32>(k, k + 1, k + 2, k + 3);
+        let m = vec4<i32>(WINDOW - 1);
+        let e = vec4<u32>(words[min(at.x, m.x)], words[min(at.y, m.y)], words[min(at.z, m.z)], words[min(at.w, m.w)]);
+        let r = srgb_decode(bytes_at(e, 0u));
+        let gr = srgb_decode(bytes_at(e, 8u));
+        let b = srgb_decode(bytes_at(e, 16u));
+        for (var c = 0; c < 4; c++) {
+            lin[4 * g + c] = vec3<f32>(r[c], gr[c], b[c]);
+        }
+    }
+    var out: array<vec3<f32>, 5>;
+    for (var j = 0; j < 5; j++) {
+        var a = blur_tap(0u) * lin[H + j];
+        for (var o = 1; o <= H; o++) {
+            a += blur_tap(u32(o)) * (lin[H + j - o] + lin[H + j + o]);
+        }
+        out[j] = a;
+    }
+    return out;
+}
+
+// Prepares the camera texels of a rectangle only: the ones some view samples (the engine
+// passes the rectangle's first texel in region_size, which this pass has no other use for,
+// and dispatches over its size).
+@compute @workgroup_size(8, 8)
+fn decode_blur(@builtin(global_invocation_id) id: vec3<u32>) {
+    let x0 = i32(pc.region_size.x + id.x * 4u);
     let w = i32(pc.camera_size.x);
     let h = i32(pc.camera_size.y);
-    let i = u32(clamp(y, 0, h - 1) * w + clamp(x, 0, w - 1));
-    let word = camera[i];
-    return srgb_decode_code(vec3<u32>(word & 255u, (word >> 8u) & 255u, (word >> 16u) & 255u));
-}
-
-@compute @workgroup_size(8, 8)
-fn decode_blur_h(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= pc.camera_size.x || id.y >= pc.camera_size.y) {
+    let y = i32(pc.region_size.y + id.y);
+    if (x0 >= w || y >= h) {
         return;
     }
-    let x = i32(id.x);
-    let y = i32(id.y);
-    var acc = blur_tap(0u) * camera_linear(x, y);
-    for (var k = 1u; k <= pc.blur_half; k++) {
-        let o = i32(k);
-        acc += blur_tap(k) * (camera_linear(x - o, y) + camera_linear(x + o, y));
+    var acc: array<vec3<f32>, 5>;
+    for (var r = -H; r <= H; r++) {
+        let row = hblur_row(clamp(y + r, 0, h - 1), x0);
+        let t = blur_tap(u32(abs(r)));
+        for (var j = 0; j < 5; j++) {
+            acc[j] += t * row[j];
+        }
     }
-    blur_tmp[id.y * pc.camera_size.x + id.x] = vec4<f32>(acc, 1.0);
-}
-
-fn tmp_at(x: i32, y: i32) -> vec3<f32> {
-    let h = i32(pc.camera_size.y);
-    return blur_tmp[u32(clamp(y, 0, h - 1)) * pc.camera_size.x + u32(x)].rgb;
-}
-
-// The vertical pass at column x (clamped to the image).
-fn blur_v_at(x: i32, y: i32) -> vec3<f32> {
-    let xc = min(x, i32(pc.camera_size.x) - 1);
-    var acc = blur_tap(0u) * tmp_at(xc, y);
-    for (var k = 1u; k <= pc.blur_half; k++) {
-        let o = i32(k);
-        acc += blur_tap(k) * (tmp_at(xc, y - o) + tmp_at(xc, y + o));
-    }
-    return acc;
-}
-
-// Vertical blur of four neighbouring texels x0..x0+3 per invocation (each entry of `blurred`
-// also holds its right neighbour, so five columns are blurred for four entries).
-@compute @workgroup_size(8, 8)
-fn blur_v(@builtin(global_invocation_id) id: vec3<u32>) {
-    let x0 = id.x * 4u;
-    if (x0 >= pc.camera_size.x || id.y >= pc.camera_size.y) {
-        return;
-    }
-    let y = i32(id.y);
-    var left = blur_v_at(i32(x0), y);
-    for (var k = 0u; k < 4u; k++) {
-        let x = x0 + k;
-        if (x >= pc.camera_size.x) {
+    let base = u32(y) * pc.camera_size.x;
+    for (var j = 0; j < 4; j++) {
+        let x = x0 + j;
+        if (x >= w) {
             break;
         }
-        let right = blur_v_at(i32(x) + 1, y);
-        blurred[id.y * pc.camera_size.x + x] = vec4<u32>(pack_linear(left), pack_linear(right));
-        left = right;
+        // Entry x holds texels x and x + 1; the last column's neighbour is itself.
+        let right = select(acc[j + 1], acc[j], x + 1 >= w);
+        blurred[base + u32(x)] = vec4<u32>(pack_linear(acc[j]), pack_linear(right));
     }
 }

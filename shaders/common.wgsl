@@ -38,17 +38,16 @@ struct Params {
 
 var<immediate> pc: Params;
 
-// Camera frame: RGBA8 sRGB, one u32 per pixel (R in the low byte).
-@group(0) @binding(0) var<storage, read> camera: array<u32>;
-// Camera-grid linear light after the horizontal blur.
-@group(0) @binding(1) var<storage, read_write> blur_tmp: array<vec4<f32>>;
+// Camera frame: RGBA8 sRGB, one u32 per pixel (R in the low byte), four pixels per entry;
+// rows padded to a multiple of 4 pixels (camera_stride).
+@group(0) @binding(0) var<storage, read> camera: array<vec4<u32>>;
 // The camera frame decoded and blurred: linear light on the camera grid, NOT attenuated (the
 // subtraction method needs it as is), the one image prepared per camera frame. Entry
 // y * width + x holds texels x and x + 1 of row y (texel width - 1 twice at the right edge),
 // packed by pack_linear_pair, so a bilinear sample reads one entry per row.
-@group(0) @binding(2) var<storage, read_write> blurred: array<vec4<u32>>;
-// Bindings 3 (pixels: the display region's raw pixels in the swapchain format, 1 or 2 u32 per
-// pixel) and 5 (source: the copy passes' source, the benchmark's floor) are declared by
+@group(0) @binding(1) var<storage, read_write> blurred: array<vec4<u32>>;
+// Bindings 2 (pixels: the display region's raw pixels in the swapchain format, 1 or 2 u32 per
+// pixel) and 4 (source: the copy passes' source, the benchmark's floor) are declared by
 // access_wide.wgsl or access_narrow.wgsl, which build.rs puts after this file.
 // The tiles the enhancement runs on (classify and finish_tiles in enhance.wgsl).
 struct TileList {
@@ -61,9 +60,7 @@ struct TileList {
     // Tile index (row * tile_columns + column) of each listed tile.
     index: array<u32>,
 }
-@group(0) @binding(4) var<storage, read_write> tiles: TileList;
-// sRGB decode of the 256 8-bit codes, computed in f64 and rounded once (exact).
-@group(0) @binding(6) var<storage, read> srgb_table: array<f32>;
+@group(0) @binding(3) var<storage, read_write> tiles: TileList;
 
 const LAYOUT_RGBA8: u32 = 0u;
 const LAYOUT_BGRA8: u32 = 1u;
@@ -86,13 +83,6 @@ const METHOD_HUE_ONLY: u32 = 1u;
 const METHOD_OTHER_HUE: u32 = 2u;
 const METHOD_LUM_CHROMA: u32 = 3u;
 const METHOD_SUBTRACTION: u32 = 4u;
-
-// sRGB decode of an 8-bit camera code: the exact table (binding 8). The background pass uses
-// it once per camera pixel; the per-pixel enhancement uses srgb_decode (a polynomial, no
-// memory access).
-fn srgb_decode_code(c: vec3<u32>) -> vec3<f32> {
-    return vec3<f32>(srgb_table[c.x], srgb_table[c.y], srgb_table[c.z]);
-}
 
 // Four pixels' colours, one column per channel: column k holds channel k (R, G, B or L', a',
 // b') of pixels 0..3. The per-pixel pass works on four pixels at once in this form, so that a

@@ -5,7 +5,7 @@
 
 use super::app_image::AppImage;
 use super::buffer::GpuBuffer;
-use super::engine::{barrier, Placement, ViewTarget};
+use super::engine::{barrier, CameraRect, Placement, ViewTarget};
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
 use super::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
@@ -415,8 +415,9 @@ impl OfflineEngine {
                 self.timestamp(cmd, q, 2 * span as u32 + 1);
                 done
             };
+            let rect = CameraRect::sampled_by(&vec![mapping; views.len()], background.size);
             timed(Span::Background, &mut || {
-                engine.record_background(gpu, cmd, background, params)
+                engine.record_background(gpu, cmd, background, params, &rect)
             })?;
             timed(Span::CopyWide, &mut || {
                 views.iter().for_each(|v| {

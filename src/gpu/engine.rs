@@ -30,13 +30,13 @@ const MAX_BACKGROUNDS: u32 = 2;
 /// One camera frame on the GPU and its blurred linear-light copy (camera grid).
 pub struct BackgroundFrame {
     pub size: (u32, u32),
-    /// RGBA8 sRGB, one u32 per pixel; host-visible, written with `upload`.
+    /// RGBA8 sRGB, one u32 per pixel, rows padded to a multiple of 4 pixels (the shader reads
+    /// 16 bytes at a time); host-visible, written with `upload`.
     pub camera: GpuBuffer,
-    blur_tmp: GpuBuffer,
     /// Decoded and blurred, linear light, not attenuated: two texels per 16 bytes (see
     /// `blurred` in shaders/common.wgsl). What every view's enhancement samples.
     pub blurred: GpuBuffer,
-    /// The preparation passes' descriptor set (camera, blur_tmp, blurred, sRGB table).
+    /// The preparation pass's descriptor set (camera, blurred).
     set: vk::DescriptorSet,
     pool: vk::DescriptorPool,
 }
@@ -44,18 +44,121 @@ pub struct BackgroundFrame {
 impl BackgroundFrame {
     /// Copies a camera frame (RGBA8 sRGB, row-major) into the host-visible camera buffer.
     pub fn upload(&mut self, rgba: &[[u8; 4]]) -> Result<(), GpuError> {
-        if rgba.len() != (self.size.0 * self.size.1) as usize {
+        let (w, h) = (self.size.0 as usize, self.size.1 as usize);
+        if rgba.len() != w * h {
             return Err(GpuError::Unsupported("camera frame size changed".into()));
         }
-        self.camera.write(rgba.as_flattened())
+        let stride = camera_stride(self.size.0) as usize;
+        if stride == w {
+            return self.camera.write(rgba.as_flattened());
+        }
+        let dst = self
+            .camera
+            .mapped_mut()
+            .ok_or_else(|| GpuError::Unsupported("buffer is not host-visible".into()))?;
+        for (row, src) in rgba.chunks_exact(w).enumerate() {
+            let at = row * stride * 4;
+            dst[at..at + w * 4].copy_from_slice(src.as_flattened());
+        }
+        Ok(())
     }
 
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         free_set(gpu, self.pool, &mut self.set);
-        for b in [&mut self.camera, &mut self.blur_tmp, &mut self.blurred] {
+        for b in [&mut self.camera, &mut self.blurred] {
             b.destroy(gpu);
         }
     }
+}
+
+/// The camera texels a background preparation makes: those the views' mappings sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraRect {
+    /// First texel; x is a multiple of 4 (the pass makes 4 texels per invocation).
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl CameraRect {
+    pub fn full(size: (u32, u32)) -> CameraRect {
+        CameraRect {
+            x: 0,
+            y: 0,
+            width: size.0,
+            height: size.1,
+        }
+    }
+
+    /// The texels whose entries bilinear sampling reads for any display pixel of views at
+    /// `mappings` (the bounding box of each view's mapped corners: where the mapping's z is
+    /// positive at all four corners it is positive inside, and the view's image is the convex
+    /// quadrilateral of its corners), with a margin for rounding. The whole image where a
+    /// mapping is degenerate.
+    pub fn sampled_by(mappings: &[CameraMapping], size: (u32, u32)) -> CameraRect {
+        let (w, h) = (f64::from(size.0), f64::from(size.1));
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for m in mappings {
+            for corner in [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]] {
+                let r = &m.rows;
+                let z = r[2][0] * corner[0] + r[2][1] * corner[1] + r[2][2];
+                let uv = m.apply(glam::DVec2::from(corner));
+                if !(z > 0.0 && uv.is_finite()) {
+                    return CameraRect::full(size);
+                }
+                let t = [uv.x * w - 0.5, uv.y * h - 0.5];
+                for k in 0..2 {
+                    lo[k] = lo[k].min(t[k]);
+                    hi[k] = hi[k].max(t[k]);
+                }
+            }
+        }
+        if mappings.is_empty() {
+            return CameraRect::full(size);
+        }
+        // Entries floor(t) - 1 ..= floor(t) + 1 in x, rows floor(t) - 1 ..= floor(t) + 2 in y.
+        let span = |lo: f64, hi: f64, extra: f64, n: f64| {
+            let a = (lo.floor() - 1.0).clamp(0.0, n - 1.0);
+            let b = (hi.floor() + extra).clamp(0.0, n - 1.0);
+            (a as u32, b as u32)
+        };
+        let (x0, x1) = span(lo[0], hi[0], 1.0, w);
+        let (y0, y1) = span(lo[1], hi[1], 2.0, h);
+        let x0 = x0 / 4 * 4;
+        CameraRect {
+            x: x0,
+            y: y0,
+            width: x1 - x0 + 1,
+            height: y1 - y0 + 1,
+        }
+    }
+
+    /// Whether every texel of `other` is in this rectangle.
+    pub fn contains(&self, other: &CameraRect) -> bool {
+        other.x >= self.x
+            && other.y >= self.y
+            && other.x + other.width <= self.x + self.width
+            && other.y + other.height <= self.y + self.height
+    }
+
+    /// The smallest rectangle holding both.
+    pub fn union(&self, other: &CameraRect) -> CameraRect {
+        let (x, y) = (self.x.min(other.x), self.y.min(other.y));
+        let right = (self.x + self.width).max(other.x + other.width);
+        let bottom = (self.y + self.height).max(other.y + other.height);
+        CameraRect {
+            x,
+            y,
+            width: right - x,
+            height: bottom - y,
+        }
+    }
+}
+
+/// Pixels per camera buffer row: the width rounded up to whole 16-byte entries.
+fn camera_stride(width: u32) -> u32 {
+    width.next_multiple_of(4)
 }
 
 fn free_set(gpu: &GpuDevice, pool: vk::DescriptorPool, set: &mut vk::DescriptorSet) {
@@ -101,27 +204,6 @@ impl ViewTarget {
 pub struct Engine {
     pipelines: Pipelines,
     pool: vk::DescriptorPool,
-    /// The sRGB decode of the 256 8-bit codes (binding 6), shared by every view.
-    srgb_table: GpuBuffer,
-}
-
-/// The exact decode table: f64 sRGB curve, rounded once to f32.
-fn srgb_table(gpu: &GpuDevice) -> Result<GpuBuffer, GpuError> {
-    let table: Vec<u8> = (0..=255u8)
-        .flat_map(|c| (crate::colour::code_to_linear(c) as f32).to_le_bytes())
-        .collect();
-    let mut buffer = GpuBuffer::new(
-        gpu,
-        table.len() as u64,
-        STORAGE,
-        MemoryLocation::CpuToGpu,
-        "srgb_table",
-    )?;
-    if let Err(e) = buffer.write(&table) {
-        buffer.destroy(gpu);
-        return Err(e);
-    }
-    Ok(buffer)
 }
 
 /// Where the engine's working buffers live: device-local inside the layer, host-visible for the
@@ -215,9 +297,8 @@ fn alloc_all<const N: usize>(
         .unwrap_or_else(|_| unreachable!("N buffers were made")))
 }
 
-/// Bindings of shaders/common.wgsl the engine points somewhere other than at set creation.
-const SOURCE_BINDING: u32 = 5;
-const SRGB_TABLE_BINDING: u32 = 6;
+/// The binding of the copy passes' source (shaders/common.wgsl).
+const SOURCE_BINDING: u32 = 4;
 
 const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
 
@@ -225,13 +306,6 @@ impl Engine {
     /// Builds the pipelines; `max_views` bounds how many ViewTargets may exist at once.
     pub fn new(gpu: &GpuDevice, max_views: u32) -> Result<Engine, GpuError> {
         let mut pipelines = Pipelines::new(gpu)?;
-        let mut table = match srgb_table(gpu) {
-            Ok(t) => t,
-            Err(e) => {
-                pipelines.destroy(gpu);
-                return Err(e);
-            }
-        };
         let max_sets = max_views + MAX_BACKGROUNDS;
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
@@ -242,14 +316,9 @@ impl Engine {
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a valid device.
         match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
-            Ok(pool) => Ok(Engine {
-                pipelines,
-                pool,
-                srgb_table: table,
-            }),
+            Ok(pool) => Ok(Engine { pipelines, pool }),
             Err(result) => {
                 pipelines.destroy(gpu);
-                table.destroy(gpu);
                 Err(GpuError::Vulkan {
                     call: "vkCreateDescriptorPool",
                     result,
@@ -268,19 +337,17 @@ impl Engine {
             return Err(GpuError::Unsupported("empty camera frame".into()));
         }
         let px = u64::from(size.0) * u64::from(size.1);
-        let gpu_only = MemoryLocation::GpuOnly;
-        let [camera, blur_tmp, blurred] = alloc_all(
+        let padded = u64::from(camera_stride(size.0)) * u64::from(size.1);
+        let [camera, blurred] = alloc_all(
             gpu,
             [
-                (px * 4, STORAGE, placement.camera, "camera"),
-                (px * 16, STORAGE, gpu_only, "blur_tmp"),
+                (padded * 4, STORAGE, placement.camera, "camera"),
                 (px * 16, STORAGE, placement.working, "blurred"),
             ],
         )?;
         let mut bg = BackgroundFrame {
             size,
             camera,
-            blur_tmp,
             blurred,
             set: vk::DescriptorSet::null(),
             pool: self.pool,
@@ -292,9 +359,7 @@ impl Engine {
                 return Err(e);
             }
         }
-        let buffers = [&bg.camera, &bg.blur_tmp, &bg.blurred];
-        self.write_set(gpu, bg.set, 0, &buffers);
-        self.write_set(gpu, bg.set, SRGB_TABLE_BINDING, &[&self.srgb_table]);
+        self.write_set(gpu, bg.set, 0, &[&bg.camera, &bg.blurred]);
         Ok(bg)
     }
 
@@ -368,18 +433,16 @@ impl Engine {
     pub fn bind(&self, gpu: &GpuDevice, view: &mut ViewTarget, background: &BackgroundFrame) {
         let buffers = [
             &background.camera,
-            &background.blur_tmp,
             &background.blurred,
             &view.pixels,
             &view.tiles,
             &view.pixels,
-            &self.srgb_table,
         ];
         self.write_set(gpu, view.set, 0, &buffers);
         view.camera_size = background.size;
     }
 
-    /// Points a view's copy source (binding 5, used only by `record_copy`) at `source`.
+    /// Points a view's copy source (binding 4, used only by `record_copy`) at `source`.
     pub fn bind_source(&self, gpu: &GpuDevice, view: &ViewTarget, source: &GpuBuffer) {
         self.write_set(gpu, view.set, SOURCE_BINDING, &[source]);
     }
@@ -483,24 +546,27 @@ impl Engine {
 
     /// Records the background preparation of spec section 2 for a camera frame already
     /// uploaded: decode and blur on the camera grid, once per camera frame whatever the number
-    /// of views (each view's enhancement samples the result through its own mapping).
+    /// of views (each view's enhancement samples the result through its own mapping), for the
+    /// texels in `rect` (`CameraRect::sampled_by` the views' mappings).
     pub fn record_background(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         background: &BackgroundFrame,
         params: &Params,
+        rect: &CameraRect,
     ) -> Result<(), GpuError> {
         let all = vk::PipelineStageFlags::ALL_COMMANDS;
         barrier(gpu, cmd, all, COMPUTE);
         let identity = CameraMapping::IDENTITY;
-        let push = PushConstants::new(params, background.size, background.size, &identity);
-        let (pipelines, set, size) = (&self.pipelines, background.set, background.size);
-        self.dispatch(gpu, cmd, pipelines.decode_blur_h, set, &push, size);
-        barrier(gpu, cmd, COMPUTE, COMPUTE);
-        // Four texels per invocation (shaders/background.wgsl).
-        let grid = (size.0.div_ceil(4), size.1);
-        self.dispatch(gpu, cmd, pipelines.blur_v, set, &push, grid);
+        // The pass reads the rectangle's first texel from region_size (shaders/background.wgsl).
+        let origin = (rect.x / 4 * 4, rect.y);
+        let push = PushConstants::new(params, background.size, origin, &identity);
+        let pipeline = self.pipelines.decode_blur(gpu, push.blur_half)?;
+        // Four texels per invocation.
+        let right = (rect.x + rect.width).min(background.size.0);
+        let grid = ((right - origin.0).div_ceil(4), rect.height);
+        self.dispatch(gpu, cmd, pipeline, background.set, &push, grid);
         barrier(gpu, cmd, COMPUTE, all);
         Ok(())
     }
@@ -604,7 +670,6 @@ impl Engine {
         // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
         unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };
         self.pool = vk::DescriptorPool::null();
-        self.srgb_table.destroy(gpu);
         self.pipelines.destroy(gpu);
     }
 }
@@ -615,4 +680,50 @@ pub fn begin(gpu: &GpuDevice, cmd: vk::CommandBuffer) -> Result<(), GpuError> {
         vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
     // SAFETY: cmd is not pending (the caller waited for its fence).
     unsafe { gpu.device.begin_command_buffer(cmd, &info) }.vk("vkBeginCommandBuffer")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec2;
+
+    /// Every entry (x, row) and (x, row + 1) that bilinear sampling reads for a grid of display
+    /// pixels lies in the rectangle, and its x is a multiple of 4.
+    #[test]
+    fn the_sampled_rect_holds_every_entry_the_views_read() {
+        let size = (640, 480);
+        let projective = CameraMapping {
+            rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
+        };
+        let manual = Params::default().camera_mapping();
+        for mappings in [vec![manual], vec![projective], vec![manual, projective]] {
+            let rect = CameraRect::sampled_by(&mappings, size);
+            assert_eq!(rect.x % 4, 0);
+            assert!(rect.width * rect.height < size.0 * size.1, "{rect:?}");
+            for m in &mappings {
+                for (i, j) in (0..=64).flat_map(|i| (0..=64).map(move |j| (i, j))) {
+                    let uv = m.apply(DVec2::new(f64::from(i) / 64.0, f64::from(j) / 64.0));
+                    let t = uv * DVec2::new(640.0, 480.0) - 0.5;
+                    let x = t.x.floor().clamp(0.0, 639.0) as u32;
+                    for y in [t.y.floor(), t.y.floor() + 1.0] {
+                        let y = y.clamp(0.0, 479.0) as u32;
+                        let texel = CameraRect {
+                            x,
+                            y,
+                            width: 1,
+                            height: 1,
+                        };
+                        assert!(rect.contains(&texel), "{rect:?} misses {texel:?}");
+                    }
+                }
+            }
+        }
+        let degenerate = CameraMapping {
+            rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-2.0, 0.0, 1.0]],
+        };
+        assert_eq!(
+            CameraRect::sampled_by(&[degenerate], size),
+            CameraRect::full(size)
+        );
+    }
 }

@@ -17,7 +17,7 @@ pub mod pipelines;
 pub mod shaders;
 
 pub use device::{DeviceOptions, GpuDevice};
-pub use engine::{BackgroundFrame, Engine, Placement, ViewTarget};
+pub use engine::{BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
 pub use error::GpuError;
 pub use format::{PixelFormat, PixelLayout};
 pub use offline::OfflineEngine;

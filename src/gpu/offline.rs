@@ -3,7 +3,7 @@
 
 use super::commands::Commands;
 use super::device::{DeviceOptions, GpuDevice};
-use super::engine::{barrier, BackgroundFrame, Engine, Placement, ViewTarget};
+use super::engine::{barrier, BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
 use super::error::GpuError;
 use super::format::PixelFormat;
 use crate::algorithm::mapping::CameraMapping;
@@ -144,7 +144,9 @@ impl OfflineEngine {
         let (bg, mut view) = self.stage(camera, region, format)?;
         let result = view.pixels.write(&words_to_bytes(pixels)).and_then(|_| {
             self.submit(|cmd| {
-                self.engine.record_background(&self.gpu, cmd, &bg, params)?;
+                let rect = CameraRect::sampled_by(&[*mapping], bg.size);
+                self.engine
+                    .record_background(&self.gpu, cmd, &bg, params, &rect)?;
                 self.engine
                     .record_enhance(&self.gpu, cmd, &view, params, mapping)
             })
@@ -206,7 +208,11 @@ impl OfflineEngine {
         params.validate().map_err(GpuError::Unsupported)?;
         let (width, height) = (camera.width, camera.height);
         let (bg, view) = self.stage(camera, (1, 1), PixelFormat::SRGB8)?;
-        let result = self.submit(|cmd| self.engine.record_background(&self.gpu, cmd, &bg, params));
+        let rect = CameraRect::full(bg.size);
+        let result = self.submit(|cmd| {
+            self.engine
+                .record_background(&self.gpu, cmd, &bg, params, &rect)
+        });
         let n = (width * height) as usize;
         let out = result.and_then(|_| {
             let bytes = bg.blurred.mapped().ok_or_else(|| {

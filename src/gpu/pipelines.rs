@@ -9,8 +9,8 @@ use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_
 use ash::vk;
 use std::sync::Mutex;
 
-/// Bindings 0..=6 of shaders/common.wgsl, all storage buffers.
-pub const BINDING_COUNT: u32 = 7;
+/// Bindings 0..=4 of shaders/common.wgsl, all storage buffers.
+pub const BINDING_COUNT: u32 = 5;
 
 /// The push-constant block, laid out as WGSL lays out `Params`: 128 bytes, the least
 /// maxPushConstantsSize Vulkan guarantees.
@@ -84,19 +84,19 @@ impl PushConstants {
 pub struct Pipelines {
     pub set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
-    pub decode_blur_h: vk::Pipeline,
-    pub blur_v: vk::Pipeline,
     pub finish_tiles: vk::Pipeline,
     pub copy_pixels: vk::Pipeline,
     pub copy_rows: vk::Pipeline,
     /// The `enhance` and `classify` variants (shaders::ENHANCE_VARIANTS, then
-    /// shaders::CLASSIFY_VARIANTS), built on first use: each costs a compile in the driver and
-    /// a session uses a few.
+    /// shaders::CLASSIFY_VARIANTS, then shaders::DECODE_BLUR), built on first use: each costs
+    /// a compile in the driver and a session uses a few.
     variants: Mutex<Vec<vk::Pipeline>>,
 }
 
 fn no_variants() -> Mutex<Vec<vk::Pipeline>> {
-    let n = shaders::ENHANCE_VARIANTS.len() + shaders::CLASSIFY_VARIANTS.len();
+    let n = shaders::ENHANCE_VARIANTS.len()
+        + shaders::CLASSIFY_VARIANTS.len()
+        + shaders::DECODE_BLUR.len();
     Mutex::new(vec![vk::Pipeline::null(); n])
 }
 
@@ -106,8 +106,6 @@ impl Pipelines {
         Pipelines {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
-            decode_blur_h: vk::Pipeline::null(),
-            blur_v: vk::Pipeline::null(),
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
             copy_rows: vk::Pipeline::null(),
@@ -150,8 +148,6 @@ impl Pipelines {
         // SAFETY: valid create info on a valid device.
         self.layout = unsafe { gpu.device.create_pipeline_layout(&info, None) }
             .vk("vkCreatePipelineLayout")?;
-        self.decode_blur_h = self.compute_pipeline(gpu, &shaders::DECODE_BLUR_H)?;
-        self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
         self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
         self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         self.copy_rows = self.compute_pipeline(gpu, &shaders::COPY_ROWS)?;
@@ -195,6 +191,15 @@ impl Pipelines {
         let offset = shaders::ENHANCE_VARIANTS.len();
         self.variant(gpu, k.map(|k| k + offset), |k| {
             &shaders::CLASSIFY_VARIANTS[k - offset].2
+        })
+    }
+
+    /// The background pass for a blur half-width (0..=7).
+    pub fn decode_blur(&self, gpu: &GpuDevice, half: u32) -> Result<vk::Pipeline, GpuError> {
+        let offset = shaders::ENHANCE_VARIANTS.len() + shaders::CLASSIFY_VARIANTS.len();
+        let k = (half as usize) < shaders::DECODE_BLUR.len();
+        self.variant(gpu, k.then_some(offset + half as usize), |k| {
+            &shaders::DECODE_BLUR[k - offset]
         })
     }
 
@@ -256,15 +261,9 @@ impl Pipelines {
                 Ok(v) => std::mem::take(v),
                 Err(poisoned) => std::mem::take(poisoned.into_inner()),
             };
-            for p in [
-                self.decode_blur_h,
-                self.blur_v,
-                self.finish_tiles,
-                self.copy_pixels,
-                self.copy_rows,
-            ]
-            .into_iter()
-            .chain(variants)
+            for p in [self.finish_tiles, self.copy_pixels, self.copy_rows]
+                .into_iter()
+                .chain(variants)
             {
                 gpu.device.destroy_pipeline(p, None);
             }

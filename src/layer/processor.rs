@@ -8,7 +8,7 @@ use crate::gpu::commands::Commands;
 use crate::gpu::engine::barrier;
 use crate::gpu::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
 use crate::gpu::{
-    BackgroundFrame, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
+    BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
 };
 use crate::image::RgbaImage;
 use ash::vk;
@@ -66,8 +66,8 @@ pub struct Processor {
     background: Option<BackgroundFrame>,
     background_sequence: u64,
     /// The background sequence the blurred camera image was prepared for (once per camera
-    /// frame, whatever the number of views).
-    prepared_for: Option<u64>,
+    /// frame, whatever the number of views), and the camera texels prepared.
+    prepared_for: Option<(u64, CameraRect)>,
     views: HashMap<ViewKey, PreparedView>,
     frame: u64,
     // Last: dropped after everything above was destroyed in Drop.
@@ -281,11 +281,19 @@ impl Processor {
     ) -> Result<(), GpuError> {
         self.commands.begin(&self.gpu)?;
         let seq = self.background_sequence;
-        if self.prepared_for != Some(seq) {
-            let bg = self.background.as_ref().expect("set in process");
+        let bg = self.background.as_ref().expect("set in process");
+        let mappings: Vec<CameraMapping> = items.iter().map(|i| i.mapping).collect();
+        let needed = CameraRect::sampled_by(&mappings, bg.size);
+        let rect = match self.prepared_for {
+            Some((s, done)) if s == seq && done.contains(&needed) => None,
+            // A view the frame's preparation did not cover: prepare both again.
+            Some((s, done)) if s == seq => Some(done.union(&needed)),
+            _ => Some(needed),
+        };
+        if let Some(rect) = rect {
             self.engine
-                .record_background(&self.gpu, self.commands.cmd, bg, params)?;
-            self.prepared_for = Some(seq);
+                .record_background(&self.gpu, self.commands.cmd, bg, params, &rect)?;
+            self.prepared_for = Some((seq, rect));
         }
         let frame = self.frame;
         for i in items {
