@@ -46,6 +46,10 @@ var<immediate> pc: Params;
 // y * width + x holds texels x and x + 1 of row y (texel width - 1 twice at the right edge),
 // packed by pack_linear_pair, so a bilinear sample reads one entry per row.
 @group(0) @binding(1) var<storage, read_write> blurred: array<vec4<u32>>;
+// The same, as an R32G32B32A32_UINT image (copied from `blurred` after each preparation): what
+// the enhancement samples. A texel fetch is a gather on CPU drivers such as lavapipe, where a
+// storage-buffer read at a per-pixel index is a loop over the SIMD lanes with a branch each.
+@group(0) @binding(5) var blurred_texels: texture_2d<u32>;
 // Bindings 2 (pixels: the display region's raw pixels in the swapchain format, 1 or 2 u32 per
 // pixel) and 4 (source: the copy passes' source, the benchmark's floor) are declared by
 // access_wide.wgsl or access_narrow.wgsl, which build.rs puts after this file.

@@ -328,8 +328,8 @@ fn bilinear(tx: f32, ty: f32) -> vec3<f32> {
     let x = u32(clamp(base.x, 0.0, size.x - 1.0));
     let y0 = u32(clamp(base.y, 0.0, size.y - 1.0));
     let y1 = u32(clamp(base.y + 1.0, 0.0, size.y - 1.0));
-    let top = blurred[y0 * pc.camera_size.x + x];
-    let bottom = blurred[y1 * pc.camera_size.x + x];
+    let top = textureLoad(blurred_texels, vec2<u32>(x, y0), 0);
+    let bottom = textureLoad(blurred_texels, vec2<u32>(x, y1), 0);
     let upper = mix(unpack_linear(top.xy), unpack_linear(top.zw), t.x);
     let lower = mix(unpack_linear(bottom.xy), unpack_linear(bottom.zw), t.x);
     return mix(upper, lower, t.y);

@@ -1,6 +1,7 @@
-//! An app-like colour image (optimal tiling, device-local, usable as a colour attachment and
-//! as a transfer source and destination, as the layer makes swapchain images): what the
-//! benchmark copies from and to, so that it times the layer's image copies on real images.
+//! A device-local 2D image: app-like colour images (usable as a colour attachment and as a
+//! transfer source and destination, as the layer makes swapchain images) that the benchmark
+//! copies from and to, so that it times the layer's image copies on real images; and the
+//! blurred camera image the enhancement samples (src/gpu/engine.rs).
 
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
@@ -10,7 +11,7 @@ use gpu_allocator::MemoryLocation;
 
 pub struct AppImage {
     pub raw: vk::Image,
-    allocation: Option<Allocation>,
+    pub(super) allocation: Option<Allocation>,
 }
 
 impl AppImage {
@@ -18,6 +19,16 @@ impl AppImage {
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
             | vk::ImageUsageFlags::TRANSFER_SRC
             | vk::ImageUsageFlags::TRANSFER_DST;
+        Self::with_usage(gpu, size, format, usage)
+    }
+
+    /// A 2D image of `format` with `usage` (optimal tiling, device-local, UNDEFINED layout).
+    pub fn with_usage(
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self, GpuError> {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)

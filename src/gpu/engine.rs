@@ -5,11 +5,12 @@
 //! touches images itself. Data lives in storage buffers, so the swapchain's format never has to
 //! be a storage-image format: the caller copies a view's region into `ViewTarget::pixels` and back.
 
+use super::app_image::AppImage;
 use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
-use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT};
+use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT, IMAGE_BINDING};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
@@ -36,6 +37,9 @@ pub struct BackgroundFrame {
     /// Decoded and blurred, linear light, not attenuated: two texels per 16 bytes (see
     /// `blurred` in shaders/common.wgsl). What every view's enhancement samples.
     pub blurred: GpuBuffer,
+    /// `blurred` as an image (R32G32B32A32_UINT, kept in GENERAL), which the enhancement reads.
+    texels: AppImage,
+    texels_view: vk::ImageView,
     /// The preparation pass's descriptor set (camera, blurred).
     set: vk::DescriptorSet,
     pool: vk::DescriptorPool,
@@ -65,6 +69,10 @@ impl BackgroundFrame {
 
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         free_set(gpu, self.pool, &mut self.set);
+        // SAFETY: the view is ours (null is ignored) and the GPU no longer uses it.
+        unsafe { gpu.device.destroy_image_view(self.texels_view, None) };
+        self.texels_view = vk::ImageView::null();
+        self.texels.destroy(gpu);
         for b in [&mut self.camera, &mut self.blurred] {
             b.destroy(gpu);
         }
@@ -154,6 +162,16 @@ impl CameraRect {
             height: bottom - y,
         }
     }
+}
+
+/// The blurred camera image's texel format: one 16-byte entry (two packed texels) per texel.
+const TEXELS_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+
+fn colour_layer() -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default()
+        .aspect_mask(vk::ImageAspectFlags::COLOR)
+        .level_count(1)
+        .layer_count(1)
 }
 
 /// Pixels per camera buffer row: the width rounded up to whole 16-byte entries.
@@ -307,9 +325,14 @@ impl Engine {
     pub fn new(gpu: &GpuDevice, max_views: u32) -> Result<Engine, GpuError> {
         let mut pipelines = Pipelines::new(gpu)?;
         let max_sets = max_views + MAX_BACKGROUNDS;
-        let sizes = [vk::DescriptorPoolSize::default()
-            .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(max_sets * BINDING_COUNT)];
+        let sizes = [
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(max_sets * BINDING_COUNT),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::SAMPLED_IMAGE)
+                .descriptor_count(max_sets),
+        ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .flags(vk::DescriptorPoolCreateFlags::FREE_DESCRIPTOR_SET)
             .max_sets(max_sets)
@@ -338,29 +361,48 @@ impl Engine {
         }
         let px = u64::from(size.0) * u64::from(size.1);
         let padded = u64::from(camera_stride(size.0)) * u64::from(size.1);
+        let blurred_usage = STORAGE | vk::BufferUsageFlags::TRANSFER_SRC;
         let [camera, blurred] = alloc_all(
             gpu,
             [
                 (padded * 4, STORAGE, placement.camera, "camera"),
-                (px * 16, STORAGE, placement.working, "blurred"),
+                (px * 16, blurred_usage, placement.working, "blurred"),
             ],
         )?;
         let mut bg = BackgroundFrame {
             size,
             camera,
             blurred,
+            texels: AppImage {
+                raw: vk::Image::null(),
+                allocation: None,
+            },
+            texels_view: vk::ImageView::null(),
             set: vk::DescriptorSet::null(),
             pool: self.pool,
         };
-        match self.allocate_set(gpu) {
-            Ok(set) => bg.set = set,
-            Err(e) => {
-                bg.destroy(gpu);
-                return Err(e);
-            }
+        if let Err(e) = self.make_texels(gpu, &mut bg) {
+            bg.destroy(gpu);
+            return Err(e);
         }
         self.write_set(gpu, bg.set, 0, &[&bg.camera, &bg.blurred]);
         Ok(bg)
+    }
+
+    /// The image the enhancement samples, its view, and the preparation's descriptor set.
+    fn make_texels(&self, gpu: &GpuDevice, bg: &mut BackgroundFrame) -> Result<(), GpuError> {
+        let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        bg.texels = AppImage::with_usage(gpu, bg.size, TEXELS_FORMAT, usage)?;
+        let info = vk::ImageViewCreateInfo::default()
+            .image(bg.texels.raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(TEXELS_FORMAT)
+            .subresource_range(colour_layer());
+        // SAFETY: a view of our own image, with its format, on a valid device.
+        bg.texels_view =
+            unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
+        bg.set = self.allocate_set(gpu)?;
+        Ok(())
     }
 
     fn allocate_set(&self, gpu: &GpuDevice) -> Result<vk::DescriptorSet, GpuError> {
@@ -439,6 +481,16 @@ impl Engine {
             &view.pixels,
         ];
         self.write_set(gpu, view.set, 0, &buffers);
+        let image = [vk::DescriptorImageInfo::default()
+            .image_view(background.texels_view)
+            .image_layout(vk::ImageLayout::GENERAL)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(view.set)
+            .dst_binding(IMAGE_BINDING)
+            .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+            .image_info(&image);
+        // SAFETY: the set and the view are valid; the caller guarantees the set is not in use.
+        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
         view.camera_size = background.size;
     }
 
@@ -567,8 +619,71 @@ impl Engine {
         let right = (rect.x + rect.width).min(background.size.0);
         let grid = ((right - origin.0).div_ceil(4), rect.height);
         self.dispatch(gpu, cmd, pipeline, background.set, &push, grid);
-        barrier(gpu, cmd, COMPUTE, all);
+        self.record_texels_copy(gpu, cmd, background, (origin.0, rect.y, right, rect.height));
+        barrier(gpu, cmd, vk::PipelineStageFlags::TRANSFER, all);
         Ok(())
+    }
+
+    /// Copies the prepared rows x0..right of rows y..y + height of `blurred` into the image the
+    /// enhancement samples (GENERAL; its earlier contents are not needed: every texel a view
+    /// reads is in the rectangle just prepared).
+    fn record_texels_copy(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        bg: &BackgroundFrame,
+        (x0, y0, right, height): (u32, u32, u32, u32),
+    ) {
+        let to_general = [vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::GENERAL)
+            .src_access_mask(vk::AccessFlags::SHADER_READ)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(bg.texels.raw)
+            .subresource_range(colour_layer())];
+        let written = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];
+        let copy = [vk::BufferImageCopy::default()
+            .buffer_offset((u64::from(y0) * u64::from(bg.size.0) + u64::from(x0)) * 16)
+            .buffer_row_length(bg.size.0)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_offset(vk::Offset3D {
+                x: x0 as i32,
+                y: y0 as i32,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width: right - x0,
+                height,
+                depth: 1,
+            })];
+        let d = &gpu.device;
+        // SAFETY: cmd is recording; the image and buffer are ours, the region lies in both.
+        unsafe {
+            d.cmd_pipeline_barrier(
+                cmd,
+                COMPUTE,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &written,
+                &[],
+                &to_general,
+            );
+            d.cmd_copy_buffer_to_image(
+                cmd,
+                bg.blurred.raw,
+                bg.texels.raw,
+                vk::ImageLayout::GENERAL,
+                &copy,
+            );
+        }
     }
 
     /// Records the per-pixel enhancement of one view's `pixels`, in place: the tile

@@ -11,6 +11,8 @@ use std::sync::Mutex;
 
 /// Bindings 0..=4 of shaders/common.wgsl, all storage buffers.
 pub const BINDING_COUNT: u32 = 5;
+/// Binding 5: the blurred camera image, a sampled image.
+pub const IMAGE_BINDING: u32 = 5;
 
 /// The push-constant block, laid out as WGSL lays out `Params`: 128 bytes, the least
 /// maxPushConstantsSize Vulkan guarantees.
@@ -125,11 +127,16 @@ impl Pipelines {
 
     fn build(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
         crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
-        let bindings: Vec<_> = (0..BINDING_COUNT)
+        let bindings: Vec<_> = (0..=IMAGE_BINDING)
             .map(|b| {
+                let ty = if b == IMAGE_BINDING {
+                    vk::DescriptorType::SAMPLED_IMAGE
+                } else {
+                    vk::DescriptorType::STORAGE_BUFFER
+                };
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(ty)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
