@@ -10,10 +10,24 @@
 // also holds): it reads the camera rows y - BLUR_HALF..y + BLUR_HALF 16 bytes (4 pixels) at a
 // time, decodes them, blurs each row horizontally, then the rows vertically. Decoding a texel
 // again for each row it serves costs arithmetic; it saves the intermediate image and the
-// memory accesses (each a loop over the SIMD lanes on lavapipe) of a two-pass blur. The
-// decode is the enhancement's (srgb_decode: a polynomial, 1.3e-5 relative error at most over
-// the 8-bit codes, src/gpu/approx.rs); the exact table cost a memory access per channel, and
-// a Newton step refining the polynomial more than doubled this pass on lavapipe (its division).
+// memory accesses (each a loop over the SIMD lanes on lavapipe) of a two-pass blur.
+
+// The sRGB decode of 8-bit codes c / 255, exact to f32 rounding: the enhancement's polynomial
+// (srgb_decode, 1.3e-5 relative at most, src/gpu/approx.rs) refined by one Newton step on
+// y^5 = s^12 (y = s^2.4), which squares its error. The exact table of earlier versions cost a
+// memory access per channel (a loop over the SIMD lanes on lavapipe); the polynomial alone is
+// twice as fast here but its error, amplified by Algorithm 1 on some pixels, took 16-bit
+// outputs past the reference's tolerance (tests/layer.rs, R16G16B16A16_UNORM).
+fn srgb_decode_exact(v: vec4<f32>) -> vec4<f32> {
+    let y0 = srgb_decode_poly(v);
+    let s = (v + 0.055) * (1.0 / 1.055);
+    let s2 = s * s;
+    let s4 = s2 * s2;
+    let s12 = s4 * s4 * s4;
+    let y2 = y0 * y0;
+    let y = 0.8 * y0 + 0.2 * s12 / (y2 * y2);
+    return select(v * (1.0 / 12.92), y, v > vec4<f32>(0.04045));
+}
 
 const H: i32 = i32(BLUR_HALF);
 // Texels of the window left of the first output, a whole number of 4-pixel entries.
@@ -65,9 +79,9 @@ fn hblur_row(row: i32, x0: i32) -> array<vec3<f32>, 5> {
         let at = vec4<i32>(k, k + 1, k + 2, k + 3);
         let m = vec4<i32>(WINDOW - 1);
         let e = vec4<u32>(words[min(at.x, m.x)], words[min(at.y, m.y)], words[min(at.z, m.z)], words[min(at.w, m.w)]);
-        let r = srgb_decode(bytes_at(e, 0u));
-        let gr = srgb_decode(bytes_at(e, 8u));
-        let b = srgb_decode(bytes_at(e, 16u));
+        let r = srgb_decode_exact(bytes_at(e, 0u));
+        let gr = srgb_decode_exact(bytes_at(e, 8u));
+        let b = srgb_decode_exact(bytes_at(e, 16u));
         for (var c = 0; c < 4; c++) {
             lin[4 * g + c] = vec3<f32>(r[c], gr[c], b[c]);
         }
