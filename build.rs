@@ -10,11 +10,7 @@ use std::{env, fs, path::PathBuf};
 include!("src/gpu/approx_constants.rs");
 
 /// Stage files and their entry points.
-const STAGES: &[(&str, &[&str])] = &[
-    ("background", &["decode_blur_h", "blur_v", "fov_map"]),
-    ("enhance", &["finish_tiles"]),
-    ("copy", &["copy_pixels"]),
-];
+const STAGES: &[(&str, &[&str])] = &[("enhance", &["finish_tiles"]), ("copy", &["copy_pixels"])];
 
 /// The per-pixel `enhance` entry is built once per (method, view mode, pixel format) with all
 /// three as WGSL constants, so each variant holds only its own code: a CPU driver such as
@@ -25,6 +21,8 @@ const STAGES: &[(&str, &[&str])] = &[
 /// beyond-the-paper extras (achromatic boost, luminance cap) are a fourth such switch: a variant
 /// without them for when both are off, the default.
 const METHODS: u32 = 5;
+/// The largest blur half-width (src/algorithm/params.rs: MAX_BLUR_SIZE 15).
+const MAX_BLUR_HALF: u32 = 7;
 const ENHANCE_MODES: [u32; 3] = [0, 2, 3];
 const MODE_BACKGROUND: u32 = 4;
 const FORMATS: [u32; 7] = [256, 0, 257, 1, 2, 3, 4];
@@ -229,6 +227,23 @@ fn main() {
         for entry in *entries {
             write(entry, stage, &source, entry);
         }
+    }
+    // The background pass once per blur half-width (Params::blur_taps: at most 7), so that its
+    // loops have constant trip counts (see shaders/background.wgsl).
+    println!("cargo:rerun-if-changed=shaders/background.wgsl");
+    let body = fs::read_to_string("shaders/background.wgsl").unwrap();
+    for half in 0..=MAX_BLUR_HALF {
+        let source = format!(
+            "{}\n{}const BLUR_HALF: u32 = {half}u;\n{body}",
+            prefix(false),
+            specialise(0, 0, 256, false)
+        );
+        write(
+            &format!("decode_blur_{half}"),
+            "background",
+            &source,
+            "decode_blur",
+        );
     }
     println!("cargo:rerun-if-changed=shaders/copy_wide.wgsl");
     let body = fs::read_to_string("shaders/copy_wide.wgsl").unwrap();

@@ -1,10 +1,9 @@
-// Pixel and background access for regions whose rows are not 16-byte aligned (and for the
-// passes that are not per-pixel hot paths): one u32 / one vec2<u32> per load.
+// Pixel access for regions whose rows are not 16-byte aligned (and for the
+// passes that are not per-pixel hot paths): one u32 per load.
 
-@group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec2<u32>>;
-@group(0) @binding(5) var<storage, read_write> pixels: array<u32>;
+@group(0) @binding(2) var<storage, read_write> pixels: array<u32>;
 // The copy passes' source (the benchmark's floor); the layer binds `pixels` here.
-@group(0) @binding(7) var<storage, read> source: array<u32>;
+@group(0) @binding(4) var<storage, read> source: array<u32>;
 
 // Words w..w+3 of the region (any w; words past the buffer read as 0).
 fn load_words4(w: u32) -> vec4<u32> {
@@ -16,13 +15,4 @@ fn store_words4(w: u32, v: vec4<u32>, n: u32) {
     for (var k = 0u; k < n; k++) {
         pixels[w + k] = v[k];
     }
-}
-
-// Packed B of pixels p and p + 1.
-fn load_background2(p: u32) -> vec4<u32> {
-    return vec4<u32>(bg_scaled[p], bg_scaled[p + 1u]);
-}
-
-fn store_background(p: u32, w: vec2<u32>) {
-    bg_scaled[p] = w;
 }

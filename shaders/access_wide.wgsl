@@ -1,11 +1,10 @@
-// Pixel and background access for regions whose rows are 16-byte aligned (width x words per
+// Pixel access for regions whose rows are 16-byte aligned (width x words per
 // pixel a multiple of 4): 16 bytes per load and store. CPU drivers such as lavapipe emulate
 // every buffer access with a loop over the SIMD lanes, so four words per access cost about
 // what one does (measured in docs/performance.md).
 
-@group(0) @binding(4) var<storage, read_write> bg_scaled: array<vec4<u32>>;
-@group(0) @binding(5) var<storage, read_write> pixels: array<vec4<u32>>;
-@group(0) @binding(7) var<storage, read> source: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read_write> pixels: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> source: array<vec4<u32>>;
 
 // Words w..w+3 of the region (w a multiple of 4).
 fn load_words4(w: u32) -> vec4<u32> {
@@ -20,9 +19,4 @@ fn store_words4(w: u32, v: vec4<u32>, n: u32) {
 // Words w..w+3 of the copy source (w a multiple of 4).
 fn load_source4(w: u32) -> vec4<u32> {
     return source[w / 4u];
-}
-
-// Packed B of pixels p and p + 1 (p even).
-fn load_background2(p: u32) -> vec4<u32> {
-    return bg_scaled[p / 2u];
 }

@@ -1,25 +1,21 @@
 // Shared by every stage: the push constants, the bindings and the colour science of spec
 // section 1 in f32. The CPU reference (src/colour.rs, src/algorithm/) is the same math in f64.
 
-// One push-constant block for all passes (they share one pipeline layout).
+// One push-constant block for all passes (they share one pipeline layout). 128 bytes, the
+// least maxPushConstantsSize Vulkan guarantees: keep it within.
 struct Params {
     camera_size: vec2<u32>,
     // Size of the display region (one view), in pixels; buffers are tightly packed rows.
     region_size: vec2<u32>,
-    fov_scale: vec2<f32>,
-    fov_offset: vec2<f32>,
     lambda_e: f32,
     lambda_jnd: f32,
     transmittance: f32,
     // Gaussian taps at offsets -blur_half..=blur_half (blur_half <= 7).
     blur_half: u32,
-    // Pixel layout in the low byte (LAYOUT_*), bit 8 set when values are sRGB-encoded.
-    format: u32,
-    method: u32,
-    k_v: f32,
-    k_b: f32,
     // Symmetric normalised taps: tap(k) = taps[k / 4][k % 4] for k = |offset|.
     taps: array<vec4<f32>, 2>,
+    k_v: f32,
+    k_b: f32,
     // What the view shows (MODE_*).
     mode: u32,
     // Tiles per row of the region (TILE x TILE pixels each).
@@ -27,21 +23,36 @@ struct Params {
     // Beyond the paper (0 = off): chroma boost on near-grey backgrounds; luminance cap.
     achromatic_boost: f32,
     luminance_cap: f32,
+    // The view's CameraMapping (src/algorithm/mapping.rs), row-major: camera_uv =
+    // (M (display_uv, 1)).xy / (M (display_uv, 1)).z.
+    map_00: f32,
+    map_01: f32,
+    map_02: f32,
+    map_10: f32,
+    map_11: f32,
+    map_12: f32,
+    map_20: f32,
+    map_21: f32,
+    map_22: f32,
 }
 
 var<immediate> pc: Params;
 
-// Camera frame: RGBA8 sRGB, one u32 per pixel (R in the low byte).
-@group(0) @binding(0) var<storage, read> camera: array<u32>;
-// Camera-grid linear light after the horizontal blur.
-@group(0) @binding(1) var<storage, read_write> blur_tmp: array<vec4<f32>>;
-// Camera-grid linear light after both blur passes.
-@group(0) @binding(2) var<storage, read_write> blurred: array<vec4<f32>>;
-// Display-grid background, FoV-mapped, linear light, not attenuated (for subtraction).
-@group(0) @binding(3) var<storage, read_write> bg_linear: array<vec4<f32>>;
-// Bindings 4 (bg_scaled: the paper's B, packed by pack_background, 8 bytes per pixel) and 5
-// (pixels: the display region's raw pixels in the swapchain format, 1 or 2 u32 per pixel) are
-// declared by access_wide.wgsl or access_narrow.wgsl, which build.rs puts after this file.
+// Camera frame: RGBA8 sRGB, one u32 per pixel (R in the low byte), four pixels per entry;
+// rows padded to a multiple of 4 pixels (camera_stride).
+@group(0) @binding(0) var<storage, read> camera: array<vec4<u32>>;
+// The camera frame decoded and blurred: linear light on the camera grid, NOT attenuated (the
+// subtraction method needs it as is), the one image prepared per camera frame. Entry
+// y * width + x holds texels x and x + 1 of row y (texel width - 1 twice at the right edge),
+// packed by pack_linear_pair, so a bilinear sample reads one entry per row.
+@group(0) @binding(1) var<storage, read_write> blurred: array<vec4<u32>>;
+// The same, as an R32G32B32A32_UINT image (copied from `blurred` after each preparation): what
+// the enhancement samples. A texel fetch is a gather on CPU drivers such as lavapipe, where a
+// storage-buffer read at a per-pixel index is a loop over the SIMD lanes with a branch each.
+@group(0) @binding(5) var blurred_texels: texture_2d<u32>;
+// Bindings 2 (pixels: the display region's raw pixels in the swapchain format, 1 or 2 u32 per
+// pixel) and 4 (source: the copy passes' source, the benchmark's floor) are declared by
+// access_wide.wgsl or access_narrow.wgsl, which build.rs puts after this file.
 // The tiles the enhancement runs on (classify and finish_tiles in enhance.wgsl).
 struct TileList {
     // Tiles found so far by classify; finish_tiles moves it to `total` and zeroes it.
@@ -53,10 +64,7 @@ struct TileList {
     // Tile index (row * tile_columns + column) of each listed tile.
     index: array<u32>,
 }
-@group(0) @binding(6) var<storage, read_write> tiles: TileList;
-// Binding 7 (source: the copy passes' source, the benchmark's floor) is declared with 4 and 5.
-// sRGB decode of the 256 8-bit codes, computed in f64 and rounded once (exact).
-@group(0) @binding(8) var<storage, read> srgb_table: array<f32>;
+@group(0) @binding(3) var<storage, read_write> tiles: TileList;
 
 const LAYOUT_RGBA8: u32 = 0u;
 const LAYOUT_BGRA8: u32 = 1u;
@@ -79,13 +87,6 @@ const METHOD_HUE_ONLY: u32 = 1u;
 const METHOD_OTHER_HUE: u32 = 2u;
 const METHOD_LUM_CHROMA: u32 = 3u;
 const METHOD_SUBTRACTION: u32 = 4u;
-
-// sRGB decode of an 8-bit camera code: the exact table (binding 8). The background pass uses
-// it once per camera pixel; the per-pixel enhancement uses srgb_decode (a polynomial, no
-// memory access).
-fn srgb_decode_code(c: vec3<u32>) -> vec3<f32> {
-    return vec3<f32>(srgb_table[c.x], srgb_table[c.y], srgb_table[c.z]);
-}
 
 // Four pixels' colours, one column per channel: column k holds channel k (R, G, B or L', a',
 // b') of pixels 0..3. The per-pixel pass works on four pixels at once in this form, so that a
@@ -117,15 +118,6 @@ fn row_times(m: vec3<f32>, c: Colours) -> vec4<f32> {
 // stay exactly grey (a* = b* = 0) whatever the rounding of the matrix.
 fn unit_row_times(m: vec3<f32>, c: Colours) -> vec4<f32> {
     return c[1] + m.x * (c[0] - c[1]) + m.z * (c[2] - c[1]);
-}
-
-// One colour in all four pixels of a group (the background pass works a pixel at a time).
-fn single(v: vec3<f32>) -> Colours {
-    return Colours(vec4<f32>(v.x), vec4<f32>(v.y), vec4<f32>(v.z));
-}
-
-fn first_of(c: Colours) -> vec3<f32> {
-    return vec3<f32>(c[0].x, c[1].x, c[2].x);
 }
 
 // Four colours as a group, pixel j from the j-th argument.
@@ -191,23 +183,20 @@ fn scaled_to_linear(s: Colours) -> Colours {
     return Colours(unit_row_times(T_TO_RGB_0, t), unit_row_times(T_TO_RGB_1, t), unit_row_times(T_TO_RGB_2, t));
 }
 
-// B in 8 bytes, a quarter of the f32 traffic per pixel: L', a' and b' each as 21-bit fixed
-// point over [-2, 2) (steps of 1.9e-6, close to f32's own precision near 1; 16 bits were too
-// coarse: I = -B/|B| amplifies B's error by 1/|B| on near-grey backgrounds). L' in bits 0-20,
-// a' in 21-41, b' in 42-62. Mirrored by src/gpu/offline.rs (unpack_background).
-const B_SCALE: f32 = 524288.0; // 2^19 steps per unit
-const B_OFFSET: f32 = 1048576.0; // 2^20: the code of 0
-const B_MAX_CODE: f32 = 2097151.0; // 2^21 - 1
+// A linear-light colour in [0, 1] in 8 bytes: each channel as a 21-bit code over [0, 1]
+// (steps of 4.8e-7, a few f32 ulps near 1; scaled LAB moves by at most 4e-6 per step, in the
+// darkest shades). R in bits 0-20, G in 21-41, B in 42-62. Two texels per 16-byte entry.
+// Mirrored by src/gpu/offline.rs (unpack_linear).
+const LINEAR_MAX_CODE: f32 = 2097151.0; // 2^21 - 1: the code of 1.0
 
-fn pack_background(b: vec3<f32>) -> vec2<u32> {
-    let q = vec3<u32>(clamp(round(b * B_SCALE) + B_OFFSET, vec3<f32>(0.0), vec3<f32>(B_MAX_CODE)));
+fn pack_linear(c: vec3<f32>) -> vec2<u32> {
+    let q = vec3<u32>(round(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * LINEAR_MAX_CODE));
     return vec2<u32>(q.x | (q.y << 21u), (q.y >> 11u) | (q.z << 10u));
 }
 
-fn unpack_background(w: vec2<u32>) -> vec3<f32> {
+fn unpack_linear(w: vec2<u32>) -> vec3<f32> {
     let q = vec3<u32>(w.x & 0x1fffffu, (w.x >> 21u) | ((w.y & 0x3ffu) << 11u), w.y >> 10u);
-    // Exact in f32: codes below 2^24, scale a power of two.
-    return (vec3<f32>(q) - B_OFFSET) * (1.0 / B_SCALE);
+    return vec3<f32>(q) * (1.0 / LINEAR_MAX_CODE);
 }
 
 fn blur_tap(k: u32) -> f32 {

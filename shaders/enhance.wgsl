@@ -271,14 +271,17 @@ struct Enhanced {
     changed: vec4<bool>,
 }
 
-// Pixels p..p+3 of the linear, display-grid background (subtraction and the background view).
-fn background_linear(p: u32) -> Colours {
-    return group_of(bg_linear[p].rgb, bg_linear[p + 1u].rgb, bg_linear[p + 2u].rgb, bg_linear[p + 3u].rgb);
+// The display pixels' background (spec section 2): `linear` sampled from the blurred camera
+// image (not attenuated: what subtraction uses), `scaled` the paper's B.
+struct Background {
+    linear: Colours,
+    scaled: Colours,
 }
 
-fn enhance_linear(p: u32, display: Colours, b: Colours) -> Enhanced {
+fn enhance_linear(display: Colours, bg: Background) -> Enhanced {
+    let b = bg.scaled;
     if (METHOD == METHOD_SUBTRACTION) {
-        let out = pc.k_v * display - pc.k_b * background_linear(p);
+        let out = pc.k_v * display - pc.k_b * bg.linear;
         return Enhanced(cap_luminance(display, clip(out)), vec4<bool>(true));
     }
     let d = linear_to_scaled(display);
@@ -300,21 +303,59 @@ fn is_enhanced(b: Colours, display: Colours, stored: Colours) -> vec4<bool> {
     return (delta_e(b, p) > delta_e(b, d)) & (delta_e(p, d) >= vec4<f32>(2.3));
 }
 
-// Packed B of pixels p..p+3 (p even) as scaled colours.
-fn background_scaled(p: u32) -> Colours {
-    let lo = load_background2(p);
-    let hi = load_background2(p + 2u);
-    return group_of(unpack_background(lo.xy), unpack_background(lo.zw), unpack_background(hi.xy), unpack_background(hi.zw));
+// Texture coordinates of display pixels (x..x+3, y) in the camera image: the view's
+// CameraMapping with its projective divide (an affine mapping has a bottom row of 0, 0, 1).
+// Texel centres at (i + 0.5) / W, origin top-left (spec section 2, step 3).
+fn camera_uv(x: u32, y: u32) -> array<vec4<f32>, 2> {
+    let u = (vec4<f32>(vec4<u32>(x) + vec4<u32>(0u, 1u, 2u, 3u)) + 0.5) / f32(pc.region_size.x);
+    let v = vec4<f32>((f32(y) + 0.5) / f32(pc.region_size.y));
+    let z = pc.map_20 * u + pc.map_21 * v + pc.map_22;
+    let cu = (pc.map_00 * u + pc.map_01 * v + pc.map_02) / z;
+    let cv = (pc.map_10 * u + pc.map_11 * v + pc.map_12) / z;
+    return array<vec4<f32>, 2>(cu, cv);
 }
 
-// The new words of pixels p..p+3 (columns x..x+3) given their words and B; unchanged words
-// where the method or mode leaves a pixel alone.
-fn enhance_group(p: u32, x: u32, w: Words, b: Colours) -> Words {
-    if (MODE == MODE_BACKGROUND) {
-        return encode_words(w, encode_stored(pc.transmittance * background_linear(p)));
+// Bilinear interpolation, clamp-to-edge, of the blurred camera image at texel coordinates
+// (tx, ty) (texel centres at integers). Entry x of `blurred` holds texels x and x + 1, so each
+// row costs one read; left of the first texel centre the entry of texel 0 with weight 0.
+fn bilinear(tx: f32, ty: f32) -> vec3<f32> {
+    let size = vec2<f32>(pc.camera_size);
+    let base = floor(vec2<f32>(tx, ty));
+    var t = vec2<f32>(tx, ty) - base;
+    if (base.x < 0.0) {
+        t.x = 0.0;
     }
+    let x = u32(clamp(base.x, 0.0, size.x - 1.0));
+    let y0 = u32(clamp(base.y, 0.0, size.y - 1.0));
+    let y1 = u32(clamp(base.y + 1.0, 0.0, size.y - 1.0));
+    let top = textureLoad(blurred_texels, vec2<u32>(x, y0), 0);
+    let bottom = textureLoad(blurred_texels, vec2<u32>(x, y1), 0);
+    let upper = mix(unpack_linear(top.xy), unpack_linear(top.zw), t.x);
+    let lower = mix(unpack_linear(bottom.xy), unpack_linear(bottom.zw), t.x);
+    return mix(upper, lower, t.y);
+}
+
+// The background of display pixels (x..x+3, y) (spec section 2): the blurred camera image
+// sampled through the view's mapping (bilinear, linear light), then the lens transmittance
+// and the conversion to scaled LAB, in the spec's order. Only the pixels the enhancement runs
+// on pay for it (the camera image itself is prepared once per camera frame, background.wgsl).
+fn sampled_background(x: u32, y: u32) -> Background {
+    let uv = camera_uv(x, y);
+    let tx = uv[0] * f32(pc.camera_size.x) - 0.5;
+    let ty = uv[1] * f32(pc.camera_size.y) - 0.5;
+    let linear = group_of(bilinear(tx.x, ty.x), bilinear(tx.y, ty.y), bilinear(tx.z, ty.z), bilinear(tx.w, ty.w));
+    return Background(linear, linear_to_scaled(pc.transmittance * linear));
+}
+
+// The new words of pixels x..x+3 of a row given their words and background; unchanged words
+// where the method or mode leaves a pixel alone.
+fn enhance_group(x: u32, w: Words, bg: Background) -> Words {
+    if (MODE == MODE_BACKGROUND) {
+        return encode_words(w, encode_stored(pc.transmittance * bg.linear));
+    }
+    let b = bg.scaled;
     let display = decode_stored(stored_colours(w));
-    let e = enhance_linear(p, display, b);
+    let e = enhance_linear(display, bg);
     let stored = encode_stored(e.linear);
     var out = encode_words(w, stored);
     var changed = e.changed & !see_through(w);
@@ -336,7 +377,8 @@ fn enhance_group(p: u32, x: u32, w: Words, b: Colours) -> Words {
 
 // One invocation per tile row: 8 tiles per workgroup (local.x, so the 8 SIMD lanes of a CPU
 // driver read neighbouring tiles of one row), 8 rows per tile (local.y). The row's pixels and
-// B are all loaded first, so that their cache misses overlap, then enhanced 4 at a time.
+// background samples are all loaded first, so that their cache misses overlap, then enhanced
+// 4 at a time.
 @compute @workgroup_size(8, 8)
 fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
     let k = (group.y * 32768u + group.x) * TILE + local.x;
@@ -356,11 +398,12 @@ fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id
     let second = row + select(0u, 4u, valid > 4u);
     let w_first = load_group(row);
     let w_second = load_group(second);
-    let b_first = background_scaled(row);
-    let b_second = background_scaled(second);
-    store_group(row, enhance_group(row, x0, w_first, b_first), min(valid, 4u));
+    let x_second = x0 + select(0u, 4u, valid > 4u);
+    let b_first = sampled_background(x0, y);
+    let b_second = sampled_background(x_second, y);
+    store_group(row, enhance_group(x0, w_first, b_first), min(valid, 4u));
     if (valid > 4u) {
-        store_group(second, enhance_group(second, x0 + 4u, w_second, b_second), valid - 4u);
+        store_group(second, enhance_group(x_second, w_second, b_second), valid - 4u);
     }
 }
 

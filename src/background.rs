@@ -1,9 +1,12 @@
 //! Background preprocessing on the CPU (spec section 2): decode, Gaussian blur on the
-//! camera's own grid, FoV mapping onto the display grid (bilinear, linear light), then
-//! attenuation and conversion to the scaled space. The GPU engine does the same in f32.
+//! camera's own grid, mapping onto the display grid through the view's CameraMapping
+//! (bilinear, linear light), then attenuation and conversion to the scaled space. The GPU
+//! engine does the same in f32 (the first two once per camera frame, the rest per pixel it
+//! enhances).
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::Params;
 use crate::colour;
 use crate::image::RgbaImage;
@@ -20,11 +23,12 @@ pub struct PreparedBackground {
     pub scaled: Vec<DVec3>,
 }
 
-/// A linear-light image on the camera's grid.
-struct LinearImage {
-    width: u32,
-    height: u32,
-    pixels: Vec<DVec3>,
+/// A linear-light image on the camera's grid, row-major.
+#[derive(Clone, Debug)]
+pub struct LinearImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<DVec3>,
 }
 
 impl LinearImage {
@@ -95,27 +99,43 @@ impl LinearImage {
         top.lerp(bottom, fy)
     }
 
-    /// Resamples onto a `width` x `height` display grid: camera_uv = scale * display_uv + offset.
-    fn fov_map(&self, width: u32, height: u32, params: &Params) -> Vec<DVec3> {
-        let (scale, offset) = params.fov_mapping();
-        let (sx, sy) = (f64::from(scale[0]), f64::from(scale[1]));
-        let (ox, oy) = (f64::from(offset[0]), f64::from(offset[1]));
+    /// Resamples onto a `width` x `height` display grid: camera_uv = mapping(display_uv).
+    fn fov_map(&self, width: u32, height: u32, mapping: &CameraMapping) -> Vec<DVec3> {
         let mut out = Vec::with_capacity((width * height) as usize);
         for y in 0..height {
-            let v = sy * ((f64::from(y) + 0.5) / f64::from(height)) + oy;
+            let v = (f64::from(y) + 0.5) / f64::from(height);
             for x in 0..width {
-                let u = sx * ((f64::from(x) + 0.5) / f64::from(width)) + ox;
-                out.push(self.sample(u, v));
+                let u = (f64::from(x) + 0.5) / f64::from(width);
+                let c = mapping.apply(DVec2::new(u, v));
+                out.push(self.sample(c.x, c.y));
             }
         }
         out
     }
 }
 
-/// Preprocesses a camera frame for a `width` x `height` display (spec section 2).
+/// The camera frame decoded and blurred (spec section 2 steps 1-2): linear light on the
+/// camera's grid, not attenuated. The part that depends on the camera frame only.
+pub fn blurred_camera(camera: &RgbaImage, params: &Params) -> LinearImage {
+    LinearImage::decode(camera).blur(&params.blur_taps())
+}
+
+/// Preprocesses a camera frame for a `width` x `height` display (spec section 2) with the
+/// manual FoV mapping of `params` (`Params::camera_mapping`).
 pub fn prepare(camera: &RgbaImage, width: u32, height: u32, params: &Params) -> PreparedBackground {
-    let blurred = LinearImage::decode(camera).blur(&params.blur_taps());
-    let linear = blurred.fov_map(width, height, params);
+    prepare_mapped(camera, width, height, &params.camera_mapping(), params)
+}
+
+/// Preprocesses a camera frame for one view of `width` x `height` whose pixels lie at
+/// `mapping` in the camera image (spec section 2, the FoV step generalised to a homography).
+pub fn prepare_mapped(
+    camera: &RgbaImage,
+    width: u32,
+    height: u32,
+    mapping: &CameraMapping,
+    params: &Params,
+) -> PreparedBackground {
+    let linear = blurred_camera(camera, params).fov_map(width, height, mapping);
     let transmittance = f64::from(params.transmittance);
     let scaled = linear
         .iter()
@@ -132,7 +152,17 @@ pub fn prepare(camera: &RgbaImage, width: u32, height: u32, params: &Params) -> 
 /// The camera frame FoV-mapped onto the display grid, linear light, neither blurred nor
 /// attenuated: what the eye sees sharp through the lens (before the lens's transmittance).
 pub fn fov_sharp(camera: &RgbaImage, width: u32, height: u32, params: &Params) -> Vec<DVec3> {
-    LinearImage::decode(camera).fov_map(width, height, params)
+    fov_sharp_mapped(camera, width, height, &params.camera_mapping())
+}
+
+/// `fov_sharp` for a view at `mapping` in the camera image.
+pub fn fov_sharp_mapped(
+    camera: &RgbaImage,
+    width: u32,
+    height: u32,
+    mapping: &CameraMapping,
+) -> Vec<DVec3> {
+    LinearImage::decode(camera).fov_map(width, height, mapping)
 }
 
 #[cfg(test)]
@@ -203,5 +233,26 @@ mod tests {
         let s = fov_sharp(&camera, 1, 1, &half);
         let want = 0.5 * (colour::code_to_linear(10) + colour::code_to_linear(60));
         assert!((s[0].x - want).abs() < 1e-6, "{} vs {want}", s[0].x);
+    }
+
+    #[test]
+    fn a_homography_samples_after_the_projective_divide() {
+        // Camera 4x1 ramp as above, display 1x1 (uv 0.5, 0.5). M (0.5, 0.5, 1) = (0.75, 0.5, 2):
+        // camera u = 0.375 -> x = 1.0, texel 1 exactly; without the divide it would be texel 2.5.
+        let mut camera = RgbaImage::new(4, 1, [0, 0, 0, 255]);
+        for (x, c) in [10u8, 60, 120, 250].iter().enumerate() {
+            camera.set(x as u32, 0, [*c, *c, *c, 255]);
+        }
+        let mapping = CameraMapping {
+            rows: [[1.0, 0.0, 0.25], [0.0, 1.0, 0.0], [1.0, 1.0, 1.0]],
+        };
+        let s = fov_sharp_mapped(&camera, 1, 1, &mapping);
+        assert!((s[0].x - colour::code_to_linear(60)).abs() < 1e-9);
+        let params = Params {
+            blur: false,
+            ..Params::default()
+        };
+        let bg = prepare_mapped(&camera, 1, 1, &mapping, &params);
+        assert_eq!(bg.linear, s);
     }
 }

@@ -1,6 +1,7 @@
 //! The CPU reference on whole images: background preprocessing plus the per-pixel method.
 //! Slow and exact (f64); the GPU engine is tested against it.
 
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::{enhance_srgb8, Params};
 use crate::background::{self, PreparedBackground};
 use crate::image::RgbaImage;
@@ -30,8 +31,20 @@ pub fn enhance_image(
     }
 }
 
-/// Preprocesses the camera frame (any size) for the display, then enhances.
+/// Preprocesses the camera frame (any size) for the display, then enhances (the manual FoV
+/// mapping of `params`).
 pub fn enhance_with_camera(display: &RgbaImage, camera: &RgbaImage, params: &Params) -> RgbaImage {
-    let bg = background::prepare(camera, display.width, display.height, params);
+    enhance_with_camera_mapped(display, camera, &params.camera_mapping(), params)
+}
+
+/// `enhance_with_camera` for a view at `mapping` in the camera image.
+pub fn enhance_with_camera_mapped(
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    mapping: &CameraMapping,
+    params: &Params,
+) -> RgbaImage {
+    let (w, h) = (display.width, display.height);
+    let bg = background::prepare_mapped(camera, w, h, mapping, params);
     enhance_image(display, &bg, params)
 }

@@ -1,6 +1,7 @@
 //! The GPU engine on the first Vulkan device (lavapipe in CI) with the validation layer on:
 //! every validation error fails the test.
 
+use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
 use contrastxr::image::RgbaImage;
@@ -216,9 +217,21 @@ fn nonconformant(
     camera: &RgbaImage,
     params: &Params,
 ) -> Vec<String> {
+    nonconformant_mapped(e, display, camera, &params.camera_mapping(), params)
+}
+
+/// `nonconformant` for a view at `mapping` in the camera image.
+fn nonconformant_mapped(
+    e: &mut OfflineEngine,
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    mapping: &CameraMapping,
+    params: &Params,
+) -> Vec<String> {
     use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
-    let gpu = e.enhance(display, camera, params).unwrap();
-    let bg = contrastxr::background::prepare(camera, display.width, display.height, params);
+    let gpu = e.enhance_mapped(display, camera, mapping, params).unwrap();
+    let (w, h) = (display.width, display.height);
+    let bg = contrastxr::background::prepare_mapped(camera, w, h, mapping, params);
     let mut bad = Vec::new();
     for (i, (d, g)) in display.pixels.iter().zip(&gpu.pixels).enumerate() {
         let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
@@ -238,6 +251,16 @@ fn check_all_methods(
     camera: &RgbaImage,
     base: &Params,
 ) {
+    check_all_methods_mapped(e, display, camera, &base.camera_mapping(), base);
+}
+
+fn check_all_methods_mapped(
+    e: &mut OfflineEngine,
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    mapping: &CameraMapping,
+    base: &Params,
+) {
     for method in Method::ALL {
         for lambda_e in [0.1, 0.4, 1.0] {
             let params = Params {
@@ -245,7 +268,7 @@ fn check_all_methods(
                 lambda_e,
                 ..base.clone()
             };
-            let bad = nonconformant(e, display, camera, &params);
+            let bad = nonconformant_mapped(e, display, camera, mapping, &params);
             assert!(
                 bad.is_empty(),
                 "{method:?} lambda_e {lambda_e}: {} of {} pixels differ, e.g. {:?}",
@@ -266,6 +289,25 @@ fn gpu_matches_cpu_on_random_images() {
     for width in [96, 97] {
         let display = noise(width, 61, 21);
         check_all_methods(&mut e, &display, &camera, &Params::default());
+    }
+    assert_clean(&e);
+}
+
+/// A registered view's mapping (issue 14's homographies): not affine, the projective divide
+/// varying by about 15% across the view, and reaching past the camera's edges (clamp-to-edge).
+fn projective() -> CameraMapping {
+    CameraMapping {
+        rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
+    }
+}
+
+#[test]
+fn gpu_matches_cpu_with_a_projective_mapping() {
+    let mut e = engine();
+    let camera = noise(131, 83, 5);
+    for width in [96, 97] {
+        let display = noise(width, 61, 23);
+        check_all_methods_mapped(&mut e, &display, &camera, &projective(), &Params::default());
     }
     assert_clean(&e);
 }
@@ -294,6 +336,7 @@ fn gpu_matches_cpu_on_the_corner_cases() {
 
 #[test]
 fn gpu_background_matches_cpu_preparation() {
+    // The per-camera-frame part: decode and blur on the camera grid.
     let mut e = engine();
     let camera = noise(150, 90, 9);
     for params in [
@@ -304,15 +347,53 @@ fn gpu_background_matches_cpu_preparation() {
             ..Params::default()
         },
     ] {
-        let gpu = e.prepare_background(&camera, (80, 45), &params).unwrap();
-        let cpu = contrastxr::background::prepare(&camera, 80, 45, &params);
-        for i in 0..gpu.scaled.len() {
+        let gpu = e.prepare_background(&camera, &params).unwrap();
+        let cpu = contrastxr::background::blurred_camera(&camera, &params);
+        assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height));
+        for i in 0..cpu.pixels.len() {
+            // Each entry also holds its right neighbour (itself in the last column).
+            let right = if (i + 1) % 150 == 0 { i } else { i + 1 };
             for k in 0..3 {
-                let dl = (f64::from(gpu.linear[i][k]) - cpu.linear[i][k]).abs();
-                let ds = (f64::from(gpu.scaled[i][k]) - cpu.scaled[i][k]).abs();
+                let dl = (f64::from(gpu.linear[i][k]) - cpu.pixels[i][k]).abs();
+                let dr = (f64::from(gpu.right[i][k]) - cpu.pixels[right][k]).abs();
                 assert!(
-                    dl < 1e-5 && ds < 1e-4,
-                    "pixel {i} channel {k}: linear {dl}, scaled {ds}"
+                    dl < 1e-5 && dr < 1e-5,
+                    "texel {i} channel {k}: {dl}, right neighbour {dr}"
+                );
+            }
+        }
+    }
+    assert_clean(&e);
+}
+
+#[test]
+fn sampled_background_matches_cpu_preparation_through_any_mapping() {
+    // The per-pixel part (FoV sampling, transmittance), seen through the background view on a
+    // 16-bit linear format: the output is transmittance x the sampled background.
+    let mut e = engine();
+    let camera = noise(150, 90, 9);
+    let params = with_mode(ViewMode::Background);
+    let format = PixelFormat {
+        layout: PixelLayout::Rgba16Unorm,
+        srgb: false,
+    };
+    let region = (40u32, 27u32);
+    let opaque = vec![0xffff_0000u32; (region.0 * region.1 * 2) as usize];
+    for mapping in [params.camera_mapping(), projective()] {
+        let out = e
+            .enhance_raw_mapped(&opaque, (region, format), &camera, &mapping, &params)
+            .unwrap();
+        let cpu =
+            contrastxr::background::prepare_mapped(&camera, region.0, region.1, &mapping, &params);
+        let t = f64::from(params.transmittance);
+        for (i, want) in cpu.linear.iter().enumerate() {
+            let (w0, w1) = (out[2 * i], out[2 * i + 1]);
+            let got = [w0 & 0xffff, w0 >> 16, w1 & 0xffff].map(|c| f64::from(c) / 65535.0);
+            for k in 0..3 {
+                let d = (got[k] - t * want[k]).abs();
+                assert!(
+                    d <= 1.5 / 65535.0,
+                    "{mapping:?} pixel {i} channel {k}: off by {d}"
                 );
             }
         }
@@ -598,9 +679,23 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     assert_eq!(r["content"], "full");
     assert_eq!(r["foreground_fraction"].as_f64(), Some(1.0));
     let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
-    for k in ["copy_ms", "copy_wide_ms", "enhance_ms", "background_ms"] {
+    for k in [
+        "copy_ms",
+        "copy_wide_ms",
+        "enhance_ms",
+        "background_ms",
+        "frame_ms",
+        "image_copy_ms",
+    ] {
         assert!(ms(k) > 0.0, "{k} {}", ms(k));
     }
+    assert!((ms("frame_ratio") - ms("frame_ms") / ms("copy_ms")).abs() < 1e-9 * ms("frame_ratio"));
+    let live = ms("frame_ms") + ms("background_ms");
+    assert!((ms("live_frame_ms") - live).abs() < 1e-9 * live);
+    assert_eq!(
+        (r["camera_width"].as_u64(), r["camera_height"].as_u64()),
+        (Some(1280), Some(720))
+    );
     let ratio = ms("enhance_ms") / ms("copy_ms");
     assert!((ms("ratio") - ratio).abs() < 1e-9 * ratio);
     // Width 64 x 4 bytes: rows 16-byte aligned, so the stricter floor is measured too.

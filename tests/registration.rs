@@ -307,7 +307,6 @@ fn a_scene_point_lands_on_its_display_pixel_in_each_eye() {
 /// values, and the two eyes differ. The profile has parallel axes, so the mappings are affine
 /// and the reference's manual form computes them.
 #[test]
-#[ignore = "needs the engine to take each view's mapping (issue 13); un-ignore once merged"]
 fn each_eye_shows_the_camera_through_its_own_mapping() {
     use contrastxr::algorithm::Params;
     use contrastxr::image::RgbaImage;

@@ -1,9 +1,10 @@
-//! `contrastxr bench`: GPU time of the enhancement against a plain copy of the same pixels.
+//! `contrastxr bench`: GPU time of the enhancement, and of everything the layer records per
+//! display frame and per camera frame, against a plain copy of the same pixels.
 
 use super::args::Args;
 use super::CliError;
 use contrastxr::algorithm::{Method, Params};
-use contrastxr::gpu::bench::{BenchCase, BenchResult, Content};
+use contrastxr::gpu::bench::{BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::{DeviceOptions, OfflineEngine};
 
 const DEFAULT_SIZES: &str = "1268x720,2064x2208,3840x3840";
@@ -15,9 +16,12 @@ pub fn usage() -> String {
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
-         floor, where rows are 16-byte aligned), the per-frame enhancement, and the\n\
-         per-camera-frame background preparation\n\
-         (camera {}x{}). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
+         floor, where rows are 16-byte aligned), the per-frame enhancement, everything the\n\
+         layer records per display frame (frame: the enhancement plus its copies from and to\n\
+         the app's images, frame ratio over the copy; img copy: those copies alone), and the\n\
+         per-camera-frame background preparation (bg: decode and blur of a {}x{} camera\n\
+         frame, once whatever the views; live = frame + bg, a display frame that also brings\n\
+         a new camera frame). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
          with typical content (mostly black: panels and an object) and full frames\n\
          (--content picks one or both).\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
@@ -122,7 +126,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>7} {:>10} {:>9} {:>6}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6}",
         "size",
         "views",
         "content",
@@ -130,9 +134,13 @@ fn header() -> String {
         "copy ms",
         "copy16 ms",
         "enh ms",
+        "frame ms",
+        "img copy ms",
         "bg ms",
+        "live ms",
         "ratio",
         "ratio16",
+        "frame r",
         "enh Mpx/s",
         "Mpx"
     )
@@ -141,7 +149,7 @@ fn header() -> String {
 fn row(r: &BenchResult) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>9.0} {:>6.2}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
@@ -149,9 +157,13 @@ fn row(r: &BenchResult) -> String {
         r.copy_ms,
         optional(r.copy_wide_ms, 3),
         r.enhance_ms,
+        r.frame_ms,
+        r.image_copy_ms,
         r.background_ms,
+        r.live_frame_ms(),
         r.ratio(),
         optional(r.ratio_wide(), 2),
+        r.frame_ratio(),
         r.megapixels() / (r.enhance_ms / 1e3),
         r.megapixels(),
     )
@@ -179,6 +191,13 @@ fn to_json(device: &str, results: &[BenchResult]) -> String {
                 "background_ms": r.background_ms,
                 "ratio": r.ratio(),
                 "ratio_wide": r.ratio_wide(),
+                "frame_ms": r.frame_ms,
+                "frame_ratio": r.frame_ratio(),
+                "image_copy_ms": r.image_copy_ms,
+                "live_frame_ms": r.live_frame_ms(),
+                "live_ratio": r.live_frame_ms() / r.copy_ms,
+                "camera_width": CAMERA_SIZE.0,
+                "camera_height": CAMERA_SIZE.1,
             })
         })
         .collect();

@@ -1,11 +1,14 @@
 //! The benchmark behind `contrastxr bench`: GPU time, from timestamp queries, of the plain copy
-//! pass (the floor), the per-frame enhancement and the per-camera-frame background preparation
-//! over the same display regions, on the offline engine's device.
+//! pass (the floor), the per-frame enhancement, everything the layer records per display frame
+//! (the enhancement with the copies from and to the app's image) and the per-camera-frame
+//! background preparation, over the same display regions, on the offline engine's device.
 
+use super::app_image::AppImage;
 use super::buffer::GpuBuffer;
-use super::engine::{barrier, Placement, ViewTarget};
+use super::engine::{barrier, CameraRect, Placement, ViewTarget};
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
+use super::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
 use super::offline::OfflineEngine;
 use super::BackgroundFrame;
 use crate::algorithm::params::Params;
@@ -56,6 +59,12 @@ pub struct BenchResult {
     /// The copy with the enhancement's 16-byte accesses (None where rows are not aligned).
     pub copy_wide_ms: Option<f64>,
     pub enhance_ms: f64,
+    /// Everything the layer records per display frame: the layout transitions, the copies of
+    /// each view from the app's image into its buffer and back, and the enhancement.
+    pub frame_ms: f64,
+    /// The same without the enhancement: the layer's image copies alone.
+    pub image_copy_ms: f64,
+    /// Per camera frame: decode and blur on the camera grid (once, whatever the views).
     pub background_ms: f64,
     /// Fraction of pixels that are foreground (neither black nor alpha 0).
     pub foreground: f64,
@@ -70,6 +79,18 @@ impl BenchResult {
     /// Enhancement time over the 16-byte copy's time.
     pub fn ratio_wide(&self) -> Option<f64> {
         self.copy_wide_ms.map(|c| self.enhance_ms / c)
+    }
+
+    /// The layer's whole per-frame work over the copy's time.
+    pub fn frame_ratio(&self) -> f64 {
+        self.frame_ms / self.copy_ms
+    }
+
+    /// A display frame that also brings a new camera frame (a live camera at or above the
+    /// display's rate): the background preparation then the frame, one after the other on the
+    /// queue, so the sum of the two medians.
+    pub fn live_frame_ms(&self) -> f64 {
+        self.frame_ms + self.background_ms
     }
 
     pub fn megapixels(&self) -> f64 {
@@ -128,12 +149,38 @@ struct Rig {
     background: Option<BackgroundFrame>,
     views: Vec<ViewTarget>,
     sources: Vec<GpuBuffer>,
+    /// One app-like image per view (R8G8B8A8_SRGB, as the content), kept in
+    /// COLOR_ATTACHMENT_OPTIMAL between runs, as an app leaves it at xrEndFrame.
+    images: Vec<AppImage>,
     staging: Option<GpuBuffer>,
     queries: vk::QueryPool,
 }
 
-/// Timestamps per run: copy, enhancement, background and 16-byte copy, start and end each.
-const QUERIES: u32 = 8;
+impl Rig {
+    fn regions(&self, size: (u32, u32)) -> Vec<ImageRegion> {
+        let region = |i: &AppImage| ImageRegion {
+            image: i.raw,
+            array_index: 0,
+            offset: (0, 0),
+            extent: size,
+        };
+        self.images.iter().map(region).collect()
+    }
+}
+
+/// The spans timed in each run, in `timed_run`'s order of recording (a start and an end
+/// timestamp each).
+#[derive(Clone, Copy)]
+enum Span {
+    Background,
+    CopyWide,
+    Copy,
+    Enhance,
+    Frame,
+    ImageCopy,
+}
+const SPANS: usize = 6;
+const QUERIES: u32 = 2 * SPANS as u32;
 
 impl OfflineEngine {
     /// Times one case; `params` are the enhancement's settings (method, blur, ...).
@@ -143,6 +190,7 @@ impl OfflineEngine {
             background: None,
             views: Vec::new(),
             sources: Vec::new(),
+            images: Vec::new(),
             staging: None,
             queries: vk::QueryPool::null(),
         };
@@ -158,7 +206,7 @@ impl OfflineEngine {
         params: &Params,
     ) -> Result<BenchResult, GpuError> {
         let foreground = self.build_rig(rig, case)?;
-        let mut samples: [Vec<f64>; 4] = Default::default();
+        let mut samples: [Vec<f64>; SPANS] = Default::default();
         for run in 0..WARM_UP_RUNS + case.runs {
             let times = self.timed_run(rig, params)?;
             if run >= WARM_UP_RUNS {
@@ -167,17 +215,19 @@ impl OfflineEngine {
                 }
             }
         }
-        let [copy_ms, enhance_ms, background_ms, copy_wide_ms] = samples.map(median);
+        let ms = samples.map(median);
         Ok(BenchResult {
             case: *case,
-            copy_ms,
+            copy_ms: ms[Span::Copy as usize],
             copy_wide_ms: rig
                 .views
                 .iter()
                 .all(ViewTarget::copies_wide)
-                .then_some(copy_wide_ms),
-            enhance_ms,
-            background_ms,
+                .then_some(ms[Span::CopyWide as usize]),
+            enhance_ms: ms[Span::Enhance as usize],
+            frame_ms: ms[Span::Frame as usize],
+            image_copy_ms: ms[Span::ImageCopy as usize],
+            background_ms: ms[Span::Background as usize],
             foreground,
         })
     }
@@ -229,8 +279,10 @@ impl OfflineEngine {
             let view = rig.views.last().expect("pushed above");
             self.engine.bind_source(gpu, view, &source);
             rig.sources.push(source);
+            rig.images
+                .push(AppImage::new(gpu, case.region, vk::Format::R8G8B8A8_SRGB)?);
         }
-        self.fill_sources(rig, bytes.len() as u64)?;
+        self.fill_sources(rig, bytes.len() as u64, case.region)?;
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(QUERIES);
@@ -240,7 +292,9 @@ impl OfflineEngine {
         Ok(foreground / f64::from(w * h))
     }
 
-    fn fill_sources(&mut self, rig: &Rig, size: u64) -> Result<(), GpuError> {
+    /// Fills the copy sources with the content and brings the images to the layout an app
+    /// leaves them in (their content is written at each run, `restore_images`).
+    fn fill_sources(&mut self, rig: &Rig, size: u64, extent: (u32, u32)) -> Result<(), GpuError> {
         let staging = rig.staging.as_ref().expect("made before").raw;
         self.submit(|cmd| {
             for source in &rig.sources {
@@ -252,8 +306,79 @@ impl OfflineEngine {
                         .cmd_copy_buffer(cmd, staging, source.raw, &region)
                 };
             }
+            let to_attachment: Vec<_> = rig
+                .regions(extent)
+                .iter()
+                .map(|r| {
+                    vk::ImageMemoryBarrier::default()
+                        .old_layout(vk::ImageLayout::UNDEFINED)
+                        .new_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                        .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
+                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .image(r.image)
+                        .subresource_range(
+                            vk::ImageSubresourceRange::default()
+                                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                                .level_count(1)
+                                .layer_count(1),
+                        )
+                })
+                .collect();
+            // SAFETY: cmd is recording; the images are ours and unused.
+            unsafe {
+                self.gpu.device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &to_attachment,
+                )
+            };
             Ok(())
         })
+    }
+
+    /// Writes the pristine content into each app image (an app's newly rendered frame).
+    fn restore_images(&self, cmd: vk::CommandBuffer, rig: &Rig, regions: &[ImageRegion]) {
+        let staging = rig.staging.as_ref().expect("made before");
+        record_layout_barriers(&self.gpu, cmd, regions, true);
+        for r in regions {
+            record_region_copy(&self.gpu, cmd, r, staging, false);
+        }
+        record_layout_barriers(&self.gpu, cmd, regions, false);
+    }
+
+    /// What the layer records per display frame around (and, with `enhance`, including) the
+    /// enhancement: src/layer/processor.rs's `record` less the background and captures.
+    fn record_frame(
+        &self,
+        cmd: vk::CommandBuffer,
+        (views, regions): (&[&ViewTarget], &[ImageRegion]),
+        params: &Params,
+        enhance: bool,
+    ) -> Result<(), GpuError> {
+        use vk::PipelineStageFlags as S;
+        let gpu = &self.gpu;
+        record_layout_barriers(gpu, cmd, regions, true);
+        for (r, v) in regions.iter().zip(views) {
+            record_region_copy(gpu, cmd, r, &v.pixels, true);
+        }
+        barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+        if enhance {
+            let mapping = params.camera_mapping();
+            for v in views {
+                self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+            }
+            barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        }
+        for (r, v) in regions.iter().zip(views) {
+            record_region_copy(gpu, cmd, r, &v.pixels, false);
+        }
+        record_layout_barriers(gpu, cmd, regions, false);
+        Ok(())
     }
 
     fn timestamp(&self, cmd: vk::CommandBuffer, pool: vk::QueryPool, query: u32) {
@@ -269,41 +394,59 @@ impl OfflineEngine {
         };
     }
 
-    /// One run: 16-byte copy, copy (which also restores the pristine pixels), enhancement,
-    /// background. Returns the GPU times in milliseconds: copy, enhancement, background, 16-byte
-    /// copy (0 where the rows do not allow it).
-    fn timed_run(&mut self, rig: &Rig, params: &Params) -> Result<[f64; 4], GpuError> {
-        let compute = vk::PipelineStageFlags::COMPUTE_SHADER;
+    /// One run: background, 16-byte copy, copy (which also restores the pristine pixels),
+    /// enhancement, then (after restoring the app images' content, untimed) the layer's whole
+    /// frame and its image copies alone. Returns each Span's GPU time in milliseconds (the
+    /// 16-byte copy's is 0 where the rows do not allow it).
+    fn timed_run(&mut self, rig: &Rig, params: &Params) -> Result<[f64; SPANS], GpuError> {
+        let all = vk::PipelineStageFlags::ALL_COMMANDS;
         let views: Vec<&ViewTarget> = rig.views.iter().collect();
+        let regions = rig.regions(views[0].region);
         let background = rig.background.as_ref().expect("made before");
+        let mapping = params.camera_mapping();
         self.submit(|cmd| {
             let (gpu, engine, q) = (&self.gpu, &self.engine, rig.queries);
             // SAFETY: cmd is recording; the pool is ours and not in use by pending work.
             unsafe { gpu.device.cmd_reset_query_pool(cmd, q, 0, QUERIES) };
-            barrier(gpu, cmd, vk::PipelineStageFlags::ALL_COMMANDS, compute);
-            self.timestamp(cmd, q, 6);
-            views.iter().for_each(|v| {
-                engine.record_copy_wide(gpu, cmd, v);
-            });
-            self.timestamp(cmd, q, 7);
-            barrier(gpu, cmd, compute, compute);
-            self.timestamp(cmd, q, 0);
-            views.iter().for_each(|v| engine.record_copy(gpu, cmd, v));
-            self.timestamp(cmd, q, 1);
-            barrier(gpu, cmd, compute, vk::PipelineStageFlags::ALL_COMMANDS);
-            self.timestamp(cmd, q, 2);
-            for v in &views {
-                engine.record_enhance(gpu, cmd, v, params)?;
-            }
-            self.timestamp(cmd, q, 3);
-            barrier(gpu, cmd, compute, vk::PipelineStageFlags::ALL_COMMANDS);
-            self.timestamp(cmd, q, 4);
-            engine.record_background(gpu, cmd, background, &views, params)?;
-            self.timestamp(cmd, q, 5);
-            Ok(())
+            let timed = |span: Span, record: &mut dyn FnMut() -> Result<(), GpuError>| {
+                barrier(gpu, cmd, all, all);
+                self.timestamp(cmd, q, 2 * span as u32);
+                let done = record();
+                self.timestamp(cmd, q, 2 * span as u32 + 1);
+                done
+            };
+            let rect = CameraRect::sampled_by(&vec![mapping; views.len()], background.size);
+            timed(Span::Background, &mut || {
+                engine.record_background(gpu, cmd, background, params, &rect)
+            })?;
+            timed(Span::CopyWide, &mut || {
+                views.iter().for_each(|v| {
+                    engine.record_copy_wide(gpu, cmd, v);
+                });
+                Ok(())
+            })?;
+            timed(Span::Copy, &mut || {
+                views.iter().for_each(|v| engine.record_copy(gpu, cmd, v));
+                Ok(())
+            })?;
+            timed(Span::Enhance, &mut || {
+                for v in &views {
+                    engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+                }
+                Ok(())
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            let both = (views.as_slice(), regions.as_slice());
+            timed(Span::Frame, &mut || {
+                self.record_frame(cmd, both, params, true)
+            })?;
+            timed(Span::ImageCopy, &mut || {
+                self.record_frame(cmd, both, params, false)
+            })
         })?;
         let mut ticks = [0u64; QUERIES as usize];
-        // SAFETY: the submission was waited for; the eight queries were written by it.
+        // SAFETY: the submission was waited for; every query was written by it.
         unsafe {
             self.gpu.device.get_query_pool_results(
                 rig.queries,
@@ -314,8 +457,9 @@ impl OfflineEngine {
         }
         .vk("vkGetQueryPoolResults")?;
         let ms = f64::from(self.gpu.timestamp_period()) / 1e6;
-        let span = |a: usize| ticks[a + 1].wrapping_sub(ticks[a]) as f64 * ms;
-        Ok([span(0), span(2), span(4), span(6)])
+        Ok(std::array::from_fn(|k| {
+            ticks[2 * k + 1].wrapping_sub(ticks[2 * k]) as f64 * ms
+        }))
     }
 
     fn destroy_rig(&mut self, mut rig: Rig) {
@@ -326,6 +470,7 @@ impl OfflineEngine {
             self.engine.destroy_view(gpu, &mut v);
         }
         rig.sources.iter_mut().for_each(|b| b.destroy(gpu));
+        rig.images.iter_mut().for_each(|i| i.destroy(gpu));
         if let Some(mut b) = rig.staging.take() {
             b.destroy(gpu);
         }

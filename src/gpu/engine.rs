@@ -1,14 +1,17 @@
-//! The engine: records the background preparation and the per-pixel enhancement into a command
-//! buffer that the caller owns and submits. It works the same on a device it created (the CLI)
+//! The engine: records the background preparation (once per camera frame, on the camera grid)
+//! and the per-pixel enhancement (per view, sampling that image through the view's
+//! CameraMapping) into a command buffer that the caller owns and submits. It works the same on a device it created (the CLI)
 //! and on someone else's device and queue (the app's, in the layer): it never submits, waits or
 //! touches images itself. Data lives in storage buffers, so the swapchain's format never has to
 //! be a storage-image format: the caller copies a view's region into `ViewTarget::pixels` and back.
 
+use super::app_image::AppImage;
 use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
-use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT};
+use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT, IMAGE_BINDING};
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -22,43 +25,175 @@ pub const TILE: u32 = WORKGROUP;
 /// Words before the tile indices in the tile buffer (struct TileList in shaders/common.wgsl).
 const TILE_LIST_HEADER: u64 = 8;
 
+/// Background frames that may exist at once besides the views (their descriptor sets).
+const MAX_BACKGROUNDS: u32 = 2;
+
 /// One camera frame on the GPU and its blurred linear-light copy (camera grid).
 pub struct BackgroundFrame {
     pub size: (u32, u32),
-    /// RGBA8 sRGB, one u32 per pixel; host-visible, written with `upload`.
+    /// RGBA8 sRGB, one u32 per pixel, rows padded to a multiple of 4 pixels (the shader reads
+    /// 16 bytes at a time); host-visible, written with `upload`.
     pub camera: GpuBuffer,
-    blur_tmp: GpuBuffer,
-    blurred: GpuBuffer,
+    /// Decoded and blurred, linear light, not attenuated: two texels per 16 bytes (see
+    /// `blurred` in shaders/common.wgsl). What every view's enhancement samples.
+    pub blurred: GpuBuffer,
+    /// `blurred` as an image (R32G32B32A32_UINT, kept in GENERAL), which the enhancement reads.
+    texels: AppImage,
+    texels_view: vk::ImageView,
+    /// The preparation pass's descriptor set (camera, blurred).
+    set: vk::DescriptorSet,
+    pool: vk::DescriptorPool,
 }
 
 impl BackgroundFrame {
     /// Copies a camera frame (RGBA8 sRGB, row-major) into the host-visible camera buffer.
     pub fn upload(&mut self, rgba: &[[u8; 4]]) -> Result<(), GpuError> {
-        if rgba.len() != (self.size.0 * self.size.1) as usize {
+        let (w, h) = (self.size.0 as usize, self.size.1 as usize);
+        if rgba.len() != w * h {
             return Err(GpuError::Unsupported("camera frame size changed".into()));
         }
-        self.camera.write(rgba.as_flattened())
+        let stride = camera_stride(self.size.0) as usize;
+        if stride == w {
+            return self.camera.write(rgba.as_flattened());
+        }
+        let dst = self
+            .camera
+            .mapped_mut()
+            .ok_or_else(|| GpuError::Unsupported("buffer is not host-visible".into()))?;
+        for (row, src) in rgba.chunks_exact(w).enumerate() {
+            let at = row * stride * 4;
+            dst[at..at + w * 4].copy_from_slice(src.as_flattened());
+        }
+        Ok(())
     }
 
     pub fn destroy(&mut self, gpu: &GpuDevice) {
-        for b in [&mut self.camera, &mut self.blur_tmp, &mut self.blurred] {
+        free_set(gpu, self.pool, &mut self.set);
+        // SAFETY: the view is ours (null is ignored) and the GPU no longer uses it.
+        unsafe { gpu.device.destroy_image_view(self.texels_view, None) };
+        self.texels_view = vk::ImageView::null();
+        self.texels.destroy(gpu);
+        for b in [&mut self.camera, &mut self.blurred] {
             b.destroy(gpu);
         }
     }
 }
 
-/// One display region (a view): its prepared background and its pixels.
+/// The camera texels a background preparation makes: those the views' mappings sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraRect {
+    /// First texel; x is a multiple of 4 (the pass makes 4 texels per invocation).
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl CameraRect {
+    pub fn full(size: (u32, u32)) -> CameraRect {
+        CameraRect {
+            x: 0,
+            y: 0,
+            width: size.0,
+            height: size.1,
+        }
+    }
+
+    /// The texels whose entries bilinear sampling reads for any display pixel of views at
+    /// `mappings` (the bounding box of each view's mapped corners: where the mapping's z is
+    /// positive at all four corners it is positive inside, and the view's image is the convex
+    /// quadrilateral of its corners), with a margin for rounding. The whole image where a
+    /// mapping is degenerate.
+    pub fn sampled_by(mappings: &[CameraMapping], size: (u32, u32)) -> CameraRect {
+        let (w, h) = (f64::from(size.0), f64::from(size.1));
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for m in mappings {
+            for corner in [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]] {
+                let r = &m.rows;
+                let z = r[2][0] * corner[0] + r[2][1] * corner[1] + r[2][2];
+                let uv = m.apply(glam::DVec2::from(corner));
+                if !(z > 0.0 && uv.is_finite()) {
+                    return CameraRect::full(size);
+                }
+                let t = [uv.x * w - 0.5, uv.y * h - 0.5];
+                for k in 0..2 {
+                    lo[k] = lo[k].min(t[k]);
+                    hi[k] = hi[k].max(t[k]);
+                }
+            }
+        }
+        if mappings.is_empty() {
+            return CameraRect::full(size);
+        }
+        // Entries floor(t) - 1 ..= floor(t) + 1 in x, rows floor(t) - 1 ..= floor(t) + 2 in y.
+        let span = |lo: f64, hi: f64, extra: f64, n: f64| {
+            let a = (lo.floor() - 1.0).clamp(0.0, n - 1.0);
+            let b = (hi.floor() + extra).clamp(0.0, n - 1.0);
+            (a as u32, b as u32)
+        };
+        let (x0, x1) = span(lo[0], hi[0], 1.0, w);
+        let (y0, y1) = span(lo[1], hi[1], 2.0, h);
+        let x0 = x0 / 4 * 4;
+        CameraRect {
+            x: x0,
+            y: y0,
+            width: x1 - x0 + 1,
+            height: y1 - y0 + 1,
+        }
+    }
+
+    /// Whether every texel of `other` is in this rectangle.
+    pub fn contains(&self, other: &CameraRect) -> bool {
+        other.x >= self.x
+            && other.y >= self.y
+            && other.x + other.width <= self.x + self.width
+            && other.y + other.height <= self.y + self.height
+    }
+
+    /// The smallest rectangle holding both.
+    pub fn union(&self, other: &CameraRect) -> CameraRect {
+        let (x, y) = (self.x.min(other.x), self.y.min(other.y));
+        let right = (self.x + self.width).max(other.x + other.width);
+        let bottom = (self.y + self.height).max(other.y + other.height);
+        CameraRect {
+            x,
+            y,
+            width: right - x,
+            height: bottom - y,
+        }
+    }
+}
+
+/// The blurred camera image's texel format: one 16-byte entry (two packed texels) per texel.
+const TEXELS_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+
+fn colour_layer() -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default()
+        .aspect_mask(vk::ImageAspectFlags::COLOR)
+        .level_count(1)
+        .layer_count(1)
+}
+
+/// Pixels per camera buffer row: the width rounded up to whole 16-byte entries.
+fn camera_stride(width: u32) -> u32 {
+    width.next_multiple_of(4)
+}
+
+fn free_set(gpu: &GpuDevice, pool: vk::DescriptorPool, set: &mut vk::DescriptorSet) {
+    if *set != vk::DescriptorSet::null() {
+        // SAFETY: the set came from this pool and the GPU no longer uses it.
+        let _ = unsafe { gpu.device.free_descriptor_sets(pool, &[*set]) };
+        *set = vk::DescriptorSet::null();
+    }
+}
+
+/// One display region (a view): its pixels and tile list, bound to a background frame.
 pub struct ViewTarget {
     pub region: (u32, u32),
     pub format: PixelFormat,
-    /// Display-grid background, linear light, not attenuated (vec4<f32> per pixel).
-    pub bg_linear: GpuBuffer,
-    /// Display-grid background in scaled LAB, packed (shaders/common.wgsl, pack_background):
-    /// the paper's B.
-    pub bg_scaled: GpuBuffer,
     /// The region's raw pixels in `format`, rows tightly packed.
     pub pixels: GpuBuffer,
-    /// Indirect dispatch arguments and the list of non-empty tiles (see shaders/tiles.wgsl).
+    /// Indirect dispatch arguments and the list of non-empty tiles (TileList in shaders/common.wgsl).
     pub tiles: GpuBuffer,
     set: vk::DescriptorSet,
     camera_size: (u32, u32),
@@ -87,27 +222,6 @@ impl ViewTarget {
 pub struct Engine {
     pipelines: Pipelines,
     pool: vk::DescriptorPool,
-    /// The sRGB decode of the 256 8-bit codes (binding 8), shared by every view.
-    srgb_table: GpuBuffer,
-}
-
-/// The exact decode table: f64 sRGB curve, rounded once to f32.
-fn srgb_table(gpu: &GpuDevice) -> Result<GpuBuffer, GpuError> {
-    let table: Vec<u8> = (0..=255u8)
-        .flat_map(|c| (crate::colour::code_to_linear(c) as f32).to_le_bytes())
-        .collect();
-    let mut buffer = GpuBuffer::new(
-        gpu,
-        table.len() as u64,
-        STORAGE,
-        MemoryLocation::CpuToGpu,
-        "srgb_table",
-    )?;
-    if let Err(e) = buffer.write(&table) {
-        buffer.destroy(gpu);
-        return Err(e);
-    }
-    Ok(buffer)
 }
 
 /// Where the engine's working buffers live: device-local inside the layer, host-visible for the
@@ -201,36 +315,33 @@ fn alloc_all<const N: usize>(
         .unwrap_or_else(|_| unreachable!("N buffers were made")))
 }
 
+/// The binding of the copy passes' source (shaders/common.wgsl).
+const SOURCE_BINDING: u32 = 4;
+
 const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
 
 impl Engine {
     /// Builds the pipelines; `max_views` bounds how many ViewTargets may exist at once.
     pub fn new(gpu: &GpuDevice, max_views: u32) -> Result<Engine, GpuError> {
         let mut pipelines = Pipelines::new(gpu)?;
-        let mut table = match srgb_table(gpu) {
-            Ok(t) => t,
-            Err(e) => {
-                pipelines.destroy(gpu);
-                return Err(e);
-            }
-        };
-        let sizes = [vk::DescriptorPoolSize::default()
-            .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(max_views * BINDING_COUNT)];
+        let max_sets = max_views + MAX_BACKGROUNDS;
+        let sizes = [
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(max_sets * BINDING_COUNT),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::SAMPLED_IMAGE)
+                .descriptor_count(max_sets),
+        ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .flags(vk::DescriptorPoolCreateFlags::FREE_DESCRIPTOR_SET)
-            .max_sets(max_views)
+            .max_sets(max_sets)
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a valid device.
         match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
-            Ok(pool) => Ok(Engine {
-                pipelines,
-                pool,
-                srgb_table: table,
-            }),
+            Ok(pool) => Ok(Engine { pipelines, pool }),
             Err(result) => {
                 pipelines.destroy(gpu);
-                table.destroy(gpu);
                 Err(GpuError::Vulkan {
                     call: "vkCreateDescriptorPool",
                     result,
@@ -249,21 +360,65 @@ impl Engine {
             return Err(GpuError::Unsupported("empty camera frame".into()));
         }
         let px = u64::from(size.0) * u64::from(size.1);
-        let gpu_only = MemoryLocation::GpuOnly;
-        let [camera, blur_tmp, blurred] = alloc_all(
+        let padded = u64::from(camera_stride(size.0)) * u64::from(size.1);
+        let blurred_usage = STORAGE | vk::BufferUsageFlags::TRANSFER_SRC;
+        let [camera, blurred] = alloc_all(
             gpu,
             [
-                (px * 4, STORAGE, placement.camera, "camera"),
-                (px * 16, STORAGE, gpu_only, "blur_tmp"),
-                (px * 16, STORAGE, gpu_only, "blurred"),
+                (padded * 4, STORAGE, placement.camera, "camera"),
+                (px * 16, blurred_usage, placement.working, "blurred"),
             ],
         )?;
-        Ok(BackgroundFrame {
+        let mut bg = BackgroundFrame {
             size,
             camera,
-            blur_tmp,
             blurred,
-        })
+            texels: AppImage {
+                raw: vk::Image::null(),
+                allocation: None,
+            },
+            texels_view: vk::ImageView::null(),
+            set: vk::DescriptorSet::null(),
+            pool: self.pool,
+        };
+        if let Err(e) = self.make_texels(gpu, &mut bg) {
+            bg.destroy(gpu);
+            return Err(e);
+        }
+        self.write_set(gpu, bg.set, 0, &[&bg.camera, &bg.blurred]);
+        Ok(bg)
+    }
+
+    /// The image the enhancement samples, its view, and the preparation's descriptor set.
+    fn make_texels(&self, gpu: &GpuDevice, bg: &mut BackgroundFrame) -> Result<(), GpuError> {
+        let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        bg.texels = AppImage::with_usage(gpu, bg.size, TEXELS_FORMAT, usage)?;
+        let info = vk::ImageViewCreateInfo::default()
+            .image(bg.texels.raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(TEXELS_FORMAT)
+            .subresource_range(colour_layer());
+        // SAFETY: a view of our own image, with its format, on a valid device.
+        bg.texels_view =
+            unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
+        bg.set = self.allocate_set(gpu)?;
+        Ok(())
+    }
+
+    fn allocate_set(&self, gpu: &GpuDevice) -> Result<vk::DescriptorSet, GpuError> {
+        let layouts = [self.pipelines.set_layout];
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.pool)
+            .set_layouts(&layouts);
+        // SAFETY: pool and layout are valid; the pool was sized for max_views views plus
+        // MAX_BACKGROUNDS background frames.
+        match unsafe { gpu.device.allocate_descriptor_sets(&info) } {
+            Ok(sets) => Ok(sets[0]),
+            Err(result) => Err(GpuError::Vulkan {
+                call: "vkAllocateDescriptorSets",
+                result,
+            }),
+        }
     }
 
     pub fn create_view(
@@ -285,11 +440,9 @@ impl Engine {
         let tile_usage =
             STORAGE | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let gpu_only = MemoryLocation::GpuOnly;
-        let [bg_linear, bg_scaled, pixels, tiles] = alloc_all(
+        let [pixels, tiles] = alloc_all(
             gpu,
             [
-                (px * 16, usage, at, "bg_linear"),
-                (px * 8, usage, at, "bg_scaled"),
                 (px * bpp, usage, at, "pixels"),
                 (
                     (TILE_LIST_HEADER + tile_count) * 4,
@@ -302,26 +455,16 @@ impl Engine {
         let mut view = ViewTarget {
             region,
             format,
-            bg_linear,
-            bg_scaled,
             pixels,
             tiles,
             set: vk::DescriptorSet::null(),
             camera_size: background.size,
         };
-        let layouts = [self.pipelines.set_layout];
-        let info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.pool)
-            .set_layouts(&layouts);
-        // SAFETY: pool and layout are valid; the pool was sized for max_views sets.
-        match unsafe { gpu.device.allocate_descriptor_sets(&info) } {
-            Ok(sets) => view.set = sets[0],
-            Err(result) => {
+        match self.allocate_set(gpu) {
+            Ok(set) => view.set = set,
+            Err(e) => {
                 self.destroy_view(gpu, &mut view);
-                return Err(GpuError::Vulkan {
-                    call: "vkAllocateDescriptorSets",
-                    result,
-                });
+                return Err(e);
             }
         }
         self.bind(gpu, &mut view, background);
@@ -332,22 +475,28 @@ impl Engine {
     pub fn bind(&self, gpu: &GpuDevice, view: &mut ViewTarget, background: &BackgroundFrame) {
         let buffers = [
             &background.camera,
-            &background.blur_tmp,
             &background.blurred,
-            &view.bg_linear,
-            &view.bg_scaled,
             &view.pixels,
             &view.tiles,
             &view.pixels,
-            &self.srgb_table,
         ];
         self.write_set(gpu, view.set, 0, &buffers);
+        let image = [vk::DescriptorImageInfo::default()
+            .image_view(background.texels_view)
+            .image_layout(vk::ImageLayout::GENERAL)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(view.set)
+            .dst_binding(IMAGE_BINDING)
+            .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+            .image_info(&image);
+        // SAFETY: the set and the view are valid; the caller guarantees the set is not in use.
+        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
         view.camera_size = background.size;
     }
 
-    /// Points a view's copy source (binding 7, used only by `record_copy`) at `source`.
+    /// Points a view's copy source (binding 4, used only by `record_copy`) at `source`.
     pub fn bind_source(&self, gpu: &GpuDevice, view: &ViewTarget, source: &GpuBuffer) {
-        self.write_set(gpu, view.set, 7, &[source]);
+        self.write_set(gpu, view.set, SOURCE_BINDING, &[source]);
     }
 
     fn write_set(
@@ -381,17 +530,8 @@ impl Engine {
     }
 
     pub fn destroy_view(&self, gpu: &GpuDevice, view: &mut ViewTarget) {
-        if view.set != vk::DescriptorSet::null() {
-            // SAFETY: the set came from this pool and the GPU no longer uses it.
-            let _ = unsafe { gpu.device.free_descriptor_sets(self.pool, &[view.set]) };
-            view.set = vk::DescriptorSet::null();
-        }
-        for b in [
-            &mut view.bg_linear,
-            &mut view.bg_scaled,
-            &mut view.pixels,
-            &mut view.tiles,
-        ] {
+        free_set(gpu, self.pool, &mut view.set);
+        for b in [&mut view.pixels, &mut view.tiles] {
             b.destroy(gpu);
         }
     }
@@ -457,70 +597,107 @@ impl Engine {
     }
 
     /// Records the background preparation of spec section 2 for a camera frame already
-    /// uploaded: the blur once on the camera grid, then the FoV mapping for each view.
-    /// Every view must be bound to `background`.
+    /// uploaded: decode and blur on the camera grid, once per camera frame whatever the number
+    /// of views (each view's enhancement samples the result through its own mapping), for the
+    /// texels in `rect` (`CameraRect::sampled_by` the views' mappings).
     pub fn record_background(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         background: &BackgroundFrame,
-        views: &[&ViewTarget],
         params: &Params,
+        rect: &CameraRect,
     ) -> Result<(), GpuError> {
-        let Some(first) = views.first() else {
-            return Ok(());
-        };
-        if views.iter().any(|v| v.camera_size != background.size) {
-            return Err(GpuError::Unsupported(
-                "view bound to another background frame".into(),
-            ));
-        }
         let all = vk::PipelineStageFlags::ALL_COMMANDS;
         barrier(gpu, cmd, all, COMPUTE);
-        let push = PushConstants::new(params, background.size, first.region, 0);
-        self.dispatch(
-            gpu,
-            cmd,
-            self.pipelines.decode_blur_h,
-            first.set,
-            &push,
-            background.size,
-        );
-        barrier(gpu, cmd, COMPUTE, COMPUTE);
-        self.dispatch(
-            gpu,
-            cmd,
-            self.pipelines.blur_v,
-            first.set,
-            &push,
-            background.size,
-        );
-        barrier(gpu, cmd, COMPUTE, COMPUTE);
-        for view in views {
-            let push = PushConstants::new(params, background.size, view.region, 0);
-            self.dispatch(
-                gpu,
-                cmd,
-                self.pipelines.fov_map,
-                view.set,
-                &push,
-                view.region,
-            );
-        }
-        barrier(gpu, cmd, COMPUTE, all);
+        let identity = CameraMapping::IDENTITY;
+        // The pass reads the rectangle's first texel from region_size (shaders/background.wgsl).
+        let origin = (rect.x / 4 * 4, rect.y);
+        let push = PushConstants::new(params, background.size, origin, &identity);
+        let pipeline = self.pipelines.decode_blur(gpu, push.blur_half)?;
+        // Four texels per invocation.
+        let right = (rect.x + rect.width).min(background.size.0);
+        let grid = ((right - origin.0).div_ceil(4), rect.height);
+        self.dispatch(gpu, cmd, pipeline, background.set, &push, grid);
+        self.record_texels_copy(gpu, cmd, background, (origin.0, rect.y, right, rect.height));
+        barrier(gpu, cmd, vk::PipelineStageFlags::TRANSFER, all);
         Ok(())
     }
 
+    /// Copies the prepared rows x0..right of rows y..y + height of `blurred` into the image the
+    /// enhancement samples (GENERAL; its earlier contents are not needed: every texel a view
+    /// reads is in the rectangle just prepared).
+    fn record_texels_copy(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        bg: &BackgroundFrame,
+        (x0, y0, right, height): (u32, u32, u32, u32),
+    ) {
+        let to_general = [vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::GENERAL)
+            .src_access_mask(vk::AccessFlags::SHADER_READ)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(bg.texels.raw)
+            .subresource_range(colour_layer())];
+        let written = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];
+        let copy = [vk::BufferImageCopy::default()
+            .buffer_offset((u64::from(y0) * u64::from(bg.size.0) + u64::from(x0)) * 16)
+            .buffer_row_length(bg.size.0)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_offset(vk::Offset3D {
+                x: x0 as i32,
+                y: y0 as i32,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width: right - x0,
+                height,
+                depth: 1,
+            })];
+        let d = &gpu.device;
+        // SAFETY: cmd is recording; the image and buffer are ours, the region lies in both.
+        unsafe {
+            d.cmd_pipeline_barrier(
+                cmd,
+                COMPUTE,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &written,
+                &[],
+                &to_general,
+            );
+            d.cmd_copy_buffer_to_image(
+                cmd,
+                bg.blurred.raw,
+                bg.texels.raw,
+                vk::ImageLayout::GENERAL,
+                &copy,
+            );
+        }
+    }
+
     /// Records the per-pixel enhancement of one view's `pixels`, in place: the tile
-    /// classification, then the enhancement over the listed tiles only (indirect dispatch).
+    /// classification, then the enhancement over the listed tiles only (indirect dispatch),
+    /// which samples the view's background through `mapping` (display uv -> camera uv).
     /// Nothing in `ViewMode::Off`. The caller orders its copy into `pixels` before this and its
-    /// copy out after it (see `barrier`).
+    /// copy out after it (see `barrier`), and the background's preparation before it.
     pub fn record_enhance(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         view: &ViewTarget,
         params: &Params,
+        mapping: &CameraMapping,
     ) -> Result<(), GpuError> {
         if params.mode == ViewMode::Off {
             return Ok(());
@@ -535,12 +712,7 @@ impl Engine {
         );
         let pipeline = self.pipelines.enhance(gpu, codes, wide, extras)?;
         let classify = self.pipelines.classify(gpu, format, wide)?;
-        let push = PushConstants::new(
-            params,
-            view.camera_size,
-            view.region,
-            view.format.shader_code(),
-        );
+        let push = PushConstants::new(params, view.camera_size, view.region, mapping);
         let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
         use vk::PipelineStageFlags as S;
         barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
@@ -570,7 +742,12 @@ impl Engine {
     /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source
     /// (`bind_source`) into its `pixels` (4-byte formats), with the enhancement's dispatch shape.
     pub fn record_copy(&self, gpu: &GpuDevice, cmd: vk::CommandBuffer, view: &ViewTarget) {
-        let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
+        let push = PushConstants::new(
+            &Params::default(),
+            view.camera_size,
+            view.region,
+            &CameraMapping::IDENTITY,
+        );
         self.dispatch(
             gpu,
             cmd,
@@ -593,7 +770,12 @@ impl Engine {
         if !view.copies_wide() {
             return None;
         }
-        let push = PushConstants::new(&Params::default(), view.camera_size, view.region, 0);
+        let push = PushConstants::new(
+            &Params::default(),
+            view.camera_size,
+            view.region,
+            &CameraMapping::IDENTITY,
+        );
         let grid = (view.region.0.div_ceil(TILE), view.region.1);
         self.dispatch(gpu, cmd, self.pipelines.copy_rows, view.set, &push, grid);
         Some(())
@@ -603,7 +785,6 @@ impl Engine {
         // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
         unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };
         self.pool = vk::DescriptorPool::null();
-        self.srgb_table.destroy(gpu);
         self.pipelines.destroy(gpu);
     }
 }
@@ -614,4 +795,50 @@ pub fn begin(gpu: &GpuDevice, cmd: vk::CommandBuffer) -> Result<(), GpuError> {
         vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
     // SAFETY: cmd is not pending (the caller waited for its fence).
     unsafe { gpu.device.begin_command_buffer(cmd, &info) }.vk("vkBeginCommandBuffer")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec2;
+
+    /// Every entry (x, row) and (x, row + 1) that bilinear sampling reads for a grid of display
+    /// pixels lies in the rectangle, and its x is a multiple of 4.
+    #[test]
+    fn the_sampled_rect_holds_every_entry_the_views_read() {
+        let size = (640, 480);
+        let projective = CameraMapping {
+            rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
+        };
+        let manual = Params::default().camera_mapping();
+        for mappings in [vec![manual], vec![projective], vec![manual, projective]] {
+            let rect = CameraRect::sampled_by(&mappings, size);
+            assert_eq!(rect.x % 4, 0);
+            assert!(rect.width * rect.height < size.0 * size.1, "{rect:?}");
+            for m in &mappings {
+                for (i, j) in (0..=64).flat_map(|i| (0..=64).map(move |j| (i, j))) {
+                    let uv = m.apply(DVec2::new(f64::from(i) / 64.0, f64::from(j) / 64.0));
+                    let t = uv * DVec2::new(640.0, 480.0) - 0.5;
+                    let x = t.x.floor().clamp(0.0, 639.0) as u32;
+                    for y in [t.y.floor(), t.y.floor() + 1.0] {
+                        let y = y.clamp(0.0, 479.0) as u32;
+                        let texel = CameraRect {
+                            x,
+                            y,
+                            width: 1,
+                            height: 1,
+                        };
+                        assert!(rect.contains(&texel), "{rect:?} misses {texel:?}");
+                    }
+                }
+            }
+        }
+        let degenerate = CameraMapping {
+            rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-2.0, 0.0, 1.0]],
+        };
+        assert_eq!(
+            CameraRect::sampled_by(&[degenerate], size),
+            CameraRect::full(size)
+        );
+    }
 }

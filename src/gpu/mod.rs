@@ -2,6 +2,7 @@
 //! preparation and per-pixel enhancement, usable offline on its own device and recorded into
 //! someone else's command buffer inside an app. Knows nothing of OpenXR.
 
+pub mod app_image;
 pub mod approx;
 pub mod bench;
 pub mod buffer;
@@ -10,12 +11,13 @@ pub mod device;
 pub mod engine;
 pub mod error;
 pub mod format;
+pub mod image_copy;
 pub mod offline;
 pub mod pipelines;
 pub mod shaders;
 
 pub use device::{DeviceOptions, GpuDevice};
-pub use engine::{BackgroundFrame, Engine, Placement, ViewTarget};
+pub use engine::{BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
 pub use error::GpuError;
 pub use format::{PixelFormat, PixelLayout};
 pub use offline::OfflineEngine;

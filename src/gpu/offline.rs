@@ -3,9 +3,10 @@
 
 use super::commands::Commands;
 use super::device::{DeviceOptions, GpuDevice};
-use super::engine::{barrier, BackgroundFrame, Engine, Placement, ViewTarget};
+use super::engine::{barrier, BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
 use super::error::GpuError;
 use super::format::PixelFormat;
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::image::RgbaImage;
 use ash::vk;
@@ -19,39 +20,25 @@ pub struct OfflineEngine {
     pub gpu: GpuDevice,
 }
 
-/// The prepared background read back from the GPU (display grid, one entry per pixel).
+/// The prepared background read back from the GPU: the blurred camera image, linear light,
+/// on the camera grid (row-major).
 pub struct GpuBackground {
-    pub linear: Vec<[f32; 4]>,
-    /// B (L', a', b'), unpacked from the shader's 8-byte form.
-    pub scaled: Vec<[f32; 3]>,
+    pub width: u32,
+    pub height: u32,
+    pub linear: Vec<[f32; 3]>,
+    /// The second texel of each entry: its right neighbour (itself in the last column).
+    pub right: Vec<[f32; 3]>,
 }
 
 fn words_to_bytes(words: &[u32]) -> Vec<u8> {
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
 }
 
-fn bytes_to_vec4(bytes: &[u8], n: usize) -> Vec<[f32; 4]> {
-    bytes[..n * 16]
-        .chunks_exact(16)
-        .map(|c| {
-            std::array::from_fn(|k| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap()))
-        })
-        .collect()
-}
-
-/// Mirrors `unpack_background` in shaders/common.wgsl: three 21-bit fixed-point codes in two
-/// little-endian u32 words, 2^19 steps per unit, code 2^20 = 0.
-fn unpack_background(bytes: &[u8], n: usize) -> Vec<[f32; 3]> {
-    bytes[..n * 8]
-        .chunks_exact(8)
-        .map(|c| {
-            let packed = u64::from_le_bytes(c.try_into().unwrap());
-            std::array::from_fn(|k| {
-                let code = (packed >> (21 * k)) & 0x1f_ffff;
-                (code as f32 - 1_048_576.0) / 524_288.0
-            })
-        })
-        .collect()
+/// Mirrors `unpack_linear` in shaders/common.wgsl: three 21-bit codes over [0, 1] in two
+/// little-endian u32 words.
+fn unpack_linear(bytes: &[u8]) -> [f32; 3] {
+    let packed = u64::from_le_bytes(bytes.try_into().expect("8 bytes"));
+    std::array::from_fn(|k| ((packed >> (21 * k)) & 0x1f_ffff) as f32 / 2_097_151.0)
 }
 
 impl OfflineEngine {
@@ -124,13 +111,27 @@ impl OfflineEngine {
         bg.destroy(&self.gpu);
     }
 
-    /// Enhances raw pixels of any supported format (1 or 2 u32 per pixel) against a camera frame.
+    /// Enhances raw pixels of any supported format (1 or 2 u32 per pixel) against a camera frame,
+    /// with the manual FoV mapping of `params`.
     pub fn enhance_raw(
         &mut self,
         pixels: &[u32],
         region: (u32, u32),
         format: PixelFormat,
         camera: &RgbaImage,
+        params: &Params,
+    ) -> Result<Vec<u32>, GpuError> {
+        let mapping = params.camera_mapping();
+        self.enhance_raw_mapped(pixels, (region, format), camera, &mapping, params)
+    }
+
+    /// `enhance_raw` with the view's camera mapping given (a registered view's homography).
+    pub fn enhance_raw_mapped(
+        &mut self,
+        pixels: &[u32],
+        (region, format): ((u32, u32), PixelFormat),
+        camera: &RgbaImage,
+        mapping: &CameraMapping,
         params: &Params,
     ) -> Result<Vec<u32>, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
@@ -143,9 +144,11 @@ impl OfflineEngine {
         let (bg, mut view) = self.stage(camera, region, format)?;
         let result = view.pixels.write(&words_to_bytes(pixels)).and_then(|_| {
             self.submit(|cmd| {
+                let rect = CameraRect::sampled_by(&[*mapping], bg.size);
                 self.engine
-                    .record_background(&self.gpu, cmd, &bg, &[&view], params)?;
-                self.engine.record_enhance(&self.gpu, cmd, &view, params)
+                    .record_background(&self.gpu, cmd, &bg, params, &rect)?;
+                self.engine
+                    .record_enhance(&self.gpu, cmd, &view, params, mapping)
             })
         });
         let out = result.and_then(|_| {
@@ -162,11 +165,23 @@ impl OfflineEngine {
         out
     }
 
-    /// Enhances an 8-bit sRGB display image against a camera frame of any size.
+    /// Enhances an 8-bit sRGB display image against a camera frame of any size, with the
+    /// manual FoV mapping of `params`.
     pub fn enhance(
         &mut self,
         display: &RgbaImage,
         camera: &RgbaImage,
+        params: &Params,
+    ) -> Result<RgbaImage, GpuError> {
+        self.enhance_mapped(display, camera, &params.camera_mapping(), params)
+    }
+
+    /// `enhance` with the view's camera mapping given.
+    pub fn enhance_mapped(
+        &mut self,
+        display: &RgbaImage,
+        camera: &RgbaImage,
+        mapping: &CameraMapping,
         params: &Params,
     ) -> Result<RgbaImage, GpuError> {
         let words: Vec<u32> = display
@@ -175,39 +190,44 @@ impl OfflineEngine {
             .map(|p| u32::from_le_bytes(*p))
             .collect();
         let region = (display.width, display.height);
-        let out = self.enhance_raw(&words, region, PixelFormat::SRGB8, camera, params)?;
+        let target = (region, PixelFormat::SRGB8);
+        let out = self.enhance_raw_mapped(&words, target, camera, mapping, params)?;
         Ok(RgbaImage {
             pixels: out.iter().map(|w| w.to_le_bytes()).collect(),
             ..display.clone()
         })
     }
 
-    /// Runs only the background preparation and reads it back (for conformance tests).
+    /// Runs only the background preparation (once per camera frame: decode and blur on the
+    /// camera grid) and reads it back (for conformance tests).
     pub fn prepare_background(
         &mut self,
         camera: &RgbaImage,
-        region: (u32, u32),
         params: &Params,
     ) -> Result<GpuBackground, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
-        let (bg, view) = self.stage(camera, region, PixelFormat::SRGB8)?;
+        let (width, height) = (camera.width, camera.height);
+        let (bg, view) = self.stage(camera, (1, 1), PixelFormat::SRGB8)?;
+        let rect = CameraRect::full(bg.size);
         let result = self.submit(|cmd| {
             self.engine
-                .record_background(&self.gpu, cmd, &bg, &[&view], params)
+                .record_background(&self.gpu, cmd, &bg, params, &rect)
         });
-        let n = (region.0 * region.1) as usize;
+        let n = (width * height) as usize;
         let out = result.and_then(|_| {
-            let lin = view.bg_linear.mapped();
-            let sc = view.bg_scaled.mapped();
-            match (lin, sc) {
-                (Some(l), Some(s)) => Ok(GpuBackground {
-                    linear: bytes_to_vec4(l, n),
-                    scaled: unpack_background(s, n),
-                }),
-                _ => Err(GpuError::Unsupported(
-                    "background buffers are not host-visible".into(),
-                )),
-            }
+            let bytes = bg.blurred.mapped().ok_or_else(|| {
+                GpuError::Unsupported("background buffers are not host-visible".into())
+            })?;
+            let entries = bytes[..n * 16].chunks_exact(16);
+            let (linear, right) = entries
+                .map(|e| (unpack_linear(&e[..8]), unpack_linear(&e[8..])))
+                .unzip();
+            Ok(GpuBackground {
+                width,
+                height,
+                linear,
+                right,
+            })
         });
         self.release(bg, view);
         out

@@ -4,63 +4,71 @@
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::shaders::{self, ShaderModule};
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
 use std::sync::Mutex;
 
-/// Bindings 0..=8 of shaders/common.wgsl, all storage buffers.
-pub const BINDING_COUNT: u32 = 9;
+/// Bindings 0..=4 of shaders/common.wgsl, all storage buffers.
+pub const BINDING_COUNT: u32 = 5;
+/// Binding 5: the blurred camera image, a sampled image.
+pub const IMAGE_BINDING: u32 = 5;
 
-/// The push-constant block, laid out as WGSL lays out `Params` (112 bytes).
+/// The push-constant block, laid out as WGSL lays out `Params`: 128 bytes, the least
+/// maxPushConstantsSize Vulkan guarantees.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PushConstants {
     pub camera_size: [u32; 2],
     pub region_size: [u32; 2],
-    pub fov_scale: [f32; 2],
-    pub fov_offset: [f32; 2],
     pub lambda_e: f32,
     pub lambda_jnd: f32,
     pub transmittance: f32,
     pub blur_half: u32,
-    pub format: u32,
-    pub method: u32,
+    pub taps: [f32; 8],
     pub k_v: f32,
     pub k_b: f32,
-    pub taps: [f32; 8],
     pub mode: u32,
     pub tile_columns: u32,
     pub achromatic_boost: f32,
     pub luminance_cap: f32,
+    /// The view's CameraMapping, row-major.
+    pub mapping: [[f32; 3]; 3],
+    /// WGSL rounds the struct's size up to its 16-byte alignment (the taps).
+    pub pad: u32,
 }
 
+const _: () = assert!(std::mem::size_of::<PushConstants>() == 128);
+
 impl PushConstants {
-    pub fn new(params: &Params, camera: (u32, u32), region: (u32, u32), format: u32) -> Self {
+    pub fn new(
+        params: &Params,
+        camera: (u32, u32),
+        region: (u32, u32),
+        mapping: &CameraMapping,
+    ) -> Self {
         let taps64 = params.blur_taps();
         let half = taps64.len() / 2;
         let mut taps = [0.0f32; 8];
         for (k, t) in taps.iter_mut().enumerate().take(half + 1) {
             *t = taps64[half + k] as f32;
         }
-        let (fov_scale, fov_offset) = params.fov_mapping();
         PushConstants {
             camera_size: [camera.0, camera.1],
             region_size: [region.0, region.1],
-            fov_scale,
-            fov_offset,
             lambda_e: params.lambda_e,
             lambda_jnd: params.lambda_jnd_scaled,
             transmittance: params.transmittance,
             blur_half: half as u32,
-            format,
-            method: params.method.shader_code(),
+            taps,
             k_v: SUBTRACTION_K_V,
             k_b: SUBTRACTION_K_B,
-            taps,
             mode: params.mode.shader_code(),
             tile_columns: region.0.div_ceil(super::engine::TILE),
             achromatic_boost: params.achromatic_boost,
             luminance_cap: params.luminance_cap,
+            mapping: mapping.to_f32_rows(),
+            pad: 0,
         }
     }
 
@@ -78,20 +86,19 @@ impl PushConstants {
 pub struct Pipelines {
     pub set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
-    pub decode_blur_h: vk::Pipeline,
-    pub blur_v: vk::Pipeline,
-    pub fov_map: vk::Pipeline,
     pub finish_tiles: vk::Pipeline,
     pub copy_pixels: vk::Pipeline,
     pub copy_rows: vk::Pipeline,
     /// The `enhance` and `classify` variants (shaders::ENHANCE_VARIANTS, then
-    /// shaders::CLASSIFY_VARIANTS), built on first use: each costs a compile in the driver and
-    /// a session uses a few.
+    /// shaders::CLASSIFY_VARIANTS, then shaders::DECODE_BLUR), built on first use: each costs
+    /// a compile in the driver and a session uses a few.
     variants: Mutex<Vec<vk::Pipeline>>,
 }
 
 fn no_variants() -> Mutex<Vec<vk::Pipeline>> {
-    let n = shaders::ENHANCE_VARIANTS.len() + shaders::CLASSIFY_VARIANTS.len();
+    let n = shaders::ENHANCE_VARIANTS.len()
+        + shaders::CLASSIFY_VARIANTS.len()
+        + shaders::DECODE_BLUR.len();
     Mutex::new(vec![vk::Pipeline::null(); n])
 }
 
@@ -101,9 +108,6 @@ impl Pipelines {
         Pipelines {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
-            decode_blur_h: vk::Pipeline::null(),
-            blur_v: vk::Pipeline::null(),
-            fov_map: vk::Pipeline::null(),
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
             copy_rows: vk::Pipeline::null(),
@@ -123,11 +127,16 @@ impl Pipelines {
 
     fn build(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
         crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
-        let bindings: Vec<_> = (0..BINDING_COUNT)
+        let bindings: Vec<_> = (0..=IMAGE_BINDING)
             .map(|b| {
+                let ty = if b == IMAGE_BINDING {
+                    vk::DescriptorType::SAMPLED_IMAGE
+                } else {
+                    vk::DescriptorType::STORAGE_BUFFER
+                };
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(ty)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -146,9 +155,6 @@ impl Pipelines {
         // SAFETY: valid create info on a valid device.
         self.layout = unsafe { gpu.device.create_pipeline_layout(&info, None) }
             .vk("vkCreatePipelineLayout")?;
-        self.decode_blur_h = self.compute_pipeline(gpu, &shaders::DECODE_BLUR_H)?;
-        self.blur_v = self.compute_pipeline(gpu, &shaders::BLUR_V)?;
-        self.fov_map = self.compute_pipeline(gpu, &shaders::FOV_MAP)?;
         self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
         self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         self.copy_rows = self.compute_pipeline(gpu, &shaders::COPY_ROWS)?;
@@ -192,6 +198,15 @@ impl Pipelines {
         let offset = shaders::ENHANCE_VARIANTS.len();
         self.variant(gpu, k.map(|k| k + offset), |k| {
             &shaders::CLASSIFY_VARIANTS[k - offset].2
+        })
+    }
+
+    /// The background pass for a blur half-width (0..=7).
+    pub fn decode_blur(&self, gpu: &GpuDevice, half: u32) -> Result<vk::Pipeline, GpuError> {
+        let offset = shaders::ENHANCE_VARIANTS.len() + shaders::CLASSIFY_VARIANTS.len();
+        let k = (half as usize) < shaders::DECODE_BLUR.len();
+        self.variant(gpu, k.then_some(offset + half as usize), |k| {
+            &shaders::DECODE_BLUR[k - offset]
         })
     }
 
@@ -253,16 +268,9 @@ impl Pipelines {
                 Ok(v) => std::mem::take(v),
                 Err(poisoned) => std::mem::take(poisoned.into_inner()),
             };
-            for p in [
-                self.decode_blur_h,
-                self.blur_v,
-                self.fov_map,
-                self.finish_tiles,
-                self.copy_pixels,
-                self.copy_rows,
-            ]
-            .into_iter()
-            .chain(variants)
+            for p in [self.finish_tiles, self.copy_pixels, self.copy_rows]
+                .into_iter()
+                .chain(variants)
             {
                 gpu.device.destroy_pipeline(p, None);
             }

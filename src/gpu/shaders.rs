@@ -35,9 +35,17 @@ macro_rules! spirv {
     };
 }
 
-pub const DECODE_BLUR_H: ShaderModule = spirv!("decode_blur_h");
-pub const BLUR_V: ShaderModule = spirv!("blur_v");
-pub const FOV_MAP: ShaderModule = spirv!("fov_map");
+/// The background pass, one per blur half-width (index = half-width, 0..=7).
+pub const DECODE_BLUR: [ShaderModule; 8] = [
+    spirv!("decode_blur_0", "decode_blur"),
+    spirv!("decode_blur_1", "decode_blur"),
+    spirv!("decode_blur_2", "decode_blur"),
+    spirv!("decode_blur_3", "decode_blur"),
+    spirv!("decode_blur_4", "decode_blur"),
+    spirv!("decode_blur_5", "decode_blur"),
+    spirv!("decode_blur_6", "decode_blur"),
+    spirv!("decode_blur_7", "decode_blur"),
+];
 pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
 pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
 pub const COPY_ROWS: ShaderModule = spirv!("copy_rows");
@@ -46,16 +54,10 @@ include!(concat!(env!("OUT_DIR"), "/enhance_variants.rs"));
 
 /// Every embedded shader (for spirv-val in the tests).
 pub fn all() -> Vec<&'static ShaderModule> {
-    let fixed = [
-        &DECODE_BLUR_H,
-        &BLUR_V,
-        &FOV_MAP,
-        &FINISH_TILES,
-        &COPY_PIXELS,
-        &COPY_ROWS,
-    ];
+    let fixed = [&FINISH_TILES, &COPY_PIXELS, &COPY_ROWS];
     fixed
         .into_iter()
+        .chain(DECODE_BLUR.iter())
         .chain(ENHANCE_VARIANTS.iter().map(|(_, _, _, _, _, m)| m))
         .chain(CLASSIFY_VARIANTS.iter().map(|(_, _, m)| m))
         .collect()

@@ -6,12 +6,13 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::commands::Commands;
 use crate::gpu::engine::barrier;
+use crate::gpu::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
 use crate::gpu::{
-    BackgroundFrame, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
+    BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
 };
 use crate::image::RgbaImage;
 use ash::vk;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Most view regions a session keeps buffers for (2 eyes x a few swapchains and quads).
@@ -28,6 +29,17 @@ pub struct WorkItem {
     pub mapping: CameraMapping,
 }
 
+impl WorkItem {
+    fn region(&self) -> ImageRegion {
+        ImageRegion {
+            image: self.image,
+            array_index: self.key.array_index,
+            offset: self.key.offset,
+            extent: self.key.extent,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ViewKey {
     pub swapchain: u64,
@@ -38,8 +50,6 @@ pub struct ViewKey {
 
 struct PreparedView {
     target: ViewTarget,
-    /// The background sequence its bg buffers were prepared for.
-    prepared_for: Option<u64>,
     last_frame: u64,
 }
 
@@ -55,20 +65,15 @@ pub struct Processor {
     commands: Commands,
     background: Option<BackgroundFrame>,
     background_sequence: u64,
+    /// The background sequence the blurred camera image was prepared for (once per camera
+    /// frame, whatever the number of views), and the camera texels prepared.
+    prepared_for: Option<(u64, CameraRect)>,
     views: HashMap<ViewKey, PreparedView>,
     frame: u64,
     /// The in-headset indicator drawn after the enhancement (its timer is set by the session).
     pub indicator: super::indicator::Indicator,
     // Last: dropped after everything above was destroyed in Drop.
     pub gpu: GpuDevice,
-}
-
-fn subresource(layer: u32) -> vk::ImageSubresourceRange {
-    vk::ImageSubresourceRange::default()
-        .aspect_mask(vk::ImageAspectFlags::COLOR)
-        .level_count(1)
-        .base_array_layer(layer)
-        .layer_count(1)
 }
 
 impl Processor {
@@ -86,6 +91,7 @@ impl Processor {
             commands,
             background: None,
             background_sequence: 0,
+            prepared_for: None,
             views: HashMap::new(),
             frame: 0,
             indicator: Default::default(),
@@ -113,9 +119,9 @@ impl Processor {
                 .create_background(&self.gpu, size, Placement::DEVICE)?;
             for v in self.views.values_mut() {
                 self.engine.bind(&self.gpu, &mut v.target, &bg);
-                v.prepared_for = None;
             }
             self.background = Some(bg);
+            self.prepared_for = None;
         }
         let bg = self.background.as_mut().expect("created above");
         bg.upload(&image.pixels)?;
@@ -152,7 +158,6 @@ impl Processor {
             item.key,
             PreparedView {
                 target,
-                prepared_for: None,
                 last_frame: self.frame,
             },
         );
@@ -250,103 +255,14 @@ impl Processor {
     }
 
     fn image_barriers(&self, items: &[WorkItem], to_general: bool) {
-        let mut seen = HashSet::new();
-        let barriers: Vec<_> = items
-            .iter()
-            .filter(|i| seen.insert((i.image, i.key.array_index)))
-            .map(|i| {
-                let (old, new) = if to_general {
-                    (
-                        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                        vk::ImageLayout::GENERAL,
-                    )
-                } else {
-                    (
-                        vk::ImageLayout::GENERAL,
-                        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    )
-                };
-                let colour = vk::AccessFlags::COLOR_ATTACHMENT_WRITE
-                    | vk::AccessFlags::COLOR_ATTACHMENT_READ;
-                let transfer = vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE;
-                let (src, dst) = if to_general {
-                    (colour, transfer)
-                } else {
-                    (transfer, colour)
-                };
-                vk::ImageMemoryBarrier::default()
-                    .old_layout(old)
-                    .new_layout(new)
-                    .src_access_mask(src)
-                    .dst_access_mask(dst)
-                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                    .image(i.image)
-                    .subresource_range(subresource(i.key.array_index))
-            })
-            .collect();
-        let colour = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
-        let transfer = vk::PipelineStageFlags::TRANSFER;
-        let (src, dst) = if to_general {
-            (colour, transfer)
-        } else {
-            (transfer, colour)
-        };
-        // SAFETY: cmd is recording; the images are the app's, held by the layer until release.
-        unsafe {
-            self.gpu.device.cmd_pipeline_barrier(
-                self.commands.cmd,
-                src,
-                dst,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &barriers,
-            )
-        };
+        let regions: Vec<ImageRegion> = items.iter().map(WorkItem::region).collect();
+        record_layout_barriers(&self.gpu, self.commands.cmd, &regions, to_general);
     }
 
     fn copy_region(&self, item: &WorkItem, to_buffer: bool) {
-        let target = &self.views[&item.key].target;
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .base_array_layer(item.key.array_index)
-                    .layer_count(1),
-            )
-            .image_offset(vk::Offset3D {
-                x: item.key.offset.0,
-                y: item.key.offset.1,
-                z: 0,
-            })
-            .image_extent(vk::Extent3D {
-                width: item.key.extent.0,
-                height: item.key.extent.1,
-                depth: 1,
-            })];
-        let d = &self.gpu.device;
-        // SAFETY: cmd is recording; the image is in GENERAL (see image_barriers) and the
-        // region lies inside it (checked against the swapchain size when the item was made).
-        unsafe {
-            if to_buffer {
-                d.cmd_copy_image_to_buffer(
-                    self.commands.cmd,
-                    item.image,
-                    vk::ImageLayout::GENERAL,
-                    target.pixels.raw,
-                    &region,
-                );
-            } else {
-                d.cmd_copy_buffer_to_image(
-                    self.commands.cmd,
-                    target.pixels.raw,
-                    item.image,
-                    vk::ImageLayout::GENERAL,
-                    &region,
-                );
-            }
-        }
+        let pixels = &self.views[&item.key].target.pixels;
+        let cmd = self.commands.cmd;
+        record_region_copy(&self.gpu, cmd, &item.region(), pixels, to_buffer);
     }
 
     fn copy_to_capture(&self, item: &WorkItem, dst: &crate::gpu::buffer::GpuBuffer) {
@@ -368,24 +284,19 @@ impl Processor {
     ) -> Result<(), GpuError> {
         self.commands.begin(&self.gpu)?;
         let seq = self.background_sequence;
-        let stale: Vec<ViewKey> = {
-            let mut seen = HashSet::new();
-            items
-                .iter()
-                .map(|i| i.key)
-                .filter(|k| seen.insert(*k) && self.views[k].prepared_for != Some(seq))
-                .collect()
+        let bg = self.background.as_ref().expect("set in process");
+        let mappings: Vec<CameraMapping> = items.iter().map(|i| i.mapping).collect();
+        let needed = CameraRect::sampled_by(&mappings, bg.size);
+        let rect = match self.prepared_for {
+            Some((s, done)) if s == seq && done.contains(&needed) => None,
+            // A view the frame's preparation did not cover: prepare both again.
+            Some((s, done)) if s == seq => Some(done.union(&needed)),
+            _ => Some(needed),
         };
-        if !stale.is_empty() {
-            let bg = self.background.as_ref().expect("set in process");
-            let targets: Vec<&ViewTarget> = stale.iter().map(|k| &self.views[k].target).collect();
+        if let Some(rect) = rect {
             self.engine
-                .record_background(&self.gpu, self.commands.cmd, bg, &targets, params)?;
-        }
-        for k in &stale {
-            if let Some(v) = self.views.get_mut(k) {
-                v.prepared_for = Some(seq);
-            }
+                .record_background(&self.gpu, self.commands.cmd, bg, params, &rect)?;
+            self.prepared_for = Some((seq, rect));
         }
         let frame = self.frame;
         for i in items {
@@ -415,6 +326,7 @@ impl Processor {
                 self.commands.cmd,
                 &self.views[&i.key].target,
                 params,
+                &i.mapping,
             )?;
         }
         barrier(&self.gpu, self.commands.cmd, S::COMPUTE_SHADER, S::TRANSFER);

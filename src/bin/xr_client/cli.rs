@@ -2,6 +2,7 @@
 //! with them.
 
 use crate::format::{SwapchainFormat, FORMATS};
+use crate::pattern::Content;
 
 pub const USAGE: &str = "\
 usage: contrastxr-xr-client [options]
@@ -13,6 +14,10 @@ usage: contrastxr-xr-client [options]
   --frames N              frames to submit before ending the session (default 60)
   --quad                  also submit a quad layer with its own swapchain
   --size WxH              per-view size (default: the runtime's recommended size)
+  --content panels|typical
+                          what the images show: coloured panels and a ramp (default, 37 %
+                          of each view), or a typical mixed-reality frame (17 %: two UI
+                          panels and a shaded disc, as `contrastxr bench --content typical`)
   --validation            enable VK_LAYER_KHRONOS_validation; any error fails the run
   --list-formats          print the formats the runtime offers and exit
   --json                  print the final report as one JSON line on stdout
@@ -73,6 +78,7 @@ pub struct Options {
     pub pipelined: bool,
     pub churn_swapchains: bool,
     pub script: Option<Vec<crate::script::Op>>,
+    pub content: Content,
 }
 
 impl Default for Options {
@@ -96,6 +102,7 @@ impl Default for Options {
             pipelined: false,
             churn_swapchains: false,
             script: None,
+            content: Content::Panels,
         }
     }
 }
@@ -112,6 +119,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
                 options.frames = value()?.parse().map_err(|_| "--frames needs a count")?
             }
             "--size" => options.size = Some(parse_size(&value()?)?),
+            "--content" => options.content = parse_content(&value()?)?,
             "--quad" => options.quad = true,
             "--validation" => options.validation = true,
             "--list-formats" => options.list_formats = true,
@@ -153,6 +161,14 @@ fn parse_layout(name: &str) -> Result<Layout, String> {
     }
 }
 
+fn parse_content(name: &str) -> Result<Content, String> {
+    match name {
+        "panels" => Ok(Content::Panels),
+        "typical" => Ok(Content::Typical),
+        _ => Err(format!("unknown content {name}: use panels or typical")),
+    }
+}
+
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let bad = || format!("bad size {text}: use WxH, e.g. 640x480");
     let (w, h) = text.split_once('x').ok_or_else(bad)?;
@@ -183,6 +199,9 @@ mod tests {
         let o = parse_str("--pipelined --script acquire,wait,release,end-empty").unwrap();
         assert!(o.pipelined);
         assert_eq!(o.script.unwrap().len(), 4);
+        assert_eq!(o.content, Content::Panels);
+        let o = parse_str("--content typical").unwrap();
+        assert_eq!(o.content, Content::Typical);
     }
 
     #[test]
@@ -193,6 +212,7 @@ mod tests {
             "--frames x",
             "--size 10",
             "--size 0x5",
+            "--content full",
             "--frames",
             "--bogus",
             "--script acquire,jump",

@@ -40,6 +40,7 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    pattern::set_content(options.content);
     let mut report = Report {
         frames_requested: options.frames,
         layout: options.layout.name().to_string(),

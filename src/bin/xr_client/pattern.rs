@@ -4,6 +4,9 @@
 //! content on black: a 4 x 3 grid of panels (primaries, secondaries, white, greys, pastels) and a
 //! grey ramp, covering about 37 % of the view; the rest is exactly black. Each view is shifted
 //! horizontally by a different amount, so a layer that mixes up views changes the result.
+//! `--content typical` draws a sparser frame instead (see `Content`).
+
+use std::sync::OnceLock;
 
 /// The panels' colours, sRGB-encoded.
 const PANELS: [[f32; 3]; 12] = [
@@ -48,15 +51,52 @@ impl Target {
     }
 }
 
+/// What every image shows (`--content`), chosen once at start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Content {
+    /// The panels and ramp above (about 37 % of each view).
+    Panels,
+    /// A typical mixed-reality frame, about 17 % foreground: the same two UI panels and shaded
+    /// disc as `contrastxr bench`'s typical content (src/gpu/bench.rs, `content_pixel`), drawn
+    /// here independently of the library, so end-to-end and GPU figures describe alike frames.
+    Typical,
+}
+
+static CONTENT: OnceLock<Content> = OnceLock::new();
+
+/// Sets what `texel` draws; the first call wins (main calls it once, before any image).
+pub fn set_content(content: Content) {
+    let _ = CONTENT.set(content);
+}
+
 /// The colour of texel (x, y) of a `width` x `height` image, as sRGB-encoded RGBA.
 pub fn texel(target: Target, x: u32, y: u32, width: u32, height: u32) -> [f32; 4] {
     // Sample at the texel centre, in fractions of the image.
     let u = (x as f32 + 0.5) / width as f32 - target.shift();
     let v = (y as f32 + 0.5) / height as f32;
-    let [r, g, b] = panel_colour(u, v)
-        .or_else(|| ramp_grey(u, v))
-        .unwrap_or([0.0; 3]);
+    let colour = match CONTENT.get() {
+        Some(Content::Typical) => typical_colour(u, v, width, height),
+        _ => panel_colour(u, v).or_else(|| ramp_grey(u, v)),
+    };
+    let [r, g, b] = colour.unwrap_or([0.0; 3]);
     [r, g, b, 1.0]
+}
+
+/// Two UI panels and a shaded disc of radius 0.12 x the shorter side, on black.
+fn typical_colour(u: f32, v: f32, width: u32, height: u32) -> Option<[f32; 3]> {
+    let inside =
+        |u0: f32, u1: f32, v0: f32, v1: f32| (u0..u1).contains(&u) && (v0..v1).contains(&v);
+    if inside(0.10, 0.40, 0.30, 0.60) {
+        return Some([0.78, 0.82, 0.90]);
+    }
+    if inside(0.60, 0.85, 0.15, 0.35) {
+        return Some([0.15, 0.63, 0.31]);
+    }
+    let (dx, dy) = ((u - 0.55) * width as f32, (v - 0.65) * height as f32);
+    let r = 0.12 * width.min(height) as f32;
+    let d2 = (dx * dx + dy * dy) / (r * r);
+    let shade = 1.0 - 0.6 * d2;
+    (d2 < 1.0).then_some([0.9 * shade, 0.45 * shade, 0.1 * shade + 0.02])
 }
 
 fn panel_colour(u: f32, v: f32) -> Option<[f32; 3]> {
@@ -105,6 +145,21 @@ mod tests {
         assert_eq!(at(999, 999), [0.0, 0.0, 0.0, 1.0]);
         assert_eq!(at(150, 150), [1.0, 0.0, 0.0, 1.0]); // first panel
         assert_eq!(at(750, 590), [0.2, 0.2, 0.2, 1.0]); // last panel
+    }
+
+    #[test]
+    fn typical_content_is_about_a_sixth_of_a_view() {
+        // Not set_content: the process-wide choice would leak into the other tests.
+        let (w, h) = (1268, 720);
+        let lit = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let (u, v) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                typical_colour(u, v, w, h).is_some()
+            })
+            .count();
+        let fraction = lit as f32 / (w * h) as f32;
+        assert!((0.16..0.18).contains(&fraction), "{fraction}");
     }
 
     #[test]

@@ -1,0 +1,104 @@
+//! A device-local 2D image: app-like colour images (usable as a colour attachment and as a
+//! transfer source and destination, as the layer makes swapchain images) that the benchmark
+//! copies from and to, so that it times the layer's image copies on real images; and the
+//! blurred camera image the enhancement samples (src/gpu/engine.rs).
+
+use super::device::GpuDevice;
+use super::error::{GpuError, VkResultExt};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+pub struct AppImage {
+    pub raw: vk::Image,
+    pub(super) allocation: Option<Allocation>,
+}
+
+impl AppImage {
+    pub fn new(gpu: &GpuDevice, size: (u32, u32), format: vk::Format) -> Result<Self, GpuError> {
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        Self::with_usage(gpu, size, format, usage)
+    }
+
+    /// A 2D image of `format` with `usage` (optimal tiling, device-local, UNDEFINED layout).
+    pub fn with_usage(
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self, GpuError> {
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D {
+                width: size.0,
+                height: size.1,
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: a plain 2D image create info on a valid device.
+        let raw = unsafe { gpu.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        let mut image = AppImage {
+            raw,
+            allocation: None,
+        };
+        match image.bind_memory(gpu) {
+            Ok(a) => image.allocation = Some(a),
+            Err(e) => {
+                image.destroy(gpu);
+                return Err(e);
+            }
+        }
+        Ok(image)
+    }
+
+    fn bind_memory(&self, gpu: &GpuDevice) -> Result<Allocation, GpuError> {
+        // SAFETY: raw is an image of this device.
+        let requirements = unsafe { gpu.device.get_image_memory_requirements(self.raw) };
+        let mut allocator = gpu.allocator.lock().map_err(|_| {
+            GpuError::Unsupported("the GPU allocator was poisoned by an earlier panic".into())
+        })?;
+        let allocation = allocator.allocate(&AllocationCreateDesc {
+            name: "app image",
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })?;
+        // SAFETY: the allocation satisfies the image's requirements and is bound nowhere else.
+        let bound = unsafe {
+            gpu.device
+                .bind_image_memory(self.raw, allocation.memory(), allocation.offset())
+        };
+        if let Err(result) = bound {
+            let _ = allocator.free(allocation);
+            return Err(GpuError::Vulkan {
+                call: "vkBindImageMemory",
+                result,
+            });
+        }
+        Ok(allocation)
+    }
+
+    /// Frees the image and its memory. The GPU must be done with it.
+    pub fn destroy(&mut self, gpu: &GpuDevice) {
+        if let Some(allocation) = self.allocation.take() {
+            if let Ok(mut allocator) = gpu.allocator.lock() {
+                let _ = allocator.free(allocation);
+            }
+        }
+        if self.raw != vk::Image::null() {
+            // SAFETY: the caller guarantees no pending GPU work uses the image.
+            unsafe { gpu.device.destroy_image(self.raw, None) };
+            self.raw = vk::Image::null();
+        }
+    }
+}

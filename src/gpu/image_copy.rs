@@ -1,0 +1,130 @@
+//! The copies of a view's region between an app's image and a view's pixel buffer, with the
+//! layout transitions around them: what the layer records around the enhancement each frame
+//! (src/layer/processor.rs), shared with the benchmark so that `contrastxr bench` times the
+//! same commands.
+
+use super::buffer::GpuBuffer;
+use super::device::GpuDevice;
+use ash::vk;
+use std::collections::HashSet;
+
+/// One view's region of an image (one array layer, mip 0).
+#[derive(Clone, Copy, Debug)]
+pub struct ImageRegion {
+    pub image: vk::Image,
+    pub array_index: u32,
+    pub offset: (i32, i32),
+    pub extent: (u32, u32),
+}
+
+fn subresource(layer: u32) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default()
+        .aspect_mask(vk::ImageAspectFlags::COLOR)
+        .level_count(1)
+        .base_array_layer(layer)
+        .layer_count(1)
+}
+
+/// Moves each region's image layer from COLOR_ATTACHMENT_OPTIMAL (where the app left it) to
+/// GENERAL for the copies (`to_general`), or back afterwards; one barrier per layer.
+pub fn record_layout_barriers(
+    gpu: &GpuDevice,
+    cmd: vk::CommandBuffer,
+    regions: &[ImageRegion],
+    to_general: bool,
+) {
+    let mut seen = HashSet::new();
+    let colour = vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_READ;
+    let transfer = vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE;
+    let attachment = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+    let general = vk::ImageLayout::GENERAL;
+    let ((old, new), (src, dst)) = if to_general {
+        ((attachment, general), (colour, transfer))
+    } else {
+        ((general, attachment), (transfer, colour))
+    };
+    let barriers: Vec<_> = regions
+        .iter()
+        .filter(|r| seen.insert((r.image, r.array_index)))
+        .map(|r| {
+            vk::ImageMemoryBarrier::default()
+                .old_layout(old)
+                .new_layout(new)
+                .src_access_mask(src)
+                .dst_access_mask(dst)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(r.image)
+                .subresource_range(subresource(r.array_index))
+        })
+        .collect();
+    let colour = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
+    let transfer = vk::PipelineStageFlags::TRANSFER;
+    let (src, dst) = if to_general {
+        (colour, transfer)
+    } else {
+        (transfer, colour)
+    };
+    // SAFETY: cmd is recording (the caller's contract); the images are valid and not in use
+    // by other queues (the layer holds the app's images until xrEndFrame).
+    unsafe {
+        gpu.device.cmd_pipeline_barrier(
+            cmd,
+            src,
+            dst,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &barriers,
+        )
+    };
+}
+
+/// Copies a region (image in GENERAL) into `pixels` (`to_buffer`) or back, rows tightly packed.
+pub fn record_region_copy(
+    gpu: &GpuDevice,
+    cmd: vk::CommandBuffer,
+    region: &ImageRegion,
+    pixels: &GpuBuffer,
+    to_buffer: bool,
+) {
+    let copy = [vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .base_array_layer(region.array_index)
+                .layer_count(1),
+        )
+        .image_offset(vk::Offset3D {
+            x: region.offset.0,
+            y: region.offset.1,
+            z: 0,
+        })
+        .image_extent(vk::Extent3D {
+            width: region.extent.0,
+            height: region.extent.1,
+            depth: 1,
+        })];
+    let d = &gpu.device;
+    // SAFETY: cmd is recording; the image is in GENERAL (record_layout_barriers) and the
+    // region lies inside it and fits `pixels` (the caller's contract).
+    unsafe {
+        if to_buffer {
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                region.image,
+                vk::ImageLayout::GENERAL,
+                pixels.raw,
+                &copy,
+            );
+        } else {
+            d.cmd_copy_buffer_to_image(
+                cmd,
+                pixels.raw,
+                region.image,
+                vk::ImageLayout::GENERAL,
+                &copy,
+            );
+        }
+    }
+}
