@@ -53,6 +53,16 @@ fn run_validated(
     Some((run, validation))
 }
 
+/// [`run_validated`], then: the run succeeded, validation stayed clean, and the layer logged
+/// `line`.
+fn run_clean(tag: &str, cmd: &[&str], env: &[(&str, &str)], line: &str) -> Option<SandboxRun> {
+    let (run, validation) = run_validated(tag, cmd, env)?;
+    run.assert_success();
+    validation.assert_clean();
+    assert!(run.stderr.contains(line), "no {line:?}: {}", run.describe());
+    Some(run)
+}
+
 /// The layer's variables for an enhancing run with captures into `dir`.
 fn layer_env(dir: &Path, background: &str) -> Vec<(String, String)> {
     vec![
@@ -267,16 +277,15 @@ fn client_through_layer(format: &str, layout: &str) {
         "--layout",
         layout,
     ];
-    let Some((run, validation)) = run_validated(&tag, &cmd, &as_refs(&env)) else {
-        return;
-    };
-    run.assert_success();
-    validation.assert_clean();
-    assert!(
-        run.stderr.contains("processing frames (2 views per frame)"),
-        "{}",
-        run.describe()
+    let run = run_clean(
+        &tag,
+        &cmd,
+        &as_refs(&env),
+        "processing frames (2 views per frame)",
     );
+    if run.is_none() {
+        return;
+    }
     let views = captures(&dir);
     assert_eq!(
         views.len(),
@@ -381,16 +390,9 @@ fn pipelined_apps_have_every_frame_enhanced() {
         "--pipelined",
         "--check-untouched",
     ];
-    let Some((run, validation)) = run_validated(tag, &cmd, &as_refs(&env)) else {
+    let Some(run) = run_clean(tag, &cmd, &as_refs(&env), "pipelined renderer") else {
         return;
     };
-    run.assert_success();
-    validation.assert_clean();
-    assert!(
-        run.stderr.contains("pipelined renderer"),
-        "{}",
-        run.describe()
-    );
     let report = run.client_report();
     let checked = report["frames_checked"].as_u64().unwrap();
     assert!(checked >= 5, "{report}");
@@ -663,16 +665,15 @@ fn quad_layers_are_enhanced_when_configured() {
         "--format",
         "R8G8B8A8_SRGB",
     ];
-    let Some((run, validation)) = run_validated(tag, &cmd, &as_refs(&env)) else {
-        return;
-    };
-    run.assert_success();
-    validation.assert_clean();
-    assert!(
-        run.stderr.contains("processing frames (3 views per frame)"),
-        "{}",
-        run.describe()
+    let run = run_clean(
+        tag,
+        &cmd,
+        &as_refs(&env),
+        "processing frames (3 views per frame)",
     );
+    if run.is_none() {
+        return;
+    }
     let views = captures(&dir);
     assert_eq!(views.len(), 3, "two projection views and the quad");
     for c in &views {

@@ -20,6 +20,7 @@ use openxr::sys;
 use crate::error::{fail, Context, Result};
 use crate::format::SwapchainFormat;
 use crate::frame_loop::Scene;
+use crate::swapchain::{barrier, record_transfer_write};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Op {
@@ -302,49 +303,25 @@ impl Runner<'_, '_> {
             float32: [0.8, 0.35, 0.2, 1.0],
         };
         self.scene.gpu.submit_and_wait(|device, cmd| {
-            let to_transfer = layout_barrier(
+            let to_transfer = barrier(
                 image,
                 range,
                 vk::ImageLayout::UNDEFINED,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             )
             .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
-            let to_colour = layout_barrier(
-                image,
-                range,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            )
-            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE);
-            // SAFETY: `cmd` is recording; the image is acquired and waited by the client.
-            unsafe {
-                device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[to_transfer],
-                );
-                device.cmd_clear_color_image(
-                    cmd,
-                    image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &colour,
-                    &[range],
-                );
-                device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[to_colour],
-                );
-            }
+            record_transfer_write(device, cmd, image, range, to_transfer, || {
+                // SAFETY: `cmd` is recording; the image is acquired and waited by the client.
+                unsafe {
+                    device.cmd_clear_color_image(
+                        cmd,
+                        image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &colour,
+                        &[range],
+                    )
+                };
+            });
         })
     }
 
@@ -355,21 +332,6 @@ impl Runner<'_, '_> {
             self.swapchain.destroyed = true;
         }
     }
-}
-
-fn layout_barrier(
-    image: vk::Image,
-    range: vk::ImageSubresourceRange,
-    old: vk::ImageLayout,
-    new: vk::ImageLayout,
-) -> vk::ImageMemoryBarrier<'static> {
-    vk::ImageMemoryBarrier::default()
-        .image(image)
-        .subresource_range(range)
-        .old_layout(old)
-        .new_layout(new)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
 }
 
 /// Runs `ops` on a fresh swapchain of `format`; returns each op's name and XrResult.

@@ -159,46 +159,68 @@ impl PatternSwapchain {
             )
         }
         .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
-        let to_colour = barrier(
-            image,
-            range,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-        )
-        .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-        .dst_access_mask(
-            vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-        );
         let copy = self.whole_image_copy();
-        // SAFETY: `cmd` is recording; the image was acquired and waited for, the staging buffer
-        // holds width x height x layers texels in this format, laid out layer after layer.
-        unsafe {
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TOP_OF_PIPE | vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &[to_transfer],
-            );
-            device.cmd_copy_buffer_to_image(
-                cmd,
-                self.staging,
-                image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[copy],
-            );
-            device.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &[to_colour],
-            );
-        }
+        record_transfer_write(device, cmd, image, range, to_transfer, || {
+            // SAFETY: `cmd` is recording; the image was acquired and waited for, the staging
+            // buffer holds width x height x layers texels in this format, layer after layer.
+            unsafe {
+                device.cmd_copy_buffer_to_image(
+                    cmd,
+                    self.staging,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[copy],
+                )
+            };
+        });
+    }
+}
+
+/// Records `write` (transfer commands into `image` in TRANSFER_DST_OPTIMAL) after the barrier
+/// `to_transfer`, then the transition to COLOR_ATTACHMENT_OPTIMAL, the layout
+/// XR_KHR_vulkan_enable2 expects at release.
+pub fn record_transfer_write(
+    device: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    to_transfer: vk::ImageMemoryBarrier<'_>,
+    write: impl FnOnce(),
+) {
+    let to_colour = barrier(
+        image,
+        range,
+        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+    )
+    .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+    .dst_access_mask(
+        vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+    );
+    // SAFETY: `cmd` is recording and the image is the client's to write (acquired, waited).
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TOP_OF_PIPE | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &[to_transfer],
+        );
+    }
+    write();
+    // SAFETY: as above.
+    unsafe {
+        device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &[to_colour],
+        );
     }
 }
 
@@ -303,7 +325,7 @@ impl Drop for PatternSwapchain {
     }
 }
 
-fn barrier<'a>(
+pub fn barrier<'a>(
     image: vk::Image,
     range: vk::ImageSubresourceRange,
     old: vk::ImageLayout,
