@@ -6,11 +6,12 @@
 //
 // One pass, built once per blur half-width BLUR_HALF (0..=7, a constant here, so every loop
 // has a constant trip count and a CPU driver unrolls it into registers). Each invocation
-// makes four neighbouring texels of one row (and the right neighbour each entry of `blurred`
-// also holds): it reads the camera rows y - BLUR_HALF..y + BLUR_HALF 16 bytes (4 pixels) at a
-// time, decodes them, blurs each row horizontally, then the rows vertically. Decoding a texel
-// again for each row it serves costs arithmetic; it saves the intermediate image and the
-// memory accesses (each a loop over the SIMD lanes on lavapipe) of a two-pass blur.
+// makes a block of 4 x ROWS texels (and the right neighbour each entry of `blurred` also
+// holds): it reads each camera row y0 - BLUR_HALF..y0 + ROWS + BLUR_HALF 16 bytes (4 pixels)
+// at a time, decodes it, blurs it horizontally and adds it to the output rows it serves.
+// Decoding a texel again for each neighbouring block costs arithmetic; it saves the
+// intermediate image and the memory accesses (each a loop over the SIMD lanes on lavapipe) of
+// a two-pass blur.
 
 // The sRGB decode of 8-bit codes c / 255, exact to f32 rounding: the enhancement's polynomial
 // (srgb_decode, 1.3e-5 relative at most, src/gpu/approx.rs) refined by one Newton step on
@@ -97,34 +98,48 @@ fn hblur_row(row: i32, x0: i32) -> array<vec3<f32>, 5> {
     return out;
 }
 
+// Output rows per invocation: each camera row the block's taps read is decoded and blurred
+// horizontally once for all ROWS outputs (a pass of one row per invocation decoded every row
+// 2 * BLUR_HALF + 1 times, and the decode is most of this pass's arithmetic).
+const ROWS: i32 = 8;
+
 // Prepares the camera texels of a rectangle only: the ones some view samples (the engine
 // passes the rectangle's first texel in region_size, which this pass has no other use for,
-// and dispatches over its size).
+// and dispatches over its size, 4 x ROWS texels per invocation).
 @compute @workgroup_size(8, 8)
 fn decode_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     let x0 = i32(pc.region_size.x + id.x * 4u);
     let w = i32(pc.camera_size.x);
     let h = i32(pc.camera_size.y);
-    let y = i32(pc.region_size.y + id.y);
-    if (x0 >= w || y >= h) {
+    let y0 = i32(pc.region_size.y + id.y * u32(ROWS));
+    if (x0 >= w || y0 >= h) {
         return;
     }
-    var acc: array<vec3<f32>, 5>;
-    for (var r = -H; r <= H; r++) {
-        let row = hblur_row(clamp(y + r, 0, h - 1), x0);
-        let t = blur_tap(u32(abs(r)));
-        for (var j = 0; j < 5; j++) {
-            acc[j] += t * row[j];
+    // acc[i] is output row y0 + i; camera row y0 - H + r feeds outputs i with |r - H - i| <= H.
+    var acc: array<array<vec3<f32>, 5>, ROWS>;
+    for (var r = 0; r < ROWS + 2 * H; r++) {
+        let row = hblur_row(clamp(y0 - H + r, 0, h - 1), x0);
+        for (var i = max(0, r - 2 * H); i <= min(ROWS - 1, r); i++) {
+            let t = blur_tap(u32(abs(r - H - i)));
+            for (var j = 0; j < 5; j++) {
+                acc[i][j] += t * row[j];
+            }
         }
     }
-    let base = u32(y) * pc.camera_size.x;
-    for (var j = 0; j < 4; j++) {
-        let x = x0 + j;
-        if (x >= w) {
+    for (var i = 0; i < ROWS; i++) {
+        let y = y0 + i;
+        if (y >= h) {
             break;
         }
-        // Entry x holds texels x and x + 1; the last column's neighbour is itself.
-        let right = select(acc[j + 1], acc[j], x + 1 >= w);
-        blurred[base + u32(x)] = vec4<u32>(pack_linear(acc[j]), pack_linear(right));
+        let base = u32(y) * pc.camera_size.x;
+        for (var j = 0; j < 4; j++) {
+            let x = x0 + j;
+            if (x >= w) {
+                break;
+            }
+            // Entry x holds texels x and x + 1; the last column's neighbour is itself.
+            let right = select(acc[i][j + 1], acc[i][j], x + 1 >= w);
+            blurred[base + u32(x)] = vec4<u32>(pack_linear(acc[i][j]), pack_linear(right));
+        }
     }
 }

@@ -346,6 +346,12 @@ fn gpu_background_matches_cpu_preparation() {
             blur_sigma: 2.5,
             ..Params::default()
         },
+        // The widest kernel: its window spans more rows than one invocation's block.
+        Params {
+            blur_size: 15,
+            blur_sigma: 5.0,
+            ..Params::default()
+        },
     ] {
         let gpu = e.prepare_background(&camera, &params).unwrap();
         let cpu = contrastxr::background::blurred_camera(&camera, &params);

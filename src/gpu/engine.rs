@@ -79,6 +79,10 @@ impl BackgroundFrame {
     }
 }
 
+/// Rows of texels one invocation of the background preparation makes (`ROWS` in
+/// shaders/background.wgsl).
+const DECODE_ROWS: u32 = 8;
+
 /// The camera texels a background preparation makes: those the views' mappings sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CameraRect {
@@ -615,9 +619,12 @@ impl Engine {
         let origin = (rect.x / 4 * 4, rect.y);
         let push = PushConstants::new(params, background.size, origin, &identity);
         let pipeline = self.pipelines.decode_blur(gpu, push.blur_half)?;
-        // Four texels per invocation.
+        // 4 x DECODE_ROWS texels per invocation.
         let right = (rect.x + rect.width).min(background.size.0);
-        let grid = ((right - origin.0).div_ceil(4), rect.height);
+        let grid = (
+            (right - origin.0).div_ceil(4),
+            rect.height.div_ceil(DECODE_ROWS),
+        );
         self.dispatch(gpu, cmd, pipeline, background.set, &push, grid);
         self.record_texels_copy(gpu, cmd, background, (origin.0, rect.y, right, rect.height));
         barrier(gpu, cmd, vk::PipelineStageFlags::TRANSFER, all);
