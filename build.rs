@@ -244,6 +244,9 @@ fn main() {
             &source,
             "decode_blur",
         );
+        if half == 0 {
+            write("decode_camera", "background", &source, "decode");
+        }
     }
     println!("cargo:rerun-if-changed=shaders/copy_wide.wgsl");
     let body = fs::read_to_string("shaders/copy_wide.wgsl").unwrap();

@@ -31,10 +31,6 @@ fn srgb_decode_exact(v: vec4<f32>) -> vec4<f32> {
 }
 
 const H: i32 = i32(BLUR_HALF);
-// Texels of the window left of the first output, a whole number of 4-pixel entries.
-const LEFT: i32 = 4 * ((H + 3) / 4);
-// 4-pixel entries per window row: outputs x0..x0+4 need texels x0-H..x0+4+H.
-const GROUPS: i32 = (LEFT + 5 + H + 3) / 4;
 
 // Camera row stride in pixels (BackgroundFrame::upload pads rows to a multiple of 4).
 fn camera_stride() -> u32 {
@@ -45,47 +41,61 @@ fn bytes_at(w: vec4<u32>, shift: u32) -> vec4<f32> {
     return vec4<f32>((w >> vec4<u32>(shift)) & vec4<u32>(255u)) * (1.0 / 255.0);
 }
 
-// Texel coordinate x0 - LEFT + k of window position k.
-const WINDOW: i32 = 4 * GROUPS;
-// Texels the taps read: x0 - H..x0 + 4 + H, decoded in groups of four.
-const NEEDED_PADDED: i32 = 4 * ((5 + 2 * H + 3) / 4);
+// The decoded camera texels live in `blurred` after its width x height final entries: two
+// texels (pack_linear) per entry, rows of camera_stride() texels.
+fn decoded_entry(x: u32, y: u32) -> u32 {
+    return pc.camera_size.x * pc.camera_size.y + (y * camera_stride() + x) / 2u;
+}
 
-// Row `row` of the camera, decoded and blurred horizontally at texels x0..x0+4 (clamp-to-edge;
+// First pass: decodes each camera texel of a rectangle once (four per invocation, at the
+// rectangle's first texel, which the engine passes in region_size). The blur pass reads
+// them; decoding inside it repeated the decode for every block a texel's window reaches.
+@compute @workgroup_size(8, 8)
+fn decode(@builtin(global_invocation_id) id: vec3<u32>) {
+    let x0 = pc.region_size.x + id.x * 4u;
+    let y = pc.region_size.y + id.y;
+    if (x0 >= pc.camera_size.x || y >= pc.camera_size.y) {
+        return;
+    }
+    let e = camera[(y * camera_stride() + x0) / 4u];
+    let r = srgb_decode_exact(bytes_at(e, 0u));
+    let g = srgb_decode_exact(bytes_at(e, 8u));
+    let b = srgb_decode_exact(bytes_at(e, 16u));
+    let at = decoded_entry(x0, y);
+    blurred[at] = vec4<u32>(pack_linear(vec3<f32>(r.x, g.x, b.x)), pack_linear(vec3<f32>(r.y, g.y, b.y)));
+    blurred[at + 1u] = vec4<u32>(pack_linear(vec3<f32>(r.z, g.z, b.z)), pack_linear(vec3<f32>(r.w, g.w, b.w)));
+}
+
+// Entries read left of x0 (x0 is a multiple of 4), and texels per row window: texels
+// x0 - 2 * LEFT_E .. x0 + 4 + H, a whole number of entries.
+const LEFT_E: i32 = (H + 1) / 2;
+const WINDOW: i32 = 2 * ((2 * LEFT_E + 5 + H + 1) / 2);
+
+// Row `row` of the decoded camera, blurred horizontally at texels x0..x0+4 (clamp-to-edge;
 // entries past the row's end are garbage the caller never stores).
 fn hblur_row(row: i32, x0: i32) -> array<vec3<f32>, 5> {
     let w = i32(pc.camera_size.x);
-    let first = row * i32(camera_stride() / 4u) + x0 / 4 - LEFT / 4;
-    var words: array<u32, WINDOW>;
-    for (var g = 0; g < GROUPS; g++) {
-        // Entries before the row's start or past its end read a neighbouring row (or 0 past
-        // the buffer): replaced below.
-        let e = camera[u32(first + g)];
-        words[4 * g] = e.x;
-        words[4 * g + 1] = e.y;
-        words[4 * g + 2] = e.z;
-        words[4 * g + 3] = e.w;
+    let first = i32(decoded_entry(u32(x0), u32(row))) - LEFT_E;
+    var packed: array<vec2<u32>, WINDOW>;
+    for (var m = 0; m < WINDOW / 2; m++) {
+        // Entries before the row's start or past its end hold a neighbouring row's texels:
+        // replaced below.
+        let e = blurred[u32(max(first + m, 0))];
+        packed[2 * m] = e.xy;
+        packed[2 * m + 1] = e.zw;
     }
     // Clamp-to-edge: texels right of the row repeat its last, left of it its first.
+    let left = x0 - 2 * LEFT_E;
     for (var k = 1; k < WINDOW; k++) {
-        words[k] = select(words[k], words[k - 1], x0 - LEFT + k >= w);
+        packed[k] = select(packed[k], packed[k - 1], left + k >= w);
     }
     for (var k = WINDOW - 2; k >= 0; k--) {
-        words[k] = select(words[k], words[k + 1], x0 - LEFT + k < 0);
+        packed[k] = select(packed[k], packed[k + 1], left + k < 0);
     }
-    // Decode only the NEEDED texels the taps use (window positions LEFT - H onwards), four
-    // at a time: the decode is most of this pass's arithmetic.
-    var lin: array<vec3<f32>, NEEDED_PADDED>;
-    for (var g = 0; g < NEEDED_PADDED / 4; g++) {
-        let k = LEFT - H + 4 * g;
-        let at = vec4<i32>(k, k + 1, k + 2, k + 3);
-        let m = vec4<i32>(WINDOW - 1);
-        let e = vec4<u32>(words[min(at.x, m.x)], words[min(at.y, m.y)], words[min(at.z, m.z)], words[min(at.w, m.w)]);
-        let r = srgb_decode_exact(bytes_at(e, 0u));
-        let gr = srgb_decode_exact(bytes_at(e, 8u));
-        let b = srgb_decode_exact(bytes_at(e, 16u));
-        for (var c = 0; c < 4; c++) {
-            lin[4 * g + c] = vec3<f32>(r[c], gr[c], b[c]);
-        }
+    // Texel x0 - H + k is window position 2 * LEFT_E - H + k.
+    var lin: array<vec3<f32>, 5 + 2 * H>;
+    for (var k = 0; k < 5 + 2 * H; k++) {
+        lin[k] = unpack_linear(packed[2 * LEFT_E - H + k]);
     }
     var out: array<vec3<f32>, 5>;
     for (var j = 0; j < 5; j++) {

@@ -79,6 +79,10 @@ impl BackgroundFrame {
     }
 }
 
+/// Bytes after the decoded camera texels in `blurred`: a row window at the last row reads up to
+/// 5 entries past them (blur half-width 7).
+const DECODED_SLACK: u64 = 16 * 8;
+
 /// Rows of texels one invocation of the background preparation makes (`ROWS` in
 /// shaders/background.wgsl).
 const DECODE_ROWS: u32 = 8;
@@ -370,7 +374,14 @@ impl Engine {
             gpu,
             [
                 (padded * 4, STORAGE, placement.camera, "camera"),
-                (px * 16, blurred_usage, placement.working, "blurred"),
+                // The final texels, then the decoded ones (8 bytes each, padded rows), then
+                // slack for the entries a row window reads past the last row.
+                (
+                    px * 16 + padded * 8 + DECODED_SLACK,
+                    blurred_usage,
+                    placement.working,
+                    "blurred",
+                ),
             ],
         )?;
         let mut bg = BackgroundFrame {
@@ -619,8 +630,10 @@ impl Engine {
         let origin = (rect.x / 4 * 4, rect.y);
         let push = PushConstants::new(params, background.size, origin, &identity);
         let pipeline = self.pipelines.decode_blur(gpu, push.blur_half)?;
-        // 4 x DECODE_ROWS texels per invocation.
         let right = (rect.x + rect.width).min(background.size.0);
+        self.record_decode(gpu, cmd, background, &push, (origin.0, right), rect);
+        barrier(gpu, cmd, COMPUTE, COMPUTE);
+        // 4 x DECODE_ROWS texels per invocation.
         let grid = (
             (right - origin.0).div_ceil(4),
             rect.height.div_ceil(DECODE_ROWS),
@@ -629,6 +642,31 @@ impl Engine {
         self.record_texels_copy(gpu, cmd, background, (origin.0, rect.y, right, rect.height));
         barrier(gpu, cmd, vk::PipelineStageFlags::TRANSFER, all);
         Ok(())
+    }
+
+    /// Decodes the camera texels the blur of `rect` reads: its blocks' windows reach
+    /// blur_half texels beyond it on each side, and 4 + blur_half right of a block's start.
+    fn record_decode(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        bg: &BackgroundFrame,
+        push: &PushConstants,
+        (x0, right): (u32, u32),
+        rect: &CameraRect,
+    ) {
+        let (w, h) = bg.size;
+        let half = push.blur_half;
+        let left = x0.saturating_sub(half) / 4 * 4;
+        let end = (right.div_ceil(4) * 4 + 4 + half).min(w);
+        let top = rect.y.saturating_sub(half);
+        let rows = rect.height.div_ceil(DECODE_ROWS) * DECODE_ROWS;
+        let bottom = (rect.y + rows + half).min(h);
+        let mut push = *push;
+        push.region_size = [left, top];
+        let grid = ((end - left).div_ceil(4), bottom - top);
+        let pipeline = self.pipelines.decode_camera;
+        self.dispatch(gpu, cmd, pipeline, bg.set, &push, grid);
     }
 
     /// Copies the prepared rows x0..right of rows y..y + height of `blurred` into the image the

@@ -89,6 +89,7 @@ pub struct Pipelines {
     pub finish_tiles: vk::Pipeline,
     pub copy_pixels: vk::Pipeline,
     pub copy_rows: vk::Pipeline,
+    pub decode_camera: vk::Pipeline,
     /// The `enhance` and `classify` variants (shaders::ENHANCE_VARIANTS, then
     /// shaders::CLASSIFY_VARIANTS, then shaders::DECODE_BLUR), built on first use: each costs
     /// a compile in the driver and a session uses a few.
@@ -111,6 +112,7 @@ impl Pipelines {
             finish_tiles: vk::Pipeline::null(),
             copy_pixels: vk::Pipeline::null(),
             copy_rows: vk::Pipeline::null(),
+            decode_camera: vk::Pipeline::null(),
             variants: no_variants(),
         }
     }
@@ -156,6 +158,7 @@ impl Pipelines {
         self.layout = unsafe { gpu.device.create_pipeline_layout(&info, None) }
             .vk("vkCreatePipelineLayout")?;
         self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
+        self.decode_camera = self.compute_pipeline(gpu, &shaders::DECODE_CAMERA)?;
         self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
         self.copy_rows = self.compute_pipeline(gpu, &shaders::COPY_ROWS)?;
         Ok(())
@@ -268,9 +271,14 @@ impl Pipelines {
                 Ok(v) => std::mem::take(v),
                 Err(poisoned) => std::mem::take(poisoned.into_inner()),
             };
-            for p in [self.finish_tiles, self.copy_pixels, self.copy_rows]
-                .into_iter()
-                .chain(variants)
+            for p in [
+                self.finish_tiles,
+                self.copy_pixels,
+                self.copy_rows,
+                self.decode_camera,
+            ]
+            .into_iter()
+            .chain(variants)
             {
                 gpu.device.destroy_pipeline(p, None);
             }

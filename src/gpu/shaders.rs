@@ -46,6 +46,8 @@ pub const DECODE_BLUR: [ShaderModule; 8] = [
     spirv!("decode_blur_6", "decode_blur"),
     spirv!("decode_blur_7", "decode_blur"),
 ];
+/// The background's first pass: decodes the camera texels (the blur passes read them).
+pub const DECODE_CAMERA: ShaderModule = spirv!("decode_camera", "decode");
 pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
 pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
 pub const COPY_ROWS: ShaderModule = spirv!("copy_rows");
@@ -54,7 +56,7 @@ include!(concat!(env!("OUT_DIR"), "/enhance_variants.rs"));
 
 /// Every embedded shader (for spirv-val in the tests).
 pub fn all() -> Vec<&'static ShaderModule> {
-    let fixed = [&FINISH_TILES, &COPY_PIXELS, &COPY_ROWS];
+    let fixed = [&DECODE_CAMERA, &FINISH_TILES, &COPY_PIXELS, &COPY_ROWS];
     fixed
         .into_iter()
         .chain(DECODE_BLUR.iter())
