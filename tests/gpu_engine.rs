@@ -373,6 +373,42 @@ fn gpu_background_matches_cpu_preparation() {
 }
 
 #[test]
+fn gpu_background_of_a_part_of_the_camera_matches_cpu_preparation() {
+    // The layer prepares only the texels the views sample: at the rectangle's edges the blur
+    // still reads the texels beyond it, for every kernel width.
+    let mut e = engine();
+    let camera = noise(150, 90, 9);
+    let rect = contrastxr::gpu::CameraRect {
+        x: 36,
+        y: 21,
+        width: 61,
+        height: 35,
+    };
+    for (blur_size, blur_sigma) in [(3, 0.8), (7, 2.5), (15, 5.0)] {
+        let params = Params {
+            blur_size,
+            blur_sigma,
+            ..Params::default()
+        };
+        let gpu = e.prepare_background_in(&camera, &params, &rect).unwrap();
+        let cpu = contrastxr::background::blurred_camera(&camera, &params);
+        for y in rect.y..rect.y + rect.height {
+            for x in rect.x..rect.x + rect.width {
+                let i = (y * 150 + x) as usize;
+                for k in 0..3 {
+                    let d = (f64::from(gpu.linear[i][k]) - cpu.pixels[i][k]).abs();
+                    assert!(
+                        d < 1e-5,
+                        "blur {blur_size}: texel ({x}, {y}) channel {k}: {d}"
+                    );
+                }
+            }
+        }
+    }
+    assert_clean(&e);
+}
+
+#[test]
 fn sampled_background_matches_cpu_preparation_through_any_mapping() {
     // The per-pixel part (FoV sampling, transmittance), seen through the background view on a
     // 16-bit linear format: the output is transmittance x the sampled background.

@@ -205,10 +205,22 @@ impl OfflineEngine {
         camera: &RgbaImage,
         params: &Params,
     ) -> Result<GpuBackground, GpuError> {
+        let rect = CameraRect::full((camera.width, camera.height));
+        self.prepare_background_in(camera, params, &rect)
+    }
+
+    /// The same for the texels of `rect` only, as the layer prepares them (the views sample
+    /// part of the camera): texels outside it are not meaningful.
+    pub fn prepare_background_in(
+        &mut self,
+        camera: &RgbaImage,
+        params: &Params,
+        rect: &CameraRect,
+    ) -> Result<GpuBackground, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
         let (width, height) = (camera.width, camera.height);
         let (bg, view) = self.stage(camera, (1, 1), PixelFormat::SRGB8)?;
-        let rect = CameraRect::full(bg.size);
+        let rect = *rect;
         let result = self.submit(|cmd| {
             self.engine
                 .record_background(&self.gpu, cmd, &bg, params, &rect)
