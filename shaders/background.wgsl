@@ -4,14 +4,15 @@
 // sampled_background), only for the display pixels it enhances: per camera frame the work is
 // proportional to the camera's pixels, never to the display's or the number of views.
 //
-// One pass, built once per blur half-width BLUR_HALF (0..=7, a constant here, so every loop
-// has a constant trip count and a CPU driver unrolls it into registers). Each invocation
-// makes a block of 4 x ROWS texels (and the right neighbour each entry of `blurred` also
-// holds): it reads each camera row y0 - BLUR_HALF..y0 + ROWS + BLUR_HALF 16 bytes (4 pixels)
-// at a time, decodes it, blurs it horizontally and adds it to the output rows it serves.
-// Decoding a texel again for each neighbouring block costs arithmetic; it saves the
-// intermediate image and the memory accesses (each a loop over the SIMD lanes on lavapipe) of
-// a two-pass blur.
+// Two passes, both over the camera texels some view samples (plus the blur's reach):
+// `decode` decodes each texel once into linear light (pack_linear, after the final texels in
+// `blurred`); `decode_blur`, built once per blur half-width BLUR_HALF (0..=7, a constant here,
+// so every loop has a constant trip count and a CPU driver unrolls it into registers), makes a
+// block of 4 x ROWS texels per invocation (and the right neighbour each entry of `blurred` also
+// holds): it reads each decoded row y0 - BLUR_HALF..y0 + ROWS + BLUR_HALF, blurs it
+// horizontally and adds it to the output rows it serves. Decoding inside the blur, as earlier
+// versions did, repeated the decode (most of the arithmetic) for every block a texel's window
+// reaches; the separate pass costs one store and about one load per texel instead.
 
 // The sRGB decode of 8-bit codes c / 255, exact to f32 rounding: the enhancement's polynomial
 // (srgb_decode, 1.3e-5 relative at most, src/gpu/approx.rs) refined by one Newton step on
@@ -108,9 +109,8 @@ fn hblur_row(row: i32, x0: i32) -> array<vec3<f32>, 5> {
     return out;
 }
 
-// Output rows per invocation: each camera row the block's taps read is decoded and blurred
-// horizontally once for all ROWS outputs (a pass of one row per invocation decoded every row
-// 2 * BLUR_HALF + 1 times, and the decode is most of this pass's arithmetic).
+// Output rows per invocation: each decoded row the block's taps read is loaded and blurred
+// horizontally once for all ROWS outputs.
 const ROWS: i32 = 8;
 
 // Prepares the camera texels of a rectangle only: the ones some view samples (the engine

@@ -44,7 +44,8 @@ var<immediate> pc: Params;
 // The camera frame decoded and blurred: linear light on the camera grid, NOT attenuated (the
 // subtraction method needs it as is), the one image prepared per camera frame. Entry
 // y * width + x holds texels x and x + 1 of row y (texel width - 1 twice at the right edge),
-// packed by pack_linear_pair, so a bilinear sample reads one entry per row.
+// packed by pack_linear_pair, so a bilinear sample reads one entry per row. After those
+// width x height entries, the background pass's decoded camera texels (background.wgsl).
 @group(0) @binding(1) var<storage, read_write> blurred: array<vec4<u32>>;
 // The same, as an R32G32B32A32_UINT image (copied from `blurred` after each preparation): what
 // the enhancement samples. A texel fetch is a gather on CPU drivers such as lavapipe, where a

@@ -35,7 +35,8 @@ pub struct BackgroundFrame {
     /// 16 bytes at a time); host-visible, written with `upload`.
     pub camera: GpuBuffer,
     /// Decoded and blurred, linear light, not attenuated: two texels per 16 bytes (see
-    /// `blurred` in shaders/common.wgsl). What every view's enhancement samples.
+    /// `blurred` in shaders/common.wgsl). What every view's enhancement samples. Followed by
+    /// the decoded camera texels the blur reads (shaders/background.wgsl).
     pub blurred: GpuBuffer,
     /// `blurred` as an image (R32G32B32A32_UINT, kept in GENERAL), which the enhancement reads.
     texels: AppImage,
