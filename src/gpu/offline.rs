@@ -220,10 +220,9 @@ impl OfflineEngine {
         params.validate().map_err(GpuError::Unsupported)?;
         let (width, height) = (camera.width, camera.height);
         let (bg, view) = self.stage(camera, (1, 1), PixelFormat::SRGB8)?;
-        let rect = *rect;
         let result = self.submit(|cmd| {
             self.engine
-                .record_background(&self.gpu, cmd, &bg, params, &rect)
+                .record_background(&self.gpu, cmd, &bg, params, rect)
         });
         let n = (width * height) as usize;
         let out = result.and_then(|_| {
