@@ -1,8 +1,8 @@
-//! Background preprocessing on the CPU (spec section 2): decode, Gaussian blur on the
-//! camera's own grid, mapping onto the display grid through the view's CameraMapping
-//! (bilinear, linear light), then attenuation and conversion to the scaled space. The GPU
-//! engine does the same in f32 (the first two once per camera frame, the rest per pixel it
-//! enhances).
+//! Background preprocessing on the CPU (docs/algorithm.md, Background preparation): decode,
+//! Gaussian blur on the camera's own grid, mapping onto the display grid through the view's
+//! CameraMapping (bilinear, linear light), then attenuation and conversion to the scaled space.
+//! The GPU engine does the same in f32 (the first two once per camera frame, the rest per pixel
+//! it enhances).
 
 use glam::{DVec2, DVec3};
 
@@ -114,20 +114,23 @@ impl LinearImage {
     }
 }
 
-/// The camera frame decoded and blurred (spec section 2 steps 1-2): linear light on the
+/// The camera frame decoded and blurred (docs/algorithm.md, Background preparation, steps
+/// 1-2): linear light on the
 /// camera's grid, not attenuated. The part that depends on the camera frame only.
 pub fn blurred_camera(camera: &RgbaImage, params: &Params) -> LinearImage {
     LinearImage::decode(camera).blur(&params.blur_taps())
 }
 
-/// Preprocesses a camera frame for a `width` x `height` display (spec section 2) with the
+/// Preprocesses a camera frame for a `width` x `height` display (docs/algorithm.md, Background
+/// preparation) with the
 /// manual FoV mapping of `params` (`Params::camera_mapping`).
 pub fn prepare(camera: &RgbaImage, width: u32, height: u32, params: &Params) -> PreparedBackground {
     prepare_mapped(camera, width, height, &params.camera_mapping(), params)
 }
 
 /// Preprocesses a camera frame for one view of `width` x `height` whose pixels lie at
-/// `mapping` in the camera image (spec section 2, the FoV step generalised to a homography).
+/// `mapping` in the camera image (docs/algorithm.md, Per-view registration: the FoV step
+/// generalised to a homography).
 pub fn prepare_mapped(
     camera: &RgbaImage,
     width: u32,

@@ -1,12 +1,13 @@
-//! Colour science: sRGB, CIE XYZ, CIELAB and the scaled space (spec section 1).
+//! Colour science: sRGB, CIE XYZ, CIELAB and the scaled space (docs/algorithm.md, Colour spaces).
 //!
 //! Everything here is f64 and pure. The GPU shaders use the same constants in f32; the CPU
 //! reference in `algorithm` is built on these functions. Nothing here clips a colour to the
-//! sRGB gamut except `quantize` (spec: nothing projects P onto the gamut).
+//! sRGB gamut except `quantize` (docs/algorithm.md, Scaled space: nothing projects P onto the
+//! gamut).
 
 use glam::DVec3;
 
-/// Linear sRGB -> CIE XYZ (D65), rows of the matrix (spec section 1).
+/// Linear sRGB -> CIE XYZ (D65), rows of the matrix (docs/algorithm.md, XYZ matrices).
 pub const LINEAR_TO_XYZ: [[f64; 3]; 3] = [
     [0.4124564, 0.3575761, 0.1804375],
     [0.2126729, 0.7151522, 0.0721750],
@@ -81,7 +82,8 @@ pub fn srgb8_to_linear(c: [u8; 3]) -> DVec3 {
     )
 }
 
-/// Encoded value -> 8-bit code: clip to [0, 1], then `floor(255 v + 0.5)` (spec section 3).
+/// Encoded value -> 8-bit code: clip to [0, 1], then `floor(255 v + 0.5)` (docs/algorithm.md,
+/// Output encoding).
 pub fn quantize(v: f64) -> u8 {
     (255.0 * v.clamp(0.0, 1.0) + 0.5).floor() as u8
 }

@@ -1,4 +1,5 @@
-//! What "the GPU agrees with the CPU reference" means (spec section 6), in one place.
+//! What "the GPU agrees with the CPU reference" means (docs/algorithm.md, Conformance), in one
+//! place.
 //!
 //! The shader computes in f32, the reference in f64. Away from branch thresholds the f32 noise
 //! (about 1e-6 in scaled units, far below a code value after encoding) can move a result by at
@@ -105,9 +106,9 @@ const BACKGROUND_SAMPLES: [[u8; 3]; 8] = [
     [181, 181, 181],
 ];
 
-/// The corner cases of spec section 6 as (display, background) 8-bit colour pairs. The
-/// background is a uniform camera frame of that colour; "near the attenuated B" assumes the
-/// default transmittance 0.4.
+/// The corner cases of docs/algorithm.md, Conformance, as (display, background) 8-bit colour
+/// pairs. The background is a uniform camera frame of that colour; "near the attenuated B"
+/// assumes the default transmittance 0.4.
 pub fn corner_cases() -> Vec<([u8; 3], [u8; 3])> {
     let mut cases = Vec::new();
     for d in PRIMARIES_AND_SECONDARIES {

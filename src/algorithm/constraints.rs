@@ -1,5 +1,6 @@
-//! The steps of Algorithm 1 (spec section 3), each in the scaled space, each recording how
-//! close its branch condition came to flipping (for the GPU conformance tolerance).
+//! The steps of Algorithm 1 (docs/algorithm.md, Per-pixel optimisation), each in the scaled
+//! space, each recording how close its branch condition came to flipping (for the GPU
+//! conformance tolerance).
 
 use glam::DVec3;
 
@@ -78,7 +79,7 @@ pub fn split_chroma(display: DVec3, e: DVec3, m: &mut Margin) -> Option<ChromaSp
 }
 
 /// Chroma constraint: dir.ab keeps the hue change and only a chroma increase.
-/// An achromatic display colour takes all of E' (spec section 3).
+/// An achromatic display colour takes all of E' (docs/algorithm.md, Chroma step).
 pub fn chroma_constraint(display: DVec3, e: DVec3, m: &mut Margin) -> DVec3 {
     match split_chroma(display, e, m) {
         None => ab_plane(e),

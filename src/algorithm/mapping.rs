@@ -1,8 +1,9 @@
-//! The FoV calibration of spec section 2 step 3, generalised: where a display pixel's
-//! background lies in the camera image. The spec's `camera_uv = fov_scale * display_uv +
-//! fov_offset` is the affine case; a camera registered to a view from its pose and field of
-//! view gives a homography. Texture coordinates as in the spec: origin top-left, u right,
-//! v down, texel centres at (i + 0.5) / W.
+//! The FoV calibration (docs/algorithm.md, FoV calibration), generalised: where a display
+//! pixel's background lies in the camera image. The paper's manual mapping, `camera_uv =
+//! fov_scale * display_uv + fov_offset`, is the affine case; a camera registered to a view from
+//! its pose and field of view gives a homography (docs/algorithm.md, Per-view registration).
+//! Texture coordinates as docs/algorithm.md, FoV calibration, states them: origin top-left,
+//! u right, v down, texel centres at (i + 0.5) / W.
 
 use glam::{DMat3, DVec2, DVec3};
 
@@ -18,7 +19,7 @@ impl CameraMapping {
         rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
     };
 
-    /// The spec's manual mapping: `camera_uv = scale * display_uv + offset`.
+    /// The paper's manual mapping: `camera_uv = scale * display_uv + offset`.
     pub fn affine(scale: [f64; 2], offset: [f64; 2]) -> CameraMapping {
         CameraMapping {
             rows: [

@@ -1,8 +1,8 @@
 //! Algorithm 1 of the paper and its comparison methods, as the CPU reference (pure Rust, glam).
 //!
 //! This module is the definition the GPU shader is tested against: it follows
-//! `spec/algorithm.md` sections 3 and 5 step by step, in f64. It knows nothing about images,
-//! the GPU or OpenXR.
+//! docs/algorithm.md (Per-pixel optimisation, Comparison methods) step by step, in f64. It
+//! knows nothing about images, the GPU or OpenXR.
 
 pub mod conformance;
 mod constraints;
@@ -18,5 +18,6 @@ pub use params::{Method, Params, ViewMode};
 pub use pixel::{enhance_linear, enhance_srgb8, enhance_srgb8_trace};
 pub use scaled::{enhance_scaled, enhance_scaled_traced, ScaledOutcome};
 
-/// Below this length a scaled vector has no usable direction (spec section 3: |B|, |D'|, |D|).
+/// Below this length a scaled vector has no usable direction (|B|, |D'|, |D|; docs/algorithm.md,
+/// Ideal colour I, Chroma step, Comparison methods).
 pub const DIRECTION_EPSILON: f64 = 1e-6;

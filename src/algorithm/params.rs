@@ -1,6 +1,6 @@
 //! The method's settings, shared by the CPU reference, the GPU engine, the CLI and the layer.
 
-/// Which per-pixel method runs (spec sections 3 and 5).
+/// Which per-pixel method runs (docs/algorithm.md, Per-pixel optimisation and Comparison methods).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Method {
     /// Algorithm 1 with its four constraints (the paper's method).
@@ -45,7 +45,7 @@ impl Method {
     }
 }
 
-/// What the layer shows (issue: live control). `Enhance` is the product; the others are for
+/// What the layer shows (docs/control.md, Modes). `Enhance` is the product; the others are for
 /// comparison and calibration while wearing the headset. Comparison methods are `Method`s.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ViewMode {
@@ -90,11 +90,12 @@ impl ViewMode {
     }
 }
 
-/// Subtraction method gains (spec section 5): k_v on the display, k_b on the background.
+/// Subtraction method gains (docs/algorithm.md, Comparison methods): k_v on the display, k_b on
+/// the background.
 pub const SUBTRACTION_K_V: f32 = 1.0;
 pub const SUBTRACTION_K_B: f32 = 0.4;
 
-/// Every setting of the method. Defaults are the paper's (spec sections 2 and 3).
+/// Every setting of the method. Defaults are the paper's (docs/algorithm.md, Defaults).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
     /// Maximum colour change in the scaled space (the paper's lambda'_E).
@@ -155,7 +156,7 @@ pub const MAX_BLUR_SIZE: u32 = 15;
 impl Params {
     /// The normalised 1-D Gaussian taps at offsets -(n/2)..=(n/2); `[1.0]` without blur.
     /// The 2-D kernel exp(-(x^2+y^2)/(2 sigma^2)) is separable, so the product of two of these
-    /// equals the renormalised 2-D kernel of spec section 2.
+    /// equals the renormalised 2-D kernel of docs/algorithm.md, Gaussian blur.
     pub fn blur_taps(&self) -> Vec<f64> {
         if !self.blur || self.blur_size <= 1 {
             return vec![1.0];

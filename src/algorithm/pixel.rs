@@ -1,4 +1,5 @@
-//! One display pixel end to end: 8-bit sRGB -> linear -> scaled -> method -> back (spec section 3).
+//! One display pixel end to end: 8-bit sRGB -> linear -> scaled -> method -> back
+//! (docs/algorithm.md, Per-pixel optimisation and Output encoding).
 
 use glam::DVec3;
 

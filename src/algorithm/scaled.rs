@@ -1,5 +1,5 @@
-//! The per-pixel methods in the scaled space: Algorithm 1 (spec section 3) and the paper's
-//! comparison methods (spec section 5).
+//! The per-pixel methods in the scaled space: Algorithm 1 (docs/algorithm.md, Per-pixel
+//! optimisation) and the paper's comparison methods (docs/algorithm.md, Comparison methods).
 
 use glam::DVec3;
 

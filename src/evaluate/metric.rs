@@ -1,4 +1,5 @@
-//! The paper's "enhanced pixel" metric (eq. test_diff, spec section 4).
+//! The paper's "enhanced pixel" metric (its Evaluation section; docs/algorithm.md, Evaluation
+//! metric).
 
 use glam::DVec3;
 use serde::Serialize;
@@ -124,8 +125,8 @@ pub fn enhanced_mask(
         .collect()
 }
 
-/// The metric of spec section 4 for an output image against its display image, with B the
-/// same preprocessed background the optimiser used.
+/// The metric (docs/algorithm.md, Evaluation metric) for an output image against its display
+/// image, with B the same preprocessed background the optimiser used.
 pub fn metrics(
     display: &RgbaImage,
     output: &RgbaImage,
@@ -157,8 +158,9 @@ mod tests {
     use super::*;
 
     /// 3x1: black (not foreground), white turned red, grey 128 left alone; B = mid grey
-    /// (scaled origin, LAB (50, 0, 0)). Expected values from the spec's check values:
-    /// white (100, 0, 0), red (53.2408, 80.0925, 67.2032), grey 128 L* 53.585.
+    /// (scaled origin, LAB (50, 0, 0)). Expected values from the check values of
+    /// docs/algorithm.md, CIELAB: white (100, 0, 0), red (53.2408, 80.0925, 67.2032), grey 128
+    /// L* 53.585.
     #[test]
     fn hand_computed_case() {
         let mut display = RgbaImage::new(3, 1, [0, 0, 0, 255]);

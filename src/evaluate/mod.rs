@@ -1,5 +1,5 @@
-//! Evaluation of an enhancement (spec section 4): the paper's enhanced-pixel metric, the
-//! simulated perceived image of an additive display, and figures a person can look at.
+//! Evaluation of an enhancement (docs/algorithm.md, Results): the paper's enhanced-pixel metric,
+//! the simulated perceived image of an additive display, and figures a person can look at.
 //! Pure CPU; it never runs the method itself.
 
 pub mod figure;

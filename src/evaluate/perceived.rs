@@ -1,4 +1,5 @@
-//! The simulated perceived image: what the eye gets through an additive display (spec section 4).
+//! The simulated perceived image: what the eye gets through an additive display
+//! (docs/algorithm.md, Perceived image).
 
 use glam::DVec3;
 
