@@ -11,6 +11,7 @@ fn engine() -> OfflineEngine {
     OfflineEngine::with_options(&DeviceOptions {
         index: 0,
         validation: true,
+        matching: None,
     })
     .unwrap_or_else(|e| panic!("GPU engine: {e}"))
 }

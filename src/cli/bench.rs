@@ -90,6 +90,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let options = DeviceOptions {
         index: device,
         validation: false,
+        matching: None,
     };
     let mut engine =
         OfflineEngine::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;

@@ -493,6 +493,22 @@ pub const KEYS: &[Key] = &[
         get: |s| Value::Bool(s.force),
     },
     Key {
+        name: "pipelines",
+        env: "CONTRASTXR_PIPELINES",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "background: frames pass through untouched until the shader pipelines are built on the layer's thread; wait: the first frame waits for them (every frame enhanced, as captures and tests that count frames need)",
+        set: |s, v| {
+            s.wait_for_pipelines = match v {
+                Value::Text(t) if t == "background" => false,
+                Value::Text(t) if t == "wait" => true,
+                other => return Err(format!("{other} is not background or wait")),
+            };
+            Ok(())
+        },
+        get: |s| Value::Text(if s.wait_for_pipelines { "wait" } else { "background" }.into()),
+    },
+    Key {
         name: "quad_layers",
         env: "CONTRASTXR_QUAD_LAYERS",
         env_negated: false,

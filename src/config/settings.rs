@@ -22,6 +22,9 @@ pub struct Settings {
     pub force: bool,
     /// Also enhance quad layers.
     pub quad_layers: bool,
+    /// `pipelines = "wait"`: the first frame that needs a pipeline waits for its build instead
+    /// of passing through.
+    pub wait_for_pipelines: bool,
     /// The method's settings, with `mode` (what the layer shows).
     pub params: Params,
     /// Background source spec: `v4l2:auto` (default), `v4l2:/dev/videoN`, `image:PATH`,
@@ -50,6 +53,7 @@ impl Default for Settings {
             enabled: true,
             force: false,
             quad_layers: false,
+            wait_for_pipelines: false,
             params: Params::default(),
             background: "v4l2:auto".into(),
             camera: CaptureConfig::default(),

@@ -426,8 +426,9 @@ impl OfflineEngine {
                 Ok(())
             })?;
             timed(Span::Copy, &mut || {
-                views.iter().for_each(|v| engine.record_copy(gpu, cmd, v));
-                Ok(())
+                views
+                    .iter()
+                    .try_for_each(|v| engine.record_copy(gpu, cmd, v))
             })?;
             timed(Span::Enhance, &mut || {
                 for v in &views {

@@ -50,6 +50,9 @@ pub struct DeviceOptions {
     pub index: usize,
     /// Enable VK_LAYER_KHRONOS_validation (with synchronisation validation) and count errors.
     pub validation: bool,
+    /// Take the physical device with this vendor, device and pipelineCacheUUID instead of
+    /// `index` (a device of the same kind as someone else's).
+    pub matching: Option<super::pipeline_cache::CacheKey>,
 }
 
 impl DeviceOptions {
@@ -61,6 +64,7 @@ impl DeviceOptions {
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(0),
             validation: std::env::var("CONTRASTXR_VK_VALIDATION").is_ok_and(|v| v == "1"),
+            matching: None,
         }
     }
 }
@@ -195,7 +199,7 @@ impl GpuDevice {
             None => None,
         };
         // From here on, a failure must destroy the instance: build the device in a helper.
-        match Self::create_device(&entry, &instance, options.index) {
+        match Self::create_device(&entry, &instance, options) {
             Ok((physical, device, family)) => {
                 let allocator = match create_allocator(&instance, &device, physical) {
                     Ok(a) => a,
@@ -233,12 +237,19 @@ impl GpuDevice {
     fn create_device(
         entry: &ash::Entry,
         instance: &ash::Instance,
-        index: usize,
+        options: &DeviceOptions,
     ) -> Result<(vk::PhysicalDevice, ash::Device, u32), GpuError> {
         let _ = entry;
         // SAFETY: instance is a valid instance.
         let physicals =
             unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+        let index = match &options.matching {
+            Some(key) => physicals
+                .iter()
+                .position(|&p| super::pipeline_cache::CacheKey::of_physical(instance, p) == *key)
+                .ok_or_else(|| GpuError::NoDevice("no device of the wanted kind".into()))?,
+            None => options.index,
+        };
         let physical = *physicals.get(index).ok_or_else(|| {
             GpuError::NoDevice(format!(
                 "{} Vulkan devices, asked for #{index}",

@@ -10,7 +10,9 @@ use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
-use super::pipelines::{Pipelines, PushConstants, BINDING_COUNT, IMAGE_BINDING};
+use super::pipelines::{
+    self, BuildMode, BuildReport, Pipelines, PushConstants, ShaderId, BINDING_COUNT, IMAGE_BINDING,
+};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
@@ -208,11 +210,17 @@ pub struct ViewTarget {
     camera_size: (u32, u32),
 }
 
+/// Whether every row of a region `width` pixels wide starts on a 16-byte boundary, so the
+/// per-pixel passes may read and write 16 bytes at a time (shaders/access_wide.wgsl). True for
+/// most widths in use.
+pub fn rows_aligned(width: u32, format: PixelFormat) -> bool {
+    (width * format.bytes_per_pixel()) % 16 == 0
+}
+
 impl ViewTarget {
-    /// Whether every row starts on a 16-byte boundary, so the per-pixel passes may read and
-    /// write 16 bytes at a time (shaders/access_wide.wgsl). True for most widths in use.
+    /// [`rows_aligned`] for this view.
     pub fn rows_aligned(&self) -> bool {
-        (self.region.0 * self.format.bytes_per_pixel()) % 16 == 0
+        rows_aligned(self.region.0, self.format)
     }
 
     /// Whether the benchmark's 16-byte copy (`record_copy_wide`) can run on this view:
@@ -229,7 +237,7 @@ impl ViewTarget {
 }
 
 pub struct Engine {
-    pipelines: Pipelines,
+    pub(super) pipelines: Pipelines,
     pool: vk::DescriptorPool,
 }
 
@@ -330,9 +338,10 @@ const SOURCE_BINDING: u32 = 4;
 const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
 
 impl Engine {
-    /// Builds the pipelines; `max_views` bounds how many ViewTargets may exist at once.
-    pub fn new(gpu: &GpuDevice, max_views: u32) -> Result<Engine, GpuError> {
-        let mut pipelines = Pipelines::new(gpu)?;
+    /// Sets up the pipelines, built as `mode` says; `max_views` bounds how many ViewTargets
+    /// may exist at once.
+    pub fn new(gpu: &GpuDevice, max_views: u32, mode: BuildMode) -> Result<Engine, GpuError> {
+        let mut pipelines = Pipelines::new(gpu, mode)?;
         let max_sets = max_views + MAX_BACKGROUNDS;
         let sizes = [
             vk::DescriptorPoolSize::default()
@@ -403,6 +412,16 @@ impl Engine {
         }
         self.write_set(gpu, bg.set, 0, &[&bg.camera, &bg.blurred]);
         Ok(bg)
+    }
+
+    /// The background frame's descriptor set and the image the enhancement samples (for the
+    /// warm-up, which binds them itself).
+    pub(super) fn background_parts(bg: &BackgroundFrame) -> (vk::DescriptorSet, vk::Image) {
+        (bg.set, bg.texels.raw)
+    }
+
+    pub(super) fn view_set(view: &ViewTarget) -> vk::DescriptorSet {
+        view.set
     }
 
     /// The image the enhancement samples, its view, and the preparation's descriptor set.
@@ -553,7 +572,7 @@ impl Engine {
     }
 
     /// Dispatches `pipeline` over `grid` invocations (in WORKGROUP x WORKGROUP groups).
-    fn dispatch(
+    pub(super) fn dispatch(
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
@@ -630,9 +649,11 @@ impl Engine {
         // The pass reads the rectangle's first texel from region_size (shaders/background.wgsl).
         let origin = (rect.x / 4 * 4, rect.y);
         let push = PushConstants::new(params, background.size, origin, &identity);
-        let pipeline = self.pipelines.decode_blur(gpu, push.blur_half)?;
+        let pipeline = self
+            .pipelines
+            .get(pipelines::decode_blur(push.blur_half)?)?;
         let right = (rect.x + rect.width).min(background.size.0);
-        self.record_decode(gpu, cmd, background, &push, (origin.0, right), rect);
+        self.record_decode(gpu, cmd, background, &push, (origin.0, right), rect)?;
         barrier(gpu, cmd, COMPUTE, COMPUTE);
         // 4 x DECODE_ROWS texels per invocation.
         let grid = (
@@ -655,7 +676,7 @@ impl Engine {
         push: &PushConstants,
         (x0, right): (u32, u32),
         rect: &CameraRect,
-    ) {
+    ) -> Result<(), GpuError> {
         let (w, h) = bg.size;
         let half = push.blur_half;
         let left = x0.saturating_sub(half) / 4 * 4;
@@ -666,8 +687,9 @@ impl Engine {
         let mut push = *push;
         push.region_size = [left, top];
         let grid = ((end - left).div_ceil(4), bottom - top);
-        let pipeline = self.pipelines.decode_camera;
+        let pipeline = self.pipelines.get(pipelines::DECODE_CAMERA)?;
         self.dispatch(gpu, cmd, pipeline, bg.set, &push, grid);
+        Ok(())
     }
 
     /// Copies the prepared rows x0..right of rows y..y + height of `blurred` into the image the
@@ -756,8 +778,11 @@ impl Engine {
             params.mode.shader_code(),
             format,
         );
-        let pipeline = self.pipelines.enhance(gpu, codes, wide, extras)?;
-        let classify = self.pipelines.classify(gpu, format, wide)?;
+        let pipeline = self
+            .pipelines
+            .get(pipelines::enhance(codes, wide, extras)?)?;
+        let classify = self.pipelines.get(pipelines::classify(format, wide)?)?;
+        let finish_tiles = self.pipelines.get(pipelines::FINISH_TILES)?;
         let push = PushConstants::new(params, view.camera_size, view.region, mapping);
         let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
         use vk::PipelineStageFlags as S;
@@ -769,14 +794,7 @@ impl Engine {
         self.dispatch_in(gpu, cmd, classify, view.set, &push, tiles);
         barrier(gpu, cmd, COMPUTE, COMPUTE);
         // A 1x1 grid is one workgroup of one invocation.
-        self.dispatch(
-            gpu,
-            cmd,
-            self.pipelines.finish_tiles,
-            view.set,
-            &push,
-            (1, 1),
-        );
+        self.dispatch(gpu, cmd, finish_tiles, view.set, &push, (1, 1));
         barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
         self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
         // SAFETY: cmd is recording with the pipeline bound above; the tile buffer has
@@ -787,21 +805,21 @@ impl Engine {
 
     /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source
     /// (`bind_source`) into its `pixels` (4-byte formats), with the enhancement's dispatch shape.
-    pub fn record_copy(&self, gpu: &GpuDevice, cmd: vk::CommandBuffer, view: &ViewTarget) {
+    pub fn record_copy(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        view: &ViewTarget,
+    ) -> Result<(), GpuError> {
+        let pipeline = self.pipelines.get(pipelines::COPY_PIXELS)?;
         let push = PushConstants::new(
             &Params::default(),
             view.camera_size,
             view.region,
             &CameraMapping::IDENTITY,
         );
-        self.dispatch(
-            gpu,
-            cmd,
-            self.pipelines.copy_pixels,
-            view.set,
-            &push,
-            view.region,
-        );
+        self.dispatch(gpu, cmd, pipeline, view.set, &push, view.region);
+        Ok(())
     }
 
     /// Records the benchmark's second floor: the same copy with the enhancement's memory access
@@ -816,6 +834,7 @@ impl Engine {
         if !view.copies_wide() {
             return None;
         }
+        let pipeline = self.pipelines.get(pipelines::COPY_ROWS).ok()?;
         let push = PushConstants::new(
             &Params::default(),
             view.camera_size,
@@ -823,8 +842,60 @@ impl Engine {
             &CameraMapping::IDENTITY,
         );
         let grid = (view.region.0.div_ceil(TILE), view.region.1);
-        self.dispatch(gpu, cmd, self.pipelines.copy_rows, view.set, &push, grid);
+        self.dispatch(gpu, cmd, pipeline, view.set, &push, grid);
         Some(())
+    }
+
+    /// The shaders a frame's work needs: the background preparation for `params` and the
+    /// enhancement of views of these pixel formats and widths (None for Mode off).
+    pub fn shaders_for(
+        params: &Params,
+        views: impl IntoIterator<Item = (PixelFormat, u32)>,
+    ) -> Result<Vec<ShaderId>, GpuError> {
+        if params.mode == ViewMode::Off {
+            return Ok(Vec::new());
+        }
+        let half = params.blur_taps().len() as u32 / 2;
+        let mut ids = vec![
+            pipelines::DECODE_CAMERA,
+            pipelines::decode_blur(half)?,
+            pipelines::FINISH_TILES,
+        ];
+        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
+        for (format, width) in views {
+            let code = format.shader_code();
+            let wide = rows_aligned(width, format);
+            let codes = (params.method.shader_code(), params.mode.shader_code(), code);
+            for id in [
+                pipelines::classify(code, wide)?,
+                pipelines::enhance(codes, wide, extras)?,
+            ] {
+                if !ids.contains(&id) {
+                    ids.push(id);
+                }
+            }
+        }
+        Ok(ids)
+    }
+
+    /// Whether the shaders are built (requesting those that are not); an error if one failed.
+    pub fn ready(&self, ids: &[ShaderId]) -> Result<bool, GpuError> {
+        self.pipelines.ready(ids)
+    }
+
+    /// Queues shaders to build ahead of earlier requests (BuildMode::Background).
+    pub fn request(&self, ids: &[ShaderId]) {
+        self.pipelines.request(ids)
+    }
+
+    /// Waits until the shaders are built (at most `timeout`).
+    pub fn wait_for(&self, ids: &[ShaderId], timeout: std::time::Duration) -> Result<(), GpuError> {
+        self.pipelines.wait_for(ids, timeout)
+    }
+
+    /// What building the pipelines took so far.
+    pub fn build_report(&self) -> Option<BuildReport> {
+        self.pipelines.report()
     }
 
     pub fn destroy(&mut self, gpu: &GpuDevice) {

@@ -18,6 +18,8 @@ pub enum GpuError {
     Allocation(gpu_allocator::AllocationError),
     /// The request is outside what the engine supports (size, format, parameters).
     Unsupported(String),
+    /// A pipeline the work needs is still being built on the engine's own thread.
+    Pending,
 }
 
 impl fmt::Display for GpuError {
@@ -34,6 +36,7 @@ impl fmt::Display for GpuError {
             GpuError::Vulkan { call, result } => write!(f, "{call} failed: {result}"),
             GpuError::Allocation(e) => write!(f, "GPU memory allocation failed: {e}"),
             GpuError::Unsupported(e) => write!(f, "{e}"),
+            GpuError::Pending => write!(f, "the shader pipelines are still being built"),
         }
     }
 }

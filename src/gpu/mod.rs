@@ -13,8 +13,10 @@ pub mod error;
 pub mod format;
 pub mod image_copy;
 pub mod offline;
+pub mod pipeline_cache;
 pub mod pipelines;
 pub mod shaders;
+pub mod warm_up;
 
 pub use device::{DeviceOptions, GpuDevice};
 pub use engine::{BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};

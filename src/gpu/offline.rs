@@ -6,6 +6,7 @@ use super::device::{DeviceOptions, GpuDevice};
 use super::engine::{barrier, BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
 use super::error::GpuError;
 use super::format::PixelFormat;
+use super::pipelines::BuildMode;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::image::RgbaImage;
@@ -49,7 +50,7 @@ impl OfflineEngine {
 
     pub fn with_options(options: &DeviceOptions) -> Result<OfflineEngine, GpuError> {
         let gpu = GpuDevice::create(options)?;
-        let engine = Engine::new(&gpu, 4)?;
+        let engine = Engine::new(&gpu, 4, BuildMode::Inline)?;
         let commands = RefCell::new(Commands::new(&gpu)?);
         Ok(OfflineEngine {
             engine,

@@ -1,13 +1,24 @@
 //! The compute pipelines built from the embedded SPIR-V, with the one descriptor-set layout and
 //! push-constant block they share (see shaders/common.wgsl).
+//!
+//! A pipeline costs a shader compile in the driver (on lavapipe, LLVM: tenths of a second
+//! each), so none is built inside a call an app makes to the layer: in [`BuildMode::Background`]
+//! a thread of the engine's own builds what is requested, in order, through the device's
+//! [`PipelineCache`], and a pipeline not built yet is [`GpuError::Pending`]. The offline tools
+//! build on first use ([`BuildMode::Inline`]).
 
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
+use super::pipeline_cache::{self, CacheKey, Origin, PipelineCache};
 use super::shaders::{self, ShaderModule};
+use super::warm_up::WarmUp;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
-use std::sync::Mutex;
+use std::collections::VecDeque;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 /// Bindings 0..=4 of shaders/common.wgsl, all storage buffers.
 pub const BINDING_COUNT: u32 = 5;
@@ -83,52 +94,218 @@ impl PushConstants {
     }
 }
 
+/// Where pipelines are built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildMode {
+    /// On the thread that first needs one (the offline tools).
+    Inline,
+    /// On a thread of the engine's own, in the order requested (the layer).
+    Background,
+}
+
+/// One shader of `shaders::all()`, by its index there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ShaderId(usize);
+
+/// Indices into `shaders::all()` (its order: the fixed shaders, DECODE_BLUR, ENHANCE_VARIANTS,
+/// CLASSIFY_VARIANTS).
+pub const DECODE_CAMERA: ShaderId = ShaderId(0);
+pub const FINISH_TILES: ShaderId = ShaderId(1);
+pub const COPY_PIXELS: ShaderId = ShaderId(2);
+pub const COPY_ROWS: ShaderId = ShaderId(3);
+const FIXED: usize = 4;
+
+fn unsupported() -> GpuError {
+    GpuError::Unsupported("no shader for this method, mode and format".into())
+}
+
+/// Whether a shader works on the camera frame (the background's descriptor set) rather than
+/// on a view.
+pub fn reads_camera(ShaderId(k): ShaderId) -> bool {
+    k == DECODE_CAMERA.0 || (FIXED..FIXED + shaders::DECODE_BLUR.len()).contains(&k)
+}
+
+/// The background pass for a blur half-width (0..=7).
+pub fn decode_blur(half: u32) -> Result<ShaderId, GpuError> {
+    let k = half as usize;
+    (k < shaders::DECODE_BLUR.len())
+        .then_some(ShaderId(FIXED + k))
+        .ok_or_else(unsupported)
+}
+
+/// The `enhance` shader for a method, view mode and pixel format (shader codes); `wide` for
+/// regions whose rows are 16-byte aligned; `extras` where the achromatic boost or the
+/// luminance cap is on.
+pub fn enhance(
+    (method, mode, format): (u32, u32, u32),
+    wide: bool,
+    extras: bool,
+) -> Result<ShaderId, GpuError> {
+    let background = mode == ViewMode::Background.shader_code();
+    let (method, extras) = if background {
+        (0, false)
+    } else {
+        (method, extras)
+    };
+    let k = shaders::ENHANCE_VARIANTS
+        .iter()
+        .position(|&(m, v, f, w, e, _)| (m, v, f, w, e) == (method, mode, format, wide, extras))
+        .ok_or_else(unsupported)?;
+    Ok(ShaderId(FIXED + shaders::DECODE_BLUR.len() + k))
+}
+
+/// The `classify` shader for a pixel format (shader code) and row alignment.
+pub fn classify(format: u32, wide: bool) -> Result<ShaderId, GpuError> {
+    let k = shaders::CLASSIFY_VARIANTS
+        .iter()
+        .position(|&(f, w, _)| f == format && w == wide)
+        .ok_or_else(unsupported)?;
+    let offset = FIXED + shaders::DECODE_BLUR.len() + shaders::ENHANCE_VARIANTS.len();
+    Ok(ShaderId(offset + k))
+}
+
+#[derive(Clone, Debug)]
+enum Slot {
+    Missing,
+    Queued,
+    /// Taken by the building thread.
+    Building,
+    Built(vk::Pipeline),
+    Failed(String),
+}
+
+/// What the builds so far took, for the layer's start-up log line.
+#[derive(Clone, Debug)]
+pub struct BuildReport {
+    /// Pipelines built, and the time spent building them.
+    pub built: u32,
+    pub build_time: Duration,
+    /// Each build: the shader's name and its time (the warm-up's dispatch included).
+    pub builds: Vec<(&'static str, Duration)>,
+    /// What the pipeline cache started from, and its size in bytes.
+    pub cache: Origin,
+    pub cache_bytes: usize,
+    /// The last write of the cache: bytes written, or why it failed.
+    pub saved: Option<Result<usize, String>>,
+}
+
+struct BuildState {
+    slots: Vec<Slot>,
+    queue: VecDeque<usize>,
+    stop: bool,
+    /// Built since the cache was last saved.
+    unsaved: bool,
+    report: BuildReport,
+}
+
+/// What the building thread shares with the engine.
+struct Shared {
+    device: ash::Device,
+    layout: vk::PipelineLayout,
+    cache: vk::PipelineCache,
+    cache_key: CacheKey,
+    /// The driver compiles at first dispatch: warm each shader up on a device of our own.
+    warm_up: bool,
+    modules: Vec<&'static ShaderModule>,
+    state: Mutex<BuildState>,
+    /// Signalled when a request is queued (to the builder) and when a build ends (to waiters).
+    changed: Condvar,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, BuildState> {
+        // Plain data: a panic while holding it leaves a usable state.
+        self.state.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn build(&self, k: usize, warm_up: Option<&mut WarmUp>) -> Slot {
+        let t = Instant::now();
+        if let Some(w) = warm_up {
+            // A failed warm-up only costs the compile at first dispatch later.
+            let _ = w.run(ShaderId(k));
+        }
+        let slot = match compute_pipeline(self, self.modules[k]) {
+            Ok(p) => Slot::Built(p),
+            Err(e) => Slot::Failed(e.to_string()),
+        };
+        let mut st = self.lock();
+        st.report.built += 1;
+        st.report.build_time += t.elapsed();
+        st.report.builds.push((self.modules[k].name, t.elapsed()));
+        st.unsaved = true;
+        slot
+    }
+}
+
 pub struct Pipelines {
     pub set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
-    pub finish_tiles: vk::Pipeline,
-    pub copy_pixels: vk::Pipeline,
-    pub copy_rows: vk::Pipeline,
-    pub decode_camera: vk::Pipeline,
-    /// The `enhance` and `classify` variants (shaders::ENHANCE_VARIANTS, then
-    /// shaders::CLASSIFY_VARIANTS, then shaders::DECODE_BLUR), built on first use: each costs
-    /// a compile in the driver and a session uses a few.
-    variants: Mutex<Vec<vk::Pipeline>>,
-}
-
-fn no_variants() -> Mutex<Vec<vk::Pipeline>> {
-    let n = shaders::ENHANCE_VARIANTS.len()
-        + shaders::CLASSIFY_VARIANTS.len()
-        + shaders::DECODE_BLUR.len();
-    Mutex::new(vec![vk::Pipeline::null(); n])
+    mode: BuildMode,
+    shared: Option<Arc<Shared>>,
+    cache: Option<PipelineCache>,
+    builder: Option<JoinHandle<()>>,
 }
 
 impl Pipelines {
-    /// No objects yet (null handles, which vkDestroy* ignores).
-    fn empty() -> Pipelines {
-        Pipelines {
+    pub fn new(gpu: &GpuDevice, mode: BuildMode) -> Result<Pipelines, GpuError> {
+        let mut p = Pipelines {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
-            finish_tiles: vk::Pipeline::null(),
-            copy_pixels: vk::Pipeline::null(),
-            copy_rows: vk::Pipeline::null(),
-            decode_camera: vk::Pipeline::null(),
-            variants: no_variants(),
-        }
-    }
-
-    pub fn new(gpu: &GpuDevice) -> Result<Pipelines, GpuError> {
-        let mut p = Pipelines::empty();
+            mode,
+            shared: None,
+            cache: None,
+            builder: None,
+        };
         // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
-        if let Err(e) = p.build(gpu) {
+        if let Err(e) = p.create(gpu) {
             p.destroy(gpu);
             return Err(e);
         }
         Ok(p)
     }
 
-    fn build(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
-        crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
+    fn create(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
+        self.create_layouts(gpu)?;
+        let cache = PipelineCache::new(gpu)?;
+        let modules = shaders::all();
+        let report = BuildReport {
+            built: 0,
+            build_time: Duration::ZERO,
+            builds: Vec::new(),
+            cache: cache.origin.clone(),
+            cache_bytes: cache.loaded_bytes,
+            saved: None,
+        };
+        let shared = Arc::new(Shared {
+            device: gpu.device.clone(),
+            layout: self.layout,
+            cache: cache.raw,
+            cache_key: cache.key,
+            warm_up: self.mode == BuildMode::Background && WarmUp::needed(gpu),
+            state: Mutex::new(BuildState {
+                slots: vec![Slot::Missing; modules.len()],
+                queue: VecDeque::new(),
+                stop: false,
+                unsaved: false,
+                report,
+            }),
+            modules,
+            changed: Condvar::new(),
+        });
+        self.cache = Some(cache);
+        self.shared = Some(shared.clone());
+        if self.mode == BuildMode::Background {
+            let spawned = std::thread::Builder::new()
+                .name("contrastxr-pipelines".into())
+                .spawn(move || build_requests(&shared));
+            self.builder = Some(spawned.map_err(|e| {
+                GpuError::Unsupported(format!("cannot start the pipeline thread: {e}"))
+            })?);
+        }
+        Ok(())
+    }
+
+    fn create_layouts(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
         let bindings: Vec<_> = (0..=IMAGE_BINDING)
             .map(|b| {
                 let ty = if b == IMAGE_BINDING {
@@ -157,135 +334,230 @@ impl Pipelines {
         // SAFETY: valid create info on a valid device.
         self.layout = unsafe { gpu.device.create_pipeline_layout(&info, None) }
             .vk("vkCreatePipelineLayout")?;
-        self.finish_tiles = self.compute_pipeline(gpu, &shaders::FINISH_TILES)?;
-        self.decode_camera = self.compute_pipeline(gpu, &shaders::DECODE_CAMERA)?;
-        self.copy_pixels = self.compute_pipeline(gpu, &shaders::COPY_PIXELS)?;
-        self.copy_rows = self.compute_pipeline(gpu, &shaders::COPY_ROWS)?;
         Ok(())
     }
 
-    /// The `enhance` pipeline for a method, view mode and pixel format (shader codes); `wide`
-    /// for regions whose rows are 16-byte aligned (see `rows_aligned`); `extras` where the
-    /// achromatic boost or the luminance cap is on.
-    pub fn enhance(
-        &self,
-        gpu: &GpuDevice,
-        (method, mode, format): (u32, u32, u32),
-        wide: bool,
-        extras: bool,
-    ) -> Result<vk::Pipeline, GpuError> {
-        let background = mode == ViewMode::Background.shader_code();
-        let (method, extras) = if background {
-            (0, false)
-        } else {
-            (method, extras)
-        };
-        let k = shaders::ENHANCE_VARIANTS
-            .iter()
-            .position(|&(m, v, f, w, e, _)| {
-                (m, v, f, w, e) == (method, mode, format, wide, extras)
-            });
-        self.variant(gpu, k, |k| &shaders::ENHANCE_VARIANTS[k].5)
+    fn shared(&self) -> Result<&Arc<Shared>, GpuError> {
+        self.shared
+            .as_ref()
+            .ok_or_else(|| GpuError::Unsupported("the pipelines were destroyed".into()))
     }
 
-    /// The `classify` pipeline for a pixel format (shader code) and row alignment.
-    pub fn classify(
-        &self,
-        gpu: &GpuDevice,
-        format: u32,
-        wide: bool,
-    ) -> Result<vk::Pipeline, GpuError> {
-        let k = shaders::CLASSIFY_VARIANTS
-            .iter()
-            .position(|&(f, w, _)| f == format && w == wide);
-        let offset = shaders::ENHANCE_VARIANTS.len();
-        self.variant(gpu, k.map(|k| k + offset), |k| {
-            &shaders::CLASSIFY_VARIANTS[k - offset].2
-        })
-    }
-
-    /// The background pass for a blur half-width (0..=7).
-    pub fn decode_blur(&self, gpu: &GpuDevice, half: u32) -> Result<vk::Pipeline, GpuError> {
-        let offset = shaders::ENHANCE_VARIANTS.len() + shaders::CLASSIFY_VARIANTS.len();
-        let k = (half as usize) < shaders::DECODE_BLUR.len();
-        self.variant(gpu, k.then_some(offset + half as usize), |k| {
-            &shaders::DECODE_BLUR[k - offset]
-        })
-    }
-
-    fn variant(
-        &self,
-        gpu: &GpuDevice,
-        k: Option<usize>,
-        module: impl Fn(usize) -> &'static ShaderModule,
-    ) -> Result<vk::Pipeline, GpuError> {
-        let k = k.ok_or_else(|| {
-            GpuError::Unsupported("no shader for this method, mode and format".into())
-        })?;
-        let mut built = self.variants.lock().map_err(|_| {
-            GpuError::Unsupported("the pipeline cache was poisoned by an earlier panic".into())
-        })?;
-        if built[k] == vk::Pipeline::null() {
-            built[k] = self.compute_pipeline(gpu, module(k))?;
+    /// Queues the shaders not built yet ahead of earlier requests, in the given order (the
+    /// first is built first). Nothing in [`BuildMode::Inline`].
+    pub fn request(&self, ids: &[ShaderId]) {
+        let Ok(shared) = self.shared() else { return };
+        if self.mode == BuildMode::Inline {
+            return;
         }
-        Ok(built[k])
+        let mut st = shared.lock();
+        for &ShaderId(k) in ids.iter().rev() {
+            match st.slots[k] {
+                Slot::Missing => st.slots[k] = Slot::Queued,
+                Slot::Queued => st.queue.retain(|&q| q != k),
+                _ => continue,
+            }
+            st.queue.push_front(k);
+        }
+        shared.changed.notify_all();
     }
 
-    fn compute_pipeline(
-        &self,
-        gpu: &GpuDevice,
-        shader: &ShaderModule,
-    ) -> Result<vk::Pipeline, GpuError> {
-        let words = shader.words();
-        let info = vk::ShaderModuleCreateInfo::default().code(&words);
-        // SAFETY: words is SPIR-V produced and validated by naga at build time.
-        let module =
-            unsafe { gpu.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
-        let entry = std::ffi::CString::new(shader.entry).expect("entry names have no NUL");
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(&entry);
-        let info = [vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(self.layout)];
-        // SAFETY: module and layout are valid; the module is destroyed after creation.
-        let result = unsafe {
-            gpu.device
-                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+    /// Whether every one of `ids` is built; requests the missing ones. An error if one failed.
+    pub fn ready(&self, ids: &[ShaderId]) -> Result<bool, GpuError> {
+        if self.mode == BuildMode::Inline {
+            return ids
+                .iter()
+                .try_for_each(|&id| self.get(id).map(drop))
+                .map(|_| true);
+        }
+        let missing = {
+            let st = self.shared()?.lock();
+            let mut missing = Vec::new();
+            for &id in ids {
+                match &st.slots[id.0] {
+                    Slot::Built(_) => {}
+                    Slot::Failed(e) => return Err(GpuError::Unsupported(e.clone())),
+                    _ => missing.push(id),
+                }
+            }
+            missing
         };
-        // SAFETY: a shader module may be destroyed once pipelines using it are created.
-        unsafe { gpu.device.destroy_shader_module(module, None) };
-        result
-            .map(|p| p[0])
-            .map_err(|(_, result)| GpuError::Vulkan {
-                call: "vkCreateComputePipelines",
-                result,
-            })
+        self.request(&missing);
+        Ok(missing.is_empty())
     }
 
+    /// Waits (at most `timeout`) until every one of `ids` is built; requests the missing ones.
+    pub fn wait_for(&self, ids: &[ShaderId], timeout: Duration) -> Result<(), GpuError> {
+        let deadline = Instant::now() + timeout;
+        while !self.ready(ids)? {
+            let shared = self.shared()?;
+            let st = shared.lock();
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(GpuError::Unsupported(
+                    "the shader pipelines took too long to build".into(),
+                ));
+            }
+            // Woken when a build ends; ready() then looks again.
+            let _ = shared
+                .changed
+                .wait_timeout(st, left.min(Duration::from_millis(50)));
+        }
+        Ok(())
+    }
+
+    /// A pipeline: built, or built now in [`BuildMode::Inline`], else [`GpuError::Pending`].
+    pub fn get(&self, ShaderId(k): ShaderId) -> Result<vk::Pipeline, GpuError> {
+        let shared = self.shared()?;
+        let mut st = shared.lock();
+        match &st.slots[k] {
+            Slot::Built(p) => return Ok(*p),
+            Slot::Failed(e) => return Err(GpuError::Unsupported(e.clone())),
+            _ if self.mode == BuildMode::Background => return Err(GpuError::Pending),
+            _ => {}
+        }
+        drop(st);
+        let slot = shared.build(k, None);
+        st = shared.lock();
+        st.slots[k] = slot;
+        match &st.slots[k] {
+            Slot::Built(p) => Ok(*p),
+            Slot::Failed(e) => Err(GpuError::Unsupported(e.clone())),
+            _ => unreachable!("just built"),
+        }
+    }
+
+    /// What the builds took so far.
+    pub fn report(&self) -> Option<BuildReport> {
+        Some(self.shared.as_ref()?.lock().report.clone())
+    }
+
+    /// Stops the building thread (after the pipeline it is building), saves the cache and
+    /// destroys every object.
     pub fn destroy(&mut self, gpu: &GpuDevice) {
-        // SAFETY: the caller guarantees the GPU no longer uses these objects.
+        if let Some(shared) = &self.shared {
+            shared.lock().stop = true;
+            shared.changed.notify_all();
+        }
+        if let Some(builder) = self.builder.take() {
+            let _ = builder.join();
+        }
+        let slots = self.shared.take().map(|s| {
+            save_if_changed(&s);
+            std::mem::take(&mut s.lock().slots)
+        });
+        // SAFETY: the caller guarantees the GPU no longer uses these objects; the building
+        // thread has ended.
         unsafe {
-            let variants = match self.variants.get_mut() {
-                Ok(v) => std::mem::take(v),
-                Err(poisoned) => std::mem::take(poisoned.into_inner()),
-            };
-            for p in [
-                self.finish_tiles,
-                self.copy_pixels,
-                self.copy_rows,
-                self.decode_camera,
-            ]
-            .into_iter()
-            .chain(variants)
-            {
-                gpu.device.destroy_pipeline(p, None);
+            for slot in slots.into_iter().flatten() {
+                if let Slot::Built(p) = slot {
+                    gpu.device.destroy_pipeline(p, None);
+                }
             }
             gpu.device.destroy_pipeline_layout(self.layout, None);
             gpu.device
                 .destroy_descriptor_set_layout(self.set_layout, None);
         }
-        *self = Pipelines::empty();
+        if let Some(mut cache) = self.cache.take() {
+            cache.destroy(&gpu.device);
+        }
+        self.layout = vk::PipelineLayout::null();
+        self.set_layout = vk::DescriptorSetLayout::null();
+    }
+}
+
+/// Writes the cache when pipelines were built since the last write (without holding the
+/// state's lock: the render thread may be asking what is ready).
+fn save_if_changed(shared: &Shared) {
+    if !std::mem::take(&mut shared.lock().unsaved) {
+        return;
+    }
+    let saved = pipeline_cache::save(&shared.device, shared.cache, &shared.cache_key);
+    shared.lock().report.saved = Some(saved);
+}
+
+/// The building thread: builds queued shaders until stopped; saves the cache whenever the
+/// queue runs empty after builds.
+fn build_requests(shared: &Shared) {
+    // Made at the first build; None when not needed or when it cannot be made.
+    let mut warm_up: Option<Option<WarmUp>> = (!shared.warm_up).then_some(None);
+    loop {
+        let next = {
+            let mut st = shared.lock();
+            loop {
+                if st.stop {
+                    return;
+                }
+                if let Some(k) = st.queue.pop_front() {
+                    st.slots[k] = Slot::Building;
+                    break Some(k);
+                }
+                if st.unsaved {
+                    break None;
+                }
+                st = shared.changed.wait(st).unwrap_or_else(|p| p.into_inner());
+            }
+        };
+        let Some(k) = next else {
+            save_if_changed(shared);
+            continue;
+        };
+        let warm = warm_up.get_or_insert_with(|| WarmUp::new(shared.cache_key).ok());
+        let slot = shared.build(k, warm.as_mut());
+        shared.lock().slots[k] = slot;
+        shared.changed.notify_all();
+    }
+}
+
+fn compute_pipeline(shared: &Shared, shader: &ShaderModule) -> Result<vk::Pipeline, GpuError> {
+    crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
+    let words = shader.words();
+    let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    let device = &shared.device;
+    // SAFETY: words is SPIR-V produced and validated by naga at build time.
+    let module = unsafe { device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
+    let entry = std::ffi::CString::new(shader.entry).expect("entry names have no NUL");
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module)
+        .name(&entry);
+    let info = [vk::ComputePipelineCreateInfo::default()
+        .stage(stage)
+        .layout(shared.layout)];
+    // SAFETY: module, layout and cache are valid (the cache is internally synchronised).
+    let result = unsafe { device.create_compute_pipelines(shared.cache, &info, None) };
+    // SAFETY: a shader module may be destroyed once pipelines using it are created.
+    unsafe { device.destroy_shader_module(module, None) };
+    result
+        .map(|p| p[0])
+        .map_err(|(_, result)| GpuError::Vulkan {
+            call: "vkCreateComputePipelines",
+            result,
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ids name the shaders they stand for in `shaders::all()`.
+    #[test]
+    fn ids_index_the_shader_list() {
+        let all = shaders::all();
+        let name = |id: ShaderId| all[id.0].name;
+        assert_eq!(name(DECODE_CAMERA), "decode_camera");
+        assert_eq!(name(FINISH_TILES), "finish_tiles");
+        assert_eq!(name(COPY_PIXELS), "copy_pixels");
+        assert_eq!(name(COPY_ROWS), "copy_rows");
+        assert_eq!(name(decode_blur(3).unwrap()), "decode_blur_3");
+        assert!(decode_blur(8).is_err());
+        for &(m, v, f, w, e, ref module) in shaders::ENHANCE_VARIANTS {
+            assert_eq!(name(enhance((m, v, f), w, e).unwrap()), module.name);
+        }
+        for &(f, w, ref module) in shaders::CLASSIFY_VARIANTS {
+            assert_eq!(name(classify(f, w).unwrap()), module.name);
+        }
+        assert!(reads_camera(decode_blur(7).unwrap()) && reads_camera(DECODE_CAMERA));
+        assert!(!reads_camera(FINISH_TILES));
     }
 }

@@ -7,6 +7,7 @@ use crate::algorithm::params::Params;
 use crate::gpu::commands::Commands;
 use crate::gpu::engine::barrier;
 use crate::gpu::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
+use crate::gpu::pipelines::{BuildMode, BuildReport, ShaderId};
 use crate::gpu::{
     BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
 };
@@ -14,6 +15,10 @@ use crate::image::RgbaImage;
 use ash::vk;
 use std::collections::HashMap;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// How long a session that waits for its pipelines (`pipelines = "wait"`) waits at most.
+const PIPELINE_WAIT: Duration = Duration::from_secs(120);
 
 /// Most view regions a session keeps buffers for (2 eyes x a few swapchains and quads).
 const MAX_VIEWS: u32 = 16;
@@ -72,13 +77,19 @@ pub struct Processor {
     frame: u64,
     /// The in-headset indicator drawn after the enhancement (its timer is set by the session).
     pub indicator: super::indicator::Indicator,
+    /// When the session started (xrCreateSession).
+    pub started: Instant,
     // Last: dropped after everything above was destroyed in Drop.
     pub gpu: GpuDevice,
 }
 
 impl Processor {
-    pub fn new(gpu: GpuDevice) -> Result<Processor, GpuError> {
-        let mut engine = Engine::new(&gpu, MAX_VIEWS)?;
+    /// Sets up the engine on the session's device; its pipelines start building at once on
+    /// the engine's own thread, `first` first.
+    pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<Processor, GpuError> {
+        let started = Instant::now();
+        let mut engine = Engine::new(&gpu, MAX_VIEWS, BuildMode::Background)?;
+        engine.request(first);
         let commands = match Commands::new(&gpu) {
             Ok(c) => c,
             Err(e) => {
@@ -95,8 +106,35 @@ impl Processor {
             views: HashMap::new(),
             frame: 0,
             indicator: Default::default(),
+            started,
             gpu,
         })
+    }
+
+    /// Queues shaders to build ahead of earlier requests (a swapchain's format became known).
+    pub fn request(&self, ids: &[ShaderId]) {
+        self.engine.request(ids);
+    }
+
+    pub fn build_report(&self) -> Option<BuildReport> {
+        self.engine.build_report()
+    }
+
+    /// Whether the pipelines these items need are built: if not, they are requested and,
+    /// with `wait`, waited for; without it the frame is [`GpuError::Pending`].
+    fn pipelines_ready(
+        &self,
+        items: &[WorkItem],
+        params: &Params,
+        wait: bool,
+    ) -> Result<(), GpuError> {
+        let views = items.iter().map(|i| (i.format, i.key.extent.0));
+        let ids = Engine::shaders_for(params, views)?;
+        match self.engine.ready(&ids)? {
+            true => Ok(()),
+            false if wait => self.engine.wait_for(&ids, PIPELINE_WAIT),
+            false => Err(GpuError::Pending),
+        }
     }
 
     /// Waits for the previous submission (normally long done) so its buffers can be reused.
@@ -194,15 +232,17 @@ impl Processor {
     }
 
     /// Enhances every item's region in place. With `capture`, also reads back each region
-    /// before and after (waiting for the GPU).
+    /// before and after (waiting for the GPU). [`GpuError::Pending`], with nothing recorded,
+    /// while a pipeline it needs is still being built (unless `wait_for_pipelines`).
     pub fn process(
         &mut self,
         items: &[WorkItem],
         background: &Arc<RgbaImage>,
         sequence: u64,
         params: &Params,
-        capture: bool,
+        (capture, wait_for_pipelines): (bool, bool),
     ) -> Result<Vec<CapturedView>, GpuError> {
+        self.pipelines_ready(items, params, wait_for_pipelines)?;
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
         self.frame += 1;
         self.wait_idle()?;

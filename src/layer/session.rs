@@ -14,7 +14,8 @@ use super::{device, log, swapchain};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::camera::{self, Background, CaptureConfig};
-use crate::gpu::GpuDevice;
+use crate::gpu::pipeline_cache::Origin;
+use crate::gpu::{Engine, GpuDevice, GpuError};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::collections::HashMap;
@@ -49,7 +50,7 @@ pub unsafe extern "system" fn create_session(
         let settings = device::settings_on(instance, &inst, system);
         let (processor, background) = match binding {
             // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
-            Some(b) => set_up(unsafe { &*b }, &settings.background, &settings.camera),
+            Some(b) => set_up(unsafe { &*b }, &settings),
             None => {
                 log::info("session is not a Vulkan session: passing its frames through untouched");
                 (None, None)
@@ -96,8 +97,7 @@ fn open_background_logged(spec: &str, camera: &CaptureConfig) -> Option<Backgrou
 
 fn set_up(
     b: &xr::GraphicsBindingVulkanKHR,
-    background_spec: &str,
-    camera: &CaptureConfig,
+    settings: &Settings,
 ) -> (Option<Processor>, Option<Background>) {
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
     // alive until after xrDestroySession, where the processor is dropped first.
@@ -110,7 +110,9 @@ fn set_up(
             b.queue_index,
         )
     };
-    let processor = match gpu.and_then(Processor::new) {
+    // The background preparation's shaders first: the views' ones need a swapchain's format.
+    let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
+    let processor = match gpu.and_then(|gpu| Processor::new(gpu, &first)) {
         Ok(p) => p,
         Err(e) => {
             log::info(&format!(
@@ -120,7 +122,7 @@ fn set_up(
         }
     };
     // Opened after the GPU set-up: a camera stays closed for a session that cannot use it.
-    let background = open_background_logged(background_spec, camera);
+    let background = open_background_logged(&settings.background, &settings.camera);
     if let Some(bg) = &background {
         log::info(&format!(
             "session on Vulkan device {:?}, background {}: enhancing",
@@ -242,7 +244,12 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
                 return xr::Result::ERROR_HANDLE_INVALID;
             };
             let next = lock(&s).next;
+            let t = std::time::Instant::now();
             forget(session);
+            log::debug(&format!(
+                "session state released in {:.3} s",
+                t.elapsed().as_secs_f64()
+            ));
             // SAFETY: forwarding the app's call after releasing everything the layer made.
             unsafe { (next.destroy_session)(session) }
         },
@@ -505,8 +512,12 @@ fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::Environ
     let processor = s.processor.as_mut().expect("checked above");
     let now = std::time::Instant::now();
     processor.indicator.timer.update(&s.settings, now);
-    match processor.process(&items, &frame.image, sequence, &params, capture) {
+    let wait = s.settings.wait_for_pipelines;
+    match processor.process(&items, &frame.image, sequence, &params, (capture, wait)) {
         Ok(views) => {
+            if s.processed == 0 {
+                log_began(processor);
+            }
             if capture {
                 write_capture(s, &views, &frame.image);
             }
@@ -516,6 +527,10 @@ fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::Environ
                 &format!("processing frames ({} views per frame)", items.len()),
             );
         }
+        Err(GpuError::Pending) => log::once(
+            "pipelines-pending",
+            "building the shader pipelines on the layer's own thread: frames go through untouched until they are ready",
+        ),
         Err(e) => {
             log::info(&format!(
                 "GPU work failed ({e}): passing this session's frames through from now on"
@@ -523,6 +538,34 @@ fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::Environ
             s.processor = None;
         }
     }
+}
+
+/// The session's start-up in one line: when enhancement began and what the pipelines took.
+fn log_began(processor: &Processor) {
+    let after = processor.started.elapsed().as_secs_f64();
+    let Some(r) = processor.build_report() else {
+        return;
+    };
+    let cache = match &r.cache {
+        Origin::Process => format!(
+            "{} bytes from this process's earlier session",
+            r.cache_bytes
+        ),
+        Origin::File(path) => format!("{} bytes from {}", r.cache_bytes, path.display()),
+        Origin::Empty(None) => "empty".into(),
+        Origin::Empty(Some(why)) => format!("empty ({why})"),
+    };
+    log::info(&format!(
+        "enhancement began {after:.3} s after the session started ({} pipelines built in {:.3} s on the layer's thread; pipeline cache: {cache})",
+        r.built,
+        r.build_time.as_secs_f64()
+    ));
+    let each: Vec<String> = r
+        .builds
+        .iter()
+        .map(|(name, t)| format!("{name} {:.0} ms", t.as_secs_f64() * 1e3))
+        .collect();
+    log::debug(&format!("pipeline builds: {}", each.join(", ")));
 }
 
 fn write_capture(

@@ -90,10 +90,25 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 state::registry()
                     .swapchains
                     .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
+                if let Some(format) = pixel.filter(|_| transfer_usage) {
+                    request_shaders(&s, format, app_info.width);
+                }
             }
             result
         },
     )
+}
+
+/// Starts building the shaders that views of this swapchain will need (on the processor's own
+/// thread), so they are likely ready by the first xrEndFrame. Views usually span the width.
+fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32) {
+    let s = lock(s);
+    let Some(p) = s.processor.as_ref() else {
+        return;
+    };
+    if let Ok(ids) = crate::gpu::Engine::shaders_for(&s.settings.params, [(format, width)]) {
+        p.request(&ids);
+    }
 }
 
 pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain) -> xr::Result {

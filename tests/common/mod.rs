@@ -387,6 +387,9 @@ impl Sandbox {
             .arg(&self.script)
             .args(["run", "--"])
             .args(cmd)
+            // Frames counted and captured from the first on: the first frame waits for the
+            // layer's pipelines (tests of the default, "background", set it themselves).
+            .env("CONTRASTXR_PIPELINES", "wait")
             .envs(env.iter().copied())
             .stdin(std::process::Stdio::null())
             .output()

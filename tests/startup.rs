@@ -1,0 +1,187 @@
+//! Start-up against the real Monado runtime in the sandbox (see tests/common/mod.rs for the
+//! skip/require rule): the layer builds its shader pipelines on a thread of its own, so the
+//! app's frames pass through untouched until they are ready and are enhanced from then on;
+//! the pipeline cache is kept per device under $XDG_CACHE_HOME/contrastxr, a damaged file is
+//! replaced, and the sessions of one process share it.
+//!
+//! No time is asserted here (the machine may be slow or loaded): `scripts/bench-xr` measures
+//! start-up. Each test has its own cache folder, so "empty cache" is really empty.
+
+mod common;
+
+use common::{layer_lines, sandbox, scratch_dir, SandboxRun, Validation, XR_CLIENT};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+struct Run {
+    run: SandboxRun,
+    report: Value,
+    lines: Vec<String>,
+}
+
+impl Run {
+    fn lines_with(&self, text: &str) -> Vec<&String> {
+        self.lines.iter().filter(|l| l.contains(text)).collect()
+    }
+
+    fn modified(&self) -> Vec<u64> {
+        let list = self.report["frames_modified"].as_array();
+        list.expect("frames_modified")
+            .iter()
+            .filter_map(Value::as_u64)
+            .collect()
+    }
+
+    #[track_caller]
+    fn assert_ok(&self) {
+        self.run.assert_success();
+        assert_eq!(self.report["ok"], true, "{}", self.run.describe());
+    }
+}
+
+/// The client through the layer (forced on, a colour background), both validation layers and
+/// the warm-up device's validation, with `cache` as XDG_CACHE_HOME.
+fn client(tag: &str, cache: &Path, pipelines: &str, args: &[&str]) -> Option<Run> {
+    let sandbox = sandbox()?;
+    let validation = Validation::new(tag);
+    let cache = cache.to_string_lossy().into_owned();
+    let mut env = vec![
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_PIPELINES", pipelines),
+        ("CONTRASTXR_VK_VALIDATION", "1"),
+        ("XDG_CACHE_HOME", cache.as_str()),
+    ];
+    env.extend(validation.env());
+    let mut cmd = vec![XR_CLIENT, "--validation", "--json", "--size", "64x48"];
+    cmd.extend(args);
+    let run = sandbox.run_for(&cmd, &env, 240);
+    validation.assert_clean();
+    let report = run.client_report();
+    let lines = layer_lines(&run);
+    let errors: Vec<_> = lines
+        .iter()
+        .filter(|l| l.contains("validation error"))
+        .collect();
+    assert!(errors.is_empty(), "warm-up device: {errors:#?}");
+    Some(Run { run, report, lines })
+}
+
+/// The pipeline cache files a run left.
+fn cache_files(cache: &Path) -> Vec<PathBuf> {
+    let dir = cache.join("contrastxr");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return Vec::new();
+    };
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            let name = p.file_name().unwrap_or_default().to_string_lossy();
+            name.starts_with("pipelines-") && name.ends_with(".bin")
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+/// A whole cache file: the magic, then the data's length as the header says.
+fn is_whole_cache_file(bytes: &[u8]) -> bool {
+    let len = bytes
+        .get(8..16)
+        .map(|b| u64::from_le_bytes(b.try_into().unwrap()));
+    bytes.starts_with(b"CXRPIPE1") && len == Some(bytes.len() as u64 - 24)
+}
+
+#[test]
+fn frames_pass_through_untouched_until_the_pipelines_are_built() {
+    let tag = "startup-empty-cache";
+    let cache = scratch_dir(tag);
+    let args = ["--frames", "200", "--check-untouched"];
+    let Some(r) = client(tag, &cache, "background", &args) else {
+        return;
+    };
+    r.assert_ok();
+    let all = r.run.describe();
+    assert_eq!(
+        r.lines_with("building the shader pipelines").len(),
+        1,
+        "{all}"
+    );
+    let began = r.lines_with("enhancement began");
+    assert_eq!(began.len(), 1, "{all}");
+    assert!(began[0].contains("pipeline cache: empty"), "{began:?}");
+    // Untouched frames first (an empty cache: the first builds take far longer than a
+    // frame), then every checked frame enhanced.
+    let modified = r.modified();
+    assert!(!modified.is_empty(), "no frame enhanced: {all}");
+    assert!(
+        modified[0] > 0,
+        "the first frame was enhanced: {modified:?}"
+    );
+    let contiguous = modified.windows(2).all(|w| w[1] == w[0] + 1);
+    assert!(
+        contiguous,
+        "a frame in between passed through: {modified:?}"
+    );
+    let checked = r.report["frames_checked"].as_u64().unwrap_or(0);
+    assert!(
+        modified.last().copied().unwrap_or(0) + 4 >= checked,
+        "{modified:?} of {checked} checked"
+    );
+    let files = cache_files(&cache);
+    assert_eq!(files.len(), 1, "{files:?}");
+    let bytes = std::fs::read(&files[0]).unwrap();
+    assert!(is_whole_cache_file(&bytes), "{}", files[0].display());
+}
+
+#[test]
+fn a_damaged_cache_file_is_ignored_and_replaced() {
+    let tag = "startup-damaged-cache";
+    let cache = scratch_dir(tag);
+    let args = ["--frames", "10", "--check-untouched"];
+    let Some(first) = client(tag, &cache, "wait", &args) else {
+        return;
+    };
+    first.assert_ok();
+    let files = cache_files(&cache);
+    assert_eq!(files.len(), 1, "{files:?}");
+    let mut damaged = std::fs::read(&files[0]).unwrap();
+    let last = damaged.len() - 1;
+    damaged[last] ^= 0x5a;
+    std::fs::write(&files[0], &damaged).unwrap();
+    let Some(r) = client(tag, &cache, "wait", &args) else {
+        return;
+    };
+    r.assert_ok();
+    let began = r.lines_with("enhancement began");
+    assert_eq!(began.len(), 1, "{}", r.run.describe());
+    assert!(
+        began[0].contains("ignored: damaged"),
+        "the damaged file was not named: {began:?}"
+    );
+    // The app's frames are enhanced all the same, and the file is whole again.
+    assert!(!r.modified().is_empty(), "{}", r.run.describe());
+    let bytes = std::fs::read(&files[0]).unwrap();
+    assert!(is_whole_cache_file(&bytes), "not replaced");
+    assert_ne!(bytes, damaged);
+}
+
+#[test]
+fn sessions_of_one_process_share_the_pipeline_cache() {
+    let tag = "startup-two-sessions";
+    let cache = scratch_dir(tag);
+    let args = ["--frames", "10", "--sessions", "2", "--check-untouched"];
+    let Some(r) = client(tag, &cache, "wait", &args) else {
+        return;
+    };
+    r.assert_ok();
+    let began = r.lines_with("enhancement began");
+    assert_eq!(began.len(), 2, "{}", r.run.describe());
+    assert!(began[0].contains("pipeline cache: empty"), "{began:?}");
+    assert!(
+        began[1].contains("from this process's earlier session"),
+        "{began:?}"
+    );
+}
