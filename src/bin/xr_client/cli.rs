@@ -22,7 +22,13 @@ usage: contrastxr-xr-client [options]
   --list-formats          print the formats the runtime offers and exit
   --json                  print the final report as one JSON line on stdout
   --timing                report the time spent in xrEndFrame and, after it, waiting for the
-                          queue to drain (a layer's GPU work), per frame (median, p95)
+                          queue to drain (a layer's GPU work), per frame (median, p95, after
+                          10 warm-up frames); each frame-loop call's time over every frame
+                          (xrWaitFrame, xrBeginFrame, xrAcquire/Wait/ReleaseSwapchainImage,
+                          xrEndFrame: median, p95, max; `calls`); when the first 30 frames'
+                          xrEndFrame returned, in s after xrCreateSession (`first_frames_s`);
+                          frames per second from xrCreateSession to the last frame; and the
+                          client's whole run time (`run_s`)
   --provoke-xr-validation-error, --provoke-vk-validation-error
                           make one invalid call on purpose (to test that validation is seen)
   --provoke-vk-sync-hazard

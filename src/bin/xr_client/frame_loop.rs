@@ -9,6 +9,7 @@ use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::gpu::Gpu;
 use crate::swapchain::PatternSwapchain;
+use crate::timing::{Calls, Startup};
 
 const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
 /// The null compositor paces at 20 Hz; allow a slow machine several times that, plus start-up.
@@ -25,6 +26,12 @@ pub struct Stats {
     /// With --timing: milliseconds inside xrEndFrame, and waiting for the queue after it.
     pub end_frame_ms: Vec<f64>,
     pub drain_ms: Vec<f64>,
+    /// With --timing: every frame-loop call's wall time (the swapchains' added after each
+    /// session).
+    pub calls: Calls,
+    /// When the first session was created and its first frames ended (kept with or without
+    /// --timing: a few numbers).
+    pub startup: Startup,
     /// Resident memory and descriptors every 50 submitted frames.
     pub memory: Vec<crate::report::Sample>,
     /// With --script: each op's XrResult, and whether the script ran to its end.
@@ -120,13 +127,21 @@ fn frame(
     options: &Options,
     stats: &mut Stats,
 ) -> Result<()> {
-    let layout = options.layout;
-    let state = frame_waiter.wait().ctx("xrWaitFrame")?;
-    frame_stream.begin().ctx("xrBeginFrame")?;
+    let calls = &mut stats.calls;
+    let state = calls
+        .time("xrWaitFrame", || frame_waiter.wait())
+        .ctx("xrWaitFrame")?;
+    calls
+        .time("xrBeginFrame", || frame_stream.begin())
+        .ctx("xrBeginFrame")?;
     stats.frames_ended += 1;
     if !state.should_render || options.script.is_some() {
-        return frame_stream
-            .end(state.predicted_display_time, scene.blend_mode, &[])
+        // Apart from xrEndFrame: with no layers, a layer has nothing to do in it.
+        let (time, mode) = (state.predicted_display_time, scene.blend_mode);
+        return calls
+            .time("xrEndFrame (no layers)", || {
+                frame_stream.end(time, mode, &[])
+            })
             .ctx("xrEndFrame (no layers)");
     }
     let (_, views) = scene
@@ -138,8 +153,52 @@ fn frame(
         // The next frame's image, before this frame's xrEndFrame (a render thread running ahead).
         scene.ahead = Some(scene.projection.acquire()?);
     }
+    let projection_views = projection_views(scene, &views, options.layout);
+    let projection = xr::CompositionLayerProjection::new()
+        .space(scene.space)
+        .views(&projection_views);
+    let quad = scene.quad.as_ref().map(|q| quad_layer(q, scene.space));
+    let mut layers: Vec<&xr::CompositionLayerBase<'_, xr::Vulkan>> = vec![&projection];
+    if let Some(quad) = &quad {
+        layers.push(quad);
+    }
+    let start = Instant::now();
+    frame_stream
+        .end(state.predicted_display_time, scene.blend_mode, &layers)
+        .ctx("xrEndFrame")?;
+    let ended = Instant::now();
+    stats.startup.frame_ended(ended);
+    if options.timing {
+        time_end_frame(scene.gpu, stats, start, ended)?;
+    }
+    stats.frames_submitted += 1;
+    if stats.frames_submitted % 50 == 0 {
+        stats
+            .memory
+            .push(crate::report::Sample::now(stats.frames_submitted));
+    }
+    Ok(())
+}
+
+/// Records the time inside xrEndFrame (`start` to `ended`), then drains the queue and records
+/// how long that took: GPU work a layer queued in xrEndFrame and had not waited for.
+fn time_end_frame(gpu: &Gpu, stats: &mut Stats, start: Instant, ended: Instant) -> Result<()> {
+    gpu.wait_idle()?;
+    let end_frame_ms = (ended - start).as_secs_f64() * 1e3;
+    stats.end_frame_ms.push(end_frame_ms);
+    stats.calls.record("xrEndFrame", end_frame_ms);
+    stats.drain_ms.push(ended.elapsed().as_secs_f64() * 1e3);
+    Ok(())
+}
+
+/// The two views of the projection layer, as laid out in its swapchain.
+fn projection_views<'a>(
+    scene: &'a Scene<'_>,
+    views: &[xr::View],
+    layout: Layout,
+) -> Vec<xr::CompositionLayerProjectionView<'a, xr::Vulkan>> {
     let (w, h) = (scene.view_size.0 as i32, scene.view_size.1 as i32);
-    let projection_views: Vec<_> = (0..2)
+    (0..2)
         .map(|i| {
             let (index, x) = match layout {
                 Layout::Array => (i as u32, 0),
@@ -162,32 +221,7 @@ fn frame(
                         .image_rect(rect),
                 )
         })
-        .collect();
-    let projection = xr::CompositionLayerProjection::new()
-        .space(scene.space)
-        .views(&projection_views);
-    let quad = scene.quad.as_ref().map(|q| quad_layer(q, scene.space));
-    let mut layers: Vec<&xr::CompositionLayerBase<'_, xr::Vulkan>> = vec![&projection];
-    if let Some(quad) = &quad {
-        layers.push(quad);
-    }
-    let start = Instant::now();
-    frame_stream
-        .end(state.predicted_display_time, scene.blend_mode, &layers)
-        .ctx("xrEndFrame")?;
-    if options.timing {
-        let ended = Instant::now();
-        scene.gpu.wait_idle()?;
-        stats.end_frame_ms.push((ended - start).as_secs_f64() * 1e3);
-        stats.drain_ms.push(ended.elapsed().as_secs_f64() * 1e3);
-    }
-    stats.frames_submitted += 1;
-    if stats.frames_submitted % 50 == 0 {
-        stats
-            .memory
-            .push(crate::report::Sample::now(stats.frames_submitted));
-    }
-    Ok(())
+        .collect()
 }
 
 /// Fills the next image of every swapchain and releases them once the GPU is done.

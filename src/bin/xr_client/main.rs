@@ -14,6 +14,7 @@ mod pattern;
 mod report;
 mod script;
 mod swapchain;
+mod timing;
 mod validation;
 
 use std::process::ExitCode;
@@ -33,6 +34,8 @@ use swapchain::{LayerContent, PatternSwapchain};
 const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
 
 fn main() -> ExitCode {
+    // --timing's run_s: the whole process, as a user waiting for the app sees it.
+    let started = std::time::Instant::now();
     let options = match cli::parse(std::env::args().skip(1)) {
         Ok(options) => options,
         Err(message) => {
@@ -49,7 +52,10 @@ fn main() -> ExitCode {
         vk_validation: options.validation,
         ..Report::default()
     };
-    let mut stats = Stats::default();
+    let mut stats = Stats {
+        calls: timing::Calls::new(options.timing),
+        ..Stats::default()
+    };
     if let Err(e) = run(&options, &mut report, &mut stats) {
         report.errors.push(e.0);
     }
@@ -59,7 +65,8 @@ fn main() -> ExitCode {
     report.frames_ended = stats.frames_ended;
     report.reached_focused = stats.reached_focused;
     if options.timing {
-        report.timing = Some(report::Timing::new(&stats.end_frame_ms, &stats.drain_ms));
+        let run_s = started.elapsed().as_secs_f64();
+        report.timing = Some(report::Timing::new(&stats, run_s));
     }
     report.vk_validation_errors = validation::errors();
     report.vk_validation_warnings = validation::warnings();
@@ -68,18 +75,28 @@ fn main() -> ExitCode {
         || (options.script.is_none()
             && stats.frames_submitted >= options.frames * options.sessions);
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
-    if options.json {
-        eprintln!("{}", report.summary());
-        println!("{}", report.json());
-    } else if !options.list_formats {
-        println!("{}", report.summary());
-    } else if !report.ok {
-        eprintln!("{}", report.summary());
-    }
+    print(&report, &options);
     if report.ok {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
+    }
+}
+
+/// The summary line (and with --timing the timing lines after it) on stdout, or on stderr
+/// with --json, whose report must be stdout's last line; with --list-formats only on failure.
+fn print(report: &Report, options: &Options) {
+    let mut text = report.summary();
+    if let Some(timing) = &report.timing {
+        text = format!("{text}\n{}", timing.text());
+    }
+    if options.json {
+        eprintln!("{text}");
+        println!("{}", report.json());
+    } else if !options.list_formats {
+        println!("{text}");
+    } else if !report.ok {
+        eprintln!("{text}");
     }
 }
 
@@ -169,6 +186,7 @@ fn run_session(
     let (session, mut waiter, mut stream) =
         unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
             .ctx("xrCreateSession")?;
+    stats.startup.session_created();
     let offered = session
         .enumerate_swapchain_formats()
         .ctx("xrEnumerateSwapchainFormats")?;
@@ -187,7 +205,8 @@ fn run_session(
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
     let check = options.check_untouched;
-    let projection = projection_swapchain(&session, gpu, format, view_size, options.layout, check)?;
+    let projection = projection_swapchain(&session, gpu, format, view_size, options.layout, check)?
+        .timed(options.timing);
     let quad = options
         .quad
         .then(|| {
@@ -199,6 +218,7 @@ fn run_session(
                 &[LayerContent::Whole(Target::Quad)],
                 check,
             )
+            .map(|quad| quad.timed(options.timing))
         })
         .transpose()?;
     let mut scene = Scene {
@@ -235,6 +255,10 @@ fn run_session(
         result
     });
     report.swapchains_churned += churned.into_inner();
+    stats.calls.absorb(scene.projection.calls(), "");
+    if let Some(quad) = &scene.quad {
+        stats.calls.absorb(quad.calls(), " (quad)");
+    }
     for swapchain in std::iter::once(&scene.projection).chain(scene.quad.as_ref()) {
         let (checked, modified) = swapchain.check_result();
         report.frames_checked += checked;

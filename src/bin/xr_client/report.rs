@@ -1,6 +1,8 @@
 //! The final report: one summary line, or one JSON line with `--json`.
 
-use serde::Serialize;
+use serde::{Serialize, Serializer};
+
+use crate::frame_loop::Stats;
 
 #[derive(Serialize, Debug, Default)]
 pub struct Report {
@@ -66,7 +68,8 @@ impl Sample {
     }
 }
 
-/// Per-frame times in milliseconds over the frames after the first `warm_up`.
+/// Per-frame times in milliseconds over the frames after the first `warm_up` (the steady
+/// state), then what the first frames cost (start-up).
 #[derive(Serialize, Debug, Default)]
 pub struct Timing {
     pub frames: usize,
@@ -75,6 +78,55 @@ pub struct Timing {
     pub end_frame_ms_p95: f64,
     pub drain_ms_median: f64,
     pub drain_ms_p95: f64,
+    /// Each frame-loop call's wall time over every frame, warm-up included, by call name
+    /// (`xrWaitFrame`, ..., a quad's swapchain calls with ` (quad)` after the name).
+    pub calls: CallTable,
+    /// Seconds from xrCreateSession returning (the first session's) to the return of each of the
+    /// first 30 submitted frames' xrEndFrame.
+    pub first_frames_s: Vec<f64>,
+    /// Seconds from xrCreateSession returning to the last submitted frame's xrEndFrame, and the
+    /// submitted frames per second over that time (null without a submitted frame).
+    pub session_to_last_frame_s: Option<f64>,
+    pub frames_per_second: Option<f64>,
+    /// Seconds from the client's start to its report.
+    pub run_s: f64,
+}
+
+/// One call's wall times over the run.
+#[derive(Serialize, Debug)]
+pub struct CallTime {
+    pub median_ms: f64,
+    pub p95_ms: f64,
+    pub max_ms: f64,
+    pub count: usize,
+}
+
+/// Serialised as one JSON object keyed by call name, in frame-loop order.
+#[derive(Debug, Default)]
+pub struct CallTable(pub Vec<(String, CallTime)>);
+
+impl Serialize for CallTable {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_map(self.0.iter().map(|(name, time)| (name, time)))
+    }
+}
+
+impl CallTable {
+    fn new(calls: &crate::timing::Calls) -> CallTable {
+        let time = |ms: &[f64]| CallTime {
+            median_ms: percentile(ms, 0.5),
+            p95_ms: percentile(ms, 0.95),
+            max_ms: percentile(ms, 1.0),
+            count: ms.len(),
+        };
+        CallTable(
+            calls
+                .in_loop_order()
+                .into_iter()
+                .map(|(name, ms)| (name.to_string(), time(ms)))
+                .collect(),
+        )
+    }
 }
 
 /// Frames left out of the timing (pipeline compiles, first allocations).
@@ -89,9 +141,13 @@ fn percentile(v: &[f64], p: f64) -> f64 {
 }
 
 impl Timing {
-    pub fn new(end_frame_ms: &[f64], drain_ms: &[f64]) -> Timing {
-        let skip = WARM_UP_FRAMES.min(end_frame_ms.len() / 2);
-        let (e, d) = (&end_frame_ms[skip..], &drain_ms[skip..]);
+    /// `run_s`: the client's wall time so far.
+    pub fn new(stats: &Stats, run_s: f64) -> Timing {
+        let skip = WARM_UP_FRAMES.min(stats.end_frame_ms.len() / 2);
+        let (e, d) = (&stats.end_frame_ms[skip..], &stats.drain_ms[skip..]);
+        let startup = &stats.startup;
+        // Microseconds are plenty for start-up, and keep the JSON line short.
+        let first_frames_s = startup.first_frames_s.iter();
         Timing {
             frames: e.len(),
             warm_up: skip,
@@ -99,7 +155,51 @@ impl Timing {
             end_frame_ms_p95: percentile(e, 0.95),
             drain_ms_median: percentile(d, 0.5),
             drain_ms_p95: percentile(d, 0.95),
+            calls: CallTable::new(&stats.calls),
+            first_frames_s: first_frames_s.map(|s| (s * 1e6).round() / 1e6).collect(),
+            session_to_last_frame_s: startup.last_frame_s,
+            frames_per_second: startup
+                .last_frame_s
+                .map(|s| f64::from(stats.frames_submitted) / s),
+            run_s,
         }
+    }
+
+    /// The same, for people: a few lines.
+    pub fn text(&self) -> String {
+        let mut text = format!(
+            "timing: xrEndFrame {:.3} ms median, {:.3} ms p95; drain after it {:.3} ms median, \
+             {:.3} ms p95 ({} frames after {} warm-up)\n",
+            self.end_frame_ms_median,
+            self.end_frame_ms_p95,
+            self.drain_ms_median,
+            self.drain_ms_p95,
+            self.frames,
+            self.warm_up
+        );
+        for (name, t) in &self.calls.0 {
+            text += &format!(
+                "  {name:<31} median {:>8.3} ms, p95 {:>8.3} ms, max {:>8.3} ms, {} calls\n",
+                t.median_ms, t.p95_ms, t.max_ms, t.count
+            );
+        }
+        let firsts: Vec<_> = self
+            .first_frames_s
+            .iter()
+            .map(|s| format!("{s:.3}"))
+            .collect();
+        text += &format!(
+            "  first frames ended, s after xrCreateSession: {}\n",
+            firsts.join(" ")
+        );
+        let or_na =
+            |v: Option<f64>, digits: usize| v.map_or("n/a".into(), |v| format!("{v:.digits$}"));
+        text + &format!(
+            "  session to last frame {} s, {} frames/s; run {:.3} s",
+            or_na(self.session_to_last_frame_s, 3),
+            or_na(self.frames_per_second, 2),
+            self.run_s
+        )
     }
 }
 

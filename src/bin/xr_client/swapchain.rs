@@ -7,6 +7,7 @@ use crate::error::{Context, Result};
 use crate::format::SwapchainFormat;
 use crate::gpu::Gpu;
 use crate::pattern::{texel, Target};
+use crate::timing::Calls;
 
 /// What one array layer of a swapchain image shows.
 pub enum LayerContent {
@@ -29,6 +30,8 @@ pub struct PatternSwapchain {
     /// With --check-untouched: the pattern's bytes, a buffer to read images back into, and for
     /// each image the frame that last wrote it.
     check: Option<Check>,
+    /// With --timing: the wall times of acquire, wait and release.
+    calls: Calls,
 }
 
 struct Check {
@@ -94,6 +97,7 @@ impl PatternSwapchain {
         };
         Ok(PatternSwapchain {
             check,
+            calls: Calls::default(),
             handle,
             images: images.into_iter().map(vk::Image::from_raw).collect(),
             width,
@@ -105,17 +109,36 @@ impl PatternSwapchain {
         })
     }
 
+    /// Records the wall times of its OpenXR calls from now on when `on` (--timing).
+    pub fn timed(mut self, on: bool) -> PatternSwapchain {
+        self.calls = Calls::new(on);
+        self
+    }
+
+    pub fn calls(&self) -> &Calls {
+        &self.calls
+    }
+
     /// Acquires and waits for the next image; returns its index.
     pub fn acquire(&mut self) -> Result<u32> {
-        let index = self.handle.acquire_image().ctx("xrAcquireSwapchainImage")?;
-        self.handle
-            .wait_image(xr::Duration::INFINITE)
+        let handle = &mut self.handle;
+        let index = self
+            .calls
+            .time("xrAcquireSwapchainImage", || handle.acquire_image())
+            .ctx("xrAcquireSwapchainImage")?;
+        self.calls
+            .time("xrWaitSwapchainImage", || {
+                handle.wait_image(xr::Duration::INFINITE)
+            })
             .ctx("xrWaitSwapchainImage")?;
         Ok(index)
     }
 
     pub fn release(&mut self) -> Result<()> {
-        self.handle.release_image().ctx("xrReleaseSwapchainImage")
+        let handle = &mut self.handle;
+        self.calls
+            .time("xrReleaseSwapchainImage", || handle.release_image())
+            .ctx("xrReleaseSwapchainImage")
     }
 
     /// Every texel of every layer, tightly packed layer after layer in the buffer.
