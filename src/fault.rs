@@ -4,13 +4,13 @@
 //! atomic load and a branch, so the calls stay in release builds.
 //!
 //! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
-//! `camera-loss` (see [`POINTS`]). This module must not depend on anything else in the crate.
+//! `camera-loss`, `end-frame`, `queue-without-compute` (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 6] = [
+pub const POINTS: [(&str, &str); 8] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -25,6 +25,14 @@ pub const POINTS: [(&str, &str); 6] = [
     (
         "camera-loss",
         "taking the newest background frame (the source is lost)",
+    ),
+    (
+        "queue-without-compute",
+        "checking the app's queue family for compute support (as if it had none)",
+    ),
+    (
+        "end-frame",
+        "a panic in the layer's xrEndFrame after the frame's images were enhanced and held",
     ),
 ];
 

@@ -142,6 +142,11 @@ fn fault_at_pipeline_creation() {
 }
 
 #[test]
+fn an_app_queue_without_compute_passes_through() {
+    fault("queue-without-compute", "has no compute support");
+}
+
+#[test]
 fn fault_at_allocation() {
     fault("allocation", "fault injected at allocation");
 }
@@ -159,6 +164,50 @@ fn fault_at_camera_open() {
 #[test]
 fn fault_at_mid_stream_camera_loss() {
     fault("camera-loss@5", "lost: passing frames through");
+}
+
+/// A panic in the layer's xrEndFrame, after it enhanced and held the frame's images: the app's
+/// frame still reaches the runtime (every frame is submitted, the images released), the
+/// frames before it were enhanced and none after, and the layer says so once.
+#[test]
+fn a_panic_in_end_frame_still_forwards_the_frame() {
+    let tag = "fault-end-frame";
+    let env = [("CONTRASTXR_FAULT", "end-frame@5")];
+    let Some(r) = client(tag, &no_config(tag), &env, CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    let modified = r.modified();
+    assert!(
+        !modified.is_empty() && modified.iter().all(|&f| f <= 5),
+        "{modified:?}"
+    );
+    let about = r.lines_with("passing");
+    assert_eq!(about.len(), 1, "{about:#?}");
+    assert!(
+        about[0].contains("internal error in xrEndFrame"),
+        "{about:?}"
+    );
+}
+
+/// More view regions in one frame than the layer keeps buffers for (2 projection views and 20
+/// quad layers, one per strip of the quad's image): every frame is enhanced, nothing fails.
+#[test]
+fn any_number_of_regions_per_frame_is_enhanced() {
+    let tag = "many-regions";
+    let env = [("CONTRASTXR_QUAD_LAYERS", "1")];
+    let args = [CHECKED, &["--quad", "--quad-strips", "20"][..]].concat();
+    let Some(r) = client(tag, &no_config(tag), &env, &args) else {
+        return;
+    };
+    r.assert_ran(20);
+    assert!(r.lines_with("passing").is_empty(), "{:#?}", r.lines);
+    assert!(
+        r.modified().len() as u64 + 2 >= r.checked(),
+        "{:?} of {}",
+        r.modified(),
+        r.checked()
+    );
 }
 
 /// The untouched check can fail: without a fault the layer changes the frames.

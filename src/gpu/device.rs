@@ -339,6 +339,28 @@ impl GpuDevice {
             .map_or(0, |v| v.errors.load(Ordering::Relaxed))
     }
 
+    /// Whether the queue the engine records for supports compute work (an app may hand the
+    /// layer a graphics-only or transfer-only queue family).
+    pub fn queue_has_compute(&self) -> Result<(), GpuError> {
+        // The fault point makes the real failure, message included.
+        let injected = crate::fault::check("queue-without-compute").is_err();
+        // SAFETY: physical belongs to this instance.
+        let families = unsafe {
+            self.instance
+                .get_physical_device_queue_family_properties(self.physical)
+        };
+        let flags = families
+            .get(self.queue_family as usize)
+            .map_or(vk::QueueFlags::empty(), |f| f.queue_flags);
+        if flags.contains(vk::QueueFlags::COMPUTE) && !injected {
+            return Ok(());
+        }
+        Err(GpuError::Unsupported(format!(
+            "the app's queue family {} has no compute support",
+            self.queue_family
+        )))
+    }
+
     /// Nanoseconds per timestamp tick.
     pub fn timestamp_period(&self) -> f32 {
         // SAFETY: physical belongs to this instance.

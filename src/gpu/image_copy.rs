@@ -26,7 +26,10 @@ fn subresource(layer: u32) -> vk::ImageSubresourceRange {
 }
 
 /// Moves each region's image layer from COLOR_ATTACHMENT_OPTIMAL (where the app left it) to
-/// GENERAL for the copies (`to_general`), or back afterwards; one barrier per layer.
+/// GENERAL for the copies (`to_general`), or back afterwards; one barrier per layer. The app
+/// may have written its image in any way (drawn, copied, computed), and the runtime may use it
+/// in any way after: the barrier waits for every earlier access and makes the copies visible
+/// to every later one.
 pub fn record_layout_barriers(
     gpu: &GpuDevice,
     cmd: vk::CommandBuffer,
@@ -34,14 +37,14 @@ pub fn record_layout_barriers(
     to_general: bool,
 ) {
     let mut seen = HashSet::new();
-    let colour = vk::AccessFlags::COLOR_ATTACHMENT_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_READ;
+    let any = vk::AccessFlags::MEMORY_WRITE | vk::AccessFlags::MEMORY_READ;
     let transfer = vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE;
     let attachment = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
     let general = vk::ImageLayout::GENERAL;
     let ((old, new), (src, dst)) = if to_general {
-        ((attachment, general), (colour, transfer))
+        ((attachment, general), (any, transfer))
     } else {
-        ((general, attachment), (transfer, colour))
+        ((general, attachment), (transfer, any))
     };
     let barriers: Vec<_> = regions
         .iter()
@@ -58,12 +61,12 @@ pub fn record_layout_barriers(
                 .subresource_range(subresource(r.array_index))
         })
         .collect();
-    let colour = vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
+    let all = vk::PipelineStageFlags::ALL_COMMANDS;
     let transfer = vk::PipelineStageFlags::TRANSFER;
     let (src, dst) = if to_general {
-        (colour, transfer)
+        (all, transfer)
     } else {
-        (transfer, colour)
+        (transfer, all)
     };
     // SAFETY: cmd is recording (the caller's contract); the images are valid and not in use
     // by other queues (the layer holds the app's images until xrEndFrame).

@@ -218,11 +218,11 @@ impl Shared {
         self.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    fn build(&self, k: usize, warm_up: Option<&mut WarmUp>) -> Slot {
+    fn build(&self, k: usize, warm_up: Option<&mut Option<WarmUp>>) -> Slot {
         let t = Instant::now();
         if let Some(w) = warm_up {
             // A failed warm-up only costs the compile at first dispatch later.
-            let _ = w.run(ShaderId(k));
+            WarmUp::once(w, self.cache_key, ShaderId(k));
         }
         let slot = match compute_pipeline(self, self.modules[k]) {
             Ok(p) => Slot::Built(p),
@@ -480,7 +480,8 @@ fn save_if_changed(shared: &Shared) {
 /// queue runs empty after builds.
 fn build_requests(shared: &Shared) {
     // Made at the first build; None when not needed or when it cannot be made.
-    let mut warm_up: Option<Option<WarmUp>> = (!shared.warm_up).then_some(None);
+    // Made when a shader first needs warming up (never when the driver does not need it).
+    let mut warm_up: Option<WarmUp> = None;
     loop {
         let next = {
             let mut st = shared.lock();
@@ -502,8 +503,8 @@ fn build_requests(shared: &Shared) {
             save_if_changed(shared);
             continue;
         };
-        let warm = warm_up.get_or_insert_with(|| WarmUp::new(shared.cache_key).ok());
-        let slot = shared.build(k, warm.as_mut());
+        let warm = shared.warm_up.then_some(&mut warm_up);
+        let slot = shared.build(k, warm);
         shared.lock().slots[k] = slot;
         shared.changed.notify_all();
     }

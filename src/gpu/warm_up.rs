@@ -15,6 +15,17 @@ use super::pipelines::{self, BuildMode, PushConstants, ShaderId};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use ash::vk;
+use std::collections::HashSet;
+use std::sync::{Mutex, OnceLock};
+
+/// The shaders warmed up in this process, per device kind: the driver's disk cache has them,
+/// so later sessions skip them (and make no device of their own at all).
+fn warmed() -> std::sync::MutexGuard<'static, HashSet<(CacheKey, ShaderId)>> {
+    static WARMED: OnceLock<Mutex<HashSet<(CacheKey, ShaderId)>>> = OnceLock::new();
+    let m = WARMED.get_or_init(Default::default);
+    // Only set operations happen under this lock.
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
 
 /// Side of the camera frame and view the warm-up dispatches work on.
 const SIZE: (u32, u32) = (8, 8);
@@ -89,6 +100,22 @@ impl WarmUp {
             image_ready: false,
             gpu,
         })
+    }
+
+    /// Warms `id` up unless this process already did, making the device in `slot` first if
+    /// needed. Failures are not fatal: the compile then happens at first dispatch.
+    pub fn once(slot: &mut Option<WarmUp>, key: CacheKey, id: ShaderId) {
+        if warmed().contains(&(key, id)) {
+            return;
+        }
+        if slot.is_none() {
+            *slot = WarmUp::new(key).ok();
+        }
+        if let Some(w) = slot {
+            if w.run(id).is_ok() {
+                warmed().insert((key, id));
+            }
+        }
     }
 
     /// Dispatches one workgroup of the shader and waits for it (its compile).

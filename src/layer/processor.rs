@@ -122,7 +122,7 @@ impl Processor {
 
     /// Whether the pipelines these items need are built: if not, they are requested and,
     /// with `wait`, waited for; without it the frame is [`GpuError::Pending`].
-    fn pipelines_ready(
+    pub fn pipelines_ready(
         &self,
         items: &[WorkItem],
         params: &Params,
@@ -167,7 +167,9 @@ impl Processor {
         Ok(())
     }
 
-    fn ensure_view(&mut self, item: &WorkItem) -> Result<(), GpuError> {
+    /// Makes the view of `item` exist, evicting the least recently used view that is not one
+    /// of `in_use` (the items of this submission) when the engine holds MAX_VIEWS already.
+    fn ensure_view(&mut self, item: &WorkItem, in_use: &[WorkItem]) -> Result<(), GpuError> {
         if self
             .views
             .get(&item.key)
@@ -179,7 +181,7 @@ impl Processor {
             self.engine.destroy_view(&self.gpu, &mut old.target);
         }
         if self.views.len() as u32 >= MAX_VIEWS {
-            self.evict_oldest();
+            self.evict_oldest(in_use);
         }
         let bg = self
             .background
@@ -202,10 +204,11 @@ impl Processor {
         Ok(())
     }
 
-    fn evict_oldest(&mut self) {
+    fn evict_oldest(&mut self, in_use: &[WorkItem]) {
         let oldest = self
             .views
             .iter()
+            .filter(|(k, _)| !in_use.iter().any(|i| i.key == **k))
             .min_by_key(|(_, v)| v.last_frame)
             .map(|(k, _)| *k);
         if let Some(mut v) = oldest.and_then(|k| self.views.remove(&k)) {
@@ -244,11 +247,28 @@ impl Processor {
     ) -> Result<Vec<CapturedView>, GpuError> {
         self.pipelines_ready(items, params, wait_for_pipelines)?;
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
-        self.frame += 1;
+        // The previous submission read the camera buffer the upload writes.
         self.wait_idle()?;
         self.update_background(background, sequence)?;
+        // More regions than the engine holds views for: one submission per MAX_VIEWS.
+        let mut captured = Vec::new();
+        for part in items.chunks(MAX_VIEWS as usize) {
+            captured.extend(self.process_part(part, params, capture)?);
+        }
+        Ok(captured)
+    }
+
+    /// `process` for at most MAX_VIEWS items (their views all exist at once).
+    fn process_part(
+        &mut self,
+        items: &[WorkItem],
+        params: &Params,
+        capture: bool,
+    ) -> Result<Vec<CapturedView>, GpuError> {
+        self.frame += 1;
+        self.wait_idle()?;
         for item in items {
-            self.ensure_view(item)?;
+            self.ensure_view(item, items)?;
         }
         let mut staging = Vec::new();
         if capture {

@@ -112,6 +112,7 @@ fn set_up(
     };
     // The background preparation's shaders first: the views' ones need a swapchain's format.
     let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
+    let gpu = gpu.and_then(|gpu| gpu.queue_has_compute().map(|_| gpu));
     let processor = match gpu.and_then(|gpu| Processor::new(gpu, &first)) {
         Ok(p) => p,
         Err(e) => {
@@ -510,10 +511,18 @@ fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::Environ
     let params = s.settings.params.clone();
     let sequence = background_sequence(frame.sequence, &s.settings);
     let processor = s.processor.as_mut().expect("checked above");
-    let now = std::time::Instant::now();
-    processor.indicator.timer.update(&s.settings, now);
     let wait = s.settings.wait_for_pipelines;
-    match processor.process(&items, &frame.image, sequence, &params, (capture, wait)) {
+    // The indicator's time starts with the first enhanced frame, not while pipelines build.
+    let ready = processor.pipelines_ready(&items, &params, wait);
+    if ready.is_ok() {
+        processor
+            .indicator
+            .timer
+            .update(&s.settings, std::time::Instant::now());
+    }
+    let done = ready
+        .and_then(|_| processor.process(&items, &frame.image, sequence, &params, (capture, wait)));
+    match done {
         Ok(views) => {
             if s.processed == 0 {
                 log_began(processor);
@@ -584,6 +593,46 @@ fn write_capture(
     }
 }
 
+/// The layer's part of xrEndFrame: new settings, the enhancement of the held images, and
+/// their release. The caller holds no lock.
+fn layer_end_frame(session: xr::Session, s: &Mutex<SessionState>, info: *const xr::FrameEndInfo) {
+    let mut s = lock(s);
+    s.frames += 1;
+    pick_up_settings(session, &mut s);
+    // SAFETY: the app's frame end info (null is left for the runtime to reject).
+    if let Some(info) = unsafe { info.as_ref() } {
+        let done =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| enhance_frame(&mut s, info)));
+        if done.is_err() {
+            log::info(
+                "internal error while enhancing: passing this session's frames through from now on",
+            );
+            s.processor = None;
+        }
+    }
+    if let Err(e) = crate::fault::check("end-frame") {
+        panic!("{e}");
+    }
+    // The runtime composes only released images: hand over every image we held.
+    swapchain::release_held(session);
+}
+
+/// After a panic in the layer's part of xrEndFrame: the session passes through from now on,
+/// and every image still held is released, so the app's frame reaches the runtime whole.
+fn recover_end_frame(session: xr::Session, s: &Mutex<SessionState>) {
+    log::once(
+        "end-frame-panic",
+        "internal error in xrEndFrame: passing this session's frames through from now on",
+    );
+    lock(s).processor = None;
+    let released = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        swapchain::release_held(session)
+    }));
+    if released.is_err() {
+        log::once("release-failed", "internal error releasing held images");
+    }
+}
+
 /// # Safety
 /// Called by the OpenXR loader with the arguments the app passed to xrEndFrame.
 pub unsafe extern "system" fn end_frame(
@@ -594,24 +643,14 @@ pub unsafe extern "system" fn end_frame(
         let Some(s) = state::session(session) else {
             return xr::Result::ERROR_HANDLE_INVALID;
         };
-        let next = {
-            let mut s = lock(&s);
-            s.frames += 1;
-            pick_up_settings(session, &mut s);
-            // SAFETY: the app's frame end info (null is left for the runtime to reject).
-            if let Some(info) = unsafe { info.as_ref() } {
-                let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    enhance_frame(&mut s, info)
-                }));
-                if done.is_err() {
-                    log::info("internal error while enhancing: passing this session's frames through from now on");
-                    s.processor = None;
-                }
-            }
-            // The runtime composes only released images: hand over every image we held.
-            swapchain::release_held(session);
-            s.next
-        };
+        let next = lock(&s).next;
+        // A panic anywhere in the layer's part still forwards the app's frame.
+        let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            layer_end_frame(session, &s, info)
+        }));
+        if done.is_err() {
+            recover_end_frame(session, &s);
+        }
         // SAFETY: forwarding the app's call (no layer lock is held while the runtime works).
         unsafe { (next.end_frame)(session, info) }
     })

@@ -26,6 +26,27 @@ fn is_colour(info: &xr::SwapchainCreateInfo) -> bool {
         && !usage.contains(xr::SwapchainUsageFlags::DEPTH_STENCIL_ATTACHMENT)
 }
 
+/// The pixel format the layer enhances a swapchain's images in; None (the images pass
+/// through) for depth, formats the engine does not handle, and multisampled images (a
+/// multisampled image cannot be copied to a buffer: the runtime resolves it itself).
+fn enhanced_format(info: &xr::SwapchainCreateInfo) -> Option<PixelFormat> {
+    let pixel = PixelFormat::from_vk(vk::Format::from_raw(info.format as i32))?;
+    if !is_colour(info) {
+        return None;
+    }
+    if info.sample_count > 1 {
+        log::once(
+            &format!("msaa-{}", info.sample_count),
+            &format!(
+                "a multisampled swapchain ({} samples per pixel): its images pass through untouched",
+                info.sample_count
+            ),
+        );
+        return None;
+    }
+    Some(pixel)
+}
+
 pub(crate) unsafe extern "system" fn create_swapchain(
     session: xr::Session,
     info: *const xr::SwapchainCreateInfo,
@@ -49,7 +70,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             };
             let vk_format = vk::Format::from_raw(app_info.format as i32);
             // Pass-through sessions never have images held or touched.
-            let pixel = PixelFormat::from_vk(vk_format).filter(|_| active && is_colour(app_info));
+            let pixel = enhanced_format(app_info).filter(|_| active);
             let mut transfer_usage = app_info.usage_flags.contains(transfer());
             let mut result = xr::Result::ERROR_RUNTIME_FAILURE;
             if active && pixel.is_some() && !transfer_usage {
@@ -338,4 +359,40 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
             result
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn info(
+        format: vk::Format,
+        usage: xr::SwapchainUsageFlags,
+        samples: u32,
+    ) -> xr::SwapchainCreateInfo {
+        xr::SwapchainCreateInfo {
+            ty: xr::SwapchainCreateInfo::TYPE,
+            next: std::ptr::null(),
+            create_flags: xr::SwapchainCreateFlags::EMPTY,
+            usage_flags: usage,
+            format: format.as_raw() as i64,
+            sample_count: samples,
+            width: 64,
+            height: 48,
+            face_count: 1,
+            array_size: 2,
+            mip_count: 1,
+        }
+    }
+
+    #[test]
+    fn only_single_sampled_colour_images_of_known_formats_are_enhanced() {
+        let colour = xr::SwapchainUsageFlags::COLOR_ATTACHMENT;
+        let depth = xr::SwapchainUsageFlags::DEPTH_STENCIL_ATTACHMENT;
+        let srgb = vk::Format::R8G8B8A8_SRGB;
+        assert!(enhanced_format(&info(srgb, colour, 1)).is_some());
+        assert!(enhanced_format(&info(srgb, colour, 4)).is_none());
+        assert!(enhanced_format(&info(srgb, depth, 1)).is_none());
+        assert!(enhanced_format(&info(vk::Format::D32_SFLOAT, colour, 1)).is_none());
+    }
 }

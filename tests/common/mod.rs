@@ -180,6 +180,14 @@ pub fn scratch_file(name: &str) -> PathBuf {
     path
 }
 
+/// The shader cache folder the sandbox runs share (inside the target directory, which the
+/// sandbox mounts).
+fn shared_cache() -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("xr-cache");
+    std::fs::create_dir_all(&dir).expect("create the shared cache directory");
+    dir
+}
+
 /// The OpenXR core validation layer and the Vulkan validation layer's log, for one run.
 pub struct Validation {
     xr_log: String,
@@ -390,6 +398,9 @@ impl Sandbox {
             // Frames counted and captured from the first on: the first frame waits for the
             // layer's pipelines (tests of the default, "background", set it themselves).
             .env("CONTRASTXR_PIPELINES", "wait")
+            // One shader cache for the runs of all tests (Mesa's and the layer's): the driver
+            // compiles each shader once, not once per run (tests/startup.rs sets its own).
+            .env("XDG_CACHE_HOME", shared_cache())
             .envs(env.iter().copied())
             .stdin(std::process::Stdio::null())
             .output()

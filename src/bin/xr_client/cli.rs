@@ -13,6 +13,8 @@ usage: contrastxr-xr-client [options]
                           one swapchain with arraySize 2, or one wide swapchain (default array)
   --frames N              frames to submit before ending the session (default 60)
   --quad                  also submit a quad layer with its own swapchain
+  --quad-strips N         with --quad: submit the quad's image as N quad layers, one per
+                          horizontal strip (N regions of one swapchain in one frame; default 1)
   --size WxH              per-view size (default: the runtime's recommended size)
   --content panels|typical
                           what the images show: coloured panels and a ramp (default, 37 %
@@ -70,6 +72,8 @@ pub struct Options {
     pub layout: Layout,
     pub frames: u32,
     pub quad: bool,
+    /// Quad layers the quad's image is split into (horizontal strips).
+    pub quad_strips: u32,
     pub size: Option<(u32, u32)>,
     pub validation: bool,
     pub list_formats: bool,
@@ -94,6 +98,7 @@ impl Default for Options {
             layout: Layout::Array,
             frames: 60,
             quad: false,
+            quad_strips: 1,
             size: None,
             validation: false,
             list_formats: false,
@@ -127,6 +132,13 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--size" => options.size = Some(parse_size(&value()?)?),
             "--content" => options.content = parse_content(&value()?)?,
             "--quad" => options.quad = true,
+            "--quad-strips" => {
+                options.quad_strips = value()?
+                    .parse()
+                    .ok()
+                    .filter(|&n| n > 0)
+                    .ok_or("--quad-strips needs a count above 0")?
+            }
             "--validation" => options.validation = true,
             "--list-formats" => options.list_formats = true,
             "--json" => options.json = true,

@@ -157,11 +157,17 @@ fn frame(
     let projection = xr::CompositionLayerProjection::new()
         .space(scene.space)
         .views(&projection_views);
-    let quad = scene.quad.as_ref().map(|q| quad_layer(q, scene.space));
+    let quads = scene.quad.as_ref().map_or(Vec::new(), |q| {
+        (0..options.quad_strips)
+            .map(|k| quad_layer(q, scene.space, (k, options.quad_strips)))
+            .collect()
+    });
     let mut layers: Vec<&xr::CompositionLayerBase<'_, xr::Vulkan>> = vec![&projection];
-    if let Some(quad) = &quad {
-        layers.push(quad);
-    }
+    layers.extend(
+        quads
+            .iter()
+            .map(|q| -> &xr::CompositionLayerBase<'_, xr::Vulkan> { q }),
+    );
     let start = Instant::now();
     frame_stream
         .end(state.predicted_display_time, scene.blend_mode, &layers)
@@ -248,23 +254,31 @@ fn render(scene: &mut Scene<'_>, frame: u32) -> Result<()> {
     Ok(())
 }
 
-/// A quad 1.5 m in front of the viewer, 0.4 m wide, with the swapchain's aspect ratio.
+/// A quad 1.5 m in front of the viewer, 0.4 m wide, with the swapchain's aspect ratio; with
+/// `(k, n)` strips, strip k of n of it (its rows and its part of the quad's height).
 fn quad_layer<'a>(
     quad: &'a PatternSwapchain,
     space: &'a xr::Space,
+    (k, n): (u32, u32),
 ) -> xr::CompositionLayerQuad<'a, xr::Vulkan> {
+    let (top, bottom) = (quad.height * k / n, quad.height * (k + 1) / n);
     let rect = xr::Rect2Di {
-        offset: xr::Offset2Di { x: 0, y: 0 },
+        offset: xr::Offset2Di {
+            x: 0,
+            y: top as i32,
+        },
         extent: xr::Extent2Di {
             width: quad.width as i32,
-            height: quad.height as i32,
+            height: (bottom - top) as i32,
         },
     };
+    let metres = 0.4 / quad.width as f32;
+    let centre = (top + bottom) as f32 / 2.0 - quad.height as f32 / 2.0;
     let pose = xr::Posef {
         orientation: xr::Quaternionf::IDENTITY,
         position: xr::Vector3f {
             x: 0.0,
-            y: 0.0,
+            y: -centre * metres,
             z: -1.5,
         },
     };
@@ -279,6 +293,6 @@ fn quad_layer<'a>(
         .pose(pose)
         .size(xr::Extent2Df {
             width: 0.4,
-            height: 0.4 * quad.height as f32 / quad.width as f32,
+            height: (bottom - top) as f32 * metres,
         })
 }
