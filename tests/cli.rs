@@ -613,3 +613,279 @@ fn calibrate_with_device_starts_from_and_saves_to_the_headsets_table() {
     let o = calibrate(&config, &["--device", "HMD", "--app", "x"], "");
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+/// `contrastxr ARGS` with HOME, every XDG directory and the V4L2 device folder under `root`,
+/// none of this process's OpenXR, contrastxr, pressure-vessel or XDG variables, and `env`.
+/// (The loader's compiled-in /etc is the one search path this cannot move.)
+fn isolated(root: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_contrastxr"));
+    cmd.args(args);
+    for (name, _) in std::env::vars_os() {
+        let name = name.to_string_lossy().into_owned();
+        let prefixes = ["CONTRASTXR", "XR_", "PRESSURE_VESSEL", "XDG_"];
+        if prefixes.iter().any(|p| name.starts_with(p)) {
+            cmd.env_remove(&name);
+        }
+    }
+    cmd.env("HOME", root)
+        .env("XDG_DATA_HOME", root.join("data"))
+        .env("XDG_CONFIG_HOME", root.join("config"))
+        .env("XDG_STATE_HOME", root.join("state"))
+        .env("XDG_CACHE_HOME", root.join("cache"))
+        .env("XDG_CONFIG_DIRS", root.join("etc-xdg"))
+        .env("XDG_DATA_DIRS", root.join("share"))
+        .env("CONTRASTXR_V4L2_DIR", root.join("dev"))
+        .envs(env.iter().copied())
+        .output()
+        .expect("run contrastxr")
+}
+
+/// An empty folder for one test's home.
+fn fresh_home(name: &str) -> PathBuf {
+    let root = scratch(name);
+    let _ = std::fs::remove_dir_all(&root);
+    std::fs::create_dir_all(root.join("dev")).unwrap();
+    root
+}
+
+/// `contrastxr doctor --json` in `root`: the process and its report.
+fn doctor(root: &Path, env: &[(&str, &str)]) -> (Output, serde_json::Value) {
+    let o = isolated(root, &["doctor", "--json"], env);
+    let report = serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("doctor --json printed no JSON ({e}): {}", stderr(&o)));
+    (o, report)
+}
+
+fn finding<'a>(report: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    report["findings"]
+        .as_array()
+        .expect("a findings array")
+        .iter()
+        .find(|f| f["name"] == name)
+        .unwrap_or_else(|| panic!("no {name} finding in {report}"))
+}
+
+fn text<'a>(f: &'a serde_json::Value, field: &str) -> &'a str {
+    f[field]
+        .as_str()
+        .unwrap_or_else(|| panic!("{field} of {f} is not a string"))
+}
+
+/// Whether the one loader path the tests cannot redirect (/etc/openxr/1/api_layers) already
+/// holds a manifest of the layer, which would make the manifest findings differ.
+fn layer_in_sysconfdir() -> bool {
+    let dir = Path::new("/etc/openxr/1/api_layers/implicit.d");
+    let found = std::fs::read_dir(dir).into_iter().flatten().any(|e| {
+        e.ok()
+            .and_then(|e| std::fs::read_to_string(e.path()).ok())
+            .is_some_and(|t| t.contains("XR_APILAYER_CONTRASTXR"))
+    });
+    if found {
+        eprintln!("skipped: {} already names the layer", dir.display());
+    }
+    found
+}
+
+#[test]
+fn doctor_without_a_manifest_reports_the_problem_and_its_fix() {
+    if layer_in_sysconfdir() {
+        return;
+    }
+    let root = fresh_home("doctor-none");
+    let (o, report) = doctor(&root, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(report["ok"], false);
+    let m = finding(&report, "manifest");
+    assert_eq!(m["status"], "problem", "{m}");
+    let user_dir = root.join("data/openxr/1/api_layers/implicit.d");
+    assert!(
+        text(m, "detail").contains(&user_dir.display().to_string()),
+        "{m}"
+    );
+    assert!(text(m, "fix").contains("contrastxr install --user"), "{m}");
+    assert_eq!(finding(&report, "library")["status"], "warn");
+    // Every finding, in order; a fix exactly where the status is not ok.
+    let findings = report["findings"].as_array().unwrap();
+    let names: Vec<&str> = findings.iter().map(|f| text(f, "name")).collect();
+    assert_eq!(
+        names,
+        [
+            "manifest",
+            "library",
+            "runtime",
+            "vulkan",
+            "config",
+            "camera",
+            "camera-profile",
+            "last-app",
+            "steam"
+        ]
+    );
+    for f in findings {
+        assert_eq!(f["fix"].is_null(), f["status"] == "ok", "{f}");
+    }
+    // No runtime and no camera (an empty device folder) are problems of their own.
+    assert_eq!(finding(&report, "runtime")["status"], "problem");
+    assert_eq!(finding(&report, "camera")["status"], "problem");
+    // The screen says the same.
+    let o = isolated(&root, &["doctor"], &[]);
+    assert_eq!(o.status.code(), Some(1));
+    let screen = String::from_utf8_lossy(&o.stdout);
+    assert!(screen.contains("problem  manifest "), "{screen}");
+    assert!(screen.contains("fix: install the layer"), "{screen}");
+}
+
+#[test]
+fn doctor_after_install_names_the_manifest_and_loads_its_library() {
+    if layer_in_sysconfdir() {
+        return;
+    }
+    let root = fresh_home("doctor-installed");
+    // The library built beside the tool, as a user installs it.
+    let o = isolated(&root, &["install", "--user"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let manifest = root.join("data/openxr/1/api_layers/implicit.d/contrastxr.json");
+    let library = root.join("data/contrastxr/libcontrastxr.so");
+    let (_, report) = doctor(&root, &[]);
+    let m = finding(&report, "manifest");
+    assert_eq!(m["status"], "ok", "{m}");
+    assert!(m["fix"].is_null());
+    let detail = text(m, "detail");
+    assert!(
+        detail.contains(&format!("implicit manifest {}", manifest.display()))
+            && detail.contains(&format!("names {}", library.display())),
+        "{detail}"
+    );
+    let l = finding(&report, "library");
+    assert_eq!(l["status"], "ok", "{l}");
+    assert_eq!(
+        text(l, "detail"),
+        format!(
+            "{} loads and exports xrNegotiateLoaderApiLayerInterface",
+            library.display()
+        )
+    );
+    // A second implicit manifest (a system-wide install) would load the layer twice.
+    let system = root.join("share/openxr/1/api_layers/implicit.d");
+    std::fs::create_dir_all(&system).unwrap();
+    std::fs::copy(&manifest, system.join("contrastxr.json")).unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let m = finding(&report, "manifest");
+    assert_eq!(m["status"], "warn", "{m}");
+    assert!(text(m, "detail").starts_with("2 implicit manifests"), "{m}");
+    std::fs::remove_dir_all(root.join("share")).unwrap();
+    // A file that is no loadable library: the manifest is fine, the library a problem.
+    let standin = root.join("built/libcontrastxr.so");
+    std::fs::create_dir_all(standin.parent().unwrap()).unwrap();
+    std::fs::write(&standin, b"\x7fELF stand-in for the built library").unwrap();
+    let o = isolated(
+        &root,
+        &["install", "--user", "--library", standin.to_str().unwrap()],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (o, report) = doctor(&root, &[]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(finding(&report, "manifest")["status"], "ok");
+    let l = finding(&report, "library");
+    assert_eq!(l["status"], "problem", "{l}");
+    assert!(
+        text(l, "detail").starts_with(&format!("{} cannot be loaded: ", library.display())),
+        "{l}"
+    );
+    assert!(text(l, "fix").contains("contrastxr install --user"), "{l}");
+}
+
+#[test]
+fn doctor_names_the_config_files_bad_line() {
+    let root = fresh_home("doctor-config");
+    let file = root.join("config/contrastxr/config.toml");
+    std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+    std::fs::write(
+        &file,
+        "lambda_e = 0.5\n\n[app.\"hello_xr\"]\nlamda_e = 0.6\n",
+    )
+    .unwrap();
+    let (o, report) = doctor(&root, &[]);
+    assert_eq!(o.status.code(), Some(1));
+    let c = finding(&report, "config");
+    assert_eq!(c["status"], "problem", "{c}");
+    assert_eq!(
+        text(c, "detail"),
+        format!(
+            "1 problem(s): config {}:4: unknown key \"lamda_e\"",
+            file.display()
+        )
+    );
+    assert_eq!(
+        text(c, "fix"),
+        format!(
+            "edit {} line 4; `contrastxr config check` lists every problem",
+            file.display()
+        )
+    );
+    std::fs::write(&file, "lambda_e = 0.5\n").unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let c = finding(&report, "config");
+    assert_eq!(c["status"], "ok", "{c}");
+    assert_eq!(
+        text(c, "detail"),
+        format!("{}: no problems", file.display())
+    );
+}
+
+#[test]
+fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
+    let root = fresh_home("doctor-log");
+    let log = root.join("state/contrastxr/layer.log");
+    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
+    std::fs::write(
+        &log,
+        "\
+2026-01-01T00:00:00.000Z [pid 7] layer loaded into /usr/bin/a
+2026-01-01T00:00:00.500Z [pid 7] enhancement began 0.200 s after the session started
+2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b
+2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it
+2026-01-01T00:00:01.200Z [pid 9] environment blend mode OPAQUE is not ADDITIVE: passing frames through (set CONTRASTXR_FORCE=1 to act anyway)
+",
+    )
+    .unwrap();
+    let config = root.join("config/contrastxr/config.toml");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    std::fs::write(&config, "background = \"color:#808080\"\n").unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let l = finding(&report, "last-app");
+    assert_eq!(l["status"], "warn", "{l}");
+    assert!(
+        text(l, "detail").starts_with("last app /usr/bin/b (pid 9, ")
+            && text(l, "detail").contains("blend mode OPAQUE is not ADDITIVE"),
+        "{l}"
+    );
+    assert!(text(l, "fix").contains("force = true"), "{l}");
+    let p = finding(&report, "camera-profile");
+    assert_eq!(p["status"], "warn", "{p}");
+    assert!(text(p, "fix").contains("[device.\"Glasses\"]"), "{p}");
+    assert_eq!(finding(&report, "camera")["status"], "ok");
+    // The headset described: its profile is found.
+    std::fs::write(
+        &config,
+        "background = \"color:#808080\"\n[device.\"Glasses\"]\ncamera_fov = [90.0, 60.0]\n",
+    )
+    .unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let p = finding(&report, "camera-profile");
+    assert_eq!(p["status"], "ok", "{p}");
+    assert!(text(p, "detail").contains("[device.\"Glasses\"]"), "{p}");
+    // Steam installed: its games need the variable, in their launch options or here.
+    assert_eq!(finding(&report, "steam")["status"], "ok");
+    std::fs::create_dir_all(root.join(".steam/steam")).unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let s = finding(&report, "steam");
+    assert_eq!(s["status"], "warn", "{s}");
+    assert!(
+        text(s, "fix").contains("PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS=1 CONTRASTXR=1 %command%"),
+        "{s}"
+    );
+    let (_, report) = doctor(&root, &[("PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS", "1")]);
+    assert_eq!(finding(&report, "steam")["status"], "ok");
+}

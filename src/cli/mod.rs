@@ -9,6 +9,7 @@ mod camera;
 mod completions;
 mod config;
 mod control;
+mod doctor;
 mod engine;
 mod enhance;
 mod evaluate;
@@ -133,6 +134,14 @@ const COMMANDS: &[Subcommand] = &[
         usage: log::usage,
         run: log::run,
         options: &[log::OPTIONS],
+        positionals: None,
+    },
+    Subcommand {
+        name: "doctor",
+        summary: "check that the layer can work here: manifest, runtime, Vulkan, camera, config",
+        usage: doctor::usage,
+        run: doctor::run,
+        options: &[doctor::OPTIONS],
         positionals: None,
     },
     Subcommand {

@@ -1,0 +1,203 @@
+//! The config file and its problems, what the last app that loaded the layer logged about it,
+//! and Steam's pressure-vessel setting.
+
+use super::{var, Finding};
+use contrastxr::config::{self, Env, Source};
+use contrastxr::layer::log;
+use std::path::{Path, PathBuf};
+
+/// A problem sentence without the list of known keys that follows an unknown one.
+fn short(problem: &str) -> &str {
+    problem
+        .split_once(" (known keys:")
+        .map_or(problem, |(head, _)| head)
+}
+
+/// The line a `config PATH:LINE: ...` problem names.
+fn line_of(problem: &str, path: &Path) -> Option<usize> {
+    let rest = problem.strip_prefix(&format!("config {}:", path.display()))?;
+    rest.split(':').next()?.parse().ok()
+}
+
+/// The config file the layer reads, every problem in it (all its tables), and the problems of
+/// this shell's `CONTRASTXR_*` variables.
+pub fn config(env: &Env) -> Finding {
+    const NAME: &str = "config";
+    let Some(path) = config::path::find(env) else {
+        let user = config::path::user_path(env)
+            .map_or("~/.config/contrastxr/config.toml".into(), |p| {
+                p.display().to_string()
+            });
+        return Finding::ok(
+            NAME,
+            format!("no config file: defaults apply (`contrastxr set` writes {user})"),
+        );
+    };
+    let mut problems = match std::fs::read_to_string(&path) {
+        Ok(text) => config::check(Source {
+            path: &path,
+            text: &text,
+        }),
+        Err(e) => vec![format!("config {}: cannot read it ({e})", path.display())],
+    };
+    let from_env = config::load("", env).problems.into_iter();
+    problems.extend(from_env.filter(|p| p.starts_with("environment variable")));
+    let Some(first) = problems.first() else {
+        return Finding::ok(NAME, format!("{}: no problems", path.display()));
+    };
+    let fix = match line_of(first, &path) {
+        Some(line) => format!(
+            "edit {} line {line}; `contrastxr config check` lists every problem",
+            path.display()
+        ),
+        None => "correct the value named above; `contrastxr config check` lists every problem \
+                 in the file"
+            .into(),
+    };
+    Finding::problem(
+        NAME,
+        format!("{} problem(s): {}", problems.len(), short(first)),
+        fix,
+    )
+}
+
+/// The log lines of the last app that loaded the layer (`contrastxr log`'s reading).
+pub struct LastApp {
+    path: Option<PathBuf>,
+    lines: Vec<String>,
+}
+
+/// A line saying the layer is on, or why it is not, and the fix for the latter.
+fn verdict(text: &str) -> Option<(bool, &'static str)> {
+    const LOG: &str = "`contrastxr log` shows the whole log of that app";
+    if text.contains("enhancement began")
+        || text.contains("processing frames")
+        || text.ends_with(": enhancing")
+    {
+        return Some((true, ""));
+    }
+    if text.contains(" off (CONTRASTXR is 0") {
+        return Some((false, "start the app with CONTRASTXR=1"));
+    }
+    if !text.contains("passing") || !text.contains("through") {
+        return None;
+    }
+    Some((
+        false,
+        if text.contains("blend mode") {
+            "if the headset is see-through but its runtime reports another blend mode, set \
+             force = true (or CONTRASTXR_FORCE=1)"
+        } else if text.contains("background") {
+            "check the camera finding and the background setting (`contrastxr camera list`)"
+        } else if text.contains("not a Vulkan session") {
+            "the layer works on Vulkan sessions only: choose the app's Vulkan renderer"
+        } else {
+            LOG
+        },
+    ))
+}
+
+impl LastApp {
+    pub fn read() -> LastApp {
+        let path = log::path();
+        let read = |p: &Path| std::fs::read_to_string(p).unwrap_or_default();
+        let text = path
+            .as_deref()
+            .map_or(String::new(), |p| read(&log::rotated(p)) + &read(p));
+        let lines = log::last_app(&text)
+            .into_iter()
+            .map(str::to_string)
+            .collect();
+        LastApp { path, lines }
+    }
+
+    /// The headset's system name, from the layer's `system "NAME": ...` line.
+    pub fn system(&self) -> Option<&str> {
+        self.lines.iter().rev().find_map(|l| {
+            let text = log::parse_line(l)?.text;
+            let rest = text.strip_prefix("system \"")?;
+            Some(&rest[..rest.find("\": settings")?])
+        })
+    }
+
+    pub fn finding(&self) -> Finding {
+        const NAME: &str = "last-app";
+        let where_ = self
+            .path
+            .as_ref()
+            .map_or("(no log path: HOME unset)".into(), |p| {
+                p.display().to_string()
+            });
+        let Some(first) = self.lines.first().and_then(|l| log::parse_line(l)) else {
+            return Finding::warn(
+                NAME,
+                format!("no app has loaded the layer yet (no start of an app in {where_})"),
+                "start an OpenXR app with CONTRASTXR=1 (for Steam games see \
+                 docs/steam-flatpak.md), then run doctor again",
+            );
+        };
+        let exe = first.text.strip_prefix(log::LOADED).unwrap_or(first.text);
+        let app = format!("last app {exe} (pid {}, {})", first.pid, first.time);
+        let last = self.lines.iter().rev().find_map(|l| {
+            let text = log::parse_line(l)?.text;
+            verdict(text).map(|v| (text, v))
+        });
+        match last {
+            Some((text, (true, _))) => Finding::ok(NAME, format!("{app}: {text}")),
+            Some((text, (false, fix))) => Finding::warn(NAME, format!("{app}: {text}"), fix),
+            None => Finding::warn(
+                NAME,
+                format!("{app} loaded the layer but logged no enhanced frame"),
+                "let the app run until it shows frames; `contrastxr log` shows what it logged",
+            ),
+        }
+    }
+}
+
+/// Steam's own folders, as installed natively or as a Flatpak.
+fn steam_installed() -> bool {
+    let Some(home) = var("HOME").map(PathBuf::from) else {
+        return false;
+    };
+    let data = var("XDG_DATA_HOME").map_or_else(|| home.join(".local/share"), PathBuf::from);
+    [
+        home.join(".steam/steam"),
+        data.join("Steam"),
+        home.join(".var/app/com.valvesoftware.Steam"),
+    ]
+    .iter()
+    .any(|p| p.exists())
+}
+
+/// `PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS`: without it the Steam Linux Runtime container does
+/// not import the host's OpenXR layers.
+pub fn steam() -> Finding {
+    const NAME: &str = "steam";
+    const VAR: &str = "PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS";
+    const OPTIONS: &str = "PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS=1 CONTRASTXR=1 %command%";
+    match std::env::var(VAR).ok() {
+        Some(v) if v == "1" => Finding::ok(
+            NAME,
+            format!(
+                "{VAR}=1 here: Steam games started from this environment import the host's \
+                 OpenXR layers (each still needs CONTRASTXR=1)"
+            ),
+        ),
+        set if steam_installed() => Finding::warn(
+            NAME,
+            format!(
+                "Steam is installed and {VAR} is {}: Steam games run in a container that does \
+                 not import host OpenXR layers without it",
+                set.map_or("not set here".into(), |v| format!("{v:?}, not 1"))
+            ),
+            format!("in each game's launch options: {OPTIONS} (docs/steam-flatpak.md)"),
+        ),
+        _ => Finding::ok(
+            NAME,
+            format!(
+                "Steam not found; for Steam games the launch options need {OPTIONS} \
+                 (docs/steam-flatpak.md)"
+            ),
+        ),
+    }
+}

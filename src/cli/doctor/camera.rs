@@ -1,0 +1,206 @@
+//! The background source the layer would open (the V4L2 cameras and their formats, as
+//! `contrastxr camera list` shows them) and whether the camera's profile is described.
+
+use super::Finding;
+use contrastxr::camera::v4l2::{self, Mode};
+use contrastxr::camera::{parse_source, SourceSpec};
+use contrastxr::config::{self, Env, Who};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// A V4L2 capture node with its formats.
+struct Camera {
+    path: PathBuf,
+    card: String,
+    /// `FOURCC up to WxH`, usable formats first; empty when none can be read.
+    formats: Vec<String>,
+    usable: bool,
+}
+
+fn formats(modes: &[Mode]) -> (Vec<String>, bool) {
+    let mut largest: BTreeMap<(bool, [u8; 4]), (u32, u32)> = BTreeMap::new();
+    for m in modes {
+        let e = largest.entry((m.format.is_none(), m.fourcc)).or_default();
+        if m.width * m.height > e.0 * e.1 {
+            *e = (m.width, m.height);
+        }
+    }
+    let usable = modes.iter().any(|m| m.format.is_some());
+    let list = largest
+        .iter()
+        .map(|((unusable, fourcc), (w, h))| {
+            let note = if *unusable { " (not usable)" } else { "" };
+            format!("{} up to {w}x{h}{note}", String::from_utf8_lossy(fourcc))
+        })
+        .collect();
+    (list, usable)
+}
+
+/// The capture nodes of `dir`, as `camera list` finds them.
+fn cameras(dir: &Path) -> Vec<Camera> {
+    v4l2::device_nodes(dir)
+        .iter()
+        .filter_map(|path| {
+            let (device, info) = v4l2::probe(path).ok()?;
+            if !info.capture {
+                return None;
+            }
+            let (formats, usable) = v4l2::modes(&device)
+                .map(|m| formats(&m))
+                .unwrap_or_default();
+            Some(Camera {
+                path: path.clone(),
+                card: info.card,
+                formats,
+                usable,
+            })
+        })
+        .collect()
+}
+
+fn describe(c: &Camera) -> String {
+    format!(
+        "{} \"{}\": {}",
+        c.path.display(),
+        c.card,
+        if c.formats.is_empty() {
+            "no formats listed".into()
+        } else {
+            c.formats.join(", ")
+        }
+    )
+}
+
+const NAME: &str = "camera";
+const LIST: &str = "`contrastxr camera list` shows the cameras, `contrastxr camera test \
+    /dev/videoN -o DIR` saves frames to see which one looks at the world";
+
+fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
+    let dir = v4l2::device_dir();
+    let found = cameras(&dir);
+    let chosen = match wanted {
+        Some(p) => found.iter().find(|c| c.path == p),
+        None => found.first(),
+    };
+    let Some(c) = chosen else {
+        let what = wanted.map_or(
+            format!("no V4L2 capture device in {}", dir.display()),
+            |p| format!("{} is not a V4L2 capture device here", p.display()),
+        );
+        return Finding::problem(
+            NAME,
+            format!("background = \"{spec}\", but {what}: the layer passes frames through"),
+            format!(
+                "connect the headset's camera and set background = \"v4l2:/dev/videoN\" ({LIST}); \
+                 without a camera, background = \"image:PATH\" or \"color:#RRGGBB\""
+            ),
+        );
+    };
+    if !c.usable {
+        return Finding::problem(
+            NAME,
+            format!(
+                "background = \"{spec}\" opens {}, which offers no usable format",
+                describe(c)
+            ),
+            format!("choose another camera ({LIST})"),
+        );
+    }
+    let others: Vec<String> = found
+        .iter()
+        .filter(|o| o.path != c.path)
+        .map(|o| o.path.display().to_string())
+        .collect();
+    let detail = format!("background = \"{spec}\" opens {}", describe(c));
+    if wanted.is_none() && !others.is_empty() {
+        return Finding::warn(
+            NAME,
+            format!("{detail}; also here: {}", others.join(", ")),
+            format!(
+                "v4l2:auto takes the first camera, often a laptop's webcam: name the headset's \
+                 world camera, background = \"v4l2:/dev/videoN\" ({LIST})"
+            ),
+        );
+    }
+    Finding::ok(NAME, detail)
+}
+
+/// The background source the layer would open with these settings.
+pub fn camera(spec: &str) -> Finding {
+    match parse_source(spec) {
+        Err(e) => Finding::problem(NAME, e, "set background to v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH or color:#RRGGBB"),
+        Ok(SourceSpec::V4l2Auto) => v4l2_finding(spec, None),
+        Ok(SourceSpec::V4l2Device(p)) => v4l2_finding(spec, Some(&p)),
+        Ok(SourceSpec::Image(p) | SourceSpec::Video(p)) if !p.exists() => Finding::problem(
+            NAME,
+            format!("background = \"{spec}\", but {} does not exist", p.display()),
+            "fix the path in the config's background setting",
+        ),
+        Ok(SourceSpec::Image(_) | SourceSpec::Video(_)) => Finding::ok(
+            NAME,
+            format!("background = \"{spec}\": a file stands in for the camera"),
+        ),
+        Ok(SourceSpec::Color(_)) => Finding::ok(
+            NAME,
+            format!("background = \"{spec}\": a flat colour stands in for the camera"),
+        ),
+    }
+}
+
+/// `[device."NAME"]` tables of the config file.
+fn device_tables(env: &Env) -> Vec<String> {
+    let Some(path) = config::path::find(env) else {
+        return Vec::new();
+    };
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    config::file::parse(&text)
+        .map(|f| f.devices.into_iter().map(|(name, _)| name).collect())
+        .unwrap_or_default()
+}
+
+/// Whether the settings for `device` (None: the file's top level) place the background: a
+/// camera profile, or a manual mapping other than the default.
+fn placed(env: &Env, device: Option<&str>) -> Option<&'static str> {
+    let s = config::load_for(Who { app: "", device }, env).settings;
+    if s.registration.profile().is_some() {
+        Some("a camera profile")
+    } else if s.manual_mapping_set() {
+        Some("a manual fov_scale/fov_offset mapping")
+    } else {
+        None
+    }
+}
+
+/// Whether the camera's profile is described, for the headset the last app ran on when the
+/// log names it.
+pub fn profile(env: &Env, system: Option<&str>) -> Finding {
+    const NAME: &str = "camera-profile";
+    let tables = device_tables(env);
+    let mut places: Vec<Option<String>> = vec![None];
+    match system {
+        Some(s) => places.push(Some(s.to_string())),
+        None => places.extend(tables.iter().cloned().map(Some)),
+    }
+    for place in &places {
+        if let Some(what) = placed(env, place.as_deref()) {
+            let table = place.as_ref().map_or("the config's top level".into(), |d| {
+                format!("[device.{d:?}]")
+            });
+            return Finding::ok(NAME, format!("{what} in {table} places the background"));
+        }
+    }
+    let device = system.map_or("<systemName>".to_string(), str::to_string);
+    let whose = system.map_or(String::new(), |s| format!(" for {s:?}"));
+    Finding::warn(
+        NAME,
+        format!(
+            "no camera profile{whose}: the background is placed with the default mapping (the \
+             paper's HoloLens values), which will not line up with what you see"
+        ),
+        format!(
+            "describe the camera in [device.{device:?}] (docs/calibration.md; the name is in \
+             `contrastxr log` once an app ran), then run `contrastxr calibrate --device {device:?}` \
+             wearing the headset"
+        ),
+    )
+}

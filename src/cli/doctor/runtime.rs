@@ -1,0 +1,208 @@
+//! The active OpenXR runtime (as the loader finds it) and the Vulkan devices.
+
+use super::{var, Finding};
+use ash::vk;
+use std::path::{Path, PathBuf};
+
+/// Where the loader looks for the active runtime, in its order (`FindXDGConfigFile`):
+/// `$XDG_CONFIG_HOME` (default `~/.config`), each of `$XDG_CONFIG_DIRS` (default `/etc/xdg`),
+/// then `/etc`; in each `openxr/1/active_runtime.<arch>.json`, then `active_runtime.json`.
+fn config_bases() -> Vec<PathBuf> {
+    let mut bases: Vec<PathBuf> = var("XDG_CONFIG_HOME")
+        .map(PathBuf::from)
+        .or_else(|| var("HOME").map(|h| Path::new(&h).join(".config")))
+        .into_iter()
+        .collect();
+    let dirs = var("XDG_CONFIG_DIRS").unwrap_or_else(|| "/etc/xdg".into());
+    bases.extend(dirs.split(':').filter(|d| !d.is_empty()).map(PathBuf::from));
+    bases.push(PathBuf::from("/etc"));
+    bases
+}
+
+fn candidates() -> Vec<PathBuf> {
+    let arch = format!("active_runtime.{}.json", std::env::consts::ARCH);
+    config_bases()
+        .iter()
+        .flat_map(|b| {
+            let dir = b.join("openxr/1");
+            [dir.join(&arch), dir.join("active_runtime.json")]
+        })
+        .collect()
+}
+
+const INSTALL_RUNTIME: &str = "install an OpenXR runtime and make it the active one (Debian: \
+    `sudo apt install monado-service libopenxr1-monado`, which links \
+    /etc/xdg/openxr/1/active_runtime.json to it), or point XR_RUNTIME_JSON at its manifest";
+
+/// The runtime manifest's name and library, resolved as the loader resolves it.
+fn read_runtime(file: &Path) -> Result<(String, PathBuf), String> {
+    let text = std::fs::read_to_string(file).map_err(|e| format!("cannot read it ({e})"))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("not valid JSON ({e})"))?;
+    let runtime = &v["runtime"];
+    let library = runtime["library_path"]
+        .as_str()
+        .ok_or("it has no runtime.library_path")?;
+    let name = runtime["name"].as_str().unwrap_or("(unnamed)").to_string();
+    let path = Path::new(library);
+    if !library.contains('/') || path.is_absolute() {
+        return Ok((name, path.to_path_buf()));
+    }
+    let real = file.canonicalize().unwrap_or_else(|_| file.to_path_buf());
+    Ok((name, real.parent().unwrap_or(Path::new("/")).join(path)))
+}
+
+pub fn runtime() -> Finding {
+    const NAME: &str = "runtime";
+    let (file, how) = match var("XR_RUNTIME_JSON") {
+        Some(f) => (PathBuf::from(f), " (XR_RUNTIME_JSON)"),
+        None => match candidates().into_iter().find(|p| p.exists()) {
+            Some(f) => (f, ""),
+            None => {
+                let dirs: Vec<String> = config_bases()
+                    .iter()
+                    .map(|b| b.join("openxr/1").display().to_string())
+                    .collect();
+                return Finding::problem(
+                    NAME,
+                    format!(
+                        "no active OpenXR runtime: XR_RUNTIME_JSON is unset and none of {} holds \
+                         active_runtime.json (or active_runtime.{}.json)",
+                        dirs.join(", "),
+                        std::env::consts::ARCH
+                    ),
+                    INSTALL_RUNTIME,
+                );
+            }
+        },
+    };
+    let (name, library) = match read_runtime(&file) {
+        Ok(r) => r,
+        Err(why) => {
+            return Finding::problem(
+                NAME,
+                format!("active runtime manifest {}{how}: {why}", file.display()),
+                INSTALL_RUNTIME,
+            )
+        }
+    };
+    let lib = library.display();
+    if library.is_absolute() && !library.exists() {
+        return Finding::problem(
+            NAME,
+            format!(
+                "active runtime {name} ({}{how}) names {lib}, which does not exist",
+                file.display()
+            ),
+            format!("reinstall the runtime, or select another one; {INSTALL_RUNTIME}"),
+        );
+    }
+    let lookup = if library.is_absolute() {
+        ""
+    } else {
+        " (looked up by the dynamic linker)"
+    };
+    Finding::ok(
+        NAME,
+        format!(
+            "active runtime {name} from {}{how}, library {lib}{lookup}",
+            file.display()
+        ),
+    )
+}
+
+const INSTALL_VULKAN: &str = "install the Vulkan loader and a driver: `sudo apt install \
+    libvulkan1 mesa-vulkan-drivers` (or your GPU vendor's Vulkan driver)";
+
+fn device_type(t: vk::PhysicalDeviceType) -> &'static str {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "CPU, software",
+        _ => "other",
+    }
+}
+
+/// Each physical device as `#N NAME (TYPE, Vulkan X.Y)`, and whether it is a CPU device.
+fn describe(instance: &ash::Instance) -> Result<Vec<(String, bool)>, vk::Result> {
+    // SAFETY: a valid instance.
+    let physicals = unsafe { instance.enumerate_physical_devices() }?;
+    Ok(physicals
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            // SAFETY: p was enumerated from this instance.
+            let props = unsafe { instance.get_physical_device_properties(p) };
+            let name = props
+                .device_name_as_c_str()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|_| "unknown device".into());
+            let v = props.api_version;
+            let text = format!(
+                "#{i} {name} ({}, Vulkan {}.{})",
+                device_type(props.device_type),
+                vk::api_version_major(v),
+                vk::api_version_minor(v)
+            );
+            (text, props.device_type == vk::PhysicalDeviceType::CPU)
+        })
+        .collect())
+}
+
+/// The Vulkan devices, found the way the engine finds them (`src/gpu/device.rs`): the loader
+/// `libvulkan.so.1` through ash, a Vulkan 1.1 instance, vkEnumeratePhysicalDevices.
+pub fn vulkan() -> Finding {
+    const NAME: &str = "vulkan";
+    // SAFETY: loads libvulkan.so.1, whose initialisation has no preconditions.
+    let entry = match unsafe { ash::Entry::load() } {
+        Ok(e) => e,
+        Err(e) => {
+            return Finding::problem(
+                NAME,
+                format!("cannot load the Vulkan loader libvulkan.so.1 ({e})"),
+                INSTALL_VULKAN,
+            )
+        }
+    };
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"contrastxr doctor")
+        .api_version(vk::API_VERSION_1_1);
+    let info = vk::InstanceCreateInfo::default().application_info(&app);
+    // SAFETY: info and what it points to live until the call returns.
+    let instance = match unsafe { entry.create_instance(&info, None) } {
+        Ok(i) => i,
+        Err(e) => {
+            let why = match e {
+                vk::Result::ERROR_INCOMPATIBLE_DRIVER => "no Vulkan driver is installed".into(),
+                e => format!("vkCreateInstance failed: {e}"),
+            };
+            return Finding::problem(NAME, why, INSTALL_VULKAN);
+        }
+    };
+    let devices = describe(&instance);
+    // SAFETY: the instance has no children.
+    unsafe { instance.destroy_instance(None) };
+    match devices {
+        Err(e) => Finding::problem(
+            NAME,
+            format!("vkEnumeratePhysicalDevices failed: {e}"),
+            INSTALL_VULKAN,
+        ),
+        Ok(d) if d.is_empty() => Finding::problem(NAME, "no Vulkan device", INSTALL_VULKAN),
+        Ok(d) => {
+            let list: Vec<&str> = d.iter().map(|(t, _)| t.as_str()).collect();
+            let detail = format!("{} device(s): {}", d.len(), list.join("; "));
+            if d.iter().all(|(_, cpu)| *cpu) {
+                Finding::warn(
+                    NAME,
+                    detail + "; only a software device, too slow for a headset",
+                    "install your GPU's Vulkan driver (mesa-vulkan-drivers for AMD and Intel, \
+                     the NVIDIA driver for NVIDIA); apps render on their own device",
+                )
+            } else {
+                Finding::ok(NAME, detail)
+            }
+        }
+    }
+}
