@@ -76,7 +76,10 @@ impl Commands {
                 "command buffer still in flight".into(),
             ));
         }
-        super::engine::begin(gpu, self.cmd)
+        let info = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: cmd is not pending (its last submission was waited for, checked above).
+        unsafe { gpu.device.begin_command_buffer(self.cmd, &info) }.vk("vkBeginCommandBuffer")
     }
 
     /// Ends recording and submits on the device's queue with the fence.

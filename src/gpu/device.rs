@@ -52,7 +52,7 @@ pub struct DeviceOptions {
     pub validation: bool,
     /// Take the physical device with this vendor, device and pipelineCacheUUID instead of
     /// `index` (a device of the same kind as someone else's).
-    pub matching: Option<super::pipeline_cache::CacheKey>,
+    pub matching: Option<DeviceKind>,
 }
 
 impl DeviceOptions {
@@ -246,7 +246,7 @@ impl GpuDevice {
         let index = match &options.matching {
             Some(key) => physicals
                 .iter()
-                .position(|&p| super::pipeline_cache::CacheKey::of_physical(instance, p) == *key)
+                .position(|&p| DeviceKind::of_physical(instance, p) == *key)
                 .ok_or_else(|| GpuError::NoDevice("no device of the wanted kind".into()))?,
             None => options.index,
         };
@@ -385,6 +385,31 @@ impl Drop for GpuDevice {
                 m.loader.destroy_debug_utils_messenger(m.raw, None);
             }
             self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// A kind of device: its vendor, device and pipelineCacheUUID (which changes with the driver).
+/// What a pipeline cache's data belongs to, and how a device of the same kind is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct DeviceKind {
+    pub vendor: u32,
+    pub device: u32,
+    pub uuid: [u8; vk::UUID_SIZE],
+}
+
+impl DeviceKind {
+    pub fn of(gpu: &GpuDevice) -> DeviceKind {
+        DeviceKind::of_physical(&gpu.instance, gpu.physical)
+    }
+
+    pub fn of_physical(instance: &ash::Instance, physical: vk::PhysicalDevice) -> DeviceKind {
+        // SAFETY: the caller passes a physical device of this instance.
+        let p = unsafe { instance.get_physical_device_properties(physical) };
+        DeviceKind {
+            vendor: p.vendor_id,
+            device: p.device_id,
+            uuid: p.pipeline_cache_uuid,
         }
     }
 }

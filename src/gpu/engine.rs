@@ -11,7 +11,8 @@ use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
 use super::pipelines::{
-    self, BuildMode, BuildReport, Pipelines, PushConstants, ShaderId, BINDING_COUNT, IMAGE_BINDING,
+    self, BuildMode, BuildReport, Pipelines, PushConstants, ShaderId, WarmUpHook, BINDING_COUNT,
+    IMAGE_BINDING,
 };
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
@@ -340,8 +341,13 @@ const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
 impl Engine {
     /// Sets up the pipelines, built as `mode` says; `max_views` bounds how many ViewTargets
     /// may exist at once.
-    pub fn new(gpu: &GpuDevice, max_views: u32, mode: BuildMode) -> Result<Engine, GpuError> {
-        let mut pipelines = Pipelines::new(gpu, mode)?;
+    pub fn new(
+        gpu: &GpuDevice,
+        max_views: u32,
+        mode: BuildMode,
+        warm_up: Option<WarmUpHook>,
+    ) -> Result<Engine, GpuError> {
+        let mut pipelines = Pipelines::new(gpu, mode, warm_up)?;
         let max_sets = max_views + MAX_BACKGROUNDS;
         let sizes = [
             vk::DescriptorPoolSize::default()
@@ -904,14 +910,6 @@ impl Engine {
         self.pool = vk::DescriptorPool::null();
         self.pipelines.destroy(gpu);
     }
-}
-
-/// Begins a one-time-submit command buffer.
-pub fn begin(gpu: &GpuDevice, cmd: vk::CommandBuffer) -> Result<(), GpuError> {
-    let info =
-        vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-    // SAFETY: cmd is not pending (the caller waited for its fence).
-    unsafe { gpu.device.begin_command_buffer(cmd, &info) }.vk("vkBeginCommandBuffer")
 }
 
 #[cfg(test)]

@@ -50,7 +50,7 @@ impl OfflineEngine {
 
     pub fn with_options(options: &DeviceOptions) -> Result<OfflineEngine, GpuError> {
         let gpu = GpuDevice::create(options)?;
-        let engine = Engine::new(&gpu, 4, BuildMode::Inline)?;
+        let engine = Engine::new(&gpu, 4, BuildMode::Inline, None)?;
         let commands = RefCell::new(Commands::new(&gpu)?);
         Ok(OfflineEngine {
             engine,

@@ -4,7 +4,7 @@
 //! one built even when it creates a new VkDevice. A file that is corrupt, truncated or written
 //! for another device is ignored and replaced; the cache is only ever an optimisation.
 
-use super::device::GpuDevice;
+use super::device::{DeviceKind, GpuDevice};
 use super::error::{GpuError, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
@@ -18,29 +18,7 @@ const FILE_HEADER: usize = 8 + 8 + 8;
 /// device, pipelineCacheUUID.
 const VK_HEADER: usize = 16 + vk::UUID_SIZE;
 
-/// Which device a cache's data belongs to (what the driver's header must say).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct CacheKey {
-    pub vendor: u32,
-    pub device: u32,
-    pub uuid: [u8; vk::UUID_SIZE],
-}
-
-impl CacheKey {
-    pub fn of(gpu: &GpuDevice) -> CacheKey {
-        CacheKey::of_physical(&gpu.instance, gpu.physical)
-    }
-
-    pub fn of_physical(instance: &ash::Instance, physical: vk::PhysicalDevice) -> CacheKey {
-        // SAFETY: the caller passes a physical device of this instance.
-        let p = unsafe { instance.get_physical_device_properties(physical) };
-        CacheKey {
-            vendor: p.vendor_id,
-            device: p.device_id,
-            uuid: p.pipeline_cache_uuid,
-        }
-    }
-
+impl DeviceKind {
     fn file_name(&self) -> String {
         let uuid: String = self.uuid.iter().map(|b| format!("{b:02x}")).collect();
         format!("pipelines-{uuid}.bin")
@@ -78,7 +56,7 @@ fn checksum(data: &[u8]) -> u64 {
 }
 
 /// The data of a cache file, if it is whole and for this device.
-pub fn parse_file(bytes: &[u8], key: &CacheKey) -> Result<Vec<u8>, String> {
+pub fn parse_file(bytes: &[u8], key: &DeviceKind) -> Result<Vec<u8>, String> {
     let word = |at: usize| {
         bytes
             .get(at..at + 8)
@@ -107,8 +85,8 @@ pub fn file_bytes(data: &[u8]) -> Vec<u8> {
 }
 
 /// The newest data per device kind, shared by the sessions of this process.
-fn in_memory() -> std::sync::MutexGuard<'static, HashMap<CacheKey, Vec<u8>>> {
-    static MEMORY: OnceLock<Mutex<HashMap<CacheKey, Vec<u8>>>> = OnceLock::new();
+fn in_memory() -> std::sync::MutexGuard<'static, HashMap<DeviceKind, Vec<u8>>> {
+    static MEMORY: OnceLock<Mutex<HashMap<DeviceKind, Vec<u8>>>> = OnceLock::new();
     let m = MEMORY.get_or_init(Default::default);
     // Only map operations happen under this lock.
     m.lock().unwrap_or_else(|p| p.into_inner())
@@ -128,14 +106,14 @@ pub enum Origin {
 /// A device's VkPipelineCache and what it started from.
 pub struct PipelineCache {
     pub raw: vk::PipelineCache,
-    pub key: CacheKey,
+    pub key: DeviceKind,
     pub origin: Origin,
     /// Bytes of data it started with.
     pub loaded_bytes: usize,
 }
 
 /// The data to start from: this process's, else the file's, else none (and why).
-fn initial_data(key: &CacheKey) -> (Vec<u8>, Origin) {
+fn initial_data(key: &DeviceKind) -> (Vec<u8>, Origin) {
     if let Some(data) = in_memory().get(key) {
         return (data.clone(), Origin::Process);
     }
@@ -156,7 +134,7 @@ fn initial_data(key: &CacheKey) -> (Vec<u8>, Origin) {
 
 impl PipelineCache {
     pub fn new(gpu: &GpuDevice) -> Result<PipelineCache, GpuError> {
-        let key = CacheKey::of(gpu);
+        let key = DeviceKind::of(gpu);
         let (data, mut origin) = initial_data(&key);
         let info = vk::PipelineCacheCreateInfo::default().initial_data(&data);
         // SAFETY: valid create info on a valid device; the data's header matches this device.
@@ -190,7 +168,11 @@ impl PipelineCache {
 
 /// Keeps a cache's data for later sessions of this process and writes its file (atomically: a
 /// reader sees the old file or the new one). Returns the bytes written.
-pub fn save(device: &ash::Device, raw: vk::PipelineCache, key: &CacheKey) -> Result<usize, String> {
+pub fn save(
+    device: &ash::Device,
+    raw: vk::PipelineCache,
+    key: &DeviceKind,
+) -> Result<usize, String> {
     // SAFETY: the cache is valid; vkGetPipelineCacheData is internally synchronised.
     let data = unsafe { device.get_pipeline_cache_data(raw) }
         .map_err(|e| format!("vkGetPipelineCacheData failed: {e}"))?;
@@ -218,8 +200,8 @@ fn write_atomically(dir: &std::path::Path, name: &str, bytes: &[u8]) -> Result<(
 mod tests {
     use super::*;
 
-    fn key() -> CacheKey {
-        CacheKey {
+    fn key() -> DeviceKind {
+        DeviceKind {
             vendor: 0x10005,
             device: 0,
             uuid: *b"0123456789abcdef",
@@ -227,7 +209,7 @@ mod tests {
     }
 
     /// A driver header for `key` followed by a body.
-    fn driver_data(key: &CacheKey, body: &[u8]) -> Vec<u8> {
+    fn driver_data(key: &DeviceKind, body: &[u8]) -> Vec<u8> {
         let mut d = Vec::new();
         d.extend_from_slice(&(VK_HEADER as u32).to_le_bytes());
         d.extend_from_slice(&1u32.to_le_bytes());

@@ -7,11 +7,11 @@
 //! [`PipelineCache`], and a pipeline not built yet is [`GpuError::Pending`]. The offline tools
 //! build on first use ([`BuildMode::Inline`]).
 
+use super::device::DeviceKind;
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
-use super::pipeline_cache::{self, CacheKey, Origin, PipelineCache};
+use super::pipeline_cache::{self, Origin, PipelineCache};
 use super::shaders::{self, ShaderModule};
-use super::warm_up::WarmUp;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
@@ -93,6 +93,10 @@ impl PushConstants {
         }
     }
 }
+
+/// Runs a shader once, on the building thread, before it is built for the engine's device: a
+/// CPU driver compiles at first dispatch (see gpu/warm_up.rs).
+pub type WarmUpHook = Box<dyn FnMut(ShaderId) + Send>;
 
 /// Where pipelines are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -203,9 +207,7 @@ struct Shared {
     device: ash::Device,
     layout: vk::PipelineLayout,
     cache: vk::PipelineCache,
-    cache_key: CacheKey,
-    /// The driver compiles at first dispatch: warm each shader up on a device of our own.
-    warm_up: bool,
+    cache_key: DeviceKind,
     modules: Vec<&'static ShaderModule>,
     state: Mutex<BuildState>,
     /// Signalled when a request is queued (to the builder) and when a build ends (to waiters).
@@ -218,11 +220,10 @@ impl Shared {
         self.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    fn build(&self, k: usize, warm_up: Option<&mut Option<WarmUp>>) -> Slot {
+    fn build(&self, k: usize, warm_up: Option<&mut WarmUpHook>) -> Slot {
         let t = Instant::now();
-        if let Some(w) = warm_up {
-            // A failed warm-up only costs the compile at first dispatch later.
-            WarmUp::once(w, self.cache_key, ShaderId(k));
+        if let Some(warm_up) = warm_up {
+            warm_up(ShaderId(k));
         }
         let slot = match compute_pipeline(self, self.modules[k]) {
             Ok(p) => Slot::Built(p),
@@ -247,7 +248,13 @@ pub struct Pipelines {
 }
 
 impl Pipelines {
-    pub fn new(gpu: &GpuDevice, mode: BuildMode) -> Result<Pipelines, GpuError> {
+    /// Pipelines built as `mode` says; in BuildMode::Background, `warm_up` runs before each
+    /// build.
+    pub fn new(
+        gpu: &GpuDevice,
+        mode: BuildMode,
+        warm_up: Option<WarmUpHook>,
+    ) -> Result<Pipelines, GpuError> {
         let mut p = Pipelines {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
@@ -257,14 +264,14 @@ impl Pipelines {
             builder: None,
         };
         // On failure, destroy what was made so far (null handles are ignored by vkDestroy*).
-        if let Err(e) = p.create(gpu) {
+        if let Err(e) = p.create(gpu, warm_up) {
             p.destroy(gpu);
             return Err(e);
         }
         Ok(p)
     }
 
-    fn create(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
+    fn create(&mut self, gpu: &GpuDevice, warm_up: Option<WarmUpHook>) -> Result<(), GpuError> {
         self.create_layouts(gpu)?;
         let cache = PipelineCache::new(gpu)?;
         let modules = shaders::all();
@@ -281,7 +288,6 @@ impl Pipelines {
             layout: self.layout,
             cache: cache.raw,
             cache_key: cache.key,
-            warm_up: self.mode == BuildMode::Background && WarmUp::needed(gpu),
             state: Mutex::new(BuildState {
                 slots: vec![Slot::Missing; modules.len()],
                 queue: VecDeque::new(),
@@ -297,7 +303,7 @@ impl Pipelines {
         if self.mode == BuildMode::Background {
             let spawned = std::thread::Builder::new()
                 .name("contrastxr-pipelines".into())
-                .spawn(move || build_requests(&shared));
+                .spawn(move || build_requests(&shared, warm_up));
             self.builder = Some(spawned.map_err(|e| {
                 GpuError::Unsupported(format!("cannot start the pipeline thread: {e}"))
             })?);
@@ -478,10 +484,7 @@ fn save_if_changed(shared: &Shared) {
 
 /// The building thread: builds queued shaders until stopped; saves the cache whenever the
 /// queue runs empty after builds.
-fn build_requests(shared: &Shared) {
-    // Made at the first build; None when not needed or when it cannot be made.
-    // Made when a shader first needs warming up (never when the driver does not need it).
-    let mut warm_up: Option<WarmUp> = None;
+fn build_requests(shared: &Shared, mut warm_up: Option<WarmUpHook>) {
     loop {
         let next = {
             let mut st = shared.lock();
@@ -503,8 +506,7 @@ fn build_requests(shared: &Shared) {
             save_if_changed(shared);
             continue;
         };
-        let warm = shared.warm_up.then_some(&mut warm_up);
-        let slot = shared.build(k, warm);
+        let slot = shared.build(k, warm_up.as_mut());
         shared.lock().slots[k] = slot;
         shared.changed.notify_all();
     }

@@ -6,12 +6,12 @@
 //! happens there, and the driver's shader disk cache hands the result to the app's device.
 
 use super::commands::Commands;
+use super::device::DeviceKind;
 use super::device::{DeviceOptions, GpuDevice};
 use super::engine::{BackgroundFrame, Engine, Placement, ViewTarget};
 use super::error::GpuError;
 use super::format::{PixelFormat, PixelLayout};
-use super::pipeline_cache::CacheKey;
-use super::pipelines::{self, BuildMode, PushConstants, ShaderId};
+use super::pipelines::{self, BuildMode, PushConstants, ShaderId, WarmUpHook};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use ash::vk;
@@ -20,8 +20,8 @@ use std::sync::{Mutex, OnceLock};
 
 /// The shaders warmed up in this process, per device kind: the driver's disk cache has them,
 /// so later sessions skip them (and make no device of their own at all).
-fn warmed() -> std::sync::MutexGuard<'static, HashSet<(CacheKey, ShaderId)>> {
-    static WARMED: OnceLock<Mutex<HashSet<(CacheKey, ShaderId)>>> = OnceLock::new();
+fn warmed() -> std::sync::MutexGuard<'static, HashSet<(DeviceKind, ShaderId)>> {
+    static WARMED: OnceLock<Mutex<HashSet<(DeviceKind, ShaderId)>>> = OnceLock::new();
     let m = WARMED.get_or_init(Default::default);
     // Only set operations happen under this lock.
     m.lock().unwrap_or_else(|p| p.into_inner())
@@ -44,6 +44,18 @@ pub struct WarmUp {
 }
 
 impl WarmUp {
+    /// The hook that warms each shader up before it is built for `gpu`, where its driver
+    /// compiles at first dispatch (the warm-up's device is made at the first shader that needs
+    /// it); None for other drivers.
+    pub fn hook(gpu: &GpuDevice) -> Option<WarmUpHook> {
+        if !WarmUp::needed(gpu) {
+            return None;
+        }
+        let kind = DeviceKind::of(gpu);
+        let mut slot: Option<WarmUp> = None;
+        Some(Box::new(move |id| WarmUp::once(&mut slot, kind, id)))
+    }
+
     /// Whether a device compiles at first dispatch (a CPU driver).
     pub fn needed(gpu: &GpuDevice) -> bool {
         // SAFETY: physical belongs to this instance.
@@ -53,14 +65,14 @@ impl WarmUp {
 
     /// A device of the same kind as `key`'s, with a camera frame and a view (the widest pixel
     /// format, so every variant stays inside the buffers) zero-filled.
-    pub fn new(key: CacheKey) -> Result<WarmUp, GpuError> {
+    pub fn new(key: DeviceKind) -> Result<WarmUp, GpuError> {
         // CONTRASTXR_VK_VALIDATION=1 validates the warm-up's own device too.
         let options = DeviceOptions {
             matching: Some(key),
             ..DeviceOptions::from_env()
         };
         let gpu = GpuDevice::create(&options)?;
-        let mut engine = Engine::new(&gpu, 1, BuildMode::Inline)?;
+        let mut engine = Engine::new(&gpu, 1, BuildMode::Inline, None)?;
         let parts = Commands::new(&gpu).and_then(|commands| {
             let mut bg = engine.create_background(&gpu, SIZE, Placement::OFFLINE)?;
             let format = PixelFormat {
@@ -104,7 +116,7 @@ impl WarmUp {
 
     /// Warms `id` up unless this process already did, making the device in `slot` first if
     /// needed. Failures are not fatal: the compile then happens at first dispatch.
-    pub fn once(slot: &mut Option<WarmUp>, key: CacheKey, id: ShaderId) {
+    pub fn once(slot: &mut Option<WarmUp>, key: DeviceKind, id: ShaderId) {
         if warmed().contains(&(key, id)) {
             return;
         }

@@ -8,7 +8,7 @@
 //! enhancement and before the copy back to the app's image. The app's other pixels are left
 //! as the enhancement made them, and captures show what the runtime gets.
 
-use super::processor::ViewKey;
+use super::work::ViewKey;
 use crate::algorithm::params::{Method, ViewMode};
 use crate::colour;
 use crate::config::Settings;

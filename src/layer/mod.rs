@@ -18,5 +18,6 @@ pub mod session;
 pub mod settings;
 mod state;
 mod swapchain;
+mod work;
 
 pub use entry::{xrNegotiateLoaderApiLayerInterface, LAYER_NAME};

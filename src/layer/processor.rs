@@ -2,15 +2,15 @@
 //! into the engine's buffer, enhance it, and copy it back, on the app's device and queue.
 //! The image is still the app's at that point (its release is held until xrEndFrame).
 
+use super::work::{ViewKey, WorkItem};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::commands::Commands;
 use crate::gpu::engine::barrier;
 use crate::gpu::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
 use crate::gpu::pipelines::{BuildMode, BuildReport, ShaderId};
-use crate::gpu::{
-    BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, PixelFormat, Placement, ViewTarget,
-};
+use crate::gpu::warm_up::WarmUp;
+use crate::gpu::{BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, Placement, ViewTarget};
 use crate::image::RgbaImage;
 use ash::vk;
 use std::collections::HashMap;
@@ -22,36 +22,6 @@ const PIPELINE_WAIT: Duration = Duration::from_secs(120);
 
 /// Most view regions a session keeps buffers for (2 eyes x a few swapchains and quads).
 const MAX_VIEWS: u32 = 16;
-
-/// One region of a swapchain image to enhance.
-#[derive(Clone, Debug)]
-pub struct WorkItem {
-    pub key: ViewKey,
-    pub image: vk::Image,
-    pub format: PixelFormat,
-    pub vk_format: vk::Format,
-    /// Where this view's display pixels lie in the camera image.
-    pub mapping: CameraMapping,
-}
-
-impl WorkItem {
-    fn region(&self) -> ImageRegion {
-        ImageRegion {
-            image: self.image,
-            array_index: self.key.array_index,
-            offset: self.key.offset,
-            extent: self.key.extent,
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct ViewKey {
-    pub swapchain: u64,
-    pub offset: (i32, i32),
-    pub extent: (u32, u32),
-    pub array_index: u32,
-}
 
 struct PreparedView {
     target: ViewTarget,
@@ -88,7 +58,8 @@ impl Processor {
     /// the engine's own thread, `first` first.
     pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<Processor, GpuError> {
         let started = Instant::now();
-        let mut engine = Engine::new(&gpu, MAX_VIEWS, BuildMode::Background)?;
+        let warm_up = WarmUp::hook(&gpu);
+        let mut engine = Engine::new(&gpu, MAX_VIEWS, BuildMode::Background, warm_up)?;
         engine.request(first);
         let commands = match Commands::new(&gpu) {
             Ok(c) => c,

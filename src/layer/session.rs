@@ -6,10 +6,11 @@
 
 use super::capture;
 use super::ffi::{find_in_chain, guard};
-use super::processor::{Processor, ViewKey, WorkItem};
+use super::processor::Processor;
 use super::registration::{self, ViewGeometry};
 use super::settings::{self, Settings};
 use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
+use super::work::{ViewKey, WorkItem};
 use super::{device, log, swapchain};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;

@@ -8,6 +8,7 @@ use openxr as xr;
 use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::gpu::Gpu;
+use crate::scene::Scene;
 use crate::swapchain::PatternSwapchain;
 use crate::timing::{Calls, Startup};
 
@@ -33,24 +34,10 @@ pub struct Stats {
     /// --timing: a few numbers).
     pub startup: Startup,
     /// Resident memory and descriptors every 50 submitted frames.
-    pub memory: Vec<crate::report::Sample>,
+    pub memory: Vec<crate::memory::Sample>,
     /// With --script: each op's XrResult, and whether the script ran to its end.
     pub script: Vec<String>,
     pub script_ran: bool,
-}
-
-/// What the frame loop draws with.
-pub struct Scene<'a> {
-    pub session: &'a xr::Session<xr::Vulkan>,
-    pub space: &'a xr::Space,
-    pub gpu: &'a Gpu,
-    pub projection: PatternSwapchain,
-    pub quad: Option<PatternSwapchain>,
-    pub view_size: (u32, u32),
-    pub blend_mode: xr::EnvironmentBlendMode,
-    pub format: crate::format::SwapchainFormat,
-    /// With --pipelined: the projection image already acquired and waited for the next frame.
-    pub ahead: Option<u32>,
 }
 
 pub fn run(
@@ -181,7 +168,7 @@ fn frame(
     if stats.frames_submitted % 50 == 0 {
         stats
             .memory
-            .push(crate::report::Sample::now(stats.frames_submitted));
+            .push(crate::memory::Sample::now(stats.frames_submitted));
     }
     Ok(())
 }

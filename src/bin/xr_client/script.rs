@@ -19,7 +19,7 @@ use openxr::sys;
 
 use crate::error::{fail, Context, Result};
 use crate::format::SwapchainFormat;
-use crate::frame_loop::Scene;
+use crate::scene::Scene;
 use crate::swapchain::{barrier, record_transfer_write};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
