@@ -3,7 +3,7 @@
 //! codes the layer does not handle pass through unchanged.
 
 use super::dispatch::NextFns;
-use super::ffi::{c_str, guard};
+use super::ffi::{c_str, guard, LayerError};
 use super::settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
 use super::{log, session, swapchain};
@@ -32,7 +32,7 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
         xr::Result::ERROR_INITIALIZATION_FAILED,
         || {
             if loader_info.is_null() || request.is_null() {
-                return xr::Result::ERROR_INITIALIZATION_FAILED;
+                return Err(LayerError::Loader("bad negotiation or chain structs"));
             }
             // SAFETY: the loader passes valid structs (checked non-null above).
             let (info, req) = unsafe { (&*loader_info, &mut *request) };
@@ -41,13 +41,13 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
                 || info.min_interface_version > 1
                 || info.max_interface_version < 1
             {
-                return xr::Result::ERROR_INITIALIZATION_FAILED;
+                return Err(LayerError::Loader("bad negotiation or chain structs"));
             }
             req.layer_interface_version = 1;
             req.layer_api_version = xr::CURRENT_API_VERSION;
             req.get_instance_proc_addr = Some(get_instance_proc_addr);
             req.create_api_layer_instance = Some(create_api_layer_instance);
-            xr::Result::SUCCESS
+            Ok(xr::Result::SUCCESS)
         },
     )
 }
@@ -83,7 +83,7 @@ unsafe extern "system" fn create_api_layer_instance(
                 .unwrap_or(std::ptr::null_mut());
             // SAFETY: non-null next_info points to the loader's chain entry for this layer.
             let Some(next) = (unsafe { next_info.as_ref() }) else {
-                return xr::Result::ERROR_INITIALIZATION_FAILED;
+                return Err(LayerError::Loader("bad negotiation or chain structs"));
             };
             // Hand the next layer the chain without our entry.
             // SAFETY: layer_info is valid (its next_info was read above).
@@ -93,13 +93,13 @@ unsafe extern "system" fn create_api_layer_instance(
             let result =
                 unsafe { (next.next_create_api_layer_instance)(info, &forwarded, instance) };
             if result.into_raw() < 0 {
-                return result;
+                return Ok(result);
             }
             let _ = FIRST_NEXT_GIPA.set(next.next_get_instance_proc_addr);
             // SAFETY: instance was just written by a successful create call.
             let handle = unsafe { *instance };
             register_instance(handle, next.next_get_instance_proc_addr, info);
-            result
+            Ok(result)
         },
     )
 }
@@ -232,7 +232,7 @@ unsafe extern "system" fn get_instance_proc_addr(
                 .map(|s| s.next.get_instance_proc_addr)
                 .or(FIRST_NEXT_GIPA.get().copied());
             let Some(next_gipa) = next_gipa else {
-                return xr::Result::ERROR_HANDLE_INVALID;
+                return Err(LayerError::UnknownHandle("XrInstance"));
             };
             // SAFETY: the app passes a NUL-terminated name.
             let wanted = unsafe { c_str(name) }.unwrap_or("");
@@ -251,7 +251,7 @@ unsafe extern "system" fn get_instance_proc_addr(
                 // SAFETY: as above; our gipa must stay in the chain even when disabled.
                 unsafe { *function = intercepted(wanted) };
             }
-            result
+            Ok(result)
         },
     )
 }
@@ -261,9 +261,7 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
         "xrDestroyInstance",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let Some(state) = state::instance(instance) else {
-                return xr::Result::ERROR_HANDLE_INVALID;
-            };
+            let state = state::instance(instance).ok_or(LayerError::UnknownHandle("XrInstance"))?;
             // Sessions left alive by the app die with the instance: drop our GPU state first.
             // Lock order: sessions are locked only after the registry lock is dropped.
             let all: Vec<(u64, Arc<std::sync::Mutex<state::SessionState>>)> = state::registry()
@@ -282,7 +280,7 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
             state::registry().instances.remove(&instance.into_raw());
             settings::forget_live(instance.into_raw());
             // SAFETY: forwarding the app's call.
-            unsafe { (state.next.destroy_instance)(instance) }
+            Ok(unsafe { (state.next.destroy_instance)(instance) })
         },
     )
 }

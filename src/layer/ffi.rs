@@ -5,11 +5,48 @@ use super::log;
 use openxr_sys as xr;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-/// Runs an entry point's body. A panic is logged once and answered with `on_panic` (the layer
-/// then behaves as pass-through where the caller arranges it), never unwound into the app.
-pub fn guard(name: &str, on_panic: xr::Result, body: impl FnOnce() -> xr::Result) -> xr::Result {
+/// Why the layer answers an app's call itself, without the runtime.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LayerError {
+    /// A handle the layer never saw created (or already saw destroyed).
+    UnknownHandle(&'static str),
+    /// The loader's negotiation or layer chain is not what the loader interface specifies.
+    Loader(&'static str),
+}
+
+impl LayerError {
+    /// The result the app gets.
+    pub fn result(&self) -> xr::Result {
+        match self {
+            LayerError::UnknownHandle(_) => xr::Result::ERROR_HANDLE_INVALID,
+            LayerError::Loader(_) => xr::Result::ERROR_INITIALIZATION_FAILED,
+        }
+    }
+}
+
+impl std::fmt::Display for LayerError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LayerError::UnknownHandle(kind) => write!(f, "unknown {kind} handle"),
+            LayerError::Loader(what) => write!(f, "loader interface: {what}"),
+        }
+    }
+}
+
+/// An entry point's outcome: the runtime's (or the layer's own) result, or why the layer
+/// answers the call itself.
+pub type LayerResult = Result<xr::Result, LayerError>;
+
+/// Runs an entry point's body. A layer error becomes its XrResult; a panic is logged once and
+/// answered with `on_panic` (the layer then behaves as pass-through where the caller arranges
+/// it), never unwound into the app.
+pub fn guard(name: &str, on_panic: xr::Result, body: impl FnOnce() -> LayerResult) -> xr::Result {
     match catch_unwind(AssertUnwindSafe(body)) {
-        Ok(result) => result,
+        Ok(Ok(result)) => result,
+        Ok(Err(e)) => {
+            log::debug(&format!("{name}: {e}"));
+            e.result()
+        }
         Err(panic) => {
             let what = panic
                 .downcast_ref::<&str>()

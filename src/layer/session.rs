@@ -5,7 +5,7 @@
 //! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
 //! a changed background source is reopened on a helper thread while frames pass through.
 
-use super::ffi::{find_in_chain, guard};
+use super::ffi::{find_in_chain, guard, LayerError};
 use super::processor::Processor;
 use super::settings::Settings;
 use super::state::{self, lock, SessionState};
@@ -24,13 +24,11 @@ pub unsafe extern "system" fn create_session(
     session: *mut xr::Session,
 ) -> xr::Result {
     guard("xrCreateSession", xr::Result::ERROR_RUNTIME_FAILURE, || {
-        let Some(inst) = state::instance(instance) else {
-            return xr::Result::ERROR_HANDLE_INVALID;
-        };
+        let inst = state::instance(instance).ok_or(LayerError::UnknownHandle("XrInstance"))?;
         // SAFETY: forwarding the app's arguments.
         let result = unsafe { (inst.next.create_session)(instance, info, session) };
         if result.into_raw() < 0 {
-            return result;
+            return Ok(result);
         }
         // SAFETY: the runtime accepted info, so its next chain is valid.
         let binding = unsafe { info.as_ref() }.and_then(|i| unsafe {
@@ -66,7 +64,7 @@ pub unsafe extern "system" fn create_session(
         state::registry()
             .sessions
             .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
-        result
+        Ok(result)
     })
 }
 
@@ -143,9 +141,7 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
         "xrDestroySession",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let Some(s) = state::session(session) else {
-                return xr::Result::ERROR_HANDLE_INVALID;
-            };
+            let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
             let next = lock(&s).next;
             let t = std::time::Instant::now();
             forget(session);
@@ -154,7 +150,7 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
                 t.elapsed().as_secs_f64()
             ));
             // SAFETY: forwarding the app's call after releasing everything the layer made.
-            unsafe { (next.destroy_session)(session) }
+            Ok(unsafe { (next.destroy_session)(session) })
         },
     )
 }
@@ -207,9 +203,7 @@ pub unsafe extern "system" fn end_frame(
     info: *const xr::FrameEndInfo,
 ) -> xr::Result {
     guard("xrEndFrame", xr::Result::ERROR_RUNTIME_FAILURE, || {
-        let Some(s) = state::session(session) else {
-            return xr::Result::ERROR_HANDLE_INVALID;
-        };
+        let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
         let next = lock(&s).next;
         // A panic anywhere in the layer's part still forwards the app's frame.
         let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -219,6 +213,6 @@ pub unsafe extern "system" fn end_frame(
             recover_end_frame(session, &s);
         }
         // SAFETY: forwarding the app's call (no layer lock is held while the runtime works).
-        unsafe { (next.end_frame)(session, info) }
+        Ok(unsafe { (next.end_frame)(session, info) })
     })
 }

@@ -7,7 +7,7 @@
 //! gets the runtime's own answer. Queue work happens only in calls the spec lets use the app's
 //! queue: xrAcquireSwapchainImage, xrReleaseSwapchainImage, xrEndFrame.
 
-use super::ffi::guard;
+use super::ffi::{guard, LayerError};
 use super::image_states::{ImageStates, ReleasePlan};
 use super::log;
 use super::state::{self, lock, SessionState, SwapchainInfo, SwapchainState};
@@ -56,9 +56,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
         "xrCreateSwapchain",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let Some(s) = state::session(session) else {
-                return xr::Result::ERROR_HANDLE_INVALID;
-            };
+            let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
             let (next, active) = {
                 let s = lock(&s);
                 (s.next, s.processor.is_some())
@@ -66,7 +64,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             // SAFETY: the app's create info (null is left for the runtime to reject).
             let Some(app_info) = (unsafe { info.as_ref() }) else {
                 // SAFETY: forwarding the app's arguments.
-                return unsafe { (next.create_swapchain)(session, info, swapchain) };
+                return Ok(unsafe { (next.create_swapchain)(session, info, swapchain) });
             };
             let vk_format = vk::Format::from_raw(app_info.format as i32);
             // Pass-through sessions never have images held or touched.
@@ -115,7 +113,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                     request_shaders(&s, format, app_info.width);
                 }
             }
-            result
+            Ok(result)
         },
     )
 }
@@ -137,9 +135,7 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
         "xrDestroySwapchain",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let Some(sc) = state::swapchain(swapchain) else {
-                return xr::Result::ERROR_HANDLE_INVALID;
-            };
+            let sc = state::swapchain(swapchain).ok_or(LayerError::UnknownHandle("XrSwapchain"))?;
             let next = with_session(&sc, |s, sc| {
                 // A held release goes with the swapchain: the image is never composed again.
                 sc.states = ImageStates::default();
@@ -150,7 +146,7 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
             });
             state::registry().swapchains.remove(&swapchain.into_raw());
             // SAFETY: forwarding the app's call.
-            unsafe { (next.destroy_swapchain)(swapchain) }
+            Ok(unsafe { (next.destroy_swapchain)(swapchain) })
         },
     )
 }
@@ -168,7 +164,7 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
             let tracked = state::swapchain(swapchain);
             let next = match &tracked {
                 Some(sc) => lock(sc).next,
-                None => return xr::Result::ERROR_HANDLE_INVALID,
+                None => return Err(LayerError::UnknownHandle("XrSwapchain")),
             };
             // SAFETY: forwarding the app's arguments.
             let result =
@@ -187,7 +183,7 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
                         .collect();
                 }
             }
-            result
+            Ok(result)
         },
     )
 }
@@ -269,9 +265,7 @@ pub(crate) unsafe extern "system" fn acquire_swapchain_image(
         "xrAcquireSwapchainImage",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let Some(sc) = state::swapchain(swapchain) else {
-                return xr::Result::ERROR_HANDLE_INVALID;
-            };
+            let sc = state::swapchain(swapchain).ok_or(LayerError::UnknownHandle("XrSwapchain"))?;
             // The app takes its next image before xrEndFrame: the held one goes now, enhanced
             // (acquire may use the app's queue), so the runtime sees what the app sees.
             let next = with_session(&sc, |s, sc| {
@@ -287,7 +281,7 @@ pub(crate) unsafe extern "system" fn acquire_swapchain_image(
                 // SAFETY: written by the successful call.
                 lock(&sc).states.acquired(unsafe { *index });
             }
-            result
+            Ok(result)
         },
     )
 }
@@ -300,9 +294,7 @@ pub(crate) unsafe extern "system" fn wait_swapchain_image(
         "xrWaitSwapchainImage",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let Some(sc) = state::swapchain(swapchain) else {
-                return xr::Result::ERROR_HANDLE_INVALID;
-            };
+            let sc = state::swapchain(swapchain).ok_or(LayerError::UnknownHandle("XrSwapchain"))?;
             // No lock is held while the runtime blocks. A held release here means the app has
             // no acquired image: the runtime answers CALL_ORDER_INVALID either way ("already
             // waited" for the held image, as "nothing acquired" without the layer).
@@ -312,7 +304,7 @@ pub(crate) unsafe extern "system" fn wait_swapchain_image(
             if result.into_raw() >= 0 && result != xr::Result::TIMEOUT_EXPIRED {
                 lock(&sc).states.waited(result == xr::Result::SUCCESS);
             }
-            result
+            Ok(result)
         },
     )
 }
@@ -325,9 +317,7 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
         "xrReleaseSwapchainImage",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let Some(sc) = state::swapchain(swapchain) else {
-                return xr::Result::ERROR_HANDLE_INVALID;
-            };
+            let sc = state::swapchain(swapchain).ok_or(LayerError::UnknownHandle("XrSwapchain"))?;
             let (plan, next) = with_session(&sc, |s, sc| {
                 // SAFETY: the app's release info, null or valid (its type is checked here and
                 // by the runtime when forwarded).
@@ -349,14 +339,14 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
             if let ReleasePlan::Hold(_) = plan {
                 // The runtime would accept this release (an image is waited): it answers the
                 // same when the layer forwards it at xrEndFrame.
-                return xr::Result::SUCCESS;
+                return Ok(xr::Result::SUCCESS);
             }
             // SAFETY: forwarding the app's arguments.
             let result = unsafe { (next.release_swapchain_image)(swapchain, info) };
             if result.into_raw() >= 0 {
                 lock(&sc).states.released();
             }
-            result
+            Ok(result)
         },
     )
 }
