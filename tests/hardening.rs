@@ -210,6 +210,24 @@ fn any_number_of_regions_per_frame_is_enhanced() {
     );
 }
 
+/// A session the layer does not act on (the simulated display is OPAQUE, not forced) never
+/// opens its background: the camera-open fault point is never reached.
+#[test]
+fn the_background_opens_only_for_frames_the_layer_acts_on() {
+    let tag = "no-open-when-opaque";
+    let env = [
+        ("CONTRASTXR_FORCE", "0"),
+        ("CONTRASTXR_FAULT", "camera-open"),
+    ];
+    let Some(r) = client(tag, &no_config(tag), &env, CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    assert!(r.modified().is_empty(), "{:?}", r.modified());
+    assert!(r.lines_with("camera-open").is_empty(), "{:#?}", r.lines);
+    assert_eq!(r.lines_with("is not ADDITIVE").len(), 1, "{:#?}", r.lines);
+}
+
 /// The untouched check can fail: without a fault the layer changes the frames.
 #[test]
 fn without_a_fault_frames_are_enhanced() {

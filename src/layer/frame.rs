@@ -7,6 +7,7 @@ use super::log;
 use super::processor::Processor;
 use super::registration::{self, ViewGeometry};
 use super::settings::Settings;
+use super::sources;
 use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
 use super::work::{ViewKey, WorkItem};
 use crate::algorithm::mapping::CameraMapping;
@@ -261,8 +262,10 @@ fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::Environ
         || s.processor.is_none()
         || !acts_on(s, blend)
     {
+        sources::close_when_idle(s);
         return;
     }
+    sources::open_when_needed(s);
     let Some(frame) = background_frame(s) else {
         return;
     };

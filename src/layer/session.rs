@@ -10,7 +10,6 @@ use super::processor::Processor;
 use super::settings::Settings;
 use super::state::{self, lock, SessionState};
 use super::{device, frame, log, sources, swapchain};
-use crate::camera::Background;
 use crate::gpu::{Engine, GpuDevice};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
@@ -40,27 +39,30 @@ pub unsafe extern "system" fn create_session(
         // SAFETY: the runtime accepted info, so its systemId is the app's system.
         let system = unsafe { info.as_ref() }.map(|i| i.system_id);
         let settings = device::settings_on(instance, &inst, system);
-        let (processor, background) = match binding {
+        let processor = match binding {
             // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
             Some(b) => set_up(unsafe { &*b }, &settings),
             None => {
                 log::info("session is not a Vulkan session: passing its frames through untouched");
-                (None, None)
+                None
             }
         };
+        // SAFETY: session was written by the successful create call.
+        let handle = unsafe { *session };
         let state = SessionState {
+            handle,
             instance,
             next: inst.next,
             settings,
             processor,
-            background,
+            background: None,
+            background_requested: false,
+            idle_frames: 0,
             frames: 0,
             processed: 0,
             last_blend_mode: None,
             regions_seen: false,
         };
-        // SAFETY: session was written by the successful create call.
-        let handle = unsafe { *session };
         state::registry()
             .sessions
             .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
@@ -68,10 +70,9 @@ pub unsafe extern "system" fn create_session(
     })
 }
 
-fn set_up(
-    b: &xr::GraphicsBindingVulkanKHR,
-    settings: &Settings,
-) -> (Option<Processor>, Option<Background>) {
+/// The session's processor on the app's device (its pipelines start building at once). The
+/// background is not opened here: a camera opens only when a frame is to be enhanced.
+fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Processor> {
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
     // alive until after xrDestroySession, where the processor is dropped first.
     let gpu = unsafe {
@@ -92,19 +93,14 @@ fn set_up(
             log::info(&format!(
                 "GPU set-up failed ({e}): passing frames through untouched"
             ));
-            return (None, None);
+            return None;
         }
     };
-    // Opened after the GPU set-up: a camera stays closed for a session that cannot use it.
-    let background = sources::open_background_logged(&settings.background, &settings.camera);
-    if let Some(bg) = &background {
-        log::info(&format!(
-            "session on Vulkan device {:?}, background {}: enhancing",
-            processor.gpu.name,
-            bg.description()
-        ));
-    }
-    (Some(processor), background)
+    log::info(&format!(
+        "session on Vulkan device {:?}, background {}: enhancing",
+        processor.gpu.name, settings.background
+    ));
+    Some(processor)
 }
 
 /// Drops the layer's state of a session (its GPU objects first) and of its swapchains.

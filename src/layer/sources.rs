@@ -59,6 +59,38 @@ fn start_reopen(
     }
 }
 
+/// Frames in a row without enhancement after which the background closes (a camera's light
+/// goes off; it opens again at the next frame the layer acts on): 2 s at 20 Hz.
+const CLOSE_AFTER_IDLE_FRAMES: u64 = 40;
+
+/// Opens the session's background at the first frame the layer acts on: at once with
+/// `pipelines = "wait"` (every frame enhanced), else on a helper thread while frames pass
+/// through. A source that failed to open is tried again only when the config changes.
+pub(super) fn open_when_needed(s: &mut SessionState) {
+    s.idle_frames = 0;
+    if s.background.is_some() || s.background_requested {
+        return;
+    }
+    s.background_requested = true;
+    let (spec, camera) = (s.settings.background.clone(), s.settings.camera.clone());
+    if s.settings.wait_for_pipelines {
+        s.background = open_background_logged(&spec, &camera);
+    } else {
+        start_reopen(s.handle, None, spec, camera);
+    }
+}
+
+/// Counts a frame the layer did not act on, and closes the background after
+/// CLOSE_AFTER_IDLE_FRAMES of them.
+pub(super) fn close_when_idle(s: &mut SessionState) {
+    s.idle_frames += 1;
+    if s.idle_frames == CLOSE_AFTER_IDLE_FRAMES && s.background.is_some() {
+        log::info("no frame enhanced for 2 s: the background is closed until the next one");
+        s.background = None;
+        s.background_requested = false;
+    }
+}
+
 /// A reopened background, if the helper thread has finished.
 fn take_reopened(session: xr::Session, s: &mut SessionState) {
     let mut pending = reopening();
@@ -91,7 +123,8 @@ pub(super) fn pick_up_settings(session: xr::Session, s: &mut SessionState) {
     };
     let source_changed =
         newer.background != s.settings.background || newer.camera != s.settings.camera;
-    if source_changed && s.processor.is_some() {
+    // A background not opened yet opens with the new settings when it is first needed.
+    if source_changed && s.processor.is_some() && s.background_requested {
         start_reopen(
             session,
             s.background.take(),

@@ -24,13 +24,19 @@ pub struct InstanceState {
 }
 
 pub struct SessionState {
+    pub handle: xr::Session,
     pub instance: xr::Instance,
     pub next: NextFns,
     pub settings: Arc<Settings>,
     /// None: this session passes through (not Vulkan, set-up failed, or an earlier failure).
     pub processor: Option<Processor>,
-    /// The running background source (camera, video, image): open only while the session lives.
+    /// The running background source (camera, video, image): open only while the session's
+    /// frames are enhanced (opened at the first frame the layer acts on).
     pub background: Option<crate::camera::Background>,
+    /// The background was asked for (opened, being opened, or failed to open).
+    pub background_requested: bool,
+    /// Frames in a row the layer has not acted on (the background closes after a while).
+    pub idle_frames: u64,
     /// Frames submitted through xrEndFrame so far.
     pub frames: u64,
     /// Frames the layer processed (captures are numbered by this).
