@@ -19,12 +19,11 @@ use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-const WORKGROUP: u32 = 8;
+const WORKGROUP: u32 = TILE;
 /// `classify` runs a row of tiles per workgroup, so that tiles are listed (and then enhanced)
 /// in row order: neighbouring memory, which a CPU driver's caches and prefetchers follow.
 const CLASSIFY_WORKGROUP: (u32, u32) = (64, 1);
-/// Side of the square tiles the enhancement skips when they hold no foreground pixel.
-pub const TILE: u32 = WORKGROUP;
+pub use super::pipelines::TILE;
 /// Words before the tile indices in the tile buffer (struct TileList in shaders/common.wgsl).
 const TILE_LIST_HEADER: u64 = 8;
 

@@ -20,6 +20,10 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+/// Side of the square tiles the enhancement skips when they hold no foreground pixel, and of
+/// the per-pixel passes' workgroups (TILE in shaders/common.wgsl).
+pub const TILE: u32 = 8;
+
 /// Bindings 0..=4 of shaders/common.wgsl, all storage buffers.
 pub const BINDING_COUNT: u32 = 5;
 /// Binding 5: the blurred camera image, a sampled image.
@@ -75,7 +79,7 @@ impl PushConstants {
             k_v: SUBTRACTION_K_V,
             k_b: SUBTRACTION_K_B,
             mode: params.mode.shader_code(),
-            tile_columns: region.0.div_ceil(super::engine::TILE),
+            tile_columns: region.0.div_ceil(TILE),
             achromatic_boost: params.achromatic_boost,
             luminance_cap: params.luminance_cap,
             mapping: mapping.to_f32_rows(),
