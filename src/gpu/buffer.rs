@@ -109,3 +109,21 @@ impl GpuBuffer {
         }
     }
 }
+
+/// Records copies of byte ranges from `src` into `dst`. The caller orders them against other
+/// work with barriers; every range must lie inside both buffers.
+pub fn record_buffer_copy(
+    gpu: &GpuDevice,
+    cmd: vk::CommandBuffer,
+    (src, dst): (&GpuBuffer, &GpuBuffer),
+    regions: &[vk::BufferCopy],
+) {
+    let inside = |b: &GpuBuffer, end: u64| end <= b.size;
+    let fits = regions
+        .iter()
+        .all(|r| inside(src, r.src_offset + r.size) && inside(dst, r.dst_offset + r.size));
+    assert!(fits, "a buffer copy reaches past its buffers");
+    // SAFETY: cmd is recording (the caller's contract); both buffers are valid and every range
+    // lies inside them (checked above).
+    unsafe { gpu.device.cmd_copy_buffer(cmd, src.raw, dst.raw, regions) };
+}

@@ -13,7 +13,7 @@ use crate::algorithm::params::{Method, ViewMode};
 use crate::colour;
 use crate::config::Settings;
 use crate::evaluate::font;
-use crate::gpu::buffer::GpuBuffer;
+use crate::gpu::buffer::{record_buffer_copy, GpuBuffer};
 use crate::gpu::{GpuDevice, GpuError, PixelFormat, PixelLayout, ViewTarget};
 use crate::image::RgbaImage;
 use ash::vk;
@@ -257,12 +257,8 @@ impl Indicator {
                     None => continue,
                 },
             };
-            // SAFETY: cmd is recording; the overlay buffer is ours and host-written before this
-            // submission; every copy lies inside the view buffer (runs lie inside the region).
-            unsafe {
-                gpu.device
-                    .cmd_copy_buffer(cmd, o.buffer.raw, target.pixels.raw, &o.copies)
-            };
+            // The overlay buffer is host-written before this submission.
+            record_buffer_copy(gpu, cmd, (&o.buffer, &target.pixels), &o.copies);
             drawn = true;
         }
         Ok(drawn)

@@ -5,6 +5,7 @@
 use super::work::{ViewKey, WorkItem};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
+use crate::gpu::buffer::record_buffer_copy;
 use crate::gpu::commands::Commands;
 use crate::gpu::engine::barrier;
 use crate::gpu::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
@@ -299,12 +300,7 @@ impl Processor {
     fn copy_to_capture(&self, item: &WorkItem, dst: &crate::gpu::buffer::GpuBuffer) {
         let src = &self.views[&item.key].target.pixels;
         let region = [vk::BufferCopy::default().size(self.views[&item.key].target.pixel_bytes())];
-        // SAFETY: cmd is recording; both buffers are ours and large enough.
-        unsafe {
-            self.gpu
-                .device
-                .cmd_copy_buffer(self.commands.cmd, src.raw, dst.raw, &region)
-        };
+        record_buffer_copy(&self.gpu, self.commands.cmd, (src, dst), &region);
     }
 
     fn record(
