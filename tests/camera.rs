@@ -440,6 +440,15 @@ fn vanishing_device_goes_stale_then_lost_then_live_again() {
 }
 
 #[test]
+fn a_busy_camera_is_retried_until_it_is_free() {
+    let out = FakeCamera::new("in-use", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_BUSY_FOR_MS", "1500")
+        .run("busy");
+    assert!(out.contains("frame after busy"), "{out}");
+}
+
+#[test]
 fn device_that_never_delivers_reports_it_without_hanging() {
     let out = FakeCamera::new("silent", "YUYV")
         .set("FAKE_V4L2_NO_FRAMES", "1")
@@ -502,6 +511,7 @@ fn child_dispatch() {
         "stream" => child_stream(),
         "vanish" => child_vanish(),
         "silent" => child_silent(),
+        "busy" => child_busy(),
         "list" => child_list(),
         "cli_test" => child_cli_test(),
         other => panic!("unknown child case {other}"),
@@ -548,6 +558,25 @@ fn wait_for_frame(
         std::thread::sleep(Duration::from_millis(2));
     }
     None
+}
+
+/// Busy at open (another program captures): the source opens all the same, says so once,
+/// and delivers frames once the device is free.
+fn child_busy() {
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    let cfg = CaptureConfig {
+        max_backoff: Duration::from_millis(400),
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&fake_spec(), &cfg).unwrap();
+    assert!(bg.description().contains("is busy"), "{}", bg.description());
+    let frame = wait_for_frame(&bg, 0, Duration::from_secs(20)).expect("a frame once free");
+    which_expected(&frame.image, &expected_images()).unwrap();
+    let log = LOG.lock().unwrap().clone();
+    let busy: Vec<_> = log.iter().filter(|l| l.contains("busy")).collect();
+    assert_eq!(busy.len(), 1, "{log:#?}");
+    println!("frame after busy");
 }
 
 fn child_decode() {

@@ -41,6 +41,8 @@ pub enum CameraError {
     Device(String),
     /// An image or video file is missing or unreadable.
     File(String),
+    /// The device exists but another program is capturing from it (EBUSY).
+    Busy(String),
 }
 
 impl fmt::Display for CameraError {
@@ -49,7 +51,8 @@ impl fmt::Display for CameraError {
             CameraError::NoDevice(m)
             | CameraError::Unsupported(m)
             | CameraError::Device(m)
-            | CameraError::File(m) => f.write_str(m),
+            | CameraError::File(m)
+            | CameraError::Busy(m) => f.write_str(m),
         }
     }
 }

@@ -17,6 +17,8 @@
  *   FAKE_V4L2_VANISH_AFTER  after N delivered frames the device disappears (ENODEV, POLLERR)
  *   FAKE_V4L2_RETURN_AFTER_MS  and can be opened again this long after (default 500)
  *   FAKE_V4L2_NO_FRAMES     if 1, the device streams but never delivers a frame
+ *   FAKE_V4L2_BUSY_FOR_MS   setting a format fails with EBUSY for this long after start, as
+ *                           when another program is capturing from the device
  *   FAKE_V4L2_CARD          card name (default "Fake V4L2 camera")
  *
  * Not modelled: read() I/O, USERPTR/DMABUF memory, controls, multi-planar API, select().
@@ -74,6 +76,7 @@ static struct {
 	int n_frame_files;
 	long vanish_after;
 	long return_after_ms;
+	uint64_t busy_until_ns;
 	int no_frames;
 } cfg;
 
@@ -151,6 +154,8 @@ static void parse_config(void)
 	cfg.vanish_after = e ? atol(e) : 0;
 	e = getenv("FAKE_V4L2_RETURN_AFTER_MS");
 	cfg.return_after_ms = e ? atol(e) : 500;
+	e = getenv("FAKE_V4L2_BUSY_FOR_MS");
+	cfg.busy_until_ns = e ? now_ns() + (uint64_t)atol(e) * 1000000ull : 0;
 	e = getenv("FAKE_V4L2_NO_FRAMES");
 	cfg.no_frames = e && atoi(e) == 1;
 
@@ -435,6 +440,9 @@ static int set_fmt(struct v4l2_format *f, int apply)
 	if (f->type != V4L2_BUF_TYPE_VIDEO_CAPTURE)
 		return EINVAL;
 	if (apply && dev.n_bufs > 0)
+		return EBUSY;
+	/* Another process streams from the device for the first FAKE_V4L2_BUSY_FOR_MS. */
+	if (apply && now_ns() < cfg.busy_until_ns)
 		return EBUSY;
 	struct v4l2_pix_format *p = &f->fmt.pix;
 	uint32_t fmt = has_format(p->pixelformat) ? p->pixelformat : cfg.formats[0];

@@ -57,7 +57,13 @@ pub(crate) fn spawn(
         .spawn(move || match open_session(target.as_ref(), &cfg) {
             Ok(session) => {
                 let _ = tx.send(Ok(session.description.clone()));
-                run(target, &cfg, &thread_shared, session);
+                run(target, &cfg, &thread_shared, Some(session));
+            }
+            // Busy now, perhaps free in a moment: the source opens, and the thread retries
+            // with growing waits (frames pass through meanwhile).
+            Err(CameraError::Busy(e)) => {
+                let _ = tx.send(Ok(format!("{e}, retrying")));
+                run(target, &cfg, &thread_shared, None);
             }
             Err(e) => {
                 let _ = tx.send(Err(e));
@@ -111,7 +117,12 @@ fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session
             "{shown} offers none of YUYV, NV12, MJPG, RGB3, BGR3, GREY"
         ))
     })?;
-    let device_err = |e: io::Error| CameraError::Device(format!("{shown}: {e}"));
+    let device_err = |e: io::Error| match e.raw_os_error() {
+        Some(libc::EBUSY) => CameraError::Busy(format!(
+            "{shown} is busy (another program is capturing from it)"
+        )),
+        _ => CameraError::Device(format!("{shown}: {e}")),
+    };
     let mut wanted = device.format().map_err(device_err)?;
     (wanted.width, wanted.height, wanted.fourcc) =
         (mode.width, mode.height, FourCC::new(&mode.fourcc));
@@ -152,14 +163,16 @@ fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session
 }
 
 /// The thread's life: stream, and after each loss reopen with doubling waits, until stopped.
-fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Session) {
+fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Option<Session>) {
     let mut capture = Capture {
         sequence: 0,
         smoother: cfg.smoothing.map(Smoother::new),
         status: StatusLog::default(),
     };
-    log(&format!("opened {}", first.description));
-    let mut session = Some(first);
+    if let Some(first) = &first {
+        log(&format!("opened {}", first.description));
+    }
+    let mut session = first;
     let mut backoff = FIRST_BACKOFF;
     let mut open_error = None;
     // A device that opens but delivers nothing is reopened quietly, with growing waits.
@@ -178,7 +191,7 @@ fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Ses
                 Err(e) => {
                     let message = e.to_string();
                     if open_error.as_ref() != Some(&message) {
-                        log(&format!("cannot reopen yet: {message}"));
+                        log(&format!("cannot open yet: {message}"));
                         open_error = Some(message);
                     }
                     capture.status.update(shared, cfg);
