@@ -440,6 +440,26 @@ fn vanishing_device_goes_stale_then_lost_then_live_again() {
 }
 
 #[test]
+fn stable_paths_are_listed_and_open_and_auto_says_why() {
+    let cam = FakeCamera::new("stable", "YUYV").frames("YUYV", &[0]);
+    let by_id = cam.dir.join("v4l/by-id");
+    std::fs::create_dir_all(&by_id).unwrap();
+    std::os::unix::fs::symlink(
+        "../../video7",
+        by_id.join("usb-Acme_World_Camera-video-index0"),
+    )
+    .unwrap();
+    let out = cam.run("stable");
+    assert!(out.contains("stable path opened"), "{out}");
+    // A laptop's camera is still taken when it is the only one, and the log says so.
+    let out = FakeCamera::new("stable-builtin", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_CARD", "Integrated Camera")
+        .run("stable");
+    assert!(out.contains("every capture device looks built in"), "{out}");
+}
+
+#[test]
 fn a_busy_camera_is_retried_until_it_is_free() {
     let out = FakeCamera::new("in-use", "YUYV")
         .frames("YUYV", &[0])
@@ -512,6 +532,7 @@ fn child_dispatch() {
         "vanish" => child_vanish(),
         "silent" => child_silent(),
         "busy" => child_busy(),
+        "stable" => child_stable(),
         "list" => child_list(),
         "cli_test" => child_cli_test(),
         other => panic!("unknown child case {other}"),
@@ -558,6 +579,34 @@ fn wait_for_frame(
         std::thread::sleep(Duration::from_millis(2));
     }
     None
+}
+
+/// `camera list` names a device's stable paths, `v4l2:` opens one, and `v4l2:auto` logs what
+/// it took and why.
+fn child_stable() {
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    let dir = env("CONTRASTXR_V4L2_DIR");
+    let link = format!("{dir}/v4l/by-id/usb-Acme_World_Camera-video-index0");
+    let mut out = Vec::new();
+    cli::list(&mut out).unwrap();
+    let text = String::from_utf8(out).unwrap();
+    if std::path::Path::new(&link).exists() {
+        assert!(text.contains(&format!("  also {link}\n")), "{text}");
+        let spec = parse_source(&format!("v4l2:{link}")).unwrap();
+        let bg = Background::open(&spec, &CaptureConfig::default()).unwrap();
+        wait_for_frame(&bg, 0, Duration::from_secs(10)).expect("a frame through the link");
+        println!("stable path opened");
+    }
+    let bg = Background::open(&SourceSpec::V4l2Auto, &CaptureConfig::default()).unwrap();
+    drop(bg);
+    let log = LOG.lock().unwrap().join("\n");
+    let took: Vec<_> = log
+        .lines()
+        .filter(|l| l.contains("v4l2:auto took"))
+        .collect();
+    assert_eq!(took.len(), 1, "{log}");
+    println!("{}", took[0]);
 }
 
 /// Busy at open (another program captures): the source opens all the same, says so once,

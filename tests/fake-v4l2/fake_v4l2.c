@@ -27,6 +27,7 @@
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <linux/videodev2.h>
 #include <poll.h>
 #include <pthread.h>
@@ -185,9 +186,15 @@ static int is_fake(int fd)
 	return cfg.path[0] && fd >= 0 && fd < MAX_FDS && fake_fd[fd];
 }
 
+/* The device's path, or a link to it (as /dev/v4l/by-id/... are). */
 static int is_fake_path(const char *path)
 {
-	return cfg.path[0] && path && strcmp(path, cfg.path) == 0;
+	if (!cfg.path[0] || !path)
+		return 0;
+	if (strcmp(path, cfg.path) == 0)
+		return 1;
+	char a[PATH_MAX], b[PATH_MAX];
+	return realpath(path, a) && realpath(cfg.path, b) && strcmp(a, b) == 0;
 }
 
 /* Bytes in one frame of the given format; MJPEG gets a generous upper bound like real drivers. */

@@ -2,7 +2,7 @@
 //! RGBA and publishes it; on loss or stall it marks the source down and reopens with backoff.
 //! Readers only ever touch the mailbox in `Shared`, so nothing here can block them.
 
-use super::{choose_mode, device_dir, first_capture_device, modes, probe};
+use super::{auto_capture_device, choose_mode, device_dir, modes, probe};
 use crate::camera::convert::{to_rgba, PixelFormat};
 use crate::camera::frame::{Frame, Shared, SourceStatus};
 use crate::camera::log::log;
@@ -90,12 +90,17 @@ pub(crate) fn spawn(
 fn resolve(target: Option<&PathBuf>) -> Result<PathBuf, CameraError> {
     match target {
         Some(path) => Ok(path.clone()),
-        None => first_capture_device(&device_dir()).ok_or_else(|| {
-            CameraError::NoDevice(format!(
-                "no V4L2 capture device found ({}/video* absent or not capture devices)",
-                device_dir().display()
-            ))
-        }),
+        None => auto_capture_device(&device_dir())
+            .map(|(path, why)| {
+                log(&format!("v4l2:auto took {why}"));
+                path
+            })
+            .ok_or_else(|| {
+                CameraError::NoDevice(format!(
+                    "no V4L2 capture device found ({}/video* absent or not capture devices)",
+                    device_dir().display()
+                ))
+            }),
     }
 }
 

@@ -66,11 +66,81 @@ pub fn probe(path: &Path) -> io::Result<(Device, DeviceInfo)> {
     Ok((device, info))
 }
 
-/// The first capture device in `dir`.
-pub fn first_capture_device(dir: &Path) -> Option<PathBuf> {
-    device_nodes(dir)
+/// Words in a camera's name that mark a laptop's or monitor's own camera, which faces the
+/// user, not the world.
+const BUILT_IN_WORDS: [&str; 6] = [
+    "integrated",
+    "built-in",
+    "builtin",
+    "facetime",
+    "webcam",
+    "user facing",
+];
+
+/// Whether a camera's name (its card, or a stable path's name) says it is built in.
+pub fn looks_built_in(name: &str) -> bool {
+    let name = name.to_lowercase().replace(['_', '-'], " ");
+    BUILT_IN_WORDS
+        .iter()
+        .any(|w| name.contains(&w.replace('-', " ")))
+}
+
+/// The camera `v4l2:auto` takes among `dir`'s capture devices, and why: the first that does
+/// not look built in, else the first.
+pub fn auto_capture_device(dir: &Path) -> Option<(PathBuf, String)> {
+    let found: Vec<DeviceInfo> = device_nodes(dir)
         .into_iter()
-        .find(|p| probe(p).is_ok_and(|(_, info)| info.capture))
+        .filter_map(|p| probe(&p).ok().map(|(_, info)| info))
+        .filter(|info| info.capture)
+        .collect();
+    let built_in = |i: &DeviceInfo| {
+        looks_built_in(&i.card)
+            || stable_paths(dir, &i.path)
+                .iter()
+                .any(|p| looks_built_in(&p.to_string_lossy()))
+    };
+    let chosen = found.iter().position(|i| !built_in(i));
+    let (k, why) = match chosen {
+        Some(k) if found.len() == 1 => (k, "the only capture device".to_string()),
+        Some(k) => (
+            k,
+            format!(
+                "the first of {} capture devices that does not look like a built-in camera",
+                found.len()
+            ),
+        ),
+        None if found.is_empty() => return None,
+        None => (
+            0,
+            "every capture device looks built in: the first".to_string(),
+        ),
+    };
+    let info = &found[k];
+    Some((
+        info.path.clone(),
+        format!("{} ({}): {why}", info.path.display(), info.card),
+    ))
+}
+
+/// The stable names of a device node: links to it in `dir`/v4l/by-id and by-path (udev's),
+/// which keep naming the same camera when /dev/videoN numbers change across reboots.
+pub fn stable_paths(dir: &Path, node: &Path) -> Vec<PathBuf> {
+    let Ok(target) = std::fs::canonicalize(node) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for kind in ["by-id", "by-path"] {
+        let Ok(entries) = std::fs::read_dir(dir.join("v4l").join(kind)) else {
+            continue;
+        };
+        let mut links: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| std::fs::canonicalize(p).is_ok_and(|t| t == target))
+            .collect();
+        links.sort();
+        out.extend(links);
+    }
+    out
 }
 
 /// Every (format, size, frame interval) the device offers, including formats this module
@@ -135,4 +205,28 @@ fn intervals(device: &Device, fourcc: FourCC, w: u32, h: u32) -> io::Result<Vec<
         out.push((0, 0));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::looks_built_in;
+
+    #[test]
+    fn laptop_cameras_look_built_in_and_others_do_not() {
+        for name in [
+            "Integrated Camera",
+            "HP HD Webcam",
+            "FaceTime HD Camera",
+            "usb-Chicony_Electronics_Co._Ltd._Integrated_Camera_0001-video-index0",
+            "Built-in iSight",
+        ] {
+            assert!(looks_built_in(name), "{name}");
+        }
+        for name in [
+            "Arducam OV9281 USB Camera",
+            "usb-Intel_R__RealSense_TM_-video-index0",
+        ] {
+            assert!(!looks_built_in(name), "{name}");
+        }
+    }
 }
