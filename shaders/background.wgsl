@@ -1,5 +1,5 @@
-// Background preprocessing of spec section 2, once per camera frame, all on the camera grid:
-// decode -> separable Gaussian blur, in linear light. The rest of section 2 (FoV bilinear
+// Background preparation (docs/algorithm.md, Background preparation), once per camera frame, all on the camera grid:
+// decode -> separable Gaussian blur, in linear light. The rest of the preparation (FoV bilinear
 // sampling, transmittance, scaled LAB) runs in the enhancement pass (enhance.wgsl,
 // sampled_background), only for the display pixels it enhances: per camera frame the work is
 // proportional to the camera's pixels, never to the display's or the number of views.

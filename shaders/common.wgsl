@@ -1,5 +1,5 @@
-// Shared by every stage: the push constants, the bindings and the colour science of spec
-// section 1 in f32. The CPU reference (src/colour.rs, src/algorithm/) is the same math in f64.
+// Shared by every stage: the parameter block (push constants), the bindings and the colour
+// science of docs/algorithm.md, Colour spaces, in f32. The CPU reference (src/colour.rs, src/algorithm/) is the same math in f64.
 
 // One push-constant block for all passes (they share one pipeline layout). 128 bytes, the
 // least maxPushConstantsSize Vulkan guarantees: keep it within.

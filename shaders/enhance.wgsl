@@ -1,5 +1,5 @@
-// The per-pixel enhancement of spec section 3 (Algorithm 1 and its four constraints) and the
-// comparison methods of section 5, on one display region's raw pixels, in place, four pixels
+// The per-pixel enhancement (docs/algorithm.md, Per-pixel optimisation: Algorithm 1 and its
+// four constraints) and the comparison methods (docs/algorithm.md, Comparison methods), on one display region's raw pixels, in place, four pixels
 // at a time (Colours in common.wgsl). Every branch is a per-pixel select: a CPU driver runs all
 // of them anyway. A pixel the method leaves unchanged keeps its words, bit for bit.
 
@@ -80,7 +80,7 @@ fn stored_colours(w: Words) -> Colours {
 }
 
 // Pixels the enhancement leaves alone: exactly black (transparent on an additive display) or
-// alpha 0 (spec section 3, "Skip").
+// alpha 0 (docs/algorithm.md, Skipped pixels).
 fn see_through(w: Words) -> vec4<bool> {
     switch FORMAT & 255u {
         case LAYOUT_RGBA8, LAYOUT_BGRA8: {
@@ -180,7 +180,7 @@ fn clip(c: Colours) -> Colours {
 
 // The JND constraint: where P is strictly inside the sphere |X - B| = r and D is not, P moves
 // back to the first point where the segment D->P meets the sphere. Squared lengths against
-// r^2: the spec's tests up to float rounding at the boundary.
+// r^2: the tests of docs/algorithm.md, JND step, up to float rounding at the boundary.
 fn jnd_constraint(d: Colours, p: Colours, b: Colours) -> Colours {
     let r2 = pc.lambda_jnd * pc.lambda_jnd;
     let pb = p - b;
@@ -271,7 +271,7 @@ struct Enhanced {
     changed: vec4<bool>,
 }
 
-// The display pixels' background (spec section 2): `linear` sampled from the blurred camera
+// The display pixels' background (docs/algorithm.md, Background preparation): `linear` sampled from the blurred camera
 // image (not attenuated: what subtraction uses), `scaled` the paper's B.
 struct Background {
     linear: Colours,
@@ -296,7 +296,7 @@ fn delta_e(x: Colours, y: Colours) -> vec4<f32> {
     return sqrt(2500.0 * d[0] * d[0] + 16384.0 * (d[1] * d[1] + d[2] * d[2]));
 }
 
-// Spec section 4's criterion on the output as stored: dE(B, P) > dE(B, D), dE(P, D) >= 2.3.
+// The criterion of docs/algorithm.md, Evaluation metric, on the output as stored: dE(B, P) > dE(B, D), dE(P, D) >= 2.3.
 fn is_enhanced(b: Colours, display: Colours, stored: Colours) -> vec4<bool> {
     let d = linear_to_scaled(display);
     let p = linear_to_scaled(decode_stored(quantised(stored)));
@@ -305,7 +305,7 @@ fn is_enhanced(b: Colours, display: Colours, stored: Colours) -> vec4<bool> {
 
 // Texture coordinates of display pixels (x..x+3, y) in the camera image: the view's
 // CameraMapping with its projective divide (an affine mapping has a bottom row of 0, 0, 1).
-// Texel centres at (i + 0.5) / W, origin top-left (spec section 2, step 3).
+// Texel centres at (i + 0.5) / W, origin top-left (docs/algorithm.md, FoV calibration).
 fn camera_uv(x: u32, y: u32) -> array<vec4<f32>, 2> {
     let u = (vec4<f32>(vec4<u32>(x) + vec4<u32>(0u, 1u, 2u, 3u)) + 0.5) / f32(pc.region_size.x);
     let v = vec4<f32>((f32(y) + 0.5) / f32(pc.region_size.y));
@@ -335,9 +335,9 @@ fn bilinear(tx: f32, ty: f32) -> vec3<f32> {
     return mix(upper, lower, t.y);
 }
 
-// The background of display pixels (x..x+3, y) (spec section 2): the blurred camera image
+// The background of display pixels (x..x+3, y) (docs/algorithm.md, Background preparation): the blurred camera image
 // sampled through the view's mapping (bilinear, linear light), then the lens transmittance
-// and the conversion to scaled LAB, in the spec's order. Only the pixels the enhancement runs
+// and the conversion to scaled LAB, in that order. Only the pixels the enhancement runs
 // on pay for it (the camera image itself is prepared once per camera frame, background.wgsl).
 fn sampled_background(x: u32, y: u32) -> Background {
     let uv = camera_uv(x, y);

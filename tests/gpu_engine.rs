@@ -210,7 +210,7 @@ fn formats_agree_on(e: &mut OfflineEngine, camera: &RgbaImage, colours: &[[u8; 4
     }
 }
 
-/// Counts pixels where the GPU output does not conform to the CPU reference (spec section 6),
+/// Counts pixels where the GPU output does not conform to the CPU reference (docs/algorithm.md, Conformance),
 /// with the CPU's own background preparation as the reference's B.
 fn nonconformant(
     e: &mut OfflineEngine,
@@ -582,7 +582,7 @@ fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
     let heat = e
         .enhance(&display, &camera, &with_mode(ViewMode::Heatmap))
         .unwrap();
-    // The CPU metric of spec section 4 (f64) on the GPU's own enhanced output.
+    // The CPU metric (docs/algorithm.md, Evaluation metric; f64) on the GPU's own enhanced output.
     let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
     let mask = contrastxr::evaluate::metric::enhanced_mask(&display, &enhanced, &bg);
     let mut marked = 0;

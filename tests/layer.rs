@@ -1,7 +1,7 @@
 //! The contrastxr layer inside real OpenXR apps on the real Monado runtime (sandbox), with the
 //! OpenXR core validation layer and the Vulkan validation layer (synchronisation validation
 //! too) on. The layer's captures are checked against the CPU reference, computed here from the
-//! captured display and background, within the spec's tolerance (section 6).
+//! captured display and background, within the tolerance of docs/algorithm.md, Conformance.
 
 mod common;
 

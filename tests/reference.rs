@@ -1,4 +1,4 @@
-//! The CPU reference against independent expectations: spec section 3's degenerate cases
+//! The CPU reference against independent expectations: the degenerate cases of docs/algorithm.md, Per-pixel optimisation
 //! (values computed by hand or by the straightforward formulas below, never by the code under
 //! test), the JND geometry, the invariants as property tests, and the sRGB<->LAB round trip.
 

@@ -636,7 +636,7 @@ impl Engine {
         }
     }
 
-    /// Records the background preparation of spec section 2 for a camera frame already
+    /// Records the background preparation (docs/algorithm.md, Background preparation) for a camera frame already
     /// uploaded: decode and blur on the camera grid, once per camera frame whatever the number
     /// of views (each view's enhancement samples the result through its own mapping), for the
     /// texels in `rect` (`CameraRect::sampled_by` the views' mappings).

@@ -1,7 +1,7 @@
 //! Swapchains: track creation info, images and image states, and hold the app's release of a
 //! colour image until xrEndFrame, so the layer writes the image while it is still the app's to
 //! give. (On Monado a released image is handed to an external queue at once: writing it after
-//! the release would be outside the spec.) Every call reaches the runtime at once except a
+//! the release would be outside the OpenXR specification.) Every call reaches the runtime at once except a
 //! release the runtime would accept; anything that needs the runtime to see the app's own state
 //! (another acquire, another release) hands a held release over first, enhanced, so each call
 //! gets the runtime's own answer. Queue work happens only in calls the spec lets use the app's
