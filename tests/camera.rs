@@ -460,6 +460,22 @@ fn stable_paths_are_listed_and_open_and_auto_says_why() {
 }
 
 #[test]
+fn fixed_exposure_white_balance_and_gain_are_set_and_reported() {
+    let out = FakeCamera::new("controls", "YUYV")
+        .frames("YUYV", &[0])
+        .run("controls");
+    assert!(out.contains("controls checked"), "{out}");
+    let out = FakeCamera::new("no-controls", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_NO_CONTROLS", "1")
+        .run("controls");
+    assert!(
+        out.contains("camera_exposure 10000us: the camera has no such control"),
+        "{out}"
+    );
+}
+
+#[test]
 fn a_busy_camera_is_retried_until_it_is_free() {
     let out = FakeCamera::new("in-use", "YUYV")
         .frames("YUYV", &[0])
@@ -533,6 +549,7 @@ fn child_dispatch() {
         "silent" => child_silent(),
         "busy" => child_busy(),
         "stable" => child_stable(),
+        "controls" => child_controls(),
         "list" => child_list(),
         "cli_test" => child_cli_test(),
         other => panic!("unknown child case {other}"),
@@ -607,6 +624,48 @@ fn child_stable() {
         .collect();
     assert_eq!(took.len(), 1, "{log}");
     println!("{}", took[0]);
+}
+
+/// Fixed controls: the log names the value the camera took (clamped to its range, rounded to
+/// its step), and `camera list` shows the controls with their ranges and current values.
+fn child_controls() {
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    let cfg = CaptureConfig {
+        controls: contrastxr::camera::CameraControls {
+            exposure_us: Some(10_000),
+            white_balance_k: Some(5_003),
+            gain: Some(300),
+        },
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&fake_spec(), &cfg).unwrap();
+    wait_for_frame(&bg, 0, Duration::from_secs(10)).expect("a frame");
+    let log = LOG.lock().unwrap().join("\n");
+    println!("{log}");
+    if env("FAKE_V4L2_NO_CONTROLS").is_empty() {
+        for line in [
+            "camera_exposure 10000us: the camera took 10000us",
+            "camera_white_balance 5003K: the camera took 5000K",
+            "camera_gain 300: the camera took 255",
+        ] {
+            assert!(log.contains(line), "{line} missing:\n{log}");
+        }
+        let mut out = Vec::new();
+        cli::list(&mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(
+            text.contains(
+                "  control camera_white_balance 2800..6500K (default 4600, now 5000, fixed)"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("  control camera_exposure 300..204700us"),
+            "{text}"
+        );
+        println!("controls checked");
+    }
 }
 
 /// Busy at open (another program captures): the source opens all the same, says so once,

@@ -42,6 +42,9 @@ pub fn list_in(dir: &Path, out: &mut dyn Write) -> Result<(), String> {
                 for stable in v4l2::stable_paths(dir, path) {
                     writeln!(out, "  also {}", stable.display()).map_err(w)?;
                 }
+                for control in v4l2::controls::describe(&device) {
+                    writeln!(out, "  control {control}").map_err(w)?;
+                }
                 match v4l2::modes(&device) {
                     Ok(modes) => write_modes(&modes, out).map_err(w)?,
                     Err(e) => writeln!(out, "  cannot list formats: {e}").map_err(w)?,

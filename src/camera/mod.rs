@@ -26,7 +26,7 @@ mod y4m;
 pub use background::Background;
 pub use frame::{Frame, SourceStatus};
 pub use log::set_log_sink;
-pub use source::{parse_source, CaptureConfig, SourceSpec};
+pub use source::{parse_source, CameraControls, CaptureConfig, SourceSpec};
 
 use std::fmt;
 

@@ -75,6 +75,20 @@ pub struct CaptureConfig {
     /// Temporal smoothing: weight of the newest frame in an exponential moving average of
     /// the background, in (0, 1]; `None` (the default) is off.
     pub smoothing: Option<f32>,
+    /// Fixed exposure, white balance and gain (None: the camera's automatic control).
+    pub controls: CameraControls,
+}
+
+/// Camera settings that otherwise drift (automatic exposure, white balance, gain), each either
+/// left to the camera (None) or fixed, so that a drift does not become a change of tint.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CameraControls {
+    /// Exposure time in microseconds.
+    pub exposure_us: Option<u32>,
+    /// White balance as a colour temperature in kelvin.
+    pub white_balance_k: Option<u32>,
+    /// Gain, in the camera's own units.
+    pub gain: Option<u32>,
 }
 
 impl Default for CaptureConfig {
@@ -88,6 +102,7 @@ impl Default for CaptureConfig {
             grace: Duration::from_secs(2),
             max_backoff: Duration::from_secs(2),
             smoothing: None,
+            controls: CameraControls::default(),
         }
     }
 }

@@ -55,6 +55,26 @@ fn boolean(v: Value) -> Result<bool, String> {
     }
 }
 
+/// `auto` (None) or a whole number, for a camera control.
+fn auto_or_count(v: Value) -> Result<Option<u32>, String> {
+    let text = match v {
+        Value::Text(t) => t,
+        Value::Count(n) => n.to_string(),
+        other => return Err(format!("{other} is not auto or a whole number")),
+    };
+    if text.trim() == "auto" {
+        return Ok(None);
+    }
+    text.trim()
+        .parse()
+        .map(Some)
+        .map_err(|_| format!("{text:?} is not auto or a whole number"))
+}
+
+fn auto_text(v: Option<u32>) -> Value {
+    Value::Text(v.map_or("auto".into(), |n| n.to_string()))
+}
+
 fn pair(v: Value) -> Result<[f32; 2], String> {
     match v {
         Value::Pair(p) if p.iter().all(|x| x.is_finite()) => Ok(p),
@@ -259,6 +279,42 @@ pub const KEYS: &[Key] = &[
             Ok(())
         },
         get: |s| Value::Count(u64::from(s.camera.fps)),
+    },
+    Key {
+        name: "camera_exposure",
+        env: "CONTRASTXR_CAMERA_EXPOSURE",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "auto (the camera's automatic exposure) or a fixed exposure time in microseconds",
+        set: |s, v| {
+            s.camera.controls.exposure_us = auto_or_count(v)?;
+            Ok(())
+        },
+        get: |s| auto_text(s.camera.controls.exposure_us),
+    },
+    Key {
+        name: "camera_white_balance",
+        env: "CONTRASTXR_CAMERA_WHITE_BALANCE",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "auto (the camera's automatic white balance) or a fixed colour temperature in kelvin",
+        set: |s, v| {
+            s.camera.controls.white_balance_k = auto_or_count(v)?;
+            Ok(())
+        },
+        get: |s| auto_text(s.camera.controls.white_balance_k),
+    },
+    Key {
+        name: "camera_gain",
+        env: "CONTRASTXR_CAMERA_GAIN",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "auto (the camera's automatic gain) or a fixed gain in the camera's units",
+        set: |s, v| {
+            s.camera.controls.gain = auto_or_count(v)?;
+            Ok(())
+        },
+        get: |s| auto_text(s.camera.controls.gain),
     },
     Key {
         name: "background_smoothing",
@@ -635,6 +691,18 @@ mod tests {
                 .unwrap_or_else(|e| panic!("{}: {e}", k.name));
             assert_eq!(s, defaults, "{}", k.name);
         }
+    }
+
+    #[test]
+    fn camera_controls_take_auto_or_a_whole_number() {
+        let mut s = Settings::default();
+        let k = key("camera_exposure").unwrap();
+        k.apply(&mut s, Value::Text("8000".into())).unwrap();
+        assert_eq!(s.camera.controls.exposure_us, Some(8000));
+        k.apply(&mut s, Value::Text("auto".into())).unwrap();
+        assert_eq!(s.camera.controls.exposure_us, None);
+        assert!(k.apply(&mut s, Value::Text("bright".into())).is_err());
+        assert!(k.apply(&mut s, Value::Float(1.5)).is_err());
     }
 
     #[test]

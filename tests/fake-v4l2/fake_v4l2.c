@@ -17,6 +17,7 @@
  *   FAKE_V4L2_VANISH_AFTER  after N delivered frames the device disappears (ENODEV, POLLERR)
  *   FAKE_V4L2_RETURN_AFTER_MS  and can be opened again this long after (default 500)
  *   FAKE_V4L2_NO_FRAMES     if 1, the device streams but never delivers a frame
+ *   FAKE_V4L2_NO_CONTROLS   if set, the device has no controls (else exposure, white balance, gain)
  *   FAKE_V4L2_BUSY_FOR_MS   setting a format fails with EBUSY for this long after start, as
  *                           when another program is capturing from the device
  *   FAKE_V4L2_CARD          card name (default "Fake V4L2 camera")
@@ -529,6 +530,94 @@ static int buffer_ioctl(int fd, unsigned long req, void *arg)
 	return ENOTTY;
 }
 
+/* Camera controls: auto exposure (a menu: 1 manual, 3 aperture priority), exposure time in
+ * 100 us units, auto white balance, white balance temperature, gain. FAKE_V4L2_NO_CONTROLS=1
+ * gives a camera without any. A value set is clamped to the range and rounded to the step. */
+struct fake_ctrl {
+	uint32_t id, type;
+	const char *name;
+	int32_t min, max, step, def, value;
+};
+static struct fake_ctrl ctrls[] = {
+	{V4L2_CID_GAIN, V4L2_CTRL_TYPE_INTEGER, "Gain", 0, 255, 1, 32, 32},
+	{V4L2_CID_AUTO_WHITE_BALANCE, V4L2_CTRL_TYPE_BOOLEAN, "White Balance, Automatic", 0, 1, 1, 1, 1},
+	{V4L2_CID_WHITE_BALANCE_TEMPERATURE, V4L2_CTRL_TYPE_INTEGER, "White Balance Temperature", 2800, 6500, 10, 4600, 4600},
+	{V4L2_CID_EXPOSURE_AUTO, V4L2_CTRL_TYPE_MENU, "Auto Exposure", 1, 3, 2, 3, 3},
+	{V4L2_CID_EXPOSURE_ABSOLUTE, V4L2_CTRL_TYPE_INTEGER, "Exposure Time, Absolute", 3, 2047, 1, 156, 156},
+};
+#define N_CTRLS ((int)(sizeof ctrls / sizeof ctrls[0]))
+
+static struct fake_ctrl *find_ctrl(uint32_t id)
+{
+	if (getenv("FAKE_V4L2_NO_CONTROLS"))
+		return NULL;
+	for (int i = 0; i < N_CTRLS; i++)
+		if (ctrls[i].id == id)
+			return &ctrls[i];
+	return NULL;
+}
+
+static int query_ext_ctrl(struct v4l2_query_ext_ctrl *q)
+{
+	uint32_t flags = V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND;
+	struct fake_ctrl *c = NULL;
+	if (q->id & flags) {
+		uint32_t after = q->id & ~flags;
+		for (int i = 0; i < N_CTRLS && !getenv("FAKE_V4L2_NO_CONTROLS"); i++)
+			if (ctrls[i].id > after && (!c || ctrls[i].id < c->id))
+				c = &ctrls[i];
+	} else {
+		c = find_ctrl(q->id);
+	}
+	if (!c)
+		return EINVAL;
+	memset(q, 0, sizeof *q);
+	q->id = c->id;
+	q->type = c->type;
+	snprintf(q->name, sizeof q->name, "%s", c->name);
+	q->minimum = c->min;
+	q->maximum = c->max;
+	q->step = (uint64_t)c->step;
+	q->default_value = c->def;
+	q->elems = q->nr_of_dims = 0;
+	q->elem_size = 4;
+	q->elems = 1;
+	return 0;
+}
+
+static int querymenu(struct v4l2_querymenu *m)
+{
+	if (m->id != V4L2_CID_EXPOSURE_AUTO || !find_ctrl(m->id))
+		return EINVAL;
+	const char *name = m->index == 1 ? "Manual Mode" : m->index == 3 ? "Aperture Priority Mode" : NULL;
+	if (!name)
+		return EINVAL;
+	snprintf((char *)m->name, sizeof m->name, "%s", name);
+	return 0;
+}
+
+static int ext_ctrls(struct v4l2_ext_controls *list, int set)
+{
+	for (uint32_t i = 0; i < list->count; i++) {
+		struct v4l2_ext_control *x = &list->controls[i];
+		struct fake_ctrl *c = find_ctrl(x->id);
+		if (!c)
+			return EINVAL;
+		if (!set) {
+			x->value = c->value;
+			continue;
+		}
+		int32_t v = (int32_t)x->value64;
+		if (v < c->min)
+			v = c->min;
+		if (v > c->max)
+			v = c->max;
+		v = c->min + (v - c->min) / c->step * c->step;
+		c->value = v;
+	}
+	return 0;
+}
+
 /* Returns 0 or an errno value. */
 static int handle_ioctl(int fd, unsigned long req, void *arg)
 {
@@ -556,6 +645,14 @@ static int handle_ioctl(int fd, unsigned long req, void *arg)
 		return parm(arg, 0);
 	case VIDIOC_S_PARM:
 		return parm(arg, 1);
+	case VIDIOC_QUERY_EXT_CTRL:
+		return query_ext_ctrl(arg);
+	case VIDIOC_QUERYMENU:
+		return querymenu(arg);
+	case VIDIOC_G_EXT_CTRLS:
+		return ext_ctrls(arg, 0);
+	case VIDIOC_S_EXT_CTRLS:
+		return ext_ctrls(arg, 1);
 	}
 	return buffer_ioctl(fd, req, arg);
 }

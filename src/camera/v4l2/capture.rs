@@ -132,6 +132,7 @@ fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session
     (wanted.width, wanted.height, wanted.fourcc) =
         (mode.width, mode.height, FourCC::new(&mode.fourcc));
     let got = device.set_format(&wanted).map_err(device_err)?;
+    super::controls::apply(&device, &cfg.controls, &shown.to_string());
     let format = PixelFormat::from_fourcc(got.fourcc.repr).ok_or_else(|| {
         CameraError::Unsupported(format!(
             "{shown} switched to unsupported format {}",

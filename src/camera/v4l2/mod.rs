@@ -6,6 +6,7 @@
 
 mod capture;
 mod choose;
+pub mod controls;
 
 pub(crate) use capture::spawn;
 pub use choose::{choose_mode, Mode};
