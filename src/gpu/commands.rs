@@ -24,7 +24,8 @@ impl Commands {
             in_flight: false,
         };
         if let Err(e) = c.create(gpu) {
-            c.destroy(gpu);
+            // Nothing was submitted: the wait in destroy cannot fail.
+            let _ = c.destroy(gpu);
             return Err(e);
         }
         Ok(c)
@@ -100,9 +101,11 @@ impl Commands {
         Ok(())
     }
 
-    /// Waits for the GPU and destroys the objects (null handles are ignored).
-    pub fn destroy(&mut self, gpu: &GpuDevice) {
-        let _ = self.wait(gpu, 5_000_000_000);
+    /// Waits for the GPU and destroys the objects (null handles are ignored). When the GPU
+    /// does not finish within the wait, the objects it may still use are left alive and the
+    /// error returned.
+    pub fn destroy(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
+        self.wait(gpu, 5_000_000_000)?;
         // SAFETY: our own objects, no longer in use after the wait.
         unsafe {
             gpu.device.destroy_fence(self.fence, None);
@@ -111,5 +114,6 @@ impl Commands {
         self.fence = vk::Fence::null();
         self.pool = vk::CommandPool::null();
         self.cmd = vk::CommandBuffer::null();
+        Ok(())
     }
 }

@@ -28,6 +28,8 @@ struct Messenger {
 /// Objects this device created and must destroy (None when borrowed).
 struct Owned {
     messenger: Option<Messenger>,
+    /// The instance is this object's too (false for a device made on someone else's).
+    instance: bool,
 }
 
 pub struct GpuDevice {
@@ -41,6 +43,8 @@ pub struct GpuDevice {
     pub name: String,
     pub validation: Option<Arc<ValidationLog>>,
     owned: Option<Owned>,
+    /// The GPU may still use memory or objects of this device: Drop then frees nothing.
+    abandoned: bool,
 }
 
 /// Options for a device the engine creates itself.
@@ -214,7 +218,10 @@ impl GpuDevice {
                 // SAFETY: the device was created with one queue of `family`.
                 let mut gpu = unsafe { Self::assemble(handles, family, 0) };
                 gpu.validation = log;
-                gpu.owned = Some(Owned { messenger });
+                gpu.owned = Some(Owned {
+                    messenger,
+                    instance: true,
+                });
                 Ok(gpu)
             }
             Err(e) => {
@@ -222,6 +229,52 @@ impl GpuDevice {
                 Err(e)
             }
         }
+    }
+
+    /// A device of its own on `app`'s instance and physical device, with one compute queue.
+    /// No instance is created, so the Vulkan loader neither loads nor unloads a driver; Drop
+    /// destroys only this device. Made and dropped on the app's thread (see docs/layer.md,
+    /// Threads).
+    pub fn create_beside(app: &GpuDevice) -> Result<GpuDevice, GpuError> {
+        let (instance, physical) = (&app.instance, app.physical);
+        let family = compute_family(instance, physical)
+            .ok_or_else(|| GpuError::NoDevice("the device has no compute queue".into()))?;
+        let priorities = [1.0];
+        let queues = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
+        // SAFETY: physical belongs to the app's live instance; info lives until the call returns.
+        let device =
+            unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
+        let allocator = match create_allocator(instance, &device, physical) {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the device was just created and has no children.
+                unsafe { device.destroy_device(None) };
+                return Err(e);
+            }
+        };
+        let handles = (
+            app.entry.clone(),
+            instance.clone(),
+            physical,
+            device,
+            allocator,
+        );
+        // SAFETY: the device was created with one queue of `family`.
+        let mut gpu = unsafe { Self::assemble(handles, family, 0) };
+        gpu.owned = Some(Owned {
+            messenger: None,
+            instance: false,
+        });
+        Ok(gpu)
+    }
+
+    /// The GPU may still be using this device's memory or objects (a wait for it timed out):
+    /// Drop then leaves everything alive rather than free what is in use.
+    pub fn abandon(&mut self) {
+        self.abandoned = true;
     }
 
     /// Destroys an instance this object created (and its messenger) after a failed set-up.
@@ -329,6 +382,7 @@ impl GpuDevice {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             validation: None,
             owned: None,
+            abandoned: false,
         }
     }
 
@@ -372,19 +426,25 @@ impl GpuDevice {
 
 impl Drop for GpuDevice {
     fn drop(&mut self) {
+        if self.abandoned {
+            return;
+        }
         // SAFETY: the allocator is dropped exactly once, here, before the device it uses.
         unsafe { ManuallyDrop::drop(&mut self.allocator) };
         let Some(owned) = self.owned.take() else {
             return;
         };
-        // SAFETY: this object created the device, instance and messenger; the engine objects
-        // built on them were destroyed by their owners before (they borrow this device).
+        // SAFETY: this object created the device (and the instance and messenger where
+        // `owned` says so); the engine objects built on them were destroyed by their owners
+        // before (they borrow this device).
         unsafe {
             self.device.destroy_device(None);
             if let Some(m) = owned.messenger {
                 m.loader.destroy_debug_utils_messenger(m.raw, None);
             }
-            self.instance.destroy_instance(None);
+            if owned.instance {
+                self.instance.destroy_instance(None);
+            }
         }
     }
 }

@@ -903,6 +903,17 @@ impl Engine {
         self.pipelines.report()
     }
 
+    /// Tells the pipeline thread to stop, without waiting for it.
+    pub fn stop_building(&self) {
+        self.pipelines.stop();
+    }
+
+    /// Stops the pipeline thread and waits for it: nothing of the engine then touches the
+    /// device on another thread (what the GPU uses is left alive).
+    pub fn join_building(&mut self) {
+        self.pipelines.join();
+    }
+
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
         unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };

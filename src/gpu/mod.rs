@@ -15,6 +15,7 @@ pub mod image_copy;
 pub mod offline;
 pub mod pipeline_cache;
 pub mod pipelines;
+pub mod process_exit;
 pub mod shaders;
 pub mod warm_up;
 

@@ -252,7 +252,11 @@ impl OfflineEngine {
 
 impl Drop for OfflineEngine {
     fn drop(&mut self) {
-        self.commands.get_mut().destroy(&self.gpu);
+        if self.commands.get_mut().destroy(&self.gpu).is_err() {
+            // The GPU may still use the engine's objects: leave them alive.
+            self.gpu.abandon();
+            return;
+        }
         self.engine.destroy(&self.gpu);
     }
 }

@@ -11,6 +11,7 @@ use super::device::DeviceKind;
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::pipeline_cache::{self, Origin, PipelineCache};
+use super::process_exit;
 use super::shaders::{self, ShaderModule};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
@@ -229,6 +230,11 @@ impl Shared {
         if let Some(warm_up) = warm_up {
             warm_up(ShaderId(k));
         }
+        // A session that ends, or a process that exits, may be about to destroy the app's
+        // device: nothing more is made on it.
+        if self.lock().stop || process_exit::exiting() {
+            return Slot::Failed("the pipeline thread was stopped".into());
+        }
         let slot = match compute_pipeline(self, self.modules[k]) {
             Ok(p) => Slot::Built(p),
             Err(e) => Slot::Failed(e.to_string()),
@@ -305,6 +311,7 @@ impl Pipelines {
         self.cache = Some(cache);
         self.shared = Some(shared.clone());
         if self.mode == BuildMode::Background {
+            process_exit::watch();
             let spawned = std::thread::Builder::new()
                 .name("contrastxr-pipelines".into())
                 .spawn(move || build_requests(&shared, warm_up));
@@ -442,16 +449,28 @@ impl Pipelines {
         Some(self.shared.as_ref()?.lock().report.clone())
     }
 
-    /// Stops the building thread (after the pipeline it is building), saves the cache and
-    /// destroys every object.
-    pub fn destroy(&mut self, gpu: &GpuDevice) {
+    /// Tells the building thread to stop after the pipeline it is building, without waiting
+    /// for it: the session passes its frames through from now on.
+    pub fn stop(&self) {
         if let Some(shared) = &self.shared {
             shared.lock().stop = true;
             shared.changed.notify_all();
         }
+    }
+
+    /// Stops the building thread and waits for it to end: afterwards nothing of this object
+    /// touches the device on another thread.
+    pub fn join(&mut self) {
+        self.stop();
         if let Some(builder) = self.builder.take() {
             let _ = builder.join();
         }
+    }
+
+    /// Stops the building thread (after the pipeline it is building), saves the cache and
+    /// destroys every object.
+    pub fn destroy(&mut self, gpu: &GpuDevice) {
+        self.join();
         let slots = self.shared.take().map(|s| {
             save_if_changed(&s);
             std::mem::take(&mut s.lock().slots)
@@ -506,13 +525,19 @@ fn build_requests(shared: &Shared, mut warm_up: Option<WarmUpHook>) {
                 st = shared.changed.wait(st).unwrap_or_else(|p| p.into_inner());
             }
         };
-        let Some(k) = next else {
-            save_if_changed(shared);
-            continue;
-        };
-        let slot = shared.build(k, warm_up.as_mut());
-        shared.lock().slots[k] = slot;
-        shared.changed.notify_all();
+        // Nothing starts once the process is exiting (see gpu/process_exit.rs).
+        if !process_exit::begin() {
+            return;
+        }
+        match next {
+            None => save_if_changed(shared),
+            Some(k) => {
+                let slot = shared.build(k, warm_up.as_mut());
+                shared.lock().slots[k] = slot;
+                shared.changed.notify_all();
+            }
+        }
+        process_exit::end();
     }
 }
 

@@ -1,13 +1,19 @@
 //! The warm-up of a CPU driver's shader compiles. lavapipe (and other CPU Vulkan drivers built
 //! on llvmpipe) compiles a compute shader to machine code at its first dispatch, not at
 //! vkCreateComputePipelines: on the app's queue that would be seconds inside the app's
-//! xrEndFrame. So the building thread first dispatches each shader once on a device of its
-//! own (its own instance, the same kind of physical device, its own queue): the compile
-//! happens there, and the driver's shader disk cache hands the result to the app's device.
+//! xrEndFrame. So the building thread first dispatches each shader once on a device of the
+//! layer's own (the app's instance and physical device, its own queue): the compile happens
+//! there, and the driver's shader disk cache hands the result to the app's device.
+//!
+//! That device is made and destroyed on the app's thread (at xrCreateSession and
+//! xrDestroySession, calls in which the app waits for the runtime anyway), never on the
+//! building thread, and on the app's instance: no second instance exists, so the Vulkan loader
+//! never loads or unloads a driver behind the app's back. The building thread only records,
+//! submits and waits on the warm-up device's own objects.
 
 use super::commands::Commands;
 use super::device::DeviceKind;
-use super::device::{DeviceOptions, GpuDevice};
+use super::device::GpuDevice;
 use super::engine::{BackgroundFrame, Engine, Placement, ViewTarget};
 use super::error::GpuError;
 use super::format::{PixelFormat, PixelLayout};
@@ -16,7 +22,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use ash::vk;
 use std::collections::HashSet;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The shaders warmed up in this process, per device kind: the driver's disk cache has them,
 /// so later sessions skip them (and make no device of their own at all).
@@ -31,6 +37,9 @@ fn warmed() -> std::sync::MutexGuard<'static, HashSet<(DeviceKind, ShaderId)>> {
 const SIZE: (u32, u32) = (8, 8);
 /// How long one warm-up dispatch may take (a compile included).
 const TIMEOUT_NS: u64 = 120_000_000_000;
+/// How long dropping the device waits for work still in flight (none, unless a dispatch
+/// timed out): it runs on the app's thread.
+const DROP_WAIT_NS: u64 = 1_000_000_000;
 
 pub struct WarmUp {
     engine: Engine,
@@ -43,17 +52,35 @@ pub struct WarmUp {
     gpu: GpuDevice,
 }
 
+/// The warm-up device of a session, shared by the app's thread (which makes and drops it) and
+/// the building thread (which dispatches on it).
+pub type SharedWarmUp = Arc<Mutex<WarmUp>>;
+
 impl WarmUp {
-    /// The hook that warms each shader up before it is built for `gpu`, where its driver
-    /// compiles at first dispatch (the warm-up's device is made at the first shader that needs
-    /// it); None for other drivers.
-    pub fn hook(gpu: &GpuDevice) -> Option<WarmUpHook> {
+    /// The warm-up device for `gpu`, made now, on the caller's thread (the app's), where its
+    /// driver compiles at first dispatch and this process has not warmed every shader up yet;
+    /// None for other drivers. Failures are not fatal: the compile then happens at first
+    /// dispatch on the app's queue.
+    pub fn for_device(gpu: &GpuDevice) -> Option<SharedWarmUp> {
         if !WarmUp::needed(gpu) {
             return None;
         }
         let kind = DeviceKind::of(gpu);
-        let mut slot: Option<WarmUp> = None;
-        Some(Box::new(move |id| WarmUp::once(&mut slot, kind, id)))
+        let done = warmed().iter().filter(|(k, _)| *k == kind).count();
+        if done >= super::shaders::all().len() {
+            return None;
+        }
+        WarmUp::new(gpu).ok().map(|w| Arc::new(Mutex::new(w)))
+    }
+
+    /// The hook that warms each shader up on `shared` before it is built for the app's device.
+    pub fn hook(shared: &SharedWarmUp, kind: DeviceKind) -> WarmUpHook {
+        let shared = shared.clone();
+        Box::new(move |id| {
+            // Only this hook locks it while the building thread runs.
+            let mut w = shared.lock().unwrap_or_else(|p| p.into_inner());
+            w.once(kind, id);
+        })
     }
 
     /// Whether a device compiles at first dispatch (a CPU driver).
@@ -63,15 +90,10 @@ impl WarmUp {
         props.device_type == vk::PhysicalDeviceType::CPU
     }
 
-    /// A device of the same kind as `key`'s, with a camera frame and a view (the widest pixel
-    /// format, so every variant stays inside the buffers) zero-filled.
-    pub fn new(key: DeviceKind) -> Result<WarmUp, GpuError> {
-        // CONTRASTXR_VK_VALIDATION=1 validates the warm-up's own device too.
-        let options = DeviceOptions {
-            matching: Some(key),
-            ..DeviceOptions::from_env()
-        };
-        let gpu = GpuDevice::create(&options)?;
+    /// A device beside `app`'s, with a camera frame and a view (the widest pixel format, so
+    /// every variant stays inside the buffers) zero-filled.
+    pub fn new(app: &GpuDevice) -> Result<WarmUp, GpuError> {
+        let gpu = GpuDevice::create_beside(app)?;
         let mut engine = Engine::new(&gpu, 1, BuildMode::Inline, None)?;
         let parts = Commands::new(&gpu).and_then(|commands| {
             let mut bg = engine.create_background(&gpu, SIZE, Placement::OFFLINE)?;
@@ -114,19 +136,14 @@ impl WarmUp {
         })
     }
 
-    /// Warms `id` up unless this process already did, making the device in `slot` first if
-    /// needed. Failures are not fatal: the compile then happens at first dispatch.
-    pub fn once(slot: &mut Option<WarmUp>, key: DeviceKind, id: ShaderId) {
+    /// Warms `id` up unless this process already did. Failures are not fatal: the compile
+    /// then happens at first dispatch.
+    pub fn once(&mut self, key: DeviceKind, id: ShaderId) {
         if warmed().contains(&(key, id)) {
             return;
         }
-        if slot.is_none() {
-            *slot = WarmUp::new(key).ok();
-        }
-        if let Some(w) = slot {
-            if w.run(id).is_ok() {
-                warmed().insert((key, id));
-            }
+        if self.run(id).is_ok() {
+            warmed().insert((key, id));
         }
     }
 
@@ -183,10 +200,15 @@ fn record_to_general(gpu: &GpuDevice, cmd: vk::CommandBuffer, image: vk::Image) 
 
 impl Drop for WarmUp {
     fn drop(&mut self) {
-        let _ = self.commands.wait(&self.gpu, TIMEOUT_NS);
+        if self.commands.wait(&self.gpu, DROP_WAIT_NS).is_err() {
+            // The GPU may still use every object: leave them alive rather than free them.
+            self.gpu.abandon();
+            return;
+        }
         self.engine.destroy_view(&self.gpu, &mut self.view);
         self.background.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
-        self.commands.destroy(&self.gpu);
+        // Waited for above: this wait cannot fail.
+        let _ = self.commands.destroy(&self.gpu);
     }
 }

@@ -250,7 +250,7 @@ fn guarded_process(
         log::info(
             "internal error while enhancing: passing this session's frames through from now on",
         );
-        s.processor = None;
+        s.retire_processor();
     }
 }
 
@@ -306,7 +306,7 @@ fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::Environ
             log::info(&format!(
                 "GPU work failed ({e}): passing this session's frames through from now on"
             ));
-            s.processor = None;
+            s.retire_processor();
         }
     }
 }

@@ -7,10 +7,11 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::buffer::record_buffer_copy;
 use crate::gpu::commands::Commands;
+use crate::gpu::device::DeviceKind;
 use crate::gpu::engine::barrier;
 use crate::gpu::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
 use crate::gpu::pipelines::{BuildMode, BuildReport, ShaderId};
-use crate::gpu::warm_up::WarmUp;
+use crate::gpu::warm_up::{SharedWarmUp, WarmUp};
 use crate::gpu::{BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, Placement, ViewTarget};
 use crate::image::RgbaImage;
 use ash::vk;
@@ -50,6 +51,9 @@ pub struct Processor {
     pub indicator: super::indicator::Indicator,
     /// When the session started (xrCreateSession).
     pub started: Instant,
+    /// The warm-up device (CPU drivers), dropped here on the app's thread after the pipeline
+    /// thread that uses it has ended.
+    warm_up: Option<SharedWarmUp>,
     // Last: dropped after everything above was destroyed in Drop.
     pub gpu: GpuDevice,
 }
@@ -59,8 +63,12 @@ impl Processor {
     /// the engine's own thread, `first` first.
     pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<Processor, GpuError> {
         let started = Instant::now();
-        let warm_up = WarmUp::hook(&gpu);
-        let mut engine = Engine::new(&gpu, MAX_VIEWS, BuildMode::Background, warm_up)?;
+        // Made here, on the app's thread, never on the pipeline thread (see gpu/warm_up.rs).
+        let warm_up = WarmUp::for_device(&gpu);
+        let hook = warm_up
+            .as_ref()
+            .map(|w| WarmUp::hook(w, DeviceKind::of(&gpu)));
+        let mut engine = Engine::new(&gpu, MAX_VIEWS, BuildMode::Background, hook)?;
         engine.request(first);
         let commands = match Commands::new(&gpu) {
             Ok(c) => c,
@@ -79,8 +87,15 @@ impl Processor {
             frame: 0,
             indicator: Default::default(),
             started,
+            warm_up,
             gpu,
         })
+    }
+
+    /// Tells the pipeline thread to stop, without waiting: the session passes through from now
+    /// on, and the processor is dropped only at xrDestroySession.
+    pub fn stop_building(&self) {
+        self.engine.stop_building();
     }
 
     /// Queues shaders to build ahead of earlier requests (a swapchain's format became known).
@@ -264,6 +279,12 @@ impl Processor {
             Ok(())
         });
         let mut captured = Vec::new();
+        // The capture buffers may be freed only once the GPU is done with them; when it is
+        // not, they are left alive (the error then ends the session's enhancement).
+        let idle = match staging.is_empty() {
+            true => Ok(()),
+            false => self.wait_idle(),
+        };
         for (item, (mut before, mut after)) in items.iter().zip(staging) {
             if result.is_ok() {
                 captured.push(CapturedView {
@@ -272,12 +293,12 @@ impl Processor {
                     output: after.mapped().unwrap_or_default().to_vec(),
                 });
             }
-            // Capture buffers are only used when we waited above (or the submit failed).
-            let _ = self.wait_idle();
-            before.destroy(&self.gpu);
-            after.destroy(&self.gpu);
+            if idle.is_ok() {
+                before.destroy(&self.gpu);
+                after.destroy(&self.gpu);
+            }
         }
-        result.map(|_| captured)
+        result.and(idle).map(|_| captured)
     }
 
     fn submit(&mut self) -> Result<(), GpuError> {
@@ -377,8 +398,18 @@ impl Processor {
 }
 
 impl Drop for Processor {
+    /// Runs on the app's thread (xrDestroySession, xrDestroyInstance, or a failed set-up).
     fn drop(&mut self) {
-        let _ = self.wait_idle();
+        let idle = self.wait_idle();
+        // The pipeline thread uses the app's device: it ends before anything is destroyed.
+        self.engine.join_building();
+        if let Err(e) = idle {
+            super::log::info(&format!(
+                "the GPU did not finish the layer's last work ({e}): its objects are left alive, not destroyed"
+            ));
+            self.gpu.abandon();
+            return;
+        }
         for (_, mut v) in self.views.drain() {
             self.engine.destroy_view(&self.gpu, &mut v.target);
         }
@@ -387,6 +418,9 @@ impl Drop for Processor {
         }
         self.indicator.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
-        self.commands.destroy(&self.gpu);
+        // Waited for above: this wait cannot fail.
+        let _ = self.commands.destroy(&self.gpu);
+        // The pipeline thread that dispatched on it has ended (joined above).
+        drop(self.warm_up.take());
     }
 }

@@ -55,6 +55,7 @@ pub unsafe extern "system" fn create_session(
             next: inst.next,
             settings,
             processor,
+            retired: Vec::new(),
             background: None,
             background_requested: false,
             idle_frames: 0,
@@ -109,7 +110,10 @@ pub fn forget(session: xr::Session) {
     sources::reopening().remove(&session.into_raw());
     if let Some(s) = removed {
         let mut s = lock(&s);
+        // On the app's thread, inside xrDestroySession or xrDestroyInstance: the pipeline
+        // threads end and the warm-up devices are destroyed here.
         s.processor = None;
+        s.retired.clear();
         // Closes the camera: it is open only while a session runs.
         s.background = None;
     }
@@ -166,7 +170,7 @@ fn layer_end_frame(session: xr::Session, s: &Mutex<SessionState>, info: *const x
             log::info(
                 "internal error while enhancing: passing this session's frames through from now on",
             );
-            s.processor = None;
+            s.retire_processor();
         }
     }
     if let Err(e) = crate::fault::check("end-frame") {
@@ -183,7 +187,7 @@ fn recover_end_frame(session: xr::Session, s: &Mutex<SessionState>) {
         "end-frame-panic",
         "internal error in xrEndFrame: passing this session's frames through from now on",
     );
-    lock(s).processor = None;
+    lock(s).retire_processor();
     let released = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         swapchain::release_held(session)
     }));

@@ -30,6 +30,9 @@ pub struct SessionState {
     pub settings: Arc<Settings>,
     /// None: this session passes through (not Vulkan, set-up failed, or an earlier failure).
     pub processor: Option<Processor>,
+    /// Processors of earlier failures, kept until xrDestroySession: dropping one waits for its
+    /// pipeline thread, which no frame call may do.
+    pub retired: Vec<Processor>,
     /// The running background source (camera, video, image): open only while the session's
     /// frames are enhanced (opened at the first frame the layer acts on).
     pub background: Option<crate::camera::Background>,
@@ -46,6 +49,18 @@ pub struct SessionState {
     /// Whether any xrEndFrame has named sub-images yet (before that, a swapchain's view
     /// regions are unknown).
     pub regions_seen: bool,
+}
+
+impl SessionState {
+    /// The session passes its frames through from now on. Its processor's pipeline thread is
+    /// told to stop, and the processor is kept until xrDestroySession, so that no call of the
+    /// app waits here for a shader compile, a device teardown or a cache write.
+    pub fn retire_processor(&mut self) {
+        if let Some(p) = self.processor.take() {
+            p.stop_building();
+            self.retired.push(p);
+        }
+    }
 }
 
 /// One view's region of a swapchain image, as a composition layer names it.

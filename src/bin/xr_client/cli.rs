@@ -40,6 +40,9 @@ usage: contrastxr-xr-client [options]
   --pipelined             acquire and wait for the next frame's image before xrEndFrame of the
                           current one, as engines with a render thread running ahead do
   --churn-swapchains      create and destroy swapchains on a second thread while frames run
+  --churn-formats         with --churn-swapchains: cycle through every format the runtime
+                          offers (colour and depth), up to 1920x1080, from the moment the
+                          session exists
   --script OPS            instead of frames, run one scripted sequence of raw swapchain and
                           frame calls (comma-separated: acquire wait release begin end
                           end-empty destroy create) and report each call's XrResult (`script`)
@@ -87,6 +90,8 @@ pub struct Options {
     pub check_untouched: bool,
     pub pipelined: bool,
     pub churn_swapchains: bool,
+    /// The churn thread cycles through every offered format at growing sizes.
+    pub churn_formats: bool,
     pub script: Option<Vec<crate::script::Op>>,
     pub content: Content,
 }
@@ -112,6 +117,7 @@ impl Default for Options {
             check_untouched: false,
             pipelined: false,
             churn_swapchains: false,
+            churn_formats: false,
             script: None,
             content: Content::Panels,
         }
@@ -150,6 +156,10 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--check-untouched" => options.check_untouched = true,
             "--pipelined" => options.pipelined = true,
             "--churn-swapchains" => options.churn_swapchains = true,
+            "--churn-formats" => {
+                options.churn_swapchains = true;
+                options.churn_formats = true;
+            }
             "--script" => options.script = Some(crate::script::parse(&value()?)?),
             "--sessions" => {
                 options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?

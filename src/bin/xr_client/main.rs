@@ -199,6 +199,41 @@ fn run_session(
     }
     let format = choose_format(options.format, &offered)?;
     report.format = format.name.to_string();
+    let churn_plan = churn::plan(format, &offered, options.churn_formats);
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let churned = std::sync::atomic::AtomicU32::new(0);
+    // The churn thread starts as soon as the session exists: a layer that sets up on threads
+    // of its own at xrCreateSession races the app's swapchain calls from the first moment.
+    let result = std::thread::scope(|threads| {
+        let churner = options
+            .churn_swapchains
+            .then(|| threads.spawn(|| churn::churn(&session, &churn_plan, &stop, &churned)));
+        let streams = (&mut waiter, &mut stream);
+        let result = run_frames(world, options, &session, streams, format, report, stats);
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        match churner.map(|t| t.join()) {
+            Some(Ok(Some(e))) => report.errors.push(e),
+            Some(Err(_)) => report.errors.push("the churn thread panicked".into()),
+            _ => {}
+        }
+        result
+    });
+    report.swapchains_churned += churned.into_inner();
+    result
+}
+
+/// The session's swapchains and its frame loop; the frames' call times and checks go to the
+/// report.
+fn run_frames(
+    world: &World<'_>,
+    options: &Options,
+    session: &xr::Session<xr::Vulkan>,
+    (waiter, stream): (&mut xr::FrameWaiter, &mut xr::FrameStream<xr::Vulkan>),
+    format: SwapchainFormat,
+    report: &mut Report,
+    stats: &mut Stats,
+) -> Result<()> {
+    let (instance, system, gpu) = (world.instance, world.system, world.gpu);
     let view_size = match options.size {
         Some(size) => size,
         None => recommended_size(instance, system)?,
@@ -208,13 +243,13 @@ fn run_session(
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
     let check = options.check_untouched;
-    let projection = projection_swapchain(&session, gpu, format, view_size, options.layout, check)?
+    let projection = projection_swapchain(session, gpu, format, view_size, options.layout, check)?
         .timed(options.timing);
     let quad = options
         .quad
         .then(|| {
             PatternSwapchain::new(
-                &session,
+                session,
                 gpu,
                 format,
                 (view_size.0 / 2, view_size.1 / 2),
@@ -225,7 +260,7 @@ fn run_session(
         })
         .transpose()?;
     let mut scene = Scene {
-        session: &session,
+        session,
         space: &space,
         gpu,
         projection,
@@ -235,29 +270,7 @@ fn run_session(
         format,
         ahead: None,
     };
-    let stop = std::sync::atomic::AtomicBool::new(false);
-    let churned = std::sync::atomic::AtomicU32::new(0);
-    let result = std::thread::scope(|threads| {
-        let churner = options
-            .churn_swapchains
-            .then(|| threads.spawn(|| churn::churn(&session, format, &stop, &churned)));
-        let result = frame_loop::run(
-            instance,
-            &mut scene,
-            &mut waiter,
-            &mut stream,
-            options,
-            stats,
-        );
-        stop.store(true, std::sync::atomic::Ordering::Relaxed);
-        match churner.map(|t| t.join()) {
-            Some(Ok(Some(e))) => report.errors.push(e),
-            Some(Err(_)) => report.errors.push("the churn thread panicked".into()),
-            _ => {}
-        }
-        result
-    });
-    report.swapchains_churned += churned.into_inner();
+    let result = frame_loop::run(instance, &mut scene, waiter, stream, options, stats);
     stats.calls.absorb(scene.projection.calls(), "");
     if let Some(quad) = &scene.quad {
         stats.calls.absorb(quad.calls(), " (quad)");

@@ -1,0 +1,77 @@
+//! The pipeline threads against the end of the host process. An app may exit (or unload the
+//! layer) without destroying its session: its `exit` then runs the driver's static destructors
+//! (lavapipe's LLVM among them) while a pipeline thread may be compiling or calling the app's
+//! device. At exit, or when the layer's library is unloaded, the handler registered here stops
+//! every pipeline thread from starting more work and waits (boundedly) for the work in progress.
+
+use std::sync::{Condvar, Mutex, MutexGuard, Once, OnceLock};
+use std::time::{Duration, Instant};
+
+/// The longest the process's exit waits for a build in progress (a compile on lavapipe takes
+/// up to a few seconds on a loaded machine).
+const EXIT_WAIT: Duration = Duration::from_secs(20);
+
+#[derive(Default)]
+struct Work {
+    /// Builds in progress on pipeline threads.
+    busy: u32,
+    /// The process is exiting: no build may start.
+    exiting: bool,
+}
+
+fn work() -> &'static (Mutex<Work>, Condvar) {
+    static WORK: OnceLock<(Mutex<Work>, Condvar)> = OnceLock::new();
+    WORK.get_or_init(Default::default)
+}
+
+fn lock() -> MutexGuard<'static, Work> {
+    // Plain counters: a panic while holding the lock leaves them usable.
+    work().0.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Registers the exit handler (once per process, on the first pipeline thread).
+pub fn watch() {
+    static REGISTERED: Once = Once::new();
+    REGISTERED.call_once(|| {
+        // SAFETY: at_exit is a plain function of this library; glibc's atexit runs it at exit
+        // or when this library is unloaded, whichever comes first.
+        unsafe { libc::atexit(at_exit) };
+    });
+}
+
+/// A build may start: false once the process is exiting. Pair with [`end`].
+pub fn begin() -> bool {
+    let mut w = lock();
+    if w.exiting {
+        return false;
+    }
+    w.busy += 1;
+    true
+}
+
+/// A build that [`begin`] let start has ended.
+pub fn end() {
+    lock().busy -= 1;
+    work().1.notify_all();
+}
+
+/// Whether the process is exiting (a build checks before it touches the app's device).
+pub fn exiting() -> bool {
+    lock().exiting
+}
+
+extern "C" fn at_exit() {
+    let deadline = Instant::now() + EXIT_WAIT;
+    let mut w = lock();
+    w.exiting = true;
+    while w.busy > 0 {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return;
+        }
+        w = match work().1.wait_timeout(w, left) {
+            Ok((w, _)) => w,
+            Err(p) => p.into_inner().0,
+        };
+    }
+}
