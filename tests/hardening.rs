@@ -106,29 +106,79 @@ const CHECKED: &[&str] = &["--frames", "20", "--size", SIZE, "--check-untouched"
 
 // ---- fault points ----
 
-/// A fault point: the app runs to its end, no frame is changed (for the mid-stream ones: none
-/// after the fault), and the layer says so in exactly one line.
-fn fault(point: &str, says: &str) {
-    let tag = format!("fault-{}", point.replace('@', "-"));
-    let env = [("CONTRASTXR_FAULT", point)];
-    let Some(r) = client(&tag, &no_config(&tag), &env, CHECKED) else {
-        return;
-    };
-    r.assert_ran(20);
-    assert!(r.checked() >= 10, "{} images checked", r.checked());
-    let modified = r.modified();
-    if point.starts_with("camera-loss") {
-        // Frames before the loss were enhanced; none after it.
-        assert!(
-            !modified.is_empty() && modified.iter().all(|&f| f < 10),
-            "{modified:?}"
-        );
-    } else {
-        assert!(modified.is_empty(), "frames changed: {modified:?}");
+/// How the fault matrix runs the layer's pipelines: as the other tests do (`wait`: every frame
+/// counted), and in the default mode (`background`). There, from an empty shader cache, the
+/// points fire while the pipeline thread is still building; the two that only a processed
+/// frame reaches (an allocation, a view's copy) run from the tests' warm cache and fire at the
+/// first frame whose pipelines are ready.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Pipelines {
+    Wait,
+    Building,
+}
+
+/// The longest call an app may see in a fault run: a frame call that waits for a shader
+/// compile, a device teardown or a cache write takes seconds on lavapipe.
+const LONGEST_CALL_MS: f64 = 1000.0;
+
+/// A fault run's client, with the pipelines as `mode` says.
+fn fault_client(tag: &str, point: &str, mode: Pipelines) -> Option<LayerRun> {
+    let tag = format!("{tag}-{mode:?}").to_lowercase();
+    let cache = scratch_dir(&format!("{tag}-cache"));
+    let cache = cache.to_string_lossy().into_owned();
+    let mut env = vec![("CONTRASTXR_FAULT", point)];
+    let after_build = ["allocation", "image-capture"].contains(&point);
+    let mut args = [CHECKED, &["--timing"][..]].concat();
+    if mode == Pipelines::Building {
+        env.push(("CONTRASTXR_PIPELINES", "background"));
+        match after_build {
+            true => args[1] = "60",
+            false => env.push(("XDG_CACHE_HOME", cache.as_str())),
+        }
     }
-    let about = r.lines_with("passing");
-    assert_eq!(about.len(), 1, "{about:#?}");
-    assert!(about[0].contains(says), "{about:?}");
+    let r = client(&tag, &no_config(&tag), &env, &args)?;
+    let longest = longest_call_ms(&r.report);
+    eprintln!("{tag}: longest frame-loop call {longest:.1} ms");
+    assert!(
+        longest < LONGEST_CALL_MS,
+        "{tag}: a frame-loop call took {longest:.1} ms: {}",
+        r.report["timing"]["calls"]
+    );
+    Some(r)
+}
+
+/// The longest of the client's frame-loop calls (`--timing`).
+fn longest_call_ms(report: &Value) -> f64 {
+    let calls = report["timing"]["calls"].as_object().expect("timing.calls");
+    calls
+        .values()
+        .filter_map(|c| c["max_ms"].as_f64())
+        .fold(0.0, f64::max)
+}
+
+/// A fault point, in both pipeline modes: the app runs to its end with no frame-loop call
+/// near a second, no frame is changed (for the mid-stream ones: none after the fault), and the
+/// layer says so in exactly one line.
+fn fault(point: &str, says: &str) {
+    for mode in [Pipelines::Wait, Pipelines::Building] {
+        let tag = format!("fault-{}", point.replace('@', "-"));
+        let Some(r) = fault_client(&tag, point, mode) else {
+            return;
+        };
+        r.assert_ran(20);
+        assert!(r.checked() >= 10, "{} images checked", r.checked());
+        let modified = r.modified();
+        if point.starts_with("camera-loss") {
+            // Frames before the loss were enhanced (once the pipelines were ready); none after.
+            let some = mode == Pipelines::Building || !modified.is_empty();
+            assert!(some && modified.iter().all(|&f| f < 10), "{modified:?}");
+        } else {
+            assert!(modified.is_empty(), "frames changed: {modified:?}");
+        }
+        let about = r.lines_with("passing");
+        assert_eq!(about.len(), 1, "{mode:?}: {about:#?}");
+        assert!(about[0].contains(says), "{mode:?}: {about:?}");
+    }
 }
 
 #[test]
@@ -168,26 +218,25 @@ fn fault_at_mid_stream_camera_loss() {
 
 /// A panic in the layer's xrEndFrame, after it enhanced and held the frame's images: the app's
 /// frame still reaches the runtime (every frame is submitted, the images released), the
-/// frames before it were enhanced and none after, and the layer says so once.
+/// frames before it were enhanced (once the pipelines were ready) and none after, and the
+/// layer says so once, in both pipeline modes.
 #[test]
 fn a_panic_in_end_frame_still_forwards_the_frame() {
-    let tag = "fault-end-frame";
-    let env = [("CONTRASTXR_FAULT", "end-frame@5")];
-    let Some(r) = client(tag, &no_config(tag), &env, CHECKED) else {
-        return;
-    };
-    r.assert_ran(20);
-    let modified = r.modified();
-    assert!(
-        !modified.is_empty() && modified.iter().all(|&f| f <= 5),
-        "{modified:?}"
-    );
-    let about = r.lines_with("passing");
-    assert_eq!(about.len(), 1, "{about:#?}");
-    assert!(
-        about[0].contains("internal error in xrEndFrame"),
-        "{about:?}"
-    );
+    for mode in [Pipelines::Wait, Pipelines::Building] {
+        let Some(r) = fault_client("fault-end-frame", "end-frame@5", mode) else {
+            return;
+        };
+        r.assert_ran(20);
+        let modified = r.modified();
+        let some = mode == Pipelines::Building || !modified.is_empty();
+        assert!(some && modified.iter().all(|&f| f <= 5), "{modified:?}");
+        let about = r.lines_with("passing");
+        assert_eq!(about.len(), 1, "{about:#?}");
+        assert!(
+            about[0].contains("internal error in xrEndFrame"),
+            "{about:?}"
+        );
+    }
 }
 
 /// More view regions in one frame than the layer keeps buffers for (2 projection views and 20

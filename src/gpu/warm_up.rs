@@ -95,23 +95,33 @@ impl WarmUp {
     pub fn new(app: &GpuDevice) -> Result<WarmUp, GpuError> {
         let gpu = GpuDevice::create_beside(app)?;
         let mut engine = Engine::new(&gpu, 1, BuildMode::Inline, None)?;
-        let parts = Commands::new(&gpu).and_then(|commands| {
-            let mut bg = engine.create_background(&gpu, SIZE, Placement::OFFLINE)?;
-            let format = PixelFormat {
-                layout: PixelLayout::Rgba16Float,
-                srgb: false,
-            };
-            match engine.create_view(&gpu, SIZE, format, &bg, Placement::OFFLINE) {
-                Ok(view) => Ok((commands, bg, view)),
-                Err(e) => {
-                    bg.destroy(&gpu);
-                    Err(e)
-                }
+        let mut commands = match Commands::new(&gpu) {
+            Ok(c) => c,
+            Err(e) => {
+                engine.destroy(&gpu);
+                return Err(e);
             }
-        });
-        let (commands, mut background, mut view) = match parts {
+        };
+        let format = PixelFormat {
+            layout: PixelLayout::Rgba16Float,
+            srgb: false,
+        };
+        let parts = engine
+            .create_background(&gpu, SIZE, Placement::OFFLINE)
+            .and_then(|mut bg| {
+                match engine.create_view(&gpu, SIZE, format, &bg, Placement::OFFLINE) {
+                    Ok(view) => Ok((bg, view)),
+                    Err(e) => {
+                        bg.destroy(&gpu);
+                        Err(e)
+                    }
+                }
+            });
+        let (mut background, mut view) = match parts {
             Ok(p) => p,
             Err(e) => {
+                // Nothing was submitted: the wait in destroy cannot fail.
+                let _ = commands.destroy(&gpu);
                 engine.destroy(&gpu);
                 return Err(e);
             }

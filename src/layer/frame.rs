@@ -204,11 +204,12 @@ fn capturing(s: &SessionState) -> bool {
 }
 
 /// The newest background frame, or None (logged once: lost after frames came, or not yet).
-fn background_frame(s: &SessionState) -> Option<camera::Frame> {
+fn background_frame(s: &mut SessionState) -> Option<camera::Frame> {
     // No source at all: why was logged when it failed to open.
     let bg = s.background.as_ref()?;
     let frame = bg.latest();
-    if frame.is_none() && s.processed > 0 {
+    let delivered = std::mem::replace(&mut s.background_delivered, frame.is_some());
+    if frame.is_none() && (s.processed > 0 || delivered) {
         log::once(
             "background-lost",
             &format!(

@@ -58,6 +58,7 @@ pub unsafe extern "system" fn create_session(
             retired: Vec::new(),
             background: None,
             background_requested: false,
+            background_delivered: false,
             idle_frames: 0,
             frames: 0,
             processed: 0,

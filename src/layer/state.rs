@@ -38,6 +38,8 @@ pub struct SessionState {
     pub background: Option<crate::camera::Background>,
     /// The background was asked for (opened, being opened, or failed to open).
     pub background_requested: bool,
+    /// The background's last frame request got a frame (a None after it is a loss).
+    pub background_delivered: bool,
     /// Frames in a row the layer has not acted on (the background closes after a while).
     pub idle_frames: u64,
     /// Frames submitted through xrEndFrame so far.
