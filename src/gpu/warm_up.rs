@@ -52,35 +52,52 @@ pub struct WarmUp {
     gpu: GpuDevice,
 }
 
-/// The warm-up device of a session, shared by the app's thread (which makes and drops it) and
-/// the building thread (which dispatches on it).
-pub type SharedWarmUp = Arc<Mutex<WarmUp>>;
+/// A session's warm-up device, shared by the app's thread (which makes it when a shader that
+/// still needs a warm-up is requested, and drops it after the building thread has ended) and
+/// the building thread (which dispatches on it). Empty until needed.
+pub type WarmUpSlot = Arc<Mutex<Option<WarmUp>>>;
+
+fn lock(slot: &WarmUpSlot) -> std::sync::MutexGuard<'_, Option<WarmUp>> {
+    // A panic while holding it leaves a usable slot.
+    slot.lock().unwrap_or_else(|p| p.into_inner())
+}
 
 impl WarmUp {
-    /// The warm-up device for `gpu`, made now, on the caller's thread (the app's), where its
-    /// driver compiles at first dispatch and this process has not warmed every shader up yet;
-    /// None for other drivers. Failures are not fatal: the compile then happens at first
-    /// dispatch on the app's queue.
-    pub fn for_device(gpu: &GpuDevice) -> Option<SharedWarmUp> {
+    /// An empty slot and the hook that warms each shader up on the device in it (if any)
+    /// before it is built for `gpu`; None where `gpu`'s driver compiles at pipeline creation.
+    pub fn slot(gpu: &GpuDevice) -> Option<(WarmUpSlot, WarmUpHook)> {
         if !WarmUp::needed(gpu) {
             return None;
         }
+        let slot: WarmUpSlot = Default::default();
         let kind = DeviceKind::of(gpu);
-        let done = warmed().iter().filter(|(k, _)| *k == kind).count();
-        if done >= super::shaders::all().len() {
-            return None;
-        }
-        WarmUp::new(gpu).ok().map(|w| Arc::new(Mutex::new(w)))
+        let shared = slot.clone();
+        let hook: WarmUpHook = Box::new(move |id| {
+            if let Some(w) = lock(&shared).as_mut() {
+                w.once(kind, id);
+            }
+        });
+        Some((slot, hook))
     }
 
-    /// The hook that warms each shader up on `shared` before it is built for the app's device.
-    pub fn hook(shared: &SharedWarmUp, kind: DeviceKind) -> WarmUpHook {
-        let shared = shared.clone();
-        Box::new(move |id| {
-            // Only this hook locks it while the building thread runs.
-            let mut w = shared.lock().unwrap_or_else(|p| p.into_inner());
-            w.once(kind, id);
-        })
+    /// Makes the warm-up device in `slot`, on the caller's thread (the app's, before it asks
+    /// for `ids` to be built), when one of them still needs a warm-up in this process.
+    /// Failures are not fatal: the compile then happens at first dispatch on the app's queue.
+    pub fn prepare(slot: &WarmUpSlot, app: &GpuDevice, ids: &[ShaderId]) {
+        let kind = DeviceKind::of(app);
+        if ids.iter().all(|&id| warmed().contains(&(kind, id))) {
+            return;
+        }
+        // Held by the building thread: it is dispatching on the device, which thus exists
+        // (never wait here for its compile).
+        let mut slot = match slot.try_lock() {
+            Ok(slot) => slot,
+            Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner(),
+            Err(std::sync::TryLockError::WouldBlock) => return,
+        };
+        if slot.is_none() {
+            *slot = WarmUp::new(app).ok();
+        }
     }
 
     /// Whether a device compiles at first dispatch (a CPU driver).

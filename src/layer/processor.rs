@@ -7,11 +7,10 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::buffer::record_buffer_copy;
 use crate::gpu::commands::Commands;
-use crate::gpu::device::DeviceKind;
 use crate::gpu::engine::barrier;
 use crate::gpu::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
 use crate::gpu::pipelines::{BuildMode, BuildReport, ShaderId};
-use crate::gpu::warm_up::{SharedWarmUp, WarmUp};
+use crate::gpu::warm_up::{WarmUp, WarmUpSlot};
 use crate::gpu::{BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, Placement, ViewTarget};
 use crate::image::RgbaImage;
 use ash::vk;
@@ -53,7 +52,7 @@ pub struct Processor {
     pub started: Instant,
     /// The warm-up device (CPU drivers), dropped here on the app's thread after the pipeline
     /// thread that uses it has ended.
-    warm_up: Option<SharedWarmUp>,
+    warm_up: Option<WarmUpSlot>,
     // Last: dropped after everything above was destroyed in Drop.
     pub gpu: GpuDevice,
 }
@@ -63,13 +62,8 @@ impl Processor {
     /// the engine's own thread, `first` first.
     pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<Processor, GpuError> {
         let started = Instant::now();
-        // Made here, on the app's thread, never on the pipeline thread (see gpu/warm_up.rs).
-        let warm_up = WarmUp::for_device(&gpu);
-        let hook = warm_up
-            .as_ref()
-            .map(|w| WarmUp::hook(w, DeviceKind::of(&gpu)));
+        let (warm_up, hook) = WarmUp::slot(&gpu).unzip();
         let mut engine = Engine::new(&gpu, MAX_VIEWS, BuildMode::Background, hook)?;
-        engine.request(first);
         let commands = match Commands::new(&gpu) {
             Ok(c) => c,
             Err(e) => {
@@ -77,7 +71,7 @@ impl Processor {
                 return Err(e);
             }
         };
-        Ok(Processor {
+        let processor = Processor {
             engine,
             commands,
             background: None,
@@ -89,7 +83,9 @@ impl Processor {
             started,
             warm_up,
             gpu,
-        })
+        };
+        processor.request(first);
+        Ok(processor)
     }
 
     /// Tells the pipeline thread to stop, without waiting: the session passes through from now
@@ -98,8 +94,13 @@ impl Processor {
         self.engine.stop_building();
     }
 
-    /// Queues shaders to build ahead of earlier requests (a swapchain's format became known).
+    /// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
+    /// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device
+    /// is made here when one of them needs it, never on the pipeline thread (gpu/warm_up.rs).
     pub fn request(&self, ids: &[ShaderId]) {
+        if let Some(slot) = &self.warm_up {
+            WarmUp::prepare(slot, &self.gpu, ids);
+        }
         self.engine.request(ids);
     }
 
@@ -117,6 +118,9 @@ impl Processor {
     ) -> Result<(), GpuError> {
         let views = items.iter().map(|i| (i.format, i.key.extent.0));
         let ids = Engine::shaders_for(params, views)?;
+        if let Some(slot) = &self.warm_up {
+            WarmUp::prepare(slot, &self.gpu, &ids);
+        }
         match self.engine.ready(&ids)? {
             true => Ok(()),
             false if wait => self.engine.wait_for(&ids, PIPELINE_WAIT),
