@@ -83,20 +83,32 @@ impl WarmUp {
     /// Makes the warm-up device in `slot`, on the caller's thread (the app's, before it asks
     /// for `ids` to be built), when one of them still needs a warm-up in this process.
     /// Failures are not fatal: the compile then happens at first dispatch on the app's queue.
-    pub fn prepare(slot: &WarmUpSlot, app: &GpuDevice, ids: &[ShaderId]) {
+    /// Returns what making the device gave, when this call made (or tried to make) one.
+    pub fn prepare(
+        slot: &WarmUpSlot,
+        app: &GpuDevice,
+        ids: &[ShaderId],
+    ) -> Option<Result<(), GpuError>> {
         let kind = DeviceKind::of(app);
         if ids.iter().all(|&id| warmed().contains(&(kind, id))) {
-            return;
+            return None;
         }
         // Held by the building thread: it is dispatching on the device, which thus exists
         // (never wait here for its compile).
         let mut slot = match slot.try_lock() {
             Ok(slot) => slot,
             Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner(),
-            Err(std::sync::TryLockError::WouldBlock) => return,
+            Err(std::sync::TryLockError::WouldBlock) => return None,
         };
-        if slot.is_none() {
-            *slot = WarmUp::new(app).ok();
+        if slot.is_some() {
+            return None;
+        }
+        match WarmUp::new(app) {
+            Ok(w) => {
+                *slot = Some(w);
+                Some(Ok(()))
+            }
+            Err(e) => Some(Err(e)),
         }
     }
 

@@ -98,10 +98,24 @@ impl Processor {
     /// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device
     /// is made here when one of them needs it, never on the pipeline thread (gpu/warm_up.rs).
     pub fn request(&self, ids: &[ShaderId]) {
-        if let Some(slot) = &self.warm_up {
-            WarmUp::prepare(slot, &self.gpu, ids);
-        }
+        self.prepare_warm_up(ids);
         self.engine.request(ids);
+    }
+
+    /// Makes the warm-up device (CPU drivers) if one of `ids` needs it and it does not exist.
+    fn prepare_warm_up(&self, ids: &[ShaderId]) {
+        let Some(slot) = &self.warm_up else { return };
+        let t = Instant::now();
+        match WarmUp::prepare(slot, &self.gpu, ids) {
+            Some(Ok(())) => super::log::debug(&format!(
+                "warm-up device made on the app's thread in {:.3} s",
+                t.elapsed().as_secs_f64()
+            )),
+            Some(Err(e)) => super::log::debug(&format!(
+                "no warm-up device ({e}): shaders compile at their first dispatch"
+            )),
+            None => {}
+        }
     }
 
     pub fn build_report(&self) -> Option<BuildReport> {
@@ -118,9 +132,7 @@ impl Processor {
     ) -> Result<(), GpuError> {
         let views = items.iter().map(|i| (i.format, i.key.extent.0));
         let ids = Engine::shaders_for(params, views)?;
-        if let Some(slot) = &self.warm_up {
-            WarmUp::prepare(slot, &self.gpu, &ids);
-        }
+        self.prepare_warm_up(&ids);
         match self.engine.ready(&ids)? {
             true => Ok(()),
             false if wait => self.engine.wait_for(&ids, PIPELINE_WAIT),
