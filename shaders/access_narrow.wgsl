@@ -1,10 +1,6 @@
 // Pixel access for regions whose rows are not 16-byte aligned (and for the
 // passes that are not per-pixel hot paths): one u32 per load.
 
-@group(0) @binding(2) var<storage, read_write> pixels: array<u32>;
-// The copy passes' source (the benchmark's floor); the layer binds `pixels` here.
-@group(0) @binding(4) var<storage, read> source: array<u32>;
-
 // Words w..w+3 of the region (any w; words past the buffer read as 0).
 fn load_words4(w: u32) -> vec4<u32> {
     return vec4<u32>(pixels[w], pixels[w + 1u], pixels[w + 2u], pixels[w + 3u]);

@@ -3,9 +3,6 @@
 // every buffer access with a loop over the SIMD lanes, so four words per access cost about
 // what one does (measured in docs/performance.md).
 
-@group(0) @binding(2) var<storage, read_write> pixels: array<vec4<u32>>;
-@group(0) @binding(4) var<storage, read> source: array<vec4<u32>>;
-
 // Words w..w+3 of the region (w a multiple of 4).
 fn load_words4(w: u32) -> vec4<u32> {
     return pixels[w / 4u];

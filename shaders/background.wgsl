@@ -51,7 +51,7 @@ fn decoded_entry(x: u32, y: u32) -> u32 {
 // First pass: decodes each camera texel of a rectangle once (four per invocation, at the
 // rectangle's first texel, which the engine passes in region_size). The blur pass reads
 // them; decoding inside it repeated the decode for every block a texel's window reaches.
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(TILE, TILE)
 fn decode(@builtin(global_invocation_id) id: vec3<u32>) {
     let x0 = pc.region_size.x + id.x * 4u;
     let y = pc.region_size.y + id.y;
@@ -111,12 +111,12 @@ fn hblur_row(row: i32, x0: i32) -> array<vec3<f32>, 5> {
 
 // Output rows per invocation: each decoded row the block's taps read is loaded and blurred
 // horizontally once for all ROWS outputs.
-const ROWS: i32 = 8;
+const ROWS: i32 = i32(DECODE_ROWS);
 
 // Prepares the camera texels of a rectangle only: the ones some view samples (the engine
 // passes the rectangle's first texel in region_size, which this pass has no other use for,
 // and dispatches over its size, 4 x ROWS texels per invocation).
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(TILE, TILE)
 fn decode_blur(@builtin(global_invocation_id) id: vec3<u32>) {
     let x0 = i32(pc.region_size.x + id.x * 4u);
     let w = i32(pc.camera_size.x);

@@ -3,7 +3,7 @@
 // enhancement can also be compared against a copy that uses its wide accesses. 4-byte pixels,
 // rows 16-byte aligned.
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(TILE, TILE)
 fn copy_rows(@builtin(global_invocation_id) id: vec3<u32>) {
     let x0 = id.x * TILE;
     let y = id.y;

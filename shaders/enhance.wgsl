@@ -379,9 +379,9 @@ fn enhance_group(x: u32, w: Words, bg: Background) -> Words {
 // driver read neighbouring tiles of one row), 8 rows per tile (local.y). The row's pixels and
 // background samples are all loaded first, so that their cache misses overlap, then enhanced
 // 4 at a time.
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(TILE, TILE)
 fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    let k = (group.y * 32768u + group.x) * TILE + local.x;
+    let k = (group.y * INDIRECT_ROW_GROUPS + group.x) * TILE + local.x;
     if (k >= tiles.total) {
         return;
     }
@@ -445,7 +445,7 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
 
 // One invocation per tile: lists the tiles with any foreground pixel, a row of tiles per
 // workgroup (CLASSIFY_WORKGROUP in src/gpu/engine.rs) so that the list runs in row order.
-@compute @workgroup_size(64, 1)
+@compute @workgroup_size(CLASSIFY_WORKGROUP_X, CLASSIFY_WORKGROUP_Y)
 fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     let rows = (pc.region_size.y + TILE - 1u) / TILE;
     if (id.x >= pc.tile_columns || id.y >= rows || !tile_wanted(id.x, id.y)) {
@@ -463,7 +463,7 @@ fn finish_tiles() {
     let n = atomicExchange(&tiles.count, 0u);
     let groups = (n + TILE - 1u) / TILE;
     tiles.total = n;
-    tiles.groups[0] = min(groups, 32768u);
-    tiles.groups[1] = (groups + 32767u) / 32768u;
+    tiles.groups[0] = min(groups, INDIRECT_ROW_GROUPS);
+    tiles.groups[1] = (groups + (INDIRECT_ROW_GROUPS - 1u)) / INDIRECT_ROW_GROUPS;
     tiles.groups[2] = 1u;
 }

@@ -38,11 +38,6 @@ impl Method {
     pub fn parse(name: &str) -> Option<Method> {
         Method::ALL.into_iter().find(|m| m.name() == name)
     }
-
-    /// The code the shaders use for this method (push constant `method`).
-    pub fn shader_code(self) -> u32 {
-        self as u32
-    }
 }
 
 /// What the layer shows (docs/control.md, Modes). `Enhance` is the product; the others are for
@@ -82,11 +77,6 @@ impl ViewMode {
 
     pub fn parse(name: &str) -> Option<ViewMode> {
         ViewMode::ALL.into_iter().find(|m| m.name() == name)
-    }
-
-    /// The code the shaders use for this mode.
-    pub fn shader_code(self) -> u32 {
-        self as u32
     }
 }
 

@@ -7,25 +7,26 @@
 
 use super::app_image::AppImage;
 use super::buffer::GpuBuffer;
+use super::codes::{method_code, mode_code};
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
+use super::interface::{
+    BindingKind, BINDING_BLURRED, BINDING_BLURRED_TEXELS, BINDING_CAMERA, BINDING_PIXELS,
+    BINDING_SOURCE, BINDING_TILES, CLASSIFY_WORKGROUP, DECODE_ROWS, TILE_LIST_DISPATCH_OFFSET,
+    TILE_LIST_HEADER_WORDS,
+};
 use super::pipelines::{
-    self, BuildMode, BuildReport, Pipelines, PushConstants, ShaderId, WarmUpHook, BINDING_COUNT,
-    IMAGE_BINDING,
+    self, binding_count, BuildMode, BuildReport, Pipelines, PushConstants, ShaderId, WarmUpHook,
 };
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+/// The per-pixel passes' workgroups are TILE x TILE (src/gpu/interface.rs, WORKGROUPS).
 const WORKGROUP: u32 = TILE;
-/// `classify` runs a row of tiles per workgroup, so that tiles are listed (and then enhanced)
-/// in row order: neighbouring memory, which a CPU driver's caches and prefetchers follow.
-const CLASSIFY_WORKGROUP: (u32, u32) = (64, 1);
 pub use super::pipelines::TILE;
-/// Words before the tile indices in the tile buffer (struct TileList in shaders/common.wgsl).
-const TILE_LIST_HEADER: u64 = 8;
 
 /// Background frames that may exist at once besides the views (their descriptor sets).
 const MAX_BACKGROUNDS: u32 = 2;
@@ -85,10 +86,6 @@ impl BackgroundFrame {
 /// Bytes after the decoded camera texels in `blurred`: a row window at the last row reads up to
 /// 5 entries past them (blur half-width 7).
 const DECODED_SLACK: u64 = 16 * 8;
-
-/// Rows of texels one invocation of the background preparation makes (`ROWS` in
-/// shaders/background.wgsl).
-const DECODE_ROWS: u32 = 8;
 
 /// The camera texels a background preparation makes: those the views' mappings sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -332,9 +329,6 @@ fn alloc_all<const N: usize>(
         .unwrap_or_else(|_| unreachable!("N buffers were made")))
 }
 
-/// The binding of the copy passes' source (shaders/common.wgsl).
-const SOURCE_BINDING: u32 = 4;
-
 const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
 
 impl Engine {
@@ -351,10 +345,10 @@ impl Engine {
         let sizes = [
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(max_sets * BINDING_COUNT),
+                .descriptor_count(max_sets * binding_count(BindingKind::StorageBuffer)),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::SAMPLED_IMAGE)
-                .descriptor_count(max_sets),
+                .descriptor_count(max_sets * binding_count(BindingKind::SampledImage)),
         ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .flags(vk::DescriptorPoolCreateFlags::FREE_DESCRIPTOR_SET)
@@ -485,7 +479,7 @@ impl Engine {
             [
                 (px * bpp, usage, at, "pixels"),
                 (
-                    (TILE_LIST_HEADER + tile_count) * 4,
+                    (TILE_LIST_HEADER_WORDS + tile_count) * 4,
                     tile_usage,
                     gpu_only,
                     "tiles",
@@ -514,19 +508,22 @@ impl Engine {
     /// Points a view's descriptor set at a (new) background frame. The set must not be in use.
     pub fn bind(&self, gpu: &GpuDevice, view: &mut ViewTarget, background: &BackgroundFrame) {
         let buffers = [
-            &background.camera,
-            &background.blurred,
-            &view.pixels,
-            &view.tiles,
-            &view.pixels,
+            (BINDING_CAMERA, &background.camera),
+            (BINDING_BLURRED, &background.blurred),
+            (BINDING_PIXELS, &view.pixels),
+            (BINDING_TILES, &view.tiles),
+            // The copy passes read the pixels in place unless a source is bound.
+            (BINDING_SOURCE, &view.pixels),
         ];
-        self.write_set(gpu, view.set, 0, &buffers);
+        for (binding, buffer) in buffers {
+            self.write_set(gpu, view.set, binding, &[buffer]);
+        }
         let image = [vk::DescriptorImageInfo::default()
             .image_view(background.texels_view)
             .image_layout(vk::ImageLayout::GENERAL)];
         let write = vk::WriteDescriptorSet::default()
             .dst_set(view.set)
-            .dst_binding(IMAGE_BINDING)
+            .dst_binding(BINDING_BLURRED_TEXELS)
             .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
             .image_info(&image);
         // SAFETY: the set and the view are valid; the caller guarantees the set is not in use.
@@ -534,9 +531,9 @@ impl Engine {
         view.camera_size = background.size;
     }
 
-    /// Points a view's copy source (binding 4, used only by `record_copy`) at `source`.
+    /// Points a view's copy source (used only by `record_copy`) at `source`.
     pub fn bind_source(&self, gpu: &GpuDevice, view: &ViewTarget, source: &GpuBuffer) {
-        self.write_set(gpu, view.set, SOURCE_BINDING, &[source]);
+        self.write_set(gpu, view.set, BINDING_SOURCE, &[source]);
     }
 
     fn write_set(
@@ -778,11 +775,7 @@ impl Engine {
         let format = view.format.shader_code();
         let wide = view.rows_aligned();
         let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
-        let codes = (
-            params.method.shader_code(),
-            params.mode.shader_code(),
-            format,
-        );
+        let codes = (method_code(params.method), mode_code(params.mode), format);
         let pipeline = self
             .pipelines
             .get(pipelines::enhance(codes, wide, extras)?)?;
@@ -795,7 +788,7 @@ impl Engine {
         // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at least 4 bytes.
         unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
         barrier(gpu, cmd, S::TRANSFER, COMPUTE);
-        let classify = (classify, CLASSIFY_WORKGROUP);
+        let classify = (classify, (CLASSIFY_WORKGROUP[0], CLASSIFY_WORKGROUP[1]));
         self.dispatch_in(gpu, cmd, classify, view.set, &push, tiles);
         barrier(gpu, cmd, COMPUTE, COMPUTE);
         // A 1x1 grid is one workgroup of one invocation.
@@ -804,7 +797,10 @@ impl Engine {
         self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
         // SAFETY: cmd is recording with the pipeline bound above; the tile buffer has
         // INDIRECT_BUFFER usage and its arguments were written by finish_tiles.
-        unsafe { gpu.device.cmd_dispatch_indirect(cmd, view.tiles.raw, 4) };
+        unsafe {
+            gpu.device
+                .cmd_dispatch_indirect(cmd, view.tiles.raw, TILE_LIST_DISPATCH_OFFSET)
+        };
         Ok(())
     }
 
@@ -870,7 +866,7 @@ impl Engine {
         for (format, width) in views {
             let code = format.shader_code();
             let wide = rows_aligned(width, format);
-            let codes = (params.method.shader_code(), params.mode.shader_code(), code);
+            let codes = (method_code(params.method), mode_code(params.mode), code);
             for id in [
                 pipelines::classify(code, wide)?,
                 pipelines::enhance(codes, wide, extras)?,

@@ -2,16 +2,30 @@
 //! layout and whether its values are sRGB-encoded (OpenXR: *_SRGB formats hold sRGB-encoded
 //! values, UNORM and float formats hold linear light).
 
+use super::interface::{self, FORMAT_SRGB_BIT};
 use ash::vk;
 
-/// Byte layout of one pixel (matches LAYOUT_* in shaders/common.wgsl).
+/// Byte layout of one pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PixelLayout {
-    Rgba8 = 0,
-    Bgra8 = 1,
-    Rgba16Unorm = 2,
-    Rgba16Float = 3,
-    A2b10g10r10 = 4,
+    Rgba8,
+    Bgra8,
+    Rgba16Unorm,
+    Rgba16Float,
+    A2b10g10r10,
+}
+
+impl PixelLayout {
+    /// The shaders' LAYOUT_* code (src/gpu/interface.rs).
+    pub fn shader_code(self) -> u32 {
+        match self {
+            PixelLayout::Rgba8 => interface::LAYOUT_RGBA8,
+            PixelLayout::Bgra8 => interface::LAYOUT_BGRA8,
+            PixelLayout::Rgba16Unorm => interface::LAYOUT_RGBA16_UNORM,
+            PixelLayout::Rgba16Float => interface::LAYOUT_RGBA16_FLOAT,
+            PixelLayout::A2b10g10r10 => interface::LAYOUT_A2B10G10R10,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -20,8 +34,6 @@ pub struct PixelFormat {
     /// True when stored values are sRGB-encoded.
     pub srgb: bool,
 }
-
-const FORMAT_SRGB_BIT: u32 = 256;
 
 impl PixelFormat {
     /// 8-bit sRGB RGBA: PNG files and the camera.
@@ -54,8 +66,8 @@ impl PixelFormat {
         }
     }
 
-    /// The shader's `format` push constant.
+    /// The code of the format a shader variant is built for (`FORMAT` in the shaders).
     pub fn shader_code(self) -> u32 {
-        self.layout as u32 | if self.srgb { FORMAT_SRGB_BIT } else { 0 }
+        self.layout.shader_code() | if self.srgb { FORMAT_SRGB_BIT } else { 0 }
     }
 }

@@ -35,11 +35,14 @@ fn words_to_bytes(words: &[u32]) -> Vec<u8> {
     words.iter().flat_map(|w| w.to_le_bytes()).collect()
 }
 
-/// Mirrors `unpack_linear` in shaders/common.wgsl: three 21-bit codes over [0, 1] in two
+/// `unpack_linear` of shaders/common.wgsl: three LINEAR_BITS-bit codes over [0, 1] in two
 /// little-endian u32 words.
 fn unpack_linear(bytes: &[u8]) -> [f32; 3] {
+    use super::interface::{LINEAR_BITS, LINEAR_MAX};
     let packed = u64::from_le_bytes(bytes.try_into().expect("8 bytes"));
-    std::array::from_fn(|k| ((packed >> (21 * k)) & 0x1f_ffff) as f32 / 2_097_151.0)
+    std::array::from_fn(|k| {
+        ((packed >> (LINEAR_BITS as usize * k)) & u64::from(LINEAR_MAX)) as f32 / LINEAR_MAX as f32
+    })
 }
 
 impl OfflineEngine {

@@ -7,31 +7,29 @@
 //! [`PipelineCache`], and a pipeline not built yet is [`GpuError::Pending`]. The offline tools
 //! build on first use ([`BuildMode::Inline`]).
 
+use super::codes::mode_code;
 use super::device::DeviceKind;
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
+use super::interface::{self, BindingKind, BINDINGS, BLUR_TAPS, PARAMS_SIZE};
 use super::pipeline_cache::{self, Origin, PipelineCache};
 use super::process_exit;
 use super::shaders::{self, ShaderModule};
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::params::{Params, ViewMode, SUBTRACTION_K_B, SUBTRACTION_K_V};
+use crate::algorithm::params::{Params, ViewMode, MAX_BLUR_SIZE, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
 use std::collections::VecDeque;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// Side of the square tiles the enhancement skips when they hold no foreground pixel, and of
-/// the per-pixel passes' workgroups (TILE in shaders/common.wgsl).
-pub const TILE: u32 = 8;
+pub use super::interface::TILE;
 
-/// Bindings 0..=4 of shaders/common.wgsl, all storage buffers.
-pub const BINDING_COUNT: u32 = 5;
-/// Binding 5: the blurred camera image, a sampled image.
-pub const IMAGE_BINDING: u32 = 5;
+// The algorithm's largest blur is the shaders' largest half-width.
+const _: () = assert!(MAX_BLUR_SIZE == 2 * interface::MAX_BLUR_HALF + 1);
 
-/// The push-constant block, laid out as WGSL lays out `Params`: 128 bytes, the least
-/// maxPushConstantsSize Vulkan guarantees.
+/// The push-constant block, laid out as the shaders' `Params` (src/gpu/interface.rs, PARAMS:
+/// the same fields in the same order, checked below).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PushConstants {
@@ -41,20 +39,62 @@ pub struct PushConstants {
     pub lambda_jnd: f32,
     pub transmittance: f32,
     pub blur_half: u32,
-    pub taps: [f32; 8],
+    pub taps: [f32; BLUR_TAPS],
     pub k_v: f32,
     pub k_b: f32,
     pub mode: u32,
     pub tile_columns: u32,
     pub achromatic_boost: f32,
     pub luminance_cap: f32,
-    /// The view's CameraMapping, row-major.
+    /// The view's CameraMapping, row-major (PARAMS' map_00 ..= map_22).
     pub mapping: [[f32; 3]; 3],
-    /// WGSL rounds the struct's size up to its 16-byte alignment (the taps).
     pub pad: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<PushConstants>() == 128);
+/// Each PushConstants field's byte offset, in PARAMS order (the mapping stands for map_00 ..=
+/// map_22, one f32 each).
+const PUSH_OFFSETS: [usize; interface::PARAMS.len()] = {
+    use std::mem::offset_of;
+    let m = offset_of!(PushConstants, mapping);
+    [
+        offset_of!(PushConstants, camera_size),
+        offset_of!(PushConstants, region_size),
+        offset_of!(PushConstants, lambda_e),
+        offset_of!(PushConstants, lambda_jnd),
+        offset_of!(PushConstants, transmittance),
+        offset_of!(PushConstants, blur_half),
+        offset_of!(PushConstants, taps),
+        offset_of!(PushConstants, k_v),
+        offset_of!(PushConstants, k_b),
+        offset_of!(PushConstants, mode),
+        offset_of!(PushConstants, tile_columns),
+        offset_of!(PushConstants, achromatic_boost),
+        offset_of!(PushConstants, luminance_cap),
+        m,
+        m + 4,
+        m + 8,
+        m + 12,
+        m + 16,
+        m + 20,
+        m + 24,
+        m + 28,
+        m + 32,
+        offset_of!(PushConstants, pad),
+    ]
+};
+
+const _: () = {
+    let (offsets, _) = interface::params_layout();
+    let mut i = 0;
+    while i < offsets.len() {
+        assert!(
+            PUSH_OFFSETS[i] == offsets[i] as usize,
+            "PushConstants differs from PARAMS"
+        );
+        i += 1;
+    }
+    assert!(std::mem::size_of::<PushConstants>() == PARAMS_SIZE as usize);
+};
 
 impl PushConstants {
     pub fn new(
@@ -65,7 +105,7 @@ impl PushConstants {
     ) -> Self {
         let taps64 = params.blur_taps();
         let half = taps64.len() / 2;
-        let mut taps = [0.0f32; 8];
+        let mut taps = [0.0f32; BLUR_TAPS];
         for (k, t) in taps.iter_mut().enumerate().take(half + 1) {
             *t = taps64[half + k] as f32;
         }
@@ -79,7 +119,7 @@ impl PushConstants {
             taps,
             k_v: SUBTRACTION_K_V,
             k_b: SUBTRACTION_K_B,
-            mode: params.mode.shader_code(),
+            mode: mode_code(params.mode),
             tile_columns: region.0.div_ceil(TILE),
             achromatic_boost: params.achromatic_boost,
             luminance_cap: params.luminance_cap,
@@ -150,7 +190,7 @@ pub fn enhance(
     wide: bool,
     extras: bool,
 ) -> Result<ShaderId, GpuError> {
-    let background = mode == ViewMode::Background.shader_code();
+    let background = mode == mode_code(ViewMode::Background);
     let (method, extras) = if background {
         (0, false)
     } else {
@@ -323,15 +363,12 @@ impl Pipelines {
     }
 
     fn create_layouts(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
-        let bindings: Vec<_> = (0..=IMAGE_BINDING)
+        let bindings: Vec<_> = BINDINGS
+            .iter()
             .map(|b| {
-                let ty = if b == IMAGE_BINDING {
-                    vk::DescriptorType::SAMPLED_IMAGE
-                } else {
-                    vk::DescriptorType::STORAGE_BUFFER
-                };
+                let ty = descriptor_type(b.kind);
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(b)
+                    .binding(b.number)
                     .descriptor_type(ty)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
@@ -539,6 +576,19 @@ fn build_requests(shared: &Shared, mut warm_up: Option<WarmUpHook>) {
         }
         process_exit::end();
     }
+}
+
+/// The descriptor type of a binding's kind.
+pub fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
+    match kind {
+        BindingKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
+        BindingKind::SampledImage => vk::DescriptorType::SAMPLED_IMAGE,
+    }
+}
+
+/// How many bindings of `kind` the set layout has.
+pub fn binding_count(kind: BindingKind) -> u32 {
+    BINDINGS.iter().filter(|b| b.kind == kind).count() as u32
 }
 
 fn compute_pipeline(shared: &Shared, shader: &ShaderModule) -> Result<vk::Pipeline, GpuError> {

@@ -35,23 +35,13 @@ macro_rules! spirv {
     };
 }
 
-/// The background pass, one per blur half-width (index = half-width, 0..=7).
-pub const DECODE_BLUR: [ShaderModule; 8] = [
-    spirv!("decode_blur_0", "decode_blur"),
-    spirv!("decode_blur_1", "decode_blur"),
-    spirv!("decode_blur_2", "decode_blur"),
-    spirv!("decode_blur_3", "decode_blur"),
-    spirv!("decode_blur_4", "decode_blur"),
-    spirv!("decode_blur_5", "decode_blur"),
-    spirv!("decode_blur_6", "decode_blur"),
-    spirv!("decode_blur_7", "decode_blur"),
-];
 /// The background's first pass: decodes the camera texels (the blur passes read them).
 pub const DECODE_CAMERA: ShaderModule = spirv!("decode_camera", "decode");
 pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
 pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
 pub const COPY_ROWS: ShaderModule = spirv!("copy_rows");
 
+// DECODE_BLUR, ENHANCE_VARIANTS and CLASSIFY_VARIANTS, generated from src/gpu/interface.rs.
 include!(concat!(env!("OUT_DIR"), "/enhance_variants.rs"));
 
 /// Every embedded shader (for spirv-val in the tests).

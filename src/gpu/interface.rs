@@ -1,0 +1,303 @@
+// The interface between the engine (Rust) and its compute shaders (WGSL), defined once.
+//
+// build.rs includes this file: it writes the WGSL declarations from it (the bindings, the
+// `Params` push-constant block, the tile list, the codes and sizes below) in front of every
+// shader, and after naga has parsed a shader it checks the module's bindings, push-constant
+// layout and workgroup sizes against it, failing the build with both sides named. The engine
+// uses the same items, and `PushConstants` is checked against PARAMS at compile time. Changing
+// a value here reaches every shader and every Rust user. Nothing here depends on anything else.
+
+/// What a binding of descriptor set 0 holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BindingKind {
+    /// A storage buffer (in the shader: `var<storage, read>` or `read_write`).
+    StorageBuffer,
+    /// A sampled image (in the shader: `texture_2d<u32>`).
+    SampledImage,
+}
+
+/// One binding of descriptor set 0, the one set every pass shares.
+#[derive(Clone, Copy, Debug)]
+pub struct Binding {
+    pub number: u32,
+    /// The shader's variable.
+    pub name: &'static str,
+    pub kind: BindingKind,
+    /// The variable's declaration after `var`, given the `wide` pixel access (16 bytes per
+    /// load where a region's rows are 16-byte aligned) or the narrow one.
+    pub wgsl: fn(wide: bool) -> &'static str,
+}
+
+/// The camera frame: RGBA8 sRGB, one u32 per pixel, four pixels per entry.
+pub const BINDING_CAMERA: u32 = 0;
+/// The camera frame decoded and blurred (linear light, packed pairs of texels).
+pub const BINDING_BLURRED: u32 = 1;
+/// The display region's raw pixels in the swapchain format.
+pub const BINDING_PIXELS: u32 = 2;
+/// The tile list of the enhancement (TILE_LIST_* below).
+pub const BINDING_TILES: u32 = 3;
+/// The copy passes' source (the benchmark's floor); the layer binds the pixels here.
+pub const BINDING_SOURCE: u32 = 4;
+/// `blurred` as an R32G32B32A32_UINT image, what the enhancement samples.
+pub const BINDING_BLURRED_TEXELS: u32 = 5;
+
+/// Every binding, in binding order.
+pub const BINDINGS: [Binding; 6] = [
+    Binding {
+        number: BINDING_CAMERA,
+        name: "camera",
+        kind: BindingKind::StorageBuffer,
+        wgsl: |_| "<storage, read> camera: array<vec4<u32>>",
+    },
+    Binding {
+        number: BINDING_BLURRED,
+        name: "blurred",
+        kind: BindingKind::StorageBuffer,
+        wgsl: |_| "<storage, read_write> blurred: array<vec4<u32>>",
+    },
+    Binding {
+        number: BINDING_PIXELS,
+        name: "pixels",
+        kind: BindingKind::StorageBuffer,
+        wgsl: |wide| match wide {
+            true => "<storage, read_write> pixels: array<vec4<u32>>",
+            false => "<storage, read_write> pixels: array<u32>",
+        },
+    },
+    Binding {
+        number: BINDING_TILES,
+        name: "tiles",
+        kind: BindingKind::StorageBuffer,
+        wgsl: |_| "<storage, read_write> tiles: TileList",
+    },
+    Binding {
+        number: BINDING_SOURCE,
+        name: "source",
+        kind: BindingKind::StorageBuffer,
+        wgsl: |wide| match wide {
+            true => "<storage, read> source: array<vec4<u32>>",
+            false => "<storage, read> source: array<u32>",
+        },
+    },
+    Binding {
+        number: BINDING_BLURRED_TEXELS,
+        name: "blurred_texels",
+        kind: BindingKind::SampledImage,
+        wgsl: |_| " blurred_texels: texture_2d<u32>",
+    },
+];
+
+/// Side of the square tiles the enhancement skips when they hold no foreground pixel, and the
+/// workgroup size (TILE x TILE) of the per-pixel passes.
+pub const TILE: u32 = 8;
+/// `classify` runs a row of tiles per workgroup, so that tiles are listed (and then enhanced)
+/// in row order: neighbouring memory, which a CPU driver's caches and prefetchers follow.
+pub const CLASSIFY_WORKGROUP: [u32; 3] = [64, 1, 1];
+/// Rows of texels one invocation of the background preparation makes.
+pub const DECODE_ROWS: u32 = 8;
+/// Workgroups per row of the enhancement's indirect dispatch (maxComputeWorkGroupCount is only
+/// guaranteed to be 65535).
+pub const INDIRECT_ROW_GROUPS: u32 = 32768;
+
+/// Each entry point's workgroup size.
+pub const WORKGROUPS: [(&str, [u32; 3]); 7] = [
+    ("decode", [TILE, TILE, 1]),
+    ("decode_blur", [TILE, TILE, 1]),
+    ("copy_pixels", [TILE, TILE, 1]),
+    ("copy_rows", [TILE, TILE, 1]),
+    ("enhance", [TILE, TILE, 1]),
+    ("classify", CLASSIFY_WORKGROUP),
+    ("finish_tiles", [1, 1, 1]),
+];
+
+/// Words (u32) of the tile list before the tile indices: the count, the indirect dispatch's
+/// three workgroup counts, the total and padding (struct TileList).
+pub const TILE_LIST_HEADER_WORDS: u64 = 8;
+/// Byte offset of the indirect dispatch's arguments in the tile list.
+pub const TILE_LIST_DISPATCH_OFFSET: u64 = 4;
+/// The tile list's declaration; its header must be TILE_LIST_HEADER_WORDS words and hold the
+/// dispatch arguments at TILE_LIST_DISPATCH_OFFSET (checked by build.rs).
+pub const TILE_LIST_WGSL: &str = "struct TileList {
+    // Tiles found so far by classify; finish_tiles moves it to `total` and zeroes it.
+    count: atomic<u32>,
+    // vkCmdDispatchIndirect arguments: workgroups x, y, z.
+    groups: array<u32, 3>,
+    total: u32,
+    pad: array<u32, 3>,
+    // Tile index (row * tile_columns + column) of each listed tile.
+    index: array<u32>,
+}
+";
+
+/// The largest blur half-width (blur_size at most 2 * MAX_BLUR_HALF + 1); one background
+/// pass is built per half-width 0..=MAX_BLUR_HALF.
+pub const MAX_BLUR_HALF: u32 = 7;
+/// Gaussian taps in the push constants: offsets 0..=MAX_BLUR_HALF.
+pub const BLUR_TAPS: usize = MAX_BLUR_HALF as usize + 1;
+
+/// A pixel's byte layout in a display region (the `FORMAT` code's low bits).
+pub const LAYOUT_RGBA8: u32 = 0;
+pub const LAYOUT_BGRA8: u32 = 1;
+pub const LAYOUT_RGBA16_UNORM: u32 = 2;
+pub const LAYOUT_RGBA16_FLOAT: u32 = 3;
+pub const LAYOUT_A2B10G10R10: u32 = 4;
+/// Set in a format code when the stored values are sRGB-encoded.
+pub const FORMAT_SRGB_BIT: u32 = 256;
+/// Every format code a shader is built for (the sRGB ones are 8-bit).
+pub const FORMAT_CODES: [u32; 7] = [
+    LAYOUT_RGBA8 | FORMAT_SRGB_BIT,
+    LAYOUT_RGBA8,
+    LAYOUT_BGRA8 | FORMAT_SRGB_BIT,
+    LAYOUT_BGRA8,
+    LAYOUT_RGBA16_UNORM,
+    LAYOUT_RGBA16_FLOAT,
+    LAYOUT_A2B10G10R10,
+];
+
+/// What a view shows (ViewMode).
+pub const MODE_ENHANCE: u32 = 0;
+pub const MODE_OFF: u32 = 1;
+pub const MODE_SPLIT: u32 = 2;
+pub const MODE_HEATMAP: u32 = 3;
+pub const MODE_BACKGROUND: u32 = 4;
+/// The modes an `enhance` variant is built for (MODE_OFF does no GPU work; MODE_BACKGROUND has
+/// one variant of its own).
+pub const ENHANCE_MODES: [u32; 3] = [MODE_ENHANCE, MODE_SPLIT, MODE_HEATMAP];
+
+/// The method (Method).
+pub const METHOD_PAPER: u32 = 0;
+pub const METHOD_HUE_ONLY: u32 = 1;
+pub const METHOD_OTHER_HUE: u32 = 2;
+pub const METHOD_LUM_CHROMA: u32 = 3;
+pub const METHOD_SUBTRACTION: u32 = 4;
+pub const METHODS: u32 = 5;
+
+/// The codes written into every shader as WGSL constants, by name.
+pub const CODES: [(&str, u32); 25] = [
+    ("TILE", TILE),
+    ("DECODE_ROWS", DECODE_ROWS),
+    ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
+    ("MAX_BLUR_HALF", MAX_BLUR_HALF),
+    ("LAYOUT_RGBA8", LAYOUT_RGBA8),
+    ("LAYOUT_BGRA8", LAYOUT_BGRA8),
+    ("LAYOUT_RGBA16_UNORM", LAYOUT_RGBA16_UNORM),
+    ("LAYOUT_RGBA16_FLOAT", LAYOUT_RGBA16_FLOAT),
+    ("LAYOUT_A2B10G10R10", LAYOUT_A2B10G10R10),
+    ("FORMAT_SRGB_BIT", FORMAT_SRGB_BIT),
+    ("MODE_ENHANCE", MODE_ENHANCE),
+    ("MODE_OFF", MODE_OFF),
+    ("MODE_SPLIT", MODE_SPLIT),
+    ("MODE_HEATMAP", MODE_HEATMAP),
+    ("MODE_BACKGROUND", MODE_BACKGROUND),
+    ("METHOD_PAPER", METHOD_PAPER),
+    ("METHOD_HUE_ONLY", METHOD_HUE_ONLY),
+    ("METHOD_OTHER_HUE", METHOD_OTHER_HUE),
+    ("METHOD_LUM_CHROMA", METHOD_LUM_CHROMA),
+    ("METHOD_SUBTRACTION", METHOD_SUBTRACTION),
+    ("LINEAR_BITS", LINEAR_BITS),
+    ("LINEAR_MAX", LINEAR_MAX),
+    ("CLASSIFY_WORKGROUP_X", CLASSIFY_WORKGROUP[0]),
+    ("CLASSIFY_WORKGROUP_Y", CLASSIFY_WORKGROUP[1]),
+    ("BLUR_TAPS", BLUR_TAPS as u32),
+];
+
+/// The blurred background packs each texel's linear R, G, B into 21 bits each (two texels per
+/// entry of `blurred`): values 0..=LINEAR_MAX stand for 0..=1.
+pub const LINEAR_BITS: u32 = 21;
+pub const LINEAR_MAX: u32 = (1 << LINEAR_BITS) - 1;
+
+/// A field type of the push-constant block, with its WGSL name, size and alignment in bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamType {
+    U32,
+    F32,
+    Vec2U32,
+    /// `array<vec4<f32>, N>` holding N * 4 floats.
+    Vec4F32Array(u32),
+}
+
+impl ParamType {
+    pub fn wgsl(self) -> String {
+        match self {
+            ParamType::U32 => "u32".into(),
+            ParamType::F32 => "f32".into(),
+            ParamType::Vec2U32 => "vec2<u32>".into(),
+            ParamType::Vec4F32Array(n) => format!("array<vec4<f32>, {n}>"),
+        }
+    }
+
+    pub const fn size(self) -> u32 {
+        match self {
+            ParamType::U32 | ParamType::F32 => 4,
+            ParamType::Vec2U32 => 8,
+            ParamType::Vec4F32Array(n) => 16 * n,
+        }
+    }
+
+    pub const fn align(self) -> u32 {
+        match self {
+            ParamType::U32 | ParamType::F32 => 4,
+            ParamType::Vec2U32 => 8,
+            ParamType::Vec4F32Array(_) => 16,
+        }
+    }
+}
+
+/// The push-constant block `Params` every pass shares, in order: WGSL lays it out (and the
+/// Rust `PushConstants` mirrors it) with each field at the next multiple of its alignment.
+pub const PARAMS: [(&str, ParamType); 23] = [
+    ("camera_size", ParamType::Vec2U32),
+    // Size of the display region (one view), in pixels; buffers are tightly packed rows.
+    ("region_size", ParamType::Vec2U32),
+    ("lambda_e", ParamType::F32),
+    ("lambda_jnd", ParamType::F32),
+    ("transmittance", ParamType::F32),
+    // Gaussian taps at offsets -blur_half..=blur_half (blur_half <= MAX_BLUR_HALF).
+    ("blur_half", ParamType::U32),
+    // Symmetric normalised taps: tap(k) = taps[k / 4][k % 4] for k = |offset|.
+    ("taps", ParamType::Vec4F32Array(BLUR_TAPS as u32 / 4)),
+    ("k_v", ParamType::F32),
+    ("k_b", ParamType::F32),
+    // What the view shows (MODE_*).
+    ("mode", ParamType::U32),
+    // Tiles per row of the region (TILE x TILE pixels each).
+    ("tile_columns", ParamType::U32),
+    // Beyond the paper (0 = off): chroma boost on near-grey backgrounds; luminance cap.
+    ("achromatic_boost", ParamType::F32),
+    ("luminance_cap", ParamType::F32),
+    // The view's camera mapping, row-major: camera_uv = (M (display_uv, 1)).xy / .z.
+    ("map_00", ParamType::F32),
+    ("map_01", ParamType::F32),
+    ("map_02", ParamType::F32),
+    ("map_10", ParamType::F32),
+    ("map_11", ParamType::F32),
+    ("map_12", ParamType::F32),
+    ("map_20", ParamType::F32),
+    ("map_21", ParamType::F32),
+    ("map_22", ParamType::F32),
+    // Fills the block up to its 16-byte alignment (the taps').
+    ("pad", ParamType::U32),
+];
+
+/// The byte offset of each PARAMS field, and the block's size (a multiple of its largest
+/// alignment), as WGSL lays them out.
+pub const fn params_layout() -> ([u32; PARAMS.len()], u32) {
+    let mut offsets = [0u32; PARAMS.len()];
+    let (mut at, mut align, mut i) = (0u32, 4u32, 0);
+    while i < PARAMS.len() {
+        let ty = PARAMS[i].1;
+        at = at.div_ceil(ty.align()) * ty.align();
+        offsets[i] = at;
+        at += ty.size();
+        if ty.align() > align {
+            align = ty.align();
+        }
+        i += 1;
+    }
+    (offsets, at.div_ceil(align) * align)
+}
+
+/// The push-constant block's size: at most 128 bytes, the least maxPushConstantsSize Vulkan
+/// guarantees.
+pub const PARAMS_SIZE: u32 = params_layout().1;
+const _: () = assert!(PARAMS_SIZE <= 128);
