@@ -294,7 +294,7 @@ fn gpu_matches_cpu_on_random_images() {
     assert_clean(&e);
 }
 
-/// A registered view's mapping (issue 14's homographies): not affine, the projective divide
+/// A registered view's mapping (a plane-induced homography): not affine, the projective divide
 /// varying by about 15% across the view, and reaching past the camera's edges (clamp-to-edge).
 fn projective() -> CameraMapping {
     CameraMapping {
