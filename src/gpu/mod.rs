@@ -4,8 +4,10 @@
 
 pub mod app_image;
 pub mod approx;
+pub mod barrier;
 pub mod bench;
 pub mod buffer;
+pub mod camera_rect;
 pub mod codes;
 pub mod commands;
 pub mod device;
@@ -18,6 +20,8 @@ pub mod offline;
 pub mod pipeline_cache;
 pub mod pipelines;
 pub mod process_exit;
+mod record;
+pub mod resources;
 pub mod shaders;
 pub mod warm_up;
 
