@@ -20,8 +20,10 @@ pub mod offline;
 pub mod pipeline_cache;
 pub mod pipelines;
 pub mod process_exit;
+pub mod push_constants;
 mod record;
 pub mod resources;
+pub mod shader_ids;
 pub mod shaders;
 pub mod warm_up;
 

@@ -1,5 +1,5 @@
 //! The compute pipelines built from the embedded SPIR-V, with the one descriptor-set layout and
-//! push-constant block they share (see shaders/common.wgsl).
+//! push-constant block they share (src/gpu/interface.rs).
 //!
 //! A pipeline costs a shader compile in the driver (on lavapipe, LLVM: tenths of a second
 //! each), so none is built inside a call an app makes to the layer: in [`BuildMode::Background`]
@@ -7,16 +7,13 @@
 //! [`PipelineCache`], and a pipeline not built yet is [`GpuError::Pending`]. The offline tools
 //! build on first use ([`BuildMode::Inline`]).
 
-use super::codes::mode_code;
 use super::device::DeviceKind;
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
-use super::interface::{self, BindingKind, BINDINGS, BLUR_TAPS, PARAMS_SIZE};
+use super::interface::{BindingKind, BINDINGS};
 use super::pipeline_cache::{self, Origin, PipelineCache};
 use super::process_exit;
 use super::shaders::{self, ShaderModule};
-use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::params::{Params, ViewMode, MAX_BLUR_SIZE, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use ash::vk;
 use std::collections::VecDeque;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -24,120 +21,11 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 pub use super::interface::TILE;
-
-// The algorithm's largest blur is the shaders' largest half-width.
-const _: () = assert!(MAX_BLUR_SIZE == 2 * interface::MAX_BLUR_HALF + 1);
-
-/// The push-constant block, laid out as the shaders' `Params` (src/gpu/interface.rs, PARAMS:
-/// the same fields in the same order, checked below).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct PushConstants {
-    pub camera_size: [u32; 2],
-    pub region_size: [u32; 2],
-    pub lambda_e: f32,
-    pub lambda_jnd: f32,
-    pub transmittance: f32,
-    pub blur_half: u32,
-    pub taps: [f32; BLUR_TAPS],
-    pub k_v: f32,
-    pub k_b: f32,
-    pub mode: u32,
-    pub tile_columns: u32,
-    pub achromatic_boost: f32,
-    pub luminance_cap: f32,
-    /// The view's CameraMapping, row-major (PARAMS' map_00 ..= map_22).
-    pub mapping: [[f32; 3]; 3],
-    pub pad: u32,
-}
-
-/// Each PushConstants field's byte offset, in PARAMS order (the mapping stands for map_00 ..=
-/// map_22, one f32 each).
-const PUSH_OFFSETS: [usize; interface::PARAMS.len()] = {
-    use std::mem::offset_of;
-    let m = offset_of!(PushConstants, mapping);
-    [
-        offset_of!(PushConstants, camera_size),
-        offset_of!(PushConstants, region_size),
-        offset_of!(PushConstants, lambda_e),
-        offset_of!(PushConstants, lambda_jnd),
-        offset_of!(PushConstants, transmittance),
-        offset_of!(PushConstants, blur_half),
-        offset_of!(PushConstants, taps),
-        offset_of!(PushConstants, k_v),
-        offset_of!(PushConstants, k_b),
-        offset_of!(PushConstants, mode),
-        offset_of!(PushConstants, tile_columns),
-        offset_of!(PushConstants, achromatic_boost),
-        offset_of!(PushConstants, luminance_cap),
-        m,
-        m + 4,
-        m + 8,
-        m + 12,
-        m + 16,
-        m + 20,
-        m + 24,
-        m + 28,
-        m + 32,
-        offset_of!(PushConstants, pad),
-    ]
+pub use super::push_constants::PushConstants;
+pub use super::shader_ids::{
+    classify, decode_blur, enhance, reads_camera, ShaderId, COPY_PIXELS, COPY_ROWS, DECODE_CAMERA,
+    FINISH_TILES,
 };
-
-const _: () = {
-    let (offsets, _) = interface::params_layout();
-    let mut i = 0;
-    while i < offsets.len() {
-        assert!(
-            PUSH_OFFSETS[i] == offsets[i] as usize,
-            "PushConstants differs from PARAMS"
-        );
-        i += 1;
-    }
-    assert!(std::mem::size_of::<PushConstants>() == PARAMS_SIZE as usize);
-};
-
-impl PushConstants {
-    pub fn new(
-        params: &Params,
-        camera: (u32, u32),
-        region: (u32, u32),
-        mapping: &CameraMapping,
-    ) -> Self {
-        let taps64 = params.blur_taps();
-        let half = taps64.len() / 2;
-        let mut taps = [0.0f32; BLUR_TAPS];
-        for (k, t) in taps.iter_mut().enumerate().take(half + 1) {
-            *t = taps64[half + k] as f32;
-        }
-        PushConstants {
-            camera_size: [camera.0, camera.1],
-            region_size: [region.0, region.1],
-            lambda_e: params.lambda_e,
-            lambda_jnd: params.lambda_jnd_scaled,
-            transmittance: params.transmittance,
-            blur_half: half as u32,
-            taps,
-            k_v: SUBTRACTION_K_V,
-            k_b: SUBTRACTION_K_B,
-            mode: mode_code(params.mode),
-            tile_columns: region.0.div_ceil(TILE),
-            achromatic_boost: params.achromatic_boost,
-            luminance_cap: params.luminance_cap,
-            mapping: mapping.to_f32_rows(),
-            pad: 0,
-        }
-    }
-
-    pub fn bytes(&self) -> &[u8] {
-        // SAFETY: PushConstants is repr(C), Copy, made only of 4-byte scalars (no padding).
-        unsafe {
-            std::slice::from_raw_parts(
-                (self as *const Self).cast::<u8>(),
-                std::mem::size_of::<Self>(),
-            )
-        }
-    }
-}
 
 /// Runs a shader once, on the building thread, before it is built for the engine's device: a
 /// CPU driver compiles at first dispatch (see gpu/warm_up.rs).
@@ -150,67 +38,6 @@ pub enum BuildMode {
     Inline,
     /// On a thread of the engine's own, in the order requested (the layer).
     Background,
-}
-
-/// One shader of `shaders::all()`, by its index there.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct ShaderId(usize);
-
-/// Indices into `shaders::all()` (its order: the fixed shaders, DECODE_BLUR, ENHANCE_VARIANTS,
-/// CLASSIFY_VARIANTS).
-pub const DECODE_CAMERA: ShaderId = ShaderId(0);
-pub const FINISH_TILES: ShaderId = ShaderId(1);
-pub const COPY_PIXELS: ShaderId = ShaderId(2);
-pub const COPY_ROWS: ShaderId = ShaderId(3);
-const FIXED: usize = 4;
-
-fn unsupported() -> GpuError {
-    GpuError::Unsupported("no shader for this method, mode and format".into())
-}
-
-/// Whether a shader works on the camera frame (the background's descriptor set) rather than
-/// on a view.
-pub fn reads_camera(ShaderId(k): ShaderId) -> bool {
-    k == DECODE_CAMERA.0 || (FIXED..FIXED + shaders::DECODE_BLUR.len()).contains(&k)
-}
-
-/// The background pass for a blur half-width (0..=7).
-pub fn decode_blur(half: u32) -> Result<ShaderId, GpuError> {
-    let k = half as usize;
-    (k < shaders::DECODE_BLUR.len())
-        .then_some(ShaderId(FIXED + k))
-        .ok_or_else(unsupported)
-}
-
-/// The `enhance` shader for a method, view mode and pixel format (shader codes); `wide` for
-/// regions whose rows are 16-byte aligned; `extras` where the achromatic boost or the
-/// luminance cap is on.
-pub fn enhance(
-    (method, mode, format): (u32, u32, u32),
-    wide: bool,
-    extras: bool,
-) -> Result<ShaderId, GpuError> {
-    let background = mode == mode_code(ViewMode::Background);
-    let (method, extras) = if background {
-        (0, false)
-    } else {
-        (method, extras)
-    };
-    let k = shaders::ENHANCE_VARIANTS
-        .iter()
-        .position(|&(m, v, f, w, e, _)| (m, v, f, w, e) == (method, mode, format, wide, extras))
-        .ok_or_else(unsupported)?;
-    Ok(ShaderId(FIXED + shaders::DECODE_BLUR.len() + k))
-}
-
-/// The `classify` shader for a pixel format (shader code) and row alignment.
-pub fn classify(format: u32, wide: bool) -> Result<ShaderId, GpuError> {
-    let k = shaders::CLASSIFY_VARIANTS
-        .iter()
-        .position(|&(f, w, _)| f == format && w == wide)
-        .ok_or_else(unsupported)?;
-    let offset = FIXED + shaders::DECODE_BLUR.len() + shaders::ENHANCE_VARIANTS.len();
-    Ok(ShaderId(offset + k))
 }
 
 #[derive(Clone, Debug)]
@@ -616,30 +443,4 @@ fn compute_pipeline(shared: &Shared, shader: &ShaderModule) -> Result<vk::Pipeli
             call: "vkCreateComputePipelines",
             result,
         })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The ids name the shaders they stand for in `shaders::all()`.
-    #[test]
-    fn ids_index_the_shader_list() {
-        let all = shaders::all();
-        let name = |id: ShaderId| all[id.0].name;
-        assert_eq!(name(DECODE_CAMERA), "decode_camera");
-        assert_eq!(name(FINISH_TILES), "finish_tiles");
-        assert_eq!(name(COPY_PIXELS), "copy_pixels");
-        assert_eq!(name(COPY_ROWS), "copy_rows");
-        assert_eq!(name(decode_blur(3).unwrap()), "decode_blur_3");
-        assert!(decode_blur(8).is_err());
-        for &(m, v, f, w, e, ref module) in shaders::ENHANCE_VARIANTS {
-            assert_eq!(name(enhance((m, v, f), w, e).unwrap()), module.name);
-        }
-        for &(f, w, ref module) in shaders::CLASSIFY_VARIANTS {
-            assert_eq!(name(classify(f, w).unwrap()), module.name);
-        }
-        assert!(reads_camera(decode_blur(7).unwrap()) && reads_camera(DECODE_CAMERA));
-        assert!(!reads_camera(FINISH_TILES));
-    }
 }

@@ -1,0 +1,94 @@
+//! The shaders by identity: which embedded SPIR-V module a pass, a blur width, a method, a view
+//! mode and a pixel format need (indices into `shaders::all()`).
+
+use super::codes::mode_code;
+use super::error::GpuError;
+use super::shaders;
+use crate::algorithm::params::ViewMode;
+
+/// One shader of `shaders::all()`, by its index there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ShaderId(pub(super) usize);
+
+/// Indices into `shaders::all()` (its order: the fixed shaders, DECODE_BLUR, ENHANCE_VARIANTS,
+/// CLASSIFY_VARIANTS).
+pub const DECODE_CAMERA: ShaderId = ShaderId(0);
+pub const FINISH_TILES: ShaderId = ShaderId(1);
+pub const COPY_PIXELS: ShaderId = ShaderId(2);
+pub const COPY_ROWS: ShaderId = ShaderId(3);
+const FIXED: usize = 4;
+
+fn unsupported() -> GpuError {
+    GpuError::Unsupported("no shader for this method, mode and format".into())
+}
+
+/// Whether a shader works on the camera frame (the background's descriptor set) rather than
+/// on a view.
+pub fn reads_camera(ShaderId(k): ShaderId) -> bool {
+    k == DECODE_CAMERA.0 || (FIXED..FIXED + shaders::DECODE_BLUR.len()).contains(&k)
+}
+
+/// The background pass for a blur half-width (0..=7).
+pub fn decode_blur(half: u32) -> Result<ShaderId, GpuError> {
+    let k = half as usize;
+    (k < shaders::DECODE_BLUR.len())
+        .then_some(ShaderId(FIXED + k))
+        .ok_or_else(unsupported)
+}
+
+/// The `enhance` shader for a method, view mode and pixel format (shader codes); `wide` for
+/// regions whose rows are 16-byte aligned; `extras` where the achromatic boost or the
+/// luminance cap is on.
+pub fn enhance(
+    (method, mode, format): (u32, u32, u32),
+    wide: bool,
+    extras: bool,
+) -> Result<ShaderId, GpuError> {
+    let background = mode == mode_code(ViewMode::Background);
+    let (method, extras) = if background {
+        (0, false)
+    } else {
+        (method, extras)
+    };
+    let k = shaders::ENHANCE_VARIANTS
+        .iter()
+        .position(|&(m, v, f, w, e, _)| (m, v, f, w, e) == (method, mode, format, wide, extras))
+        .ok_or_else(unsupported)?;
+    Ok(ShaderId(FIXED + shaders::DECODE_BLUR.len() + k))
+}
+
+/// The `classify` shader for a pixel format (shader code) and row alignment.
+pub fn classify(format: u32, wide: bool) -> Result<ShaderId, GpuError> {
+    let k = shaders::CLASSIFY_VARIANTS
+        .iter()
+        .position(|&(f, w, _)| f == format && w == wide)
+        .ok_or_else(unsupported)?;
+    let offset = FIXED + shaders::DECODE_BLUR.len() + shaders::ENHANCE_VARIANTS.len();
+    Ok(ShaderId(offset + k))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ids name the shaders they stand for in `shaders::all()`.
+    #[test]
+    fn ids_index_the_shader_list() {
+        let all = shaders::all();
+        let name = |id: ShaderId| all[id.0].name;
+        assert_eq!(name(DECODE_CAMERA), "decode_camera");
+        assert_eq!(name(FINISH_TILES), "finish_tiles");
+        assert_eq!(name(COPY_PIXELS), "copy_pixels");
+        assert_eq!(name(COPY_ROWS), "copy_rows");
+        assert_eq!(name(decode_blur(3).unwrap()), "decode_blur_3");
+        assert!(decode_blur(8).is_err());
+        for &(m, v, f, w, e, ref module) in shaders::ENHANCE_VARIANTS {
+            assert_eq!(name(enhance((m, v, f), w, e).unwrap()), module.name);
+        }
+        for &(f, w, ref module) in shaders::CLASSIFY_VARIANTS {
+            assert_eq!(name(classify(f, w).unwrap()), module.name);
+        }
+        assert!(reads_camera(decode_blur(7).unwrap()) && reads_camera(DECODE_CAMERA));
+        assert!(!reads_camera(FINISH_TILES));
+    }
+}
