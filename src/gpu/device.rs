@@ -164,6 +164,24 @@ fn compute_family(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Opt
         .map(|i| i as u32)
 }
 
+/// A device with one queue of the first compute family of `physical` (a device of `instance`).
+fn create_compute_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+) -> Result<(ash::Device, u32), GpuError> {
+    let family = compute_family(instance, physical)
+        .ok_or_else(|| GpuError::NoDevice("the device has no compute queue".into()))?;
+    let priorities = [1.0];
+    let queues = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(family)
+        .queue_priorities(&priorities)];
+    let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
+    // SAFETY: physical belongs to the live instance; info and its arrays live until the call
+    // returns.
+    let device = unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
+    Ok((device, family))
+}
+
 fn device_name(instance: &ash::Instance, physical: vk::PhysicalDevice) -> String {
     // SAFETY: physical is a handle enumerated from this instance.
     let props = unsafe { instance.get_physical_device_properties(physical) };
@@ -237,16 +255,7 @@ impl GpuDevice {
     /// Threads).
     pub fn create_beside(app: &GpuDevice) -> Result<GpuDevice, GpuError> {
         let (instance, physical) = (&app.instance, app.physical);
-        let family = compute_family(instance, physical)
-            .ok_or_else(|| GpuError::NoDevice("the device has no compute queue".into()))?;
-        let priorities = [1.0];
-        let queues = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(family)
-            .queue_priorities(&priorities)];
-        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
-        // SAFETY: physical belongs to the app's live instance; info lives until the call returns.
-        let device =
-            unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
+        let (device, family) = create_compute_device(instance, physical)?;
         let allocator = match create_allocator(instance, &device, physical) {
             Ok(a) => a,
             Err(e) => {
@@ -316,16 +325,7 @@ impl GpuDevice {
                 "the device supports only Vulkan 1.0".into(),
             ));
         }
-        let family = compute_family(instance, physical)
-            .ok_or_else(|| GpuError::NoDevice("the device has no compute queue".into()))?;
-        let priorities = [1.0];
-        let queues = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(family)
-            .queue_priorities(&priorities)];
-        let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
-        // SAFETY: info and its arrays live until the call returns.
-        let device =
-            unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
+        let (device, family) = create_compute_device(instance, physical)?;
         Ok((physical, device, family))
     }
 
