@@ -73,6 +73,8 @@ impl DeviceOptions {
     }
 }
 
+/// # Safety
+/// Called by the Vulkan loader with a valid callback data pointer and the user data the messenger was created with.
 unsafe extern "system" fn on_validation_message(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     _types: vk::DebugUtilsMessageTypeFlagsEXT,
@@ -83,6 +85,7 @@ unsafe extern "system" fn on_validation_message(
         // SAFETY: user is the Arc<ValidationLog> the messenger was created with, alive until
         // the messenger is destroyed; data is valid for the duration of the callback.
         let log = unsafe { &*(user as *const ValidationLog) };
+        // SAFETY: data is valid for the duration of the callback (see above).
         let text = unsafe { (*data).message_as_c_str() }
             .map(|m| m.to_string_lossy().into_owned())
             .unwrap_or_default();

@@ -68,6 +68,8 @@ fn startup_line(settings: &Settings, app: &str) -> String {
     line
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrCreateInstance and the loader's layer info.
 unsafe extern "system" fn create_api_layer_instance(
     info: *const xr::InstanceCreateInfo,
     layer_info: *const ApiLayerCreateInfo,
@@ -168,7 +170,7 @@ fn register_instance(
 
 /// Our replacement for `name`, if the layer intercepts it.
 fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
-    // SAFETY (all arms): the loader calls each pointer through the signature its name has
+    // SAFETY: (all arms) the loader calls each pointer through the signature its name has
     // in the OpenXR specification, which is the one each function below is declared with.
     unsafe {
         Some(match name {
@@ -217,6 +219,8 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
     }
 }
 
+/// # Safety
+/// Called by the OpenXR loader (or the app) with a valid name and a valid output pointer.
 unsafe extern "system" fn get_instance_proc_addr(
     instance: xr::Instance,
     name: *const c_char,
@@ -256,6 +260,8 @@ unsafe extern "system" fn get_instance_proc_addr(
     )
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the argument the app passed to xrDestroyInstance.
 unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result {
     guard(
         "xrDestroyInstance",

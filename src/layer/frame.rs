@@ -36,6 +36,7 @@ unsafe fn sub_images(info: &xr::FrameEndInfo, settings: &Settings) -> Vec<SubIma
     for i in 0..info.layer_count as usize {
         // SAFETY: layer_count valid pointers (the caller's contract).
         let layer = unsafe { *info.layers.add(i) };
+        // SAFETY: each non-null entry points to a composition layer struct (the caller's contract).
         let Some(base) = (unsafe { layer.as_ref() }) else {
             continue;
         };

@@ -47,6 +47,8 @@ fn enhanced_format(info: &xr::SwapchainCreateInfo) -> Option<PixelFormat> {
     Some(pixel)
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrCreateSwapchain.
 pub(crate) unsafe extern "system" fn create_swapchain(
     session: xr::Session,
     info: *const xr::SwapchainCreateInfo,
@@ -130,6 +132,8 @@ fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32) {
     }
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrDestroySwapchain.
 pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain) -> xr::Result {
     guard(
         "xrDestroySwapchain",
@@ -151,6 +155,8 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
     )
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrEnumerateSwapchainImages.
 pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
     swapchain: xr::Swapchain,
     capacity: u32,
@@ -175,6 +181,7 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
             ) {
                 // SAFETY: on success the runtime filled *count structs of the type the app chose.
                 let n = unsafe { *count } as usize;
+                // SAFETY: images is non-null (checked above) and holds at least one struct.
                 if unsafe { (*images).ty } == xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR {
                     let vk_images = images as *const xr::SwapchainImageVulkanKHR;
                     // SAFETY: n Vulkan image structs were written.
@@ -256,6 +263,8 @@ fn enhance_ahead(
     }
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrAcquireSwapchainImage.
 pub(crate) unsafe extern "system" fn acquire_swapchain_image(
     swapchain: xr::Swapchain,
     info: *const xr::SwapchainImageAcquireInfo,
@@ -286,6 +295,8 @@ pub(crate) unsafe extern "system" fn acquire_swapchain_image(
     )
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrWaitSwapchainImage.
 pub(crate) unsafe extern "system" fn wait_swapchain_image(
     swapchain: xr::Swapchain,
     info: *const xr::SwapchainImageWaitInfo,
@@ -309,6 +320,8 @@ pub(crate) unsafe extern "system" fn wait_swapchain_image(
     )
 }
 
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrReleaseSwapchainImage.
 pub(crate) unsafe extern "system" fn release_swapchain_image(
     swapchain: xr::Swapchain,
     info: *const xr::SwapchainImageReleaseInfo,

@@ -33,6 +33,8 @@ pub fn messenger_info() -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
         .pfn_user_callback(Some(on_message))
 }
 
+/// # Safety
+/// Called by the Vulkan loader with a valid callback data pointer.
 unsafe extern "system" fn on_message(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     _types: vk::DebugUtilsMessageTypeFlagsEXT,
