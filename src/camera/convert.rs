@@ -94,6 +94,17 @@ pub fn to_rgba(
     height: u32,
     stride: u32,
 ) -> Result<RgbaImage, String> {
+    let empty = RgbaImage::new(0, 0, [0, 0, 0, 255]);
+    to_rgba_into(format, data, (width, height, stride), empty)
+}
+
+/// [`to_rgba`] into `into`'s buffer when its size matches (MJPEG decodes into a new one).
+pub(crate) fn to_rgba_into(
+    format: PixelFormat,
+    data: &[u8],
+    (width, height, stride): (u32, u32, u32),
+    into: RgbaImage,
+) -> Result<RgbaImage, String> {
     let Some(min_stride) = format.min_stride(width) else {
         return crate::camera::mjpeg::decode(data);
     };
@@ -113,8 +124,7 @@ pub fn to_rgba(
             data.len()
         ));
     }
-    let mut image = RgbaImage::new(width, height, [0, 0, 0, 255]);
-    image.has_alpha = false;
+    let mut image = crate::camera::pool::sized(into, width, height);
     for y in 0..height as usize {
         let row = &data[y * stride..];
         let out = &mut image.pixels[y * width as usize..(y + 1) * width as usize];

@@ -3,6 +3,7 @@
 
 use crate::camera::frame::{Frame, Shared};
 use crate::camera::log::log;
+use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
 use crate::camera::y4m::Y4m;
 use crate::camera::{CameraError, CaptureConfig};
@@ -34,7 +35,8 @@ fn static_frame(image: RgbaImage) -> Frame {
 /// The frames of a video, loaded one at a time by the player thread.
 pub(crate) trait VideoFrames: Send {
     fn count(&self) -> usize;
-    fn load(&self, index: usize) -> Result<RgbaImage, String>;
+    /// Frame `index`, into `into`'s buffer where the format allows (see `pool`).
+    fn load(&mut self, index: usize, into: RgbaImage) -> Result<RgbaImage, String>;
 }
 
 struct PngFolder {
@@ -45,7 +47,7 @@ impl VideoFrames for PngFolder {
     fn count(&self) -> usize {
         self.files.len()
     }
-    fn load(&self, index: usize) -> Result<RgbaImage, String> {
+    fn load(&mut self, index: usize, _: RgbaImage) -> Result<RgbaImage, String> {
         RgbaImage::load_png(&self.files[index])
     }
 }
@@ -54,8 +56,8 @@ impl VideoFrames for Y4m {
     fn count(&self) -> usize {
         self.frame_count()
     }
-    fn load(&self, index: usize) -> Result<RgbaImage, String> {
-        self.read_frame(index)
+    fn load(&mut self, index: usize, into: RgbaImage) -> Result<RgbaImage, String> {
+        self.read_frame(index, into)
     }
 }
 
@@ -111,13 +113,14 @@ fn frame_number(path: &Path) -> u64 {
 /// Plays `frames` in a loop until asked to stop. Frame `n` (counted from `start`) is shown from
 /// `start + n / fps`; its sequence is `n + 1`, so skipped frames show as a jump in sequence.
 pub(crate) fn play(
-    frames: Box<dyn VideoFrames>,
+    mut frames: Box<dyn VideoFrames>,
     fps: f64,
     start: Instant,
     shared: &Shared,
     smoothing: Option<f32>,
 ) {
     let mut smoother = smoothing.map(Smoother::new);
+    let mut pool = ImagePool::default();
     let mut shown = None;
     let mut failed = false;
     let count = frames.count() as u64;
@@ -127,7 +130,7 @@ pub(crate) fn play(
         let n = if count == 1 { 0 } else { n };
         if shown != Some(n) {
             shown = Some(n);
-            match frames.load((n % count) as usize) {
+            match frames.load((n % count) as usize, pool.take()) {
                 Ok(image) => {
                     let image = match smoother.as_mut() {
                         Some(s) => s.apply(image),
@@ -135,7 +138,7 @@ pub(crate) fn play(
                     };
                     let captured_at = start + Duration::from_secs_f64(n as f64 / fps);
                     shared.publish(Frame {
-                        image: Arc::new(image),
+                        image: pool.share(image),
                         sequence: n + 1,
                         captured_at,
                     });

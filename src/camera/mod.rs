@@ -18,6 +18,7 @@ mod files;
 mod frame;
 mod log;
 mod mjpeg;
+mod pool;
 mod smoothing;
 pub mod source;
 pub mod v4l2;

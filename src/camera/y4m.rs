@@ -27,6 +27,8 @@ pub(crate) struct Y4m {
     full_range: bool,
     /// File offset of each frame's pixel data.
     offsets: Vec<u64>,
+    /// The last frame's YUV bytes: one buffer for every frame read.
+    data: Vec<u8>,
 }
 
 impl Y4m {
@@ -67,17 +69,26 @@ impl Y4m {
         u64::from(self.width * self.height) + 2 * u64::from(cw * ch)
     }
 
-    pub(crate) fn read_frame(&self, index: usize) -> Result<RgbaImage, String> {
+    /// Frame `index`, converted into `into` (whose buffer is reused when its size matches).
+    pub(crate) fn read_frame(
+        &mut self,
+        index: usize,
+        into: RgbaImage,
+    ) -> Result<RgbaImage, String> {
         let mut file =
             File::open(&self.path).map_err(|e| format!("{}: {e}", self.path.display()))?;
-        let mut data = vec![0; self.frame_bytes() as usize];
-        file.seek(SeekFrom::Start(self.offsets[index]))
+        let mut data = std::mem::take(&mut self.data);
+        data.resize(self.frame_bytes() as usize, 0);
+        let read = file
+            .seek(SeekFrom::Start(self.offsets[index]))
             .and_then(|_| file.read_exact(&mut data))
-            .map_err(|e| format!("{}: frame {index}: {e}", self.path.display()))?;
-        Ok(self.to_rgba(&data))
+            .map_err(|e| format!("{}: frame {index}: {e}", self.path.display()));
+        let image = read.map(|_| self.to_rgba(&data, into));
+        self.data = data;
+        image
     }
 
-    fn to_rgba(&self, data: &[u8]) -> RgbaImage {
+    fn to_rgba(&self, data: &[u8], into: RgbaImage) -> RgbaImage {
         let (w, h) = (self.width, self.height);
         let (cw, ch) = self.chroma_size();
         let (luma, chroma) = data.split_at((w * h) as usize);
@@ -87,8 +98,7 @@ impl Y4m {
         } else {
             bt601_limited_to_rgb
         };
-        let mut image = RgbaImage::new(w, h, [0, 0, 0, 255]);
-        image.has_alpha = false;
+        let mut image = crate::camera::pool::sized(into, w, h);
         for y in 0..h {
             for x in 0..w {
                 let (u, v) = match self.chroma {
@@ -122,6 +132,7 @@ fn parse_header(line: &str) -> Result<Y4m, String> {
         },
         full_range: false,
         offsets: Vec::new(),
+        data: Vec::new(),
     };
     for token in tokens.filter(|t| !t.is_empty()) {
         let (key, value) = token.split_at(1);

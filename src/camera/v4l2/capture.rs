@@ -3,9 +3,10 @@
 //! Readers only ever touch the mailbox in `Shared`, so nothing here can block them.
 
 use super::{auto_capture_device, choose_mode, device_dir, modes, probe};
-use crate::camera::convert::{to_rgba, PixelFormat};
+use crate::camera::convert::{to_rgba_into, PixelFormat};
 use crate::camera::frame::{Frame, Shared, SourceStatus};
 use crate::camera::log::log;
+use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
 use crate::camera::{CameraError, CaptureConfig, SourceSpec};
 use std::io;
@@ -174,6 +175,7 @@ fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Opt
         sequence: 0,
         smoother: cfg.smoothing.map(Smoother::new),
         status: StatusLog::default(),
+        pool: ImagePool::default(),
     };
     if let Some(first) = &first {
         log(&format!("opened {}", first.description));
@@ -236,6 +238,8 @@ struct Capture {
     sequence: u64,
     smoother: Option<Smoother>,
     status: StatusLog,
+    /// The converted frames, reused (see `pool`).
+    pool: ImagePool,
 }
 
 impl Capture {
@@ -303,13 +307,8 @@ impl Capture {
             0 => data.len(),
             n => n.min(data.len()),
         };
-        let image = to_rgba(
-            session.format,
-            &data[..used],
-            session.width,
-            session.height,
-            session.stride,
-        )?;
+        let size = (session.width, session.height, session.stride);
+        let image = to_rgba_into(session.format, &data[..used], size, self.pool.take())?;
         let image = match self.smoother.as_mut() {
             Some(s) => s.apply(image),
             None => image,
@@ -319,7 +318,7 @@ impl Capture {
         #[allow(clippy::unnecessary_cast)]
         let captured_at = instant_of(meta.timestamp.sec as i64, meta.timestamp.usec as i64);
         Ok(Frame {
-            image: Arc::new(image),
+            image: self.pool.share(image),
             sequence: self.sequence,
             captured_at,
         })
