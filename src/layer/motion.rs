@@ -19,6 +19,9 @@ use openxr_sys as xr;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// A frame older than this is a still image (`image:`, `color:`), not a capture of the moment.
+const STILL_AFTER: std::time::Duration = std::time::Duration::from_secs(5);
+
 /// A session's motion state.
 #[derive(Default)]
 pub struct SessionMotion {
@@ -117,6 +120,8 @@ pub fn at_end_frame(
         s.motion.poses.record(t, pose);
     }
     let latency_ns = (f64::from(s.settings.motion.camera_latency_ms) * 1e6) as i64;
+    // A still image's frame is not a capture of the moment: it stays head-fixed.
+    let captured_at = captured_at.filter(|t| t.elapsed() < STILL_AFTER);
     let camera_time = captured_at.and_then(|t| {
         s.motion
             .xr_time(instance, clock::monotonic_ns(t) - latency_ns)
