@@ -156,6 +156,45 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// What the eye should see: the panorama through the view at display time.
+fn expected(json: &Value, pano: &RgbaImage, w: u32, h: u32) -> RgbaImage {
+    let fov = &json["view_fov"];
+    let a = |k: &str| fov[k].as_f64().unwrap().tan();
+    let (l, r, u, d) = (
+        a("angle_left"),
+        a("angle_right"),
+        a("angle_up"),
+        a("angle_down"),
+    );
+    let q = numbers(&json["view_pose"]["orientation"]);
+    let mut out = RgbaImage::new(w, h, [0, 0, 0, 255]);
+    for y in 0..h {
+        for x in 0..w {
+            let s = (f64::from(x) + 0.5) / f64::from(w);
+            let t = (f64::from(y) + 0.5) / f64::from(h);
+            let dir = rotate(&q, [l + s * (r - l), u - t * (u - d), -1.0]);
+            let n = dir.iter().map(|c| c * c).sum::<f64>().sqrt();
+            let c = sample(pano, dir[0].atan2(-dir[2]), (dir[1] / n).asin());
+            out.set(x, y, [c[0] as u8, c[1] as u8, c[2] as u8, 255]);
+        }
+    }
+    out
+}
+
+/// The figure for the README: what the eye should see and what it shows, side by side.
+fn figure(json: &Value, output: &RgbaImage, pano: &RgbaImage, path: &Path) {
+    let (w, h) = (output.width, output.height);
+    let want = expected(json, pano, w, h);
+    let mut fig = RgbaImage::new(2 * w + 4, h, [255, 255, 255, 255]);
+    for y in 0..h {
+        for x in 0..w {
+            fig.set(x, y, want.get(x, y));
+            fig.set(w + 4 + x, y, output.get(x, y));
+        }
+    }
+    fig.save_png(path).unwrap();
+}
+
 /// One view's measurement: (measured shift, the head's turn between capture and display), deg.
 struct Seen {
     shift: f64,
@@ -193,6 +232,10 @@ fn run(name: &str, compensation: bool) -> Option<Vec<Seen>> {
     let cmd = [XR_CLIENT, "--json", "--frames", "100", "--size", "160x120"];
     let out = sandbox.run_for(&cmd, &env, 240);
     out.assert_success();
+    let lines = common::layer_lines(&out);
+    let said = |text: &str| lines.iter().any(|l| l.contains(text));
+    assert!(!said("cannot convert CLOCK_MONOTONIC"), "{lines:#?}");
+    assert!(!said("could not be located"), "{lines:#?}");
     let pano = RgbaImage::load_png(&pano_path).unwrap();
     let mut seen = Vec::new();
     for f in (0..60).step_by(3) {
@@ -218,6 +261,13 @@ fn run(name: &str, compensation: bool) -> Option<Vec<Seen>> {
         }
     }
     assert!(seen.len() >= 10, "only {} views captured", seen.len());
+    // The README's figure: view 0 of the first measured frame (the sway's phase varies).
+    let first = capture.join("frame-0-view-0");
+    if let Ok(text) = std::fs::read_to_string(first.with_extension("json")) {
+        let json: Value = serde_json::from_str(&text).unwrap();
+        let output = RgbaImage::load_png(&capture.join("frame-0-view-0-output.png")).unwrap();
+        figure(&json, &output, &pano, &dir.join("figure.png"));
+    }
     Some(seen)
 }
 
@@ -263,4 +313,32 @@ fn without_compensation_the_world_lags_by_the_head_turn() {
         miss <= 0.25,
         "shift differs from the head's turn by {miss:.3} deg"
     );
+}
+
+/// The layer enables XR_KHR_convert_timespec_time for itself, invisibly: an app that did not
+/// enable it still gets XR_ERROR_FUNCTION_UNSUPPORTED for its functions, as without the layer.
+#[test]
+fn the_layers_clock_extension_stays_hidden_from_the_app() {
+    let Some(sandbox) = sandbox() else {
+        return;
+    };
+    let cmd = [XR_CLIENT, "--json", "--frames", "5", "--size", "64x48"];
+    let mut seen = Vec::new();
+    for on in ["1", "0"] {
+        let env = [
+            ("CONTRASTXR", on),
+            ("CONTRASTXR_FORCE", "1"),
+            ("CONTRASTXR_BACKGROUND", "color:#808080"),
+        ];
+        let run = sandbox.run_for(&cmd, &env, 120);
+        run.assert_success();
+        let report = run.client_report();
+        seen.push((
+            report["timespec_offered"].clone(),
+            report["timespec_lookup"].clone(),
+        ));
+    }
+    assert_eq!(seen[0].0, Value::Bool(true), "Monado offers the extension");
+    assert_eq!(seen[0].1, "ERROR_FUNCTION_UNSUPPORTED");
+    assert_eq!(seen[0], seen[1], "layer on and off answer alike");
 }

@@ -105,7 +105,7 @@ unsafe extern "system" fn create_api_layer_instance(
                 result =
                     unsafe { (next.next_create_api_layer_instance)(info, &forwarded, instance) };
                 // SAFETY: as above.
-                extended = unsafe { info.as_ref() }.map(|i| timespec::Extended::unchanged(i));
+                extended = unsafe { info.as_ref() }.map(timespec::Extended::unchanged);
             }
             if result.into_raw() < 0 {
                 return Ok(result);

@@ -65,7 +65,7 @@ impl SessionMotion {
 
     fn xr_time(&self, instance: xr::Instance, ns: i64) -> Option<xr::Time> {
         match self.timespec.filter(Timespec::available) {
-            Some(t) => t.to_xr(instance, ns),
+            Some(t) => t.xr_time(instance, ns),
             None => self.offset_ns.map(|o| xr::Time::from_nanos(ns + o)),
         }
     }

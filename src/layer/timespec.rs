@@ -149,7 +149,7 @@ impl Timespec {
     }
 
     /// CLOCK_MONOTONIC `ns` as XrTime, when the runtime converts it.
-    pub fn to_xr(&self, instance: xr::Instance, ns: i64) -> Option<xr::Time> {
+    pub fn xr_time(&self, instance: xr::Instance, ns: i64) -> Option<xr::Time> {
         let convert = self.convert?;
         let ts = libc::timespec {
             tv_sec: ns.div_euclid(1_000_000_000) as libc::time_t,
