@@ -595,8 +595,9 @@ fn calibrate_takes_single_keys_on_a_terminal() {
         .spawn()
         .expect("run script");
     let mut keys = child.stdin.take().expect("stdin");
-    // Right arrow twice and ']' on the left eye, Enter, 's' (down) on the right eye, Enter.
-    for k in ["", "\x1b[C", "\x1b[C", "]", "\r", "s", "\r"] {
+    // Right arrow twice and ']' on the left eye, Enter, 's' (down) on the right eye, Enter,
+    // Enter past the latency step.
+    for k in ["", "\x1b[C", "\x1b[C", "]", "\r", "s", "\r", "\r"] {
         std::thread::sleep(std::time::Duration::from_millis(300));
         keys.write_all(k.as_bytes()).unwrap();
         keys.flush().unwrap();
