@@ -310,7 +310,7 @@ fn without_compensation_the_world_lags_by_the_head_turn() {
     let error = median(seen.iter().map(|s| s.shift.abs()).collect());
     eprintln!("head-fixed: median error {error:.3} deg, head turn median {turn:.3} deg, median |error - turn| {miss:.3} deg");
     assert!(
-        miss <= 0.25,
+        miss <= 0.3,
         "shift differs from the head's turn by {miss:.3} deg"
     );
 }

@@ -131,7 +131,7 @@ pub fn at_end_frame(
         .and_then(|(sp, t)| spaces::locate(&next, sp.view, sp.local, t));
     let compensation =
         s.settings.motion.compensation && s.settings.registration.profile().is_some();
-    if compensation && head.is_none() && spaces.is_some() {
+    if compensation && captured_at.is_some() && head.is_none() && spaces.is_some() {
         log::once("head-not-located", "the head could not be located at a camera frame's capture time (tracking lost or time out of range): that frame's background is head-fixed");
     }
     FrameMotion {
