@@ -537,6 +537,22 @@ fn calibrate_saves_each_eyes_nudges_and_puts_the_mode_back() {
 }
 
 #[test]
+fn calibrate_ends_with_the_cameras_latency() {
+    let config = scratch("calibrate-latency.toml");
+    std::fs::write(&config, "camera_latency_ms = 10\n").unwrap();
+    // Both eyes untouched, then the latency: 3 steps up, 1 down at a doubled step (10 ms).
+    let o = calibrate(&config, &[], "next\nnext\nup up up\ncoarser down\nnext\n");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("camera_latency_ms = 15"), "{out}");
+    assert_eq!(effective(&config, "").motion.camera_latency_ms, 15.0);
+    // Cancelled in the latency step: the latency is put back.
+    let o = calibrate(&config, &[], "next\nnext\nup up\nquit\n");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(effective(&config, "").motion.camera_latency_ms, 15.0);
+}
+
+#[test]
 fn calibrate_writes_an_app_table_and_removes_the_mode_it_added() {
     let config = scratch("calibrate-app.toml");
     std::fs::write(&config, "lambda_e = 0.5\n").unwrap();
@@ -579,8 +595,9 @@ fn calibrate_takes_single_keys_on_a_terminal() {
         .spawn()
         .expect("run script");
     let mut keys = child.stdin.take().expect("stdin");
-    // Right arrow twice and ']' on the left eye, Enter, 's' (down) on the right eye, Enter.
-    for k in ["", "\x1b[C", "\x1b[C", "]", "\r", "s", "\r"] {
+    // Right arrow twice and ']' on the left eye, Enter, 's' (down) on the right eye, Enter,
+    // Enter past the latency step.
+    for k in ["", "\x1b[C", "\x1b[C", "]", "\r", "s", "\r", "\r"] {
         std::thread::sleep(std::time::Duration::from_millis(300));
         keys.write_all(k.as_bytes()).unwrap();
         keys.flush().unwrap();

@@ -10,6 +10,7 @@ pub mod mapping;
 pub mod params;
 mod pixel;
 pub mod registration;
+pub mod reprojection;
 mod scaled;
 
 pub use conformance::{conformant, corner_cases, PixelTrace, NEAR_ROUNDING, NEAR_THRESHOLD};

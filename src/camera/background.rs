@@ -54,6 +54,10 @@ impl Background {
                 let text = format!("video {} ({count} frames at {fps:.2} fps)", path.display());
                 (threaded(shared, thread, false, cfg), text)
             }
+            SourceSpec::World(path) => {
+                let (shared, thread, text) = super::world::spawn(path, cfg)?;
+                (threaded(shared, thread, false, cfg), text)
+            }
             SourceSpec::V4l2Device(_) | SourceSpec::V4l2Auto => {
                 let (shared, thread, text) = v4l2::spawn(spec, cfg)?;
                 (threaded(shared, thread, true, cfg), text)

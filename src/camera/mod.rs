@@ -1,7 +1,8 @@
 //! Background sources: the real world behind the display, as 8-bit sRGB RGBA frames.
 //!
 //! A [`Background`] is chosen by a spec string (`CONTRASTXR_BACKGROUND`, see [`parse_source`]):
-//! a V4L2 camera, a PNG image, a video (numbered PNG frames or a Y4M file) or a flat colour.
+//! a V4L2 camera, a PNG image, a video (numbered PNG frames or a Y4M file), a simulated camera
+//! in a panorama world ([`world`]) or a flat colour.
 //! Live sources run on their own thread and publish into a latest-frame mailbox; the render
 //! thread only ever takes the newest frame and never waits for a camera or a file.
 //!
@@ -13,6 +14,7 @@
 
 mod background;
 pub mod cli;
+pub mod clock;
 pub mod convert;
 mod files;
 mod frame;
@@ -22,12 +24,14 @@ mod pool;
 mod smoothing;
 pub mod source;
 pub mod v4l2;
+pub mod world;
 mod y4m;
 
 pub use background::Background;
 pub use frame::{Frame, SourceStatus};
 pub use log::set_log_sink;
 pub use source::{parse_source, CameraControls, CaptureConfig, SourceSpec};
+pub use world::{HeadPoses, WorldRig};
 
 use std::fmt;
 

@@ -16,6 +16,9 @@ pub enum SourceSpec {
     Video(PathBuf),
     /// `color:#RRGGBB`: a flat sRGB colour, static.
     Color([u8; 3]),
+    /// `world:PATH`: a simulated head-mounted camera looking at an equirectangular panorama
+    /// (PNG or JPEG) fixed in the world.
+    World(PathBuf),
 }
 
 /// Parses a background spec such as `v4l2:/dev/video0` or `color:#204080`.
@@ -23,7 +26,7 @@ pub fn parse_source(spec: &str) -> Result<SourceSpec, String> {
     let spec = spec.trim();
     let Some((kind, rest)) = spec.split_once(':') else {
         return Err(format!(
-            "background source '{spec}' has no kind: use v4l2:, image:, video: or color:"
+            "background source '{spec}' has no kind: use v4l2:, image:, video:, world: or color:"
         ));
     };
     if rest.is_empty() {
@@ -36,9 +39,10 @@ pub fn parse_source(spec: &str) -> Result<SourceSpec, String> {
         "v4l2" => Ok(SourceSpec::V4l2Device(PathBuf::from(rest))),
         "image" => Ok(SourceSpec::Image(PathBuf::from(rest))),
         "video" => Ok(SourceSpec::Video(PathBuf::from(rest))),
+        "world" => Ok(SourceSpec::World(PathBuf::from(rest))),
         "color" | "colour" => parse_color(rest).map(SourceSpec::Color),
         _ => Err(format!(
-            "background source kind '{kind}' is unknown: use v4l2:, image:, video: or color:"
+            "background source kind '{kind}' is unknown: use v4l2:, image:, video:, world: or color:"
         )),
     }
 }
@@ -77,6 +81,11 @@ pub struct CaptureConfig {
     pub smoothing: Option<f32>,
     /// Fixed exposure, white balance and gain (None: the camera's automatic control).
     pub controls: CameraControls,
+    /// `world:` source: milliseconds between a frame's capture and its delivery (50).
+    pub world_latency_ms: f32,
+    /// `world:` source: the simulated camera and the head poses it is carried by (set by the
+    /// consumer when it opens the source; None in settings).
+    pub world: Option<super::world::WorldRig>,
 }
 
 /// Camera settings that otherwise drift (automatic exposure, white balance, gain), each either
@@ -103,6 +112,8 @@ impl Default for CaptureConfig {
             max_backoff: Duration::from_secs(2),
             smoothing: None,
             controls: CameraControls::default(),
+            world_latency_ms: 50.0,
+            world: None,
         }
     }
 }
@@ -129,6 +140,10 @@ mod tests {
         assert_eq!(
             parse_source("color:#FF8001"),
             Ok(SourceSpec::Color([255, 128, 1]))
+        );
+        assert_eq!(
+            parse_source("world:/p/pano.jpg"),
+            Ok(SourceSpec::World("/p/pano.jpg".into()))
         );
     }
 

@@ -18,6 +18,8 @@ pub const OPTIONS: &[Opt] = &[
     Opt::value("--step", "F"),
 ];
 
+mod latency;
+
 pub fn usage() -> String {
     "usage: contrastxr calibrate [--app NAME | --device SYSTEM] [--step F]\n\n\
      Lines the camera's background up with what each eye sees, with the app running and the\n\
@@ -33,6 +35,8 @@ pub fn usage() -> String {
      \x20       } {                 taller, shorter      > <   coarser, finer steps\n\
      \x20       r                   reset this eye       Enter next eye, then done\n\
      \x20       q                   cancel: put back what both eyes had\n\
+     Then the latency: nod and turn the head, up/down (w s) raise/lower camera_latency_ms\n\
+     until the background stops swimming against the world; Enter when done.\n\
      Without a terminal, stdin gives the same as words, any number per line: up down left\n\
      right bigger smaller wider narrower taller shorter coarser finer reset next quit\n\
      (end of input = done). --step F: the first move step, a fraction of the view (0.005).\n"
@@ -411,19 +415,30 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         target.path.display()
     ));
     let mut input = Input::open();
-    let ended = calibrate_eyes(&target, &mut input, &mut eyes, step);
+    let latency_was = f64::from(settings.motion.camera_latency_ms);
+    let mut latency = latency_was;
+    let mut ended = calibrate_eyes(&target, &mut input, &mut eyes, step);
+    if matches!(ended, Ok(End::Done)) {
+        ended = latency::calibrate_latency(&target, &mut input, latency_was).map(|(end, ms)| {
+            latency = ms;
+            end
+        });
+    }
     drop(input);
     // Whatever happened, running apps go back to the mode they had.
     let restored = target.restore_mode(&previous);
     match ended? {
         End::Done => print(&format!(
-            "saved in {}: {}\n",
+            "saved in {}: {}; camera_latency_ms = {latency}\n",
             target.path.display(),
             summary(&eyes)
         )),
         End::Cancelled => {
             for eye in 0..2 {
                 target.write_eye(eye, &eyes[eye], &start[eye])?;
+            }
+            if latency != latency_was {
+                target.set("camera_latency_ms", &Value::Float(latency_was as f32))?;
             }
             print("cancelled: both eyes are back as they were.\n");
         }

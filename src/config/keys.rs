@@ -41,6 +41,13 @@ fn float(v: Value) -> Result<f32, String> {
     }
 }
 
+fn non_negative(v: Value) -> Result<f32, String> {
+    match float(v)? {
+        x if x >= 0.0 => Ok(x),
+        x => Err(format!("{x} is negative")),
+    }
+}
+
 fn count(v: Value) -> Result<u64, String> {
     match v {
         Value::Count(n) => Ok(n),
@@ -480,6 +487,42 @@ pub const KEYS: &[Key] = &[
         get: |s| Value::Float(s.registration.scene_distance),
     },
     Key {
+        name: "motion_compensation",
+        env: "CONTRASTXR_MOTION_COMPENSATION",
+        env_negated: false,
+        kind: Kind::Bool,
+        doc: "map each view from the camera at the frame's capture time to the eye at display time (false: head-fixed)",
+        set: |s, v| {
+            s.motion.compensation = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.motion.compensation),
+    },
+    Key {
+        name: "camera_latency_ms",
+        env: "CONTRASTXR_CAMERA_LATENCY_MS",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "milliseconds by which the camera's frames are older than their timestamps say",
+        set: |s, v| {
+            s.motion.camera_latency_ms = non_negative(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.motion.camera_latency_ms),
+    },
+    Key {
+        name: "world_latency_ms",
+        env: "CONTRASTXR_WORLD_LATENCY_MS",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "background world: milliseconds between a simulated frame's capture and its delivery",
+        set: |s, v| {
+            s.camera.world_latency_ms = non_negative(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.camera.world_latency_ms),
+    },
+    Key {
         name: "left_eye_offset",
         env: "CONTRASTXR_LEFT_EYE_OFFSET",
         env_negated: false,
@@ -532,7 +575,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_BACKGROUND",
         env_negated: false,
         kind: Kind::Text,
-        doc: "v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH or color:#RRGGBB",
+        doc: "v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH, world:PATH or color:#RRGGBB",
         set: set_background,
         get: |s| Value::Text(s.background.clone()),
     },

@@ -34,6 +34,8 @@ pub struct Settings {
     pub camera: CaptureConfig,
     /// Where the camera is and what it sees: per-view registration, per-eye corrections.
     pub registration: Registration,
+    /// Keeping the background on the world while the head moves.
+    pub motion: Motion,
     /// Where captures go; None: no capture.
     pub capture_dir: Option<PathBuf>,
     pub capture_frames: u64,
@@ -58,6 +60,7 @@ impl Default for Settings {
             background: "v4l2:auto".into(),
             camera: CaptureConfig::default(),
             registration: Registration::default(),
+            motion: Motion::default(),
             capture_dir: None,
             capture_frames: 1,
             capture_skip: 0,
@@ -98,6 +101,24 @@ impl Default for Registration {
             scene_distance: 2.0,
             eye_offset: [[0.0, 0.0]; 2],
             eye_scale: [[1.0, 1.0]; 2],
+        }
+    }
+}
+
+/// Motion compensation: the camera frame's capture time and the head's pose then.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// Map each view from the camera at capture to the eye at display (false: head-fixed).
+    pub compensation: bool,
+    /// Added to each camera frame's age: for cameras whose timestamps are late, milliseconds.
+    pub camera_latency_ms: f32,
+}
+
+impl Default for Motion {
+    fn default() -> Self {
+        Motion {
+            compensation: true,
+            camera_latency_ms: 0.0,
         }
     }
 }

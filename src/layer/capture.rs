@@ -106,6 +106,7 @@ pub fn write_view(
     captured: &CapturedView,
     background: &RgbaImage,
     settings: &Settings,
+    motion: serde_json::Map<String, serde_json::Value>,
 ) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let item = &captured.item;
@@ -122,7 +123,7 @@ pub fn write_view(
         std::fs::write(name(suffix), bytes).map_err(|e| format!("cannot write capture: {e}"))?;
     }
     background.save_png(&name("-background.png"))?;
-    let json = serde_json::json!({
+    let mut json = serde_json::json!({
         "frame": frame,
         "view": view,
         "format": format!("{:?}", item.vk_format),
@@ -134,6 +135,9 @@ pub fn write_view(
         "background": settings.background,
         "params": settings_json(settings),
     });
+    if let Some(object) = json.as_object_mut() {
+        object.extend(motion);
+    }
     let text = serde_json::to_string_pretty(&json).expect("plain JSON");
     std::fs::write(name(".json"), text).map_err(|e| format!("cannot write capture JSON: {e}"))
 }

@@ -19,6 +19,9 @@ pub struct NextFns {
     pub release_swapchain_image: pfn::ReleaseSwapchainImage,
     pub end_frame: pfn::EndFrame,
     pub get_system_properties: pfn::GetSystemProperties,
+    pub create_reference_space: pfn::CreateReferenceSpace,
+    pub destroy_space: pfn::DestroySpace,
+    pub locate_space: pfn::LocateSpace,
 }
 
 /// Looks up `name` in the next layer.
@@ -101,6 +104,14 @@ impl NextFns {
                 c"xrGetSystemProperties",
                 pfn::GetSystemProperties
             ),
+            create_reference_space: resolve!(
+                gipa,
+                instance,
+                c"xrCreateReferenceSpace",
+                pfn::CreateReferenceSpace
+            ),
+            destroy_space: resolve!(gipa, instance, c"xrDestroySpace", pfn::DestroySpace),
+            locate_space: resolve!(gipa, instance, c"xrLocateSpace", pfn::LocateSpace),
         })
     }
 }

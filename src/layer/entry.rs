@@ -6,7 +6,7 @@ use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
 use super::settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
-use super::{log, session, swapchain};
+use super::{log, session, spaces, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};
@@ -91,16 +91,34 @@ unsafe extern "system" fn create_api_layer_instance(
             // SAFETY: layer_info is valid (its next_info was read above).
             let mut forwarded = unsafe { *layer_info };
             forwarded.next_info = next.next;
-            // SAFETY: forwarding the loader's own arguments to the next layer.
-            let result =
-                unsafe { (next.next_create_api_layer_instance)(info, &forwarded, instance) };
+            let gipa = next.next_get_instance_proc_addr;
+            // SAFETY: the loader passes the app's valid create info (null left to the runtime).
+            let extended = unsafe { info.as_ref() }.map(|i| unsafe { timespec::extend(i, gipa) });
+            let mut result = match &extended {
+                // SAFETY: the app's create info with one more extension the runtime offers.
+                Some(e) if e.added => unsafe {
+                    (next.next_create_api_layer_instance)(&e.info, &forwarded, instance)
+                },
+                _ => xr::Result::ERROR_EXTENSION_NOT_PRESENT,
+            };
+            let mut extended = extended.filter(|_| result.into_raw() >= 0);
+            if extended.is_none() {
+                // SAFETY: forwarding the loader's own arguments to the next layer.
+                result =
+                    unsafe { (next.next_create_api_layer_instance)(info, &forwarded, instance) };
+                // SAFETY: as above.
+                extended = unsafe { info.as_ref() }.map(timespec::Extended::unchanged);
+            }
             if result.into_raw() < 0 {
                 return Ok(result);
             }
-            let _ = FIRST_NEXT_GIPA.set(next.next_get_instance_proc_addr);
+            let _ = FIRST_NEXT_GIPA.set(gipa);
             // SAFETY: instance was just written by a successful create call.
             let handle = unsafe { *instance };
-            register_instance(handle, next.next_get_instance_proc_addr, info);
+            // SAFETY: gipa is the next layer's and handle was created by it.
+            let timespec =
+                extended.map(|e| unsafe { timespec::Timespec::resolve(gipa, handle, &e) });
+            register_instance(handle, gipa, info, timespec);
             Ok(result)
         },
     )
@@ -142,6 +160,7 @@ fn register_instance(
     handle: xr::Instance,
     gipa: pfn::GetInstanceProcAddr,
     info: *const xr::InstanceCreateInfo,
+    timespec: Option<timespec::Timespec>,
 ) {
     // SAFETY: info is the app's valid create info; the name is a NUL-terminated array.
     let app = unsafe { info.as_ref() }
@@ -156,6 +175,7 @@ fn register_instance(
             let state = InstanceState {
                 next,
                 settings: Arc::new(settings),
+                timespec,
             };
             state::registry()
                 .instances
@@ -189,6 +209,13 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
             ),
             "xrEndFrame" => {
                 std::mem::transmute::<pfn::EndFrame, pfn::VoidFunction>(session::end_frame)
+            }
+            "xrCreateReferenceSpace" => std::mem::transmute::<
+                pfn::CreateReferenceSpace,
+                pfn::VoidFunction,
+            >(spaces::create_reference_space),
+            "xrDestroySpace" => {
+                std::mem::transmute::<pfn::DestroySpace, pfn::VoidFunction>(spaces::destroy_space)
             }
             "xrCreateSwapchain" => std::mem::transmute::<pfn::CreateSwapchain, pfn::VoidFunction>(
                 swapchain::create_swapchain,
@@ -242,6 +269,17 @@ unsafe extern "system" fn get_instance_proc_addr(
             let wanted = unsafe { c_str(name) }.unwrap_or("");
             // Ask the next layer first: an extension function the app did not enable must stay
             // XR_ERROR_FUNCTION_UNSUPPORTED, and its error codes pass through unchanged.
+            let hidden = state
+                .as_ref()
+                .is_some_and(|s| s.timespec.is_some_and(|t| t.hidden));
+            if hidden && timespec::FUNCTIONS.contains(&wanted) {
+                // The layer enabled this extension for itself: to the app it is not enabled.
+                // SAFETY: function is the app's out pointer.
+                if let Some(f) = unsafe { function.as_mut() } {
+                    *f = None;
+                }
+                return Ok(xr::Result::ERROR_FUNCTION_UNSUPPORTED);
+            }
             // SAFETY: forwarding the app's own arguments.
             let result = unsafe { next_gipa(instance, name, function) };
             let enabled = state.as_ref().is_some_and(|s| s.settings.enabled);

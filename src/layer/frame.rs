@@ -4,6 +4,7 @@
 
 use super::capture;
 use super::log;
+use super::motion::{self, FrameMotion};
 use super::processor::Processor;
 use super::registration::{self, ViewGeometry};
 use super::settings::Settings;
@@ -28,7 +29,11 @@ struct SubImage {
 ///
 /// # Safety
 /// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
-unsafe fn sub_images(info: &xr::FrameEndInfo, settings: &Settings) -> Vec<SubImage> {
+unsafe fn sub_images(
+    info: &xr::FrameEndInfo,
+    settings: &Settings,
+    motion: &mut FrameMotion,
+) -> Vec<SubImage> {
     let mut out = Vec::new();
     if info.layers.is_null() {
         return out;
@@ -49,7 +54,7 @@ unsafe fn sub_images(info: &xr::FrameEndInfo, settings: &Settings) -> Vec<SubIma
             // SAFETY: view_count valid views.
             let views = unsafe { std::slice::from_raw_parts(proj.views, proj.view_count as usize) };
             let geometry: Vec<_> = views.iter().map(ViewGeometry::from_xr).collect();
-            let mappings = registration::projection_mappings(settings, &geometry);
+            let mappings = motion.mappings(settings, &geometry, proj.space);
             for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
                 registration::log_mapping(settings, k, &mapping, &source);
                 out.push(SubImage {
@@ -208,7 +213,8 @@ fn capturing(s: &SessionState) -> bool {
 fn background_frame(s: &mut SessionState) -> Option<camera::Frame> {
     // No source at all: why was logged when it failed to open.
     let bg = s.background.as_ref()?;
-    let frame = bg.latest();
+    // The frame this xrEndFrame's mappings were computed for, if any.
+    let frame = s.frame_in_use.clone().or_else(|| bg.latest());
     let delivered = std::mem::replace(&mut s.background_delivered, frame.is_some());
     if frame.is_none() && (s.processed > 0 || delivered) {
         log::once(
@@ -233,12 +239,17 @@ fn background_sequence(frame_sequence: u64, s: &Settings) -> u64 {
 /// Enhances the held images of this frame and remembers its regions; any failure turns the
 /// session into pass-through.
 pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
+    s.frame_in_use = s.background.as_ref().and_then(|bg| bg.latest());
+    let captured_at = s.frame_in_use.as_ref().map(|f| f.captured_at);
+    let mut moving = motion::at_end_frame(s, info.display_time, captured_at);
     // SAFETY: the app's frame end info, valid for this call.
-    let subs = unsafe { sub_images(info, &s.settings) };
+    let subs = unsafe { sub_images(info, &s.settings, &mut moving) };
+    moving.finish(s);
     let items = frame_items(&subs, &s.settings);
     s.regions_seen |= !subs.is_empty();
     s.last_blend_mode = Some(info.environment_blend_mode);
     process(s, items, Some(info.environment_blend_mode));
+    s.frame_in_use = None;
 }
 
 /// `process` with panics caught: a panic turns the session into pass-through.
@@ -350,7 +361,8 @@ fn write_capture(
         return;
     };
     for (k, v) in views.iter().enumerate() {
-        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings);
+        let motion = motion::capture_json(s.motion.views.get(k));
+        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings, motion);
         if let Err(e) = written {
             log::once("capture-failed", &format!("capture failed: {e}"));
         }

@@ -13,13 +13,16 @@ mod image_states;
 pub mod indicator;
 pub mod install;
 pub mod log;
+mod motion;
 mod processor;
 mod registration;
 pub mod session;
 pub mod settings;
 mod sources;
+mod spaces;
 mod state;
 mod swapchain;
+mod timespec;
 mod work;
 
 pub use entry::{xrNegotiateLoaderApiLayerInterface, LAYER_NAME};

@@ -49,6 +49,7 @@ pub unsafe extern "system" fn create_session(
         };
         // SAFETY: session was written by the successful create call.
         let handle = unsafe { *session };
+        let motion = super::motion::SessionMotion::create(&inst.next, handle, inst.timespec);
         let state = SessionState {
             handle,
             instance,
@@ -64,6 +65,8 @@ pub unsafe extern "system" fn create_session(
             processed: 0,
             last_blend_mode: None,
             regions_seen: false,
+            motion,
+            frame_in_use: None,
         };
         state::registry()
             .sessions
@@ -144,6 +147,7 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
         || {
             let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
             let next = lock(&s).next;
+            lock(&s).motion.destroy(&next);
             let t = std::time::Instant::now();
             forget(session);
             log::debug(&format!(

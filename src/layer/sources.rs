@@ -72,7 +72,8 @@ pub(super) fn open_when_needed(s: &mut SessionState) {
         return;
     }
     s.background_requested = true;
-    let (spec, camera) = (s.settings.background.clone(), s.settings.camera.clone());
+    let spec = s.settings.background.clone();
+    let camera = super::motion::camera_config(&s.settings, &s.motion);
     if s.settings.wait_for_pipelines {
         s.background = open_background_logged(&spec, &camera);
     } else {
@@ -129,7 +130,7 @@ pub(super) fn pick_up_settings(session: xr::Session, s: &mut SessionState) {
             session,
             s.background.take(),
             newer.background.clone(),
-            newer.camera.clone(),
+            super::motion::camera_config(&newer, &s.motion),
         );
     }
     s.settings = newer;

@@ -21,6 +21,8 @@ use std::sync::{Arc, Mutex, OnceLock};
 pub struct InstanceState {
     pub next: NextFns,
     pub settings: Arc<Settings>,
+    /// CLOCK_MONOTONIC to XrTime (None: the instance was created before the layer could ask).
+    pub timespec: Option<super::timespec::Timespec>,
 }
 
 pub struct SessionState {
@@ -51,6 +53,10 @@ pub struct SessionState {
     /// Whether any xrEndFrame has named sub-images yet (before that, a swapchain's view
     /// regions are unknown).
     pub regions_seen: bool,
+    /// The layer's spaces, clock conversion and head poses for motion compensation.
+    pub motion: super::motion::SessionMotion,
+    /// The background frame this xrEndFrame's mappings were computed for.
+    pub frame_in_use: Option<crate::camera::Frame>,
 }
 
 impl SessionState {

@@ -124,6 +124,8 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
         .create_instance(&app, &extensions, &[])
         .ctx("xrCreateInstance")?;
     let props = instance.properties().ctx("xrGetInstanceProperties")?;
+    report.timespec_offered = available.khr_convert_timespec_time;
+    report.timespec_lookup = timespec_lookup(&entry, &instance);
     report.runtime = format!("{} {}", props.runtime_name, props.runtime_version);
     if options.provoke_xr_error {
         // Invalid on purpose: an undefined form factor, which core validation must report.
@@ -363,4 +365,19 @@ fn recommended_size(instance: &xr::Instance, system: xr::SystemId) -> Result<(u3
         views[0].recommended_image_rect_width,
         views[0].recommended_image_rect_height,
     ))
+}
+
+/// What xrGetInstanceProcAddr answers for an extension function this app did not enable (the
+/// spec: XR_ERROR_FUNCTION_UNSUPPORTED), as the XrResult's name.
+fn timespec_lookup(entry: &xr::Entry, instance: &xr::Instance) -> String {
+    let mut f = None;
+    // SAFETY: a valid instance, a NUL-terminated name and a valid out pointer.
+    let r = unsafe {
+        (entry.fp().get_instance_proc_addr)(
+            instance.as_raw(),
+            c"xrConvertTimespecTimeToTimeKHR".as_ptr(),
+            &mut f,
+        )
+    };
+    format!("{r:?}")
 }

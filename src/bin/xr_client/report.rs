@@ -20,6 +20,10 @@ pub struct Report {
     pub quad: bool,
     pub blend_mode: String,
     pub runtime: String,
+    /// The runtime lists XR_KHR_convert_timespec_time (the client never enables it).
+    pub timespec_offered: bool,
+    /// xrGetInstanceProcAddr's result for xrConvertTimespecTimeToTimeKHR.
+    pub timespec_lookup: String,
     pub vk_validation: bool,
     pub vk_validation_errors: u32,
     pub vk_validation_warnings: u32,

@@ -176,6 +176,7 @@ fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Opt
         smoother: cfg.smoothing.map(Smoother::new),
         status: StatusLog::default(),
         pool: ImagePool::default(),
+        exposure_us: cfg.controls.exposure_us,
     };
     if let Some(first) = &first {
         log(&format!("opened {}", first.description));
@@ -240,6 +241,8 @@ struct Capture {
     status: StatusLog,
     /// The converted frames, reused (see `pool`).
     pool: ImagePool,
+    /// A fixed exposure time: a start-of-exposure timestamp then moves to mid-exposure.
+    exposure_us: Option<u32>,
 }
 
 impl Capture {
@@ -316,12 +319,28 @@ impl Capture {
         self.sequence += 1;
         // time_t is 32 bits on some targets.
         #[allow(clippy::unnecessary_cast)]
-        let captured_at = instant_of(meta.timestamp.sec as i64, meta.timestamp.usec as i64);
+        let stamped = instant_of(meta.timestamp.sec as i64, meta.timestamp.usec as i64);
+        let captured_at = capture_time(meta.flags, stamped, self.exposure_us);
         Ok(Frame {
             image: self.pool.share(image),
             sequence: self.sequence,
             captured_at,
         })
+    }
+}
+
+/// When a frame was captured: the driver's timestamp when it says the clock is monotonic (at
+/// mid-exposure when it stamps the start of exposure and the exposure time is fixed), else the
+/// time it was dequeued.
+fn capture_time(flags: BufferFlags, stamped: Instant, exposure_us: Option<u32>) -> Instant {
+    let clock = flags & BufferFlags::TIMESTAMP_MASK;
+    if clock != BufferFlags::TIMESTAMP_MONOTONIC {
+        return Instant::now();
+    }
+    let start_of_exposure = flags & BufferFlags::TSTAMP_SRC_MASK == BufferFlags::TSTAMP_SRC_SOE;
+    match exposure_us {
+        Some(us) if start_of_exposure => stamped + Duration::from_micros(u64::from(us) / 2),
+        _ => stamped,
     }
 }
 
@@ -368,5 +387,26 @@ impl StatusLog {
             SourceStatus::Lost if grace == 0 => "lost, passing frames through",
             SourceStatus::Lost => "lost for longer than the grace period, passing frames through",
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn capture_time_follows_the_drivers_clock_flags() {
+        let stamped = Instant::now() - Duration::from_millis(40);
+        let mono = BufferFlags::TIMESTAMP_MONOTONIC;
+        assert_eq!(capture_time(mono, stamped, Some(10_000)), stamped);
+        let soe = mono | BufferFlags::TSTAMP_SRC_SOE;
+        assert_eq!(
+            capture_time(soe, stamped, Some(10_000)),
+            stamped + Duration::from_millis(5)
+        );
+        assert_eq!(capture_time(soe, stamped, None), stamped);
+        // Another clock: the dequeue time.
+        let copied = capture_time(BufferFlags::TIMESTAMP_COPY, stamped, None);
+        assert!(copied.duration_since(stamped) >= Duration::from_millis(40));
     }
 }

@@ -128,10 +128,10 @@ fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
 /// The background source the layer would open with these settings.
 pub fn camera(spec: &str) -> Finding {
     match parse_source(spec) {
-        Err(e) => Finding::problem(NAME, e, "set background to v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH or color:#RRGGBB"),
+        Err(e) => Finding::problem(NAME, e, "set background to v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH, world:PATH or color:#RRGGBB"),
         Ok(SourceSpec::V4l2Auto) => v4l2_finding(spec, None),
         Ok(SourceSpec::V4l2Device(p)) => v4l2_finding(spec, Some(&p)),
-        Ok(SourceSpec::Image(p) | SourceSpec::Video(p)) if !p.exists() => Finding::problem(
+        Ok(SourceSpec::Image(p) | SourceSpec::Video(p) | SourceSpec::World(p)) if !p.exists() => Finding::problem(
             NAME,
             format!("background = \"{spec}\", but {} does not exist", p.display()),
             "fix the path in the config's background setting",
@@ -139,6 +139,10 @@ pub fn camera(spec: &str) -> Finding {
         Ok(SourceSpec::Image(_) | SourceSpec::Video(_)) => Finding::ok(
             NAME,
             format!("background = \"{spec}\": a file stands in for the camera"),
+        ),
+        Ok(SourceSpec::World(_)) => Finding::ok(
+            NAME,
+            format!("background = \"{spec}\": a simulated camera in a panorama stands in for the camera"),
         ),
         Ok(SourceSpec::Color(_)) => Finding::ok(
             NAME,

@@ -1,0 +1,171 @@
+//! Reference spaces: the layer's own VIEW and LOCAL spaces per session (created at
+//! xrCreateSession, destroyed before the app's xrDestroySession is forwarded), locating one
+//! space in another, and the type of each reference space the app creates (for captures).
+
+use super::dispatch::NextFns;
+use super::ffi::guard;
+use super::state;
+use crate::algorithm::registration::Pose;
+use glam::{DQuat, DVec3};
+use openxr_sys as xr;
+use openxr_sys::pfn;
+use std::collections::HashMap;
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+/// The layer's own spaces of one session.
+#[derive(Clone, Copy, Debug)]
+pub struct Spaces {
+    pub view: xr::Space,
+    pub local: xr::Space,
+}
+
+fn reference_space(
+    next: &NextFns,
+    session: xr::Session,
+    ty: xr::ReferenceSpaceType,
+) -> Option<xr::Space> {
+    let info = xr::ReferenceSpaceCreateInfo {
+        ty: xr::StructureType::REFERENCE_SPACE_CREATE_INFO,
+        next: std::ptr::null(),
+        reference_space_type: ty,
+        pose_in_reference_space: xr::Posef::IDENTITY,
+    };
+    let mut space = xr::Space::NULL;
+    // SAFETY: a valid create info and out pointer for a session the runtime created.
+    let r = unsafe { (next.create_reference_space)(session, &info, &mut space) };
+    (r == xr::Result::SUCCESS).then_some(space)
+}
+
+/// Creates the session's VIEW and LOCAL spaces (None, said once, if the runtime refuses).
+pub fn create(next: &NextFns, session: xr::Session) -> Option<Spaces> {
+    let view = reference_space(next, session, xr::ReferenceSpaceType::VIEW);
+    let local = reference_space(next, session, xr::ReferenceSpaceType::LOCAL);
+    match (view, local) {
+        (Some(view), Some(local)) => Some(Spaces { view, local }),
+        (view, local) => {
+            for s in [view, local].into_iter().flatten() {
+                // SAFETY: a space the layer created and nothing else uses.
+                unsafe { (next.destroy_space)(s) };
+            }
+            super::log::once(
+                "no-spaces",
+                "cannot create VIEW and LOCAL reference spaces: the background stays head-fixed",
+            );
+            None
+        }
+    }
+}
+
+pub fn destroy(next: &NextFns, spaces: Spaces) {
+    for s in [spaces.view, spaces.local] {
+        // SAFETY: spaces the layer created; no other thread uses them.
+        unsafe { (next.destroy_space)(s) };
+    }
+}
+
+/// `space` in `base` at `time`, when both its orientation and position are valid.
+pub fn locate(next: &NextFns, space: xr::Space, base: xr::Space, time: xr::Time) -> Option<Pose> {
+    let mut location = xr::SpaceLocation {
+        ty: xr::StructureType::SPACE_LOCATION,
+        next: std::ptr::null_mut(),
+        location_flags: xr::SpaceLocationFlags::EMPTY,
+        pose: xr::Posef::IDENTITY,
+    };
+    // SAFETY: valid handles of one session and a valid out struct.
+    let r = unsafe { (next.locate_space)(space, base, time, &mut location) };
+    let valid = xr::SpaceLocationFlags::ORIENTATION_VALID | xr::SpaceLocationFlags::POSITION_VALID;
+    (r == xr::Result::SUCCESS && location.location_flags.contains(valid))
+        .then(|| pose_of(&location.pose))
+}
+
+pub fn pose_of(p: &xr::Posef) -> Pose {
+    let (o, q) = (p.position, p.orientation);
+    Pose {
+        position: DVec3::new(f64::from(o.x), f64::from(o.y), f64::from(o.z)),
+        orientation: DQuat::from_xyzw(
+            f64::from(q.x),
+            f64::from(q.y),
+            f64::from(q.z),
+            f64::from(q.w),
+        )
+        .normalize(),
+    }
+}
+
+/// The reference space type of each space the app created with xrCreateReferenceSpace, with
+/// the next layer's xrDestroySpace of its session.
+type Types = HashMap<u64, (xr::ReferenceSpaceType, pfn::DestroySpace)>;
+
+fn types() -> MutexGuard<'static, Types> {
+    static TYPES: OnceLock<Mutex<Types>> = OnceLock::new();
+    let m = TYPES.get_or_init(Default::default);
+    // Only map operations happen under this lock.
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// The app's name for a reference space's type, if `space` is one.
+pub fn type_name(space: xr::Space) -> Option<String> {
+    let ty = types().get(&space.into_raw())?.0;
+    Some(
+        match ty {
+            xr::ReferenceSpaceType::VIEW => "VIEW",
+            xr::ReferenceSpaceType::LOCAL => "LOCAL",
+            xr::ReferenceSpaceType::STAGE => "STAGE",
+            xr::ReferenceSpaceType::LOCAL_FLOOR => "LOCAL_FLOOR",
+            _ => return Some(format!("{}", ty.into_raw())),
+        }
+        .into(),
+    )
+}
+
+/// # Safety
+/// Called by the OpenXR loader with the arguments the app passed to xrCreateReferenceSpace.
+pub unsafe extern "system" fn create_reference_space(
+    session: xr::Session,
+    info: *const xr::ReferenceSpaceCreateInfo,
+    space: *mut xr::Space,
+) -> xr::Result {
+    guard(
+        "xrCreateReferenceSpace",
+        xr::Result::ERROR_RUNTIME_FAILURE,
+        || {
+            let s = state::session(session)
+                .ok_or(super::ffi::LayerError::UnknownHandle("XrSession"))?;
+            let next = state::lock(&s).next;
+            // SAFETY: forwarding the app's call.
+            let r = unsafe { (next.create_reference_space)(session, info, space) };
+            if r == xr::Result::SUCCESS {
+                // SAFETY: the runtime accepted info and wrote space.
+                if let (Some(info), Some(space)) = unsafe { (info.as_ref(), space.as_ref()) } {
+                    types().insert(
+                        space.into_raw(),
+                        (info.reference_space_type, next.destroy_space),
+                    );
+                }
+            }
+            Ok(r)
+        },
+    )
+}
+
+/// # Safety
+/// Called by the OpenXR loader with the argument the app passed to xrDestroySpace.
+pub unsafe extern "system" fn destroy_space(space: xr::Space) -> xr::Result {
+    guard("xrDestroySpace", xr::Result::ERROR_RUNTIME_FAILURE, || {
+        let known = types().remove(&space.into_raw()).map(|(_, f)| f);
+        let next = known.map_or_else(any_destroy_space, Ok)?;
+        // SAFETY: forwarding the app's call.
+        Ok(unsafe { next(space) })
+    })
+}
+
+/// The next xrDestroySpace for a space the app made otherwise (action spaces): an instance's
+/// (the loader runs one runtime per process).
+fn any_destroy_space() -> Result<pfn::DestroySpace, super::ffi::LayerError> {
+    state::registry()
+        .instances
+        .values()
+        .next()
+        .map(|i| i.next.destroy_space)
+        .ok_or(super::ffi::LayerError::UnknownHandle("XrInstance"))
+}
