@@ -476,6 +476,14 @@ fn fixed_exposure_white_balance_and_gain_are_set_and_reported() {
 }
 
 #[test]
+fn auto_turns_the_automatic_controls_back_on_and_close_restores_them() {
+    let out = FakeCamera::new("controls-auto", "YUYV")
+        .frames("YUYV", &[0])
+        .run("controls_auto");
+    assert!(out.contains("auto controls checked"), "{out}");
+}
+
+#[test]
 fn a_busy_camera_is_retried_until_it_is_free() {
     let out = FakeCamera::new("in-use", "YUYV")
         .frames("YUYV", &[0])
@@ -550,6 +558,7 @@ fn child_dispatch() {
         "busy" => child_busy(),
         "stable" => child_stable(),
         "controls" => child_controls(),
+        "controls_auto" => child_controls_auto(),
         "list" => child_list(),
         "cli_test" => child_cli_test(),
         other => panic!("unknown child case {other}"),
@@ -647,7 +656,7 @@ fn child_controls() {
         for line in [
             "camera_exposure 10000us: the camera took 10000us",
             "camera_white_balance 5003K: the camera took 5000K",
-            "camera_gain 300: the camera took 255",
+            "camera_gain 300: refused, outside the camera's range 0..255",
         ] {
             assert!(log.contains(line), "{line} missing:\n{log}");
         }
@@ -664,8 +673,82 @@ fn child_controls() {
             text.contains("  control camera_exposure 300..204700us"),
             "{text}"
         );
+        drop(bg);
+        let text = listed();
+        for line in [
+            "  control camera_white_balance 2800..6500K (default 4600, now 4600, automatic)",
+            "  control camera_exposure 300..204700us (default 15600, now 15600, automatic)",
+            "  control camera_gain 0..255 (default 32, now 32)\n",
+        ] {
+            assert!(text.contains(line), "not restored at close: {line}\n{text}");
+        }
         println!("controls checked");
     }
+}
+
+fn listed() -> String {
+    let mut out = Vec::new();
+    cli::list(&mut out).unwrap();
+    String::from_utf8(out).unwrap()
+}
+
+/// Another program left the camera fixed: `auto` turns the automatic controls back on while
+/// the layer holds the camera, and close puts back what it found. A value of 2^31 (which
+/// would wrap in the driver's 32-bit field) is refused with the range, and nothing changes.
+fn child_controls_auto() {
+    use v4l::control::{Control, Value};
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    {
+        let other = v4l::Device::with_path(env("FAKE_V4L2_DEVICE")).unwrap();
+        for (id, value) in [
+            (0x009a_0901, Value::Integer(1)),
+            (0x009a_0902, Value::Integer(500)),
+            (0x0098_090c, Value::Boolean(false)),
+            (0x0098_091a, Value::Integer(3000)),
+        ] {
+            other.set_control(Control { id, value }).unwrap();
+        }
+    }
+    let fixed_by_other = [
+        "  control camera_exposure 300..204700us (default 15600, now 50000, fixed)",
+        "  control camera_white_balance 2800..6500K (default 4600, now 3000, fixed)",
+    ];
+    let text = listed();
+    for line in fixed_by_other {
+        assert!(text.contains(line), "{line}\n{text}");
+    }
+    let cfg = CaptureConfig {
+        controls: contrastxr::camera::CameraControls {
+            gain: Some(1 << 31),
+            ..Default::default()
+        },
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&fake_spec(), &cfg).unwrap();
+    wait_for_frame(&bg, 0, Duration::from_secs(10)).expect("a frame");
+    let log = LOG.lock().unwrap().join("\n");
+    for line in [
+        "camera_exposure auto: the camera's automatic control is on again",
+        "camera_white_balance auto: the camera's automatic control is on again",
+        "camera_gain 2147483648: refused, outside the camera's range 0..255",
+    ] {
+        assert!(log.contains(line), "{line} missing:\n{log}");
+    }
+    let text = listed();
+    for line in [
+        "  control camera_exposure 300..204700us (default 15600, now 50000, automatic)",
+        "  control camera_white_balance 2800..6500K (default 4600, now 3000, automatic)",
+        "  control camera_gain 0..255 (default 32, now 32)\n",
+    ] {
+        assert!(text.contains(line), "{line}\n{text}");
+    }
+    drop(bg);
+    let text = listed();
+    for line in fixed_by_other {
+        assert!(text.contains(line), "not restored at close: {line}\n{text}");
+    }
+    println!("auto controls checked");
 }
 
 /// Busy at open (another program captures): the source opens all the same, says so once,

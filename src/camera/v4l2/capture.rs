@@ -38,6 +38,14 @@ struct Session {
     height: u32,
     stride: u32,
     description: String,
+    /// The camera's controls as they were before the layer changed them, put back at close.
+    saved: super::controls::Saved,
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        super::controls::restore(&self.device, std::mem::take(&mut self.saved));
+    }
 }
 
 /// Starts capturing; returns once the device is open and configured (or failed to be).
@@ -132,13 +140,13 @@ fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session
     (wanted.width, wanted.height, wanted.fourcc) =
         (mode.width, mode.height, FourCC::new(&mode.fourcc));
     let got = device.set_format(&wanted).map_err(device_err)?;
-    super::controls::apply(&device, &cfg.controls, &shown.to_string());
     let format = PixelFormat::from_fourcc(got.fourcc.repr).ok_or_else(|| {
         CameraError::Unsupported(format!(
             "{shown} switched to unsupported format {}",
             got.fourcc
         ))
     })?;
+    let saved = super::controls::apply(&device, &cfg.controls, &shown.to_string());
     if mode.interval.0 > 0 {
         let rate = Parameters::new(Fraction::new(mode.interval.0, mode.interval.1));
         if let Err(e) = device.set_params(&rate) {
@@ -165,6 +173,7 @@ fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session
         height: got.height,
         stride: got.stride,
         description,
+        saved,
     })
 }
 
