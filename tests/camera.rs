@@ -673,7 +673,7 @@ fn child_controls() {
             text.contains("  control camera_exposure 300..204700us"),
             "{text}"
         );
-        drop(bg);
+        bg.close();
         let text = listed();
         for line in [
             "  control camera_white_balance 2800..6500K (default 4600, now 4600, automatic)",
@@ -743,7 +743,7 @@ fn child_controls_auto() {
     ] {
         assert!(text.contains(line), "{line}\n{text}");
     }
-    drop(bg);
+    bg.close();
     let text = listed();
     for line in fixed_by_other {
         assert!(text.contains(line), "not restored at close: {line}\n{text}");

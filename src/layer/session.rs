@@ -57,7 +57,7 @@ pub unsafe extern "system" fn create_session(
             processor,
             background: None,
             background_requested: false,
-            idle_frames: 0,
+            idle_since: None,
             frames: 0,
             processed: 0,
             last_blend_mode: None,
