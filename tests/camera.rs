@@ -456,7 +456,70 @@ fn stable_paths_are_listed_and_open_and_auto_says_why() {
         .frames("YUYV", &[0])
         .set("FAKE_V4L2_CARD", "Integrated Camera")
         .run("stable");
-    assert!(out.contains("every capture device looks built in"), "{out}");
+    assert!(
+        out.contains("every usable capture device looks built in"),
+        "{out}"
+    );
+}
+
+/// A fake sysfs in which the stand-in's node hangs off `device` (a folder made under it).
+fn fake_sysfs(cam: FakeCamera, device: &str) -> FakeCamera {
+    let sys = cam.dir.join("sys");
+    let target = sys.join("devices").join(device);
+    std::fs::create_dir_all(&target).unwrap();
+    let class = sys.join("class/video4linux/video7");
+    std::fs::create_dir_all(&class).unwrap();
+    std::os::unix::fs::symlink(&target, class.join("device")).unwrap();
+    let root = sys.display().to_string();
+    cam.set("CONTRASTXR_SYSFS_ROOT", &root)
+}
+
+fn with_by_id(cam: FakeCamera, name: &str) -> FakeCamera {
+    let by_id = cam.dir.join("v4l/by-id");
+    std::fs::create_dir_all(&by_id).unwrap();
+    std::os::unix::fs::symlink("../../video7", by_id.join(name)).unwrap();
+    cam
+}
+
+#[test]
+fn auto_decides_built_in_by_the_bus_not_the_word_webcam() {
+    // A USB camera called "Webcam" is the world-facing one.
+    let cam = FakeCamera::new("auto-usb", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_CARD", "HD Pro Webcam C920");
+    let cam = with_by_id(cam, "usb-046d_HD_Pro_Webcam_C920-video-index0");
+    let out = fake_sysfs(cam, "pci0000:00/0000:00:14.0/usb1/1-2/1-2:1.0").run("stable");
+    assert!(
+        out.contains("usb-046d_HD_Pro_Webcam_C920-video-index0 (HD Pro Webcam C920): the only usable capture device, on USB"),
+        "{out}"
+    );
+    // On the platform bus it is the machine's own, whatever its name.
+    let cam = FakeCamera::new("auto-platform", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_CARD", "Acme World Camera");
+    let out = fake_sysfs(cam, "platform/soc/camera0").run("stable");
+    assert!(
+        out.contains("every usable capture device looks built in"),
+        "{out}"
+    );
+}
+
+#[test]
+fn auto_skips_a_node_without_a_colour_mode() {
+    let out = FakeCamera::new("auto-depth", "Z16 ")
+        .set("FAKE_V4L2_CARD", "Intel RealSense Depth")
+        .run("auto_unusable");
+    assert!(out.contains("no usable V4L2 capture device"), "{out}");
+}
+
+#[test]
+fn auto_keeps_its_camera_by_stable_path_after_a_loss_and_says_it_once() {
+    let cam = FakeCamera::new("auto-vanish", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_VANISH_AFTER", "4")
+        .set("FAKE_V4L2_RETURN_AFTER_MS", "800");
+    let out = with_by_id(cam, "usb-Acme_World_Camera-video-index0").run("auto_vanish");
+    assert!(out.contains("auto kept its camera"), "{out}");
 }
 
 #[test]
@@ -559,6 +622,8 @@ fn child_dispatch() {
         "stable" => child_stable(),
         "controls" => child_controls(),
         "controls_auto" => child_controls_auto(),
+        "auto_unusable" => child_auto_unusable(),
+        "auto_vanish" => child_auto_vanish(),
         "list" => child_list(),
         "cli_test" => child_cli_test(),
         other => panic!("unknown child case {other}"),
@@ -684,6 +749,47 @@ fn child_controls() {
         }
         println!("controls checked");
     }
+}
+
+fn child_auto_unusable() {
+    match Background::open(&SourceSpec::V4l2Auto, &CaptureConfig::default()) {
+        Ok(bg) => panic!("took a node without a colour mode: {}", bg.description()),
+        Err(e) => println!("{e}"),
+    }
+}
+
+/// After a loss the capture thread reopens the camera it chose, by its stable path, without
+/// choosing (or saying so) again.
+fn child_auto_vanish() {
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    let cfg = CaptureConfig {
+        stall_timeout: Duration::from_millis(300),
+        grace: Duration::from_millis(200),
+        max_backoff: Duration::from_millis(100),
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&SourceSpec::V4l2Auto, &cfg).unwrap();
+    let link = format!(
+        "{}/v4l/by-id/usb-Acme_World_Camera-video-index0",
+        env("CONTRASTXR_V4L2_DIR")
+    );
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !LOG
+        .lock()
+        .unwrap()
+        .iter()
+        .any(|l| l.starts_with("reopened"))
+    {
+        assert!(Instant::now() < deadline, "{:#?}", LOG.lock().unwrap());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    bg.close();
+    let log = LOG.lock().unwrap().join("\n");
+    let took = log.lines().filter(|l| l.contains("v4l2:auto took")).count();
+    assert_eq!(took, 1, "{log}");
+    assert!(log.contains(&format!("reopened {link} (")), "{log}");
+    println!("{log}\nauto kept its camera");
 }
 
 fn listed() -> String {

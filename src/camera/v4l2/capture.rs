@@ -2,7 +2,7 @@
 //! RGBA and publishes it; on loss or stall it marks the source down and reopens with backoff.
 //! Readers only ever touch the mailbox in `Shared`, so nothing here can block them.
 
-use super::{auto_capture_device, choose_mode, device_dir, modes, probe};
+use super::{choose_mode, device_dir, modes, probe};
 use crate::camera::convert::{to_rgba, PixelFormat};
 use crate::camera::frame::{Frame, Shared, SourceStatus};
 use crate::camera::log::log;
@@ -53,9 +53,16 @@ pub(crate) fn spawn(
     spec: &SourceSpec,
     cfg: &CaptureConfig,
 ) -> Result<(Arc<Shared>, JoinHandle<()>, String), CameraError> {
+    // v4l2:auto chooses here, once: reopens after a loss take the same camera.
     let target = match spec {
         SourceSpec::V4l2Device(path) => Some(path.clone()),
-        _ => None,
+        _ => Some(super::auto::resolve(&device_dir(), cfg).ok_or_else(|| {
+            CameraError::NoDevice(format!(
+                "no usable V4L2 capture device found in {} (video* absent, not capture devices, \
+                 or none offers YUYV, NV12, MJPG, RGB3, BGR3 or GREY)",
+                device_dir().display()
+            ))
+        })?),
     };
     let shared = Arc::new(Shared::new());
     let (tx, rx) = sync_channel(1);
@@ -95,25 +102,8 @@ pub(crate) fn spawn(
     }
 }
 
-fn resolve(target: Option<&PathBuf>) -> Result<PathBuf, CameraError> {
-    match target {
-        Some(path) => Ok(path.clone()),
-        None => auto_capture_device(&device_dir())
-            .map(|(path, why)| {
-                log(&format!("v4l2:auto took {why}"));
-                path
-            })
-            .ok_or_else(|| {
-                CameraError::NoDevice(format!(
-                    "no V4L2 capture device found ({}/video* absent or not capture devices)",
-                    device_dir().display()
-                ))
-            }),
-    }
-}
-
 fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session, CameraError> {
-    let path = resolve(target)?;
+    let path = target.cloned().unwrap_or_else(device_dir);
     let shown = path.display();
     let (device, info) = probe(&path).map_err(|e| match e.kind() {
         io::ErrorKind::NotFound => CameraError::NoDevice(format!("{shown} does not exist")),
