@@ -94,6 +94,9 @@ pub fn to_rgba(
     height: u32,
     stride: u32,
 ) -> Result<RgbaImage, String> {
+    if width == 0 || height == 0 {
+        return Err(format!("frame of {width}x{height} is empty"));
+    }
     let Some(min_stride) = format.min_stride(width) else {
         return crate::camera::mjpeg::decode(data);
     };
@@ -105,7 +108,11 @@ pub fn to_rgba(
     } else {
         height as usize
     };
-    let needed = stride * rows.saturating_sub(1) + min_stride;
+    // Sizes come from the driver: a product too large for memory is as short as any.
+    let needed = stride
+        .checked_mul(rows.saturating_sub(1))
+        .and_then(|n| n.checked_add(min_stride))
+        .unwrap_or(usize::MAX);
     if data.len() < needed {
         return Err(format!(
             "{} frame of {width}x{height} has {} bytes, needs {needed}",
