@@ -58,7 +58,7 @@ pub(crate) fn spawn(
         SourceSpec::V4l2Device(path) => Some(path.clone()),
         _ => Some(super::auto::resolve(&device_dir(), cfg).ok_or_else(|| {
             CameraError::NoDevice(format!(
-                "no usable V4L2 capture device found in {} (video* absent, not capture devices, \
+                "no V4L2 capture device found in {} with a usable mode (video* absent, not capture devices, \
                  or none offers YUYV, NV12, MJPG, RGB3, BGR3 or GREY)",
                 device_dir().display()
             ))
