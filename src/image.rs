@@ -20,6 +20,10 @@ pub struct RgbaImage {
     pub has_alpha: bool,
 }
 
+/// The largest JPEG width or height decoded (camera frames and background images are far
+/// smaller; 8192x8192 RGBA is 256 MiB).
+const MAX_JPEG_SIDE: usize = 8192;
+
 impl RgbaImage {
     pub fn new(width: u32, height: u32, fill: [u8; 4]) -> Self {
         RgbaImage {
@@ -57,14 +61,18 @@ impl RgbaImage {
 
     /// Decodes a baseline or progressive JPEG (colour or grey) to RGB with alpha 255.
     pub fn decode_jpeg(data: &[u8]) -> Result<RgbaImage, String> {
-        let options = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGBA);
+        // A few bytes can declare a huge picture: the size is bounded before any allocation.
+        let options = DecoderOptions::default()
+            .jpeg_set_out_colorspace(ColorSpace::RGBA)
+            .set_max_width(MAX_JPEG_SIDE)
+            .set_max_height(MAX_JPEG_SIDE);
         let mut decoder = JpegDecoder::new_with_options(ZCursor::new(data), options);
         let pixels = decoder
             .decode()
             .map_err(|e| format!("it does not decode ({e:?})"))?;
         let info = decoder.info().ok_or("it has no JPEG header")?;
         let (width, height) = (u32::from(info.width), u32::from(info.height));
-        if pixels.len() != (width * height * 4) as usize {
+        if pixels.len() != width as usize * height as usize * 4 {
             return Err(format!(
                 "it decoded to {} bytes for {width}x{height}",
                 pixels.len()

@@ -456,7 +456,70 @@ fn stable_paths_are_listed_and_open_and_auto_says_why() {
         .frames("YUYV", &[0])
         .set("FAKE_V4L2_CARD", "Integrated Camera")
         .run("stable");
-    assert!(out.contains("every capture device looks built in"), "{out}");
+    assert!(
+        out.contains("every usable capture device looks built in"),
+        "{out}"
+    );
+}
+
+/// A fake sysfs in which the stand-in's node hangs off `device` (a folder made under it).
+fn fake_sysfs(cam: FakeCamera, device: &str) -> FakeCamera {
+    let sys = cam.dir.join("sys");
+    let target = sys.join("devices").join(device);
+    std::fs::create_dir_all(&target).unwrap();
+    let class = sys.join("class/video4linux/video7");
+    std::fs::create_dir_all(&class).unwrap();
+    std::os::unix::fs::symlink(&target, class.join("device")).unwrap();
+    let root = sys.display().to_string();
+    cam.set("CONTRASTXR_SYSFS_ROOT", &root)
+}
+
+fn with_by_id(cam: FakeCamera, name: &str) -> FakeCamera {
+    let by_id = cam.dir.join("v4l/by-id");
+    std::fs::create_dir_all(&by_id).unwrap();
+    std::os::unix::fs::symlink("../../video7", by_id.join(name)).unwrap();
+    cam
+}
+
+#[test]
+fn auto_decides_built_in_by_the_bus_not_the_word_webcam() {
+    // A USB camera called "Webcam" is the world-facing one.
+    let cam = FakeCamera::new("auto-usb", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_CARD", "HD Pro Webcam C920");
+    let cam = with_by_id(cam, "usb-046d_HD_Pro_Webcam_C920-video-index0");
+    let out = fake_sysfs(cam, "pci0000:00/0000:00:14.0/usb1/1-2/1-2:1.0").run("stable");
+    assert!(
+        out.contains("usb-046d_HD_Pro_Webcam_C920-video-index0 (HD Pro Webcam C920): the only usable capture device, on USB"),
+        "{out}"
+    );
+    // On the platform bus it is the machine's own, whatever its name.
+    let cam = FakeCamera::new("auto-platform", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_CARD", "Acme World Camera");
+    let out = fake_sysfs(cam, "platform/soc/camera0").run("stable");
+    assert!(
+        out.contains("every usable capture device looks built in"),
+        "{out}"
+    );
+}
+
+#[test]
+fn auto_skips_a_node_without_a_colour_mode() {
+    let out = FakeCamera::new("auto-depth", "Z16 ")
+        .set("FAKE_V4L2_CARD", "Intel RealSense Depth")
+        .run("auto_unusable");
+    assert!(out.contains("with a usable mode (video* absent"), "{out}");
+}
+
+#[test]
+fn auto_keeps_its_camera_by_stable_path_after_a_loss_and_says_it_once() {
+    let cam = FakeCamera::new("auto-vanish", "YUYV")
+        .frames("YUYV", &[0])
+        .set("FAKE_V4L2_VANISH_AFTER", "4")
+        .set("FAKE_V4L2_RETURN_AFTER_MS", "800");
+    let out = with_by_id(cam, "usb-Acme_World_Camera-video-index0").run("auto_vanish");
+    assert!(out.contains("auto kept its camera"), "{out}");
 }
 
 #[test]
@@ -473,6 +536,14 @@ fn fixed_exposure_white_balance_and_gain_are_set_and_reported() {
         out.contains("camera_exposure 10000us: the camera has no such control"),
         "{out}"
     );
+}
+
+#[test]
+fn auto_turns_the_automatic_controls_back_on_and_close_restores_them() {
+    let out = FakeCamera::new("controls-auto", "YUYV")
+        .frames("YUYV", &[0])
+        .run("controls_auto");
+    assert!(out.contains("auto controls checked"), "{out}");
 }
 
 #[test]
@@ -550,6 +621,9 @@ fn child_dispatch() {
         "busy" => child_busy(),
         "stable" => child_stable(),
         "controls" => child_controls(),
+        "controls_auto" => child_controls_auto(),
+        "auto_unusable" => child_auto_unusable(),
+        "auto_vanish" => child_auto_vanish(),
         "list" => child_list(),
         "cli_test" => child_cli_test(),
         other => panic!("unknown child case {other}"),
@@ -647,7 +721,7 @@ fn child_controls() {
         for line in [
             "camera_exposure 10000us: the camera took 10000us",
             "camera_white_balance 5003K: the camera took 5000K",
-            "camera_gain 300: the camera took 255",
+            "camera_gain 300: refused, outside the camera's range 0..255",
         ] {
             assert!(log.contains(line), "{line} missing:\n{log}");
         }
@@ -664,8 +738,123 @@ fn child_controls() {
             text.contains("  control camera_exposure 300..204700us"),
             "{text}"
         );
+        bg.close();
+        let text = listed();
+        for line in [
+            "  control camera_white_balance 2800..6500K (default 4600, now 4600, automatic)",
+            "  control camera_exposure 300..204700us (default 15600, now 15600, automatic)",
+            "  control camera_gain 0..255 (default 32, now 32)\n",
+        ] {
+            assert!(text.contains(line), "not restored at close: {line}\n{text}");
+        }
         println!("controls checked");
     }
+}
+
+fn child_auto_unusable() {
+    match Background::open(&SourceSpec::V4l2Auto, &CaptureConfig::default()) {
+        Ok(bg) => panic!("took a node without a colour mode: {}", bg.description()),
+        Err(e) => println!("{e}"),
+    }
+}
+
+/// After a loss the capture thread reopens the camera it chose, by its stable path, without
+/// choosing (or saying so) again.
+fn child_auto_vanish() {
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    let cfg = CaptureConfig {
+        stall_timeout: Duration::from_millis(300),
+        grace: Duration::from_millis(200),
+        max_backoff: Duration::from_millis(100),
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&SourceSpec::V4l2Auto, &cfg).unwrap();
+    let link = format!(
+        "{}/v4l/by-id/usb-Acme_World_Camera-video-index0",
+        env("CONTRASTXR_V4L2_DIR")
+    );
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !LOG
+        .lock()
+        .unwrap()
+        .iter()
+        .any(|l| l.starts_with("reopened"))
+    {
+        assert!(Instant::now() < deadline, "{:#?}", LOG.lock().unwrap());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    bg.close();
+    let log = LOG.lock().unwrap().join("\n");
+    let took = log.lines().filter(|l| l.contains("v4l2:auto took")).count();
+    assert_eq!(took, 1, "{log}");
+    assert!(log.contains(&format!("reopened {link} (")), "{log}");
+    println!("{log}\nauto kept its camera");
+}
+
+fn listed() -> String {
+    let mut out = Vec::new();
+    cli::list(&mut out).unwrap();
+    String::from_utf8(out).unwrap()
+}
+
+/// Another program left the camera fixed: `auto` turns the automatic controls back on while
+/// the layer holds the camera, and close puts back what it found. A value of 2^31 (which
+/// would wrap in the driver's 32-bit field) is refused with the range, and nothing changes.
+fn child_controls_auto() {
+    use v4l::control::{Control, Value};
+    static LOG: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
+    {
+        let other = v4l::Device::with_path(env("FAKE_V4L2_DEVICE")).unwrap();
+        for (id, value) in [
+            (0x009a_0901, Value::Integer(1)),
+            (0x009a_0902, Value::Integer(500)),
+            (0x0098_090c, Value::Boolean(false)),
+            (0x0098_091a, Value::Integer(3000)),
+        ] {
+            other.set_control(Control { id, value }).unwrap();
+        }
+    }
+    let fixed_by_other = [
+        "  control camera_exposure 300..204700us (default 15600, now 50000, fixed)",
+        "  control camera_white_balance 2800..6500K (default 4600, now 3000, fixed)",
+    ];
+    let text = listed();
+    for line in fixed_by_other {
+        assert!(text.contains(line), "{line}\n{text}");
+    }
+    let cfg = CaptureConfig {
+        controls: contrastxr::camera::CameraControls {
+            gain: Some(1 << 31),
+            ..Default::default()
+        },
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&fake_spec(), &cfg).unwrap();
+    wait_for_frame(&bg, 0, Duration::from_secs(10)).expect("a frame");
+    let log = LOG.lock().unwrap().join("\n");
+    for line in [
+        "camera_exposure auto: the camera's automatic control is on again",
+        "camera_white_balance auto: the camera's automatic control is on again",
+        "camera_gain 2147483648: refused, outside the camera's range 0..255",
+    ] {
+        assert!(log.contains(line), "{line} missing:\n{log}");
+    }
+    let text = listed();
+    for line in [
+        "  control camera_exposure 300..204700us (default 15600, now 50000, automatic)",
+        "  control camera_white_balance 2800..6500K (default 4600, now 3000, automatic)",
+        "  control camera_gain 0..255 (default 32, now 32)\n",
+    ] {
+        assert!(text.contains(line), "{line}\n{text}");
+    }
+    bg.close();
+    let text = listed();
+    for line in fixed_by_other {
+        assert!(text.contains(line), "not restored at close: {line}\n{text}");
+    }
+    println!("auto controls checked");
 }
 
 /// Busy at open (another program captures): the source opens all the same, says so once,

@@ -638,7 +638,10 @@ fn toml_line() -> impl Strategy<Value = String> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(512))]
+    // scripts/fuzz makes a longer run through CONTRASTXR_FUZZ_CASES (and PROPTEST_RNG_SEED).
+    #![proptest_config(ProptestConfig::with_cases(
+        std::env::var("CONTRASTXR_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(512)
+    ))]
 
     #[test]
     fn config_parser_never_panics_on_any_text(text in "\\PC{0,200}") {

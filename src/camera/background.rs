@@ -8,8 +8,9 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// An open background source. Cameras are open exactly as long as this lives: dropping it
-/// stops and joins the capture thread, which closes the device.
+/// An open background source. Dropping it asks the capture thread to stop without waiting for
+/// it (drops happen inside the app's frame calls): the thread closes the device on its own
+/// within a poll slice. `close` also waits for that.
 pub struct Background {
     source: Source,
     description: String,
@@ -124,14 +125,28 @@ fn threaded(
     }
 }
 
+impl Background {
+    /// Stops the source and waits until its thread has ended (the device is closed).
+    pub fn close(mut self) {
+        if let Some(thread) = self.stop() {
+            let _ = thread.join();
+        }
+    }
+
+    fn stop(&mut self) -> Option<JoinHandle<()>> {
+        let Source::Threaded { shared, thread, .. } = &mut self.source else {
+            return None;
+        };
+        shared.stop.store(true, Ordering::Release);
+        let thread = thread.take()?;
+        thread.thread().unpark();
+        Some(thread)
+    }
+}
+
 impl Drop for Background {
     fn drop(&mut self) {
-        if let Source::Threaded { shared, thread, .. } = &mut self.source {
-            shared.stop.store(true, Ordering::Release);
-            if let Some(thread) = thread.take() {
-                thread.thread().unpark();
-                let _ = thread.join();
-            }
-        }
+        // The handle is let go: the thread ends on its own.
+        drop(self.stop());
     }
 }

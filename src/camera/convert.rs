@@ -105,6 +105,9 @@ pub(crate) fn to_rgba_into(
     (width, height, stride): (u32, u32, u32),
     into: RgbaImage,
 ) -> Result<RgbaImage, String> {
+    if width == 0 || height == 0 {
+        return Err(format!("frame of {width}x{height} is empty"));
+    }
     let Some(min_stride) = format.min_stride(width) else {
         return crate::camera::mjpeg::decode(data);
     };
@@ -116,7 +119,11 @@ pub(crate) fn to_rgba_into(
     } else {
         height as usize
     };
-    let needed = stride * rows.saturating_sub(1) + min_stride;
+    // Sizes come from the driver: a product too large for memory is as short as any.
+    let needed = stride
+        .checked_mul(rows.saturating_sub(1))
+        .and_then(|n| n.checked_add(min_stride))
+        .unwrap_or(usize::MAX);
     if data.len() < needed {
         return Err(format!(
             "{} frame of {width}x{height} has {} bytes, needs {needed}",

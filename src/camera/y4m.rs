@@ -116,6 +116,9 @@ impl Y4m {
     }
 }
 
+/// The largest width or height of a video read.
+const MAX_SIDE: u32 = 16384;
+
 fn parse_header(line: &str) -> Result<Y4m, String> {
     let mut tokens = line.split(' ');
     if tokens.next() != Some("YUV4MPEG2") {
@@ -135,8 +138,11 @@ fn parse_header(line: &str) -> Result<Y4m, String> {
         data: Vec::new(),
     };
     for token in tokens.filter(|t| !t.is_empty()) {
-        let (key, value) = token.split_at(1);
-        match key {
+        // The first character is the key (the header is untrusted: it may not be ASCII).
+        let mut chars = token.chars();
+        let key = chars.next().map(String::from).unwrap_or_default();
+        let value = chars.as_str();
+        match key.as_str() {
             "W" => y4m.width = value.parse().map_err(|_| format!("bad width {value}"))?,
             "H" => y4m.height = value.parse().map_err(|_| format!("bad height {value}"))?,
             "F" => y4m.fps = parse_rate(value)?,
@@ -147,6 +153,13 @@ fn parse_header(line: &str) -> Result<Y4m, String> {
     }
     if y4m.width == 0 || y4m.height == 0 {
         return Err("width or height missing".into());
+    }
+    // Frame sizes are computed in u32: a bound keeps them exact (and allocations sane).
+    if y4m.width > MAX_SIDE || y4m.height > MAX_SIDE {
+        return Err(format!(
+            "{}x{} is larger than {MAX_SIDE}x{MAX_SIDE}",
+            y4m.width, y4m.height
+        ));
     }
     Ok(y4m)
 }

@@ -8,7 +8,9 @@ use super::device::{DeviceKind, GpuDevice};
 use super::error::{GpuError, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::io::{Read, Write};
+use std::os::unix::fs::OpenOptionsExt;
+use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
 
 /// The file starts with this, then the data's length and checksum (u64 little-endian each).
@@ -120,16 +122,56 @@ fn initial_data(key: &DeviceKind) -> (Vec<u8>, Origin) {
     let Some(path) = directory().map(|d| d.join(key.file_name())) else {
         return (Vec::new(), Origin::Empty(None));
     };
-    match std::fs::read(&path) {
-        Ok(bytes) => match parse_file(&bytes, key) {
+    match read_file(&path) {
+        Ok(Some(bytes)) => match parse_file(&bytes, key) {
             Ok(data) => (data, Origin::File(path)),
             Err(why) => (
                 Vec::new(),
                 Origin::Empty(Some(format!("{} ignored: {why}", path.display()))),
             ),
         },
-        Err(_) => (Vec::new(), Origin::Empty(None)),
+        Ok(None) => (Vec::new(), Origin::Empty(None)),
+        Err(why) => (
+            Vec::new(),
+            Origin::Empty(Some(format!("{} ignored: {why}", path.display()))),
+        ),
     }
+}
+
+/// The largest cache file read (lavapipe's and hardware drivers' caches for the engine's few
+/// shaders are far smaller).
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+/// Files of other drivers are removed once this old.
+const FOREIGN_MAX_AGE: std::time::Duration = std::time::Duration::from_secs(30 * 24 * 3600);
+
+/// A cache file's bytes; None if there is none. Only a regular file of at most
+/// MAX_FILE_BYTES is read, opened without following links and without blocking (a FIFO or a
+/// device there never hangs or floods the app).
+pub fn read_file(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    let file = match std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(path)
+    {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(format!("cannot open it ({e})")),
+    };
+    let meta = file.metadata().map_err(|e| e.to_string())?;
+    if !meta.file_type().is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(format!("{} bytes, more than {MAX_FILE_BYTES}", meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err("grew past the size limit while read".into());
+    }
+    Ok(Some(bytes))
 }
 
 impl PipelineCache {
@@ -181,19 +223,68 @@ pub fn save(
     }
     in_memory().insert(*key, data.clone());
     let dir = directory().ok_or("neither XDG_CACHE_HOME nor HOME is set")?;
-    write_atomically(&dir, &key.file_name(), &file_bytes(&data))?;
+    let written = write_atomically(&dir, &key.file_name(), &file_bytes(&data));
+    if let Err(e) = &written {
+        static SAID: std::sync::Once = std::sync::Once::new();
+        SAID.call_once(|| eprintln!("contrastxr: pipeline cache not saved: {e}"));
+    }
+    written?;
+    remove_old_foreign(&dir, &key.file_name());
     Ok(data.len())
 }
 
-fn write_atomically(dir: &std::path::Path, name: &str, bytes: &[u8]) -> Result<(), String> {
+/// Writes `dir`/`name` whole or not at all: through a temporary file of a random name in the
+/// same folder (created exclusively, never through a link; unique also across PID namespaces),
+/// synced, renamed over the old one, and the folder synced.
+pub fn write_atomically(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
     let fail = |e: std::io::Error| format!("cannot write {}: {e}", dir.join(name).display());
     std::fs::create_dir_all(dir).map_err(fail)?;
-    let tmp = dir.join(format!(".{name}.{}", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(fail)?;
-    std::fs::rename(&tmp, dir.join(name)).map_err(|e| {
+    let tmp = dir.join(format!(".{name}.{:016x}.tmp", random_u64()));
+    let written = (|| {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .mode(0o644)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+            .open(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, dir.join(name))?;
+        std::fs::File::open(dir)?.sync_all()
+    })();
+    written.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         fail(e)
     })
+}
+
+/// 64 random bits from the kernel; the time and the process as a fallback.
+fn random_u64() -> u64 {
+    let mut buf = [0u8; 8];
+    // SAFETY: getrandom writes at most buf.len() bytes into buf.
+    let n = unsafe { libc::getrandom(buf.as_mut_ptr().cast(), buf.len(), 0) };
+    if n == buf.len() as isize {
+        return u64::from_le_bytes(buf);
+    }
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH);
+    now.map_or(0, |d| d.as_nanos() as u64) ^ (u64::from(std::process::id()) << 32)
+}
+
+/// Removes the cache files of other drivers (and stray temporary files) not touched for
+/// FOREIGN_MAX_AGE; links and other kinds of file are left alone.
+pub fn remove_old_foreign(dir: &Path, keep: &str) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.filter_map(|e| e.ok()) {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let ours = name.starts_with("pipelines-") || name.starts_with(".pipelines-");
+        let Ok(meta) = e.metadata() else { continue };
+        let age = meta.modified().ok().and_then(|m| m.elapsed().ok());
+        if ours && name != keep && meta.is_file() && age.is_some_and(|a| a > FOREIGN_MAX_AGE) {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
 }
 
 #[cfg(test)]

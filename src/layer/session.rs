@@ -60,7 +60,7 @@ pub unsafe extern "system" fn create_session(
             background: None,
             background_requested: false,
             background_delivered: false,
-            idle_frames: 0,
+            idle_since: None,
             frames: 0,
             processed: 0,
             last_blend_mode: None,

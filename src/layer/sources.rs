@@ -9,6 +9,7 @@ use openxr_sys as xr;
 use std::collections::HashMap;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::sync::{Mutex, MutexGuard, OnceLock};
+use std::time::{Duration, Instant};
 
 fn open_background(spec: &str, camera: &CaptureConfig) -> Result<Background, String> {
     let source = camera::parse_source(spec)?;
@@ -48,7 +49,10 @@ fn start_reopen(
     let spawned = std::thread::Builder::new()
         .name("contrastxr-reopen".into())
         .spawn(move || {
-            drop(old);
+            // The old camera is closed before the new one opens (it may be the same device).
+            if let Some(old) = old {
+                old.close();
+            }
             let _ = tx.send(open_background_logged(&spec, &camera));
         });
     match spawned {
@@ -59,15 +63,15 @@ fn start_reopen(
     }
 }
 
-/// Frames in a row without enhancement after which the background closes (a camera's light
-/// goes off; it opens again at the next frame the layer acts on): 2 s at 20 Hz.
-const CLOSE_AFTER_IDLE_FRAMES: u64 = 40;
+/// Wall time without an enhanced frame after which the background closes (a camera's light
+/// goes off; it opens again at the next frame the layer acts on).
+const CLOSE_AFTER_IDLE: Duration = Duration::from_secs(2);
 
 /// Opens the session's background at the first frame the layer acts on: at once with
 /// `pipelines = "wait"` (every frame enhanced), else on a helper thread while frames pass
 /// through. A source that failed to open is tried again only when the config changes.
 pub(super) fn open_when_needed(s: &mut SessionState) {
-    s.idle_frames = 0;
+    s.idle_since = None;
     if s.background.is_some() || s.background_requested {
         return;
     }
@@ -81,12 +85,15 @@ pub(super) fn open_when_needed(s: &mut SessionState) {
     }
 }
 
-/// Counts a frame the layer did not act on, and closes the background after
-/// CLOSE_AFTER_IDLE_FRAMES of them.
+/// Notes a frame the layer did not act on, and closes the background CLOSE_AFTER_IDLE after
+/// the last enhanced frame, also one still opening then (it is dropped when it arrives).
+/// Closing never waits: the capture thread closes the device on its own.
 pub(super) fn close_when_idle(s: &mut SessionState) {
-    s.idle_frames += 1;
-    if s.idle_frames == CLOSE_AFTER_IDLE_FRAMES && s.background.is_some() {
-        log::info("no frame enhanced for 2 s: the background is closed until the next one");
+    let since = *s.idle_since.get_or_insert_with(Instant::now);
+    if since.elapsed() >= CLOSE_AFTER_IDLE && s.background_requested {
+        if s.background.is_some() {
+            log::info("no frame enhanced for 2 s: the background is closed until the next one");
+        }
         s.background = None;
         s.background_requested = false;
     }
@@ -99,6 +106,10 @@ fn take_reopened(session: xr::Session, s: &mut SessionState) {
         return;
     };
     match rx.try_recv() {
+        // Opened after the session went idle: closed at once (without waiting).
+        Ok(_) if !s.background_requested => {
+            pending.remove(&session.into_raw());
+        }
         Ok(bg) => {
             if let Some(bg) = &bg {
                 log::info(&format!("background is now {}", bg.description()));

@@ -42,8 +42,8 @@ pub struct SessionState {
     pub background_requested: bool,
     /// The background's last frame request got a frame (a None after it is a loss).
     pub background_delivered: bool,
-    /// Frames in a row the layer has not acted on (the background closes after a while).
-    pub idle_frames: u64,
+    /// Since when the layer has not acted on a frame (the background closes after a while).
+    pub idle_since: Option<std::time::Instant>,
     /// Frames submitted through xrEndFrame so far.
     pub frames: u64,
     /// Frames the layer processed (captures are numbered by this).

@@ -21,6 +21,10 @@
  *   FAKE_V4L2_BUSY_FOR_MS   setting a format fails with EBUSY for this long after start, as
  *                           when another program is capturing from the device
  *   FAKE_V4L2_CARD          card name (default "Fake V4L2 camera")
+ *   FAKE_V4L2_OPEN_DELAY_MS each open of the device takes this long (a slow USB camera)
+ *   FAKE_V4L2_LOG           file to which each open and close of the device is appended, as
+ *                           "open MS" / "close MS" lines (MS: wall-clock milliseconds since 1970),
+ *                           with "opening MS" where a slow open starts
  *
  * Not modelled: read() I/O, USERPTR/DMABUF memory, controls, multi-planar API, select().
  */
@@ -79,6 +83,8 @@ static struct {
 	long vanish_after;
 	long return_after_ms;
 	uint64_t busy_until_ns;
+	long open_delay_ms;
+	const char *log;
 	int no_frames;
 } cfg;
 
@@ -158,6 +164,9 @@ static void parse_config(void)
 	cfg.return_after_ms = e ? atol(e) : 500;
 	e = getenv("FAKE_V4L2_BUSY_FOR_MS");
 	cfg.busy_until_ns = e ? now_ns() + (uint64_t)atol(e) * 1000000ull : 0;
+	e = getenv("FAKE_V4L2_OPEN_DELAY_MS");
+	cfg.open_delay_ms = e ? atol(e) : 0;
+	cfg.log = getenv("FAKE_V4L2_LOG");
 	e = getenv("FAKE_V4L2_NO_FRAMES");
 	cfg.no_frames = e && atoi(e) == 1;
 
@@ -240,8 +249,31 @@ static int device_present(void)
 
 static void free_buffers(void);
 
+/* Appends "WHAT MS" to FAKE_V4L2_LOG, if set. */
+static void log_event(const char *what)
+{
+	if (!cfg.log)
+		return;
+	struct timespec t;
+	clock_gettime(CLOCK_REALTIME, &t);
+	int fd = real_open(cfg.log, O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+	if (fd < 0)
+		return;
+	char line[64];
+	int n = snprintf(line, sizeof line, "%s %lld\n", what,
+			 (long long)t.tv_sec * 1000 + t.tv_nsec / 1000000);
+	if (write(fd, line, (size_t)n) < 0)
+		n = 0;
+	real_close(fd);
+}
+
 static int open_fake(void)
 {
+	if (cfg.open_delay_ms > 0) {
+		log_event("opening");
+		struct timespec d = {cfg.open_delay_ms / 1000, (cfg.open_delay_ms % 1000) * 1000000};
+		nanosleep(&d, NULL);
+	}
 	pthread_mutex_lock(&lock);
 	if (!device_present()) {
 		pthread_mutex_unlock(&lock);
@@ -261,6 +293,8 @@ static int open_fake(void)
 	int fd = real_open("/dev/null", O_RDWR | O_CLOEXEC);
 	if (fd >= 0 && fd < MAX_FDS)
 		fake_fd[fd] = 1;
+	if (fd >= 0)
+		log_event("open");
 	return fd;
 }
 
@@ -743,6 +777,7 @@ int close(int fd)
 			free_buffers();
 		fake_fd[fd] = 0;
 		pthread_mutex_unlock(&lock);
+		log_event("close");
 	}
 	return real_close(fd);
 }

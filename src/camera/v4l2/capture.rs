@@ -2,7 +2,7 @@
 //! RGBA and publishes it; on loss or stall it marks the source down and reopens with backoff.
 //! Readers only ever touch the mailbox in `Shared`, so nothing here can block them.
 
-use super::{auto_capture_device, choose_mode, device_dir, modes, probe};
+use super::{choose_mode, device_dir, modes, probe};
 use crate::camera::convert::{to_rgba_into, PixelFormat};
 use crate::camera::frame::{Frame, Shared, SourceStatus};
 use crate::camera::log::log;
@@ -39,6 +39,14 @@ struct Session {
     height: u32,
     stride: u32,
     description: String,
+    /// The camera's controls as they were before the layer changed them, put back at close.
+    saved: super::controls::Saved,
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        super::controls::restore(&self.device, std::mem::take(&mut self.saved));
+    }
 }
 
 /// Starts capturing; returns once the device is open and configured (or failed to be).
@@ -46,9 +54,16 @@ pub(crate) fn spawn(
     spec: &SourceSpec,
     cfg: &CaptureConfig,
 ) -> Result<(Arc<Shared>, JoinHandle<()>, String), CameraError> {
+    // v4l2:auto chooses here, once: reopens after a loss take the same camera.
     let target = match spec {
         SourceSpec::V4l2Device(path) => Some(path.clone()),
-        _ => None,
+        _ => Some(super::auto::resolve(&device_dir(), cfg).ok_or_else(|| {
+            CameraError::NoDevice(format!(
+                "no V4L2 capture device found in {} with a usable mode (video* absent, not capture devices, \
+                 or none offers YUYV, NV12, MJPG, RGB3, BGR3 or GREY)",
+                device_dir().display()
+            ))
+        })?),
     };
     let shared = Arc::new(Shared::new());
     let (tx, rx) = sync_channel(1);
@@ -88,25 +103,8 @@ pub(crate) fn spawn(
     }
 }
 
-fn resolve(target: Option<&PathBuf>) -> Result<PathBuf, CameraError> {
-    match target {
-        Some(path) => Ok(path.clone()),
-        None => auto_capture_device(&device_dir())
-            .map(|(path, why)| {
-                log(&format!("v4l2:auto took {why}"));
-                path
-            })
-            .ok_or_else(|| {
-                CameraError::NoDevice(format!(
-                    "no V4L2 capture device found ({}/video* absent or not capture devices)",
-                    device_dir().display()
-                ))
-            }),
-    }
-}
-
 fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session, CameraError> {
-    let path = resolve(target)?;
+    let path = target.cloned().unwrap_or_else(device_dir);
     let shown = path.display();
     let (device, info) = probe(&path).map_err(|e| match e.kind() {
         io::ErrorKind::NotFound => CameraError::NoDevice(format!("{shown} does not exist")),
@@ -133,13 +131,13 @@ fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session
     (wanted.width, wanted.height, wanted.fourcc) =
         (mode.width, mode.height, FourCC::new(&mode.fourcc));
     let got = device.set_format(&wanted).map_err(device_err)?;
-    super::controls::apply(&device, &cfg.controls, &shown.to_string());
     let format = PixelFormat::from_fourcc(got.fourcc.repr).ok_or_else(|| {
         CameraError::Unsupported(format!(
             "{shown} switched to unsupported format {}",
             got.fourcc
         ))
     })?;
+    let saved = super::controls::apply(&device, &cfg.controls, &shown.to_string());
     if mode.interval.0 > 0 {
         let rate = Parameters::new(Fraction::new(mode.interval.0, mode.interval.1));
         if let Err(e) = device.set_params(&rate) {
@@ -166,6 +164,7 @@ fn open_session(target: Option<&PathBuf>, cfg: &CaptureConfig) -> Result<Session
         height: got.height,
         stride: got.stride,
         description,
+        saved,
     })
 }
 

@@ -4,10 +4,12 @@
 //! Device nodes are looked up in `/dev`, or in the folder named by `CONTRASTXR_V4L2_DIR`
 //! (for unusual setups, and for the tests' stand-in device).
 
+pub mod auto;
 mod capture;
 mod choose;
 pub mod controls;
 
+pub use auto::looks_built_in;
 pub(crate) use capture::spawn;
 pub use choose::{choose_mode, Mode};
 
@@ -65,62 +67,6 @@ pub fn probe(path: &Path) -> io::Result<(Device, DeviceInfo)> {
             && caps.capabilities.contains(Flags::STREAMING),
     };
     Ok((device, info))
-}
-
-/// Words in a camera's name that mark a laptop's or monitor's own camera, which faces the
-/// user, not the world.
-const BUILT_IN_WORDS: [&str; 6] = [
-    "integrated",
-    "built-in",
-    "builtin",
-    "facetime",
-    "webcam",
-    "user facing",
-];
-
-/// Whether a camera's name (its card, or a stable path's name) says it is built in.
-pub fn looks_built_in(name: &str) -> bool {
-    let name = name.to_lowercase().replace(['_', '-'], " ");
-    BUILT_IN_WORDS
-        .iter()
-        .any(|w| name.contains(&w.replace('-', " ")))
-}
-
-/// The camera `v4l2:auto` takes among `dir`'s capture devices, and why: the first that does
-/// not look built in, else the first.
-pub fn auto_capture_device(dir: &Path) -> Option<(PathBuf, String)> {
-    let found: Vec<DeviceInfo> = device_nodes(dir)
-        .into_iter()
-        .filter_map(|p| probe(&p).ok().map(|(_, info)| info))
-        .filter(|info| info.capture)
-        .collect();
-    let built_in = |i: &DeviceInfo| {
-        looks_built_in(&i.card)
-            || stable_paths(dir, &i.path)
-                .iter()
-                .any(|p| looks_built_in(&p.to_string_lossy()))
-    };
-    let chosen = found.iter().position(|i| !built_in(i));
-    let (k, why) = match chosen {
-        Some(k) if found.len() == 1 => (k, "the only capture device".to_string()),
-        Some(k) => (
-            k,
-            format!(
-                "the first of {} capture devices that does not look like a built-in camera",
-                found.len()
-            ),
-        ),
-        None if found.is_empty() => return None,
-        None => (
-            0,
-            "every capture device looks built in: the first".to_string(),
-        ),
-    };
-    let info = &found[k];
-    Some((
-        info.path.clone(),
-        format!("{} ({}): {why}", info.path.display(), info.card),
-    ))
 }
 
 /// The stable names of a device node: links to it in `dir`/v4l/by-id and by-path (udev's),
@@ -216,7 +162,6 @@ mod tests {
     fn laptop_cameras_look_built_in_and_others_do_not() {
         for name in [
             "Integrated Camera",
-            "HP HD Webcam",
             "FaceTime HD Camera",
             "usb-Chicony_Electronics_Co._Ltd._Integrated_Camera_0001-video-index0",
             "Built-in iSight",
@@ -226,6 +171,8 @@ mod tests {
         for name in [
             "Arducam OV9281 USB Camera",
             "usb-Intel_R__RealSense_TM_-video-index0",
+            "HD Pro Webcam C920",
+            "Logitech Webcam",
         ] {
             assert!(!looks_built_in(name), "{name}");
         }
