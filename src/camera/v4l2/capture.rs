@@ -281,6 +281,13 @@ impl Capture {
                 io::ErrorKind::TimedOut => stalled(),
                 _ => e,
             })?;
+            // A newer buffer is already filled: this one is stale. Only the newest frame is
+            // converted and handed over, so no queue of old driver buffers lies between the
+            // camera and the frame (the next `next()` gives this buffer back to the driver).
+            if handle.poll(libc::POLLIN, 0)? > 0 {
+                last_frame = Instant::now();
+                continue;
+            }
             match self.convert(session, data, meta) {
                 Ok(frame) => {
                     shared.publish(frame);
