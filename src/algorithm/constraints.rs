@@ -4,7 +4,9 @@
 
 use glam::DVec3;
 
-use super::DIRECTION_EPSILON;
+/// Below this length a scaled vector has no usable direction (|B|, |D'|, |D|; docs/algorithm.md,
+/// Ideal colour I, Chroma step, Comparison methods).
+pub(super) const DIRECTION_EPSILON: f64 = 1e-6;
 
 /// The smallest distance of any evaluated branch quantity from its threshold, in scaled units.
 #[derive(Clone, Copy, Debug)]

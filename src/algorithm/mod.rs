@@ -18,7 +18,3 @@ pub use mapping::CameraMapping;
 pub use params::{Method, Params, ViewMode};
 pub use pixel::{enhance_linear, enhance_srgb8, enhance_srgb8_trace};
 pub use scaled::{enhance_scaled, enhance_scaled_traced, ScaledOutcome};
-
-/// Below this length a scaled vector has no usable direction (|B|, |D'|, |D|; docs/algorithm.md,
-/// Ideal colour I, Chroma step, Comparison methods).
-pub const DIRECTION_EPSILON: f64 = 1e-6;

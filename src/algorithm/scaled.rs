@@ -3,12 +3,13 @@
 
 use glam::DVec3;
 
+use super::constraints::DIRECTION_EPSILON;
 use super::constraints::{
     ab_plane, change_vector, chroma_constraint, jnd_constraint, luminance_constraint, split_chroma,
     Margin,
 };
 use super::params::ACHROMATIC_CHROMA;
-use super::{Method, Params, DIRECTION_EPSILON};
+use super::{Method, Params};
 
 /// P and how close the computation came to a branch flip.
 #[derive(Clone, Copy, Debug)]

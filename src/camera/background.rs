@@ -1,8 +1,9 @@
 //! The running background source the consumer holds.
 
+use crate::camera::error::CameraError;
 use crate::camera::files::{color_frame, image_frame, open_video, play};
 use crate::camera::frame::{Frame, Shared, SourceStatus};
-use crate::camera::{v4l2, CameraError, CaptureConfig, SourceSpec};
+use crate::camera::{v4l2, CaptureConfig, SourceSpec};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::thread::JoinHandle;

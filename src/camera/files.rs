@@ -1,12 +1,13 @@
 //! File sources: a PNG or JPEG image, a flat colour, and videos (numbered PNG frames or Y4M) played
 //! in a loop at their frame rate, following wall-clock time.
 
+use crate::camera::error::CameraError;
 use crate::camera::frame::{Frame, Shared};
 use crate::camera::log::log;
 use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
 use crate::camera::y4m::Y4m;
-use crate::camera::{CameraError, CaptureConfig};
+use crate::camera::CaptureConfig;
 use crate::image::RgbaImage;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -12,9 +12,10 @@
 use crate::algorithm::registration::{CameraProfile, Lens, Pose};
 use crate::algorithm::reprojection::panorama_uv;
 use crate::camera::clock::{instant_of_ns, monotonic_now_ns};
+use crate::camera::error::CameraError;
 use crate::camera::frame::{Frame, Shared};
 use crate::camera::log::log;
-use crate::camera::{CameraError, CaptureConfig};
+use crate::camera::CaptureConfig;
 use crate::image::RgbaImage;
 use glam::DVec3;
 use std::collections::VecDeque;

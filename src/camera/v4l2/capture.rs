@@ -4,11 +4,12 @@
 
 use super::{choose_mode, device_dir, modes, probe};
 use crate::camera::convert::{to_rgba_into, PixelFormat};
+use crate::camera::error::CameraError;
 use crate::camera::frame::{Frame, Shared, SourceStatus};
 use crate::camera::log::log;
 use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
-use crate::camera::{CameraError, CaptureConfig, SourceSpec};
+use crate::camera::{CaptureConfig, SourceSpec};
 use std::io;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
