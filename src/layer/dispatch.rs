@@ -19,6 +19,7 @@ pub struct NextFns {
     pub release_swapchain_image: pfn::ReleaseSwapchainImage,
     pub end_frame: pfn::EndFrame,
     pub get_system_properties: pfn::GetSystemProperties,
+    pub enumerate_environment_blend_modes: pfn::EnumerateEnvironmentBlendModes,
 }
 
 /// Looks up `name` in the next layer.
@@ -100,6 +101,12 @@ impl NextFns {
                 instance,
                 c"xrGetSystemProperties",
                 pfn::GetSystemProperties
+            ),
+            enumerate_environment_blend_modes: resolve!(
+                gipa,
+                instance,
+                c"xrEnumerateEnvironmentBlendModes",
+                pfn::EnumerateEnvironmentBlendModes
             ),
         })
     }
