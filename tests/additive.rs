@@ -131,3 +131,35 @@ fn the_device_table_key_offers_additive_to_its_system_only() {
         assert_eq!(enhanced > 0, expected == "ADDITIVE", "{}", run.describe());
     }
 }
+
+/// Shipped profiles (here at `$CONTRASTXR_DEVICES`) apply to their system, and the user's
+/// device table overrides them.
+#[test]
+fn shipped_profiles_apply_below_the_users_device_table() {
+    let dir = scratch_dir("additive-shipped");
+    let shipped = dir.join("devices.toml");
+    let text = format!("[device.\"{SYSTEM}\"]\nenvironment_blend_mode = \"additive\"\n");
+    std::fs::write(&shipped, text).unwrap();
+    let config = dir.join("config.toml");
+    let text = format!("[device.\"{SYSTEM}\"]\nenvironment_blend_mode = \"\"\n");
+    std::fs::write(&config, text).unwrap();
+    let cmd = [XR_CLIENT, "--json", "--frames", "4", "--size", "64x48"];
+    for (user, expected) in [(false, "ADDITIVE"), (true, "OPAQUE")] {
+        let mut env = env_with(&dir.join("none"), &[]);
+        env.push(("CONTRASTXR_DEVICES".into(), shipped.display().to_string()));
+        let user_file = if user {
+            config.clone()
+        } else {
+            dir.join("missing.toml")
+        };
+        env.push(("CONTRASTXR_CONFIG".into(), user_file.display().to_string()));
+        let Some(run) = run(&cmd, &env) else { return };
+        run.assert_success();
+        assert_eq!(
+            run.client_report()["blend_mode"],
+            expected,
+            "{}",
+            run.describe()
+        );
+    }
+}

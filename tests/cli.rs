@@ -463,6 +463,14 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
         serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
     assert_eq!(v["api_layer"]["library_path"], copy.to_str().unwrap());
     assert_eq!(v["api_layer"]["enable_environment"], "CONTRASTXR");
+    // The shipped device profiles lie beside the copy, where the layer looks for them.
+    let profiles = home.join("contrastxr/devices.toml");
+    let shipped =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("devices.toml"));
+    assert_eq!(
+        std::fs::read_to_string(&profiles).unwrap(),
+        shipped.unwrap()
+    );
     // `cargo clean` removes the original: the installed copy stays as it was.
     std::fs::remove_file(&original).unwrap();
     assert_eq!(
@@ -471,7 +479,7 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
     );
     let o = run(&["uninstall", "--user"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!manifest.exists() && !copy.exists());
+    assert!(!manifest.exists() && !copy.exists() && !profiles.exists());
     let o = run(&["uninstall"]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("was not installed"));
 }
