@@ -897,3 +897,46 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     let (_, report) = doctor(&root, &[("PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS", "1")]);
     assert_eq!(finding(&report, "steam")["status"], "ok");
 }
+
+/// After `install --user`, `config print --device` applies the shipped profile of that system,
+/// each value with its origin (the shipped file and line), and the user's device table beats it.
+#[test]
+fn config_print_device_shows_the_shipped_profile_below_the_users_table() {
+    let root = fresh_home("shipped-profiles");
+    let system = "Monado: Xreal Air Glasses";
+    let o = isolated(&root, &["install", "--user"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let shipped = root.join("data/contrastxr/devices.toml");
+    let line = std::fs::read_to_string(&shipped)
+        .unwrap()
+        .lines()
+        .position(|l| l == format!("[device.\"{system}\"]"))
+        .unwrap()
+        + 2;
+    let print = |root: &Path| {
+        let o = isolated(root, &["config", "print", "--device", system], &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let out = print(&root);
+    let wanted = format!(
+        "environment_blend_mode = \"additive\"  # {}:{line}",
+        shipped.display()
+    );
+    assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+    // Another system: the default.
+    let o = isolated(&root, &["config", "print", "--device", "Other"], &[]);
+    let other = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        other.contains("environment_blend_mode = \"\"  # default"),
+        "{other}"
+    );
+    // The user's device table overrides the shipped one.
+    let config = root.join("config/contrastxr/config.toml");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    let text = format!("[device.\"{system}\"]\nenvironment_blend_mode = \"\"\n");
+    std::fs::write(&config, text).unwrap();
+    let out = print(&root);
+    let wanted = format!("environment_blend_mode = \"\"  # {}:2", config.display());
+    assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+}

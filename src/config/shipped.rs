@@ -1,7 +1,9 @@
 //! The shipped device profiles (`devices.toml`): `[device."SYSTEM"]` tables for headsets people
 //! run on Linux, applied below everything in the user's config file. Found at
 //! `$CONTRASTXR_DEVICES`, else beside the running layer library (where `contrastxr install`
-//! puts them), else `/usr/share/contrastxr/devices.toml` (the package's).
+//! puts them), else beside `install --user`'s and `install --system`'s copies of the library
+//! (for the command-line tool, which has no layer loaded), else
+//! `/usr/share/contrastxr/devices.toml` (the package's).
 
 use super::path::Env;
 use std::path::PathBuf;
@@ -27,10 +29,21 @@ pub fn find(env: &Env) -> Option<PathBuf> {
     if let Some(p) = env.get("CONTRASTXR_DEVICES").filter(|p| !p.is_empty()) {
         return Some(PathBuf::from(p));
     }
+    let data_home = env
+        .get("XDG_DATA_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| {
+            env.get("HOME")
+                .map(|h| PathBuf::from(h).join(".local/share"))
+        });
     let beside = library_dir().map(|d| d.join(FILE_NAME));
+    let user = data_home.map(|d| d.join("contrastxr").join(FILE_NAME));
+    let system = PathBuf::from("/usr/local/lib/contrastxr").join(FILE_NAME);
     beside
         .into_iter()
-        .chain([PathBuf::from(PACKAGED_PATH)])
+        .chain(user)
+        .chain([system, PathBuf::from(PACKAGED_PATH)])
         .find(|p| p.is_file())
 }
 
