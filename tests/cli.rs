@@ -725,6 +725,7 @@ fn doctor_without_a_manifest_reports_the_problem_and_its_fix() {
             "config",
             "camera",
             "camera-profile",
+            "device-profile",
             "last-app",
             "steam"
         ]
@@ -884,6 +885,23 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     let p = finding(&report, "camera-profile");
     assert_eq!(p["status"], "ok", "{p}");
     assert!(text(p, "detail").contains("[device.\"Glasses\"]"), "{p}");
+    // The shipped profiles: none for this headset, then one that names it.
+    let d = finding(&report, "device-profile");
+    assert!(
+        text(d, "detail").starts_with("no shipped device profiles"),
+        "{d}"
+    );
+    let shipped = root.join("devices.toml");
+    std::fs::write(
+        &shipped,
+        "[device.\"Glasses\"]\nenvironment_blend_mode = \"additive\"\n",
+    )
+    .unwrap();
+    let shipped_text = shipped.to_string_lossy().into_owned();
+    let (_, report) = doctor(&root, &[("CONTRASTXR_DEVICES", &shipped_text)]);
+    let d = finding(&report, "device-profile");
+    let wanted = format!("the headset \"Glasses\" matched the shipped profile [device.\"Glasses\"] in {shipped_text}");
+    assert_eq!(text(d, "detail"), wanted, "{d}");
     // Steam installed: its games need the variable, in their launch options or here.
     assert_eq!(finding(&report, "steam")["status"], "ok");
     std::fs::create_dir_all(root.join(".steam/steam")).unwrap();
