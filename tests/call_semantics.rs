@@ -131,6 +131,113 @@ cases! {
         "end SUCCESS", 3;
     // A frame ended with the image still acquired: the runtime refuses the layer (not released).
     end_without_release: "begin,acquire,wait,end,release,end-empty", "end ERROR_", 0;
+    // Without environment_blend_mode the runtime's blend modes stand, in every call form.
+    blend_modes_untouched: "blend-count,blend-short,blend-fill,blend-bad-view", "blend-fill SUCCESS", 0;
+    // The runtime refuses the ADDITIVE frame; the layer had enhanced its released image (it
+    // acts before the runtime answers), and the app gets the runtime's error.
+    additive_frames_refused: "begin,acquire,wait,release,end-additive", "end-additive ERROR_", 1;
+}
+
+/// Runs `script` with the layer off and on with `environment_blend_mode = "additive"` (no
+/// force); returns both scripts' results and the frames the layer enhanced.
+fn run_additive(tag: &str, script: &str) -> Option<(Vec<String>, Vec<String>, usize)> {
+    let sandbox = sandbox()?;
+    let cmd = [
+        XR_CLIENT,
+        "--json",
+        "--validation",
+        "--size",
+        "64x48",
+        "--script",
+        script,
+    ];
+    let off = sandbox.run(&cmd, &[("CONTRASTXR", "0")]);
+    let dir = scratch_dir(&format!("semantics-{tag}"));
+    let dir_text = dir.to_string_lossy().into_owned();
+    let on = sandbox.run(
+        &cmd,
+        &[
+            ("CONTRASTXR", "1"),
+            ("CONTRASTXR_ENVIRONMENT_BLEND_MODE", "additive"),
+            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+            ("CONTRASTXR_CAPTURE_DIR", &dir_text),
+            ("CONTRASTXR_CAPTURE_FRAMES", "1000"),
+        ],
+    );
+    Some((script_of(&off), script_of(&on), enhanced_frames(&dir)))
+}
+
+/// `RESULT n=COUNT [MODES]` of a blend-modes op.
+fn blend_answer(line: &str) -> (String, u32, Vec<String>) {
+    let rest = line.split_once(' ').unwrap().1;
+    let (result, rest) = rest.split_once(" n=").unwrap();
+    let (count, modes) = rest.split_once(' ').unwrap();
+    let modes = modes.trim_matches(['[', ']']);
+    let modes = modes.split_whitespace().map(String::from).collect();
+    (result.to_string(), count.parse().unwrap(), modes)
+}
+
+/// The runtime lacks ADDITIVE: with the key, ADDITIVE comes first and the count grows by one in
+/// both call forms, a capacity that no longer fits is XR_ERROR_SIZE_INSUFFICIENT with the count
+/// written (as the runtime answers a short array), and an invalid view configuration keeps the
+/// runtime's error.
+#[test]
+fn additive_display_lists_additive_first() {
+    let script = "blend-count,blend-short,blend-fill,blend-bad-view";
+    let Some((off, on, _)) = run_additive("additive-blend", script) else {
+        return;
+    };
+    let (off_count, on_count) = (blend_answer(&off[0]), blend_answer(&on[0]));
+    assert_eq!(off_count.0, "SUCCESS", "{off:?}");
+    assert!(!off_count.2.contains(&"ADDITIVE".to_string()), "{off:?}");
+    assert_eq!(
+        on_count,
+        ("SUCCESS".into(), off_count.1 + 1, vec![]),
+        "{on:?}"
+    );
+    let (off_fill, on_fill) = (blend_answer(&off[2]), blend_answer(&on[2]));
+    let mut wanted = vec!["ADDITIVE".to_string()];
+    wanted.extend(off_fill.2.iter().cloned());
+    assert_eq!(
+        on_fill,
+        ("SUCCESS".into(), off_fill.1 + 1, wanted),
+        "{on:?}"
+    );
+    // Capacity 1: the runtime's one mode fits, the layer's two do not.
+    assert_eq!(off_fill.1, 1, "the simulated HMD has one mode: {off:?}");
+    assert_eq!(blend_answer(&off[1]).0, "SUCCESS");
+    assert_eq!(
+        blend_answer(&on[1]),
+        ("ERROR_SIZE_INSUFFICIENT".into(), 2, vec![]),
+        "{on:?}"
+    );
+    assert!(off[3].contains("ERROR_"), "{off:?}");
+    assert_eq!(off[3], on[3]);
+}
+
+/// An ADDITIVE frame the runtime refuses is accepted and enhanced (without force) with the key;
+/// an OPAQUE frame keeps the runtime's answer and passes through.
+#[test]
+fn additive_display_accepts_and_enhances_additive_frames() {
+    let frame = "begin,acquire,wait,release,";
+    let script = format!("{frame}end-additive");
+    let Some((off, on, enhanced)) = run_additive("additive-end", &script) else {
+        return;
+    };
+    assert_eq!(
+        off[4], "end-additive ERROR_ENVIRONMENT_BLEND_MODE_UNSUPPORTED",
+        "{off:?}"
+    );
+    assert_eq!(on[4], "end-additive SUCCESS", "{on:?}");
+    assert_eq!(off[..4], on[..4]);
+    assert_eq!(enhanced, 1);
+    let script = format!("{frame}end-opaque");
+    let Some((off, on, enhanced)) = run_additive("additive-end-opaque", &script) else {
+        return;
+    };
+    assert_eq!(off, on);
+    assert_eq!(on[4], "end-opaque SUCCESS", "{on:?}");
+    assert_eq!(enhanced, 0);
 }
 
 /// xrDestroySwapchain on one thread while xrEndFrame runs on another: the layer takes its locks

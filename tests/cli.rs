@@ -463,6 +463,14 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
         serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
     assert_eq!(v["api_layer"]["library_path"], copy.to_str().unwrap());
     assert_eq!(v["api_layer"]["enable_environment"], "CONTRASTXR");
+    // The shipped device profiles lie beside the copy, where the layer looks for them.
+    let profiles = home.join("contrastxr/devices.toml");
+    let shipped =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("devices.toml"));
+    assert_eq!(
+        std::fs::read_to_string(&profiles).unwrap(),
+        shipped.unwrap()
+    );
     // `cargo clean` removes the original: the installed copy stays as it was.
     std::fs::remove_file(&original).unwrap();
     assert_eq!(
@@ -471,7 +479,7 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
     );
     let o = run(&["uninstall", "--user"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!manifest.exists() && !copy.exists());
+    assert!(!manifest.exists() && !copy.exists() && !profiles.exists());
     let o = run(&["uninstall"]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("was not installed"));
 }
@@ -734,6 +742,7 @@ fn doctor_without_a_manifest_reports_the_problem_and_its_fix() {
             "config",
             "camera",
             "camera-profile",
+            "device-profile",
             "last-app",
             "steam"
         ]
@@ -893,6 +902,23 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     let p = finding(&report, "camera-profile");
     assert_eq!(p["status"], "ok", "{p}");
     assert!(text(p, "detail").contains("[device.\"Glasses\"]"), "{p}");
+    // The shipped profiles: none for this headset, then one that names it.
+    let d = finding(&report, "device-profile");
+    assert!(
+        text(d, "detail").starts_with("no shipped device profiles"),
+        "{d}"
+    );
+    let shipped = root.join("devices.toml");
+    std::fs::write(
+        &shipped,
+        "[device.\"Glasses\"]\nenvironment_blend_mode = \"additive\"\n",
+    )
+    .unwrap();
+    let shipped_text = shipped.to_string_lossy().into_owned();
+    let (_, report) = doctor(&root, &[("CONTRASTXR_DEVICES", &shipped_text)]);
+    let d = finding(&report, "device-profile");
+    let wanted = format!("the headset \"Glasses\" matched the shipped profile [device.\"Glasses\"] in {shipped_text}");
+    assert_eq!(text(d, "detail"), wanted, "{d}");
     // Steam installed: its games need the variable, in their launch options or here.
     assert_eq!(finding(&report, "steam")["status"], "ok");
     std::fs::create_dir_all(root.join(".steam/steam")).unwrap();
@@ -905,4 +931,47 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     );
     let (_, report) = doctor(&root, &[("PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS", "1")]);
     assert_eq!(finding(&report, "steam")["status"], "ok");
+}
+
+/// After `install --user`, `config print --device` applies the shipped profile of that system,
+/// each value with its origin (the shipped file and line), and the user's device table beats it.
+#[test]
+fn config_print_device_shows_the_shipped_profile_below_the_users_table() {
+    let root = fresh_home("shipped-profiles");
+    let system = "Monado: Xreal Air Glasses";
+    let o = isolated(&root, &["install", "--user"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let shipped = root.join("data/contrastxr/devices.toml");
+    let line = std::fs::read_to_string(&shipped)
+        .unwrap()
+        .lines()
+        .position(|l| l == format!("[device.\"{system}\"]"))
+        .unwrap()
+        + 2;
+    let print = |root: &Path| {
+        let o = isolated(root, &["config", "print", "--device", system], &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let out = print(&root);
+    let wanted = format!(
+        "environment_blend_mode = \"additive\"  # {}:{line}",
+        shipped.display()
+    );
+    assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+    // Another system: the default.
+    let o = isolated(&root, &["config", "print", "--device", "Other"], &[]);
+    let other = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        other.contains("environment_blend_mode = \"\"  # default"),
+        "{other}"
+    );
+    // The user's device table overrides the shipped one.
+    let config = root.join("config/contrastxr/config.toml");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    let text = format!("[device.\"{system}\"]\nenvironment_blend_mode = \"\"\n");
+    std::fs::write(&config, text).unwrap();
+    let out = print(&root);
+    let wanted = format!("environment_blend_mode = \"\"  # {}:2", config.display());
+    assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
 }

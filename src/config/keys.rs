@@ -592,6 +592,22 @@ pub const KEYS: &[Key] = &[
         get: |s| Value::Bool(s.force),
     },
     Key {
+        name: "environment_blend_mode",
+        env: "CONTRASTXR_ENVIRONMENT_BLEND_MODE",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "the display's true blend mode: additive (apps are offered ADDITIVE, and its frames are enhanced, even where the runtime reports only OPAQUE), or \"\" to trust the runtime",
+        set: |s, v| {
+            s.additive_display = match v {
+                Value::Text(t) if t == "additive" => true,
+                Value::Text(t) if t.is_empty() => false,
+                other => return Err(format!("{other} is not additive or \"\"")),
+            };
+            Ok(())
+        },
+        get: |s| Value::Text(if s.additive_display { "additive" } else { "" }.into()),
+    },
+    Key {
         name: "pipelines",
         env: "CONTRASTXR_PIPELINES",
         env_negated: false,

@@ -1,7 +1,8 @@
 //! The layer's configuration: a TOML file with per-app tables, environment overrides, every
 //! value's origin, hot reload, and the edits behind `contrastxr set` and `toggle`.
 //!
-//! Sources, lowest first: defaults, the file's top level, its `[device."SYSTEM"]` table (SYSTEM
+//! Sources, lowest first: defaults, the shipped device profiles' `[device."SYSTEM"]` table
+//! ([`shipped`]), the file's top level, its `[device."SYSTEM"]` table (SYSTEM
 //! is XrSystemProperties.systemName, known once the app creates a session), its `[app."NAME"]`
 //! table (NAME is XrApplicationInfo.applicationName), the `CONTRASTXR_*` environment variables. The file is
 //! `$CONTRASTXR_CONFIG`, else `$XDG_CONFIG_HOME/contrastxr/config.toml`, else
@@ -14,13 +15,15 @@ pub mod keys;
 pub mod path;
 pub mod resolve;
 mod settings;
+pub mod shipped;
 pub mod value;
 pub mod watch;
 
 pub use keys::{key, Key, KEYS};
 pub use path::Env;
 pub use resolve::{
-    check, is_off, load, load_for, resolve, resolve_for, Origin, Resolved, Source, Who,
+    check, is_off, load, load_for, resolve, resolve_for, resolve_with, Origin, Resolved, Source,
+    Who,
 };
 pub use settings::{Capture, Registration, Settings, EYES};
 pub use value::{Kind, Value};

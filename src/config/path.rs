@@ -15,7 +15,9 @@ pub struct Env {
 
 impl Env {
     pub fn capture() -> Env {
-        let wanted = |k: &str| k.starts_with("CONTRASTXR") || k == "XDG_CONFIG_HOME" || k == "HOME";
+        let wanted = |k: &str| {
+            k.starts_with("CONTRASTXR") || ["XDG_CONFIG_HOME", "XDG_DATA_HOME", "HOME"].contains(&k)
+        };
         Env {
             vars: std::env::vars_os()
                 .filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?)))

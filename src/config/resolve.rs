@@ -1,4 +1,5 @@
-//! Effective settings for one app on one device: the defaults, then the file's top-level keys,
+//! Effective settings for one app on one device: the defaults, then the shipped profiles'
+//! `[device."SYSTEM"]` table, then the file's top-level keys,
 //! then its `[device."SYSTEM"]` table (once the system is known), then its `[app."NAME"]`
 //! table, then the environment. An invalid value gets one message naming its
 //! file, line and key (or its variable), and is ignored: the key keeps the value it had
@@ -162,6 +163,21 @@ impl Resolved {
         }
     }
 
+    /// The shipped profiles' table for `who`'s device only (problems are the package's, and
+    /// reported by `contrastxr doctor`, not at every start).
+    fn apply_shipped(&mut self, who: Who, source: Source) {
+        let Ok(parsed) = file::parse(source.text) else {
+            return;
+        };
+        for (name, entries) in &parsed.devices {
+            if Some(name.as_str()) == who.device {
+                let before = self.problems.len();
+                self.apply_entries(source.path, entries);
+                self.problems.truncate(before);
+            }
+        }
+    }
+
     fn apply_env(&mut self, env: &Env) {
         for (index, key) in KEYS.iter().enumerate() {
             if let Some(text) = env.get(key.env) {
@@ -190,7 +206,20 @@ pub fn resolve(app: &str, file: Option<Source>, env: &Env) -> Resolved {
 
 /// The effective settings for an app on a device from a file (if any) and the environment.
 pub fn resolve_for(who: Who, file: Option<Source>, env: &Env) -> Resolved {
+    resolve_with(who, None, file, env)
+}
+
+/// [`resolve_for`] with the shipped device profiles below the file.
+pub fn resolve_with(
+    who: Who,
+    shipped: Option<Source>,
+    file: Option<Source>,
+    env: &Env,
+) -> Resolved {
     let mut r = Resolved::new();
+    if let Some(source) = shipped {
+        r.apply_shipped(who, source);
+    }
     if let Some(source) = file {
         r.apply_file(who, source);
     }
@@ -205,12 +234,21 @@ pub fn load(app: &str, env: &Env) -> Resolved {
 
 /// [`load`] for an app on a device.
 pub fn load_for(who: Who, env: &Env) -> Resolved {
+    let shipped_path = who.device.and_then(|_| super::shipped::find(env));
+    let shipped_text = shipped_path
+        .as_ref()
+        .and_then(|p| std::fs::read_to_string(p).ok());
+    let shipped = shipped_path
+        .as_deref()
+        .zip(shipped_text.as_deref())
+        .map(|(path, text)| Source { path, text });
     let Some(path) = path::find(env) else {
-        return resolve_for(who, None, env);
+        return resolve_with(who, shipped, None, env);
     };
     match std::fs::read_to_string(&path) {
-        Ok(text) => resolve_for(
+        Ok(text) => resolve_with(
             who,
+            shipped,
             Some(Source {
                 path: &path,
                 text: &text,
@@ -218,7 +256,7 @@ pub fn load_for(who: Who, env: &Env) -> Resolved {
             env,
         ),
         Err(e) => {
-            let mut r = resolve_for(who, None, env);
+            let mut r = resolve_with(who, shipped, None, env);
             r.file = Some(path.clone());
             r.file_failed = true;
             r.problems.insert(

@@ -20,6 +20,9 @@ pub struct Settings {
     pub enabled: bool,
     /// Act on any environment blend mode, not only ADDITIVE.
     pub force: bool,
+    /// The display's true blend mode is ADDITIVE though its runtime may report another
+    /// (`environment_blend_mode = "additive"`); false: trust the runtime.
+    pub additive_display: bool,
     /// Also enhance quad layers.
     pub quad_layers: bool,
     /// `pipelines = "wait"`: the first frame that needs a pipeline waits for its build instead
@@ -54,6 +57,7 @@ impl Default for Settings {
         Settings {
             enabled: true,
             force: false,
+            additive_display: false,
             quad_layers: false,
             wait_for_pipelines: false,
             params: Params::default(),

@@ -118,6 +118,16 @@ impl Live {
         Some(r)
     }
 
+    /// The settings the app would have on the system named `device`, without changing the
+    /// device in use (for calls made before a session exists).
+    pub fn on_device(&self, device: &str) -> Settings {
+        let who = Who {
+            app: &self.app,
+            device: Some(device),
+        };
+        load_for(who, &self.env).settings
+    }
+
     fn resolve(&self) -> Resolved {
         let device = lock(&self.device).clone();
         let who = Who {

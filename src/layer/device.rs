@@ -13,7 +13,11 @@ use openxr_sys as xr;
 use std::sync::Arc;
 
 /// The system's name, or None (logged once) if the runtime does not say.
-fn system_name(next: &NextFns, instance: xr::Instance, system: xr::SystemId) -> Option<String> {
+pub(super) fn system_name(
+    next: &NextFns,
+    instance: xr::Instance,
+    system: xr::SystemId,
+) -> Option<String> {
     // SAFETY: an all-zero XrSystemProperties is a valid out struct once its type is set.
     let mut props: xr::SystemProperties = unsafe { std::mem::zeroed() };
     props.ty = xr::SystemProperties::TYPE;

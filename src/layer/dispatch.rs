@@ -22,6 +22,7 @@ pub struct NextFns {
     pub create_reference_space: pfn::CreateReferenceSpace,
     pub destroy_space: pfn::DestroySpace,
     pub locate_space: pfn::LocateSpace,
+    pub enumerate_environment_blend_modes: pfn::EnumerateEnvironmentBlendModes,
 }
 
 /// Looks up `name` in the next layer.
@@ -112,6 +113,12 @@ impl NextFns {
             ),
             destroy_space: resolve!(gipa, instance, c"xrDestroySpace", pfn::DestroySpace),
             locate_space: resolve!(gipa, instance, c"xrLocateSpace", pfn::LocateSpace),
+            enumerate_environment_blend_modes: resolve!(
+                gipa,
+                instance,
+                c"xrEnumerateEnvironmentBlendModes",
+                pfn::EnumerateEnvironmentBlendModes
+            ),
         })
     }
 }

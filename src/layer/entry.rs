@@ -6,7 +6,7 @@ use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
 use super::settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
-use super::{log, session, spaces, swapchain, timespec};
+use super::{blend, log, session, spaces, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};
@@ -207,6 +207,11 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
             "xrDestroySession" => std::mem::transmute::<pfn::DestroySession, pfn::VoidFunction>(
                 session::destroy_session,
             ),
+            "xrEnumerateEnvironmentBlendModes" => {
+                std::mem::transmute::<pfn::EnumerateEnvironmentBlendModes, pfn::VoidFunction>(
+                    blend::enumerate_environment_blend_modes,
+                )
+            }
             "xrEndFrame" => {
                 std::mem::transmute::<pfn::EndFrame, pfn::VoidFunction>(session::end_frame)
             }

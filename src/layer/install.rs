@@ -100,7 +100,8 @@ pub struct Installed {
     pub library: PathBuf,
 }
 
-/// Copies `library` to [`library_copy`] and writes the manifest naming the copy.
+/// Copies `library` to [`library_copy`], writes the shipped device profiles beside it and the
+/// manifest naming the copy.
 pub fn install(scope: Scope, library: &Path) -> Result<Installed, String> {
     if !library.is_absolute() || !library.is_file() {
         return Err(format!(
@@ -112,6 +113,10 @@ pub fn install(scope: Scope, library: &Path) -> Result<Installed, String> {
     if library.canonicalize().ok() != copy.canonicalize().ok() {
         copy_library(library, &copy)?;
     }
+    // The shipped device profiles beside the library, where the layer looks for them.
+    let profiles = copy.with_file_name(crate::config::shipped::FILE_NAME);
+    std::fs::write(&profiles, crate::config::shipped::TEXT)
+        .map_err(|e| format!("cannot write {}: {e}", profiles.display()))?;
     let dir = layer_dir(scope)?;
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let path = dir.join(MANIFEST_NAME);
@@ -135,7 +140,9 @@ fn remove(path: &Path) -> Result<bool, String> {
 pub fn uninstall(scope: Scope) -> Result<Option<PathBuf>, String> {
     let path = layer_dir(scope)?.join(MANIFEST_NAME);
     let removed = remove(&path)?;
-    remove(&library_copy(scope)?)?;
+    let copy = library_copy(scope)?;
+    remove(&copy.with_file_name(crate::config::shipped::FILE_NAME))?;
+    remove(&copy)?;
     Ok(removed.then_some(path))
 }
 

@@ -3,6 +3,7 @@
 //! It must never crash or corrupt the host app: every entry point catches panics, and any
 //! failure turns the affected session into pass-through with one log line.
 
+mod blend;
 pub mod capture;
 mod device;
 mod dispatch;

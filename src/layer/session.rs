@@ -9,7 +9,7 @@ use super::ffi::{find_in_chain, guard, LayerError};
 use super::processor::Processor;
 use super::settings::Settings;
 use super::state::{self, lock, SessionState};
-use super::{device, frame, log, sources, swapchain};
+use super::{blend, device, frame, log, sources, swapchain};
 use crate::gpu::{Engine, GpuDevice};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
@@ -50,6 +50,9 @@ pub unsafe extern "system" fn create_session(
         // SAFETY: session was written by the successful create call.
         let handle = unsafe { *session };
         let motion = super::motion::SessionMotion::create(&inst.next, handle, inst.timespec);
+        if let Some(system) = system {
+            blend::remember(handle, instance, system);
+        }
         let state = SessionState {
             handle,
             instance,
@@ -112,6 +115,7 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Proce
 pub fn forget(session: xr::Session) {
     let removed = state::registry().sessions.remove(&session.into_raw());
     sources::reopening().remove(&session.into_raw());
+    blend::forget(session);
     if let Some(s) = removed {
         let mut s = lock(&s);
         // On the app's thread, inside xrDestroySession or xrDestroyInstance: the pipeline
@@ -217,6 +221,12 @@ pub unsafe extern "system" fn end_frame(
         if done.is_err() {
             recover_end_frame(session, &s);
         }
+        // An app's ADDITIVE frame on a display set additive: the runtime gets a mode it has.
+        let additive = lock(&s).settings.additive_display;
+        let shown = blend::for_runtime(session, &next, additive, info);
+        let info = shown
+            .as_ref()
+            .map_or(info, |f| f as *const xr::FrameEndInfo);
         // SAFETY: forwarding the app's call (no layer lock is held while the runtime works).
         Ok(unsafe { (next.end_frame)(session, info) })
     })

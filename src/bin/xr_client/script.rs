@@ -6,7 +6,10 @@
 //! Ops (comma-separated): `acquire`, `wait`, `release` (the script's swapchain), `begin`
 //! (xrWaitFrame, then xrBeginFrame: the recorded result is xrBeginFrame's), `end` (xrEndFrame
 //! with one projection layer, both views on the script's swapchain, array layers 0 and 1),
-//! `end-empty` (xrEndFrame with no layers), `destroy` (xrDestroySwapchain), `create` (a new
+//! `end-empty` (xrEndFrame with no layers), `end-opaque`/`end-additive` (`end` with that blend
+//! mode), `blend-count`/`blend-short`/`blend-fill`/`blend-bad-view`
+//! (xrEnumerateEnvironmentBlendModes with capacity 0, 1 and 8, and an invalid view
+//! configuration; the count and modes written are recorded too), `destroy` (xrDestroySwapchain), `create` (a new
 //! swapchain replaces the script's one). The script's swapchain is created before the first op.
 //! After a successful `wait` the client clears the waited image to a colour, so a layer has
 //! content to work on.
@@ -30,8 +33,20 @@ pub enum Op {
     Begin,
     End,
     EndEmpty,
+    EndOpaque,
+    EndAdditive,
+    Blend(BlendCall),
     Destroy,
     Create,
+}
+
+/// An xrEnumerateEnvironmentBlendModes call form.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlendCall {
+    Count,
+    Short,
+    Fill,
+    BadView,
 }
 
 pub fn parse(text: &str) -> std::result::Result<Vec<Op>, String> {
@@ -43,10 +58,16 @@ pub fn parse(text: &str) -> std::result::Result<Vec<Op>, String> {
             "begin" => Ok(Op::Begin),
             "end" => Ok(Op::End),
             "end-empty" => Ok(Op::EndEmpty),
+            "end-opaque" => Ok(Op::EndOpaque),
+            "end-additive" => Ok(Op::EndAdditive),
+            "blend-count" => Ok(Op::Blend(BlendCall::Count)),
+            "blend-short" => Ok(Op::Blend(BlendCall::Short)),
+            "blend-fill" => Ok(Op::Blend(BlendCall::Fill)),
+            "blend-bad-view" => Ok(Op::Blend(BlendCall::BadView)),
             "destroy" => Ok(Op::Destroy),
             "create" => Ok(Op::Create),
             other => Err(format!(
-                "unknown script op {other:?}: use acquire wait release begin end end-empty destroy create"
+                "unknown script op {other:?}: use acquire wait release begin end end-empty end-opaque end-additive blend-count blend-short blend-fill blend-bad-view destroy create"
             )),
         })
         .collect()
@@ -60,6 +81,12 @@ fn op_name(op: Op) -> &'static str {
         Op::Begin => "begin",
         Op::End => "end",
         Op::EndEmpty => "end-empty",
+        Op::EndOpaque => "end-opaque",
+        Op::EndAdditive => "end-additive",
+        Op::Blend(BlendCall::Count) => "blend-count",
+        Op::Blend(BlendCall::Short) => "blend-short",
+        Op::Blend(BlendCall::Fill) => "blend-fill",
+        Op::Blend(BlendCall::BadView) => "blend-bad-view",
         Op::Destroy => "destroy",
         Op::Create => "create",
     }
@@ -196,6 +223,14 @@ impl Runner<'_, '_> {
                 let r = self.end(false)?;
                 self.record(op, r, None);
             }
+            Op::EndOpaque | Op::EndAdditive => {
+                let r = self.end_in(true, blend_of(op))?;
+                self.record(op, r, None);
+            }
+            Op::Blend(call) => {
+                let text = blend_modes(self.scene, call)?;
+                self.results.push(format!("{} {text}", op_name(op)));
+            }
             Op::Destroy => {
                 // SAFETY: raw destroy; the handle is not used by the client afterwards except
                 // by later ops of the script, whose answers are recorded.
@@ -236,6 +271,11 @@ impl Runner<'_, '_> {
 
     /// xrEndFrame with the projection layer on the script's swapchain, or with no layers.
     fn end(&mut self, with_layer: bool) -> Result<sys::Result> {
+        self.end_in(with_layer, self.scene.blend_mode)
+    }
+
+    /// [`Runner::end`] in blend mode `mode`.
+    fn end_in(&mut self, with_layer: bool, mode: sys::EnvironmentBlendMode) -> Result<sys::Result> {
         let scene = self.scene;
         let (_, views) = scene
             .session
@@ -278,7 +318,7 @@ impl Runner<'_, '_> {
             ty: sys::FrameEndInfo::TYPE,
             next: ptr::null(),
             display_time: self.display_time,
-            environment_blend_mode: scene.blend_mode,
+            environment_blend_mode: mode,
             layer_count: u32::from(with_layer),
             layers: if with_layer {
                 layers.as_ptr()
@@ -347,4 +387,50 @@ pub fn run(scene: &Scene<'_>, format: SwapchainFormat, ops: &[Op]) -> Result<Vec
     // The swapchain goes with the script; the frame loop goes on with empty frames.
     runner.drop_swapchain();
     outcome.map(|_| runner.results)
+}
+
+fn blend_of(op: Op) -> sys::EnvironmentBlendMode {
+    match op {
+        Op::EndAdditive => sys::EnvironmentBlendMode::ADDITIVE,
+        _ => sys::EnvironmentBlendMode::OPAQUE,
+    }
+}
+
+/// One raw xrEnumerateEnvironmentBlendModes call: its result, the count written and the modes
+/// written (`RESULT n=COUNT [MODE ...]`).
+fn blend_modes(scene: &Scene<'_>, call: BlendCall) -> Result<String> {
+    let instance = scene.session.instance();
+    let system = instance
+        .system(xr::FormFactor::HEAD_MOUNTED_DISPLAY)
+        .ctx("xrGetSystem")?;
+    let (capacity, view) = match call {
+        BlendCall::Count => (0, sys::ViewConfigurationType::PRIMARY_STEREO),
+        BlendCall::Short => (1, sys::ViewConfigurationType::PRIMARY_STEREO),
+        BlendCall::Fill => (8, sys::ViewConfigurationType::PRIMARY_STEREO),
+        BlendCall::BadView => (8, sys::ViewConfigurationType::from_raw(0x7fff_0000)),
+    };
+    let mut modes = [sys::EnvironmentBlendMode::from_raw(0); 8];
+    let mut count = u32::MAX;
+    let array = if capacity == 0 {
+        ptr::null_mut()
+    } else {
+        modes.as_mut_ptr()
+    };
+    // SAFETY: the array holds `capacity` modes (or is null for the count query).
+    let r = unsafe {
+        (instance.fp().enumerate_environment_blend_modes)(
+            instance.as_raw(),
+            system,
+            view,
+            capacity,
+            &mut count,
+            array,
+        )
+    };
+    let written: Vec<String> = modes
+        .iter()
+        .take_while(|m| m.into_raw() != 0)
+        .map(|m| format!("{m:?}"))
+        .collect();
+    Ok(format!("{r:?} n={count} [{}]", written.join(" ")))
 }

@@ -86,7 +86,9 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
         false,
         if text.contains("blend mode") {
             "if the headset is see-through but its runtime reports another blend mode, set \
-             force = true (or CONTRASTXR_FORCE=1)"
+             environment_blend_mode = \"additive\" in its [device.\"...\"] table (or \
+             CONTRASTXR_ENVIRONMENT_BLEND_MODE=additive): apps then render black around their \
+             content; force = true (CONTRASTXR_FORCE=1) acts on opaque frames as they are"
         } else if text.contains("background") {
             "check the camera finding and the background setting (`contrastxr camera list`)"
         } else if text.contains("not a Vulkan session") {

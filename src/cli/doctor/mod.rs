@@ -9,6 +9,7 @@ mod app;
 mod camera;
 mod library;
 mod manifest;
+mod profile;
 mod runtime;
 
 use super::{print, Args, CliError, Opt};
@@ -114,6 +115,7 @@ fn findings() -> Vec<Finding> {
         app::config(&env),
         camera::camera(&settings.background),
         camera::profile(&env, last.system()),
+        profile::device_profile(&env, last.system()),
         last.finding(),
         app::steam(),
     ]
