@@ -6,7 +6,7 @@ use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
 use super::settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
-use super::{blend, log, session, spaces, swapchain, timespec};
+use super::{app_spaces, blend, log, session, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};
@@ -218,10 +218,10 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
             "xrCreateReferenceSpace" => std::mem::transmute::<
                 pfn::CreateReferenceSpace,
                 pfn::VoidFunction,
-            >(spaces::create_reference_space),
-            "xrDestroySpace" => {
-                std::mem::transmute::<pfn::DestroySpace, pfn::VoidFunction>(spaces::destroy_space)
-            }
+            >(app_spaces::create_reference_space),
+            "xrDestroySpace" => std::mem::transmute::<pfn::DestroySpace, pfn::VoidFunction>(
+                app_spaces::destroy_space,
+            ),
             "xrCreateSwapchain" => std::mem::transmute::<pfn::CreateSwapchain, pfn::VoidFunction>(
                 swapchain::create_swapchain,
             ),

@@ -3,6 +3,7 @@
 //! It must never crash or corrupt the host app: every entry point catches panics, and any
 //! failure turns the affected session into pass-through with one log line.
 
+mod app_spaces;
 mod blend;
 pub mod capture;
 mod device;
@@ -18,6 +19,7 @@ mod motion;
 mod processor;
 mod registration;
 pub mod session;
+mod session_motion;
 pub mod settings;
 mod sources;
 mod spaces;

@@ -4,92 +4,23 @@
 //! eye at display ([`crate::algorithm::reprojection`]). Also answers the `world:` source's
 //! questions for head poses, and keeps what captures record of each view.
 
+use super::app_spaces;
 use super::dispatch::NextFns;
 use super::log;
 use super::registration::{self, Source, ViewGeometry};
+pub use super::session_motion::{camera_config, SessionMotion, ViewRecord};
 use super::settings::Settings;
 use super::spaces::{self, Spaces};
 use super::state::SessionState;
-use super::timespec::Timespec;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::registration::{view_mapping, Pose};
 use crate::algorithm::reprojection::view_in_world;
-use crate::camera::{clock, CaptureConfig, HeadPoses, WorldRig};
+use crate::camera::clock;
 use openxr_sys as xr;
-use std::sync::Arc;
 use std::time::Instant;
 
 /// A frame older than this is a still image (`image:`, `color:`), not a capture of the moment.
 const STILL_AFTER: std::time::Duration = std::time::Duration::from_secs(5);
-
-/// A session's motion state.
-#[derive(Default)]
-pub struct SessionMotion {
-    spaces: Option<Spaces>,
-    timespec: Option<Timespec>,
-    /// Without the timespec extension: the smallest displayTime - CLOCK_MONOTONIC seen.
-    offset_ns: Option<i64>,
-    /// Where a `world:` source asks for head poses.
-    pub poses: Arc<HeadPoses>,
-    /// The last enhanced frame's views, as captures record them.
-    pub views: Vec<ViewRecord>,
-}
-
-/// One projection view of a frame, as the capture JSON records it.
-#[derive(Clone, Debug)]
-pub struct ViewRecord {
-    pub display_time: i64,
-    pub view: ViewGeometry,
-    pub space_type: Option<String>,
-    pub camera_time: Option<i64>,
-    /// The head at `camera_time` in the projection layer's space.
-    pub camera_pose: Option<Pose>,
-}
-
-impl SessionMotion {
-    /// Creates the session's spaces (on the app's thread, in xrCreateSession).
-    pub fn create(next: &NextFns, session: xr::Session, timespec: Option<Timespec>) -> Self {
-        SessionMotion {
-            spaces: spaces::create(next, session),
-            timespec,
-            ..Default::default()
-        }
-    }
-
-    /// Destroys the session's spaces (in xrDestroySession, before it is forwarded).
-    pub fn destroy(&mut self, next: &NextFns) {
-        if let Some(s) = self.spaces.take() {
-            spaces::destroy(next, s);
-        }
-    }
-
-    fn xr_time(&self, instance: xr::Instance, ns: i64) -> Option<xr::Time> {
-        match self.timespec.filter(Timespec::available) {
-            Some(t) => t.xr_time(instance, ns),
-            None => self.offset_ns.map(|o| xr::Time::from_nanos(ns + o)),
-        }
-    }
-
-    fn measure_offset(&mut self, display_time: xr::Time) {
-        if self.timespec.is_some_and(|t| t.available()) {
-            return;
-        }
-        log::once("no-timespec", "the runtime cannot convert CLOCK_MONOTONIC to XrTime (no XR_KHR_convert_timespec_time): camera times are mapped through the clocks' offset measured from displayTime");
-        let offset = display_time.as_nanos() - clock::monotonic_now_ns();
-        self.offset_ns = Some(self.offset_ns.map_or(offset, |o| o.min(offset)));
-    }
-}
-
-/// The camera settings to open a source with: a `world:` source gets the camera profile and
-/// this session's head poses.
-pub fn camera_config(settings: &Settings, motion: &SessionMotion) -> CaptureConfig {
-    let mut camera = settings.camera.clone();
-    camera.world = settings.registration.profile().map(|profile| WorldRig {
-        profile,
-        poses: motion.poses.clone(),
-    });
-    camera
-}
 
 /// What one xrEndFrame knows about motion.
 pub struct FrameMotion {
@@ -157,7 +88,7 @@ impl FrameMotion {
         let layer = self
             .spaces
             .and_then(|sp| spaces::locate(&self.next, space, sp.local, self.display_time));
-        let space_type = spaces::type_name(space);
+        let space_type = app_spaces::type_name(space);
         for view in views {
             self.records.push(ViewRecord {
                 display_time: self.display_time.as_nanos(),

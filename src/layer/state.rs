@@ -54,7 +54,7 @@ pub struct SessionState {
     /// regions are unknown).
     pub regions_seen: bool,
     /// The layer's spaces, clock conversion and head poses for motion compensation.
-    pub motion: super::motion::SessionMotion,
+    pub motion: super::session_motion::SessionMotion,
     /// The background frame this xrEndFrame's mappings were computed for.
     pub frame_in_use: Option<crate::camera::Frame>,
 }
