@@ -220,3 +220,53 @@ fn a_circle_is_found() {
     assert!(paths.contains(&vec!["gpu".into(), "engine".into(), "TILE".into()]));
     assert!(paths.contains(&vec!["gpu".into(), "pipelines".into()]));
 }
+
+/// What a `mod.rs` may hold at its top level: module declarations, re-exports and imports (and
+/// their attributes). A definition there (a function, type, constant) is something its own files
+/// would import back from their front door.
+fn mod_rs_definitions(text: &str) -> Vec<String> {
+    const ALLOWED: [&str; 8] = [
+        "mod ",
+        "pub mod ",
+        "pub(crate) mod ",
+        "use ",
+        "pub use ",
+        "pub(crate) use ",
+        "pub(super) use ",
+        "#",
+    ];
+    code(text)
+        .lines()
+        .filter(|l| !l.is_empty() && !l.starts_with([' ', '\t', '}', ')', ']']))
+        .filter(|l| !ALLOWED.iter().any(|a| l.starts_with(a)))
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn mod_rs_files_only_declare_and_re_export() {
+    let mut files = Vec::new();
+    rust_files(Path::new(SRC), &mut files);
+    let mut found = Vec::new();
+    for file in files.iter().filter(|f| f.ends_with("mod.rs")) {
+        let text = std::fs::read_to_string(file).unwrap();
+        for line in mod_rs_definitions(&text) {
+            found.push(format!(
+                "{}: {line}",
+                file.strip_prefix(SRC).unwrap().display()
+            ));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "mod.rs files that define items:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The check can fail: a definition in a front door is found, a declaration is not.
+#[test]
+fn a_definition_in_a_mod_rs_is_found() {
+    let text = "//! Doc.\nmod a;\npub use a::B;\n\n/// Doc.\npub fn c() {\n    d();\n}\n";
+    assert_eq!(mod_rs_definitions(text), ["pub fn c() {"]);
+}

@@ -1,7 +1,7 @@
 //! The config file and its problems, what the last app that loaded the layer logged about it,
 //! and Steam's pressure-vessel setting.
 
-use super::{var, Finding};
+use super::finding::{var, Finding};
 use contrastxr::config::{self, Env, Source};
 use contrastxr::layer::log;
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! The background source the layer would open (the V4L2 cameras and their formats, as
 //! `contrastxr camera list` shows them) and whether the camera's profile is described.
 
-use super::Finding;
+use super::finding::Finding;
 use contrastxr::camera::v4l2::{self, Mode};
 use contrastxr::camera::{parse_source, SourceSpec};
 use contrastxr::config::{self, Env, Who};

@@ -1,7 +1,7 @@
 //! Whether the library a manifest names loads as the OpenXR loader would load it, and exports
 //! the negotiation function the loader calls first.
 
-use super::Finding;
+use super::finding::Finding;
 use std::ffi::{CStr, CString, OsStr};
 use std::os::unix::ffi::OsStrExt;
 use std::path::{Path, PathBuf};

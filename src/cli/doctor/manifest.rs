@@ -8,8 +8,8 @@
 //! layers `XR_API_LAYER_PATH`, when set, replaces them all. `$XDG_CONFIG_HOME` is searched only
 //! for the active runtime, never for layers, so a manifest there is reported as not seen.
 
+use super::finding::{var, Finding};
 use super::library::library_finding;
-use super::{var, Finding};
 use contrastxr::layer::LAYER_NAME;
 use std::path::{Path, PathBuf};
 

@@ -1,6 +1,6 @@
 //! Which shipped device profile matched the headset the last app ran on.
 
-use super::Finding;
+use super::finding::Finding;
 use contrastxr::config::{file, shipped, Env};
 
 /// The shipped profiles' file and its `[device."..."]` table names.

@@ -1,6 +1,6 @@
 //! The active OpenXR runtime (as the loader finds it) and the Vulkan devices.
 
-use super::{var, Finding};
+use super::finding::{var, Finding};
 use ash::vk;
 use std::path::{Path, PathBuf};
 

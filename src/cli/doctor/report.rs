@@ -1,0 +1,105 @@
+//! The doctor command: runs every check and prints the findings as text or JSON.
+
+use super::super::{print, Args, CliError, Opt};
+use super::finding::{Finding, Status};
+use super::{app, camera, manifest, profile, runtime};
+
+pub const OPTIONS: &[Opt] = &[Opt::flag("--json")];
+
+pub fn usage() -> String {
+    "usage: contrastxr doctor [--json]\n\n\
+     Checks everything the layer needs and prints one line per finding (ok, warn or problem),\n\
+     with a fix under each that is not ok:\n\
+     \x20 manifest        the OpenXR loader finds the layer's manifest (implicit, or explicit\n\
+     \x20                 through XR_API_LAYER_PATH) in its search paths: which file\n\
+     \x20 library         the library the manifest names loads and exports\n\
+     \x20                 xrNegotiateLoaderApiLayerInterface\n\
+     \x20 runtime         the active OpenXR runtime (XR_RUNTIME_JSON or active_runtime.json)\n\
+     \x20 vulkan          the Vulkan devices\n\
+     \x20 config          the config file and its problems (file, line and key)\n\
+     \x20 camera          the background source: the V4L2 cameras and their formats\n\
+     \x20 camera-profile  whether the camera's position and lens are described\n\
+     \x20 last-app        what the last app that loaded the layer logged: on, or why not\n\
+     \x20 steam           PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS, which Steam games need\n\
+     --json: one JSON object with every finding (name, status, detail, fix).\n\
+     Exit status 1 when a finding is a problem, 0 otherwise (warnings included).\n"
+        .to_string()
+}
+
+/// Every check, in the order of the report.
+fn findings() -> Vec<Finding> {
+    let search = manifest::Search::run();
+    let env = contrastxr::config::Env::capture();
+    let settings = contrastxr::config::load("", &env).settings;
+    let last = app::LastApp::read();
+    vec![
+        search.manifest_finding(),
+        search.library_finding(),
+        runtime::runtime(),
+        runtime::vulkan(),
+        app::config(&env),
+        camera::camera(&settings.background),
+        camera::profile(&env, last.system()),
+        profile::device_profile(&env, last.system()),
+        last.finding(),
+        app::steam(),
+    ]
+}
+
+fn count(findings: &[Finding], status: Status) -> usize {
+    findings.iter().filter(|f| f.status == status).count()
+}
+
+fn text(findings: &[Finding]) -> String {
+    let mut out = String::from("contrastxr doctor\n");
+    for f in findings {
+        out += &format!("  {:<8} {:<15} {}\n", f.status.name(), f.name, f.detail);
+        if let Some(fix) = &f.fix {
+            out += &format!("  {:<8} {:<15} fix: {fix}\n", "", "");
+        }
+    }
+    out += &format!(
+        "{} problem(s), {} warning(s)\n",
+        count(findings, Status::Problem),
+        count(findings, Status::Warn)
+    );
+    out
+}
+
+fn json(findings: &[Finding]) -> String {
+    let list: Vec<serde_json::Value> = findings
+        .iter()
+        .map(|f| {
+            serde_json::json!({
+                "name": f.name,
+                "status": f.status.name(),
+                "detail": f.detail,
+                "fix": f.fix,
+            })
+        })
+        .collect();
+    let report = serde_json::json!({
+        "ok": count(findings, Status::Problem) == 0,
+        "problems": count(findings, Status::Problem),
+        "warnings": count(findings, Status::Warn),
+        "findings": list,
+    });
+    serde_json::to_string_pretty(&report).expect("JSON of strings") + "\n"
+}
+
+pub fn run(args: &mut Args) -> Result<(), CliError> {
+    let as_json = args.flag("--json");
+    args.finish()?;
+    let findings = findings();
+    print(&if as_json {
+        json(&findings)
+    } else {
+        text(&findings)
+    });
+    match count(&findings, Status::Problem) {
+        0 => Ok(()),
+        n => Err(CliError::Failure(format!(
+            "{n} problem(s) found, each with its fix"
+        ))),
+    }
+}
