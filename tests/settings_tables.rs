@@ -1,6 +1,6 @@
 //! Every setting of the one key table (`config::KEYS`) is in the lists a user reads: the
 //! README's environment-variable table and the commented example config (docs/control.md
-//! explains groups of keys and points to both). A key added to KEYS but missing from either
+//! explains groups of keys and points to the example). A key added to KEYS but missing from either
 //! fails here.
 
 use contrastxr::config::KEYS;
