@@ -19,6 +19,7 @@ pub mod interface;
 pub mod offline;
 pub mod pipeline_cache;
 pub mod pipelines;
+pub mod pixel_codec;
 pub mod process_exit;
 pub mod push_constants;
 mod record;

@@ -5,40 +5,10 @@
 use super::processor::CapturedView;
 use crate::colour;
 use crate::config::{Settings, Value, KEYS};
-use crate::gpu::{PixelFormat, PixelLayout};
+use crate::gpu::pixel_codec;
+use crate::gpu::PixelFormat;
 use crate::image::RgbaImage;
 use std::path::Path;
-
-fn half_to_f32(h: u16) -> f32 {
-    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
-    let exp = i32::from((h >> 10) & 0x1f);
-    let frac = f32::from(h & 0x3ff);
-    match exp {
-        0 => sign * frac * 2f32.powi(-24),
-        31 => sign * f32::INFINITY,
-        e => sign * (1.0 + frac / 1024.0) * 2f32.powi(e - 15),
-    }
-}
-
-/// One raw pixel as (r, g, b, a) channel values in [0, 1] in the format's own encoding.
-fn channels(format: PixelFormat, px: &[u8]) -> [f32; 4] {
-    let word = |i: usize| u32::from_le_bytes([px[i], px[i + 1], px[i + 2], px[i + 3]]);
-    match format.layout {
-        PixelLayout::Rgba8 => [px[0], px[1], px[2], px[3]].map(|b| f32::from(b) / 255.0),
-        PixelLayout::Bgra8 => [px[2], px[1], px[0], px[3]].map(|b| f32::from(b) / 255.0),
-        PixelLayout::A2b10g10r10 => {
-            let w = word(0);
-            let c = |s: u32| ((w >> s) & 1023) as f32 / 1023.0;
-            [c(0), c(10), c(20), (w >> 30) as f32 / 3.0]
-        }
-        PixelLayout::Rgba16Unorm => std::array::from_fn(|k| {
-            f32::from(u16::from_le_bytes([px[2 * k], px[2 * k + 1]])) / 65535.0
-        }),
-        PixelLayout::Rgba16Float => {
-            std::array::from_fn(|k| half_to_f32(u16::from_le_bytes([px[2 * k], px[2 * k + 1]])))
-        }
-    }
-}
 
 /// Converts a region's raw pixels to 8-bit sRGB (sRGB formats are copied, linear ones encoded).
 pub fn to_srgb8(format: PixelFormat, raw: &[u8], width: u32, height: u32) -> RgbaImage {
@@ -47,7 +17,7 @@ pub fn to_srgb8(format: PixelFormat, raw: &[u8], width: u32, height: u32) -> Rgb
         .chunks_exact(bpp)
         .take((width * height) as usize)
         .map(|px| {
-            let c = channels(format, px).map(f64::from);
+            let c = pixel_codec::decode(format, px).map(f64::from);
             // sRGB formats already hold encoded values; linear ones are encoded here.
             let encode = |v: f64| {
                 if format.srgb {
@@ -145,6 +115,7 @@ pub fn write_view(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::PixelLayout;
 
     #[test]
     fn every_config_key_is_in_the_capture_json() {
@@ -163,14 +134,6 @@ mod tests {
         assert_eq!(json["fov_scale"], serde_json::json!([0.65, 0.65]));
         assert_eq!(json["blur_size"], 3);
         assert_eq!(json["blur"], true);
-    }
-
-    #[test]
-    fn half_floats_decode() {
-        assert_eq!(half_to_f32(0x3c00), 1.0);
-        assert_eq!(half_to_f32(0x3800), 0.5);
-        assert_eq!(half_to_f32(0x0000), 0.0);
-        assert!((half_to_f32(0x0001) - 5.96e-8).abs() < 1e-9);
     }
 
     #[test]

@@ -14,7 +14,8 @@ use crate::colour;
 use crate::config::Settings;
 use crate::evaluate::font;
 use crate::gpu::buffer::{record_buffer_copy, GpuBuffer};
-use crate::gpu::{GpuDevice, GpuError, PixelFormat, PixelLayout, ViewTarget};
+use crate::gpu::pixel_codec;
+use crate::gpu::{GpuDevice, GpuError, PixelFormat, ViewTarget};
 use crate::image::RgbaImage;
 use ash::vk;
 use std::collections::hash_map::{Entry, HashMap};
@@ -113,54 +114,14 @@ pub fn runs(text: &str, region: (u32, u32)) -> Vec<Run> {
     out
 }
 
-/// IEEE half float of a value in [0, 1] (normal range or zero; the colour needs no more).
-fn half(v: f32) -> u16 {
-    if v <= 6.2e-5 {
-        return 0;
-    }
-    let bits = v.to_bits();
-    let exp = ((bits >> 23) & 0xff) as i32 - 127 + 15;
-    let mantissa = (bits >> 13) & 0x3ff;
-    // Round to nearest on the first dropped bit.
-    let rounded = ((exp as u32) << 10 | mantissa) + ((bits >> 12) & 1);
-    rounded as u16
-}
-
 /// One pixel of an sRGB-encoded colour in the view's format (linear formats hold linear light).
-pub fn encode(format: PixelFormat, srgb: [u8; 4]) -> Vec<u8> {
-    let linear = |c: u8| colour::srgb_decode(f64::from(c) / 255.0);
-    let stored = |c: u8| {
-        if format.srgb {
-            f64::from(c) / 255.0
-        } else {
-            linear(c)
-        }
+pub fn encode(format: PixelFormat, [r, g, b, a]: [u8; 4]) -> Vec<u8> {
+    let code = |c: u8| f64::from(c) / 255.0;
+    let stored = |c: u8| match format.srgb {
+        true => code(c),
+        false => colour::srgb_decode(code(c)),
     };
-    let [r, g, b, a] = srgb;
-    let alpha = f64::from(a) / 255.0;
-    match format.layout {
-        PixelLayout::Rgba8 => [r, g, b].map(|c| colour::quantize(stored(c))).to_vec(),
-        PixelLayout::Bgra8 => [b, g, r].map(|c| colour::quantize(stored(c))).to_vec(),
-        PixelLayout::Rgba16Unorm => [stored(r), stored(g), stored(b), alpha]
-            .iter()
-            .flat_map(|v| ((v * 65535.0).round() as u16).to_le_bytes())
-            .collect(),
-        PixelLayout::Rgba16Float => [stored(r), stored(g), stored(b), alpha]
-            .iter()
-            .flat_map(|v| half(*v as f32).to_le_bytes())
-            .collect(),
-        PixelLayout::A2b10g10r10 => {
-            let ten = |v: f64| (v * 1023.0).round() as u32;
-            let word = ten(stored(r))
-                | ten(stored(g)) << 10
-                | ten(stored(b)) << 20
-                | ((alpha * 3.0).round() as u32) << 30;
-            word.to_le_bytes().to_vec()
-        }
-    }
-    .into_iter()
-    .chain(matches!(format.layout, PixelLayout::Rgba8 | PixelLayout::Bgra8).then_some(a))
-    .collect()
+    pixel_codec::encode(format, [stored(r), stored(g), stored(b), code(a)])
 }
 
 /// One view's drawn text: the lit pixels in a host-visible buffer and the copies into the view.
@@ -275,6 +236,7 @@ impl Indicator {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::PixelLayout;
 
     #[test]
     fn text_names_the_mode_or_method_and_lambda() {
@@ -372,8 +334,8 @@ mod tests {
         // Half floats: 1.0 = 0x3c00, 0 = 0.
         let float16 = encode(f(PixelLayout::Rgba16Float, false), [255, 0, 255, 255]);
         assert_eq!(float16, [0x00, 0x3c, 0, 0, 0x00, 0x3c, 0x00, 0x3c]);
-        assert_eq!(half(0.5), 0x3800);
-        assert_eq!(half(0.0513), 0x2a91);
+        assert_eq!(pixel_codec::half_from_f32(0.5), 0x3800);
+        assert_eq!(pixel_codec::half_from_f32(0.0513), 0x2a91);
         let packed = encode(f(PixelLayout::A2b10g10r10, false), [255, 0, 255, 255]);
         assert_eq!(u32::from_le_bytes(packed.try_into().unwrap()), 0xFFF0_03FF);
     }
