@@ -975,3 +975,30 @@ fn config_print_device_shows_the_shipped_profile_below_the_users_table() {
     let wanted = format!("environment_blend_mode = \"\"  # {}:2", config.display());
     assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
 }
+
+/// Glasses whose shipped profile says they have no colour camera: with the default `v4l2:auto`
+/// background and no camera connected, doctor suggests another kind of background instead of
+/// reporting a missing camera; without that profile it reports the missing camera.
+#[test]
+fn doctor_suggests_another_background_for_glasses_without_a_colour_camera() {
+    let root = fresh_home("doctor-no-colour-camera");
+    let log = root.join("state/contrastxr/layer.log");
+    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
+    std::fs::write(
+        &log,
+        "2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b\n\
+         2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it\n",
+    )
+    .unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let c = finding(&report, "camera");
+    assert_eq!(c["status"], "problem", "{c}");
+    let shipped = root.join("devices.toml");
+    std::fs::write(&shipped, "[device.\"Glasses\"]\ncolour_camera = false\n").unwrap();
+    let shipped_text = shipped.to_string_lossy().into_owned();
+    let (_, report) = doctor(&root, &[("CONTRASTXR_DEVICES", &shipped_text)]);
+    let c = finding(&report, "camera");
+    assert_eq!(c["status"], "warn", "{c}");
+    assert!(text(c, "detail").contains("no colour camera"), "{c}");
+    assert!(text(c, "fix").contains("image:PATH"), "{c}");
+}

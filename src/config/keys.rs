@@ -580,6 +580,18 @@ pub const KEYS: &[Key] = &[
         get: |s| Value::Text(s.background.clone()),
     },
     Key {
+        name: "colour_camera",
+        env: "CONTRASTXR_COLOUR_CAMERA",
+        env_negated: false,
+        kind: Kind::Bool,
+        doc: "the headset has a colour camera for the background (false: use image:, video: or color:, or a camera of your own)",
+        set: |s, v| {
+            s.colour_camera = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.colour_camera),
+    },
+    Key {
         name: "force",
         env: "CONTRASTXR_FORCE",
         env_negated: false,

@@ -23,6 +23,10 @@ pub struct Settings {
     /// The display's true blend mode is ADDITIVE though its runtime may report another
     /// (`environment_blend_mode = "additive"`); false: trust the runtime.
     pub additive_display: bool,
+    /// The headset has a colour camera the layer can use as its background (false in the
+    /// shipped profiles of glasses without one: a `v4l2:` background then needs a camera of
+    /// the user's own).
+    pub colour_camera: bool,
     /// Also enhance quad layers.
     pub quad_layers: bool,
     /// `pipelines = "wait"`: the first frame that needs a pipeline waits for its build instead
@@ -58,6 +62,7 @@ impl Default for Settings {
             enabled: true,
             force: false,
             additive_display: false,
+            colour_camera: true,
             quad_layers: false,
             wait_for_pipelines: false,
             params: Params::default(),

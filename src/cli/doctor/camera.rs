@@ -1,7 +1,7 @@
 //! The background source the layer would open (the V4L2 cameras and their formats, as
 //! `contrastxr camera list` shows them) and whether the camera's profile is described.
 
-use super::finding::Finding;
+use super::finding::{Finding, Status};
 use contrastxr::camera::v4l2::{self, Mode};
 use contrastxr::camera::{parse_source, SourceSpec};
 use contrastxr::config::{self, Env, Who};
@@ -125,12 +125,35 @@ fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
     Finding::ok(NAME, detail)
 }
 
-/// The background source the layer would open with these settings.
-pub fn camera(spec: &str) -> Finding {
+/// A `v4l2:` background on a headset whose profile says it has no colour camera: with no
+/// camera of the user's own connected, the fix is another kind of background.
+fn without_colour_camera(spec: &str, found: Finding) -> Finding {
+    if found.status != Status::Problem {
+        return found;
+    }
+    Finding::warn(
+        NAME,
+        format!(
+            "background = \"{spec}\", but the headset's profile says it has no colour camera \
+             (colour_camera = false) and no camera of your own is connected"
+        ),
+        "set background = \"image:PATH\", \"video:PATH\" or \"color:#RRGGBB\" (a photo or a \
+         colour like the place you wear it in); or connect a USB camera, set colour_camera = \
+         true and describe it (camera_fov)",
+    )
+}
+
+/// The background source the layer would open with these settings (`colour_camera`: whether
+/// the headset has a colour camera of its own).
+pub fn camera(spec: &str, colour_camera: bool) -> Finding {
+    let v4l2 = |wanted: Option<&Path>| match colour_camera {
+        true => v4l2_finding(spec, wanted),
+        false => without_colour_camera(spec, v4l2_finding(spec, wanted)),
+    };
     match parse_source(spec) {
         Err(e) => Finding::problem(NAME, e, "set background to v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH, world:PATH or color:#RRGGBB"),
-        Ok(SourceSpec::V4l2Auto) => v4l2_finding(spec, None),
-        Ok(SourceSpec::V4l2Device(p)) => v4l2_finding(spec, Some(&p)),
+        Ok(SourceSpec::V4l2Auto) => v4l2(None),
+        Ok(SourceSpec::V4l2Device(p)) => v4l2(Some(&p)),
         Ok(SourceSpec::Image(p) | SourceSpec::Video(p) | SourceSpec::World(p)) if !p.exists() => Finding::problem(
             NAME,
             format!("background = \"{spec}\", but {} does not exist", p.display()),

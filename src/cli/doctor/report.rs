@@ -30,15 +30,20 @@ pub fn usage() -> String {
 fn findings() -> Vec<Finding> {
     let search = manifest::Search::run();
     let env = contrastxr::config::Env::capture();
-    let settings = contrastxr::config::load("", &env).settings;
     let last = app::LastApp::read();
+    // The settings as the last app's headset gets them (its device tables applied).
+    let who = contrastxr::config::Who {
+        app: "",
+        device: last.system(),
+    };
+    let settings = contrastxr::config::load_for(who, &env).settings;
     vec![
         search.manifest_finding(),
         search.library_finding(),
         runtime::runtime(),
         runtime::vulkan(),
         app::config(&env),
-        camera::camera(&settings.background),
+        camera::camera(&settings.background, settings.colour_camera),
         camera::profile(&env, last.system()),
         profile::device_profile(&env, last.system()),
         last.finding(),
