@@ -12,8 +12,19 @@ use common::{sandbox, scratch_dir, SandboxRun, XR_CLIENT};
 use std::collections::BTreeSet;
 use std::path::Path;
 
-/// Runs `script` with the layer off and on; returns both runs and the capture folder.
+/// Runs `script` with the layer off and on (forced on the simulated OPAQUE display); returns
+/// both runs and the capture folder.
 fn run_both(tag: &str, script: &str) -> Option<(SandboxRun, SandboxRun, std::path::PathBuf)> {
+    run_both_with(tag, script, ("CONTRASTXR_FORCE", "1"))
+}
+
+/// Runs `script` with the layer off and on, `switch` being how the layer is made to act;
+/// returns both runs and the capture folder.
+fn run_both_with(
+    tag: &str,
+    script: &str,
+    switch: (&str, &str),
+) -> Option<(SandboxRun, SandboxRun, std::path::PathBuf)> {
     let sandbox = sandbox()?;
     let cmd = [
         XR_CLIENT,
@@ -31,7 +42,7 @@ fn run_both(tag: &str, script: &str) -> Option<(SandboxRun, SandboxRun, std::pat
         &cmd,
         &[
             ("CONTRASTXR", "1"),
-            ("CONTRASTXR_FORCE", "1"),
+            switch,
             ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
             ("CONTRASTXR_CAPTURE_DIR", &dir_text),
             ("CONTRASTXR_CAPTURE_FRAMES", "1000"),
@@ -141,29 +152,8 @@ cases! {
 /// Runs `script` with the layer off and on with `environment_blend_mode = "additive"` (no
 /// force); returns both scripts' results and the frames the layer enhanced.
 fn run_additive(tag: &str, script: &str) -> Option<(Vec<String>, Vec<String>, usize)> {
-    let sandbox = sandbox()?;
-    let cmd = [
-        XR_CLIENT,
-        "--json",
-        "--validation",
-        "--size",
-        "64x48",
-        "--script",
-        script,
-    ];
-    let off = sandbox.run(&cmd, &[("CONTRASTXR", "0")]);
-    let dir = scratch_dir(&format!("semantics-{tag}"));
-    let dir_text = dir.to_string_lossy().into_owned();
-    let on = sandbox.run(
-        &cmd,
-        &[
-            ("CONTRASTXR", "1"),
-            ("CONTRASTXR_ENVIRONMENT_BLEND_MODE", "additive"),
-            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
-            ("CONTRASTXR_CAPTURE_DIR", &dir_text),
-            ("CONTRASTXR_CAPTURE_FRAMES", "1000"),
-        ],
-    );
+    let switch = ("CONTRASTXR_ENVIRONMENT_BLEND_MODE", "additive");
+    let (off, on, dir) = run_both_with(tag, script, switch)?;
     Some((script_of(&off), script_of(&on), enhanced_frames(&dir)))
 }
 
