@@ -2,10 +2,10 @@
 //! background used, for each processed view of the selected frames. How users show that the
 //! layer works, and how the tests see the null compositor's frames.
 
-use super::processor::CapturedView;
 use crate::colour;
 use crate::config::{Settings, Value, KEYS};
 use crate::gpu::pixel_codec;
+use crate::gpu::CapturedView;
 use crate::gpu::PixelFormat;
 use crate::image::RgbaImage;
 use std::path::Path;
@@ -79,7 +79,7 @@ pub fn write_view(
     motion: serde_json::Map<String, serde_json::Value>,
 ) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let item = &captured.item;
+    let item = &captured.view;
     let (w, h) = item.key.extent;
     let stem = dir.join(format!("frame-{frame}-view-{view}"));
     let name = |suffix: &str| stem.with_file_name(format!("frame-{frame}-view-{view}{suffix}"));

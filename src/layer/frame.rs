@@ -10,12 +10,12 @@ use super::registration::{self, ViewGeometry};
 use super::settings::Settings;
 use super::sources;
 use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
-use super::work::{ViewKey, WorkItem};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::camera;
+use crate::gpu::frame::FrameOptions;
 use crate::gpu::pipeline_cache::Origin;
-use crate::gpu::GpuError;
+use crate::gpu::{CapturedView, FrameView, GpuError, ViewKey};
 use openxr_sys as xr;
 
 /// A sub-image a layer names, with its camera mapping when it is a projection view (each
@@ -78,7 +78,7 @@ fn work_item(
     image: u32,
     region: &ViewRegion,
     settings: &Settings,
-) -> Option<WorkItem> {
+) -> Option<FrameView> {
     let format = sc.info.pixel.filter(|_| sc.info.processable())?;
     let vk_image = *sc.images.get(image as usize)?;
     let r = region.rect;
@@ -93,7 +93,7 @@ fn work_item(
         log::once("bad-rect", "a layer's imageRect/imageArrayIndex lies outside its swapchain: that view passes through");
         return None;
     }
-    Some(WorkItem {
+    Some(FrameView {
         key: ViewKey {
             swapchain: swapchain.into_raw(),
             offset: (r.offset.x, r.offset.y),
@@ -129,7 +129,7 @@ fn regions_by_swapchain(subs: &[SubImage]) -> Vec<(xr::Swapchain, Vec<ViewRegion
 
 /// Remembers each swapchain's regions for images released ahead of their xrEndFrame, and
 /// returns the work for the images the layer holds now. The caller holds the session's lock.
-fn frame_items(subs: &[SubImage], settings: &Settings) -> Vec<WorkItem> {
+fn frame_items(subs: &[SubImage], settings: &Settings) -> Vec<FrameView> {
     let mut items = Vec::new();
     for (handle, regions) in regions_by_swapchain(subs) {
         let Some(sc) = state::swapchain(handle) else {
@@ -179,7 +179,7 @@ pub(super) fn enhance_ahead(
     swapchain: xr::Swapchain,
     image: u32,
 ) {
-    let items: Vec<WorkItem> = regions_ahead(s, sc)
+    let items: Vec<FrameView> = regions_ahead(s, sc)
         .iter()
         .filter_map(|r| work_item(swapchain, sc, image, r, &s.settings))
         .collect();
@@ -255,7 +255,7 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
 /// `process` with panics caught: a panic turns the session into pass-through.
 fn guarded_process(
     s: &mut SessionState,
-    items: Vec<WorkItem>,
+    items: Vec<FrameView>,
     blend: Option<xr::EnvironmentBlendMode>,
 ) {
     let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(s, items, blend)));
@@ -268,7 +268,7 @@ fn guarded_process(
 }
 
 /// Enhances `items` in place on the app's queue; any failure turns the session into pass-through.
-fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::EnvironmentBlendMode>) {
+fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::EnvironmentBlendMode>) {
     // Mode off: the app's frames untouched, no GPU work at all.
     if items.is_empty()
         || s.settings.params.mode == ViewMode::Off
@@ -282,27 +282,20 @@ fn process(s: &mut SessionState, items: Vec<WorkItem>, blend: Option<xr::Environ
     let Some(frame) = background_frame(s) else {
         return;
     };
-    let capture = capturing(s);
-    let params = s.settings.params.clone();
+    let options = FrameOptions {
+        capture: capturing(s),
+        wait_for_pipelines: s.settings.wait_for_pipelines,
+    };
     let sequence = background_sequence(frame.sequence, &s.settings);
     let processor = s.processor.as_mut().expect("checked above");
-    let wait = s.settings.wait_for_pipelines;
-    // The indicator's time starts with the first enhanced frame, not while pipelines build.
-    let ready = processor.pipelines_ready(&items, &params, wait);
-    if ready.is_ok() {
-        processor
-            .indicator
-            .timer
-            .update(&s.settings, std::time::Instant::now());
-    }
-    let done = ready
-        .and_then(|_| processor.process(&items, &frame.image, sequence, &params, (capture, wait)));
+    let background = super::processor::background(&frame.image, sequence);
+    let done = processor.process(&items, background, &s.settings, options);
     match done {
         Ok(views) => {
             if s.processed == 0 {
                 log_began(processor);
             }
-            if capture {
+            if options.capture {
                 write_capture(s, &views, &frame.image);
             }
             s.processed += 1;
@@ -352,11 +345,7 @@ fn log_began(processor: &Processor) {
     log::debug(&format!("pipeline builds: {}", each.join(", ")));
 }
 
-fn write_capture(
-    s: &SessionState,
-    views: &[super::processor::CapturedView],
-    bg: &crate::image::RgbaImage,
-) {
+fn write_capture(s: &SessionState, views: &[CapturedView], bg: &crate::image::RgbaImage) {
     let Some(c) = s.settings.capture() else {
         return;
     };

@@ -2,23 +2,15 @@
 //! each eye image for `indicator_seconds` after the session's first processed frame and after
 //! each change of settings, so the wearer can tell the layer is on and what it does.
 //!
-//! The text is rendered on the CPU with the figures' bitmap font and only its lit pixels are
-//! written: one buffer copy per horizontal run of lit pixels, from a small host-visible buffer
-//! holding them in the view's pixel format, into the engine's view buffer after the
-//! enhancement and before the copy back to the app's image. The app's other pixels are left
-//! as the enhancement made them, and captures show what the runtime gets.
+//! The text is rendered on the CPU with the figures' bitmap font; its lit pixels, as runs, are
+//! drawn by the GPU engine after the enhancement (gpu/overlay.rs). The app's other pixels are
+//! left as the enhancement made them, and captures show what the runtime gets.
 
-use super::work::ViewKey;
 use crate::algorithm::params::{Method, ViewMode};
-use crate::colour;
 use crate::config::Settings;
 use crate::evaluate::font;
-use crate::gpu::buffer::{record_buffer_copy, GpuBuffer};
-use crate::gpu::pixel_codec;
-use crate::gpu::{GpuDevice, GpuError, PixelFormat, ViewTarget};
+use crate::gpu::overlay::Run;
 use crate::image::RgbaImage;
-use ash::vk;
-use std::collections::hash_map::{Entry, HashMap};
 use std::time::{Duration, Instant};
 
 /// The text's colour, sRGB-encoded: a bright green, which an additive display shows well.
@@ -76,14 +68,6 @@ pub fn placement(text: &str, (w, h): (u32, u32)) -> Option<(u32, u32, u32)> {
     (tw <= w && th <= h).then(|| ((w - tw) / 2, h / 5, scale))
 }
 
-/// One horizontal run of lit pixels: region coordinates, length in pixels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Run {
-    pub x: u32,
-    pub y: u32,
-    pub len: u32,
-}
-
 /// The runs of lit pixels of `text` placed in a region of size `region`.
 pub fn runs(text: &str, region: (u32, u32)) -> Vec<Run> {
     let Some((x0, y0, scale)) = placement(text, region) else {
@@ -114,129 +98,9 @@ pub fn runs(text: &str, region: (u32, u32)) -> Vec<Run> {
     out
 }
 
-/// One pixel of an sRGB-encoded colour in the view's format (linear formats hold linear light).
-pub fn encode(format: PixelFormat, [r, g, b, a]: [u8; 4]) -> Vec<u8> {
-    let code = |c: u8| f64::from(c) / 255.0;
-    let stored = |c: u8| match format.srgb {
-        true => code(c),
-        false => colour::srgb_decode(code(c)),
-    };
-    pixel_codec::encode(format, [stored(r), stored(g), stored(b), code(a)])
-}
-
-/// One view's drawn text: the lit pixels in a host-visible buffer and the copies into the view.
-struct Overlay {
-    text: String,
-    format: PixelFormat,
-    region: (u32, u32),
-    buffer: GpuBuffer,
-    copies: Vec<vk::BufferCopy>,
-}
-
-fn overlay(gpu: &GpuDevice, text: &str, target: &ViewTarget) -> Result<Option<Overlay>, GpuError> {
-    let runs = runs(text, target.region);
-    if runs.is_empty() {
-        return Ok(None);
-    }
-    let pixel = encode(target.format, COLOUR);
-    let bpp = pixel.len() as u64;
-    let lit: u64 = runs.iter().map(|r| u64::from(r.len)).sum();
-    let mut buffer = GpuBuffer::new(
-        gpu,
-        lit * bpp,
-        vk::BufferUsageFlags::TRANSFER_SRC,
-        gpu_allocator::MemoryLocation::CpuToGpu,
-        "indicator",
-    )?;
-    let bytes: Vec<u8> = (0..lit).flat_map(|_| pixel.iter().copied()).collect();
-    if let Err(e) = buffer.write(&bytes) {
-        buffer.destroy(gpu);
-        return Err(e);
-    }
-    let width = u64::from(target.region.0);
-    let mut src = 0;
-    let copies = runs
-        .iter()
-        .map(|r| {
-            // The view buffer holds the region's rows tightly packed (as the copy out of the
-            // app's image writes them).
-            let dst = (u64::from(r.y) * width + u64::from(r.x)) * bpp;
-            let size = u64::from(r.len) * bpp;
-            let copy = vk::BufferCopy::default()
-                .src_offset(src)
-                .dst_offset(dst)
-                .size(size);
-            src += size;
-            copy
-        })
-        .collect();
-    Ok(Some(Overlay {
-        text: text.to_string(),
-        format: target.format,
-        region: target.region,
-        buffer,
-        copies,
-    }))
-}
-
-/// A session's indicator: when it shows, and each view's drawn text.
-#[derive(Default)]
-pub struct Indicator {
-    pub timer: Timer,
-    overlays: HashMap<ViewKey, Overlay>,
-}
-
-impl Indicator {
-    /// Records the copies of the text into each view's buffer; true if any was recorded (the
-    /// caller then puts a transfer barrier before anything reads the view buffers). The GPU
-    /// must be done with the previous frame (the processor waits for it before recording).
-    pub fn record<'a>(
-        &mut self,
-        gpu: &GpuDevice,
-        cmd: vk::CommandBuffer,
-        views: impl Iterator<Item = (ViewKey, &'a ViewTarget)>,
-        now: Instant,
-    ) -> Result<bool, GpuError> {
-        let Some(text) = self.timer.showing(now).map(str::to_string) else {
-            self.destroy(gpu);
-            return Ok(false);
-        };
-        let mut drawn = false;
-        for (key, target) in views {
-            let stale = self.overlays.get(&key).is_some_and(|o| {
-                o.text != text || o.format != target.format || o.region != target.region
-            });
-            if stale {
-                if let Some(mut old) = self.overlays.remove(&key) {
-                    old.buffer.destroy(gpu);
-                }
-            }
-            let o = match self.overlays.entry(key) {
-                Entry::Occupied(o) => o.into_mut(),
-                Entry::Vacant(slot) => match overlay(gpu, &text, target)? {
-                    Some(o) => slot.insert(o),
-                    None => continue,
-                },
-            };
-            // The overlay buffer is host-written before this submission.
-            record_buffer_copy(gpu, cmd, (&o.buffer, &target.pixels), &o.copies);
-            drawn = true;
-        }
-        Ok(drawn)
-    }
-
-    /// Frees the overlays' buffers. The GPU must be done with them.
-    pub fn destroy(&mut self, gpu: &GpuDevice) {
-        for (_, mut o) in self.overlays.drain() {
-            o.buffer.destroy(gpu);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu::PixelLayout;
 
     #[test]
     fn text_names_the_mode_or_method_and_lambda() {
@@ -307,36 +171,5 @@ mod tests {
         );
         let big = placement(text, (1268, 720)).unwrap();
         assert_eq!(big.2, 4);
-    }
-
-    #[test]
-    fn the_colour_in_every_format() {
-        let f = |layout, srgb| PixelFormat { layout, srgb };
-        assert_eq!(
-            encode(f(PixelLayout::Rgba8, true), COLOUR),
-            [64, 255, 64, 255]
-        );
-        assert_eq!(
-            encode(f(PixelLayout::Bgra8, true), COLOUR),
-            [64, 255, 64, 255]
-        );
-        // sRGB 64 is linear 0.0513 (IEC 61966-2-1): 13 of 255.
-        assert_eq!(
-            encode(f(PixelLayout::Rgba8, false), [64, 255, 0, 255]),
-            [13, 255, 0, 255]
-        );
-        assert_eq!(
-            encode(f(PixelLayout::Bgra8, false), [64, 255, 0, 255]),
-            [0, 255, 13, 255]
-        );
-        let unorm16 = encode(f(PixelLayout::Rgba16Unorm, false), [255, 0, 255, 255]);
-        assert_eq!(unorm16, [255, 255, 0, 0, 255, 255, 255, 255]);
-        // Half floats: 1.0 = 0x3c00, 0 = 0.
-        let float16 = encode(f(PixelLayout::Rgba16Float, false), [255, 0, 255, 255]);
-        assert_eq!(float16, [0x00, 0x3c, 0, 0, 0x00, 0x3c, 0x00, 0x3c]);
-        assert_eq!(pixel_codec::half_from_f32(0.5), 0x3800);
-        assert_eq!(pixel_codec::half_from_f32(0.0513), 0x2a91);
-        let packed = encode(f(PixelLayout::A2b10g10r10, false), [255, 0, 255, 255]);
-        assert_eq!(u32::from_le_bytes(packed.try_into().unwrap()), 0xFFF0_03FF);
     }
 }

@@ -26,6 +26,5 @@ mod spaces;
 mod state;
 mod swapchain;
 mod timespec;
-mod work;
 
 pub use entry::{xrNegotiateLoaderApiLayerInterface, LAYER_NAME};

@@ -106,7 +106,8 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Proce
     };
     log::info(&format!(
         "session on Vulkan device {:?}, background {}: enhancing",
-        processor.gpu.name, settings.background
+        processor.gpu().name,
+        settings.background
     ));
     Some(processor)
 }

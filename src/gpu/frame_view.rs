@@ -1,14 +1,14 @@
-//! The unit of the layer's GPU work: one view region of a swapchain image, and the key the
-//! processor keeps that region's buffers under.
+//! The unit of a frame's GPU work: one view region of an app's image, the key its buffers are
+//! kept under, and what a capture reads back of it.
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::gpu::image_copy::ImageRegion;
 use crate::gpu::PixelFormat;
 use ash::vk;
 
-/// One region of a swapchain image to enhance.
+/// One region of an app's image to enhance.
 #[derive(Clone, Debug)]
-pub struct WorkItem {
+pub struct FrameView {
     pub key: ViewKey,
     pub image: vk::Image,
     pub format: PixelFormat,
@@ -17,7 +17,7 @@ pub struct WorkItem {
     pub mapping: CameraMapping,
 }
 
-impl WorkItem {
+impl FrameView {
     pub fn region(&self) -> ImageRegion {
         ImageRegion {
             image: self.image,
@@ -28,10 +28,19 @@ impl WorkItem {
     }
 }
 
+/// A view region's identity across frames: its swapchain (an opaque handle value), rectangle
+/// and array layer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ViewKey {
     pub swapchain: u64,
     pub offset: (i32, i32),
     pub extent: (u32, u32),
     pub array_index: u32,
+}
+
+/// Raw bytes of one view read back for a capture: before and after the enhancement.
+pub struct CapturedView {
+    pub view: FrameView,
+    pub display: Vec<u8>,
+    pub output: Vec<u8>,
 }
