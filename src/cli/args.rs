@@ -143,17 +143,6 @@ pub fn parse_f32(what: &str, s: &str) -> Result<f32, CliError> {
         .ok_or_else(|| CliError::Failure(format!("{what} must be a number, got '{s}'")))
 }
 
-/// `X,Y` as two numbers.
-pub fn parse_pair(what: &str, s: &str) -> Result<[f32; 2], CliError> {
-    let parts: Vec<&str> = s.split(',').collect();
-    if parts.len() != 2 {
-        return Err(CliError::Failure(format!(
-            "{what} must be two numbers X,Y, got '{s}'"
-        )));
-    }
-    Ok([parse_f32(what, parts[0])?, parse_f32(what, parts[1])?])
-}
-
 /// A comma-separated list of numbers.
 pub fn parse_list(what: &str, s: &str) -> Result<Vec<f32>, CliError> {
     s.split(',').map(|p| parse_f32(what, p)).collect()
@@ -223,8 +212,6 @@ mod tests {
 
     #[test]
     fn numbers() {
-        assert_eq!(parse_pair("p", "0.65,0.5").unwrap(), [0.65, 0.5]);
-        assert!(parse_pair("p", "0.65").is_err());
         assert!(parse_f32("x", "nan").is_err());
         assert_eq!(parse_list("l", "0.2,1").unwrap(), vec![0.2, 1.0]);
     }

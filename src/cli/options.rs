@@ -1,87 +1,113 @@
 //! The options shared by `enhance` and `evaluate`: method, preprocessing, engine, images.
 
-use contrastxr::algorithm::{Method, Params};
+use contrastxr::algorithm::Params;
+use contrastxr::config::{self, Key, Settings, Value};
 use contrastxr::image::RgbaImage;
 
-use super::args::{parse_f32, parse_pair, Opt};
+use super::args::Opt;
 use super::engine::Engine;
 use super::{Args, CliError};
 
-pub const PARAMS_USAGE: &str = "\
-method and preprocessing options (defaults are the paper's):
-  --lambda-e F             maximum colour change, scaled LAB units (0.4; 0 = no change)
-  --lambda-jnd-scaled F    JND sphere radius, scaled units (0.046 = Delta E 2.3)
-  --transmittance F        lens transmittance applied to the background (0.4)
-  --achromatic-boost F     beyond the paper: raise chroma on near-grey backgrounds (0 = off, <= 1)
-  --luminance-cap F        beyond the paper: output luminance <= (1 + F) x input (0 = off)
-  --blur-size N            Gaussian kernel size on the camera grid, odd (3)
-  --blur-sigma F           Gaussian sigma in camera pixels (1.5)
-  --no-blur                no background blur
-  --fov-scale X,Y          camera_uv = scale * display_uv + offset (0.65,0.65)
-  --fov-offset X,Y         (0.13,0.17)
-  --no-fov                 camera_uv = display_uv
-  --method M               paper|hue-only|other-hue|lum-chroma|subtraction (paper)
-  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)
-";
+/// A setting of the method the offline commands take as an option: its name in
+/// [`contrastxr::config::KEYS`] (where its meaning, kind and default come from), the option, and
+/// the value's name in the help (None: a `--no-` flag that turns a switch off).
+pub struct ParamOption {
+    pub key: &'static str,
+    pub option: Opt,
+}
+
+const fn option(key: &'static str, long: &'static str, value: &'static str) -> ParamOption {
+    ParamOption {
+        key,
+        option: Opt::value(long, value),
+    }
+}
+
+const fn switch_off(key: &'static str, long: &'static str) -> ParamOption {
+    ParamOption {
+        key,
+        option: Opt::flag(long),
+    }
+}
+
+/// The method's settings as options; each is parsed and checked by its key, as in the config
+/// file (a test holds this list to KEYS).
+pub const PARAM_OPTIONS: [ParamOption; 12] = [
+    option("method", "--method", "M"),
+    option("lambda_e", "--lambda-e", "F"),
+    option("lambda_jnd_scaled", "--lambda-jnd-scaled", "F"),
+    option("transmittance", "--transmittance", "F"),
+    option("achromatic_boost", "--achromatic-boost", "F"),
+    option("luminance_cap", "--luminance-cap", "F"),
+    option("blur_size", "--blur-size", "N"),
+    option("blur_sigma", "--blur-sigma", "F"),
+    switch_off("blur", "--no-blur"),
+    option("fov_scale", "--fov-scale", "X,Y"),
+    option("fov_offset", "--fov-offset", "X,Y"),
+    switch_off("fov", "--no-fov"),
+];
 
 /// The options [`params`] and [`engine`] read.
-pub const PARAMS_OPTIONS: &[Opt] = &[
-    Opt::value("--lambda-e", "F"),
-    Opt::value("--lambda-jnd-scaled", "F"),
-    Opt::value("--transmittance", "F"),
-    Opt::value("--achromatic-boost", "F"),
-    Opt::value("--luminance-cap", "F"),
-    Opt::value("--blur-size", "N"),
-    Opt::value("--blur-sigma", "F"),
-    Opt::flag("--no-blur"),
-    Opt::value("--fov-scale", "X,Y"),
-    Opt::value("--fov-offset", "X,Y"),
-    Opt::flag("--no-fov"),
-    Opt::value("--method", "M"),
-    Opt::value("--engine", "E"),
-];
+pub const PARAMS_OPTIONS: &[Opt] = &{
+    let mut all = [Opt::flag("--engine"); PARAM_OPTIONS.len() + 1];
+    let mut i = 0;
+    while i < PARAM_OPTIONS.len() {
+        all[i] = PARAM_OPTIONS[i].option;
+        i += 1;
+    }
+    all[i] = Opt::value("--engine", "E");
+    all
+};
+
+fn key_of(o: &ParamOption) -> &'static Key {
+    config::key(o.key).expect("PARAM_OPTIONS names KEYS (tested)")
+}
+
+/// The method options' help, from each key's description and default.
+pub fn params_usage() -> String {
+    let defaults = Settings::default();
+    let mut s =
+        String::from("method and preprocessing options (defaults as in the config file):\n");
+    for o in &PARAM_OPTIONS {
+        let key = key_of(o);
+        let left = match o.option.value {
+            Some(v) => format!("{} {v}", o.option.long),
+            None => o.option.long.to_string(),
+        };
+        let default = match o.option.value {
+            Some(_) => format!(" ({})", key.get(&defaults)),
+            None => String::new(),
+        };
+        let doc = match o.option.value {
+            Some(_) => key.doc.to_string(),
+            None => format!("{} = false", key.name),
+        };
+        s += &format!("  {left:<24} {doc}{default}\n");
+    }
+    s += "  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)\n";
+    s
+}
 
 /// Takes the method and preprocessing options out of `args`, starting from the defaults.
 pub fn params(args: &mut Args) -> Result<Params, CliError> {
-    let mut p = Params::default();
-    let number = |args: &mut Args, name: &str, slot: &mut f32| -> Result<(), CliError> {
-        if let Some(v) = args.value(&[name])? {
-            *slot = parse_f32(name, &v)?;
-        }
-        Ok(())
-    };
-    number(args, "--lambda-e", &mut p.lambda_e)?;
-    number(args, "--lambda-jnd-scaled", &mut p.lambda_jnd_scaled)?;
-    number(args, "--transmittance", &mut p.transmittance)?;
-    number(args, "--achromatic-boost", &mut p.achromatic_boost)?;
-    number(args, "--luminance-cap", &mut p.luminance_cap)?;
-    number(args, "--blur-sigma", &mut p.blur_sigma)?;
-    if let Some(v) = args.value(&["--blur-size"])? {
-        p.blur_size = v.trim().parse().map_err(|_| {
-            CliError::Failure(format!(
-                "--blur-size must be a positive odd integer, got '{v}'"
-            ))
-        })?;
+    let mut settings = Settings::default();
+    for o in &PARAM_OPTIONS {
+        let key = key_of(o);
+        let value = match o.option.value {
+            None if args.flag(o.option.long) => Value::Bool(false),
+            None => continue,
+            Some(_) => match args.value(&[o.option.long])? {
+                Some(text) => key.parse_setting(&text).map_err(|_| {
+                    let kind = key.kind.describe();
+                    CliError::Failure(format!("{} must be {kind}, got '{text}'", o.option.long))
+                })?,
+                None => continue,
+            },
+        };
+        key.apply(&mut settings, value)
+            .map_err(|e| CliError::Failure(format!("{}: {e}", o.option.long)))?;
     }
-    if let Some(v) = args.value(&["--fov-scale"])? {
-        p.fov_scale = parse_pair("--fov-scale", &v)?;
-    }
-    if let Some(v) = args.value(&["--fov-offset"])? {
-        p.fov_offset = parse_pair("--fov-offset", &v)?;
-    }
-    p.blur = !args.flag("--no-blur");
-    p.fov = !args.flag("--no-fov");
-    if let Some(v) = args.value(&["--method"])? {
-        p.method = Method::parse(&v).ok_or_else(|| {
-            let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-            CliError::Failure(format!(
-                "--method must be one of {}, got '{v}'",
-                names.join(", ")
-            ))
-        })?;
-    }
-    p.validate().map_err(CliError::Failure)?;
-    Ok(p)
+    Ok(settings.params)
 }
 
 pub fn engine(args: &mut Args) -> Result<Engine, CliError> {
@@ -100,4 +126,59 @@ pub fn load_path(path: &str, what: &str) -> Result<RgbaImage, CliError> {
 pub fn save_image(img: &RgbaImage, path: &str) -> Result<(), CliError> {
     img.save_png(std::path::Path::new(path))
         .map_err(CliError::Failure)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use contrastxr::config::{Kind, KEYS};
+
+    #[test]
+    fn every_option_is_a_key_of_its_kind() {
+        for o in &PARAM_OPTIONS {
+            let key = KEYS.iter().find(|k| k.name == o.key);
+            let key = key.unwrap_or_else(|| panic!("{} is not in KEYS", o.key));
+            let flag = o.option.value.is_none();
+            assert_eq!(flag, key.kind == Kind::Bool, "{}", o.key);
+            let long = format!("--{}", key.name.replace('_', "-"));
+            let expected = if flag {
+                format!("--no-{}", &long[2..])
+            } else {
+                long
+            };
+            assert_eq!(o.option.long, expected);
+        }
+    }
+
+    #[test]
+    fn every_setting_of_the_method_has_an_option() {
+        let defaults = Settings::default();
+        for k in KEYS {
+            let mut changed = defaults.clone();
+            let other = match k.get(&defaults) {
+                Value::Bool(b) => Value::Bool(!b),
+                Value::Float(f) => Value::Float(f * 0.5 + 0.01),
+                Value::Count(n) => Value::Count(n + 2),
+                Value::Pair([x, y]) => Value::Pair([x * 0.5, y * 0.5]),
+                _ => continue,
+            };
+            if k.apply(&mut changed, other).is_ok() && changed.params != defaults.params {
+                assert!(
+                    PARAM_OPTIONS.iter().any(|o| o.key == k.name) || k.name == "mode",
+                    "{} changes the method but has no option",
+                    k.name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_help_names_each_option_with_its_default() {
+        let usage = params_usage();
+        for o in &PARAM_OPTIONS {
+            assert!(usage.contains(o.option.long), "{}", o.option.long);
+        }
+        assert!(usage.contains("--lambda-e F"), "{usage}");
+        assert!(usage.contains("(0.4)"), "{usage}");
+    }
 }
