@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use super::options::{self, PARAMS_USAGE};
+use super::options::{self, ENGINE_USAGE, METHOD_USAGE};
 use super::{engine, Args, CliError, Opt};
 
 pub const OPTIONS: &[Opt] = &[
@@ -43,5 +43,5 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 
 /// Full help text (the options block is shared with `evaluate`).
 pub fn usage() -> String {
-    format!("{USAGE}{PARAMS_USAGE}")
+    format!("{USAGE}{METHOD_USAGE}{ENGINE_USAGE}")
 }

@@ -8,7 +8,7 @@ use contrastxr::image::RgbaImage;
 
 use super::args::parse_list;
 use super::engine::{self, Engine};
-use super::options::{self, PARAMS_USAGE};
+use super::options::{self, ENGINE_USAGE, METHOD_USAGE};
 use super::{Args, CliError, Opt};
 
 pub const OPTIONS: &[Opt] = &[
@@ -36,7 +36,7 @@ noticeable amount (the paper's metric). Without --enhanced the method runs first
 ";
 
 pub fn usage() -> String {
-    format!("{USAGE}{PARAMS_USAGE}")
+    format!("{USAGE}{METHOD_USAGE}{ENGINE_USAGE}")
 }
 
 struct Inputs {

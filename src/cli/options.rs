@@ -7,7 +7,7 @@ use super::args::{parse_f32, parse_pair, Opt};
 use super::engine::Engine;
 use super::{Args, CliError};
 
-pub const PARAMS_USAGE: &str = "\
+pub const METHOD_USAGE: &str = "\
 method and preprocessing options (defaults are the paper's):
   --lambda-e F             maximum colour change, scaled LAB units (0.4; 0 = no change)
   --lambda-jnd-scaled F    JND sphere radius, scaled units (0.046 = Delta E 2.3)
@@ -21,11 +21,15 @@ method and preprocessing options (defaults are the paper's):
   --fov-offset X,Y         (0.13,0.17)
   --no-fov                 camera_uv = display_uv
   --method M               paper|hue-only|other-hue|lum-chroma|subtraction (paper)
+";
+
+/// The help of [`ENGINE_OPTIONS`], for the commands that run the method.
+pub const ENGINE_USAGE: &str = "\
   --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)
 ";
 
-/// The options [`params`] and [`engine`] read.
-pub const PARAMS_OPTIONS: &[Opt] = &[
+/// The options [`params`] reads.
+pub const METHOD_OPTIONS: &[Opt] = &[
     Opt::value("--lambda-e", "F"),
     Opt::value("--lambda-jnd-scaled", "F"),
     Opt::value("--transmittance", "F"),
@@ -38,8 +42,10 @@ pub const PARAMS_OPTIONS: &[Opt] = &[
     Opt::value("--fov-offset", "X,Y"),
     Opt::flag("--no-fov"),
     Opt::value("--method", "M"),
-    Opt::value("--engine", "E"),
 ];
+
+/// The option [`engine`] reads.
+pub const ENGINE_OPTIONS: &[Opt] = &[Opt::value("--engine", "E")];
 
 /// Takes the method and preprocessing options out of `args`, starting from the defaults.
 pub fn params(args: &mut Args) -> Result<Params, CliError> {
