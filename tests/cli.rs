@@ -1002,3 +1002,99 @@ fn doctor_suggests_another_background_for_glasses_without_a_colour_camera() {
     assert!(text(c, "detail").contains("no colour camera"), "{c}");
     assert!(text(c, "fix").contains("image:PATH"), "{c}");
 }
+
+/// One frame of an animated PNG: (delay numerator, denominator) and its RGB bytes.
+type ApngFrame = ((u16, u16), Vec<u8>);
+
+/// The size of an animated PNG and its frames.
+fn apng_frames(path: &Path) -> ((u32, u32), Vec<ApngFrame>) {
+    let file = std::fs::File::open(path).unwrap();
+    let mut reader = png::Decoder::new(file).read_info().unwrap();
+    let size = (reader.info().width, reader.info().height);
+    let count = reader.info().animation_control.expect("an APNG").num_frames;
+    let mut frames = Vec::new();
+    for _ in 0..count {
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        buf.truncate(info.buffer_size());
+        let fc = reader.info().frame_control.unwrap();
+        assert_eq!((fc.width, fc.height), size, "every frame is whole");
+        frames.push(((fc.delay_num, fc.delay_den), buf));
+    }
+    (size, frames)
+}
+
+#[test]
+fn pan_then_animate_writes_an_animation_of_the_captures() {
+    let root = scratch("animate");
+    let _ = std::fs::remove_dir_all(&root);
+    let video = root.join("video");
+    let o = contrastxr(&[
+        "pan",
+        YELLOW,
+        SKY,
+        "--frames",
+        "6",
+        "-o",
+        video.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let frame = |i: usize| load(&video.join(format!("frame-{i:04}.png")));
+    assert_eq!(std::fs::read_dir(&video).unwrap().count(), 6);
+    assert_eq!((frame(0).width, frame(0).height), (960, 540));
+    assert_eq!(
+        frame(0).pixels,
+        sample(YELLOW).pixels,
+        "starts on the first image"
+    );
+    assert_ne!(frame(3).pixels, frame(0).pixels, "the window moves");
+    // A second pan into the same folder would mix two videos: refused.
+    let again = contrastxr(&["pan", YELLOW, SKY, "-o", video.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(1), "{}", stderr(&again));
+
+    // Captures as the layer writes them, 50 ms apart, against frames of the pan.
+    let captures = root.join("capture");
+    std::fs::create_dir_all(&captures).unwrap();
+    let display = sample(DISPLAY);
+    for i in 0..4u64 {
+        let stem = captures.join(format!("frame-{}-view-0", 10 + i));
+        let file = |suffix: &str| PathBuf::from(format!("{}{suffix}", stem.display()));
+        display.save_png(&file("-display.png")).unwrap();
+        display.save_png(&file("-output.png")).unwrap();
+        frame(i as usize)
+            .save_png(&file("-background.png"))
+            .unwrap();
+        let json =
+            serde_json::json!({"frame": 10 + i, "display_time": 1_000_000_000 + i * 50_000_000});
+        std::fs::write(file(".json"), json.to_string()).unwrap();
+    }
+    let anim = root.join("animation.png");
+    let o = contrastxr(&[
+        "animate",
+        "--captures",
+        captures.to_str().unwrap(),
+        "-o",
+        anim.to_str().unwrap(),
+        "--frames",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (size, frames) = apng_frames(&anim);
+    // Five 320x180 panels (the 640x360 display halved) 12 apart, with a 16-pixel margin.
+    assert_eq!(size, (5 * 320 + 4 * 12 + 2 * 16, 180 + 2 * 16));
+    // Captures 10, 11 and 13: each shown until the next one's display time, the last for the
+    // average.
+    let delays: Vec<(u16, u16)> = frames.iter().map(|f| f.0).collect();
+    assert_eq!(delays, [(50, 1000), (100, 1000), (75, 1000)]);
+    assert_ne!(frames[0].1, frames[1].1, "the background moved");
+    assert_ne!(frames[1].1, frames[2].1, "the background moved");
+    let o = contrastxr(&[
+        "animate",
+        "--captures",
+        video.to_str().unwrap(),
+        "-o",
+        "x.png",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("no captures"), "{}", stderr(&o));
+}

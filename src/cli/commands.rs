@@ -3,8 +3,8 @@
 use super::args::Opt;
 use super::error::Command;
 use super::{
-    bench, calibrate, camera, completions, config, control, doctor, enhance, evaluate, install,
-    log, options,
+    animate, bench, calibrate, camera, completions, config, control, doctor, enhance, evaluate,
+    install, log, options, pan,
 };
 
 /// One subcommand of the tool.
@@ -36,7 +36,11 @@ pub const COMMANDS: &[Subcommand] = &[
         summary: "enhance a display image against a background (camera) image",
         usage: enhance::usage,
         run: enhance::run,
-        options: &[enhance::OPTIONS, options::PARAMS_OPTIONS],
+        options: &[
+            enhance::OPTIONS,
+            options::METHOD_OPTIONS,
+            options::ENGINE_OPTIONS,
+        ],
         positionals: None,
     },
     Subcommand {
@@ -44,8 +48,28 @@ pub const COMMANDS: &[Subcommand] = &[
         summary: "measure an enhancement with the paper's metric, write figures, sweep lambda_e",
         usage: evaluate::usage,
         run: evaluate::run,
-        options: &[evaluate::OPTIONS, options::PARAMS_OPTIONS],
+        options: &[
+            evaluate::OPTIONS,
+            options::METHOD_OPTIONS,
+            options::ENGINE_OPTIONS,
+        ],
         positionals: None,
+    },
+    Subcommand {
+        name: "animate",
+        summary: "write an animated figure (APNG) from the layer's captures of consecutive frames",
+        usage: animate::usage,
+        run: animate::run,
+        options: &[animate::OPTIONS, options::METHOD_OPTIONS],
+        positionals: None,
+    },
+    Subcommand {
+        name: "pan",
+        summary: "write a video: background, PNG frames panning across images side by side",
+        usage: pan::usage,
+        run: pan::run,
+        options: &[pan::OPTIONS],
+        positionals: Some("IMAGE..."),
     },
     Subcommand {
         name: "camera",

@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use super::options::{self, params_usage};
+use super::options::{self, method_usage, ENGINE_USAGE};
 use super::{engine, Args, CliError, Opt};
 
 pub const OPTIONS: &[Opt] = &[
@@ -43,5 +43,5 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 
 /// Full help text (the options block is shared with `evaluate`).
 pub fn usage() -> String {
-    format!("{USAGE}{}", params_usage())
+    format!("{USAGE}{}{ENGINE_USAGE}", method_usage())
 }

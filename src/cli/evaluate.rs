@@ -8,7 +8,7 @@ use contrastxr::image::RgbaImage;
 
 use super::args::parse_list;
 use super::engine::{self, Engine};
-use super::options::{self, params_usage};
+use super::options::{self, method_usage, ENGINE_USAGE};
 use super::{Args, CliError, Opt};
 
 pub const OPTIONS: &[Opt] = &[
@@ -36,7 +36,7 @@ noticeable amount (the paper's metric). Without --enhanced the method runs first
 ";
 
 pub fn usage() -> String {
-    format!("{USAGE}{}", params_usage())
+    format!("{USAGE}{}{ENGINE_USAGE}", method_usage())
 }
 
 struct Inputs {

@@ -2,6 +2,7 @@
 //! `usage() -> String` and `run(&mut Args) -> Result<(), CliError>`, and an entry in `COMMANDS`
 //! that declares its options (the parser refuses any other; reading an undeclared one panics).
 
+mod animate;
 mod args;
 mod bench;
 mod calibrate;
@@ -18,6 +19,7 @@ mod evaluate;
 mod install;
 mod log;
 mod options;
+mod pan;
 mod parse;
 
 pub use args::{Args, Opt};

@@ -47,15 +47,14 @@ pub const PARAM_OPTIONS: [ParamOption; 12] = [
     switch_off("fov", "--no-fov"),
 ];
 
-/// The options [`params`] and [`engine`] read.
-pub const PARAMS_OPTIONS: &[Opt] = &{
-    let mut all = [Opt::flag("--engine"); PARAM_OPTIONS.len() + 1];
+/// The options [`params`] reads.
+pub const METHOD_OPTIONS: &[Opt] = &{
+    let mut all = [Opt::flag(""); PARAM_OPTIONS.len()];
     let mut i = 0;
     while i < PARAM_OPTIONS.len() {
         all[i] = PARAM_OPTIONS[i].option;
         i += 1;
     }
-    all[i] = Opt::value("--engine", "E");
     all
 };
 
@@ -64,7 +63,7 @@ fn key_of(o: &ParamOption) -> &'static Key {
 }
 
 /// The method options' help, from each key's description and default.
-pub fn params_usage() -> String {
+pub fn method_usage() -> String {
     let defaults = Settings::default();
     let mut s =
         String::from("method and preprocessing options (defaults as in the config file):\n");
@@ -84,9 +83,15 @@ pub fn params_usage() -> String {
         };
         s += &format!("  {left:<24} {doc}{default}\n");
     }
-    s += "  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)\n";
     s
 }
+/// The help of [`ENGINE_OPTIONS`], for the commands that run the method.
+pub const ENGINE_USAGE: &str = "\
+  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)
+";
+
+/// The option [`engine`] reads.
+pub const ENGINE_OPTIONS: &[Opt] = &[Opt::value("--engine", "E")];
 
 /// Takes the method and preprocessing options out of `args`, starting from the defaults.
 pub fn params(args: &mut Args) -> Result<Params, CliError> {
@@ -174,7 +179,7 @@ mod tests {
 
     #[test]
     fn the_help_names_each_option_with_its_default() {
-        let usage = params_usage();
+        let usage = method_usage();
         for o in &PARAM_OPTIONS {
             assert!(usage.contains(o.option.long), "{}", o.option.long);
         }

@@ -39,7 +39,11 @@ pub fn figure_row(
     params: &Params,
     title: Option<&str>,
 ) -> RgbaImage {
-    panels_row(display, enhanced, camera, params, title, false)
+    let layout = Layout {
+        app_images: false,
+        max_panel_width: MAX_PANEL_WIDTH,
+    };
+    panels_row(display, enhanced, camera, params, title, layout)
 }
 
 /// Like `figure`, with the app's image and the enhanced image (as rendered, before blending
@@ -50,7 +54,29 @@ pub fn figure_with_app_images(
     camera: &RgbaImage,
     params: &Params,
 ) -> RgbaImage {
-    stack_rows(&[panels_row(display, enhanced, camera, params, None, true)])
+    figure_with_app_images_at(display, enhanced, camera, params, MAX_PANEL_WIDTH)
+}
+
+/// `figure_with_app_images` with panels shrunk to at most `max_panel_width` (an animation's
+/// frames are kept smaller than a still figure).
+pub fn figure_with_app_images_at(
+    display: &RgbaImage,
+    enhanced: &RgbaImage,
+    camera: &RgbaImage,
+    params: &Params,
+    max_panel_width: u32,
+) -> RgbaImage {
+    let layout = Layout {
+        app_images: true,
+        max_panel_width,
+    };
+    stack_rows(&[panels_row(display, enhanced, camera, params, None, layout)])
+}
+
+#[derive(Clone, Copy)]
+struct Layout {
+    app_images: bool,
+    max_panel_width: u32,
 }
 
 fn panels_row(
@@ -59,14 +85,14 @@ fn panels_row(
     camera: &RgbaImage,
     params: &Params,
     title: Option<&str>,
-    app_images: bool,
+    layout: Layout,
 ) -> RgbaImage {
     let bg = background::prepare(camera, display.width, display.height, params);
     let percent = metrics(display, enhanced, &bg).enhanced_percent;
     let mask = enhanced_mask(display, enhanced, &bg);
-    let factor = display.width.div_ceil(MAX_PANEL_WIDTH).max(1);
+    let factor = display.width.div_ceil(layout.max_panel_width.max(1)).max(1);
     let mut panels = Vec::new();
-    if app_images {
+    if layout.app_images {
         panels.push((shrink(display, factor), "APP IMAGE"));
         panels.push((shrink(enhanced, factor), "ENHANCED IMAGE"));
     }
@@ -88,6 +114,8 @@ fn panels_row(
     if let Some(t) = title {
         draw_text(&mut row, 0, 0, t, LABEL_SCALE, TEXT);
     }
+    // Labels of small panels in the small font, so they stay within their panel.
+    let label_scale = if pw >= 240 { LABEL_SCALE } else { 1 };
     for (i, (panel, label)) in panels.iter().enumerate() {
         let x = i as u32 * (pw + GAP);
         blit(&mut row, panel, x, header);
@@ -96,11 +124,15 @@ fn panels_row(
             x + LABEL_PAD,
             header + LABEL_PAD,
             label,
-            LABEL_SCALE,
+            label_scale,
         );
     }
     let text = format!("{percent:.1}%");
-    let scale = if pw >= 400 { 5 } else { 3 };
+    let scale = match pw {
+        400.. => 5,
+        240.. => 3,
+        _ => 2,
+    };
     let x = width.saturating_sub(text_width(&text, scale) + 3 * LABEL_PAD);
     let y = (header + ph).saturating_sub(text_height(scale) + 3 * LABEL_PAD);
     label_box(&mut row, x, y, &text, scale);

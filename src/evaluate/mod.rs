@@ -2,11 +2,15 @@
 //! the simulated perceived image of an additive display, and figures a person can look at.
 //! Pure CPU; it never runs the method itself.
 
+pub mod animation;
 pub mod figure;
 pub mod font;
 pub mod metric;
 pub mod perceived;
 
-pub use figure::{figure, figure_row, figure_with_app_images, stack_rows};
+pub use animation::{encode_apng, AnimationFrame};
+pub use figure::{
+    figure, figure_row, figure_with_app_images, figure_with_app_images_at, stack_rows,
+};
 pub use metric::{enhanced_mask, metrics, Metrics, Stats, JND_DELTA_E};
 pub use perceived::perceived;
