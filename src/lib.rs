@@ -9,6 +9,7 @@
 
 pub mod algorithm;
 pub mod background;
+pub mod blurred_texels;
 pub mod camera;
 pub mod colour;
 pub mod config;

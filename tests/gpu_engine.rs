@@ -410,6 +410,72 @@ fn gpu_background_of_a_part_of_the_camera_matches_cpu_preparation() {
 }
 
 #[test]
+fn cpu_prepared_texels_match_the_gpu_passes() {
+    // What a live source prepares on its thread is what the decode and blur passes make,
+    // entry for entry, to the 21-bit packing's rounding (one code).
+    use contrastxr::blurred_texels::{BlurTaps, BlurredTexels, LINEAR_MAX};
+    let mut e = engine();
+    // Width 151: rows not a multiple of the passes' 4-texel blocks.
+    let camera = noise(151, 90, 9);
+    for (blur, blur_size, blur_sigma) in [
+        (true, 3, 1.5),
+        (true, 7, 2.5),
+        (true, 15, 5.0),
+        (false, 3, 1.5),
+    ] {
+        let params = Params {
+            blur,
+            blur_size,
+            blur_sigma,
+            ..Params::default()
+        };
+        let gpu = e.prepare_background(&camera, &params).unwrap();
+        let cpu = BlurredTexels::prepare(&camera, BlurTaps::of(&params));
+        let code = |v: f32| (v * LINEAR_MAX as f32).round() as i64;
+        let mut worst = 0;
+        for (i, (l, r)) in gpu.linear.iter().zip(&gpu.right).enumerate() {
+            let (x, y) = (i as u32 % 151, i as u32 / 151);
+            let w = cpu.entry(x, y);
+            let packed = [
+                u64::from(w[0]) | u64::from(w[1]) << 32,
+                u64::from(w[2]) | u64::from(w[3]) << 32,
+            ];
+            for (texel, bits) in [l, r].into_iter().zip(packed) {
+                for k in 0..3 {
+                    let c = ((bits >> (21 * k)) & u64::from(LINEAR_MAX)) as i64;
+                    let d = (c - code(texel[k])).abs();
+                    worst = worst.max(d);
+                    assert!(
+                        d <= 1,
+                        "blur {blur} {blur_size}: texel ({x}, {y}) channel {k}: {d} codes"
+                    );
+                }
+            }
+        }
+        eprintln!("blur {blur} {blur_size}: largest difference {worst} codes");
+    }
+    assert_clean(&e);
+}
+
+#[test]
+fn gpu_matches_cpu_with_texels_prepared_on_the_cpu() {
+    // The enhancement of a frame whose background texels its source prepared, as the layer
+    // makes it: within the conformance tolerance of the CPU reference, through any mapping.
+    let mut e = engine();
+    e.set_cpu_background(true);
+    let camera = noise(131, 83, 5);
+    let display = noise(97, 61, 21);
+    check_all_methods(&mut e, &display, &camera, &Params::default());
+    let wide = Params {
+        blur_size: 9,
+        blur_sigma: 3.0,
+        ..Params::default()
+    };
+    check_all_methods_mapped(&mut e, &display, &camera, &projective(), &wide);
+    assert_clean(&e);
+}
+
+#[test]
 fn sampled_background_matches_cpu_preparation_through_any_mapping() {
     // The per-pixel part (FoV sampling, transmittance), seen through the background view on a
     // 16-bit linear format: the output is transmittance x the sampled background.

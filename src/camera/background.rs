@@ -1,5 +1,6 @@
 //! The running background source the consumer holds.
 
+use crate::blurred_texels::BlurTaps;
 use crate::camera::error::CameraError;
 use crate::camera::files::{color_frame, image_frame, open_video, play};
 use crate::camera::frame::{Frame, Shared, SourceStatus};
@@ -80,6 +81,15 @@ impl Background {
                 SourceStatus::Lost => None,
                 _ => shared.peek(),
             },
+        }
+    }
+
+    /// Asks a live source to prepare each new frame with `blur` on its own thread
+    /// (`Frame::prepared`), off the consumer's frame calls. Static sources are prepared once
+    /// by the consumer: nothing to do.
+    pub fn prepare_with(&self, blur: BlurTaps) {
+        if let Source::Threaded { shared, .. } = &self.source {
+            shared.want(blur);
         }
     }
 

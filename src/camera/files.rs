@@ -30,6 +30,7 @@ fn static_frame(image: RgbaImage) -> Frame {
         image: Arc::new(image),
         sequence: 1,
         captured_at: Instant::now(),
+        prepared: None,
     }
 }
 
@@ -142,6 +143,7 @@ pub(crate) fn play(
                         image: pool.share(image),
                         sequence: n + 1,
                         captured_at,
+                        prepared: None,
                     });
                     failed = false;
                 }

@@ -1,5 +1,6 @@
 //! Frames, source status, and the latest-frame mailbox shared with the producer thread.
 
+use crate::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::image::RgbaImage;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, TryLockError};
@@ -15,6 +16,9 @@ pub struct Frame {
     pub sequence: u64,
     /// When the frame was captured (for V4L2, the driver's timestamp mapped to `Instant`).
     pub captured_at: Instant,
+    /// The frame decoded and blurred with the blur the consumer asked for (`Shared::want`),
+    /// made on the producer's thread before the frame is published; None when none was asked.
+    pub prepared: Option<Arc<BlurredTexels>>,
 }
 
 /// Health of a source, for the consumer's grace-period logic.
@@ -40,6 +44,8 @@ pub(crate) struct Shared {
     /// Nanoseconds after `epoch` (+1; 0 = not down) since the device has been lost.
     down_since_ns: AtomicU64,
     pub(crate) stop: AtomicBool,
+    /// The blur each published frame is prepared with (None: not prepared).
+    blur: Mutex<Option<BlurTaps>>,
 }
 
 impl Shared {
@@ -50,6 +56,7 @@ impl Shared {
             last_frame_ns: AtomicU64::new(0),
             down_since_ns: AtomicU64::new(0),
             stop: AtomicBool::new(false),
+            blur: Mutex::new(None),
         }
     }
 
@@ -61,13 +68,27 @@ impl Shared {
         self.epoch + Duration::from_nanos(stamp - 1)
     }
 
-    pub(crate) fn publish(&self, frame: Frame) {
+    /// Publishes `frame`, first prepared with the blur asked for: on the producer's thread, so
+    /// that the consumer's frame calls only copy it.
+    pub(crate) fn publish(&self, mut frame: Frame) {
+        let blur = *self.blur.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(blur) = blur {
+            frame.prepared = Some(Arc::new(BlurredTexels::prepare(&frame.image, blur)));
+        }
         let mut slot = self.mailbox.lock().unwrap_or_else(|e| e.into_inner());
         *slot = Some(frame);
         drop(slot);
         self.last_frame_ns
             .store(self.stamp(Instant::now()), Ordering::Release);
         self.down_since_ns.store(0, Ordering::Release);
+    }
+
+    /// Asks for the frames published from now on to be prepared with `blur`. Never waits: while
+    /// the producer reads the setting, the request is left to the next call.
+    pub(crate) fn want(&self, blur: BlurTaps) {
+        if let Ok(mut slot) = self.blur.try_lock() {
+            *slot = Some(blur);
+        }
     }
 
     pub(crate) fn stopping(&self) -> bool {
@@ -142,6 +163,7 @@ mod tests {
             image: Arc::new(RgbaImage::new(1, 1, [1, 2, 3, 255])),
             sequence: 1,
             captured_at: Instant::now(),
+            prepared: None,
         }
     }
 

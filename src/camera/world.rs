@@ -162,6 +162,7 @@ impl Camera {
                             image: Arc::new(self.render(&head)),
                             sequence,
                             captured_at: instant_of_ns(t),
+                            prepared: None,
                         });
                     }
                     Some(None) => {}

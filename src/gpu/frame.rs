@@ -8,9 +8,11 @@ use super::commands::Commands;
 use super::frame_view::{CapturedView, FrameView, ViewKey};
 use super::overlay::{OverlayPixels, Overlays};
 use super::pipelines::{BuildMode, BuildReport, ShaderId};
+use super::prepared_background::PreparedStaging;
 use super::warm_up::{WarmUp, WarmUpSlot};
 use super::{BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, Placement, ViewTarget};
 use crate::algorithm::params::Params;
+use crate::blurred_texels::BlurredTexels;
 use crate::image::RgbaImage;
 use ash::vk;
 use std::collections::HashMap;
@@ -27,10 +29,12 @@ pub(super) struct PreparedView {
     pub(super) last_frame: u64,
 }
 
-/// The background of a frame: the newest camera image and its sequence number (a new number
-/// is a new camera frame).
+/// The background of a frame: the newest camera image, its texels when its source prepared
+/// them (gpu/prepared_background.rs), and its sequence number (a new number is a new camera
+/// frame).
 pub struct FrameBackground<'a> {
     pub image: &'a RgbaImage,
+    pub prepared: Option<&'a BlurredTexels>,
     pub sequence: u64,
 }
 
@@ -51,6 +55,8 @@ pub struct FrameEngine {
     /// The background sequence the blurred camera image was prepared for (once per camera
     /// frame, whatever the number of views), and the camera texels prepared.
     pub(super) prepared_for: Option<(u64, CameraRect)>,
+    /// Texels prepared by the background's source, on their way into the sampled image.
+    pub(super) staged: PreparedStaging,
     pub(super) views: HashMap<ViewKey, PreparedView>,
     pub(super) frame: u64,
     /// Lit pixels drawn over the views after the enhancement.
@@ -83,6 +89,7 @@ impl FrameEngine {
             background: None,
             background_sequence: 0,
             prepared_for: None,
+            staged: PreparedStaging::default(),
             views: HashMap::new(),
             frame: 0,
             overlays: Overlays::default(),
@@ -144,11 +151,23 @@ impl FrameEngine {
     }
 
     /// Makes the GPU background frame hold `image` (sequence identifies a new camera frame).
-    fn update_background(&mut self, image: &RgbaImage, sequence: u64) -> Result<(), GpuError> {
+    pub(super) fn update_background(
+        &mut self,
+        image: &RgbaImage,
+        sequence: u64,
+    ) -> Result<(), GpuError> {
         if self.background.is_some() && self.background_sequence == sequence {
             return Ok(());
         }
-        let size = (image.width, image.height);
+        self.ensure_background((image.width, image.height))?;
+        let bg = self.background.as_mut().expect("made above");
+        bg.upload(&image.pixels)?;
+        self.background_sequence = sequence;
+        Ok(())
+    }
+
+    /// Makes the GPU background frame exist at `size` (views are bound to it).
+    pub(super) fn ensure_background(&mut self, size: (u32, u32)) -> Result<(), GpuError> {
         if self.background.as_ref().is_none_or(|b| b.size != size) {
             if let Some(mut old) = self.background.take() {
                 old.destroy(&self.gpu);
@@ -162,9 +181,6 @@ impl FrameEngine {
             self.background = Some(bg);
             self.prepared_for = None;
         }
-        let bg = self.background.as_mut().expect("created above");
-        bg.upload(&image.pixels)?;
-        self.background_sequence = sequence;
         Ok(())
     }
 
@@ -251,7 +267,9 @@ impl FrameEngine {
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
         // The previous submission read the camera buffer the upload writes.
         self.wait_idle()?;
-        self.update_background(background.image, background.sequence)?;
+        if !self.stage_prepared(&background, views, params)? {
+            self.upload_unprepared(&background)?;
+        }
         // More regions than the engine holds views for: one submission per MAX_VIEWS.
         let mut captured = Vec::new();
         for part in views.chunks(MAX_VIEWS as usize) {
@@ -344,6 +362,7 @@ impl FrameEngine {
             bg.destroy(&self.gpu);
         }
         self.overlays.destroy(&self.gpu);
+        self.staged.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
         // Waited for above: this wait cannot fail.
         let _ = self.commands.destroy(&self.gpu);

@@ -44,6 +44,7 @@ impl FrameEngine {
         staging: &[(GpuBuffer, GpuBuffer)],
     ) -> Result<(), GpuError> {
         self.commands.begin(&self.gpu)?;
+        self.record_prepared_copy();
         let seq = self.background_sequence;
         let bg = self.background.as_ref().expect("set in process");
         let mappings: Vec<CameraMapping> = items.iter().map(|i| i.mapping).collect();

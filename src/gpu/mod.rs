@@ -24,6 +24,7 @@ pub mod overlay;
 pub mod pipeline_cache;
 pub mod pipelines;
 pub mod pixel_codec;
+pub mod prepared_background;
 pub mod process_exit;
 pub mod push_constants;
 mod record;

@@ -7,8 +7,10 @@ use super::engine::{barrier, BackgroundFrame, CameraRect, Engine, Placement, Vie
 use super::error::GpuError;
 use super::format::PixelFormat;
 use super::pipelines::BuildMode;
+use super::prepared_background::staging_buffer;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
+use crate::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::image::RgbaImage;
 use ash::vk;
 use std::cell::RefCell;
@@ -17,6 +19,9 @@ pub struct OfflineEngine {
     pub(super) engine: Engine,
     /// RefCell: `submit` records through `&self` (the engine and device are only read).
     commands: RefCell<Commands>,
+    /// Enhance with the background's texels prepared on the CPU and copied in, as the layer
+    /// does for live sources, instead of the decode and blur passes (`set_cpu_background`).
+    cpu_background: bool,
     // Declared last: dropped after the objects above are destroyed in Drop.
     pub gpu: GpuDevice,
 }
@@ -58,8 +63,16 @@ impl OfflineEngine {
         Ok(OfflineEngine {
             engine,
             commands,
+            cpu_background: false,
             gpu,
         })
+    }
+
+    /// From now on, enhances with the background's texels prepared on the CPU
+    /// (crate::blurred_texels) and copied into the sampled image, as the layer does for live
+    /// sources, instead of the GPU's decode and blur passes; false goes back to those.
+    pub fn set_cpu_background(&mut self, on: bool) {
+        self.cpu_background = on;
     }
 
     pub fn device_name(&self) -> &str {
@@ -146,15 +159,35 @@ impl OfflineEngine {
             ));
         }
         let (bg, mut view) = self.stage(camera, region, format)?;
+        let staging = match self.cpu_background.then(|| {
+            let texels = BlurredTexels::prepare(camera, BlurTaps::of(params));
+            staging_buffer(&self.gpu, &texels)
+        }) {
+            None => None,
+            Some(Ok(buffer)) => Some(buffer),
+            Some(Err(e)) => {
+                self.release(bg, view);
+                return Err(e);
+            }
+        };
         let result = view.pixels.write(&words_to_bytes(pixels)).and_then(|_| {
             self.submit(|cmd| {
                 let rect = CameraRect::sampled_by(&[*mapping], bg.size);
-                self.engine
-                    .record_background(&self.gpu, cmd, &bg, params, &rect)?;
+                match &staging {
+                    Some(texels) => self
+                        .engine
+                        .record_texels_upload(&self.gpu, cmd, &bg, texels, &rect),
+                    None => self
+                        .engine
+                        .record_background(&self.gpu, cmd, &bg, params, &rect)?,
+                }
                 self.engine
                     .record_enhance(&self.gpu, cmd, &view, params, mapping)
             })
         });
+        if let Some(mut texels) = staging {
+            texels.destroy(&self.gpu);
+        }
         let out = result.and_then(|_| {
             let bytes = view
                 .pixels

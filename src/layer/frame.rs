@@ -12,6 +12,7 @@ use super::sources;
 use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
+use crate::blurred_texels::BlurTaps;
 use crate::camera;
 use crate::gpu::frame::FrameOptions;
 use crate::gpu::pipeline_cache::Origin;
@@ -279,6 +280,10 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
         return;
     }
     sources::open_when_needed(s);
+    if let Some(bg) = &s.background {
+        // Live frames come prepared for these settings from the source's thread.
+        bg.prepare_with(BlurTaps::of(&s.settings.params));
+    }
     let Some(frame) = background_frame(s) else {
         return;
     };
@@ -288,7 +293,8 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
     };
     let sequence = background_sequence(frame.sequence, &s.settings);
     let processor = s.processor.as_mut().expect("checked above");
-    let background = super::processor::background(&frame.image, sequence);
+    let prepared = frame.prepared.as_deref();
+    let background = super::processor::background(&frame.image, prepared, sequence);
     let done = processor.process(&items, background, &s.settings, options);
     match done {
         Ok(views) => {

@@ -5,6 +5,7 @@ use super::indicator::{self, Timer};
 use super::log;
 use super::settings::Settings;
 use crate::algorithm::params::Params;
+use crate::blurred_texels::BlurredTexels;
 use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions};
 use crate::gpu::overlay::OverlayPixels;
 use crate::gpu::pipelines::{BuildReport, ShaderId};
@@ -114,7 +115,16 @@ impl Drop for Processor {
     }
 }
 
-/// The background image of a frame (a new `sequence` is a new camera frame).
-pub fn background(image: &RgbaImage, sequence: u64) -> FrameBackground<'_> {
-    FrameBackground { image, sequence }
+/// The background image of a frame (a new `sequence` is a new camera frame), with its texels
+/// when its source prepared them.
+pub fn background<'a>(
+    image: &'a RgbaImage,
+    prepared: Option<&'a BlurredTexels>,
+    sequence: u64,
+) -> FrameBackground<'a> {
+    FrameBackground {
+        image,
+        prepared,
+        sequence,
+    }
 }

@@ -332,6 +332,7 @@ impl Capture {
             image: self.pool.share(image),
             sequence: self.sequence,
             captured_at,
+            prepared: None,
         })
     }
 }

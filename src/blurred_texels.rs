@@ -1,0 +1,246 @@
+//! The camera frame decoded and blurred in f32, packed exactly as the GPU's `blurred_texels`
+//! image holds it (shaders/background.wgsl; `pack_linear` in shaders/common.wgsl): made on the
+//! CPU by a live background's own thread, so that a frame only copies it into that image
+//! (gpu/prepared_background.rs) instead of running the decode and blur passes. The arithmetic
+//! follows the passes' (decoded texels rounded to the packing, the same f32 taps summed in the
+//! same order), so both agree to the packing's rounding; src/background.rs is the f64 reference.
+
+use crate::algorithm::params::{Params, MAX_BLUR_SIZE};
+use crate::colour;
+use crate::image::RgbaImage;
+
+/// Bits per linear channel in a packed texel (the GPU's LINEAR_BITS, checked equal there).
+pub const LINEAR_BITS: u32 = 21;
+pub const LINEAR_MAX: u32 = (1 << LINEAR_BITS) - 1;
+/// Bytes per texel: two packed texels (the texel and its right neighbour), 8 bytes each.
+pub const TEXEL_BYTES: usize = 16;
+/// Taps at offsets 0..=half for the widest blur.
+const TAPS: usize = MAX_BLUR_SIZE as usize / 2 + 1;
+
+/// The blur texels are made with: the f32 Gaussian taps at offsets 0..=half, as the GPU passes
+/// get them in their push constants. A prepared frame is used only with equal taps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlurTaps {
+    pub half: usize,
+    pub taps: [f32; TAPS],
+}
+
+impl BlurTaps {
+    /// The taps of `params` (blur on or off, blur_size, blur_sigma).
+    pub fn of(params: &Params) -> BlurTaps {
+        let weights = params.blur_taps();
+        let half = weights.len() / 2;
+        let mut taps = [0.0f32; TAPS];
+        for (k, t) in taps.iter_mut().enumerate().take(half + 1) {
+            *t = weights[half + k] as f32;
+        }
+        BlurTaps { half, taps }
+    }
+}
+
+/// A camera frame decoded, blurred and packed: entry (x, y) at byte `16 * (y * width + x)`
+/// holds texel x and its right neighbour (itself in the last column), little-endian words.
+#[derive(Clone, Debug)]
+pub struct BlurredTexels {
+    pub width: u32,
+    pub height: u32,
+    pub blur: BlurTaps,
+    pub bytes: Vec<u8>,
+}
+
+/// `pack_linear` of one channel: [0, 1] onto 0..=LINEAR_MAX, ties to even as WGSL's `round`.
+fn quantize(v: f32) -> u64 {
+    u64::from((v.clamp(0.0, 1.0) * LINEAR_MAX as f32).round_ties_even() as u32)
+}
+
+/// One texel's 8 bytes: R, G, B at bits 0, 21 and 42 of a little-endian u64.
+fn pack(c: [f32; 3]) -> [u8; 8] {
+    let q = quantize(c[0]) | quantize(c[1]) << LINEAR_BITS | quantize(c[2]) << (2 * LINEAR_BITS);
+    q.to_le_bytes()
+}
+
+/// The decoded value of each 8-bit code as the blur reads it: rounded to the packing.
+fn decode_table() -> [f32; 256] {
+    std::array::from_fn(|c| {
+        let v = colour::code_to_linear(c as u8) as f32;
+        quantize(v) as f32 * (1.0 / LINEAR_MAX as f32)
+    })
+}
+
+impl BlurredTexels {
+    /// Decodes and blurs `camera` with `blur` (separable, clamp-to-edge).
+    pub fn prepare(camera: &RgbaImage, blur: BlurTaps) -> BlurredTexels {
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        let rows = horizontal(camera, &blur);
+        let mut bytes = vec![0u8; w * h * TEXEL_BYTES];
+        let mut out = vec![[0.0f32; 3]; w];
+        for (y, dst) in bytes.chunks_exact_mut(w * TEXEL_BYTES).enumerate() {
+            vertical(&rows, (w, h), y, &blur, &mut out);
+            for (x, entry) in dst.chunks_exact_mut(TEXEL_BYTES).enumerate() {
+                entry[..8].copy_from_slice(&pack(out[x]));
+                entry[8..].copy_from_slice(&pack(out[(x + 1).min(w - 1)]));
+            }
+        }
+        BlurredTexels {
+            width: camera.width,
+            height: camera.height,
+            blur,
+            bytes,
+        }
+    }
+
+    /// Whether these texels are what the GPU passes would make of a `size` frame with `params`.
+    pub fn made_for(&self, size: (u32, u32), params: &Params) -> bool {
+        (self.width, self.height) == size && self.blur == BlurTaps::of(params)
+    }
+
+    /// The entry of texel (x, y) as the four u32 words of the GPU's image.
+    pub fn entry(&self, x: u32, y: u32) -> [u32; 4] {
+        let at = (y as usize * self.width as usize + x as usize) * TEXEL_BYTES;
+        std::array::from_fn(|k| {
+            let b = &self.bytes[at + 4 * k..at + 4 * k + 4];
+            u32::from_le_bytes([b[0], b[1], b[2], b[3]])
+        })
+    }
+}
+
+/// Every row decoded and blurred horizontally (the pass's `hblur_row`), row-major.
+fn horizontal(camera: &RgbaImage, blur: &BlurTaps) -> Vec<[f32; 3]> {
+    let lut = decode_table();
+    let (w, half) = (camera.width as usize, blur.half);
+    let mut out = Vec::with_capacity(camera.pixels.len());
+    // The row with `half` clamp-to-edge texels on each side.
+    let mut padded = vec![[0.0f32; 3]; w + 2 * half];
+    for row in camera.pixels.chunks_exact(w) {
+        for (i, p) in padded.iter_mut().enumerate() {
+            let c = row[i.saturating_sub(half).min(w - 1)];
+            *p = [lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]];
+        }
+        for x in 0..w {
+            let centre = x + half;
+            let mut a = scale(blur.taps[0], padded[centre]);
+            for o in 1..=half {
+                let pair = add(padded[centre - o], padded[centre + o]);
+                a = add(a, scale(blur.taps[o], pair));
+            }
+            out.push(a);
+        }
+    }
+    out
+}
+
+/// Output row `y`: the horizontally blurred rows y - half..=y + half (clamped), top first.
+fn vertical(
+    rows: &[[f32; 3]],
+    (w, h): (usize, usize),
+    y: usize,
+    blur: &BlurTaps,
+    out: &mut [[f32; 3]],
+) {
+    let half = blur.half;
+    out.fill([0.0; 3]);
+    for k in 0..=2 * half {
+        let source = (y + k).saturating_sub(half).min(h - 1);
+        let tap = blur.taps[k.abs_diff(half)];
+        let row = &rows[source * w..(source + 1) * w];
+        for (o, r) in out.iter_mut().zip(row) {
+            *o = add(*o, scale(tap, *r));
+        }
+    }
+}
+
+fn scale(t: f32, c: [f32; 3]) -> [f32; 3] {
+    [t * c[0], t * c[1], t * c[2]]
+}
+
+fn add(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unpack(bytes: [u8; 8]) -> [f64; 3] {
+        let q = u64::from_le_bytes(bytes);
+        std::array::from_fn(|k| {
+            ((q >> (LINEAR_BITS as usize * k)) & u64::from(LINEAR_MAX)) as f64
+                / f64::from(LINEAR_MAX)
+        })
+    }
+
+    fn noise(w: u32, h: u32) -> RgbaImage {
+        let mut img = RgbaImage::new(w, h, [0, 0, 0, 255]);
+        let mut s = 12345u32;
+        for p in &mut img.pixels {
+            for c in p.iter_mut().take(3) {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                *c = (s >> 24) as u8;
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn matches_the_f64_reference_to_the_packing() {
+        let camera = noise(37, 23);
+        for (blur, blur_size, blur_sigma) in [(true, 3, 1.5), (true, 15, 5.0), (false, 3, 1.5)] {
+            let params = Params {
+                blur,
+                blur_size,
+                blur_sigma,
+                ..Params::default()
+            };
+            let texels = BlurredTexels::prepare(&camera, BlurTaps::of(&params));
+            let reference = crate::background::blurred_camera(&camera, &params);
+            for y in 0..23 {
+                for x in 0..37 {
+                    let at = (y * 37 + x) as usize * TEXEL_BYTES;
+                    let bytes = &texels.bytes[at..at + TEXEL_BYTES];
+                    let right = (x + 1).min(36);
+                    let got = [
+                        unpack(bytes[..8].try_into().unwrap()),
+                        unpack(bytes[8..].try_into().unwrap()),
+                    ];
+                    for (g, at) in got.iter().zip([x, right]) {
+                        let want = reference.pixels[(y * 37 + at) as usize];
+                        for k in 0..3 {
+                            // Packing (2.4e-7) and f32 sums: a few codes at most.
+                            assert!(
+                                (g[k] - want[k]).abs() < 2e-6,
+                                "({x}, {y}) {k}: {} vs {}",
+                                g[k],
+                                want[k]
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn taps_follow_the_settings() {
+        let on = Params::default();
+        let off = Params { blur: false, ..on };
+        let wider = Params { blur_size: 5, ..on };
+        let texels = BlurredTexels::prepare(&noise(4, 3), BlurTaps::of(&on));
+        assert!(texels.made_for((4, 3), &on));
+        assert!(!texels.made_for((4, 3), &off) && !texels.made_for((4, 3), &wider));
+        assert!(!texels.made_for((3, 4), &on));
+        assert_eq!(BlurTaps::of(&off).half, 0);
+        assert_eq!(BlurTaps::of(&off).taps[0], 1.0);
+    }
+
+    #[test]
+    fn packing_matches_the_shader_layout() {
+        // R in bits 0..21 of word 0, G across the words (11 low bits in word 0), B in word 1.
+        let bytes = pack([1.0, 1.0, 0.0]);
+        let q = u64::from_le_bytes(bytes);
+        assert_eq!(q, u64::from(LINEAR_MAX) | u64::from(LINEAR_MAX) << 21);
+        assert_eq!(
+            unpack(pack([0.25, 0.5, 0.75])).map(|v| (v * 4.0).round()),
+            [1.0, 2.0, 3.0]
+        );
+    }
+}

@@ -1,0 +1,218 @@
+//! A camera frame whose texels its source prepared on the CPU (crate::blurred_texels, on the
+//! source's own thread): the frame writes the texels the views sample into a host-visible
+//! staging buffer and copies them into the image the enhancement samples, one
+//! vkCmdCopyBufferToImage, instead of the camera upload and the decode and blur passes
+//! (gpu/record.rs, record_background). Those remain for frames that come without prepared
+//! texels, or with texels made for other blur settings, and for the offline engine.
+
+use super::buffer::GpuBuffer;
+use super::device::GpuDevice;
+use super::engine::{barrier, BackgroundFrame, CameraRect, Engine};
+use super::error::GpuError;
+use super::frame::{FrameBackground, FrameEngine};
+use super::frame_view::FrameView;
+use super::interface::LINEAR_BITS;
+use super::resources::colour_layer;
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::params::Params;
+use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+// The CPU packs texels as the shaders do.
+const _: () = assert!(crate::blurred_texels::LINEAR_BITS == LINEAR_BITS);
+
+/// The frame engine's staging buffer for prepared texels.
+#[derive(Default)]
+pub(super) struct PreparedStaging {
+    buffer: Option<GpuBuffer>,
+    /// The rectangle written into `buffer` and not yet copied into the image.
+    pending: Option<CameraRect>,
+    /// The camera buffer does not hold the frame in use (its texels came prepared).
+    camera_behind: bool,
+}
+
+impl PreparedStaging {
+    pub(super) fn destroy(&mut self, gpu: &GpuDevice) {
+        if let Some(mut b) = self.buffer.take() {
+            b.destroy(gpu);
+        }
+    }
+}
+
+/// A host-visible buffer holding all of `texels`, laid out as the image (for `record_texels_upload`).
+pub fn staging_buffer(gpu: &GpuDevice, texels: &BlurredTexels) -> Result<GpuBuffer, GpuError> {
+    let mut buffer = new_staging(gpu, texels.bytes.len() as u64)?;
+    buffer
+        .write(&texels.bytes)
+        .inspect_err(|_| buffer.destroy(gpu))?;
+    Ok(buffer)
+}
+
+fn new_staging(gpu: &GpuDevice, bytes: u64) -> Result<GpuBuffer, GpuError> {
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+    GpuBuffer::new(
+        gpu,
+        bytes,
+        usage,
+        MemoryLocation::CpuToGpu,
+        "prepared texels",
+    )
+}
+
+impl Engine {
+    /// Records the copy of `rect`'s texels from `staging` (laid out as the image, 16 bytes per
+    /// texel) into the image the enhancement samples: what `record_background` makes of the
+    /// same rectangle, from texels prepared on the CPU.
+    pub fn record_texels_upload(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        background: &BackgroundFrame,
+        staging: &GpuBuffer,
+        rect: &CameraRect,
+    ) {
+        let all = vk::PipelineStageFlags::ALL_COMMANDS;
+        let transfer = vk::PipelineStageFlags::TRANSFER;
+        let width = background.size.0;
+        let right = (rect.x + rect.width).min(width);
+        let to_general = [vk::ImageMemoryBarrier::default()
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::GENERAL)
+            .src_access_mask(vk::AccessFlags::MEMORY_READ)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(background.texels.raw)
+            .subresource_range(colour_layer())];
+        let first = u64::from(rect.y) * u64::from(width) + u64::from(rect.x);
+        let copy = [vk::BufferImageCopy::default()
+            .buffer_offset(first * TEXEL_BYTES as u64)
+            .buffer_row_length(width)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_offset(vk::Offset3D {
+                x: rect.x as i32,
+                y: rect.y as i32,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width: right - rect.x,
+                height: rect.height,
+                depth: 1,
+            })];
+        let d = &gpu.device;
+        // SAFETY: cmd is recording; the image and the buffer are ours, and the region lies in
+        // both (the buffer holds the whole frame's texels, the rectangle is inside the frame).
+        unsafe {
+            d.cmd_pipeline_barrier(
+                cmd,
+                all,
+                transfer,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &to_general,
+            );
+            d.cmd_copy_buffer_to_image(
+                cmd,
+                staging.raw,
+                background.texels.raw,
+                vk::ImageLayout::GENERAL,
+                &copy,
+            );
+        }
+        barrier(gpu, cmd, transfer, all);
+    }
+}
+
+impl FrameEngine {
+    /// Makes the frame's background its prepared texels when they were made for `params`:
+    /// writes those the views sample into the staging buffer for `record_prepared_copy`.
+    /// False, with nothing done, when the frame must be prepared on the GPU.
+    pub(super) fn stage_prepared(
+        &mut self,
+        background: &FrameBackground,
+        views: &[FrameView],
+        params: &Params,
+    ) -> Result<bool, GpuError> {
+        let image = background.image;
+        let size = (image.width, image.height);
+        let Some(texels) = background.prepared.filter(|t| t.made_for(size, params)) else {
+            return Ok(false);
+        };
+        self.ensure_background(size)?;
+        let seq = background.sequence;
+        let mappings: Vec<CameraMapping> = views.iter().map(|v| v.mapping).collect();
+        let needed = CameraRect::sampled_by(&mappings, size);
+        let rect = match self.prepared_for {
+            Some((s, done)) if s == seq && done.contains(&needed) => return Ok(true),
+            Some((s, done)) if s == seq => done.union(&needed),
+            _ => needed,
+        };
+        self.write_staging(texels, &rect)?;
+        self.background_sequence = seq;
+        self.prepared_for = Some((seq, rect));
+        self.staged.camera_behind = true;
+        Ok(true)
+    }
+
+    /// Copies the rows of `rect` into the staging buffer (made or remade for the frame's size).
+    fn write_staging(&mut self, texels: &BlurredTexels, rect: &CameraRect) -> Result<(), GpuError> {
+        let bytes = texels.bytes.len() as u64;
+        if self
+            .staged
+            .buffer
+            .as_ref()
+            .is_none_or(|b| b.size != bytes.max(16))
+        {
+            self.staged.destroy(&self.gpu);
+            self.staged.buffer = Some(new_staging(&self.gpu, bytes)?);
+        }
+        let buffer = self.staged.buffer.as_mut().expect("made above");
+        let dst = buffer
+            .mapped_mut()
+            .ok_or_else(|| GpuError::Unsupported("staging buffer is not host-visible".into()))?;
+        let row = texels.width as usize * TEXEL_BYTES;
+        let right = (rect.x + rect.width).min(texels.width) as usize;
+        let span = rect.x as usize * TEXEL_BYTES..right * TEXEL_BYTES;
+        for y in rect.y as usize..(rect.y + rect.height) as usize {
+            let at = y * row;
+            let range = at + span.start..at + span.end;
+            dst[range.clone()].copy_from_slice(&texels.bytes[range]);
+        }
+        self.staged.pending = Some(*rect);
+        Ok(())
+    }
+
+    /// The GPU path for a frame whose texels came unprepared: the camera buffer must hold it,
+    /// also when an earlier call used prepared texels for the same frame.
+    pub(super) fn upload_unprepared(
+        &mut self,
+        background: &FrameBackground,
+    ) -> Result<(), GpuError> {
+        let behind = std::mem::take(&mut self.staged.camera_behind);
+        if behind && self.background_sequence == background.sequence {
+            if let Some(bg) = self.background.as_mut() {
+                bg.upload(&background.image.pixels)?;
+            }
+        }
+        self.update_background(background.image, background.sequence)
+    }
+
+    /// Records the copy of the staged texels, once, at the start of the frame's commands.
+    pub(super) fn record_prepared_copy(&mut self) {
+        let Some(rect) = self.staged.pending.take() else {
+            return;
+        };
+        let (Some(bg), Some(staging)) = (&self.background, &self.staged.buffer) else {
+            return;
+        };
+        let cmd = self.commands.cmd;
+        self.engine
+            .record_texels_upload(&self.gpu, cmd, bg, staging, &rect);
+    }
+}
