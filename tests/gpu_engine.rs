@@ -441,9 +441,9 @@ fn cpu_prepared_texels_match_the_gpu_passes() {
                 u64::from(w[2]) | u64::from(w[3]) << 32,
             ];
             for (texel, bits) in [l, r].into_iter().zip(packed) {
-                for k in 0..3 {
+                for (k, v) in texel.iter().enumerate() {
                     let c = ((bits >> (21 * k)) & u64::from(LINEAR_MAX)) as i64;
-                    let d = (c - code(texel[k])).abs();
+                    let d = (c - code(*v)).abs();
                     worst = worst.max(d);
                     assert!(
                         d <= 1,

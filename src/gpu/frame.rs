@@ -8,7 +8,7 @@ use super::commands::Commands;
 use super::frame_view::{CapturedView, FrameView, ViewKey};
 use super::overlay::{OverlayPixels, Overlays};
 use super::pipelines::{BuildMode, BuildReport, ShaderId};
-use super::prepared_background::PreparedStaging;
+use super::prepared_staging::PreparedStaging;
 use super::warm_up::{WarmUp, WarmUpSlot};
 use super::{BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, Placement, ViewTarget};
 use crate::algorithm::params::Params;

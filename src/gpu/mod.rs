@@ -25,6 +25,7 @@ pub mod pipeline_cache;
 pub mod pipelines;
 pub mod pixel_codec;
 pub mod prepared_background;
+pub mod prepared_staging;
 pub mod process_exit;
 pub mod push_constants;
 mod record;

@@ -12,33 +12,15 @@ use super::error::GpuError;
 use super::frame::{FrameBackground, FrameEngine};
 use super::frame_view::FrameView;
 use super::interface::LINEAR_BITS;
+use super::prepared_staging::new_staging;
 use super::resources::colour_layer;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 
 // The CPU packs texels as the shaders do.
 const _: () = assert!(crate::blurred_texels::LINEAR_BITS == LINEAR_BITS);
-
-/// The frame engine's staging buffer for prepared texels.
-#[derive(Default)]
-pub(super) struct PreparedStaging {
-    buffer: Option<GpuBuffer>,
-    /// The rectangle written into `buffer` and not yet copied into the image.
-    pending: Option<CameraRect>,
-    /// The camera buffer does not hold the frame in use (its texels came prepared).
-    camera_behind: bool,
-}
-
-impl PreparedStaging {
-    pub(super) fn destroy(&mut self, gpu: &GpuDevice) {
-        if let Some(mut b) = self.buffer.take() {
-            b.destroy(gpu);
-        }
-    }
-}
 
 /// A host-visible buffer holding all of `texels`, laid out as the image (for `record_texels_upload`).
 pub fn staging_buffer(gpu: &GpuDevice, texels: &BlurredTexels) -> Result<GpuBuffer, GpuError> {
@@ -47,17 +29,6 @@ pub fn staging_buffer(gpu: &GpuDevice, texels: &BlurredTexels) -> Result<GpuBuff
         .write(&texels.bytes)
         .inspect_err(|_| buffer.destroy(gpu))?;
     Ok(buffer)
-}
-
-fn new_staging(gpu: &GpuDevice, bytes: u64) -> Result<GpuBuffer, GpuError> {
-    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
-    GpuBuffer::new(
-        gpu,
-        bytes,
-        usage,
-        MemoryLocation::CpuToGpu,
-        "prepared texels",
-    )
 }
 
 impl Engine {
