@@ -48,15 +48,20 @@ pub struct BlurredTexels {
     pub bytes: Vec<u8>,
 }
 
-/// `pack_linear` of one channel: [0, 1] onto 0..=LINEAR_MAX, ties to even as WGSL's `round`.
+/// 2^23: adding it rounds an f32 in [0, 2^22] to an integer, ties to even (the default rounding
+/// mode) as WGSL's `round`, without a call to `rint` on CPUs lacking SSE4.1.
+const ROUNDER: f32 = 8_388_608.0;
+
+/// `pack_linear` of one channel: [0, 1] onto 0..=LINEAR_MAX, ties to even.
 fn quantize(v: f32) -> u64 {
-    u64::from((v.clamp(0.0, 1.0) * LINEAR_MAX as f32).round_ties_even() as u32)
+    let scaled = v.clamp(0.0, 1.0) * LINEAR_MAX as f32;
+    // In [2^23, 2^24) an f32's ulp is 1: its mantissa bits are the rounded integer.
+    u64::from((scaled + ROUNDER).to_bits() & 0x7f_ffff)
 }
 
-/// One texel's 8 bytes: R, G, B at bits 0, 21 and 42 of a little-endian u64.
-fn pack(c: [f32; 3]) -> [u8; 8] {
-    let q = quantize(c[0]) | quantize(c[1]) << LINEAR_BITS | quantize(c[2]) << (2 * LINEAR_BITS);
-    q.to_le_bytes()
+/// One texel's packed bits: R, G, B at bits 0, 21 and 42 (two little-endian u32 words).
+fn pack(c: &[f32]) -> u64 {
+    quantize(c[0]) | quantize(c[1]) << LINEAR_BITS | quantize(c[2]) << (2 * LINEAR_BITS)
 }
 
 /// The decoded value of each 8-bit code as the blur reads it: rounded to the packing.
@@ -73,12 +78,16 @@ impl BlurredTexels {
         let (w, h) = (camera.width as usize, camera.height as usize);
         let rows = horizontal(camera, &blur);
         let mut bytes = vec![0u8; w * h * TEXEL_BYTES];
-        let mut out = vec![[0.0f32; 3]; w];
+        let mut out = vec![0.0f32; 3 * w];
+        let mut packed = vec![0u64; w];
         for (y, dst) in bytes.chunks_exact_mut(w * TEXEL_BYTES).enumerate() {
             vertical(&rows, (w, h), y, &blur, &mut out);
+            for (q, c) in packed.iter_mut().zip(out.chunks_exact(3)) {
+                *q = pack(c);
+            }
             for (x, entry) in dst.chunks_exact_mut(TEXEL_BYTES).enumerate() {
-                entry[..8].copy_from_slice(&pack(out[x]));
-                entry[8..].copy_from_slice(&pack(out[(x + 1).min(w - 1)]));
+                entry[..8].copy_from_slice(&packed[x].to_le_bytes());
+                entry[8..].copy_from_slice(&packed[(x + 1).min(w - 1)].to_le_bytes());
             }
         }
         BlurredTexels {
@@ -104,57 +113,56 @@ impl BlurredTexels {
     }
 }
 
-/// Every row decoded and blurred horizontally (the pass's `hblur_row`), row-major.
-fn horizontal(camera: &RgbaImage, blur: &BlurTaps) -> Vec<[f32; 3]> {
+/// Every row decoded and blurred horizontally (the pass's `hblur_row`): RGB floats, row-major.
+fn horizontal(camera: &RgbaImage, blur: &BlurTaps) -> Vec<f32> {
     let lut = decode_table();
     let (w, half) = (camera.width as usize, blur.half);
-    let mut out = Vec::with_capacity(camera.pixels.len());
-    // The row with `half` clamp-to-edge texels on each side.
-    let mut padded = vec![[0.0f32; 3]; w + 2 * half];
-    for row in camera.pixels.chunks_exact(w) {
-        for (i, p) in padded.iter_mut().enumerate() {
+    let mut out = vec![0.0f32; 3 * camera.pixels.len()];
+    // The row with `half` clamp-to-edge texels on each side, RGB floats.
+    let mut padded = vec![0.0f32; 3 * (w + 2 * half)];
+    for (row, dst) in camera
+        .pixels
+        .chunks_exact(w)
+        .zip(out.chunks_exact_mut(3 * w))
+    {
+        for (i, p) in padded.chunks_exact_mut(3).enumerate() {
             let c = row[i.saturating_sub(half).min(w - 1)];
-            *p = [lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]];
+            p.copy_from_slice(&[lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]]);
         }
-        for x in 0..w {
-            let centre = x + half;
-            let mut a = scale(blur.taps[0], padded[centre]);
-            for o in 1..=half {
-                let pair = add(padded[centre - o], padded[centre + o]);
-                a = add(a, scale(blur.taps[o], pair));
+        // Texel x is padded texel x + half; offset o texels is 3 * o floats.
+        let centre = &padded[3 * half..3 * (half + w)];
+        for (d, c) in dst.iter_mut().zip(centre) {
+            *d = blur.taps[0] * c;
+        }
+        for o in 1..=half {
+            let left = &padded[3 * (half - o)..3 * (half - o + w)];
+            let right = &padded[3 * (half + o)..3 * (half + o + w)];
+            let t = blur.taps[o];
+            for ((d, l), r) in dst.iter_mut().zip(left).zip(right) {
+                *d += t * (l + r);
             }
-            out.push(a);
         }
     }
     out
 }
 
 /// Output row `y`: the horizontally blurred rows y - half..=y + half (clamped), top first.
-fn vertical(
-    rows: &[[f32; 3]],
-    (w, h): (usize, usize),
-    y: usize,
-    blur: &BlurTaps,
-    out: &mut [[f32; 3]],
-) {
+fn vertical(rows: &[f32], (w, h): (usize, usize), y: usize, blur: &BlurTaps, out: &mut [f32]) {
     let half = blur.half;
-    out.fill([0.0; 3]);
-    for k in 0..=2 * half {
+    let row = |k: usize| {
         let source = (y + k).saturating_sub(half).min(h - 1);
+        &rows[3 * w * source..3 * w * (source + 1)]
+    };
+    let first = blur.taps[half];
+    for (o, r) in out.iter_mut().zip(row(0)) {
+        *o = first * r;
+    }
+    for k in 1..=2 * half {
         let tap = blur.taps[k.abs_diff(half)];
-        let row = &rows[source * w..(source + 1) * w];
-        for (o, r) in out.iter_mut().zip(row) {
-            *o = add(*o, scale(tap, *r));
+        for (o, r) in out.iter_mut().zip(row(k)) {
+            *o += tap * r;
         }
     }
-}
-
-fn scale(t: f32, c: [f32; 3]) -> [f32; 3] {
-    [t * c[0], t * c[1], t * c[2]]
-}
-
-fn add(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 #[cfg(test)]
@@ -235,11 +243,10 @@ mod tests {
     #[test]
     fn packing_matches_the_shader_layout() {
         // R in bits 0..21 of word 0, G across the words (11 low bits in word 0), B in word 1.
-        let bytes = pack([1.0, 1.0, 0.0]);
-        let q = u64::from_le_bytes(bytes);
+        let q = pack(&[1.0, 1.0, 0.0]);
         assert_eq!(q, u64::from(LINEAR_MAX) | u64::from(LINEAR_MAX) << 21);
         assert_eq!(
-            unpack(pack([0.25, 0.5, 0.75])).map(|v| (v * 4.0).round()),
+            unpack(pack(&[0.25, 0.5, 0.75]).to_le_bytes()).map(|v| (v * 4.0).round()),
             [1.0, 2.0, 3.0]
         );
     }
