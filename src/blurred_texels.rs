@@ -76,6 +76,15 @@ impl BlurredTexels {
     /// Decodes and blurs `camera` with `blur` (separable, clamp-to-edge).
     pub fn prepare(camera: &RgbaImage, blur: BlurTaps) -> BlurredTexels {
         let (w, h) = (camera.width as usize, camera.height as usize);
+        if w == 0 || h == 0 || camera.pixels.len() != w * h {
+            // Nothing to prepare (the GPU refuses empty frames): no texels, never used.
+            return BlurredTexels {
+                width: 0,
+                height: 0,
+                blur,
+                bytes: Vec::new(),
+            };
+        }
         let rows = horizontal(camera, &blur);
         let mut bytes = vec![0u8; w * h * TEXEL_BYTES];
         let mut out = vec![0.0f32; 3 * w];
@@ -238,6 +247,13 @@ mod tests {
         assert!(!texels.made_for((3, 4), &on));
         assert_eq!(BlurTaps::of(&off).half, 0);
         assert_eq!(BlurTaps::of(&off).taps[0], 1.0);
+    }
+
+    #[test]
+    fn an_empty_frame_gives_no_texels() {
+        let blur = BlurTaps::of(&Params::default());
+        let texels = BlurredTexels::prepare(&RgbaImage::new(0, 3, [0; 4]), blur);
+        assert!(texels.bytes.is_empty() && !texels.made_for((0, 3), &Params::default()));
     }
 
     #[test]
