@@ -955,7 +955,7 @@ fn config_print_device_shows_the_shipped_profile_below_the_users_table() {
     };
     let out = print(&root);
     let wanted = format!(
-        "environment_blend_mode = \"additive\"  # {}:{line}",
+        "environment_blend_mode = \"additive\"  # {} [device.\"{system}\"]:{line}",
         shipped.display()
     );
     assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
@@ -972,8 +972,64 @@ fn config_print_device_shows_the_shipped_profile_below_the_users_table() {
     let text = format!("[device.\"{system}\"]\nenvironment_blend_mode = \"\"\n");
     std::fs::write(&config, text).unwrap();
     let out = print(&root);
-    let wanted = format!("environment_blend_mode = \"\"  # {}:2", config.display());
+    let wanted = format!(
+        "environment_blend_mode = \"\"  # {} [device.\"{system}\"]:2",
+        config.display()
+    );
     assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+}
+
+/// `config print --app NAME --device SYSTEM`: each value names the file and the table it came
+/// from, or its variable, or the default; the app's table beats the device's, the environment
+/// beats both.
+#[test]
+fn config_print_names_the_table_each_value_came_from() {
+    let root = fresh_home("config-print-tables");
+    let shipped = root.join("devices.toml");
+    std::fs::write(
+        &shipped,
+        "[device.\"Glasses\"]\nlambda_e = 0.3\nblur_sigma = 2.5\nscene_distance = 4\n",
+    )
+    .unwrap();
+    let config = root.join("config/contrastxr/config.toml");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    std::fs::write(
+        &config,
+        "transmittance = 0.3\n[device.\"Glasses\"]\nlambda_e = 0.5\nblur_sigma = 3\n\
+         [app.\"hello_xr\"]\nlambda_e = 0.6\n",
+    )
+    .unwrap();
+    let shipped_text = shipped.to_string_lossy().into_owned();
+    let args = [
+        "config", "print", "--app", "hello_xr", "--device", "Glasses",
+    ];
+    let env = [
+        ("CONTRASTXR_DEVICES", shipped_text.as_str()),
+        ("CONTRASTXR_BLUR_SIGMA", "1.25"),
+    ];
+    let o = isolated(&root, &args, &env);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let (c, s) = (config.display(), shipped.display());
+    for wanted in [
+        format!("lambda_e = 0.6  # {c} [app.\"hello_xr\"]:6"),
+        format!("scene_distance = 4  # {s} [device.\"Glasses\"]:4"),
+        format!("transmittance = 0.3  # {c}:1"),
+        "blur_sigma = 1.25  # env CONTRASTXR_BLUR_SIGMA".to_string(),
+        "blur_size = 3  # default".to_string(),
+    ] {
+        assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+    }
+    // Another app: the user's device table, above the shipped one.
+    let args = ["config", "print", "--app", "other", "--device", "Glasses"];
+    let o = isolated(&root, &args, &env[..1]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    for wanted in [
+        format!("lambda_e = 0.5  # {c} [device.\"Glasses\"]:3"),
+        format!("blur_sigma = 3  # {c} [device.\"Glasses\"]:4"),
+    ] {
+        assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+    }
 }
 
 /// Glasses whose shipped profile says they have no colour camera: with the default `v4l2:auto`
