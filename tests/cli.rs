@@ -919,6 +919,17 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     let d = finding(&report, "device-profile");
     let wanted = format!("the headset \"Glasses\" matched the shipped profile [device.\"Glasses\"] in {shipped_text}");
     assert_eq!(text(d, "detail"), wanted, "{d}");
+    // Shipped profiles for other headsets only: none matched.
+    std::fs::write(
+        &shipped,
+        "[device.\"Other Glasses\"]\ncolour_camera = false\n",
+    )
+    .unwrap();
+    let (_, report) = doctor(&root, &[("CONTRASTXR_DEVICES", &shipped_text)]);
+    let d = finding(&report, "device-profile");
+    assert_eq!(d["status"], "ok", "{d}");
+    let wanted = format!("no shipped profile for \"Glasses\" in {shipped_text}: your own [device.\"Glasses\"] table describes it");
+    assert_eq!(text(d, "detail"), wanted, "{d}");
     // Steam installed: its games need the variable, in their launch options or here.
     assert_eq!(finding(&report, "steam")["status"], "ok");
     std::fs::create_dir_all(root.join(".steam/steam")).unwrap();
@@ -1057,4 +1068,63 @@ fn doctor_suggests_another_background_for_glasses_without_a_colour_camera() {
     assert_eq!(c["status"], "warn", "{c}");
     assert!(text(c, "detail").contains("no colour camera"), "{c}");
     assert!(text(c, "fix").contains("image:PATH"), "{c}");
+}
+
+/// A profile that names the headset's camera by USB id: doctor says whether it is connected
+/// (USB devices from a fake sysfs).
+#[test]
+fn doctor_says_whether_the_profiles_camera_is_connected() {
+    let root = fresh_home("doctor-profile-camera");
+    let log = root.join("state/contrastxr/layer.log");
+    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
+    std::fs::write(
+        &log,
+        "2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b\n\
+         2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it\n",
+    )
+    .unwrap();
+    let shipped = root.join("devices.toml");
+    std::fs::write(
+        &shipped,
+        "[device.\"Glasses\"]\ncamera_usb_ids = \"0c45:636b,0c45:6368\"\n",
+    )
+    .unwrap();
+    let sys = root.join("sys");
+    std::fs::create_dir_all(sys.join("class/video4linux")).unwrap();
+    let env = [
+        ("CONTRASTXR_DEVICES", shipped.to_str().unwrap()),
+        ("CONTRASTXR_SYSFS_ROOT", sys.to_str().unwrap()),
+    ];
+    let (_, report) = doctor(&root, &env);
+    let d = finding(&report, "device-profile");
+    assert_eq!(d["status"], "warn", "{d}");
+    let named = format!(
+        "its camera, camera_usb_ids = \"0c45:636b,0c45:6368\" ({} [device.\"Glasses\"]:2), is not connected",
+        shipped.display()
+    );
+    assert!(
+        text(d, "detail").starts_with("the headset \"Glasses\" matched"),
+        "{d}"
+    );
+    assert!(text(d, "detail").ends_with(&named), "{d}");
+    assert!(text(d, "fix").contains("0c45:636b"), "{d}");
+    // Its camera on USB as video3 (an interface of USB device 1-2), another camera as video1.
+    for (node, port, product) in [("video1", 1, "0825"), ("video3", 2, "6368")] {
+        let usb = sys.join(format!("devices/pci0000:00/usb1/1-{port}"));
+        std::fs::create_dir_all(usb.join(format!("1-{port}:1.0"))).unwrap();
+        std::fs::write(usb.join("idVendor"), "0c45\n").unwrap();
+        std::fs::write(usb.join("idProduct"), format!("{product}\n")).unwrap();
+        let class = sys.join("class/video4linux").join(node);
+        std::fs::create_dir_all(&class).unwrap();
+        std::os::unix::fs::symlink(usb.join(format!("1-{port}:1.0")), class.join("device"))
+            .unwrap();
+    }
+    let (_, report) = doctor(&root, &env);
+    let d = finding(&report, "device-profile");
+    assert_eq!(d["status"], "ok", "{d}");
+    let connected = format!(
+        "is connected: {} (0c45:6368)",
+        root.join("dev/video3").display()
+    );
+    assert!(text(d, "detail").ends_with(&connected), "{d}");
 }
