@@ -392,7 +392,10 @@ fn app_table_turns_one_app_off() {
     };
     r.assert_ran(20);
     assert!(r.modified().is_empty(), "{:?}", r.report);
-    let setting = format!("setting mode = \"off\"  # {}:3", path.display());
+    let setting = format!(
+        "setting mode = \"off\"  # {} [app.\"{APP}\"]:3",
+        path.display()
+    );
     assert!(r.lines.contains(&setting), "{:#?}", r.lines);
 }
 

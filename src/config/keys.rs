@@ -5,6 +5,7 @@
 use super::settings::Settings;
 use super::value::{Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
+use crate::camera::v4l2::usb::UsbId;
 use std::path::PathBuf;
 
 pub struct Key {
@@ -590,6 +591,21 @@ pub const KEYS: &[Key] = &[
             Ok(())
         },
         get: |s| Value::Bool(s.colour_camera),
+    },
+    Key {
+        name: "camera_usb_ids",
+        env: "CONTRASTXR_CAMERA_USB_IDS",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "the headset's own camera, as comma-separated USB ids VID:PID (as lsusb prints them): v4l2:auto takes it before any other camera, and doctor says whether it is connected; \"\" = none",
+        set: |s, v| {
+            let Value::Text(text) = v else {
+                return Err(format!("{v} is not a string of VID:PID ids"));
+            };
+            s.camera.usb_ids = UsbId::parse_list(&text)?;
+            Ok(())
+        },
+        get: |s| Value::Text(UsbId::list_text(&s.camera.usb_ids)),
     },
     Key {
         name: "force",
