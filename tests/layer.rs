@@ -260,10 +260,22 @@ fn check_view(c: &Captured) -> usize {
     changed
 }
 
-fn client_through_layer(format: &str, layout: &str) {
-    let tag = format!("layer-{format}-{layout}");
+/// How the layer enhances the views of a swapchain format on Monado: in place where the
+/// runtime grants storage usage (its UNORM and float formats), else through a copy (Monado
+/// refuses storage usage on sRGB formats, which have no storage support on the device).
+fn expected_path(format: &str, in_place: bool) -> &'static str {
+    match (in_place, format) {
+        (true, "R8G8B8A8_UNORM" | "R16G16B16A16_SFLOAT") => "in-place",
+        _ => "copy",
+    }
+}
+
+fn client_through_layer(format: &str, layout: &str, in_place: bool) {
+    let path = expected_path(format, in_place);
+    let tag = format!("layer-{format}-{layout}-{path}-{}", u8::from(in_place));
     let dir = capture_dir(&tag);
-    let env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+    let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+    env.push(("CONTRASTXR_IN_PLACE".into(), u8::from(in_place).to_string()));
     let cmd = [
         XR_CLIENT,
         "--validation",
@@ -294,6 +306,7 @@ fn client_through_layer(format: &str, layout: &str) {
         dir.display()
     );
     for c in &views {
+        assert_eq!(c.json["path"], path, "{format} {layout}");
         let changed = check_view(c);
         assert!(
             changed > 1000,
@@ -314,13 +327,16 @@ fn client_through_layer(format: &str, layout: &str) {
     );
 }
 
-/// One test per format (they run in parallel), each through both layouts.
+/// One test per format (they run in parallel), each through both layouts and both paths
+/// (in place where the runtime allows it, and always through a copy).
 macro_rules! through_the_layer {
     ($($name:ident: $format:literal,)*) => {$(
         #[test]
         fn $name() {
             for layout in ["array", "side-by-side"] {
-                client_through_layer($format, layout);
+                for in_place in [true, false] {
+                    client_through_layer($format, layout, in_place);
+                }
             }
         }
     )*};

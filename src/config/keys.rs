@@ -664,6 +664,18 @@ pub const KEYS: &[Key] = &[
         get: |s| Value::Bool(s.quad_layers),
     },
     Key {
+        name: "in_place",
+        env: "CONTRASTXR_IN_PLACE",
+        env_negated: false,
+        kind: Kind::Bool,
+        doc: "enhance the app's images in place where the runtime and device allow it (storage usage added to its swapchains); false: always through a copy",
+        set: |s, v| {
+            s.in_place = boolean(v)?;
+            Ok(())
+        },
+        get: |s| Value::Bool(s.in_place),
+    },
+    Key {
         name: "capture_dir",
         env: "CONTRASTXR_CAPTURE_DIR",
         env_negated: false,

@@ -29,6 +29,9 @@ pub struct Settings {
     pub colour_camera: bool,
     /// Also enhance quad layers.
     pub quad_layers: bool,
+    /// Enhance the app's images in place where the runtime and the device allow it (read when
+    /// a swapchain is created).
+    pub in_place: bool,
     /// `pipelines = "wait"`: the first frame that needs a pipeline waits for its build instead
     /// of passing through.
     pub wait_for_pipelines: bool,
@@ -64,6 +67,7 @@ impl Default for Settings {
             additive_display: false,
             colour_camera: true,
             quad_layers: false,
+            in_place: true,
             wait_for_pipelines: false,
             params: Params::default(),
             background: "v4l2:auto".into(),

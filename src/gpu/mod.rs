@@ -3,6 +3,7 @@
 //! someone else's command buffer inside an app. Knows nothing of OpenXR.
 
 pub mod app_image;
+pub mod app_views;
 pub mod approx;
 pub mod barrier;
 pub mod bench;
@@ -30,10 +31,11 @@ mod record;
 pub mod resources;
 pub mod shader_ids;
 pub mod shaders;
+mod storage_image;
 pub mod warm_up;
 
 pub use device::{DeviceOptions, GpuDevice};
-pub use engine::{BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
+pub use engine::{BackgroundFrame, CameraRect, Engine, Placement, ViewShape, ViewTarget};
 pub use error::GpuError;
 pub use format::{PixelFormat, PixelLayout};
 pub use frame::{FrameBackground, FrameEngine, FrameOptions};

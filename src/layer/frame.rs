@@ -103,6 +103,7 @@ fn work_item(
         image: vk_image,
         format,
         vk_format: sc.info.vk_format,
+        in_place: sc.info.in_place,
         // Quads, and whole images before the first xrEndFrame, take the manual mapping.
         mapping: region
             .mapping
