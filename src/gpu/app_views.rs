@@ -5,6 +5,7 @@
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::frame_view::FrameView;
+use super::PixelFormat;
 use ash::vk;
 use std::collections::HashMap;
 
@@ -23,29 +24,7 @@ impl AppImageViews {
         if let Some(&v) = self.views.get(&layer) {
             return Ok(v);
         }
-        let format = view.format.in_place_view_format().ok_or_else(|| {
-            GpuError::Unsupported(format!("{:?} is not enhanced in place", view.vk_format))
-        })?;
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .level_count(1)
-            .base_array_layer(view.key.array_index)
-            .layer_count(1);
-        // Only the storage usage: an sRGB image's UNORM view need not support the image's
-        // other usages (its swapchain was made with the mutable-format usage).
-        let mut usage = vk::ImageViewUsageCreateInfo::default().usage(vk::ImageUsageFlags::STORAGE);
-        let info = vk::ImageViewCreateInfo::default()
-            .image(view.image)
-            .view_type(vk::ImageViewType::TYPE_2D)
-            .format(format)
-            .subresource_range(range);
-        let info = match view.format.srgb {
-            true => info.push_next(&mut usage),
-            false => info,
-        };
-        // SAFETY: the image is the app's swapchain image, alive while its swapchain is (the
-        // caller forgets the swapchain's views before it is destroyed); a valid create info.
-        let v = unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
+        let v = storage_view(gpu, view.image, view.key.array_index, view.format)?;
         self.views.insert(layer, v);
         Ok(v)
     }
@@ -70,9 +49,41 @@ impl AppImageViews {
     }
 }
 
+/// A storage view of layer `layer` of `image` (of `format`), in the format its in-place
+/// shaders declare. The image must have storage usage (and, for sRGB, a mutable format).
+pub fn storage_view(
+    gpu: &GpuDevice,
+    image: vk::Image,
+    layer: u32,
+    format: PixelFormat,
+) -> Result<vk::ImageView, GpuError> {
+    let view_format = format
+        .in_place_view_format()
+        .ok_or_else(|| GpuError::Unsupported(format!("{format:?} is not enhanced in place")))?;
+    let range = vk::ImageSubresourceRange::default()
+        .aspect_mask(vk::ImageAspectFlags::COLOR)
+        .level_count(1)
+        .base_array_layer(layer)
+        .layer_count(1);
+    // Only the storage usage: an sRGB image's UNORM view need not support the image's other
+    // usages.
+    let mut usage = vk::ImageViewUsageCreateInfo::default().usage(vk::ImageUsageFlags::STORAGE);
+    let info = vk::ImageViewCreateInfo::default()
+        .image(image)
+        .view_type(vk::ImageViewType::TYPE_2D)
+        .format(view_format)
+        .subresource_range(range);
+    let info = match format.srgb {
+        true => info.push_next(&mut usage),
+        false => info,
+    };
+    // SAFETY: a valid create info for a live image of this device (the caller's contract).
+    unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")
+}
+
 /// Whether `gpu` can store to images of `format` through its in-place storage view (and so
 /// the layer asks the runtime for storage usage on its swapchains).
-pub fn can_store(gpu: &GpuDevice, format: super::PixelFormat) -> bool {
+pub fn can_store(gpu: &GpuDevice, format: PixelFormat) -> bool {
     let Some(view) = format.in_place_view_format() else {
         return false;
     };

@@ -304,6 +304,14 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
                 "first-frame",
                 &format!("processing frames ({} views per frame)", items.len()),
             );
+            let in_place = items.iter().filter(|i| i.in_place).count();
+            log::once(
+                "first-frame-path",
+                &format!(
+                    "views enhanced in place: {in_place} of {} (the others through a copy)",
+                    items.len()
+                ),
+            );
         }
         Err(GpuError::Pending) => log::once(
             "pipelines-pending",
