@@ -13,16 +13,21 @@ fn in_region(p: u32) -> bool {
     return p < pc.region_size.x * pc.region_size.y;
 }
 
-// Pixel p's words (the second only for 2-word formats); 0 outside the region.
-fn load_pixel(p: u32) -> vec2<u32> {
-    if (!in_region(p)) {
-        return vec2<u32>(0u);
-    }
-    let t = textureLoad(app_image, pixel_position(p));
+// The words of the pixel at image position `at` (the second only for 2-word formats).
+fn load_at(at: vec2<u32>) -> vec2<u32> {
+    let t = textureLoad(app_image, at);
     if (WORDS == 1u) {
         return vec2<u32>(pack4x8unorm(t), 0u);
     }
     return vec2<u32>(pack2x16float(t.xy), pack2x16float(t.zw));
+}
+
+// Pixel p's words; 0 outside the region.
+fn load_pixel(p: u32) -> vec2<u32> {
+    if (!in_region(p)) {
+        return vec2<u32>(0u);
+    }
+    return load_at(pixel_position(p));
 }
 
 fn store_pixel(p: u32, w: vec2<u32>) {
@@ -36,14 +41,24 @@ fn store_pixel(p: u32, w: vec2<u32>) {
     textureStore(app_image, pixel_position(p), vec4<f32>(unpack2x16float(w.x), unpack2x16float(w.y)));
 }
 
-// Words w..w+3 of the region (w a multiple of WORDS).
+// Words w..w+3 of the region (w a multiple of WORDS). Pixels of one row, the usual case, take
+// one position computation; a group that wraps to the next row or leaves the region takes one
+// per pixel.
 fn load_words4(w: u32) -> vec4<u32> {
-    if (WORDS == 1u) {
-        return vec4<u32>(load_pixel(w).x, load_pixel(w + 1u).x, load_pixel(w + 2u).x, load_pixel(w + 3u).x);
+    let p = w / WORDS;
+    let count = 4u / WORDS;
+    let x = p % pc.region_size.x;
+    if (x + count <= pc.region_size.x && in_region(p + count - 1u)) {
+        let at = pixel_position(p);
+        if (WORDS == 1u) {
+            return vec4<u32>(load_at(at).x, load_at(at + vec2<u32>(1u, 0u)).x, load_at(at + vec2<u32>(2u, 0u)).x, load_at(at + vec2<u32>(3u, 0u)).x);
+        }
+        return vec4<u32>(load_at(at), load_at(at + vec2<u32>(1u, 0u)));
     }
-    let a = load_pixel(w / 2u);
-    let b = load_pixel(w / 2u + 1u);
-    return vec4<u32>(a, b);
+    if (WORDS == 1u) {
+        return vec4<u32>(load_pixel(p).x, load_pixel(p + 1u).x, load_pixel(p + 2u).x, load_pixel(p + 3u).x);
+    }
+    return vec4<u32>(load_pixel(p), load_pixel(p + 1u));
 }
 
 // Stores the first n (1..=4; even for 2-word formats) of words w.. (w a multiple of WORDS).

@@ -22,6 +22,7 @@ pub mod frame_view;
 pub mod image_copy;
 pub mod interface;
 pub mod offline;
+mod offline_in_place;
 pub mod overlay;
 pub mod pipeline_cache;
 pub mod pipelines;
