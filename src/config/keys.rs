@@ -2,7 +2,7 @@
 //! writes [`Settings`]. The file, the environment, `config print` and `contrastxr set` all go
 //! through this table.
 
-use super::settings::Settings;
+use super::settings::{InPlace, Settings};
 use super::value::{Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
 use crate::camera::v4l2::usb::UsbId;
@@ -667,13 +667,16 @@ pub const KEYS: &[Key] = &[
         name: "in_place",
         env: "CONTRASTXR_IN_PLACE",
         env_negated: false,
-        kind: Kind::Bool,
-        doc: "enhance the app's images in place where the runtime and device allow it (storage usage added to its swapchains); false: always through a copy",
+        kind: Kind::Text,
+        doc: "on: enhance the app's images in place (storage usage added to its swapchains) where the runtime and the device allow it; off: always through a copy of each view; auto: on, except on CPU drivers (lavapipe), where the copies are cheaper than storage-image access",
         set: |s, v| {
-            s.in_place = boolean(v)?;
+            s.in_place = match v {
+                Value::Text(t) => InPlace::parse(&t).ok_or(format!("{t:?} is not auto, on or off"))?,
+                other => return Err(format!("{other} is not auto, on or off")),
+            };
             Ok(())
         },
-        get: |s| Value::Bool(s.in_place),
+        get: |s| Value::Text(s.in_place.name().into()),
     },
     Key {
         name: "capture_dir",

@@ -26,6 +26,6 @@ pub use path::Env;
 pub use resolve::{
     check, is_off, load, load_for, resolve, resolve_for, resolve_with, Resolved, Source, Who,
 };
-pub use settings::{Capture, Registration, Settings, EYES};
+pub use settings::{Capture, InPlace, Registration, Settings, EYES};
 pub use value::{Kind, Value};
 pub use watch::Live;

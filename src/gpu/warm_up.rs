@@ -117,9 +117,7 @@ impl WarmUp {
 
     /// Whether a device compiles at first dispatch (a CPU driver).
     pub fn needed(gpu: &GpuDevice) -> bool {
-        // SAFETY: physical belongs to this instance.
-        let props = unsafe { gpu.instance.get_physical_device_properties(gpu.physical) };
-        props.device_type == vk::PhysicalDeviceType::CPU
+        gpu.is_cpu()
     }
 
     /// A device beside `app`'s, with a camera frame and a view (the widest pixel format, so

@@ -1,10 +1,12 @@
 //! Whether a swapchain's views are enhanced in place: the layer asks the runtime for storage
 //! usage (and, for sRGB formats, mutable format, to reach them through a UNORM view) on the
 //! app's colour swapchains, invisibly to the app. A runtime that refuses gets the app's own
-//! create info again and the views go through a copy.
+//! create info again and the views go through a copy. `in_place = "auto"` leaves CPU drivers
+//! on the copy path: there a copy is a memcpy and storage-image access costs more.
 
 use super::ffi::find_in_chain;
 use super::state::SessionState;
+use crate::config::InPlace;
 use crate::gpu::app_views::can_store;
 use crate::gpu::PixelFormat;
 use openxr_sys as xr;
@@ -17,7 +19,12 @@ pub fn added_usage(
     info: &xr::SwapchainCreateInfo,
 ) -> Option<xr::SwapchainUsageFlags> {
     let gpu = s.processor.as_ref()?.gpu();
-    if !s.settings.in_place || !can_store(gpu, format) {
+    let wanted = match s.settings.in_place {
+        InPlace::On => true,
+        InPlace::Off => false,
+        InPlace::Auto => !gpu.is_cpu(),
+    };
+    if !wanted || !can_store(gpu, format) {
         return None;
     }
     if !format.srgb {
