@@ -4,7 +4,7 @@
 
 use super::app_image::AppImage;
 use super::app_views::{can_store, storage_view};
-use super::bench::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE, QUERIES};
+use super::bench_case::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE};
 use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
 use super::engine::{Placement, ViewShape, ViewTarget};
@@ -84,7 +84,13 @@ impl OfflineEngine {
 
     /// Allocates the camera frame, views, pristine sources and query pool; returns the
     /// foreground fraction of the content.
-    pub(super) fn build_rig(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<f64, GpuError> {
+    /// `queries`: the timestamp queries a run writes.
+    pub(super) fn build_rig(
+        &mut self,
+        rig: &mut Rig,
+        case: &BenchCase,
+        queries: u32,
+    ) -> Result<f64, GpuError> {
         let (w, h) = case.region;
         let gpu = &self.gpu;
         let mut bg = self
@@ -137,7 +143,7 @@ impl OfflineEngine {
         self.fill_sources(rig, bytes.len() as u64, case.region)?;
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(QUERIES);
+            .query_count(queries);
         // SAFETY: a valid create info on the engine's own device.
         rig.queries =
             unsafe { self.gpu.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;

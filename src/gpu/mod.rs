@@ -7,6 +7,7 @@ pub mod app_views;
 pub mod approx;
 pub mod barrier;
 pub mod bench;
+mod bench_case;
 mod bench_rig;
 pub mod buffer;
 pub mod camera_rect;
