@@ -138,7 +138,7 @@ impl OfflineEngine {
     }
 
     /// What the layer records per display frame around (and, with `enhance`, including) the
-    /// enhancement: src/layer/processor.rs's `record` less the background and captures.
+    /// enhancement: src/gpu/frame_record.rs's `record` less the background and captures.
     fn record_frame(
         &self,
         cmd: vk::CommandBuffer,
