@@ -14,19 +14,39 @@ use std::path::Path;
 
 /// Runs `script` with the layer off and on (forced on the simulated OPAQUE display); returns
 /// both runs and the capture folder.
-fn run_both(tag: &str, script: &str) -> Option<(SandboxRun, SandboxRun, std::path::PathBuf)> {
-    run_both_with(tag, script, ("CONTRASTXR_FORCE", "1"))
+/// How a case runs: the layer's `in_place` setting and the client's swapchain format (None:
+/// the runtime's first, R16G16B16A16_UNORM on Monado, which has no in-place path).
+type Variant = (&'static str, Option<&'static str>);
+
+/// The default; in place asked for on an sRGB format (Monado refuses the storage usage and
+/// the layer makes the swapchain again from the app's own create info); in place granted.
+const VARIANTS: [Variant; 3] = [
+    ("auto", None),
+    ("on", Some("R8G8B8A8_SRGB")),
+    ("on", Some("R8G8B8A8_UNORM")),
+];
+
+fn run_both(
+    tag: &str,
+    script: &str,
+    (in_place, format): Variant,
+) -> Option<(SandboxRun, SandboxRun, std::path::PathBuf)> {
+    let tag = format!("{tag}-{in_place}-{}", format.unwrap_or("default"));
+    let switches = [("CONTRASTXR_FORCE", "1"), ("CONTRASTXR_IN_PLACE", in_place)];
+    let args: Vec<&str> = format.map_or(Vec::new(), |f| vec!["--format", f]);
+    run_both_with(&tag, script, &switches, &args)
 }
 
-/// Runs `script` with the layer off and on, `switch` being how the layer is made to act;
+/// Runs `script` with the layer off and on, `switches` being how the layer is made to act;
 /// returns both runs and the capture folder.
 fn run_both_with(
     tag: &str,
     script: &str,
-    switch: (&str, &str),
+    switches: &[(&str, &str)],
+    args: &[&str],
 ) -> Option<(SandboxRun, SandboxRun, std::path::PathBuf)> {
     let sandbox = sandbox()?;
-    let cmd = [
+    let mut cmd = vec![
         XR_CLIENT,
         "--json",
         "--validation",
@@ -35,19 +55,18 @@ fn run_both_with(
         "--script",
         script,
     ];
+    cmd.extend_from_slice(args);
     let off = sandbox.run(&cmd, &[("CONTRASTXR", "0")]);
     let dir = scratch_dir(&format!("semantics-{tag}"));
     let dir_text = dir.to_string_lossy().into_owned();
-    let on = sandbox.run(
-        &cmd,
-        &[
-            ("CONTRASTXR", "1"),
-            switch,
-            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
-            ("CONTRASTXR_CAPTURE_DIR", &dir_text),
-            ("CONTRASTXR_CAPTURE_FRAMES", "1000"),
-        ],
-    );
+    let mut env = vec![
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_CAPTURE_DIR", &dir_text),
+        ("CONTRASTXR_CAPTURE_FRAMES", "1000"),
+    ];
+    env.extend_from_slice(switches);
+    let on = sandbox.run(&cmd, &env);
     Some((off, on, dir))
 }
 
@@ -66,6 +85,20 @@ fn enhanced_frames(dir: &Path) -> usize {
     frames.len()
 }
 
+/// The `path` of every captured view (how the layer enhanced it).
+fn capture_paths(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "json"))
+        .map(|e| {
+            let text = std::fs::read_to_string(e.path()).unwrap();
+            let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+            json["path"].as_str().unwrap_or("?").to_string()
+        })
+        .collect()
+}
+
 fn script_of(run: &SandboxRun) -> Vec<String> {
     let report = run.client_report();
     assert_eq!(report["ok"], true, "{}", run.describe());
@@ -77,8 +110,20 @@ fn script_of(run: &SandboxRun) -> Vec<String> {
         .collect()
 }
 
+/// The case in every variant (VARIANTS): the same answers and enhanced frames on every path.
 fn check_case(tag: &str, script: &str, must_contain: &str, enhanced: usize) {
-    let Some((off, on, dir)) = run_both(tag, script) else {
+    for variant in VARIANTS {
+        check_case_with(tag, script, (must_contain, enhanced), variant);
+    }
+}
+
+fn check_case_with(
+    tag: &str,
+    script: &str,
+    (must_contain, enhanced): (&str, usize),
+    variant: Variant,
+) {
+    let Some((off, on, dir)) = run_both(tag, script, variant) else {
         return;
     };
     let (bare, layered) = (script_of(&off), script_of(&on));
@@ -98,6 +143,13 @@ fn check_case(tag: &str, script: &str, must_contain: &str, enhanced: usize) {
         "{tag}: frames the layer enhanced ({bare:?})\n{}",
         on.stderr
     );
+    let expected = match variant {
+        ("on", Some("R8G8B8A8_UNORM")) => "in-place",
+        _ => "copy",
+    };
+    for path in capture_paths(&dir) {
+        assert_eq!(path, expected, "{tag} {variant:?}");
+    }
 }
 
 /// One test per case (they run in parallel). Each: the script, a result it must contain,
@@ -153,7 +205,7 @@ cases! {
 /// force); returns both scripts' results and the frames the layer enhanced.
 fn run_additive(tag: &str, script: &str) -> Option<(Vec<String>, Vec<String>, usize)> {
     let switch = ("CONTRASTXR_ENVIRONMENT_BLEND_MODE", "additive");
-    let (off, on, dir) = run_both_with(tag, script, switch)?;
+    let (off, on, dir) = run_both_with(tag, script, &[switch], &[])?;
     Some((script_of(&off), script_of(&on), enhanced_frames(&dir)))
 }
 

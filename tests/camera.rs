@@ -7,6 +7,7 @@
 //! Expected pixels are computed here from the BT.601 / JFIF equations in floating point,
 //! independently of the crate's fixed-point conversion.
 
+use contrastxr::camera::v4l2::usb::UsbId;
 use contrastxr::camera::{cli, parse_source, Background, CaptureConfig, SourceSpec, SourceStatus};
 use contrastxr::image::RgbaImage;
 use std::path::{Path, PathBuf};
@@ -504,6 +505,33 @@ fn auto_decides_built_in_by_the_bus_not_the_word_webcam() {
     );
 }
 
+/// The headset's camera named by its device profile (`camera_usb_ids`): `v4l2:auto` says it
+/// took it for that reason; with another id listed, it chooses as before.
+#[test]
+fn auto_takes_the_camera_the_profile_names_by_its_usb_id() {
+    let with_ids = |name: &str, ids: &str| {
+        let cam = FakeCamera::new(name, "YUYV")
+            .frames("YUYV", &[0])
+            .set("FAKE_V4L2_CARD", "VITURE Camera")
+            .set("CONTRASTXR_CAMERA_USB_IDS", ids);
+        let cam = fake_sysfs(cam, "pci0000:00/0000:00:14.0/usb1/1-2/1-2:1.0");
+        let usb = cam.dir.join("sys/devices/pci0000:00/0000:00:14.0/usb1/1-2");
+        std::fs::write(usb.join("idVendor"), "0c45\n").unwrap();
+        std::fs::write(usb.join("idProduct"), "636b\n").unwrap();
+        cam.run("stable")
+    };
+    let out = with_ids("auto-profile-camera", "0c45:6368,0c45:636b");
+    assert!(
+        out.contains("(VITURE Camera): USB 0c45:636b, the camera camera_usb_ids names"),
+        "{out}"
+    );
+    let out = with_ids("auto-other-camera", "0c45:6368");
+    assert!(
+        out.contains("the only usable capture device, on USB"),
+        "{out}"
+    );
+}
+
 #[test]
 fn auto_skips_a_node_without_a_colour_mode() {
     let out = FakeCamera::new("auto-depth", "Z16 ")
@@ -689,7 +717,13 @@ fn child_stable() {
         wait_for_frame(&bg, 0, Duration::from_secs(10)).expect("a frame through the link");
         println!("stable path opened");
     }
-    let bg = Background::open(&SourceSpec::V4l2Auto, &CaptureConfig::default()).unwrap();
+    // The device profile's camera, as the layer passes it from camera_usb_ids.
+    let ids = std::env::var("CONTRASTXR_CAMERA_USB_IDS").unwrap_or_default();
+    let cfg = CaptureConfig {
+        usb_ids: UsbId::parse_list(&ids).unwrap(),
+        ..CaptureConfig::default()
+    };
+    let bg = Background::open(&SourceSpec::V4l2Auto, &cfg).unwrap();
     drop(bg);
     let log = LOG.lock().unwrap().join("\n");
     let took: Vec<_> = log

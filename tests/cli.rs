@@ -919,6 +919,17 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     let d = finding(&report, "device-profile");
     let wanted = format!("the headset \"Glasses\" matched the shipped profile [device.\"Glasses\"] in {shipped_text}");
     assert_eq!(text(d, "detail"), wanted, "{d}");
+    // Shipped profiles for other headsets only: none matched.
+    std::fs::write(
+        &shipped,
+        "[device.\"Other Glasses\"]\ncolour_camera = false\n",
+    )
+    .unwrap();
+    let (_, report) = doctor(&root, &[("CONTRASTXR_DEVICES", &shipped_text)]);
+    let d = finding(&report, "device-profile");
+    assert_eq!(d["status"], "ok", "{d}");
+    let wanted = format!("no shipped profile for \"Glasses\" in {shipped_text}: your own [device.\"Glasses\"] table describes it");
+    assert_eq!(text(d, "detail"), wanted, "{d}");
     // Steam installed: its games need the variable, in their launch options or here.
     assert_eq!(finding(&report, "steam")["status"], "ok");
     std::fs::create_dir_all(root.join(".steam/steam")).unwrap();
@@ -955,7 +966,7 @@ fn config_print_device_shows_the_shipped_profile_below_the_users_table() {
     };
     let out = print(&root);
     let wanted = format!(
-        "environment_blend_mode = \"additive\"  # {}:{line}",
+        "environment_blend_mode = \"additive\"  # {} [device.\"{system}\"]:{line}",
         shipped.display()
     );
     assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
@@ -972,8 +983,64 @@ fn config_print_device_shows_the_shipped_profile_below_the_users_table() {
     let text = format!("[device.\"{system}\"]\nenvironment_blend_mode = \"\"\n");
     std::fs::write(&config, text).unwrap();
     let out = print(&root);
-    let wanted = format!("environment_blend_mode = \"\"  # {}:2", config.display());
+    let wanted = format!(
+        "environment_blend_mode = \"\"  # {} [device.\"{system}\"]:2",
+        config.display()
+    );
     assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+}
+
+/// `config print --app NAME --device SYSTEM`: each value names the file and the table it came
+/// from, or its variable, or the default; the app's table beats the device's, the environment
+/// beats both.
+#[test]
+fn config_print_names_the_table_each_value_came_from() {
+    let root = fresh_home("config-print-tables");
+    let shipped = root.join("devices.toml");
+    std::fs::write(
+        &shipped,
+        "[device.\"Glasses\"]\nlambda_e = 0.3\nblur_sigma = 2.5\nscene_distance = 4\n",
+    )
+    .unwrap();
+    let config = root.join("config/contrastxr/config.toml");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    std::fs::write(
+        &config,
+        "transmittance = 0.3\n[device.\"Glasses\"]\nlambda_e = 0.5\nblur_sigma = 3\n\
+         [app.\"hello_xr\"]\nlambda_e = 0.6\n",
+    )
+    .unwrap();
+    let shipped_text = shipped.to_string_lossy().into_owned();
+    let args = [
+        "config", "print", "--app", "hello_xr", "--device", "Glasses",
+    ];
+    let env = [
+        ("CONTRASTXR_DEVICES", shipped_text.as_str()),
+        ("CONTRASTXR_BLUR_SIGMA", "1.25"),
+    ];
+    let o = isolated(&root, &args, &env);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let (c, s) = (config.display(), shipped.display());
+    for wanted in [
+        format!("lambda_e = 0.6  # {c} [app.\"hello_xr\"]:6"),
+        format!("scene_distance = 4  # {s} [device.\"Glasses\"]:4"),
+        format!("transmittance = 0.3  # {c}:1"),
+        "blur_sigma = 1.25  # env CONTRASTXR_BLUR_SIGMA".to_string(),
+        "blur_size = 3  # default".to_string(),
+    ] {
+        assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+    }
+    // Another app: the user's device table, above the shipped one.
+    let args = ["config", "print", "--app", "other", "--device", "Glasses"];
+    let o = isolated(&root, &args, &env[..1]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    for wanted in [
+        format!("lambda_e = 0.5  # {c} [device.\"Glasses\"]:3"),
+        format!("blur_sigma = 3  # {c} [device.\"Glasses\"]:4"),
+    ] {
+        assert!(out.contains(&wanted), "{wanted:?} not in\n{out}");
+    }
 }
 
 /// Glasses whose shipped profile says they have no colour camera: with the default `v4l2:auto`
@@ -1097,4 +1164,63 @@ fn pan_then_animate_writes_an_animation_of_the_captures() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("no captures"), "{}", stderr(&o));
+}
+
+/// A profile that names the headset's camera by USB id: doctor says whether it is connected
+/// (USB devices from a fake sysfs).
+#[test]
+fn doctor_says_whether_the_profiles_camera_is_connected() {
+    let root = fresh_home("doctor-profile-camera");
+    let log = root.join("state/contrastxr/layer.log");
+    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
+    std::fs::write(
+        &log,
+        "2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b\n\
+         2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it\n",
+    )
+    .unwrap();
+    let shipped = root.join("devices.toml");
+    std::fs::write(
+        &shipped,
+        "[device.\"Glasses\"]\ncamera_usb_ids = \"0c45:636b,0c45:6368\"\n",
+    )
+    .unwrap();
+    let sys = root.join("sys");
+    std::fs::create_dir_all(sys.join("class/video4linux")).unwrap();
+    let env = [
+        ("CONTRASTXR_DEVICES", shipped.to_str().unwrap()),
+        ("CONTRASTXR_SYSFS_ROOT", sys.to_str().unwrap()),
+    ];
+    let (_, report) = doctor(&root, &env);
+    let d = finding(&report, "device-profile");
+    assert_eq!(d["status"], "warn", "{d}");
+    let named = format!(
+        "its camera, camera_usb_ids = \"0c45:636b,0c45:6368\" ({} [device.\"Glasses\"]:2), is not connected",
+        shipped.display()
+    );
+    assert!(
+        text(d, "detail").starts_with("the headset \"Glasses\" matched"),
+        "{d}"
+    );
+    assert!(text(d, "detail").ends_with(&named), "{d}");
+    assert!(text(d, "fix").contains("0c45:636b"), "{d}");
+    // Its camera on USB as video3 (an interface of USB device 1-2), another camera as video1.
+    for (node, port, product) in [("video1", 1, "0825"), ("video3", 2, "6368")] {
+        let usb = sys.join(format!("devices/pci0000:00/usb1/1-{port}"));
+        std::fs::create_dir_all(usb.join(format!("1-{port}:1.0"))).unwrap();
+        std::fs::write(usb.join("idVendor"), "0c45\n").unwrap();
+        std::fs::write(usb.join("idProduct"), format!("{product}\n")).unwrap();
+        let class = sys.join("class/video4linux").join(node);
+        std::fs::create_dir_all(&class).unwrap();
+        std::os::unix::fs::symlink(usb.join(format!("1-{port}:1.0")), class.join("device"))
+            .unwrap();
+    }
+    let (_, report) = doctor(&root, &env);
+    let d = finding(&report, "device-profile");
+    assert_eq!(d["status"], "ok", "{d}");
+    let connected = format!(
+        "is connected: {} (0c45:6368)",
+        root.join("dev/video3").display()
+    );
+    assert!(text(d, "detail").ends_with(&connected), "{d}");
 }

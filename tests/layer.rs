@@ -260,10 +260,28 @@ fn check_view(c: &Captured) -> usize {
     changed
 }
 
-fn client_through_layer(format: &str, layout: &str) {
-    let tag = format!("layer-{format}-{layout}");
+/// How the layer enhances the views of a swapchain format on Monado with `in_place` (None:
+/// the default, auto): in place where the runtime grants storage usage (its UNORM and float
+/// formats), else through a copy (Monado refuses storage usage on sRGB formats, which have no
+/// storage support on the device); auto keeps lavapipe, a CPU driver, on the copy path.
+fn expected_path(format: &str, in_place: Option<&str>) -> &'static str {
+    match (in_place, format) {
+        (Some("on"), "R8G8B8A8_UNORM" | "R16G16B16A16_SFLOAT") => "in-place",
+        _ => "copy",
+    }
+}
+
+fn client_through_layer(format: &str, layout: &str, in_place: Option<&str>) {
+    let path = expected_path(format, in_place);
+    let tag = format!(
+        "layer-{format}-{layout}-{path}-{}",
+        in_place.unwrap_or("auto")
+    );
     let dir = capture_dir(&tag);
-    let env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+    let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+    if let Some(value) = in_place {
+        env.push(("CONTRASTXR_IN_PLACE".into(), value.into()));
+    }
     let cmd = [
         XR_CLIENT,
         "--validation",
@@ -294,6 +312,7 @@ fn client_through_layer(format: &str, layout: &str) {
         dir.display()
     );
     for c in &views {
+        assert_eq!(c.json["path"], path, "{format} {layout}");
         let changed = check_view(c);
         assert!(
             changed > 1000,
@@ -314,13 +333,16 @@ fn client_through_layer(format: &str, layout: &str) {
     );
 }
 
-/// One test per format (they run in parallel), each through both layouts.
+/// One test per format (they run in parallel), each through both layouts and both paths
+/// (in place where the runtime allows it, and always through a copy).
 macro_rules! through_the_layer {
     ($($name:ident: $format:literal,)*) => {$(
         #[test]
         fn $name() {
             for layout in ["array", "side-by-side"] {
-                client_through_layer($format, layout);
+                for in_place in ["on", "off"] {
+                    client_through_layer($format, layout, Some(in_place));
+                }
             }
         }
     )*};
@@ -333,6 +355,13 @@ through_the_layer! {
     layer_enhances_bgra8_unorm: "B8G8R8A8_UNORM",
     layer_enhances_rgba16_unorm: "R16G16B16A16_UNORM",
     layer_enhances_rgba16_float: "R16G16B16A16_SFLOAT",
+}
+
+/// `in_place = "auto"` (the default) on lavapipe, a CPU driver: the copy path, even where the
+/// runtime would grant storage usage.
+#[test]
+fn auto_keeps_a_cpu_driver_on_the_copy_path() {
+    client_through_layer("R8G8B8A8_UNORM", "array", None);
 }
 
 #[test]

@@ -53,9 +53,9 @@ fn each_eye_is_registered_from_the_device_profile() {
     };
     let system = format!("system \"{SYSTEM}\"");
     assert!(lines.iter().any(|l| l.starts_with(&system)), "{lines:#?}");
-    // The device table's values are logged with their origin (file and line).
+    // The device table's values are logged with their origin (file, table and line).
     let origin = format!(
-        "setting camera_fov = [100.0, 80.0]  # {}:4",
+        "setting camera_fov = [100.0, 80.0]  # {} [device.\"{SYSTEM}\"]:4",
         config.display()
     );
     assert!(lines.contains(&origin), "{lines:#?}");

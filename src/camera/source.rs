@@ -81,6 +81,9 @@ pub struct CaptureConfig {
     pub smoothing: Option<f32>,
     /// Fixed exposure, white balance and gain (None: the camera's automatic control).
     pub controls: CameraControls,
+    /// The cameras `v4l2:auto` takes before any other, best first (the headset's own camera,
+    /// named by its device profile); empty: none.
+    pub usb_ids: Vec<super::v4l2::usb::UsbId>,
     /// `world:` source: milliseconds between a frame's capture and its delivery (50).
     pub world_latency_ms: f32,
     /// `world:` source: the simulated camera and the head poses it is carried by (set by the
@@ -112,6 +115,7 @@ impl Default for CaptureConfig {
             max_backoff: Duration::from_secs(2),
             smoothing: None,
             controls: CameraControls::default(),
+            usb_ids: Vec::new(),
             world_latency_ms: 50.0,
             world: None,
         }

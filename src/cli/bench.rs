@@ -12,7 +12,7 @@ const DEFAULT_SIZES: &str = "1268x720,2064x2208,3840x3840";
 pub fn usage() -> String {
     format!(
         "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
-         \x20                       [--method NAME] [--content typical,full]\n\n\
+         \x20                       [--method NAME] [--content typical,full] [--path P]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
@@ -23,7 +23,10 @@ pub fn usage() -> String {
          frame, once whatever the views; live = frame + bg, a display frame that also brings\n\
          a new camera frame). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
          with typical content (mostly black: panels and an object) and full frames\n\
-         (--content picks one or both).\n\
+         (--content picks one or both). --path copy|in-place|both (default both): the layer's\n\
+         frame through copies (frame) and in place (in place: the app-like images made with\n\
+         storage usage and enhanced through storage views, no copies; ip/frame: its ratio to\n\
+         the frame through copies); with copy, the frame in place is not timed.\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
         contrastxr::gpu::bench::WARM_UP_RUNS,
         contrastxr::gpu::bench::CAMERA_SIZE.0,
@@ -85,6 +88,15 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .map(parse_content)
             .collect::<Result<_, _>>()?,
     };
+    let in_place = match args.value(&["--path"])?.as_deref() {
+        None | Some("both") | Some("in-place") => true,
+        Some("copy") => false,
+        Some(p) => {
+            return Err(CliError::Usage(format!(
+                "--path must be copy, in-place or both, got '{p}'"
+            )))
+        }
+    };
     let json = args.flag("--json");
     args.finish()?;
     let options = DeviceOptions {
@@ -109,6 +121,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
                 views,
                 content,
                 runs,
+                in_place,
             };
             let r = engine
                 .bench(&case, &params)
@@ -127,7 +140,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8}",
         "size",
         "views",
         "content",
@@ -143,14 +156,16 @@ fn header() -> String {
         "ratio16",
         "frame r",
         "enh Mpx/s",
-        "Mpx"
+        "Mpx",
+        "in place ms",
+        "ip/frame"
     )
 }
 
 fn row(r: &BenchResult) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
@@ -167,6 +182,8 @@ fn row(r: &BenchResult) -> String {
         r.frame_ratio(),
         r.megapixels() / (r.enhance_ms / 1e3),
         r.megapixels(),
+        optional(r.frame_in_place_ms, 3),
+        optional(r.in_place_ratio(), 2),
     )
 }
 
@@ -195,6 +212,8 @@ fn to_json(device: &str, results: &[BenchResult]) -> String {
                 "frame_ms": r.frame_ms,
                 "frame_ratio": r.frame_ratio(),
                 "image_copy_ms": r.image_copy_ms,
+                "frame_in_place_ms": r.frame_in_place_ms,
+                "in_place_ratio": r.in_place_ratio(),
                 "live_frame_ms": r.live_frame_ms(),
                 "live_ratio": r.live_frame_ms() / r.copy_ms,
                 "camera_width": CAMERA_SIZE.0,

@@ -27,6 +27,7 @@ const BENCH_OPTIONS: &[Opt] = &[
     Opt::value("--device", "N"),
     Opt::value("--method", "NAME"),
     Opt::value("--content", "typical,full"),
+    Opt::value("--path", "copy|in-place|both"),
     Opt::flag("--json"),
 ];
 

@@ -14,7 +14,8 @@ pub fn usage() -> String {
      check: reads FILE (default: the file the layer reads) and prints every problem with its\n\
      \x20      file, line and key; exit code 1 if there is one.\n\
      print: the settings an app named NAME (its XrApplicationInfo.applicationName) would run\n\
-     \x20      with, as TOML, each with where it came from (default, file:line or env VAR),\n\
+     \x20      with, as TOML, each with where it came from (default, FILE:LINE for the top\n\
+     \x20      level, FILE [device.\"SYSTEM\"]:LINE or FILE [app.\"NAME\"]:LINE, or env VAR),\n\
      \x20      including this shell's CONTRASTXR_* variables; with --device, on the headset\n\
      \x20      whose XrSystemProperties.systemName is SYSTEM (its [device.\"SYSTEM\"] table).\n\
      path:  the file the layer reads: $CONTRASTXR_CONFIG, else\n\

@@ -2,9 +2,10 @@
 //! writes [`Settings`]. The file, the environment, `config print` and `contrastxr set` all go
 //! through this table.
 
-use super::settings::Settings;
+use super::settings::{InPlace, Settings};
 use super::value::{Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
+use crate::camera::v4l2::usb::UsbId;
 use std::path::PathBuf;
 
 pub struct Key {
@@ -592,6 +593,21 @@ pub const KEYS: &[Key] = &[
         get: |s| Value::Bool(s.colour_camera),
     },
     Key {
+        name: "camera_usb_ids",
+        env: "CONTRASTXR_CAMERA_USB_IDS",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "the headset's own camera, as comma-separated USB ids VID:PID (as lsusb prints them): v4l2:auto takes it before any other camera, and doctor says whether it is connected; \"\" = none",
+        set: |s, v| {
+            let Value::Text(text) = v else {
+                return Err(format!("{v} is not a string of VID:PID ids"));
+            };
+            s.camera.usb_ids = UsbId::parse_list(&text)?;
+            Ok(())
+        },
+        get: |s| Value::Text(UsbId::list_text(&s.camera.usb_ids)),
+    },
+    Key {
         name: "force",
         env: "CONTRASTXR_FORCE",
         env_negated: false,
@@ -646,6 +662,21 @@ pub const KEYS: &[Key] = &[
             Ok(())
         },
         get: |s| Value::Bool(s.quad_layers),
+    },
+    Key {
+        name: "in_place",
+        env: "CONTRASTXR_IN_PLACE",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "on: enhance the app's images in place (storage usage added to its swapchains) where the runtime and the device allow it; off: always through a copy of each view; auto: on, except on CPU drivers (lavapipe), where the copies are cheaper than storage-image access",
+        set: |s, v| {
+            s.in_place = match v {
+                Value::Text(t) => InPlace::parse(&t).ok_or(format!("{t:?} is not auto, on or off"))?,
+                other => return Err(format!("{other} is not auto, on or off")),
+            };
+            Ok(())
+        },
+        get: |s| Value::Text(s.in_place.name().into()),
     },
     Key {
         name: "capture_dir",

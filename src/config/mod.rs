@@ -12,6 +12,7 @@
 pub mod edit;
 pub mod file;
 pub mod keys;
+mod origin;
 pub mod path;
 pub mod resolve;
 mod settings;
@@ -20,11 +21,11 @@ pub mod value;
 pub mod watch;
 
 pub use keys::{key, Key, KEYS};
+pub use origin::{Origin, Table};
 pub use path::Env;
 pub use resolve::{
-    check, is_off, load, load_for, resolve, resolve_for, resolve_with, Origin, Resolved, Source,
-    Who,
+    check, is_off, load, load_for, resolve, resolve_for, resolve_with, Resolved, Source, Who,
 };
-pub use settings::{Capture, Registration, Settings, EYES};
+pub use settings::{Capture, InPlace, Registration, Settings, EYES};
 pub use value::{Kind, Value};
 pub use watch::Live;

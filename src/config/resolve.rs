@@ -7,28 +7,10 @@
 
 use super::file::{self, Entry};
 use super::keys::{Key, KEYS};
+use super::origin::{Origin, Table};
 use super::path::{self, Env};
 use super::settings::Settings;
-use std::fmt;
 use std::path::{Path, PathBuf};
-
-/// Where an effective value came from.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Origin {
-    Default,
-    File { path: PathBuf, line: usize },
-    Env(&'static str),
-}
-
-impl fmt::Display for Origin {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Origin::Default => f.write_str("default"),
-            Origin::File { path, line } => write!(f, "{}:{line}", path.display()),
-            Origin::Env(var) => write!(f, "env {var}"),
-        }
-    }
-}
 
 pub struct Resolved {
     pub settings: Settings,
@@ -87,7 +69,7 @@ impl Resolved {
             Ok(()) => self.origins[index] = from,
             Err(why) => {
                 let place = match &from {
-                    Origin::File { path, line } => format!("config {}:{line}", path.display()),
+                    Origin::File { path, line, .. } => format!("config {}:{line}", path.display()),
                     Origin::Env(var) => format!("environment variable {var}"),
                     Origin::Default => "default".into(),
                 };
@@ -102,7 +84,7 @@ impl Resolved {
         }
     }
 
-    fn apply_entries(&mut self, path: &Path, entries: &[Entry]) {
+    fn apply_entries(&mut self, path: &Path, table: &Table, entries: &[Entry]) {
         for e in entries
             .iter()
             .filter(|e| super::keys::key(&e.key).is_none())
@@ -124,6 +106,7 @@ impl Resolved {
                 };
                 let from = Origin::File {
                     path: path.to_path_buf(),
+                    table: table.clone(),
                     line: e.line,
                 };
                 self.offer(index, value, from);
@@ -150,15 +133,15 @@ impl Resolved {
             let p = source.path.display();
             self.problems.push(format!("config {p}:{line}: {problem}"));
         }
-        self.apply_entries(source.path, &parsed.defaults);
+        self.apply_entries(source.path, &Table::Top, &parsed.defaults);
         for (name, entries) in &parsed.devices {
             if Some(name.as_str()) == who.device {
-                self.apply_entries(source.path, entries);
+                self.apply_entries(source.path, &Table::Device(name.clone()), entries);
             }
         }
         for (name, entries) in &parsed.apps {
             if name == who.app {
-                self.apply_entries(source.path, entries);
+                self.apply_entries(source.path, &Table::App(name.clone()), entries);
             }
         }
     }
@@ -172,7 +155,7 @@ impl Resolved {
         for (name, entries) in &parsed.devices {
             if Some(name.as_str()) == who.device {
                 let before = self.problems.len();
-                self.apply_entries(source.path, entries);
+                self.apply_entries(source.path, &Table::Device(name.clone()), entries);
                 self.problems.truncate(before);
             }
         }
@@ -327,7 +310,7 @@ mod tests {
         assert_eq!(origin(&r, "lambda_e"), "/c.toml:1");
         let r = with(text, "game", &[("CONTRASTXR_TRANSMITTANCE", "0.2")]);
         assert_eq!(r.settings.params.lambda_e, 0.6);
-        assert_eq!(origin(&r, "lambda_e"), "/c.toml:4");
+        assert_eq!(origin(&r, "lambda_e"), "/c.toml [app.\"game\"]:4");
         assert_eq!(r.settings.params.mode, ViewMode::Split);
         assert_eq!(r.settings.params.transmittance, 0.2);
         assert_eq!(origin(&r, "transmittance"), "env CONTRASTXR_TRANSMITTANCE");
@@ -425,7 +408,9 @@ mod tests {
         assert_eq!(r.settings.registration.camera_fov, [100.0, 75.0]);
         assert_eq!(r.settings.registration.scene_distance, 3.0);
         assert_eq!(r.settings.params.lambda_e, 0.7);
-        assert_eq!(origin(&r, "camera_fov"), "/c.toml:4");
+        assert_eq!(origin(&r, "camera_fov"), "/c.toml [device.\"HMD\"]:4");
+        assert_eq!(origin(&r, "scene_distance"), "/c.toml [device.\"HMD\"]:6");
+        assert_eq!(origin(&r, "lambda_e"), "/c.toml [app.\"game\"]:8");
         let r = on("other", Some("HMD"));
         assert_eq!(r.settings.params.lambda_e, 0.6);
         let r = on("other", Some("another HMD"));
@@ -433,6 +418,33 @@ mod tests {
         assert_eq!(r.settings.params.lambda_e, 0.5);
         let r = on("other", None);
         assert_eq!(r.settings.registration.scene_distance, 2.0);
+    }
+
+    #[test]
+    fn camera_usb_ids_are_a_list_of_vid_pid() {
+        let r = with("camera_usb_ids = \"0c45:636b, 0c45:6368\"\n", "", &[]);
+        assert_eq!(r.settings.camera.usb_ids.len(), 2);
+        assert_eq!(
+            r.line(
+                KEYS.iter()
+                    .position(|k| k.name == "camera_usb_ids")
+                    .unwrap()
+            ),
+            "camera_usb_ids = \"0c45:636b,0c45:6368\"  # /c.toml:1"
+        );
+        let r = with("", "", &[("CONTRASTXR_CAMERA_USB_IDS", "0c45:636b,webcam")]);
+        assert!(r.settings.camera.usb_ids.is_empty());
+        assert!(
+            r.problems[0].contains("\"webcam\" is not VID:PID"),
+            "{:?}",
+            r.problems
+        );
+        let r = with("camera_usb_ids = [\"0c45:636b\"]\n", "", &[]);
+        assert!(
+            r.problems[0].contains("expected a string"),
+            "{:?}",
+            r.problems
+        );
     }
 
     #[test]

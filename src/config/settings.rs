@@ -29,6 +29,8 @@ pub struct Settings {
     pub colour_camera: bool,
     /// Also enhance quad layers.
     pub quad_layers: bool,
+    /// Whether the app's images are enhanced in place (read when a swapchain is created).
+    pub in_place: InPlace,
     /// `pipelines = "wait"`: the first frame that needs a pipeline waits for its build instead
     /// of passing through.
     pub wait_for_pipelines: bool,
@@ -56,6 +58,37 @@ pub struct Settings {
     pub generation: u64,
 }
 
+/// Whether views are enhanced in place in the app's images (`in_place`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InPlace {
+    /// In place, except on CPU drivers (their image copies are cheaper than storage-image
+    /// access, measured in docs/performance.md).
+    Auto,
+    /// In place wherever the runtime and the device allow it.
+    On,
+    /// Always through a copy of each view.
+    Off,
+}
+
+impl InPlace {
+    pub fn parse(text: &str) -> Option<InPlace> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "auto" => Some(InPlace::Auto),
+            "on" | "1" | "true" | "yes" => Some(InPlace::On),
+            "off" | "0" | "false" | "no" => Some(InPlace::Off),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            InPlace::Auto => "auto",
+            InPlace::On => "on",
+            InPlace::Off => "off",
+        }
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -64,6 +97,7 @@ impl Default for Settings {
             additive_display: false,
             colour_camera: true,
             quad_layers: false,
+            in_place: InPlace::Auto,
             wait_for_pipelines: false,
             params: Params::default(),
             background: "v4l2:auto".into(),

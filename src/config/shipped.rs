@@ -97,17 +97,40 @@ mod tests {
         let line = r.line(index("environment_blend_mode"));
         assert_eq!(
             line,
-            "environment_blend_mode = \"additive\"  # /usr/share/contrastxr/devices.toml:3"
+            "environment_blend_mode = \"additive\"  # /usr/share/contrastxr/devices.toml [device.\"D\"]:3"
         );
         // Another system: the shipped table does not apply.
         assert!(!on("", &[], Some("E")).settings.additive_display);
         assert!(!on("", &[], None).settings.additive_display);
+        let lambda_e = |r: &crate::config::Resolved| {
+            let i = index("lambda_e");
+            (r.settings.params.lambda_e, r.origins[i].to_string())
+        };
+        let shipped_origin = "/usr/share/contrastxr/devices.toml [device.\"D\"]:2";
+        assert_eq!(
+            lambda_e(&on("lambda_e = 0.35\n", &[], Some("D"))),
+            (0.35, "/c.toml:1".into()),
+            "the user's top level beats the shipped table"
+        );
+        assert_eq!(
+            lambda_e(&on("", &[], Some("D"))),
+            (0.3, shipped_origin.into())
+        );
         let device = "[device.\"D\"]\nlambda_e = 0.4\n";
-        assert_eq!(on(device, &[], Some("D")).settings.params.lambda_e, 0.4);
+        assert_eq!(
+            lambda_e(&on(device, &[], Some("D"))),
+            (0.4, "/c.toml [device.\"D\"]:2".into())
+        );
         let app = format!("{device}[app.\"A\"]\nlambda_e = 0.5\n");
-        assert_eq!(on(&app, &[], Some("D")).settings.params.lambda_e, 0.5);
+        assert_eq!(
+            lambda_e(&on(&app, &[], Some("D"))),
+            (0.5, "/c.toml [app.\"A\"]:4".into())
+        );
         let env = [("CONTRASTXR_LAMBDA_E", "0.6")];
-        assert_eq!(on(&app, &env, Some("D")).settings.params.lambda_e, 0.6);
+        assert_eq!(
+            lambda_e(&on(&app, &env, Some("D"))),
+            (0.6, "env CONTRASTXR_LAMBDA_E".into())
+        );
         let env = [("CONTRASTXR_ENVIRONMENT_BLEND_MODE", "")];
         assert!(!on("", &env, Some("D")).settings.additive_display);
     }

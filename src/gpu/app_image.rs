@@ -29,7 +29,19 @@ impl AppImage {
         format: vk::Format,
         usage: vk::ImageUsageFlags,
     ) -> Result<Self, GpuError> {
+        Self::with_flags(gpu, size, format, usage, vk::ImageCreateFlags::empty())
+    }
+
+    /// [`AppImage::with_usage`] with image create flags (e.g. a mutable format).
+    pub fn with_flags(
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        flags: vk::ImageCreateFlags,
+    ) -> Result<Self, GpuError> {
         let info = vk::ImageCreateInfo::default()
+            .flags(flags)
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
             .extent(vk::Extent3D {

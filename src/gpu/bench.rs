@@ -3,53 +3,14 @@
 //! (the enhancement with the copies from and to the app's image) and the per-camera-frame
 //! background preparation, over the same display regions, on the offline engine's device.
 
-use super::app_image::AppImage;
-use super::buffer::GpuBuffer;
-use super::engine::{barrier, CameraRect, Placement, ViewTarget};
+pub use super::bench_case::{content_pixel, BenchCase, Content, CAMERA_SIZE, WARM_UP_RUNS};
+use super::bench_rig::Rig;
+use super::engine::{barrier, CameraRect, ViewTarget};
 use super::error::{GpuError, VkResultExt};
-use super::format::PixelFormat;
 use super::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
 use super::offline::OfflineEngine;
-use super::BackgroundFrame;
 use crate::algorithm::params::Params;
 use ash::vk;
-use gpu_allocator::MemoryLocation;
-
-/// The camera frame size the background preparation is timed with (a common camera mode).
-pub const CAMERA_SIZE: (u32, u32) = (1280, 720);
-/// Runs before the timed ones (pipeline warm-up, caches, clocks).
-pub const WARM_UP_RUNS: u32 = 3;
-
-/// What the display regions hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Content {
-    /// A typical mixed-reality frame: black (see-through) with two UI panels and a shaded
-    /// object, about 17% of the pixels foreground.
-    Typical,
-    /// Every pixel foreground (a colourful gradient, never black).
-    Full,
-}
-
-impl Content {
-    pub const ALL: [Content; 2] = [Content::Typical, Content::Full];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Content::Typical => "typical",
-            Content::Full => "full",
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug)]
-pub struct BenchCase {
-    /// Per view.
-    pub region: (u32, u32),
-    pub views: u32,
-    pub content: Content,
-    /// Timed runs; the result is their median.
-    pub runs: u32,
-}
 
 /// Medians in milliseconds over all views of a case.
 #[derive(Clone, Copy, Debug)]
@@ -64,6 +25,9 @@ pub struct BenchResult {
     pub frame_ms: f64,
     /// The same without the enhancement: the layer's image copies alone.
     pub image_copy_ms: f64,
+    /// The layer's frame in place: layout transitions and the enhancement in the app's
+    /// images, no copies (None when not asked for or the device cannot store the format).
+    pub frame_in_place_ms: Option<f64>,
     /// Per camera frame: decode and blur on the camera grid (once, whatever the views).
     pub background_ms: f64,
     /// Fraction of pixels that are foreground (neither black nor alpha 0).
@@ -86,6 +50,11 @@ impl BenchResult {
         self.frame_ms / self.copy_ms
     }
 
+    /// The frame in place over the frame through copies.
+    pub fn in_place_ratio(&self) -> Option<f64> {
+        self.frame_in_place_ms.map(|f| f / self.frame_ms)
+    }
+
     /// A display frame that also brings a new camera frame (a live camera at or above the
     /// display's rate): the background preparation then the frame, one after the other on the
     /// queue, so the sum of the two medians.
@@ -99,75 +68,6 @@ impl BenchResult {
     }
 }
 
-/// One RGBA8 pixel (R in the low byte) of the given content at (x, y) of a w x h region.
-pub fn content_pixel(content: Content, x: u32, y: u32, w: u32, h: u32) -> u32 {
-    let (u, v) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
-    let rgba = |r: f32, g: f32, b: f32| {
-        let q = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u32;
-        q(r) | q(g) << 8 | q(b) << 16 | 255 << 24
-    };
-    if content == Content::Full {
-        return rgba(u.max(0.01), v, 0.5 + 0.5 * (u - v));
-    }
-    let inside =
-        |x0: f32, x1: f32, y0: f32, y1: f32| (x0..x1).contains(&u) && (y0..y1).contains(&v);
-    if inside(0.10, 0.40, 0.30, 0.60) {
-        return rgba(0.78, 0.82, 0.90);
-    }
-    if inside(0.60, 0.85, 0.15, 0.35) {
-        return rgba(0.15, 0.63, 0.31);
-    }
-    let (dx, dy) = ((u - 0.55) * w as f32, (v - 0.65) * h as f32);
-    let r = 0.12 * w.min(h) as f32;
-    let d2 = (dx * dx + dy * dy) / (r * r);
-    if d2 < 1.0 {
-        let shade = 1.0 - 0.6 * d2;
-        return rgba(0.9 * shade, 0.45 * shade, 0.1 * shade + 0.02);
-    }
-    0xff00_0000
-}
-
-/// A smooth camera frame with some texture (what the blur and FoV mapping see).
-fn camera_frame(size: (u32, u32)) -> Vec<[u8; 4]> {
-    let mut out = Vec::with_capacity((size.0 * size.1) as usize);
-    for y in 0..size.1 {
-        for x in 0..size.0 {
-            let t = ((x * 7 + y * 13) % 32) as u8;
-            out.push([
-                (x * 255 / size.0) as u8 / 2 + t,
-                (y * 255 / size.1) as u8 / 2 + 64,
-                160 - t,
-                255,
-            ]);
-        }
-    }
-    out
-}
-
-/// Everything one case allocates; `destroy` frees what was made.
-struct Rig {
-    background: Option<BackgroundFrame>,
-    views: Vec<ViewTarget>,
-    sources: Vec<GpuBuffer>,
-    /// One app-like image per view (R8G8B8A8_SRGB, as the content), kept in
-    /// COLOR_ATTACHMENT_OPTIMAL between runs, as an app leaves it at xrEndFrame.
-    images: Vec<AppImage>,
-    staging: Option<GpuBuffer>,
-    queries: vk::QueryPool,
-}
-
-impl Rig {
-    fn regions(&self, size: (u32, u32)) -> Vec<ImageRegion> {
-        let region = |i: &AppImage| ImageRegion {
-            image: i.raw,
-            array_index: 0,
-            offset: (0, 0),
-            extent: size,
-        };
-        self.images.iter().map(region).collect()
-    }
-}
-
 /// The spans timed in each run, in `timed_run`'s order of recording (a start and an end
 /// timestamp each).
 #[derive(Clone, Copy)]
@@ -178,8 +78,9 @@ enum Span {
     Enhance,
     Frame,
     ImageCopy,
+    FrameInPlace,
 }
-const SPANS: usize = 6;
+const SPANS: usize = 7;
 const QUERIES: u32 = 2 * SPANS as u32;
 
 impl OfflineEngine {
@@ -192,6 +93,8 @@ impl OfflineEngine {
             sources: Vec::new(),
             images: Vec::new(),
             staging: None,
+            in_place: Vec::new(),
+            storage_views: Vec::new(),
             queries: vk::QueryPool::null(),
         };
         let result = self.bench_with(&mut rig, case, params);
@@ -205,7 +108,7 @@ impl OfflineEngine {
         case: &BenchCase,
         params: &Params,
     ) -> Result<BenchResult, GpuError> {
-        let foreground = self.build_rig(rig, case)?;
+        let foreground = self.build_rig(rig, case, QUERIES)?;
         let mut samples: [Vec<f64>; SPANS] = Default::default();
         for run in 0..WARM_UP_RUNS + case.runs {
             let times = self.timed_run(rig, params)?;
@@ -227,132 +130,15 @@ impl OfflineEngine {
             enhance_ms: ms[Span::Enhance as usize],
             frame_ms: ms[Span::Frame as usize],
             image_copy_ms: ms[Span::ImageCopy as usize],
+            frame_in_place_ms: (!rig.in_place.is_empty())
+                .then_some(ms[Span::FrameInPlace as usize]),
             background_ms: ms[Span::Background as usize],
             foreground,
         })
     }
 
-    /// Allocates the camera frame, views, pristine sources and query pool; returns the
-    /// foreground fraction of the content.
-    fn build_rig(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<f64, GpuError> {
-        let (w, h) = case.region;
-        let gpu = &self.gpu;
-        let mut bg = self
-            .engine
-            .create_background(gpu, CAMERA_SIZE, Placement::DEVICE)?;
-        let uploaded = bg.upload(&camera_frame(CAMERA_SIZE));
-        rig.background = Some(bg);
-        uploaded?;
-        let words: Vec<u32> = (0..w * h)
-            .map(|i| content_pixel(case.content, i % w, i / w, w, h))
-            .collect();
-        let foreground = words.iter().filter(|&&p| p & 0xff_ffff != 0).count() as f64;
-        let bytes: Vec<u8> = words.iter().flat_map(|p| p.to_le_bytes()).collect();
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        let mut staging = GpuBuffer::new(
-            gpu,
-            bytes.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-            "bench staging",
-        )?;
-        let written = staging.write(&bytes);
-        rig.staging = Some(staging);
-        written?;
-        let background = rig.background.as_ref().expect("made above");
-        for _ in 0..case.views {
-            let view = self.engine.create_view(
-                gpu,
-                case.region,
-                PixelFormat::SRGB8,
-                background,
-                Placement::DEVICE,
-            )?;
-            rig.views.push(view);
-            let source = GpuBuffer::new(
-                gpu,
-                bytes.len() as u64,
-                usage,
-                MemoryLocation::GpuOnly,
-                "bench source",
-            )?;
-            let view = rig.views.last().expect("pushed above");
-            self.engine.bind_source(gpu, view, &source);
-            rig.sources.push(source);
-            rig.images
-                .push(AppImage::new(gpu, case.region, vk::Format::R8G8B8A8_SRGB)?);
-        }
-        self.fill_sources(rig, bytes.len() as u64, case.region)?;
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(QUERIES);
-        // SAFETY: a valid create info on the engine's own device.
-        rig.queries =
-            unsafe { self.gpu.device.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
-        Ok(foreground / f64::from(w * h))
-    }
-
-    /// Fills the copy sources with the content and brings the images to the layout an app
-    /// leaves them in (their content is written at each run, `restore_images`).
-    fn fill_sources(&mut self, rig: &Rig, size: u64, extent: (u32, u32)) -> Result<(), GpuError> {
-        let staging = rig.staging.as_ref().expect("made before").raw;
-        self.submit(|cmd| {
-            for source in &rig.sources {
-                let region = [vk::BufferCopy::default().size(size)];
-                // SAFETY: cmd is recording; both buffers are ours and `size` bytes long.
-                unsafe {
-                    self.gpu
-                        .device
-                        .cmd_copy_buffer(cmd, staging, source.raw, &region)
-                };
-            }
-            let to_attachment: Vec<_> = rig
-                .regions(extent)
-                .iter()
-                .map(|r| {
-                    vk::ImageMemoryBarrier::default()
-                        .old_layout(vk::ImageLayout::UNDEFINED)
-                        .new_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                        .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
-                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .image(r.image)
-                        .subresource_range(
-                            vk::ImageSubresourceRange::default()
-                                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                                .level_count(1)
-                                .layer_count(1),
-                        )
-                })
-                .collect();
-            // SAFETY: cmd is recording; the images are ours and unused.
-            unsafe {
-                self.gpu.device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &to_attachment,
-                )
-            };
-            Ok(())
-        })
-    }
-
-    /// Writes the pristine content into each app image (an app's newly rendered frame).
-    fn restore_images(&self, cmd: vk::CommandBuffer, rig: &Rig, regions: &[ImageRegion]) {
-        let staging = rig.staging.as_ref().expect("made before");
-        record_layout_barriers(&self.gpu, cmd, regions, true);
-        for r in regions {
-            record_region_copy(&self.gpu, cmd, r, staging, false);
-        }
-        record_layout_barriers(&self.gpu, cmd, regions, false);
-    }
-
     /// What the layer records per display frame around (and, with `enhance`, including) the
-    /// enhancement: src/layer/processor.rs's `record` less the background and captures.
+    /// enhancement: src/gpu/frame_record.rs's `record` less the background and captures.
     fn record_frame(
         &self,
         cmd: vk::CommandBuffer,
@@ -376,6 +162,28 @@ impl OfflineEngine {
         }
         for (r, v) in regions.iter().zip(views) {
             record_region_copy(gpu, cmd, r, &v.pixels, false);
+        }
+        record_layout_barriers(gpu, cmd, regions, false);
+        Ok(())
+    }
+
+    /// What the layer records per display frame in place: gpu/frame_record.rs's `record` for
+    /// in-place views, less the background and captures. Nothing without in-place views.
+    fn record_frame_in_place(
+        &self,
+        cmd: vk::CommandBuffer,
+        rig: &Rig,
+        regions: &[ImageRegion],
+        params: &Params,
+    ) -> Result<(), GpuError> {
+        if rig.in_place.is_empty() {
+            return Ok(());
+        }
+        let gpu = &self.gpu;
+        record_layout_barriers(gpu, cmd, regions, true);
+        let mapping = params.camera_mapping();
+        for v in &rig.in_place {
+            self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
         }
         record_layout_barriers(gpu, cmd, regions, false);
         Ok(())
@@ -444,6 +252,11 @@ impl OfflineEngine {
             })?;
             timed(Span::ImageCopy, &mut || {
                 self.record_frame(cmd, both, params, false)
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            timed(Span::FrameInPlace, &mut || {
+                self.record_frame_in_place(cmd, rig, &regions, params)
             })
         })?;
         let mut ticks = [0u64; QUERIES as usize];
@@ -461,23 +274,6 @@ impl OfflineEngine {
         Ok(std::array::from_fn(|k| {
             ticks[2 * k + 1].wrapping_sub(ticks[2 * k]) as f64 * ms
         }))
-    }
-
-    fn destroy_rig(&mut self, mut rig: Rig) {
-        let gpu = &self.gpu;
-        // SAFETY: every submission was waited for; the pool is ours (null is ignored).
-        unsafe { gpu.device.destroy_query_pool(rig.queries, None) };
-        for mut v in rig.views.drain(..) {
-            self.engine.destroy_view(gpu, &mut v);
-        }
-        rig.sources.iter_mut().for_each(|b| b.destroy(gpu));
-        rig.images.iter_mut().for_each(|i| i.destroy(gpu));
-        if let Some(mut b) = rig.staging.take() {
-            b.destroy(gpu);
-        }
-        if let Some(mut b) = rig.background.take() {
-            b.destroy(gpu);
-        }
     }
 }
 

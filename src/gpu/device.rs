@@ -212,6 +212,13 @@ fn create_allocator(
 }
 
 impl GpuDevice {
+    /// Whether the device is a CPU driver (lavapipe, SwiftShader).
+    pub fn is_cpu(&self) -> bool {
+        // SAFETY: physical belongs to this instance.
+        let props = unsafe { self.instance.get_physical_device_properties(self.physical) };
+        props.device_type == vk::PhysicalDeviceType::CPU
+    }
+
     /// Creates an instance and a device of its own (Vulkan 1.1, one compute queue).
     pub fn create(options: &DeviceOptions) -> Result<GpuDevice, GpuError> {
         let entry = load_entry()?;

@@ -12,8 +12,8 @@ use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
 use super::interface::{
-    BindingKind, BINDING_BLURRED, BINDING_BLURRED_TEXELS, BINDING_CAMERA, BINDING_PIXELS,
-    BINDING_SOURCE, BINDING_TILES, TILE_LIST_HEADER_WORDS,
+    in_place_texel, BindingKind, BINDING_APP_IMAGE, BINDING_BLURRED, BINDING_BLURRED_TEXELS,
+    BINDING_CAMERA, BINDING_PIXELS, BINDING_SOURCE, BINDING_TILES, TILE_LIST_HEADER_WORDS,
 };
 use super::pipelines::{
     self, binding_count, BuildMode, BuildReport, Pipelines, ShaderId, WarmUpHook,
@@ -31,7 +31,7 @@ pub use super::camera_rect::CameraRect;
 use super::resources::{
     alloc_all, camera_stride, colour_layer, free_set, transfer_storage, STORAGE, TEXELS_FORMAT,
 };
-pub use super::resources::{rows_aligned, BackgroundFrame, Placement, ViewTarget};
+pub use super::resources::{rows_aligned, BackgroundFrame, Placement, ViewShape, ViewTarget};
 
 /// Background frames that may exist at once besides the views (their descriptor sets).
 const MAX_BACKGROUNDS: u32 = 2;
@@ -65,6 +65,9 @@ impl Engine {
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::SAMPLED_IMAGE)
                 .descriptor_count(max_sets * binding_count(BindingKind::SampledImage)),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_IMAGE)
+                .descriptor_count(max_sets * binding_count(BindingKind::StorageImage)),
         ];
         let info = vk::DescriptorPoolCreateInfo::default()
             .flags(vk::DescriptorPoolCreateFlags::FREE_DESCRIPTOR_SET)
@@ -171,6 +174,7 @@ impl Engine {
         }
     }
 
+    /// A view enhanced through a copy of its region (`pixels`).
     pub fn create_view(
         &self,
         gpu: &GpuDevice,
@@ -179,10 +183,36 @@ impl Engine {
         background: &BackgroundFrame,
         placement: Placement,
     ) -> Result<ViewTarget, GpuError> {
+        let shape = ViewShape {
+            format,
+            width: region.0,
+            in_place: false,
+        };
+        self.create_shaped_view(gpu, (shape, region.1), background, placement)
+    }
+
+    /// A view of `shape` and `height`: in place (the app's image bound later with
+    /// `bind_app_image`; `pixels` is then a 16-byte stand-in) or through a copy.
+    pub fn create_shaped_view(
+        &self,
+        gpu: &GpuDevice,
+        (shape, height): (ViewShape, u32),
+        background: &BackgroundFrame,
+        placement: Placement,
+    ) -> Result<ViewTarget, GpuError> {
+        let (region, format) = ((shape.width, height), shape.format);
         if region.0 == 0 || region.1 == 0 {
             return Err(GpuError::Unsupported("empty display region".into()));
         }
-        let px = u64::from(region.0) * u64::from(region.1);
+        if shape.in_place && in_place_texel(format.shader_code()).is_none() {
+            return Err(GpuError::Unsupported(format!(
+                "{format:?} is not enhanced in place"
+            )));
+        }
+        let px = match shape.in_place {
+            true => 16 / u64::from(format.bytes_per_pixel()),
+            false => u64::from(region.0) * u64::from(region.1),
+        };
         let usage = transfer_storage();
         let bpp = u64::from(format.bytes_per_pixel());
         let at = placement.working;
@@ -205,6 +235,8 @@ impl Engine {
         let mut view = ViewTarget {
             region,
             format,
+            in_place: shape.in_place,
+            origin: (0, 0),
             pixels,
             tiles,
             set: vk::DescriptorSet::null(),
@@ -219,6 +251,22 @@ impl Engine {
         }
         self.bind(gpu, &mut view, background);
         Ok(view)
+    }
+
+    /// Binds the app's image layer a view in place is enhanced in (a storage view of it, in
+    /// GENERAL while the enhancement runs). The set must not be in use.
+    pub fn bind_app_image(&self, gpu: &GpuDevice, view: &ViewTarget, image_view: vk::ImageView) {
+        let image = [vk::DescriptorImageInfo::default()
+            .image_view(image_view)
+            .image_layout(vk::ImageLayout::GENERAL)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(view.set)
+            .dst_binding(BINDING_APP_IMAGE)
+            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+            .image_info(&image);
+        // SAFETY: the set and the image view are valid; the caller guarantees the set is not
+        // in use.
+        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
     }
 
     /// Points a view's descriptor set at a (new) background frame. The set must not be in use.
@@ -293,7 +341,7 @@ impl Engine {
     /// enhancement of views of these pixel formats and widths (None for Mode off).
     pub fn shaders_for(
         params: &Params,
-        views: impl IntoIterator<Item = (PixelFormat, u32)>,
+        views: impl IntoIterator<Item = ViewShape>,
     ) -> Result<Vec<ShaderId>, GpuError> {
         if params.mode == ViewMode::Off {
             return Ok(Vec::new());
@@ -305,13 +353,13 @@ impl Engine {
             pipelines::FINISH_TILES,
         ];
         let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
-        for (format, width) in views {
-            let code = format.shader_code();
-            let wide = rows_aligned(width, format);
+        for view in views {
+            let code = view.format.shader_code();
+            let access = view.access();
             let codes = (method_code(params.method), mode_code(params.mode), code);
             for id in [
-                pipelines::classify(code, wide)?,
-                pipelines::enhance(codes, wide, extras)?,
+                pipelines::classify(code, access)?,
+                pipelines::enhance(codes, access, extras)?,
             ] {
                 if !ids.contains(&id) {
                     ids.push(id);

@@ -66,8 +66,58 @@ impl PixelFormat {
         }
     }
 
+    /// The format whose shader code (`FORMAT`) is `code`.
+    pub fn from_shader_code(code: u32) -> Option<PixelFormat> {
+        use PixelLayout::*;
+        [Rgba8, Bgra8, Rgba16Unorm, Rgba16Float, A2b10g10r10]
+            .into_iter()
+            .flat_map(|layout| [true, false].map(|srgb| PixelFormat { layout, srgb }))
+            .find(|f| f.shader_code() == code)
+    }
+
+    /// The format of the storage view a region of this format is enhanced in place through
+    /// (interface.rs `in_place_texel`: UNORM for the sRGB formats); None where it is not.
+    pub fn in_place_view_format(self) -> Option<vk::Format> {
+        interface::in_place_texel(self.shader_code())?;
+        match self.layout {
+            PixelLayout::Rgba8 => Some(vk::Format::R8G8B8A8_UNORM),
+            PixelLayout::Rgba16Float => Some(vk::Format::R16G16B16A16_SFLOAT),
+            _ => None,
+        }
+    }
+
     /// The code of the format a shader variant is built for (`FORMAT` in the shaders).
     pub fn shader_code(self) -> u32 {
         self.layout.shader_code() | if self.srgb { FORMAT_SRGB_BIT } else { 0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The storage view's Vulkan format is the texel format the shader declares.
+    #[test]
+    fn in_place_view_formats_match_the_shaders_texel_formats() {
+        let formats = [
+            vk::Format::R8G8B8A8_SRGB,
+            vk::Format::R8G8B8A8_UNORM,
+            vk::Format::B8G8R8A8_SRGB,
+            vk::Format::B8G8R8A8_UNORM,
+            vk::Format::R16G16B16A16_UNORM,
+            vk::Format::R16G16B16A16_SFLOAT,
+            vk::Format::A2B10G10R10_UNORM_PACK32,
+        ];
+        for f in formats {
+            let pixel = PixelFormat::from_vk(f).unwrap();
+            let texel = interface::in_place_texel(pixel.shader_code());
+            let expected = match pixel.in_place_view_format() {
+                Some(vk::Format::R8G8B8A8_UNORM) => Some("rgba8unorm"),
+                Some(vk::Format::R16G16B16A16_SFLOAT) => Some("rgba16float"),
+                Some(other) => panic!("{other:?}"),
+                None => None,
+            };
+            assert_eq!(texel, expected, "{f:?}");
+        }
     }
 }

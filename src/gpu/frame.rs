@@ -4,6 +4,7 @@
 //! queue. Used by the layer inside xrEndFrame, where the images are still the app's (their
 //! release is held until then). Knows nothing of OpenXR.
 
+use super::app_views::AppImageViews;
 use super::commands::Commands;
 use super::frame_view::{CapturedView, FrameView, ViewKey};
 use super::overlay::{OverlayPixels, Overlays};
@@ -61,6 +62,8 @@ pub struct FrameEngine {
     pub(super) frame: u64,
     /// Lit pixels drawn over the views after the enhancement.
     pub(super) overlays: Overlays,
+    /// Storage views of the app's image layers enhanced in place.
+    pub(super) app_views: AppImageViews,
     /// Set once the engine's objects were destroyed (or left alive after a GPU failure).
     torn_down: bool,
     /// The warm-up device (CPU drivers), dropped here on the app's thread after the pipeline
@@ -93,6 +96,7 @@ impl FrameEngine {
             views: HashMap::new(),
             frame: 0,
             overlays: Overlays::default(),
+            app_views: AppImageViews::default(),
             torn_down: false,
             warm_up,
             gpu,
@@ -134,8 +138,7 @@ impl FrameEngine {
         params: &Params,
         wait: bool,
     ) -> Result<(), GpuError> {
-        let formats = views.iter().map(|v| (v.format, v.key.extent.0));
-        let ids = Engine::shaders_for(params, formats)?;
+        let ids = Engine::shaders_for(params, views.iter().map(FrameView::shape))?;
         // A failed warm-up device only means slower first dispatches.
         let _ = self.prepare_warm_up(&ids);
         match self.engine.ready(&ids)? {
@@ -190,7 +193,7 @@ impl FrameEngine {
         if self
             .views
             .get(&item.key)
-            .is_some_and(|v| v.target.format == item.format)
+            .is_some_and(|v| v.target.shape() == item.shape())
         {
             return Ok(());
         }
@@ -204,13 +207,10 @@ impl FrameEngine {
             .background
             .as_ref()
             .expect("background is set before views");
-        let target = self.engine.create_view(
-            &self.gpu,
-            item.key.extent,
-            item.format,
-            bg,
-            Placement::DEVICE,
-        )?;
+        let shape = (item.shape(), item.key.extent.1);
+        let target = self
+            .engine
+            .create_shaped_view(&self.gpu, shape, bg, Placement::DEVICE)?;
         self.views.insert(
             item.key,
             PreparedView {
@@ -233,6 +233,16 @@ impl FrameEngine {
         }
     }
 
+    /// Points an in-place view at this frame's image of its swapchain (the GPU is idle).
+    fn bind_app_image(&mut self, item: &FrameView) -> Result<(), GpuError> {
+        let image_view = self.app_views.get(&self.gpu, item)?;
+        let target = &mut self.views.get_mut(&item.key).expect("ensured").target;
+        // Inside the image: the layer checked the region against the swapchain's size.
+        target.origin = (item.key.offset.0 as u32, item.key.offset.1 as u32);
+        self.engine.bind_app_image(&self.gpu, target, image_view);
+        Ok(())
+    }
+
     /// Drops the buffers of a destroyed swapchain's views.
     pub fn forget_swapchain(&mut self, swapchain: u64) {
         if self.wait_idle().is_err() {
@@ -249,6 +259,7 @@ impl FrameEngine {
                 self.engine.destroy_view(&self.gpu, &mut v.target);
             }
         }
+        self.app_views.forget(&self.gpu, swapchain);
     }
 
     /// Enhances every view's region of the app's images in place, and draws `overlay` over
@@ -290,6 +301,9 @@ impl FrameEngine {
         self.wait_idle()?;
         for item in items {
             self.ensure_view(item, items)?;
+        }
+        for item in items.iter().filter(|i| i.in_place) {
+            self.bind_app_image(item)?;
         }
         let mut staging = Vec::new();
         if capture {
@@ -363,6 +377,7 @@ impl FrameEngine {
         }
         self.overlays.destroy(&self.gpu);
         self.staged.destroy(&self.gpu);
+        self.app_views.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
         // Waited for above: this wait cannot fail.
         let _ = self.commands.destroy(&self.gpu);

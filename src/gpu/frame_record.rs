@@ -24,16 +24,27 @@ impl FrameEngine {
         record_layout_barriers(&self.gpu, self.commands.cmd, &regions, to_general);
     }
 
+    /// Copies the region into its view's buffer or back (views through a copy only).
     fn copy_region(&self, item: &FrameView, to_buffer: bool) {
+        if item.in_place {
+            return;
+        }
         let pixels = &self.views[&item.key].target.pixels;
         let cmd = self.commands.cmd;
         record_region_copy(&self.gpu, cmd, &item.region(), pixels, to_buffer);
     }
 
+    /// Copies the view's current pixels (the app's image in place, else the view's buffer)
+    /// into a capture buffer.
     fn copy_to_capture(&self, item: &FrameView, dst: &GpuBuffer) {
+        let cmd = self.commands.cmd;
+        if item.in_place {
+            record_region_copy(&self.gpu, cmd, &item.region(), dst, true);
+            return;
+        }
         let src = &self.views[&item.key].target.pixels;
         let region = [vk::BufferCopy::default().size(self.views[&item.key].target.pixel_bytes())];
-        record_buffer_copy(&self.gpu, self.commands.cmd, (src, dst), &region);
+        record_buffer_copy(&self.gpu, cmd, (src, dst), &region);
     }
 
     pub(super) fn record(
@@ -92,7 +103,9 @@ impl FrameEngine {
             )?;
         }
         barrier(&self.gpu, self.commands.cmd, S::COMPUTE_SHADER, S::TRANSFER);
-        let views = items.iter().map(|i| (i.key, &self.views[&i.key].target));
+        let views = items
+            .iter()
+            .map(|i| (i.key, &self.views[&i.key].target, i.region()));
         if self
             .overlays
             .record(&self.gpu, self.commands.cmd, overlay, views)?

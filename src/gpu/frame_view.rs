@@ -3,7 +3,7 @@
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::gpu::image_copy::ImageRegion;
-use crate::gpu::PixelFormat;
+use crate::gpu::{PixelFormat, ViewShape};
 use ash::vk;
 
 /// One region of an app's image to enhance.
@@ -13,11 +13,22 @@ pub struct FrameView {
     pub image: vk::Image,
     pub format: PixelFormat,
     pub vk_format: vk::Format,
+    /// Enhanced in place (the swapchain was made with storage usage for it), else through a
+    /// copy of the region.
+    pub in_place: bool,
     /// Where this view's display pixels lie in the camera image.
     pub mapping: CameraMapping,
 }
 
 impl FrameView {
+    pub fn shape(&self) -> ViewShape {
+        ViewShape {
+            format: self.format,
+            width: self.key.extent.0,
+            in_place: self.in_place,
+        }
+    }
+
     pub fn region(&self) -> ImageRegion {
         ImageRegion {
             image: self.image,

@@ -1,6 +1,6 @@
 //! The copies of a view's region between an app's image and a view's pixel buffer, with the
 //! layout transitions around them: what the layer records around the enhancement each frame
-//! (src/layer/processor.rs), shared with the benchmark so that `contrastxr bench` times the
+//! (src/gpu/frame_record.rs), shared with the benchmark so that `contrastxr bench` times the
 //! same commands.
 
 use super::buffer::GpuBuffer;
@@ -26,10 +26,10 @@ fn subresource(layer: u32) -> vk::ImageSubresourceRange {
 }
 
 /// Moves each region's image layer from COLOR_ATTACHMENT_OPTIMAL (where the app left it) to
-/// GENERAL for the copies (`to_general`), or back afterwards; one barrier per layer. The app
-/// may have written its image in any way (drawn, copied, computed), and the runtime may use it
-/// in any way after: the barrier waits for every earlier access and makes the copies visible
-/// to every later one.
+/// GENERAL for the copies and the in-place enhancement (`to_general`), or back afterwards; one
+/// barrier per layer. The app may have written its image in any way (drawn, copied, computed),
+/// and the runtime may use it in any way after: the barrier waits for every earlier access and
+/// makes the layer's writes visible to every later one.
 pub fn record_layout_barriers(
     gpu: &GpuDevice,
     cmd: vk::CommandBuffer,
@@ -38,7 +38,10 @@ pub fn record_layout_barriers(
 ) {
     let mut seen = HashSet::new();
     let any = vk::AccessFlags::MEMORY_WRITE | vk::AccessFlags::MEMORY_READ;
-    let transfer = vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::TRANSFER_WRITE;
+    let transfer = vk::AccessFlags::TRANSFER_READ
+        | vk::AccessFlags::TRANSFER_WRITE
+        | vk::AccessFlags::SHADER_READ
+        | vk::AccessFlags::SHADER_WRITE;
     let attachment = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
     let general = vk::ImageLayout::GENERAL;
     let ((old, new), (src, dst)) = if to_general {
@@ -62,7 +65,7 @@ pub fn record_layout_barriers(
         })
         .collect();
     let all = vk::PipelineStageFlags::ALL_COMMANDS;
-    let transfer = vk::PipelineStageFlags::TRANSFER;
+    let transfer = vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER;
     let (src, dst) = if to_general {
         (all, transfer)
     } else {

@@ -14,6 +14,28 @@ pub enum BindingKind {
     StorageBuffer,
     /// A sampled image (in the shader: `texture_2d<u32>`).
     SampledImage,
+    /// A storage image (in the shader: `texture_storage_2d<..., read_write>`).
+    StorageImage,
+}
+
+/// How a per-pixel pass reaches a display region's pixels (the `ACCESS` code of a variant).
+/// A copy of the region in the storage buffer `pixels`, one word per load:
+pub const ACCESS_NARROW: u32 = 0;
+/// The same, 16 bytes per load (rows 16-byte aligned; shaders/access_wide.wgsl):
+pub const ACCESS_WIDE: u32 = 1;
+/// The app's image itself, through a storage view `app_image` (shaders/access_in_place.wgsl):
+pub const ACCESS_IN_PLACE: u32 = 2;
+
+/// The storage texel format through which a pixel format (a FORMAT code) is enhanced in place;
+/// None where it is only enhanced through a copy. Only formats every Vulkan device can store
+/// without optional features: an sRGB image is reached through a UNORM view of it (the shader
+/// encodes sRGB itself), so its swapchain needs the mutable-format usage.
+pub const fn in_place_texel(format: u32) -> Option<&'static str> {
+    match format & !FORMAT_SRGB_BIT {
+        LAYOUT_RGBA8 => Some("rgba8unorm"),
+        LAYOUT_RGBA16_FLOAT => Some("rgba16float"),
+        _ => None,
+    }
 }
 
 /// One binding of descriptor set 0, the one set every pass shares.
@@ -23,9 +45,9 @@ pub struct Binding {
     /// The shader's variable.
     pub name: &'static str,
     pub kind: BindingKind,
-    /// The variable's declaration after `var`, given the `wide` pixel access (16 bytes per
-    /// load where a region's rows are 16-byte aligned) or the narrow one.
-    pub wgsl: fn(wide: bool) -> &'static str,
+    /// The variable's declaration after `var`, given the pixel access (ACCESS_*) and the
+    /// FORMAT code of the variant; None where that variant does not declare it.
+    pub wgsl: fn(access: u32, format: u32) -> Option<String>,
 }
 
 /// The camera frame: RGBA8 sRGB, one u32 per pixel, four pixels per entry.
@@ -40,50 +62,69 @@ pub const BINDING_TILES: u32 = 3;
 pub const BINDING_SOURCE: u32 = 4;
 /// `blurred` as an R32G32B32A32_UINT image, what the enhancement samples.
 pub const BINDING_BLURRED_TEXELS: u32 = 5;
+/// The app's image layer, for enhancing in place (ACCESS_IN_PLACE).
+pub const BINDING_APP_IMAGE: u32 = 6;
+
+fn always(decl: &str) -> Option<String> {
+    Some(decl.to_string())
+}
 
 /// Every binding, in binding order.
-pub const BINDINGS: [Binding; 6] = [
+pub const BINDINGS: [Binding; 7] = [
     Binding {
         number: BINDING_CAMERA,
         name: "camera",
         kind: BindingKind::StorageBuffer,
-        wgsl: |_| "<storage, read> camera: array<vec4<u32>>",
+        wgsl: |_, _| always("<storage, read> camera: array<vec4<u32>>"),
     },
     Binding {
         number: BINDING_BLURRED,
         name: "blurred",
         kind: BindingKind::StorageBuffer,
-        wgsl: |_| "<storage, read_write> blurred: array<vec4<u32>>",
+        wgsl: |_, _| always("<storage, read_write> blurred: array<vec4<u32>>"),
     },
     Binding {
         number: BINDING_PIXELS,
         name: "pixels",
         kind: BindingKind::StorageBuffer,
-        wgsl: |wide| match wide {
-            true => "<storage, read_write> pixels: array<vec4<u32>>",
-            false => "<storage, read_write> pixels: array<u32>",
+        wgsl: |access, _| match access {
+            ACCESS_WIDE => always("<storage, read_write> pixels: array<vec4<u32>>"),
+            ACCESS_NARROW => always("<storage, read_write> pixels: array<u32>"),
+            _ => None,
         },
     },
     Binding {
         number: BINDING_TILES,
         name: "tiles",
         kind: BindingKind::StorageBuffer,
-        wgsl: |_| "<storage, read_write> tiles: TileList",
+        wgsl: |_, _| always("<storage, read_write> tiles: TileList"),
     },
     Binding {
         number: BINDING_SOURCE,
         name: "source",
         kind: BindingKind::StorageBuffer,
-        wgsl: |wide| match wide {
-            true => "<storage, read> source: array<vec4<u32>>",
-            false => "<storage, read> source: array<u32>",
+        wgsl: |access, _| match access {
+            ACCESS_WIDE => always("<storage, read> source: array<vec4<u32>>"),
+            ACCESS_NARROW => always("<storage, read> source: array<u32>"),
+            _ => None,
         },
     },
     Binding {
         number: BINDING_BLURRED_TEXELS,
         name: "blurred_texels",
         kind: BindingKind::SampledImage,
-        wgsl: |_| " blurred_texels: texture_2d<u32>",
+        wgsl: |_, _| always(" blurred_texels: texture_2d<u32>"),
+    },
+    Binding {
+        number: BINDING_APP_IMAGE,
+        name: "app_image",
+        kind: BindingKind::StorageImage,
+        wgsl: |access, format| match (access, in_place_texel(format)) {
+            (ACCESS_IN_PLACE, Some(texel)) => Some(format!(
+                " app_image: texture_storage_2d<{texel}, read_write>"
+            )),
+            _ => None,
+        },
     },
 ];
 
@@ -173,7 +214,7 @@ pub const METHOD_SUBTRACTION: u32 = 4;
 pub const METHODS: u32 = 5;
 
 /// The codes written into every shader as WGSL constants, by name.
-pub const CODES: [(&str, u32); 25] = [
+pub const CODES: [(&str, u32); 28] = [
     ("TILE", TILE),
     ("DECODE_ROWS", DECODE_ROWS),
     ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
@@ -199,6 +240,9 @@ pub const CODES: [(&str, u32); 25] = [
     ("CLASSIFY_WORKGROUP_X", CLASSIFY_WORKGROUP[0]),
     ("CLASSIFY_WORKGROUP_Y", CLASSIFY_WORKGROUP[1]),
     ("BLUR_TAPS", BLUR_TAPS as u32),
+    ("ACCESS_NARROW", ACCESS_NARROW),
+    ("ACCESS_WIDE", ACCESS_WIDE),
+    ("ACCESS_IN_PLACE", ACCESS_IN_PLACE),
 ];
 
 /// The blurred background packs each texel's linear R, G, B into 21 bits each (two texels per
@@ -275,8 +319,9 @@ pub const PARAMS: [(&str, ParamType); 23] = [
     ("map_20", ParamType::F32),
     ("map_21", ParamType::F32),
     ("map_22", ParamType::F32),
-    // Fills the block up to its 16-byte alignment (the taps').
-    ("pad", ParamType::U32),
+    // Where the region starts in the app's image (ACCESS_IN_PLACE): x in the low 16 bits, y
+    // in the high 16 bits.
+    ("region_origin", ParamType::U32),
 ];
 
 /// The byte offset of each PARAMS field, and the block's size (a multiple of its largest

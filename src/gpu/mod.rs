@@ -3,9 +3,12 @@
 //! someone else's command buffer inside an app. Knows nothing of OpenXR.
 
 pub mod app_image;
+pub mod app_views;
 pub mod approx;
 pub mod barrier;
 pub mod bench;
+mod bench_case;
+mod bench_rig;
 pub mod buffer;
 pub mod camera_rect;
 pub mod codes;
@@ -20,6 +23,7 @@ pub mod frame_view;
 pub mod image_copy;
 pub mod interface;
 pub mod offline;
+mod offline_in_place;
 pub mod overlay;
 pub mod pipeline_cache;
 pub mod pipelines;
@@ -32,10 +36,11 @@ mod record;
 pub mod resources;
 pub mod shader_ids;
 pub mod shaders;
+mod storage_image;
 pub mod warm_up;
 
 pub use device::{DeviceOptions, GpuDevice};
-pub use engine::{BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
+pub use engine::{BackgroundFrame, CameraRect, Engine, Placement, ViewShape, ViewTarget};
 pub use error::GpuError;
 pub use format::{PixelFormat, PixelLayout};
 pub use frame::{FrameBackground, FrameEngine, FrameOptions};

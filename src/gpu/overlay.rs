@@ -5,6 +5,7 @@
 
 use super::buffer::{record_buffer_copy, GpuBuffer};
 use super::frame_view::ViewKey;
+use super::image_copy::ImageRegion;
 use super::pixel_codec;
 use super::{GpuDevice, GpuError, PixelFormat, ViewTarget};
 use crate::colour;
@@ -96,6 +97,50 @@ fn overlay(
     }))
 }
 
+/// The runs of `o` copied into the app's image (GENERAL) at the region's place: the copies'
+/// buffer offsets are the region's tightly packed layout, as for a view's buffer.
+fn record_into_image(gpu: &GpuDevice, cmd: vk::CommandBuffer, o: &Overlay, region: &ImageRegion) {
+    let bpp = u64::from(o.format.bytes_per_pixel());
+    let width = u64::from(o.region.0);
+    let copies: Vec<vk::BufferImageCopy> = o
+        .copies
+        .iter()
+        .map(|c| {
+            let pixel = c.dst_offset / bpp;
+            let (x, y) = ((pixel % width) as i32, (pixel / width) as i32);
+            vk::BufferImageCopy::default()
+                .buffer_offset(c.src_offset)
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .base_array_layer(region.array_index)
+                        .layer_count(1),
+                )
+                .image_offset(vk::Offset3D {
+                    x: region.offset.0 + x,
+                    y: region.offset.1 + y,
+                    z: 0,
+                })
+                .image_extent(vk::Extent3D {
+                    width: (c.size / bpp) as u32,
+                    height: 1,
+                    depth: 1,
+                })
+        })
+        .collect();
+    // SAFETY: cmd is recording; the image is in GENERAL with transfer usage and every run lies
+    // inside the region, which lies inside the image (the caller's contract).
+    unsafe {
+        gpu.device.cmd_copy_buffer_to_image(
+            cmd,
+            o.buffer.raw,
+            region.image,
+            vk::ImageLayout::GENERAL,
+            &copies,
+        )
+    };
+}
+
 /// The drawings of a session's views, kept while they do not change.
 #[derive(Default)]
 pub struct Overlays {
@@ -103,22 +148,23 @@ pub struct Overlays {
 }
 
 impl Overlays {
-    /// Records the copies of `pixels` into each view's buffer; true if any was recorded (the
-    /// caller then puts a transfer barrier before anything reads the view buffers). None frees
-    /// the drawings. The GPU must be done with the previous frame.
+    /// Records the copies of `pixels` into each view's buffer, or into its region of the app's
+    /// image (GENERAL) for a view enhanced in place; true if any was recorded (the caller then
+    /// puts a transfer barrier before anything reads them). None frees the drawings. The GPU
+    /// must be done with the previous frame.
     pub fn record<'a>(
         &mut self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
         pixels: Option<&OverlayPixels>,
-        views: impl Iterator<Item = (ViewKey, &'a ViewTarget)>,
+        views: impl Iterator<Item = (ViewKey, &'a ViewTarget, ImageRegion)>,
     ) -> Result<bool, GpuError> {
         let Some(pixels) = pixels else {
             self.destroy(gpu);
             return Ok(false);
         };
         let mut drawn = false;
-        for (key, target) in views {
+        for (key, target, region) in views {
             let stale = self.drawn.get(&key).is_some_and(|o| {
                 o.key != pixels.key || o.format != target.format || o.region != target.region
             });
@@ -135,7 +181,10 @@ impl Overlays {
                 },
             };
             // The overlay buffer is host-written before this submission.
-            record_buffer_copy(gpu, cmd, (&o.buffer, &target.pixels), &o.copies);
+            match target.in_place {
+                true => record_into_image(gpu, cmd, o, &region),
+                false => record_buffer_copy(gpu, cmd, (&o.buffer, &target.pixels), &o.copies),
+            }
             drawn = true;
         }
         Ok(drawn)

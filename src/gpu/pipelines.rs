@@ -23,8 +23,8 @@ use std::time::{Duration, Instant};
 pub use super::interface::TILE;
 pub use super::push_constants::PushConstants;
 pub use super::shader_ids::{
-    classify, decode_blur, enhance, reads_camera, ShaderId, COPY_PIXELS, COPY_ROWS, DECODE_CAMERA,
-    FINISH_TILES,
+    classify, decode_blur, enhance, in_place_format, reads_camera, ShaderId, COPY_PIXELS,
+    COPY_ROWS, DECODE_CAMERA, FINISH_TILES,
 };
 
 /// Runs a shader once, on the building thread, before it is built for the engine's device: a
@@ -410,6 +410,7 @@ pub fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
     match kind {
         BindingKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
         BindingKind::SampledImage => vk::DescriptorType::SAMPLED_IMAGE,
+        BindingKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
     }
 }
 

@@ -29,7 +29,7 @@ pub struct PushConstants {
     pub luminance_cap: f32,
     /// The view's CameraMapping, row-major (PARAMS' map_00 ..= map_22).
     pub mapping: [[f32; 3]; 3],
-    pub pad: u32,
+    pub region_origin: u32,
 }
 
 /// Each PushConstants field's byte offset, in PARAMS order (the mapping stands for map_00 ..=
@@ -60,7 +60,7 @@ const PUSH_OFFSETS: [usize; interface::PARAMS.len()] = {
         m + 24,
         m + 28,
         m + 32,
-        offset_of!(PushConstants, pad),
+        offset_of!(PushConstants, region_origin),
     ]
 };
 
@@ -105,7 +105,7 @@ impl PushConstants {
             achromatic_boost: params.achromatic_boost,
             luminance_cap: params.luminance_cap,
             mapping: mapping.to_f32_rows(),
-            pad: 0,
+            region_origin: 0,
         }
     }
 

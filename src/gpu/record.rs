@@ -217,15 +217,17 @@ impl Engine {
             return Ok(());
         }
         let format = view.format.shader_code();
-        let wide = view.rows_aligned();
+        let access = view.shape().access();
         let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
         let codes = (method_code(params.method), mode_code(params.mode), format);
         let pipeline = self
             .pipelines
-            .get(pipelines::enhance(codes, wide, extras)?)?;
-        let classify = self.pipelines.get(pipelines::classify(format, wide)?)?;
+            .get(pipelines::enhance(codes, access, extras)?)?;
+        let classify = self.pipelines.get(pipelines::classify(format, access)?)?;
         let finish_tiles = self.pipelines.get(pipelines::FINISH_TILES)?;
-        let push = PushConstants::new(params, view.camera_size, view.region, mapping);
+        let mut push = PushConstants::new(params, view.camera_size, view.region, mapping);
+        // 16 bits each (interface.rs, region_origin): swapchain images are far smaller.
+        push.region_origin = (view.origin.0 & 0xffff) | (view.origin.1 << 16);
         let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
         use vk::PipelineStageFlags as S;
         barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);

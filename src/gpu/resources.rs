@@ -7,6 +7,7 @@ use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
 use super::error::GpuError;
 use super::format::PixelFormat;
+use super::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -85,11 +86,35 @@ pub(super) fn free_set(gpu: &GpuDevice, pool: vk::DescriptorPool, set: &mut vk::
     }
 }
 
+/// What decides a view's shaders: its pixel format, width and whether it is enhanced in place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ViewShape {
+    pub format: PixelFormat,
+    pub width: u32,
+    pub in_place: bool,
+}
+
+impl ViewShape {
+    /// The pixel access of its per-pixel passes (interface.rs ACCESS_*).
+    pub fn access(&self) -> u32 {
+        match (self.in_place, rows_aligned(self.width, self.format)) {
+            (true, _) => ACCESS_IN_PLACE,
+            (false, true) => ACCESS_WIDE,
+            (false, false) => ACCESS_NARROW,
+        }
+    }
+}
+
 /// One display region (a view): its pixels and tile list, bound to a background frame.
 pub struct ViewTarget {
     pub region: (u32, u32),
     pub format: PixelFormat,
-    /// The region's raw pixels in `format`, rows tightly packed.
+    /// Enhanced in place: the shaders read and write the app's image (bound with
+    /// `Engine::bind_app_image`, at `origin` in it), and `pixels` is a stand-in.
+    pub in_place: bool,
+    /// Where the region starts in the app's image (in place only).
+    pub origin: (u32, u32),
+    /// The region's raw pixels in `format`, rows tightly packed (the copy path).
     pub pixels: GpuBuffer,
     /// Indirect dispatch arguments and the list of non-empty tiles (TileList in shaders/common.wgsl).
     pub tiles: GpuBuffer,
@@ -105,6 +130,14 @@ pub fn rows_aligned(width: u32, format: PixelFormat) -> bool {
 }
 
 impl ViewTarget {
+    pub fn shape(&self) -> ViewShape {
+        ViewShape {
+            format: self.format,
+            width: self.region.0,
+            in_place: self.in_place,
+        }
+    }
+
     /// [`rows_aligned`] for this view.
     pub fn rows_aligned(&self) -> bool {
         rows_aligned(self.region.0, self.format)

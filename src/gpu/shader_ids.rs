@@ -3,6 +3,7 @@
 
 use super::codes::mode_code;
 use super::error::GpuError;
+use super::interface::ACCESS_IN_PLACE;
 use super::shaders;
 use crate::algorithm::params::ViewMode;
 
@@ -36,12 +37,12 @@ pub fn decode_blur(half: u32) -> Result<ShaderId, GpuError> {
         .ok_or_else(unsupported)
 }
 
-/// The `enhance` shader for a method, view mode and pixel format (shader codes); `wide` for
-/// regions whose rows are 16-byte aligned; `extras` where the achromatic boost or the
+/// The `enhance` shader for a method, view mode and pixel format (shader codes), reaching the
+/// pixels by `access` (interface.rs ACCESS_*); `extras` where the achromatic boost or the
 /// luminance cap is on.
 pub fn enhance(
     (method, mode, format): (u32, u32, u32),
-    wide: bool,
+    access: u32,
     extras: bool,
 ) -> Result<ShaderId, GpuError> {
     let background = mode == mode_code(ViewMode::Background);
@@ -52,19 +53,38 @@ pub fn enhance(
     };
     let k = shaders::ENHANCE_VARIANTS
         .iter()
-        .position(|&(m, v, f, w, e, _)| (m, v, f, w, e) == (method, mode, format, wide, extras))
+        .position(|&(m, v, f, a, e, _)| (m, v, f, a, e) == (method, mode, format, access, extras))
         .ok_or_else(unsupported)?;
     Ok(ShaderId(FIXED + shaders::DECODE_BLUR.len() + k))
 }
 
-/// The `classify` shader for a pixel format (shader code) and row alignment.
-pub fn classify(format: u32, wide: bool) -> Result<ShaderId, GpuError> {
+/// The `classify` shader for a pixel format (shader code) and pixel access.
+pub fn classify(format: u32, access: u32) -> Result<ShaderId, GpuError> {
     let k = shaders::CLASSIFY_VARIANTS
         .iter()
-        .position(|&(f, w, _)| f == format && w == wide)
+        .position(|&(f, a, _)| f == format && a == access)
         .ok_or_else(unsupported)?;
     let offset = FIXED + shaders::DECODE_BLUR.len() + shaders::ENHANCE_VARIANTS.len();
     Ok(ShaderId(offset + k))
+}
+
+/// The FORMAT code of an in-place variant (it reads and writes `app_image`); None for the
+/// others.
+pub fn in_place_format(ShaderId(k): ShaderId) -> Option<u32> {
+    let enhance = FIXED + shaders::DECODE_BLUR.len();
+    let classify = enhance + shaders::ENHANCE_VARIANTS.len();
+    let (format, access) = match k {
+        k if (enhance..classify).contains(&k) => {
+            let (_, _, f, a, _, _) = shaders::ENHANCE_VARIANTS[k - enhance];
+            (f, a)
+        }
+        k if k >= classify => {
+            let (f, a, _) = *shaders::CLASSIFY_VARIANTS.get(k - classify)?;
+            (f, a)
+        }
+        _ => return None,
+    };
+    (access == ACCESS_IN_PLACE).then_some(format)
 }
 
 #[cfg(test)]
@@ -89,6 +109,13 @@ mod tests {
             assert_eq!(name(classify(f, w).unwrap()), module.name);
         }
         assert!(reads_camera(decode_blur(7).unwrap()) && reads_camera(DECODE_CAMERA));
+        let rgba8 = crate::gpu::interface::LAYOUT_RGBA8;
+        assert_eq!(
+            in_place_format(classify(rgba8, ACCESS_IN_PLACE).unwrap()),
+            Some(rgba8)
+        );
+        assert_eq!(in_place_format(classify(rgba8, 0).unwrap()), None);
+        assert_eq!(in_place_format(FINISH_TILES), None);
         assert!(!reads_camera(FINISH_TILES));
     }
 }

@@ -18,6 +18,7 @@ use super::engine::{BackgroundFrame, Engine, Placement, ViewTarget};
 use super::error::GpuError;
 use super::format::{PixelFormat, PixelLayout};
 use super::pipelines::{self, BuildMode, PushConstants, ShaderId, WarmUpHook};
+use super::storage_image::StorageImage;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use ash::vk;
@@ -48,6 +49,8 @@ pub struct WarmUp {
     view: ViewTarget,
     /// The sampled image has been moved to GENERAL.
     image_ready: bool,
+    /// Stand-ins for the app's image of the in-place shaders (GENERAL), by view format.
+    storage: Vec<StorageImage>,
     // Last: dropped after everything above was destroyed in Drop.
     gpu: GpuDevice,
 }
@@ -114,9 +117,7 @@ impl WarmUp {
 
     /// Whether a device compiles at first dispatch (a CPU driver).
     pub fn needed(gpu: &GpuDevice) -> bool {
-        // SAFETY: physical belongs to this instance.
-        let props = unsafe { gpu.instance.get_physical_device_properties(gpu.physical) };
-        props.device_type == vk::PhysicalDeviceType::CPU
+        gpu.is_cpu()
     }
 
     /// A device beside `app`'s, with a camera frame and a view (the widest pixel format, so
@@ -171,6 +172,7 @@ impl WarmUp {
             background,
             view,
             image_ready: false,
+            storage: Vec::new(),
             gpu,
         })
     }
@@ -188,15 +190,19 @@ impl WarmUp {
 
     /// Dispatches one workgroup of the shader and waits for it (its compile).
     pub fn run(&mut self, id: ShaderId) -> Result<(), GpuError> {
-        let gpu = &self.gpu;
         let pipeline = self.engine.pipelines.get(id)?;
-        self.commands.begin(gpu)?;
+        self.commands.begin(&self.gpu)?;
         let cmd = self.commands.cmd;
         let (bg_set, image) = Engine::background_parts(&self.background);
         if !self.image_ready {
-            record_to_general(gpu, cmd, image);
+            record_to_general(&self.gpu, cmd, image);
             self.image_ready = true;
         }
+        if let Some(format) = pipelines::in_place_format(id) {
+            let storage = self.storage_for(cmd, format)?;
+            self.engine.bind_app_image(&self.gpu, &self.view, storage);
+        }
+        let gpu = &self.gpu;
         let set = match pipelines::reads_camera(id) {
             true => bg_set,
             false => Engine::view_set(&self.view),
@@ -209,11 +215,33 @@ impl WarmUp {
     }
 }
 
+impl WarmUp {
+    /// The view of the stand-in storage image for an in-place shader of FORMAT code `format`,
+    /// made (and moved to GENERAL in `cmd`) at its first use.
+    fn storage_for(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        format: u32,
+    ) -> Result<vk::ImageView, GpuError> {
+        let view_format = PixelFormat::from_shader_code(format)
+            .and_then(PixelFormat::in_place_view_format)
+            .ok_or_else(|| GpuError::Unsupported("no in-place view format".into()))?;
+        if let Some(s) = self.storage.iter().find(|s| s.format == view_format) {
+            return Ok(s.view);
+        }
+        let storage = StorageImage::new(&self.gpu, SIZE, view_format)?;
+        record_to_general(&self.gpu, cmd, storage.image.raw);
+        let view = storage.view;
+        self.storage.push(storage);
+        Ok(view)
+    }
+}
+
 fn record_to_general(gpu: &GpuDevice, cmd: vk::CommandBuffer, image: vk::Image) {
     let barrier = [vk::ImageMemoryBarrier::default()
         .old_layout(vk::ImageLayout::UNDEFINED)
         .new_layout(vk::ImageLayout::GENERAL)
-        .dst_access_mask(vk::AccessFlags::SHADER_READ)
+        .dst_access_mask(vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .image(image)
@@ -245,6 +273,9 @@ impl Drop for WarmUp {
             return;
         }
         self.engine.destroy_view(&self.gpu, &mut self.view);
+        for mut s in self.storage.drain(..) {
+            s.destroy(&self.gpu);
+        }
         self.background.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
         // Waited for above: this wait cannot fail.

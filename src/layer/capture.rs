@@ -101,6 +101,8 @@ pub fn write_view(
         "srgb": item.format.srgb,
         "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
         "image_array_index": item.key.array_index,
+        // How the view was enhanced: "in-place" in the app's image, or "copy" (out and back).
+        "path": if item.in_place { "in-place" } else { "copy" },
         "camera_mapping": item.mapping.rows,
         "background": settings.background,
         "params": settings_json(settings),

@@ -104,6 +104,7 @@ fn work_item(
         image: vk_image,
         format,
         vk_format: sc.info.vk_format,
+        in_place: sc.info.in_place,
         // Quads, and whole images before the first xrEndFrame, take the manual mapping.
         mapping: region
             .mapping
@@ -308,6 +309,14 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
             log::once(
                 "first-frame",
                 &format!("processing frames ({} views per frame)", items.len()),
+            );
+            let in_place = items.iter().filter(|i| i.in_place).count();
+            log::once(
+                "first-frame-path",
+                &format!(
+                    "views enhanced in place: {in_place} of {} (the others through a copy)",
+                    items.len()
+                ),
             );
         }
         Err(GpuError::Pending) => log::once(

@@ -12,6 +12,7 @@ mod entry;
 mod ffi;
 mod frame;
 mod image_states;
+mod in_place;
 pub mod indicator;
 pub mod install;
 pub mod log;

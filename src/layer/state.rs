@@ -92,6 +92,9 @@ pub struct SwapchainInfo {
     pub array_size: u32,
     /// The layer got the transfer usage it needs to copy regions in and out.
     pub transfer_usage: bool,
+    /// The layer also got storage usage (and, for sRGB, mutable format): views of this
+    /// swapchain are enhanced in place.
+    pub in_place: bool,
 }
 
 impl SwapchainInfo {

@@ -9,9 +9,10 @@
 
 use super::ffi::{guard, LayerError};
 use super::image_states::{ImageStates, ReleasePlan};
+use super::in_place;
 use super::log;
 use super::state::{self, lock, SessionState, SwapchainInfo, SwapchainState};
-use crate::gpu::PixelFormat;
+use crate::gpu::{PixelFormat, ViewShape};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::sync::{Arc, Mutex};
@@ -71,8 +72,23 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             let vk_format = vk::Format::from_raw(app_info.format as i32);
             // Pass-through sessions never have images held or touched.
             let pixel = enhanced_format(app_info).filter(|_| active);
+            let storage = pixel.and_then(|p| in_place::added_usage(&lock(&s), p, app_info));
             let mut transfer_usage = app_info.usage_flags.contains(transfer());
+            let mut in_place = false;
             let mut result = xr::Result::ERROR_RUNTIME_FAILURE;
+            if let Some(extra) = storage {
+                let mut wanted = *app_info;
+                wanted.usage_flags |= transfer() | extra;
+                // SAFETY: the app's create info with more usage bits.
+                result = unsafe { (next.create_swapchain)(session, &wanted, swapchain) };
+                in_place = result.into_raw() >= 0;
+                transfer_usage |= in_place;
+                if !in_place {
+                    log::once(&format!("no-storage-{vk_format:?}"), &format!(
+                        "the runtime refused storage usage on {vk_format:?} swapchains ({result:?}): their views are enhanced through a copy"
+                    ));
+                }
+            }
             if active && pixel.is_some() && !transfer_usage {
                 let mut wanted = *app_info;
                 wanted.usage_flags |= transfer();
@@ -101,6 +117,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                         height: app_info.height,
                         array_size: app_info.array_size,
                         transfer_usage,
+                        in_place,
                     },
                     images: Vec::new(),
                     states: ImageStates::default(),
@@ -112,7 +129,12 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                     .swapchains
                     .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
                 if let Some(format) = pixel.filter(|_| transfer_usage) {
-                    request_shaders(&s, format, app_info.width);
+                    let shape = ViewShape {
+                        format,
+                        width: app_info.width,
+                        in_place,
+                    };
+                    request_shaders(&s, shape);
                 }
             }
             Ok(result)
@@ -122,12 +144,12 @@ pub(crate) unsafe extern "system" fn create_swapchain(
 
 /// Starts building the shaders that views of this swapchain will need (on the processor's own
 /// thread), so they are likely ready by the first xrEndFrame. Views usually span the width.
-fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32) {
+fn request_shaders(s: &Mutex<SessionState>, shape: ViewShape) {
     let s = lock(s);
     let Some(p) = s.processor.as_ref() else {
         return;
     };
-    if let Ok(ids) = crate::gpu::Engine::shaders_for(&s.settings.params, [(format, width)]) {
+    if let Ok(ids) = crate::gpu::Engine::shaders_for(&s.settings.params, [shape]) {
         p.request(&ids);
     }
 }

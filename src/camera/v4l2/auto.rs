@@ -1,18 +1,15 @@
 //! `v4l2:auto`: which camera to take. Capture nodes with a colour mode this module converts are
-//! ranked: a camera on USB (from sysfs) before one on the platform or PCI bus (a laptop's own,
-//! facing the user); the card's name decides only where sysfs says nothing. The choice is kept
-//! by its stable path, so a reopen after a loss takes the same camera, and is said once.
+//! ranked: a camera the device profile names by its USB id (`camera_usb_ids`, the headset's own)
+//! first; then a camera on USB (from sysfs) before one on the platform or PCI bus (a laptop's
+//! own, facing the user); the card's name decides only where sysfs says nothing. The choice is
+//! kept by its stable path, so a reopen after a loss takes the same camera, and is said once.
 
+use super::usb::{self, sysfs_root, UsbId};
 use super::{choose_mode, modes, probe, stable_paths, DeviceInfo};
 use crate::camera::log::log;
 use crate::camera::CaptureConfig;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-
-/// Where sysfs is: `$CONTRASTXR_SYSFS_ROOT` (tests) or `/sys`.
-fn sysfs_root() -> PathBuf {
-    std::env::var_os("CONTRASTXR_SYSFS_ROOT").map_or_else(|| PathBuf::from("/sys"), PathBuf::from)
-}
 
 /// The bus a camera hangs on, as sysfs tells.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -26,10 +23,7 @@ pub enum Bus {
 /// `/sys/class/video4linux/videoN/device` resolves to a path through the USB tree for USB
 /// cameras.
 pub fn bus_of(node: &Path) -> Bus {
-    let Some(name) = std::fs::canonicalize(node)
-        .ok()
-        .and_then(|p| p.file_name().map(|n| n.to_owned()))
-    else {
+    let Some(name) = node_name(node) else {
         return Bus::Unknown;
     };
     let link = sysfs_root()
@@ -46,6 +40,12 @@ pub fn bus_of(node: &Path) -> Bus {
         Ok(_) => Bus::Internal,
         Err(_) => Bus::Unknown,
     }
+}
+
+/// The node's name in sysfs (`video2`), through any link to it.
+fn node_name(node: &Path) -> Option<String> {
+    let path = std::fs::canonicalize(node).ok()?;
+    Some(path.file_name()?.to_string_lossy().into_owned())
 }
 
 /// Words in a camera's name that mark a laptop's or monitor's own camera (used only when sysfs
@@ -72,6 +72,8 @@ pub struct Candidate {
     /// Its stable paths (by-id first), which keep naming it across renumbering.
     pub stable: Vec<PathBuf>,
     pub bus: Bus,
+    /// Its USB device's id, when it is on USB.
+    pub usb_id: Option<UsbId>,
 }
 
 impl Candidate {
@@ -107,14 +109,27 @@ pub fn candidates(dir: &Path, cfg: &CaptureConfig) -> Vec<Candidate> {
         .map(|(_, info)| Candidate {
             stable: stable_paths(dir, &info.path),
             bus: bus_of(&info.path),
+            usb_id: node_name(&info.path).and_then(|n| usb::usb_id_of(&sysfs_root(), &n)),
             info,
         })
         .collect()
 }
 
-/// The candidate to take, and why: the first that is not built in, else the first. (A list of
-/// preferred cameras would rank before this.)
-pub fn choose(found: &[Candidate]) -> Option<(usize, String)> {
+/// The first candidate with the first of the `preferred` ids that one has.
+fn preferred_camera(found: &[Candidate], preferred: &[UsbId]) -> Option<(usize, UsbId)> {
+    preferred.iter().find_map(|id| {
+        let k = found.iter().position(|c| c.usb_id == Some(*id))?;
+        Some((k, *id))
+    })
+}
+
+/// The candidate to take, and why: a `preferred` one (the device profile's camera), else the
+/// first that is not built in, else the first.
+pub fn choose(found: &[Candidate], preferred: &[UsbId]) -> Option<(usize, String)> {
+    if let Some((k, id)) = preferred_camera(found, preferred) {
+        let why = format!("USB {id}, the camera camera_usb_ids names (the device profile's)");
+        return Some((k, why));
+    }
     let chosen = found.iter().position(|c| !c.built_in());
     let why = |c: &Candidate| match c.bus {
         Bus::Usb => "on USB",
@@ -151,7 +166,7 @@ pub fn resolve(dir: &Path, cfg: &CaptureConfig) -> Option<PathBuf> {
         return Some(path.clone());
     }
     let found = candidates(dir, cfg);
-    let (k, why) = choose(&found)?;
+    let (k, why) = choose(&found, &cfg.usb_ids)?;
     let c = &found[k];
     let path = c.keep_path();
     log(&format!(
@@ -161,4 +176,93 @@ pub fn resolve(dir: &Path, cfg: &CaptureConfig) -> Option<PathBuf> {
     ));
     *kept = Some(path.clone());
     Some(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::usb::fake;
+    use super::*;
+
+    const LUMA: UsbId = UsbId {
+        vendor: 0x0c45,
+        product: 0x636b,
+    };
+    const BEAST: UsbId = UsbId {
+        vendor: 0x0c45,
+        product: 0x6368,
+    };
+
+    fn candidate(node: &str, card: &str, bus: Bus, usb_id: Option<UsbId>) -> Candidate {
+        Candidate {
+            info: DeviceInfo {
+                path: PathBuf::from("/dev").join(node),
+                card: card.into(),
+                driver: "uvcvideo".into(),
+                bus: String::new(),
+                capture: true,
+            },
+            stable: Vec::new(),
+            bus,
+            usb_id,
+        }
+    }
+
+    /// A laptop's camera, a USB webcam, then the glasses' camera (ids from a fake sysfs).
+    fn three(sys: &Path) -> Vec<Candidate> {
+        let webcam = UsbId {
+            vendor: 0x046d,
+            product: 0x0825,
+        };
+        fake::node(sys, "video0", 1, None);
+        fake::node(sys, "video2", 2, Some(webcam));
+        fake::node(sys, "video4", 3, Some(LUMA));
+        let found = [
+            ("video0", "Integrated Camera", Bus::Internal),
+            ("video2", "HD Webcam C270", Bus::Usb),
+            ("video4", "VITURE Camera", Bus::Usb),
+        ];
+        found
+            .into_iter()
+            .map(|(node, card, bus)| candidate(node, card, bus, usb::usb_id_of(sys, node)))
+            .collect()
+    }
+
+    #[test]
+    fn the_profiles_camera_ranks_first() {
+        let sys = fake::root("auto-preferred");
+        let found = three(&sys);
+        assert_eq!(found[2].usb_id, Some(LUMA));
+        let (k, why) = choose(&found, &[BEAST, LUMA]).unwrap();
+        assert_eq!(k, 2);
+        assert!(why.starts_with("USB 0c45:636b, the camera"), "{why}");
+        // Of two preferred ids present, the one listed first.
+        let mut found = found;
+        found[1].usb_id = Some(BEAST);
+        assert_eq!(choose(&found, &[BEAST, LUMA]).unwrap().0, 1);
+        assert_eq!(choose(&found, &[LUMA, BEAST]).unwrap().0, 2);
+    }
+
+    #[test]
+    fn without_the_profiles_camera_the_choice_is_unchanged() {
+        let sys = fake::root("auto-not-preferred");
+        let found = three(&sys);
+        let absent = UsbId {
+            vendor: 0x35ca,
+            product: 0x1201,
+        };
+        for preferred in [&[][..], &[absent][..]] {
+            let (k, why) = choose(&found, preferred).unwrap();
+            assert_eq!(k, 1, "{why}");
+            assert!(why.contains("not built in (on USB)"), "{why}");
+        }
+        // A preferred camera wins even where it would count as built in.
+        let built_in = [candidate(
+            "video0",
+            "Integrated Camera",
+            Bus::Internal,
+            Some(LUMA),
+        )];
+        assert_eq!(choose(&built_in, &[LUMA]).unwrap().0, 0);
+        assert!(choose(&[], &[LUMA]).is_none());
+    }
 }

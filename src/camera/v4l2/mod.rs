@@ -9,6 +9,7 @@ mod capture;
 mod choose;
 pub mod controls;
 mod devices;
+pub mod usb;
 
 pub use auto::looks_built_in;
 pub(crate) use capture::spawn;

@@ -117,8 +117,9 @@ fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
             NAME,
             format!("{detail}; also here: {}", others.join(", ")),
             format!(
-                "v4l2:auto takes the first camera, often a laptop's webcam: name the headset's \
-                 world camera, background = \"v4l2:/dev/videoN\" ({LIST})"
+                "v4l2:auto took one of several cameras: name the headset's world camera, \
+                 background = \"v4l2:/dev/videoN\" ({LIST}), or list its USB id first in \
+                 camera_usb_ids (`lsusb` shows it as VID:PID)"
             ),
         );
     }

@@ -2,6 +2,7 @@
 //! `ok`, `warn` or `problem` in one line, with a fix line when it is not ok. The checks: whether
 //! the OpenXR loader finds the layer's manifest and can load the library it names, the active
 //! runtime, the Vulkan devices, the config file, the background camera and the camera profile,
+//! the device profile that matched the headset (and whether the camera it names is connected),
 //! what the last app's log said about the layer, and Steam's pressure-vessel setting. Exit
 //! status 1 when any finding is a problem (warnings alone leave it 0).
 
