@@ -8,6 +8,7 @@
 use crate::algorithm::params::{Params, MAX_BLUR_SIZE};
 use crate::colour;
 use crate::image::RgbaImage;
+use std::sync::Mutex;
 
 /// Bits per linear channel in a packed texel (the GPU's LINEAR_BITS, checked equal there).
 pub const LINEAR_BITS: u32 = 21;
@@ -85,8 +86,11 @@ impl BlurredTexels {
                 bytes: Vec::new(),
             };
         }
-        let rows = horizontal(camera, &blur);
-        let mut bytes = vec![0u8; w * h * TEXEL_BYTES];
+        let rows = SCRATCH.with_borrow_mut(|scratch| {
+            horizontal(camera, &blur, scratch);
+            std::mem::take(scratch)
+        });
+        let mut bytes = pooled_bytes(w * h * TEXEL_BYTES);
         let mut out = vec![0.0f32; 3 * w];
         let mut packed = vec![0u64; w];
         for (y, dst) in bytes.chunks_exact_mut(w * TEXEL_BYTES).enumerate() {
@@ -99,6 +103,7 @@ impl BlurredTexels {
                 entry[8..].copy_from_slice(&packed[(x + 1).min(w - 1)].to_le_bytes());
             }
         }
+        SCRATCH.with_borrow_mut(|scratch| *scratch = rows);
         BlurredTexels {
             width: camera.width,
             height: camera.height,
@@ -122,11 +127,46 @@ impl BlurredTexels {
     }
 }
 
-/// Every row decoded and blurred horizontally (the pass's `hblur_row`): RGB floats, row-major.
-fn horizontal(camera: &RgbaImage, blur: &BlurTaps) -> Vec<f32> {
+/// Texel buffers of frames no longer used, kept for the next frames: a live source prepares
+/// one camera-sized buffer per frame, and allocating each anew grows the allocator's arenas
+/// (the same reason as camera/pool.rs). A few frames are alive at once at most.
+static POOL: Mutex<Vec<Vec<u8>>> = Mutex::new(Vec::new());
+const POOLED: usize = 4;
+
+thread_local! {
+    /// The horizontal pass's rows, reused by a source thread from frame to frame.
+    static SCRATCH: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// A zeroed-or-reused buffer of `len` bytes (every byte is overwritten by `prepare`).
+fn pooled_bytes(len: usize) -> Vec<u8> {
+    let mut pool = POOL.lock().unwrap_or_else(|p| p.into_inner());
+    match pool.iter().position(|b| b.len() == len) {
+        Some(k) => pool.swap_remove(k),
+        None => vec![0u8; len],
+    }
+}
+
+impl Drop for BlurredTexels {
+    fn drop(&mut self) {
+        let bytes = std::mem::take(&mut self.bytes);
+        if bytes.is_empty() {
+            return;
+        }
+        let mut pool = POOL.lock().unwrap_or_else(|p| p.into_inner());
+        if pool.len() < POOLED {
+            pool.push(bytes);
+        }
+    }
+}
+
+/// Every row decoded and blurred horizontally (the pass's `hblur_row`): RGB floats, row-major,
+/// into `out` (resized).
+fn horizontal(camera: &RgbaImage, blur: &BlurTaps, out: &mut Vec<f32>) {
     let lut = decode_table();
     let (w, half) = (camera.width as usize, blur.half);
-    let mut out = vec![0.0f32; 3 * camera.pixels.len()];
+    out.clear();
+    out.resize(3 * camera.pixels.len(), 0.0);
     // The row with `half` clamp-to-edge texels on each side, RGB floats.
     let mut padded = vec![0.0f32; 3 * (w + 2 * half)];
     for (row, dst) in camera
@@ -152,7 +192,6 @@ fn horizontal(camera: &RgbaImage, blur: &BlurTaps) -> Vec<f32> {
             }
         }
     }
-    out
 }
 
 /// Output row `y`: the horizontally blurred rows y - half..=y + half (clamped), top first.
