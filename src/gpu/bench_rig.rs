@@ -10,7 +10,9 @@ use super::device::GpuDevice;
 use super::engine::{Placement, ViewShape, ViewTarget};
 use super::error::{GpuError, VkResultExt};
 use super::format::PixelFormat;
-use super::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
+use super::image_copy::{
+    record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
+};
 use super::offline::OfflineEngine;
 use super::BackgroundFrame;
 use ash::vk;
@@ -140,7 +142,7 @@ impl OfflineEngine {
         if case.in_place && can_store(gpu, PixelFormat::SRGB8) {
             self.add_in_place_views(rig, case)?;
         }
-        self.fill_sources(rig, bytes.len() as u64, case.region)?;
+        self.fill_sources(rig, bytes.len() as u64)?;
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(queries);
@@ -152,7 +154,7 @@ impl OfflineEngine {
 
     /// Fills the copy sources with the content and brings the images to the layout an app
     /// leaves them in (their content is written at each run, `restore_images`).
-    fn fill_sources(&mut self, rig: &Rig, size: u64, extent: (u32, u32)) -> Result<(), GpuError> {
+    fn fill_sources(&mut self, rig: &Rig, size: u64) -> Result<(), GpuError> {
         let staging = rig.staging.as_ref().expect("made before").raw;
         self.submit(|cmd| {
             for source in &rig.sources {
@@ -164,37 +166,13 @@ impl OfflineEngine {
                         .cmd_copy_buffer(cmd, staging, source.raw, &region)
                 };
             }
-            let to_attachment: Vec<_> = rig
-                .regions(extent)
-                .iter()
-                .map(|r| {
-                    vk::ImageMemoryBarrier::default()
-                        .old_layout(vk::ImageLayout::UNDEFINED)
-                        .new_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                        .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
-                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .image(r.image)
-                        .subresource_range(
-                            vk::ImageSubresourceRange::default()
-                                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                                .level_count(1)
-                                .layer_count(1),
-                        )
-                })
-                .collect();
-            // SAFETY: cmd is recording; the images are ours and unused.
-            unsafe {
-                self.gpu.device.cmd_pipeline_barrier(
-                    cmd,
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &to_attachment,
-                )
-            };
+            let images: Vec<vk::Image> = rig.images.iter().map(|i| i.raw).collect();
+            let attachment = (
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            );
+            let layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+            record_first_layout(&self.gpu, cmd, &images, layout, attachment);
             Ok(())
         })
     }

@@ -134,3 +134,40 @@ pub fn record_region_copy(
         }
     }
 }
+
+/// The layout an image of the engine's own is first used in: from UNDEFINED (its contents
+/// discarded) to `layout`, before the accesses of `stage`. One barrier for all `images`.
+pub fn record_first_layout(
+    gpu: &GpuDevice,
+    cmd: vk::CommandBuffer,
+    images: &[vk::Image],
+    layout: vk::ImageLayout,
+    (stage, access): (vk::PipelineStageFlags, vk::AccessFlags),
+) {
+    let barriers: Vec<_> = images
+        .iter()
+        .map(|&image| {
+            vk::ImageMemoryBarrier::default()
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(layout)
+                .dst_access_mask(access)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(image)
+                .subresource_range(subresource(0))
+        })
+        .collect();
+    // SAFETY: cmd is recording (the caller's contract); the images are the caller's own and
+    // not in use.
+    unsafe {
+        gpu.device.cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+            stage,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &barriers,
+        )
+    };
+}

@@ -8,7 +8,9 @@ use super::buffer::GpuBuffer;
 use super::engine::{barrier, CameraRect, Placement, ViewShape};
 use super::error::GpuError;
 use super::format::PixelFormat;
-use super::image_copy::{record_layout_barriers, record_region_copy, ImageRegion};
+use super::image_copy::{
+    record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
+};
 use super::offline::OfflineEngine;
 use crate::algorithm::params::Params;
 use crate::image::RgbaImage;
@@ -143,7 +145,13 @@ impl OfflineEngine {
         }];
         let done = self.submit(|cmd| {
             use vk::PipelineStageFlags as S;
-            undefined_to_attachment(gpu, cmd, image.raw);
+            // A new image, in the layout an app leaves its images in at xrEndFrame.
+            let attachment = (
+                S::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            );
+            let layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+            record_first_layout(gpu, cmd, &[image.raw], layout, attachment);
             record_layout_barriers(gpu, cmd, &place, true);
             record_region_copy(gpu, cmd, &place[0], staging, false);
             barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER);
@@ -160,33 +168,4 @@ impl OfflineEngine {
         bg.destroy(gpu);
         done
     }
-}
-
-/// A new image to COLOR_ATTACHMENT_OPTIMAL, where an app leaves its images at xrEndFrame.
-fn undefined_to_attachment(gpu: &super::GpuDevice, cmd: vk::CommandBuffer, image: vk::Image) {
-    let barrier = [vk::ImageMemoryBarrier::default()
-        .old_layout(vk::ImageLayout::UNDEFINED)
-        .new_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-        .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_WRITE)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(
-            vk::ImageSubresourceRange::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .level_count(1)
-                .layer_count(1),
-        )];
-    // SAFETY: cmd is recording; the image is ours and unused.
-    unsafe {
-        gpu.device.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &barrier,
-        )
-    };
 }

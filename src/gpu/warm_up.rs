@@ -17,6 +17,7 @@ use super::device::GpuDevice;
 use super::engine::{BackgroundFrame, Engine, Placement, ViewTarget};
 use super::error::GpuError;
 use super::format::{PixelFormat, PixelLayout};
+use super::image_copy::record_first_layout;
 use super::pipelines::{self, BuildMode, PushConstants, ShaderId, WarmUpHook};
 use super::storage_image::StorageImage;
 use crate::algorithm::mapping::CameraMapping;
@@ -237,32 +238,17 @@ impl WarmUp {
     }
 }
 
+/// The warm-up's own images to GENERAL, where its shaders read and write them.
 fn record_to_general(gpu: &GpuDevice, cmd: vk::CommandBuffer, image: vk::Image) {
-    let barrier = [vk::ImageMemoryBarrier::default()
-        .old_layout(vk::ImageLayout::UNDEFINED)
-        .new_layout(vk::ImageLayout::GENERAL)
-        .dst_access_mask(vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(
-            vk::ImageSubresourceRange::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .level_count(1)
-                .layer_count(1),
-        )];
-    // SAFETY: cmd is recording; the image is the warm-up's own.
-    unsafe {
-        gpu.device.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::TOP_OF_PIPE,
-            vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &barrier,
-        )
-    };
+    let access = vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE;
+    let stage = vk::PipelineStageFlags::COMPUTE_SHADER;
+    record_first_layout(
+        gpu,
+        cmd,
+        &[image],
+        vk::ImageLayout::GENERAL,
+        (stage, access),
+    );
 }
 
 impl Drop for WarmUp {
