@@ -39,12 +39,17 @@ fn pixel_accesses() -> Vec<(u32, u32)> {
     buffers.chain(in_place).collect()
 }
 
-fn enhance_variants() -> Vec<(u32, u32, bool)> {
-    let mut v: Vec<(u32, u32, bool)> = (0..METHODS)
+/// Every (method, mode, extras, shared fetches) an `enhance` is built for. The fifth switch,
+/// SHARED_FETCH, has a group's four pixels read their camera texels once (only valid for some
+/// mappings, src/gpu/shared_fetch.rs): built only for the defaults (the paper's method in mode
+/// enhance, extras off), each variant costing about 40 kB of library.
+fn enhance_variants() -> Vec<(u32, u32, bool, bool)> {
+    let mut v: Vec<(u32, u32, bool, bool)> = (0..METHODS)
         .flat_map(|m| ENHANCE_MODES.iter().map(move |&mode| (m, mode)))
-        .flat_map(|(m, mode)| [(m, mode, false), (m, mode, true)])
+        .flat_map(|(m, mode)| [(m, mode, false, false), (m, mode, true, false)])
         .collect();
-    v.push((0, MODE_BACKGROUND, false));
+    v.push((0, MODE_BACKGROUND, false, false));
+    v.push((METHOD_PAPER, MODE_ENHANCE, false, true));
     v
 }
 
@@ -351,9 +356,9 @@ fn main() {
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         fs::write(out.join(format!("{file}.spv")), bytes).unwrap();
     };
-    let specialise = |method: u32, mode: u32, format: u32, extras: bool| {
+    let specialise = |(method, mode, format): (u32, u32, u32), extras: bool, shared: bool| {
         format!(
-            "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\n"
+            "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\nconst SHARED_FETCH: bool = {shared};\n"
         )
     };
     for (stage, entries) in STAGES {
@@ -363,7 +368,7 @@ fn main() {
         let source = format!(
             "{}\n{}{body}",
             prefix(ACCESS_NARROW, FORMAT_CODES[0]),
-            specialise(0, 0, FORMAT_CODES[0], false)
+            specialise((0, 0, FORMAT_CODES[0]), false, false)
         );
         for entry in *entries {
             write(entry, stage, &source, entry);
@@ -381,7 +386,7 @@ fn main() {
         let source = format!(
             "{}\n{}const BLUR_HALF: u32 = {half}u;\n{body}",
             prefix(ACCESS_NARROW, FORMAT_CODES[0]),
-            specialise(0, 0, FORMAT_CODES[0], false)
+            specialise((0, 0, FORMAT_CODES[0]), false, false)
         );
         write(
             &format!("decode_blur_{half}"),
@@ -398,27 +403,28 @@ fn main() {
     let source = format!(
         "{}\n{}{body}",
         prefix(ACCESS_WIDE, 0),
-        specialise(0, 0, 0, false)
+        specialise((0, 0, 0), false, false)
     );
     write("copy_rows", "copy_wide", &source, "copy_rows");
     table += "];\n";
     let body = fs::read_to_string("shaders/enhance.wgsl").unwrap();
-    table += "/// (method, mode, format, access, extras, SPIR-V) of each `enhance` variant.\n";
-    table += "pub const ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, ShaderModule)] = &[\n";
+    table += "/// (method, mode, format, access, extras, shared fetches, SPIR-V) of each `enhance`\n/// variant.\n";
+    table += "pub const ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, ShaderModule)] = &[\n";
     for (access_code, format) in pixel_accesses() {
-        for (method, mode, extras) in enhance_variants() {
+        for (method, mode, extras, shared) in enhance_variants() {
             let file = format!(
-                "enhance_m{method}_v{mode}_f{format}_a{access_code}_e{}",
-                u8::from(extras)
+                "enhance_m{method}_v{mode}_f{format}_a{access_code}_e{}{}",
+                u8::from(extras),
+                if shared { "_s" } else { "" }
             );
             let source = format!(
                 "{}\n{}{body}",
                 prefix(access_code, format),
-                specialise(method, mode, format, extras)
+                specialise((method, mode, format), extras, shared)
             );
             write(&file, "enhance", &source, "enhance");
             table += &format!(
-                "    ({method}, {mode}, {format}, {access_code}, {extras}, spirv!(\"{file}\", \"enhance\")),\n"
+                "    ({method}, {mode}, {format}, {access_code}, {extras}, {shared}, spirv!(\"{file}\", \"enhance\")),\n"
             );
         }
     }
@@ -429,7 +435,7 @@ fn main() {
         let source = format!(
             "{}\n{}{body}",
             prefix(access_code, format),
-            specialise(0, 0, format, false)
+            specialise((0, 0, format), false, false)
         );
         write(&file, "enhance", &source, "classify");
         table += &format!("    ({format}, {access_code}, spirv!(\"{file}\", \"classify\")),\n");
