@@ -40,9 +40,10 @@ fn pixel_accesses() -> Vec<(u32, u32)> {
 }
 
 /// Every (method, mode, extras, shared fetches) an `enhance` is built for. The fifth switch,
-/// SHARED_FETCH, has a group's four pixels read their camera texels once (only valid for some
-/// mappings, src/gpu/shared_fetch.rs): built only for the defaults (the paper's method in mode
-/// enhance, extras off), each variant costing about 40 kB of library.
+/// shared fetches (shaders/sample_shared.wgsl instead of sample_general.wgsl), has a group's
+/// four pixels read their camera texels once, valid only for some mappings
+/// (src/gpu/shared_fetch.rs): built only for the defaults (the paper's method in mode enhance,
+/// extras off), each variant costing about 40 kB of library.
 fn enhance_variants() -> Vec<(u32, u32, bool, bool)> {
     let mut v: Vec<(u32, u32, bool, bool)> = (0..METHODS)
         .flat_map(|m| ENHANCE_MODES.iter().map(move |&mode| (m, mode)))
@@ -341,6 +342,18 @@ fn access(access: u32) -> String {
     fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
+/// The background sampling appended to shaders/enhance.wgsl: for every mapping, or with the
+/// texel reads shared by a group's four pixels (naga writes every function of a module into
+/// its SPIR-V, also one behind a constant `if`, so each variant holds only its own).
+fn sampling(shared: bool) -> String {
+    let path = match shared {
+        false => "shaders/sample_general.wgsl",
+        true => "shaders/sample_shared.wgsl",
+    };
+    println!("cargo:rerun-if-changed={path}");
+    fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
 fn main() {
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     let common = fs::read_to_string("shaders/common.wgsl").expect("shaders/common.wgsl");
@@ -356,19 +369,22 @@ fn main() {
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         fs::write(out.join(format!("{file}.spv")), bytes).unwrap();
     };
-    let specialise = |(method, mode, format): (u32, u32, u32), extras: bool, shared: bool| {
+    let specialise = |(method, mode, format): (u32, u32, u32), extras: bool| {
         format!(
-            "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\nconst SHARED_FETCH: bool = {shared};\n"
+            "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\n"
         )
     };
     for (stage, entries) in STAGES {
         let path = format!("shaders/{stage}.wgsl");
         println!("cargo:rerun-if-changed={path}");
-        let body = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let mut body = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        if *stage == "enhance" {
+            body += &sampling(false);
+        }
         let source = format!(
             "{}\n{}{body}",
             prefix(ACCESS_NARROW, FORMAT_CODES[0]),
-            specialise((0, 0, FORMAT_CODES[0]), false, false)
+            specialise((0, 0, FORMAT_CODES[0]), false)
         );
         for entry in *entries {
             write(entry, stage, &source, entry);
@@ -386,7 +402,7 @@ fn main() {
         let source = format!(
             "{}\n{}const BLUR_HALF: u32 = {half}u;\n{body}",
             prefix(ACCESS_NARROW, FORMAT_CODES[0]),
-            specialise((0, 0, FORMAT_CODES[0]), false, false)
+            specialise((0, 0, FORMAT_CODES[0]), false)
         );
         write(
             &format!("decode_blur_{half}"),
@@ -403,11 +419,12 @@ fn main() {
     let source = format!(
         "{}\n{}{body}",
         prefix(ACCESS_WIDE, 0),
-        specialise((0, 0, 0), false, false)
+        specialise((0, 0, 0), false)
     );
     write("copy_rows", "copy_wide", &source, "copy_rows");
     table += "];\n";
     let body = fs::read_to_string("shaders/enhance.wgsl").unwrap();
+    let [general, shared_fetch] = [false, true].map(sampling);
     table += "/// (method, mode, format, access, extras, shared fetches, SPIR-V) of each `enhance`\n/// variant.\n";
     table += "pub const ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, ShaderModule)] = &[\n";
     for (access_code, format) in pixel_accesses() {
@@ -418,9 +435,10 @@ fn main() {
                 if shared { "_s" } else { "" }
             );
             let source = format!(
-                "{}\n{}{body}",
+                "{}\n{}{body}{}",
                 prefix(access_code, format),
-                specialise((method, mode, format), extras, shared)
+                specialise((method, mode, format), extras),
+                if shared { &shared_fetch } else { &general }
             );
             write(&file, "enhance", &source, "enhance");
             table += &format!(
@@ -433,9 +451,9 @@ fn main() {
     for (access_code, format) in pixel_accesses() {
         let file = format!("classify_f{format}_a{access_code}");
         let source = format!(
-            "{}\n{}{body}",
+            "{}\n{}{body}{general}",
             prefix(access_code, format),
-            specialise((0, 0, format), false, false)
+            specialise((0, 0, format), false)
         );
         write(&file, "enhance", &source, "classify");
         table += &format!("    ({format}, {access_code}, spirv!(\"{file}\", \"classify\")),\n");

@@ -315,86 +315,8 @@ fn camera_uv(x: u32, y: u32) -> array<vec4<f32>, 2> {
     return array<vec4<f32>, 2>(cu, cv);
 }
 
-// Bilinear interpolation, clamp-to-edge, of the blurred camera image at texel coordinates
-// (tx, ty) (texel centres at integers). Entry x of `blurred` holds texels x and x + 1, so each
-// row costs one read; left of the first texel centre the entry of texel 0 with weight 0.
-fn bilinear(tx: f32, ty: f32) -> vec3<f32> {
-    let size = vec2<f32>(pc.camera_size);
-    let base = floor(vec2<f32>(tx, ty));
-    var t = vec2<f32>(tx, ty) - base;
-    if (base.x < 0.0) {
-        t.x = 0.0;
-    }
-    let x = u32(clamp(base.x, 0.0, size.x - 1.0));
-    let y0 = u32(clamp(base.y, 0.0, size.y - 1.0));
-    let y1 = u32(clamp(base.y + 1.0, 0.0, size.y - 1.0));
-    let top = textureLoad(blurred_texels, vec2<u32>(x, y0), 0);
-    let bottom = textureLoad(blurred_texels, vec2<u32>(x, y1), 0);
-    let upper = mix(unpack_linear(top.xy), unpack_linear(top.zw), t.x);
-    let lower = mix(unpack_linear(bottom.xy), unpack_linear(bottom.zw), t.x);
-    return mix(upper, lower, t.y);
-}
-
-// The background of display pixels (x..x+3, y) (docs/algorithm.md, Background preparation): the blurred camera image
-// sampled through the view's mapping (bilinear, linear light), then the lens transmittance
-// and the conversion to scaled LAB, in that order. Only the pixels the enhancement runs
-// on pay for it (the camera image itself is prepared once per camera frame, background.wgsl).
-fn sampled_background(x: u32, y: u32) -> Background {
-    if (SHARED_FETCH) {
-        return sampled_background_shared(x, y);
-    }
-    let uv = camera_uv(x, y);
-    let tx = uv[0] * f32(pc.camera_size.x) - 0.5;
-    let ty = uv[1] * f32(pc.camera_size.y) - 0.5;
-    let linear = group_of(bilinear(tx.x, ty.x), bilinear(tx.y, ty.y), bilinear(tx.z, ty.z), bilinear(tx.w, ty.w));
-    return Background(linear, linear_to_scaled(pc.transmittance * linear));
-}
-
-// Per pixel, texel o (0, 1 or 2) of three: r0, r1, r2 (one channel each).
-fn texel_at(o: vec4<u32>, r0: f32, r1: f32, r2: f32) -> vec4<f32> {
-    return select(select(vec4<f32>(r2), vec4<f32>(r1), o == vec4<u32>(1u)), vec4<f32>(r0), o == vec4<u32>(0u));
-}
-
-// One camera row of the four pixels' bilinear samples: texels a..a+3 from entries a (e0) and
-// a + 2 (e1), pixel k interpolating texels a + o[k] and a + o[k] + 1 by t[k].
-fn shared_row(o: vec4<u32>, e0: vec4<u32>, e1: vec4<u32>, t: vec4<f32>) -> Colours {
-    let r0 = unpack_linear(e0.xy);
-    let r1 = unpack_linear(e0.zw);
-    let r2 = unpack_linear(e1.xy);
-    let r3 = unpack_linear(e1.zw);
-    var out: Colours;
-    for (var c = 0u; c < 3u; c++) {
-        out[c] = mix(texel_at(o, r0[c], r1[c], r2[c]), texel_at(o, r1[c], r2[c], r3[c]), t);
-    }
-    return out;
-}
-
-// `sampled_background` with the four pixels' texel reads shared: 4 reads instead of 8, the
-// same arithmetic per pixel, so the same values. Built as its own variant (SHARED_FETCH), used
-// only where the view's mapping makes the group's pixels sample one pair of camera rows and at
-// most four adjacent texels (src/gpu/shared_fetch.rs): ty equal in all four, and their
-// floor(tx) within 2 of each other.
-fn sampled_background_shared(x: u32, y: u32) -> Background {
-    let uv = camera_uv(x, y);
-    let size = vec2<f32>(pc.camera_size);
-    let tx = uv[0] * size.x - 0.5;
-    let ty = uv[1].x * size.y - 0.5;
-    let base_x = floor(tx);
-    let base_y = floor(ty);
-    let t_x = select(tx - base_x, vec4<f32>(0.0), base_x < vec4<f32>(0.0));
-    let t_y = ty - base_y;
-    let bx = vec4<u32>(clamp(base_x, vec4<f32>(0.0), vec4<f32>(size.x - 1.0)));
-    let y0 = u32(clamp(base_y, 0.0, size.y - 1.0));
-    let y1 = u32(clamp(base_y + 1.0, 0.0, size.y - 1.0));
-    // The leftmost texel of the four (a mirrored mapping runs right to left).
-    let a = min(min(bx.x, bx.y), min(bx.z, bx.w));
-    let a2 = min(a + 2u, pc.camera_size.x - 1u);
-    let o = bx - vec4<u32>(a);
-    let upper = shared_row(o, textureLoad(blurred_texels, vec2<u32>(a, y0), 0), textureLoad(blurred_texels, vec2<u32>(a2, y0), 0), t_x);
-    let lower = shared_row(o, textureLoad(blurred_texels, vec2<u32>(a, y1), 0), textureLoad(blurred_texels, vec2<u32>(a2, y1), 0), t_x);
-    let linear = Colours(mix(upper[0], lower[0], t_y), mix(upper[1], lower[1], t_y), mix(upper[2], lower[2], t_y));
-    return Background(linear, linear_to_scaled(pc.transmittance * linear));
-}
+// `sampled_background(x, y) -> Background`, the background of pixels x..x+3 of row y through
+// camera_uv, is in sample_general.wgsl or sample_shared.wgsl (build.rs appends one).
 
 // The new words of pixels x..x+3 of a row given their words and background; unchanged words
 // where the method or mode leaves a pixel alone.
