@@ -1,7 +1,7 @@
-//! Whether a view may take the shared-fetch `enhance` variant (shaders/enhance.wgsl,
-//! `sampled_background_shared`), in which the four pixels of a group read the two texel
-//! entries of each of their two camera rows once (4 reads) instead of per pixel (8 reads). Its
-//! output is the general variant's, bit for bit, where, in the shader's f32 arithmetic:
+//! Whether a view may take the shared-fetch `enhance` variant (shaders/sample_shared.wgsl),
+//! in which the four pixels of a group read the two texel entries of each of their two camera
+//! rows once (4 reads) instead of per pixel (8 reads). Its output is the general variant's, bit
+//! for bit, where, in the shader's f32 arithmetic:
 //! - the four pixels sample the same camera rows: their `ty` is equal when the mapping's
 //!   u -> v term (row 1, column 0) and its projective terms are zero and its bottom row is
 //!   (0, 0, 1), so that the divide is by exactly 1;
