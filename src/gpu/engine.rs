@@ -378,9 +378,9 @@ impl Engine {
         Ok(ids)
     }
 
-    /// The shared-fetch variants (gpu/shared_fetch.rs) worth building for a frame: those of
-    /// the views whose mapping allows them, where one is built for `params` (none before
-    /// that: the general variant serves meanwhile, with the same output).
+    /// The shared-fetch variants (gpu/shared_fetch.rs) a frame's views can take: those of the
+    /// views whose mapping allows them, where `params` has one (build.rs builds them for the
+    /// defaults only).
     pub fn shared_fetch_shaders_for<'a>(
         &self,
         params: &Params,
