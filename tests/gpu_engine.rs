@@ -865,3 +865,155 @@ fn in_place_matches_the_copy_path_bit_for_bit() {
     }
     assert_clean(&e);
 }
+
+/// Mappings under which the shared-fetch variant serves views of 96 to 128 pixels on a 64-wide
+/// camera frame: the default, a mirrored one, one shifted per row (the v -> u term), and one
+/// reaching past the camera's left and right edges (clamp-to-edge).
+fn shared_fetch_mappings() -> Vec<CameraMapping> {
+    let mut shifted = Params::default().camera_mapping();
+    shifted.rows[0][1] = 0.1;
+    vec![
+        Params::default().camera_mapping(),
+        CameraMapping::affine([-0.65, 0.65], [0.78, 0.17]),
+        shifted,
+        CameraMapping::affine([0.9, 0.8], [0.3, -0.1]),
+        CameraMapping::affine([0.9, -0.8], [-0.2, 0.9]),
+    ]
+}
+
+/// How many of two outputs' pixels (or words) differ.
+fn differing<T: PartialEq>(a: &[T], b: &[T]) -> usize {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).filter(|(x, y)| x != y).count()
+}
+
+/// The output with the shared-fetch variant allowed and with the general one forced.
+fn shared_and_general(
+    e: &mut OfflineEngine,
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    mapping: &CameraMapping,
+) -> (RgbaImage, RgbaImage) {
+    let params = Params::default();
+    let shared = e.enhance_mapped(display, camera, mapping, &params).unwrap();
+    e.set_shared_fetch(false);
+    let general = e.enhance_mapped(display, camera, mapping, &params).unwrap();
+    e.set_shared_fetch(true);
+    (shared, general)
+}
+
+#[test]
+fn shared_fetches_give_the_general_variants_output_bit_for_bit() {
+    use contrastxr::gpu::shared_fetch::shares_fetches;
+    let mut e = engine();
+    let camera = noise(64, 40, 11);
+    // 96, 128: 16-byte aligned rows (access_wide.wgsl); 97, 101: not (access_narrow.wgsl),
+    // with a last group of four past the row's end.
+    for width in [96, 97, 101, 128] {
+        let display = noise(width, 37, width);
+        for mapping in shared_fetch_mappings() {
+            assert!(
+                shares_fetches(&mapping, (width, 37), (64, 40)),
+                "{mapping:?}"
+            );
+            let (shared, general) = shared_and_general(&mut e, &display, &camera, &mapping);
+            assert_ne!(general, display, "{width} {mapping:?}: nothing changed");
+            let differ = differing(&shared.pixels, &general.pixels);
+            assert_eq!(differ, 0, "{width} {mapping:?}: pixels differ");
+        }
+    }
+    // The 16-bit float format through the same variant dimension.
+    let format = PixelFormat {
+        layout: PixelLayout::Rgba16Float,
+        srgb: false,
+    };
+    let raw: Vec<u32> = noise(100, 9, 5)
+        .pixels
+        .iter()
+        .flat_map(|p| {
+            let h = |c: u8| u32::from(half_from_f32(f32::from(c) / 255.0));
+            [h(p[0]) | h(p[1]) << 16, h(p[2]) | h(p[3]) << 16]
+        })
+        .collect();
+    let params = Params::default();
+    for mapping in shared_fetch_mappings() {
+        let run = |e: &mut OfflineEngine| {
+            e.enhance_raw_mapped(&raw, ((100, 9), format), &camera, &mapping, &params)
+                .unwrap()
+        };
+        let shared = run(&mut e);
+        e.set_shared_fetch(false);
+        let general = run(&mut e);
+        e.set_shared_fetch(true);
+        assert_ne!(general, raw);
+        assert_eq!(differing(&shared, &general), 0, "{mapping:?}: words differ");
+    }
+    assert_clean(&e);
+}
+
+#[test]
+fn shared_fetches_conform_to_the_cpu_reference() {
+    let mut e = engine();
+    let camera = noise(64, 40, 13);
+    for (width, mapping) in [96, 97].into_iter().zip(shared_fetch_mappings()) {
+        let display = noise(width, 29, 3 * width);
+        check_all_methods_mapped(&mut e, &display, &camera, &mapping, &Params::default());
+    }
+    assert_clean(&e);
+}
+
+#[test]
+fn shared_fetches_in_place_match_the_general_variant() {
+    use ash::vk;
+    let mut e = engine();
+    let camera = noise(16, 8, 7);
+    let params = Params::default();
+    for region in [(48, 9), (45, 5)] {
+        let raw: Vec<u32> = noise(region.0, region.1, 17)
+            .pixels
+            .iter()
+            .map(|p| u32::from_le_bytes(*p))
+            .collect();
+        let run = |e: &mut OfflineEngine| {
+            let format = vk::Format::R8G8B8A8_SRGB;
+            e.enhance_raw_in_place(&raw, (region, format), &camera, &params)
+                .unwrap()
+        };
+        let shared = run(&mut e);
+        e.set_shared_fetch(false);
+        let general = run(&mut e);
+        e.set_shared_fetch(true);
+        assert_ne!(general, raw, "{region:?}");
+        assert_eq!(differing(&shared, &general), 0, "{region:?}: pixels differ");
+    }
+    assert_clean(&e);
+}
+
+/// Rotation, vertical shear and a projective divide: the group's pixels sample different
+/// camera rows, so they take the general variant, and the output conforms.
+#[test]
+fn mappings_the_shared_fetches_cannot_serve_take_the_general_variant() {
+    use contrastxr::gpu::shared_fetch::shares_fetches;
+    let mut e = engine();
+    let camera = noise(64, 40, 19);
+    let (c, s) = (0.6 * 0.2f64.cos(), 0.6 * 0.2f64.sin());
+    let rotated = CameraMapping {
+        rows: [[c, -s, 0.2], [s, c, 0.1], [0.0, 0.0, 1.0]],
+    };
+    let mut sheared = Params::default().camera_mapping();
+    sheared.rows[1][0] = 0.3;
+    for mapping in [rotated, sheared, projective()] {
+        let display = noise(96, 31, 29);
+        assert!(!shares_fetches(&mapping, (96, 31), (64, 40)));
+        let (shared, general) = shared_and_general(&mut e, &display, &camera, &mapping);
+        let differ = differing(&shared.pixels, &general.pixels);
+        assert_eq!(differ, 0, "{mapping:?}: pixels differ");
+        let bad = nonconformant_mapped(&mut e, &display, &camera, &mapping, &Params::default());
+        assert!(
+            bad.is_empty(),
+            "{mapping:?}: {:?}",
+            &bad[..bad.len().min(5)]
+        );
+    }
+    assert_clean(&e);
+}

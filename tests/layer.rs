@@ -357,6 +357,46 @@ through_the_layer! {
     layer_enhances_rgba16_float: "R16G16B16A16_SFLOAT",
 }
 
+/// Views wide enough for the default mapping to let a group's pixels share their texel reads
+/// (1024 pixels over the 960-wide background: 0.61 texel per pixel, gpu/shared_fetch.rs), in
+/// place and through a copy: frames captured after 30, when the shared-fetch variant, built
+/// behind the frame's pipelines, serves the views (from the third frame in a run on lavapipe),
+/// conform to the CPU reference.
+#[test]
+fn wide_views_with_shared_texel_reads_conform() {
+    for in_place in ["on", "off"] {
+        let format = "R8G8B8A8_UNORM";
+        let path = expected_path(format, Some(in_place));
+        let tag = format!("layer-shared-fetch-{path}");
+        let dir = capture_dir(&tag);
+        let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+        env.retain(|(k, _)| k != "CONTRASTXR_CAPTURE_SKIP");
+        env.push(("CONTRASTXR_CAPTURE_SKIP".into(), "30".into()));
+        env.push(("CONTRASTXR_IN_PLACE".into(), in_place.into()));
+        let cmd = [
+            XR_CLIENT,
+            "--validation",
+            "--json",
+            "--frames",
+            "40",
+            "--size",
+            "1024x768",
+            "--format",
+            format,
+        ];
+        let line = "processing frames (2 views per frame)";
+        let Some(_) = run_clean(&tag, &cmd, &as_refs(&env), line) else {
+            return;
+        };
+        let views = captures(&dir);
+        assert_eq!(views.len(), 4, "2 frames x 2 views in {}", dir.display());
+        for c in &views {
+            assert_eq!(c.json["path"], path);
+            assert!(check_view(c) > 100_000, "{path}: few pixels changed");
+        }
+    }
+}
+
 /// `in_place = "auto"` (the default) on lavapipe, a CPU driver: the copy path, even where the
 /// runtime would grant storage usage.
 #[test]

@@ -18,6 +18,8 @@ use super::interface::{
 use super::pipelines::{
     self, binding_count, BuildMode, BuildReport, Pipelines, ShaderId, WarmUpHook,
 };
+use super::shared_fetch::shares_fetches;
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -43,6 +45,9 @@ const DECODED_SLACK: u64 = 16 * 8;
 pub struct Engine {
     pub(super) pipelines: Pipelines,
     pool: vk::DescriptorPool,
+    /// Take the shared-fetch variant where a view's mapping allows it (gpu/shared_fetch.rs);
+    /// off only to compare it with the general one.
+    pub(super) shared_fetch: bool,
 }
 
 pub(super) const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
@@ -75,7 +80,11 @@ impl Engine {
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a valid device.
         match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
-            Ok(pool) => Ok(Engine { pipelines, pool }),
+            Ok(pool) => Ok(Engine {
+                pipelines,
+                pool,
+                shared_fetch: true,
+            }),
             Err(result) => {
                 pipelines.destroy(gpu);
                 Err(GpuError::Vulkan {
@@ -367,6 +376,32 @@ impl Engine {
             }
         }
         Ok(ids)
+    }
+
+    /// The shared-fetch variants (gpu/shared_fetch.rs) a frame's views can take: those of the
+    /// views whose mapping allows them, where `params` has one (build.rs builds them for the
+    /// defaults only).
+    pub fn shared_fetch_shaders_for<'a>(
+        &self,
+        params: &Params,
+        views: impl IntoIterator<Item = (ViewShape, (u32, u32), &'a CameraMapping)>,
+        camera: (u32, u32),
+    ) -> Vec<ShaderId> {
+        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
+        let codes = |code| (method_code(params.method), mode_code(params.mode), code);
+        let mut ids = Vec::new();
+        for (shape, region, mapping) in views {
+            if !self.shared_fetch || !shares_fetches(mapping, region, camera) {
+                continue;
+            }
+            let code = shape.format.shader_code();
+            if let Some(id) = pipelines::enhance_shared(codes(code), shape.access(), extras) {
+                if !ids.contains(&id) {
+                    ids.push(id);
+                }
+            }
+        }
+        ids
     }
 
     /// Whether the shaders are built (requesting those that are not); an error if one failed.

@@ -148,6 +148,22 @@ impl FrameEngine {
         }
     }
 
+    /// Queues the shared-fetch variants this frame's views could take (gpu/shared_fetch.rs)
+    /// and are not built yet, with their warm-up. Never waited for: until one is built, its
+    /// views take the general variant, whose output is the same.
+    fn request_shared_fetches(&self, views: &[FrameView], params: &Params, camera: &RgbaImage) {
+        let shapes = views.iter().map(|v| (v.shape(), v.key.extent, &v.mapping));
+        let size = (camera.width, camera.height);
+        let ids = self.engine.shared_fetch_shaders_for(params, shapes, size);
+        if ids.is_empty() {
+            return;
+        }
+        // A failed warm-up device only means a slower first dispatch; a failed build, the
+        // general variant.
+        let _ = self.prepare_warm_up(&ids);
+        let _ = self.engine.ready(&ids);
+    }
+
     /// Waits for the previous submission (normally long done) so its buffers can be reused.
     pub(super) fn wait_idle(&mut self) -> Result<(), GpuError> {
         self.commands.wait(&self.gpu, 5_000_000_000)
@@ -275,6 +291,7 @@ impl FrameEngine {
         options: FrameOptions,
     ) -> Result<Vec<CapturedView>, GpuError> {
         self.pipelines_ready(views, params, options.wait_for_pipelines)?;
+        self.request_shared_fetches(views, params, background.image);
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
         // The previous submission read the camera buffer the upload writes.
         self.wait_idle()?;

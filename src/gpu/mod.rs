@@ -36,6 +36,7 @@ mod record;
 pub mod resources;
 pub mod shader_ids;
 pub mod shaders;
+pub mod shared_fetch;
 mod storage_image;
 pub mod warm_up;
 

@@ -75,6 +75,12 @@ impl OfflineEngine {
         self.cpu_background = on;
     }
 
+    /// Whether views whose mapping allows it take the shared-fetch `enhance` variant (on by
+    /// default; gpu/shared_fetch.rs); off, every view takes the general one, to compare them.
+    pub fn set_shared_fetch(&mut self, on: bool) {
+        self.engine.shared_fetch = on;
+    }
+
     pub fn device_name(&self) -> &str {
         &self.gpu.name
     }

@@ -23,8 +23,8 @@ use std::time::{Duration, Instant};
 pub use super::interface::TILE;
 pub use super::push_constants::PushConstants;
 pub use super::shader_ids::{
-    classify, decode_blur, enhance, in_place_format, reads_camera, ShaderId, COPY_PIXELS,
-    COPY_ROWS, DECODE_CAMERA, FINISH_TILES,
+    classify, decode_blur, enhance, enhance_shared, in_place_format, reads_camera, ShaderId,
+    COPY_PIXELS, COPY_ROWS, DECODE_CAMERA, FINISH_TILES,
 };
 
 /// Runs a shader once, on the building thread, before it is built for the engine's device: a

@@ -7,6 +7,7 @@ use super::device::GpuDevice;
 use super::error::GpuError;
 use super::interface::{CLASSIFY_WORKGROUP, DECODE_ROWS, TILE_LIST_DISPATCH_OFFSET};
 use super::pipelines::{self, PushConstants};
+use super::shared_fetch::shares_fetches;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
@@ -220,9 +221,7 @@ impl Engine {
         let access = view.shape().access();
         let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
         let codes = (method_code(params.method), mode_code(params.mode), format);
-        let pipeline = self
-            .pipelines
-            .get(pipelines::enhance(codes, access, extras)?)?;
+        let pipeline = self.enhance_pipeline(view, (codes, access, extras), mapping)?;
         let classify = self.pipelines.get(pipelines::classify(format, access)?)?;
         let finish_tiles = self.pipelines.get(pipelines::FINISH_TILES)?;
         let mut push = PushConstants::new(params, view.camera_size, view.region, mapping);
@@ -248,6 +247,25 @@ impl Engine {
                 .cmd_dispatch_indirect(cmd, view.tiles.raw, TILE_LIST_DISPATCH_OFFSET)
         };
         Ok(())
+    }
+
+    /// The `enhance` pipeline for a view: the shared-fetch variant where the view's mapping
+    /// allows it and it is built, else the general one (the same output).
+    fn enhance_pipeline(
+        &self,
+        view: &ViewTarget,
+        (codes, access, extras): ((u32, u32, u32), u32, bool),
+        mapping: &CameraMapping,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let shared = pipelines::enhance_shared(codes, access, extras).filter(|_| {
+            self.shared_fetch && shares_fetches(mapping, view.region, view.camera_size)
+        });
+        match shared.map(|id| self.pipelines.get(id)) {
+            Some(Ok(p)) => Ok(p),
+            _ => self
+                .pipelines
+                .get(pipelines::enhance(codes, access, extras)?),
+        }
     }
 
     /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source

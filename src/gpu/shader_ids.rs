@@ -39,23 +39,34 @@ pub fn decode_blur(half: u32) -> Result<ShaderId, GpuError> {
 
 /// The `enhance` shader for a method, view mode and pixel format (shader codes), reaching the
 /// pixels by `access` (interface.rs ACCESS_*); `extras` where the achromatic boost or the
-/// luminance cap is on.
-pub fn enhance(
+/// luminance cap is on. The general variant: valid for every mapping.
+pub fn enhance(codes: (u32, u32, u32), access: u32, extras: bool) -> Result<ShaderId, GpuError> {
+    enhance_variant(codes, access, extras, false).ok_or_else(unsupported)
+}
+
+/// The shared-fetch variant of `enhance` (valid only where gpu/shared_fetch.rs says so), where
+/// one is built (the defaults: see build.rs).
+pub fn enhance_shared(codes: (u32, u32, u32), access: u32, extras: bool) -> Option<ShaderId> {
+    enhance_variant(codes, access, extras, true)
+}
+
+fn enhance_variant(
     (method, mode, format): (u32, u32, u32),
     access: u32,
     extras: bool,
-) -> Result<ShaderId, GpuError> {
+    shared: bool,
+) -> Option<ShaderId> {
     let background = mode == mode_code(ViewMode::Background);
     let (method, extras) = if background {
         (0, false)
     } else {
         (method, extras)
     };
+    let wanted = (method, mode, format, access, extras, shared);
     let k = shaders::ENHANCE_VARIANTS
         .iter()
-        .position(|&(m, v, f, a, e, _)| (m, v, f, a, e) == (method, mode, format, access, extras))
-        .ok_or_else(unsupported)?;
-    Ok(ShaderId(FIXED + shaders::DECODE_BLUR.len() + k))
+        .position(|&(m, v, f, a, e, s, _)| (m, v, f, a, e, s) == wanted)?;
+    Some(ShaderId(FIXED + shaders::DECODE_BLUR.len() + k))
 }
 
 /// The `classify` shader for a pixel format (shader code) and pixel access.
@@ -75,7 +86,7 @@ pub fn in_place_format(ShaderId(k): ShaderId) -> Option<u32> {
     let classify = enhance + shaders::ENHANCE_VARIANTS.len();
     let (format, access) = match k {
         k if (enhance..classify).contains(&k) => {
-            let (_, _, f, a, _, _) = shaders::ENHANCE_VARIANTS[k - enhance];
+            let (_, _, f, a, _, _, _) = shaders::ENHANCE_VARIANTS[k - enhance];
             (f, a)
         }
         k if k >= classify => {
@@ -102,8 +113,23 @@ mod tests {
         assert_eq!(name(COPY_ROWS), "copy_rows");
         assert_eq!(name(decode_blur(3).unwrap()), "decode_blur_3");
         assert!(decode_blur(8).is_err());
-        for &(m, v, f, w, e, ref module) in shaders::ENHANCE_VARIANTS {
-            assert_eq!(name(enhance((m, v, f), w, e).unwrap()), module.name);
+        for &(m, v, f, w, e, shared, ref module) in shaders::ENHANCE_VARIANTS {
+            let id = match shared {
+                true => enhance_shared((m, v, f), w, e),
+                false => enhance((m, v, f), w, e).ok(),
+            };
+            assert_eq!(name(id.unwrap()), module.name);
+        }
+        // The defaults have a shared-fetch variant for every format and access; the others
+        // none.
+        let (paper, enhance_mode) = (0, mode_code(ViewMode::Enhance));
+        for &(f, w, _) in shaders::CLASSIFY_VARIANTS {
+            assert!(enhance_shared((paper, enhance_mode, f), w, false).is_some());
+            assert!(enhance_shared((paper, enhance_mode, f), w, true).is_none());
+            assert!(enhance_shared((1, enhance_mode, f), w, false).is_none());
+            assert!(
+                enhance_shared((paper, mode_code(ViewMode::Background), f), w, false).is_none()
+            );
         }
         for &(f, w, ref module) in shaders::CLASSIFY_VARIANTS {
             assert_eq!(name(classify(f, w).unwrap()), module.name);

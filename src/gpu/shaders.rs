@@ -50,7 +50,7 @@ pub fn all() -> Vec<&'static ShaderModule> {
     fixed
         .into_iter()
         .chain(DECODE_BLUR.iter())
-        .chain(ENHANCE_VARIANTS.iter().map(|(_, _, _, _, _, m)| m))
+        .chain(ENHANCE_VARIANTS.iter().map(|(_, _, _, _, _, _, m)| m))
         .chain(CLASSIFY_VARIANTS.iter().map(|(_, _, m)| m))
         .collect()
 }
