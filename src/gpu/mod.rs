@@ -37,6 +37,7 @@ pub mod resources;
 pub mod shader_ids;
 pub mod shaders;
 mod storage_image;
+pub mod texel_ring;
 pub mod warm_up;
 
 pub use device::{DeviceOptions, GpuDevice};
