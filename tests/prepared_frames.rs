@@ -205,12 +205,14 @@ fn expected(display: &RgbaImage, camera: &RgbaImage, prepared: bool) -> Vec<u8> 
 
 /// Pairs of frames, one per image, the second recorded while the first may still run: (camera,
 /// prepared on the CPU, sequence). A camera frame shown twice, frames prepared on the GPU
-/// between prepared ones.
-const PAIRS: [[(usize, bool, u64); 2]; 4] = [
+/// between prepared ones, and a camera of another size (camera 4) and back.
+const PAIRS: [[(usize, bool, u64); 2]; 6] = [
     [(0, true, 1), (1, true, 2)],
     [(2, true, 3), (2, true, 3)],
     [(3, false, 4), (0, true, 5)],
     [(1, true, 6), (3, false, 7)],
+    [(4, true, 8), (4, true, 8)],
+    [(2, true, 9), (0, true, 10)],
 ];
 
 /// The outputs of every frame of PAIRS, by the engine taking the direct path or not.
@@ -229,6 +231,8 @@ fn outputs(direct: bool, display: &RgbaImage, cameras: &[RgbaImage]) -> Vec<Vec<
         }
         out.extend([rig.get(0), rig.get(1)]);
     }
+    // Still on after the camera's size changed (the images made again).
+    assert_eq!(rig.engine.direct_texels(), direct, "direct path kept");
     rig.finish();
     out
 }
@@ -236,7 +240,8 @@ fn outputs(direct: bool, display: &RgbaImage, cameras: &[RgbaImage]) -> Vec<Vec<
 #[test]
 fn consecutive_live_frames_each_get_their_own_background() {
     let display = noise(REGION.0, REGION.1, 21);
-    let cameras: Vec<RgbaImage> = (0..4).map(|k| noise(CAMERA.0, CAMERA.1, 5 + k)).collect();
+    let mut cameras: Vec<RgbaImage> = (0..4).map(|k| noise(CAMERA.0, CAMERA.1, 5 + k)).collect();
+    cameras.push(noise(CAMERA.0 - 16, CAMERA.1 + 8, 11));
     let direct = outputs(true, &display, &cameras);
     let staged = outputs(false, &display, &cameras);
     let frames = PAIRS.iter().flatten();
@@ -248,12 +253,13 @@ fn consecutive_live_frames_each_get_their_own_background() {
         assert!(*s == want, "frame {n} (sequence {sequence}): staging copy");
     }
     // The cameras give different outputs: a frame sampling another's texels would show.
-    let distinct: Vec<Vec<u8>> = (0..4)
-        .map(|k| expected(&display, &cameras[k], true))
+    let distinct: Vec<Vec<u8>> = cameras
+        .iter()
+        .map(|c| expected(&display, c, true))
         .collect();
-    for a in 0..4 {
+    for a in 0..cameras.len() {
         assert_ne!(distinct[a], display.pixels.as_flattened());
-        for b in a + 1..4 {
+        for b in a + 1..cameras.len() {
             assert_ne!(distinct[a], distinct[b], "cameras {a} and {b}");
         }
     }

@@ -166,6 +166,12 @@ impl TexelRing {
 
     fn make(&mut self, gpu: &GpuDevice, size: (u32, u32)) -> Result<(), GpuError> {
         self.destroy(gpu);
+        if !fits_device(gpu, size) {
+            return Err(GpuError::Unsupported(format!(
+                "no linear texel image of {}x{}",
+                size.0, size.1
+            )));
+        }
         for _ in 0..SLOTS {
             let slot = MappedTexels::new(gpu, size);
             match slot {
@@ -230,4 +236,20 @@ impl TexelRing {
         self.size = (0, 0);
         self.active = false;
     }
+}
+
+/// Whether the device makes linear sampled texel images of `size`.
+fn fits_device(gpu: &GpuDevice, size: (u32, u32)) -> bool {
+    // SAFETY: the physical device belongs to this instance; plain enum and flag arguments.
+    let props = unsafe {
+        gpu.instance.get_physical_device_image_format_properties(
+            gpu.physical,
+            TEXELS_FORMAT,
+            vk::ImageType::TYPE_2D,
+            vk::ImageTiling::LINEAR,
+            vk::ImageUsageFlags::SAMPLED,
+            vk::ImageCreateFlags::empty(),
+        )
+    };
+    props.is_ok_and(|p| size.0 <= p.max_extent.width && size.1 <= p.max_extent.height)
 }
