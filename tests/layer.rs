@@ -698,6 +698,13 @@ fn captures_follow_a_changing_video_background() {
     };
     run.assert_success();
     validation.assert_clean();
+    // lavapipe samples mapped linear images: the source's texels go straight into them.
+    let direct = "live frames' texels are written straight into mapped images the views sample";
+    assert!(
+        run.stderr.contains(direct),
+        "no {direct:?}: {}",
+        run.describe()
+    );
     let views = captures(&dir);
     assert_eq!(views.len(), 24, "12 frames x 2 views captured");
     let mut distinct: Vec<Vec<[u8; 4]>> = Vec::new();

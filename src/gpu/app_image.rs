@@ -1,7 +1,8 @@
 //! A device-local 2D image: app-like colour images (usable as a colour attachment and as a
 //! transfer source and destination, as the layer makes swapchain images) that the benchmark
 //! copies from and to, so that it times the layer's image copies on real images; and the
-//! blurred camera image the enhancement samples (src/gpu/engine.rs).
+//! blurred camera image the enhancement samples (src/gpu/engine.rs), also as a linear image in
+//! host-visible memory that the CPU writes (src/gpu/texel_ring.rs).
 
 use super::device::GpuDevice;
 use super::error::{GpuError, VkResultExt};
@@ -40,29 +41,40 @@ impl AppImage {
         usage: vk::ImageUsageFlags,
         flags: vk::ImageCreateFlags,
     ) -> Result<Self, GpuError> {
-        let info = vk::ImageCreateInfo::default()
+        let info = image_info(size, format, usage)
             .flags(flags)
-            .image_type(vk::ImageType::TYPE_2D)
-            .format(format)
-            .extent(vk::Extent3D {
-                width: size.0,
-                height: size.1,
-                depth: 1,
-            })
-            .mip_levels(1)
-            .array_layers(1)
-            .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        Self::create(gpu, &info, MemoryLocation::GpuOnly)
+    }
+
+    /// A 2D image of `format` with `usage`, linear tiling, in host-visible memory (mapped for
+    /// its life), PREINITIALIZED: what the host writes before its first layout change is kept.
+    pub fn linear_mapped(
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self, GpuError> {
+        let info = image_info(size, format, usage)
+            .tiling(vk::ImageTiling::LINEAR)
+            .initial_layout(vk::ImageLayout::PREINITIALIZED);
+        Self::create(gpu, &info, MemoryLocation::CpuToGpu)
+    }
+
+    fn create(
+        gpu: &GpuDevice,
+        info: &vk::ImageCreateInfo,
+        location: MemoryLocation,
+    ) -> Result<Self, GpuError> {
         // SAFETY: a plain 2D image create info on a valid device.
-        let raw = unsafe { gpu.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        let raw = unsafe { gpu.device.create_image(info, None) }.vk("vkCreateImage")?;
         let mut image = AppImage {
             raw,
             allocation: None,
         };
-        match image.bind_memory(gpu) {
+        let linear = info.tiling == vk::ImageTiling::LINEAR;
+        match image.bind_memory(gpu, location, linear) {
             Ok(a) => image.allocation = Some(a),
             Err(e) => {
                 image.destroy(gpu);
@@ -72,7 +84,17 @@ impl AppImage {
         Ok(image)
     }
 
-    fn bind_memory(&self, gpu: &GpuDevice) -> Result<Allocation, GpuError> {
+    /// The mapped bytes of a host-visible image's memory (from the image's start).
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        self.allocation.as_mut()?.mapped_slice_mut()
+    }
+
+    fn bind_memory(
+        &self,
+        gpu: &GpuDevice,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> Result<Allocation, GpuError> {
         // SAFETY: raw is an image of this device.
         let requirements = unsafe { gpu.device.get_image_memory_requirements(self.raw) };
         let mut allocator = gpu.allocator.lock().map_err(|_| {
@@ -81,8 +103,8 @@ impl AppImage {
         let allocation = allocator.allocate(&AllocationCreateDesc {
             name: "app image",
             requirements,
-            location: MemoryLocation::GpuOnly,
-            linear: false,
+            location,
+            linear,
             allocation_scheme: AllocationScheme::GpuAllocatorManaged,
         })?;
         // SAFETY: the allocation satisfies the image's requirements and is bound nowhere else.
@@ -113,4 +135,25 @@ impl AppImage {
             self.raw = vk::Image::null();
         }
     }
+}
+
+/// A one-layer, one-level 2D image of `format` with `usage`, exclusive to one queue family.
+fn image_info(
+    size: (u32, u32),
+    format: vk::Format,
+    usage: vk::ImageUsageFlags,
+) -> vk::ImageCreateInfo<'static> {
+    vk::ImageCreateInfo::default()
+        .image_type(vk::ImageType::TYPE_2D)
+        .format(format)
+        .extent(vk::Extent3D {
+            width: size.0,
+            height: size.1,
+            depth: 1,
+        })
+        .mip_levels(1)
+        .array_layers(1)
+        .samples(vk::SampleCountFlags::TYPE_1)
+        .usage(usage)
+        .sharing_mode(vk::SharingMode::EXCLUSIVE)
 }

@@ -13,6 +13,9 @@ pub struct Commands {
     fence: vk::Fence,
     /// A submission whose fence has not been waited for.
     in_flight: bool,
+    /// Submissions made, and how many of them are known to have finished.
+    submitted: u64,
+    finished: u64,
 }
 
 impl Commands {
@@ -22,6 +25,8 @@ impl Commands {
             cmd: vk::CommandBuffer::null(),
             fence: vk::Fence::null(),
             in_flight: false,
+            submitted: 0,
+            finished: 0,
         };
         if let Err(e) = c.create(gpu) {
             // Nothing was submitted: the wait in destroy cannot fail.
@@ -67,7 +72,19 @@ impl Commands {
             }
             self.in_flight = false;
         }
+        self.finished = self.submitted;
         Ok(())
+    }
+
+    /// The number the next submission will have (the first is 1).
+    pub fn next_submission(&self) -> u64 {
+        self.submitted + 1
+    }
+
+    /// Whether submission `n` (a [`Commands::next_submission`]) has finished or was never made:
+    /// what it used may be written again.
+    pub fn finished(&self, n: u64) -> bool {
+        n <= self.finished || n > self.submitted
     }
 
     /// Begins recording a one-time submission; the previous one must have been waited for.
@@ -98,6 +115,7 @@ impl Commands {
                 .vk("vkQueueSubmit")?;
         }
         self.in_flight = true;
+        self.submitted += 1;
         Ok(())
     }
 

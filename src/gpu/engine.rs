@@ -291,8 +291,15 @@ impl Engine {
         for (binding, buffer) in buffers {
             self.write_set(gpu, view.set, binding, &[buffer]);
         }
+        self.bind_texels(gpu, view, background.texels_view);
+        view.camera_size = background.size;
+    }
+
+    /// Points a view's `blurred_texels` at `texels` (the background frame's image, or a mapped
+    /// one of its size, in GENERAL). The set must not be in use.
+    pub fn bind_texels(&self, gpu: &GpuDevice, view: &ViewTarget, texels: vk::ImageView) {
         let image = [vk::DescriptorImageInfo::default()
-            .image_view(background.texels_view)
+            .image_view(texels)
             .image_layout(vk::ImageLayout::GENERAL)];
         let write = vk::WriteDescriptorSet::default()
             .dst_set(view.set)
@@ -301,7 +308,6 @@ impl Engine {
             .image_info(&image);
         // SAFETY: the set and the view are valid; the caller guarantees the set is not in use.
         unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
-        view.camera_size = background.size;
     }
 
     /// Points a view's copy source (used only by `record_copy`) at `source`.

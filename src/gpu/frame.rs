@@ -10,6 +10,7 @@ use super::frame_view::{CapturedView, FrameView, ViewKey};
 use super::overlay::{OverlayPixels, Overlays};
 use super::pipelines::{BuildMode, BuildReport, ShaderId};
 use super::prepared_staging::PreparedStaging;
+use super::texel_ring::TexelRing;
 use super::warm_up::{WarmUp, WarmUpSlot};
 use super::{BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, Placement, ViewTarget};
 use crate::algorithm::params::Params;
@@ -28,6 +29,8 @@ const MAX_VIEWS: u32 = 16;
 pub(super) struct PreparedView {
     pub(super) target: ViewTarget,
     pub(super) last_frame: u64,
+    /// The image view bound as the view's `blurred_texels`.
+    pub(super) texels: vk::ImageView,
 }
 
 /// The background of a frame: the newest camera image, its texels when its source prepared
@@ -58,6 +61,9 @@ pub struct FrameEngine {
     pub(super) prepared_for: Option<(u64, CameraRect)>,
     /// Texels prepared by the background's source, on their way into the sampled image.
     pub(super) staged: PreparedStaging,
+    /// Mapped images prepared texels are written straight into, where the device allows.
+    pub(super) ring: TexelRing,
+    pub(super) direct_texels: bool,
     pub(super) views: HashMap<ViewKey, PreparedView>,
     pub(super) frame: u64,
     /// Lit pixels drawn over the views after the enhancement.
@@ -93,6 +99,8 @@ impl FrameEngine {
             background_sequence: 0,
             prepared_for: None,
             staged: PreparedStaging::default(),
+            ring: TexelRing::default(),
+            direct_texels: TexelRing::supported(&gpu),
             views: HashMap::new(),
             frame: 0,
             overlays: Overlays::default(),
@@ -196,6 +204,7 @@ impl FrameEngine {
                 .create_background(&self.gpu, size, Placement::DEVICE)?;
             for v in self.views.values_mut() {
                 self.engine.bind(&self.gpu, &mut v.target, &bg);
+                v.texels = bg.texels_view;
             }
             self.background = Some(bg);
             self.prepared_for = None;
@@ -232,6 +241,7 @@ impl FrameEngine {
             PreparedView {
                 target,
                 last_frame: self.frame,
+                texels: bg.texels_view,
             },
         );
         Ok(())
@@ -293,9 +303,11 @@ impl FrameEngine {
         self.pipelines_ready(views, params, options.wait_for_pipelines)?;
         self.request_shared_fetches(views, params, background.image);
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
+        // Before the wait: prepared texels may go into a mapped image no submitted frame samples.
+        let written = self.write_direct(&background, views, params, false);
         // The previous submission read the camera buffer the upload writes.
         self.wait_idle()?;
-        if !self.stage_prepared(&background, views, params)? {
+        if !written && !self.stage_prepared(&background, views, params)? {
             self.upload_unprepared(&background)?;
         }
         // More regions than the engine holds views for: one submission per MAX_VIEWS.
@@ -322,6 +334,7 @@ impl FrameEngine {
         for item in items.iter().filter(|i| i.in_place) {
             self.bind_app_image(item)?;
         }
+        self.bind_texels(items);
         let mut staging = Vec::new();
         if capture {
             for item in items {
@@ -394,6 +407,7 @@ impl FrameEngine {
         }
         self.overlays.destroy(&self.gpu);
         self.staged.destroy(&self.gpu);
+        self.ring.destroy(&self.gpu);
         self.app_views.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
         // Waited for above: this wait cannot fail.

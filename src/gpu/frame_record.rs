@@ -56,11 +56,15 @@ impl FrameEngine {
     ) -> Result<(), GpuError> {
         self.commands.begin(&self.gpu)?;
         self.record_prepared_copy();
+        let next = self.commands.next_submission();
+        self.ring.record_use(&self.gpu, self.commands.cmd, next);
         let seq = self.background_sequence;
         let bg = self.background.as_ref().expect("set in process");
         let mappings: Vec<CameraMapping> = items.iter().map(|i| i.mapping).collect();
         let needed = CameraRect::sampled_by(&mappings, bg.size);
         let rect = match self.prepared_for {
+            // The views sample a mapped image that holds the frame's texels.
+            _ if self.ring.active => None,
             Some((s, done)) if s == seq && done.contains(&needed) => None,
             // A view the frame's preparation did not cover: prepare both again.
             Some((s, done)) if s == seq => Some(done.union(&needed)),

@@ -38,6 +38,7 @@ pub mod shader_ids;
 pub mod shaders;
 pub mod shared_fetch;
 mod storage_image;
+pub mod texel_ring;
 pub mod warm_up;
 
 pub use device::{DeviceOptions, GpuDevice};

@@ -1,9 +1,10 @@
 //! A camera frame whose texels its source prepared on the CPU (crate::blurred_texels, on the
-//! source's own thread): the frame writes the texels the views sample into a host-visible
-//! staging buffer and copies them into the image the enhancement samples, one
-//! vkCmdCopyBufferToImage, instead of the camera upload and the decode and blur passes
-//! (gpu/record.rs, record_background). Those remain for frames that come without prepared
-//! texels, or with texels made for other blur settings, and for the offline engine.
+//! source's own thread), instead of the camera upload and the decode and blur passes
+//! (gpu/record.rs, record_background): the frame writes the texels the views sample straight
+//! into a mapped image the views then sample (gpu/texel_ring.rs) where the device allows it,
+//! else into a host-visible staging buffer, copied into the background frame's image with one
+//! vkCmdCopyBufferToImage. The passes remain for frames that come without prepared texels, or
+//! with texels made for other blur settings, and for the offline engine.
 
 use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
@@ -14,6 +15,7 @@ use super::frame_view::FrameView;
 use super::interface::LINEAR_BITS;
 use super::prepared_staging::new_staging;
 use super::resources::colour_layer;
+use super::texel_ring::TexelRing;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
@@ -101,9 +103,66 @@ impl Engine {
 }
 
 impl FrameEngine {
+    /// Whether prepared texels go straight into mapped images: on where the device samples
+    /// them (the default), off forces the staging buffer and the image copy.
+    pub fn set_direct_texels(&mut self, on: bool) {
+        self.direct_texels = on && TexelRing::supported(&self.gpu);
+    }
+
+    /// Whether prepared texels go straight into mapped images (see `set_direct_texels`;
+    /// false from the first failure to make them on).
+    pub fn direct_texels(&self) -> bool {
+        self.direct_texels
+    }
+
+    /// Makes the frame sample its prepared texels, written straight into a mapped image no
+    /// submitted frame samples, when they were made for `params`. False, with nothing done,
+    /// when the frame takes another path, or before the wait for the previous frame (not
+    /// `idle`) when the images must be (re)made or are all in use.
+    pub(super) fn write_direct(
+        &mut self,
+        background: &FrameBackground,
+        views: &[FrameView],
+        params: &Params,
+        idle: bool,
+    ) -> bool {
+        let image = background.image;
+        let size = (image.width, image.height);
+        let texels = background.prepared.filter(|t| t.made_for(size, params));
+        let (true, Some(texels)) = (self.direct_texels, texels) else {
+            return false;
+        };
+        if self.background.as_ref().is_none_or(|b| b.size != size) {
+            return false;
+        }
+        let mappings: Vec<CameraMapping> = views.iter().map(|v| v.mapping).collect();
+        let needed = CameraRect::sampled_by(&mappings, size);
+        let seq = background.sequence;
+        let commands = &self.commands;
+        let finished = |n| commands.finished(n);
+        match self
+            .ring
+            .write(&self.gpu, (texels, seq), &needed, finished, idle)
+        {
+            Ok(true) => {
+                self.background_sequence = seq;
+                self.staged.camera_behind = true;
+                true
+            }
+            Ok(false) => false,
+            // From now on through the staging buffer; the images are freed at the end.
+            Err(_) => {
+                self.direct_texels = false;
+                self.ring.active = false;
+                false
+            }
+        }
+    }
+
     /// Makes the frame's background its prepared texels when they were made for `params`:
-    /// writes those the views sample into the staging buffer for `record_prepared_copy`.
-    /// False, with nothing done, when the frame must be prepared on the GPU.
+    /// writes those the views sample into a mapped image (`write_direct`) or the staging buffer
+    /// for `record_prepared_copy`. False, with nothing done, when the frame must be prepared
+    /// on the GPU. Only with no submission in flight.
     pub(super) fn stage_prepared(
         &mut self,
         background: &FrameBackground,
@@ -112,10 +171,14 @@ impl FrameEngine {
     ) -> Result<bool, GpuError> {
         let image = background.image;
         let size = (image.width, image.height);
+        self.ring.active = false;
         let Some(texels) = background.prepared.filter(|t| t.made_for(size, params)) else {
             return Ok(false);
         };
         self.ensure_background(size)?;
+        if self.write_direct(background, views, params, true) {
+            return Ok(true);
+        }
         let seq = background.sequence;
         let mappings: Vec<CameraMapping> = views.iter().map(|v| v.mapping).collect();
         let needed = CameraRect::sampled_by(&mappings, size);
@@ -165,6 +228,7 @@ impl FrameEngine {
         &mut self,
         background: &FrameBackground,
     ) -> Result<(), GpuError> {
+        self.ring.active = false;
         let behind = std::mem::take(&mut self.staged.camera_behind);
         if behind && self.background_sequence == background.sequence {
             if let Some(bg) = self.background.as_mut() {
@@ -172,6 +236,21 @@ impl FrameEngine {
             }
         }
         self.update_background(background.image, background.sequence)
+    }
+
+    /// Points the views' `blurred_texels` at the image the frame samples (the GPU is idle).
+    pub(super) fn bind_texels(&mut self, items: &[FrameView]) {
+        let bg = self.background.as_ref().expect("set in process");
+        let want = self.ring.sampled_view().unwrap_or(bg.texels_view);
+        for item in items {
+            let Some(v) = self.views.get_mut(&item.key) else {
+                continue;
+            };
+            if v.texels != want {
+                self.engine.bind_texels(&self.gpu, &v.target, want);
+                v.texels = want;
+            }
+        }
     }
 
     /// Records the copy of the staged texels, once, at the start of the frame's commands.

@@ -254,6 +254,14 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = None;
 }
 
+/// How a frame's texels, when its source prepared them, reach the views (the log's line).
+fn prepared_texels_path(prepared: bool, processor: &Processor) -> Option<&'static str> {
+    prepared.then_some(match processor.direct_texels() {
+        true => "live frames' texels are written straight into mapped images the views sample",
+        false => "live frames' texels reach the views through a staging buffer and an image copy",
+    })
+}
+
 /// `process` with panics caught: a panic turns the session into pass-through.
 fn guarded_process(
     s: &mut SessionState,
@@ -297,6 +305,7 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
     let prepared = frame.prepared.as_deref();
     let background = super::processor::background(&frame.image, prepared, sequence);
     let done = processor.process(&items, background, &s.settings, options);
+    let texels_path = prepared_texels_path(prepared.is_some(), processor);
     match done {
         Ok(views) => {
             if s.processed == 0 {
@@ -310,6 +319,9 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
                 "first-frame",
                 &format!("processing frames ({} views per frame)", items.len()),
             );
+            if let Some(line) = texels_path {
+                log::once("prepared-texels-path", line);
+            }
             let in_place = items.iter().filter(|i| i.in_place).count();
             log::once(
                 "first-frame-path",

@@ -68,6 +68,11 @@ impl Processor {
         }
     }
 
+    /// Whether live frames' prepared texels go straight into the images the views sample.
+    pub fn direct_texels(&self) -> bool {
+        self.engine().direct_texels()
+    }
+
     pub fn build_report(&self) -> Option<BuildReport> {
         self.engine().build_report()
     }

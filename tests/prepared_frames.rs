@@ -1,0 +1,266 @@
+//! The layer's frame engine on the first Vulkan device (lavapipe in CI) with the validation
+//! layer on, over consecutive frames of a live background: each frame's views get that frame's
+//! enhancement, whether its texels went straight into a mapped image (the direct path), through
+//! the staging copy (forced), or through the GPU's decode and blur passes, and the direct path
+//! gives what the staging copy gives, bit for bit.
+
+use ash::vk;
+use contrastxr::algorithm::Params;
+use contrastxr::blurred_texels::{BlurTaps, BlurredTexels};
+use contrastxr::gpu::app_image::AppImage;
+use contrastxr::gpu::buffer::GpuBuffer;
+use contrastxr::gpu::commands::Commands;
+use contrastxr::gpu::image_copy::{
+    record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
+};
+use contrastxr::gpu::{
+    DeviceOptions, FrameBackground, FrameEngine, FrameOptions, FrameView, GpuDevice, OfflineEngine,
+    PixelFormat, PixelLayout, ViewKey,
+};
+use contrastxr::image::RgbaImage;
+use gpu_allocator::MemoryLocation;
+
+const OPTIONS: DeviceOptions = DeviceOptions {
+    index: 0,
+    validation: true,
+    matching: None,
+};
+const REGION: (u32, u32) = (40, 30);
+const CAMERA: (u32, u32) = (96, 64);
+const FORMAT: PixelFormat = PixelFormat {
+    layout: PixelLayout::Rgba8,
+    srgb: false,
+};
+
+/// A deterministic pseudo-random image (xorshift), opaque.
+fn noise(width: u32, height: u32, seed: u32) -> RgbaImage {
+    let mut s = seed.max(1);
+    let mut img = RgbaImage::new(width, height, [0, 0, 0, 255]);
+    for p in img.pixels.iter_mut() {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        *p = [(s >> 8) as u8, (s >> 16) as u8, (s >> 24) as u8, 255];
+    }
+    img
+}
+
+/// Runs one submission on the device's queue and waits for it.
+fn submit(gpu: &GpuDevice, record: impl FnOnce(vk::CommandBuffer)) {
+    let mut c = Commands::new(gpu).unwrap();
+    c.begin(gpu).unwrap();
+    record(c.cmd);
+    c.submit(gpu).unwrap();
+    c.destroy(gpu).unwrap();
+}
+
+/// Two app images (two swapchains of one image each), left in COLOR_ATTACHMENT_OPTIMAL as an
+/// app leaves them for the runtime, and a frame engine that enhances them.
+struct Rig {
+    engine: FrameEngine,
+    images: [AppImage; 2],
+    buffer: GpuBuffer,
+}
+
+impl Rig {
+    fn new(direct: bool) -> Rig {
+        let gpu = GpuDevice::create(&OPTIONS).unwrap();
+        let mut engine = FrameEngine::new(gpu, &[]).unwrap();
+        engine.set_direct_texels(direct);
+        let gpu = &engine.gpu;
+        let images =
+            [0, 1].map(|_| AppImage::new(gpu, REGION, vk::Format::R8G8B8A8_UNORM).unwrap());
+        let bytes = u64::from(REGION.0 * REGION.1 * 4);
+        let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+        let buffer = GpuBuffer::new(gpu, bytes, usage, MemoryLocation::GpuToCpu, "test").unwrap();
+        Rig {
+            engine,
+            images,
+            buffer,
+        }
+    }
+
+    fn region(&self, i: usize) -> ImageRegion {
+        ImageRegion {
+            image: self.images[i].raw,
+            array_index: 0,
+            offset: (0, 0),
+            extent: REGION,
+        }
+    }
+
+    fn view(&self, i: usize, params: &Params) -> FrameView {
+        FrameView {
+            key: ViewKey {
+                swapchain: i as u64 + 1,
+                offset: (0, 0),
+                extent: REGION,
+                array_index: 0,
+            },
+            image: self.images[i].raw,
+            format: FORMAT,
+            vk_format: vk::Format::R8G8B8A8_UNORM,
+            in_place: false,
+            mapping: params.camera_mapping(),
+        }
+    }
+
+    /// Writes `display` into both images.
+    fn put(&mut self, display: &RgbaImage) {
+        self.buffer.write(display.pixels.as_flattened()).unwrap();
+        let gpu = &self.engine.gpu;
+        for i in 0..2 {
+            let region = self.region(i);
+            submit(gpu, |cmd| {
+                let transfer = (
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                );
+                record_first_layout(
+                    gpu,
+                    cmd,
+                    &[region.image],
+                    vk::ImageLayout::GENERAL,
+                    transfer,
+                );
+                record_region_copy(gpu, cmd, &region, &self.buffer, false);
+                record_layout_barriers(gpu, cmd, &[region], false);
+            });
+        }
+    }
+
+    /// Reads image `i` back, after every submission made so far.
+    fn get(&self, i: usize) -> Vec<u8> {
+        let gpu = &self.engine.gpu;
+        let region = self.region(i);
+        submit(gpu, |cmd| {
+            record_layout_barriers(gpu, cmd, &[region], true);
+            record_region_copy(gpu, cmd, &region, &self.buffer, true);
+            record_layout_barriers(gpu, cmd, &[region], false);
+            contrastxr::gpu::barrier::barrier(
+                gpu,
+                cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::HOST,
+            );
+        });
+        self.buffer.mapped().unwrap().to_vec()
+    }
+
+    /// One frame: image `i`'s view enhanced against `camera` (camera frame `sequence`), with
+    /// its texels prepared on the CPU or not. Does not wait for the GPU.
+    fn frame(&mut self, i: usize, camera: &RgbaImage, prepared: bool, sequence: u64) {
+        let params = Params::default();
+        let texels = BlurredTexels::prepare(camera, BlurTaps::of(&params));
+        let background = FrameBackground {
+            image: camera,
+            prepared: prepared.then_some(&texels),
+            sequence,
+        };
+        let options = FrameOptions {
+            capture: false,
+            wait_for_pipelines: true,
+        };
+        let views = [self.view(i, &params)];
+        let out = self
+            .engine
+            .process(&views, background, &params, None, options);
+        assert!(out.is_ok(), "frame {sequence}: {:?}", out.err());
+    }
+
+    fn finish(mut self) {
+        let errors = self.engine.gpu.validation_errors();
+        self.buffer.destroy(&self.engine.gpu);
+        for image in &mut self.images {
+            image.destroy(&self.engine.gpu);
+        }
+        self.engine.finish().unwrap();
+        assert_eq!(errors, 0, "Vulkan validation errors (see stderr)");
+    }
+}
+
+/// What the offline engine makes of `display` against `camera`, with the texels prepared on
+/// the CPU (`prepared`) or by the GPU passes.
+fn expected(display: &RgbaImage, camera: &RgbaImage, prepared: bool) -> Vec<u8> {
+    let mut e = OfflineEngine::with_options(&OPTIONS).unwrap();
+    e.set_cpu_background(prepared);
+    let params = Params::default();
+    let words: Vec<u32> = display
+        .pixels
+        .iter()
+        .map(|p| u32::from_le_bytes(*p))
+        .collect();
+    let out = e
+        .enhance_raw_mapped(
+            &words,
+            (REGION, FORMAT),
+            camera,
+            &params.camera_mapping(),
+            &params,
+        )
+        .unwrap();
+    assert_eq!(e.validation_errors(), 0);
+    out.iter().flat_map(|w| w.to_le_bytes()).collect()
+}
+
+/// Pairs of frames, one per image, the second recorded while the first may still run: (camera,
+/// prepared on the CPU, sequence). A camera frame shown twice, frames prepared on the GPU
+/// between prepared ones, and a camera of another size (camera 4) and back.
+const PAIRS: [[(usize, bool, u64); 2]; 6] = [
+    [(0, true, 1), (1, true, 2)],
+    [(2, true, 3), (2, true, 3)],
+    [(3, false, 4), (0, true, 5)],
+    [(1, true, 6), (3, false, 7)],
+    [(4, true, 8), (4, true, 8)],
+    [(2, true, 9), (0, true, 10)],
+];
+
+/// The outputs of every frame of PAIRS, by the engine taking the direct path or not.
+fn outputs(direct: bool, display: &RgbaImage, cameras: &[RgbaImage]) -> Vec<Vec<u8>> {
+    let mut rig = Rig::new(direct);
+    assert_eq!(
+        rig.engine.direct_texels(),
+        direct,
+        "direct path on lavapipe"
+    );
+    let mut out = Vec::new();
+    for pair in PAIRS {
+        rig.put(display);
+        for (i, (camera, prepared, sequence)) in pair.into_iter().enumerate() {
+            rig.frame(i, &cameras[camera], prepared, sequence);
+        }
+        out.extend([rig.get(0), rig.get(1)]);
+    }
+    // Still on after the camera's size changed (the images made again).
+    assert_eq!(rig.engine.direct_texels(), direct, "direct path kept");
+    rig.finish();
+    out
+}
+
+#[test]
+fn consecutive_live_frames_each_get_their_own_background() {
+    let display = noise(REGION.0, REGION.1, 21);
+    let mut cameras: Vec<RgbaImage> = (0..4).map(|k| noise(CAMERA.0, CAMERA.1, 5 + k)).collect();
+    cameras.push(noise(CAMERA.0 - 16, CAMERA.1 + 8, 11));
+    let direct = outputs(true, &display, &cameras);
+    let staged = outputs(false, &display, &cameras);
+    let frames = PAIRS.iter().flatten();
+    for (n, ((camera, prepared, sequence), (d, s))) in
+        frames.zip(direct.iter().zip(&staged)).enumerate()
+    {
+        let want = expected(&display, &cameras[*camera], *prepared);
+        assert!(*d == want, "frame {n} (sequence {sequence}): direct path");
+        assert!(*s == want, "frame {n} (sequence {sequence}): staging copy");
+    }
+    // The cameras give different outputs: a frame sampling another's texels would show.
+    let distinct: Vec<Vec<u8>> = cameras
+        .iter()
+        .map(|c| expected(&display, c, true))
+        .collect();
+    for a in 0..cameras.len() {
+        assert_ne!(distinct[a], display.pixels.as_flattened());
+        for b in a + 1..cameras.len() {
+            assert_ne!(distinct[a], distinct[b], "cameras {a} and {b}");
+        }
+    }
+}
