@@ -89,6 +89,15 @@ impl AppImage {
         self.allocation.as_mut()?.mapped_slice_mut()
     }
 
+    /// Whether the image's memory is device-local (on a discrete GPU, host-visible memory
+    /// usually is not: the GPU would read it across the bus).
+    pub fn device_local(&self) -> bool {
+        self.allocation.as_ref().is_some_and(|a| {
+            a.memory_properties()
+                .contains(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+        })
+    }
+
     fn bind_memory(
         &self,
         gpu: &GpuDevice,

@@ -1,5 +1,5 @@
 //! Sampled images the CPU writes: where the device samples R32G32B32A32_UINT images with linear
-//! tiling and has host-visible memory for them (integrated GPUs, CPU drivers, standalone
+//! tiling and has device-local host-visible memory for them (integrated GPUs, CPU drivers, standalone
 //! headsets), a live background's prepared texels go straight into such an image, mapped for
 //! its life, which the enhancement then samples as its `blurred_texels`: no staging buffer and
 //! no image copy (gpu/prepared_background.rs). A ring of them, so that a frame's texels never
@@ -72,6 +72,14 @@ impl MappedTexels {
             texels.destroy(gpu);
             return Err(GpuError::Unsupported(
                 "a linear texel image is not mapped whole".into(),
+            ));
+        }
+        // Every pixel samples it: memory the GPU reads across the bus would cost more per
+        // frame than the staging copy into a device-local image.
+        if !texels.image.device_local() {
+            texels.destroy(gpu);
+            return Err(GpuError::Unsupported(
+                "no device-local host-visible memory for the texels".into(),
             ));
         }
         Ok(texels)
