@@ -48,3 +48,21 @@ pub fn barrier(
         )
     };
 }
+
+/// The layout change of an image of the engine's own (its one colour layer), after the
+/// accesses `src_access` and before `dst_access`: one image memory barrier to record.
+pub fn layout_change(
+    image: vk::Image,
+    (old, new): (vk::ImageLayout, vk::ImageLayout),
+    (src_access, dst_access): (vk::AccessFlags, vk::AccessFlags),
+) -> vk::ImageMemoryBarrier<'static> {
+    vk::ImageMemoryBarrier::default()
+        .old_layout(old)
+        .new_layout(new)
+        .src_access_mask(src_access)
+        .dst_access_mask(dst_access)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image)
+        .subresource_range(super::resources::colour_layer())
+}

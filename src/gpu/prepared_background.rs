@@ -6,6 +6,7 @@
 //! vkCmdCopyBufferToImage. The passes remain for frames that come without prepared texels, or
 //! with texels made for other blur settings, and for the offline engine.
 
+use super::barrier::layout_change;
 use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
 use super::engine::{barrier, BackgroundFrame, CameraRect, Engine};
@@ -14,7 +15,6 @@ use super::frame::{FrameBackground, FrameEngine};
 use super::frame_view::FrameView;
 use super::interface::LINEAR_BITS;
 use super::prepared_staging::new_staging;
-use super::resources::colour_layer;
 use super::texel_ring::TexelRing;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
@@ -49,15 +49,14 @@ impl Engine {
         let transfer = vk::PipelineStageFlags::TRANSFER;
         let width = background.size.0;
         let right = (rect.x + rect.width).min(width);
-        let to_general = [vk::ImageMemoryBarrier::default()
-            .old_layout(vk::ImageLayout::UNDEFINED)
-            .new_layout(vk::ImageLayout::GENERAL)
-            .src_access_mask(vk::AccessFlags::MEMORY_READ)
-            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(background.texels.raw)
-            .subresource_range(colour_layer())];
+        let to_general = [layout_change(
+            background.texels.raw,
+            (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+            (
+                vk::AccessFlags::MEMORY_READ,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+        )];
         let first = u64::from(rect.y) * u64::from(width) + u64::from(rect.x);
         let copy = [vk::BufferImageCopy::default()
             .buffer_offset(first * TEXEL_BYTES as u64)

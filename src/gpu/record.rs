@@ -12,10 +12,10 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 
+use super::barrier::layout_change;
 use super::engine::{
     barrier, BackgroundFrame, CameraRect, Engine, ViewTarget, COMPUTE, TILE, WORKGROUP,
 };
-use super::resources::colour_layer;
 
 impl Engine {
     /// Dispatches `pipeline` over `grid` invocations (in WORKGROUP x WORKGROUP groups).
@@ -149,15 +149,14 @@ impl Engine {
         bg: &BackgroundFrame,
         (x0, y0, right, height): (u32, u32, u32, u32),
     ) {
-        let to_general = [vk::ImageMemoryBarrier::default()
-            .old_layout(vk::ImageLayout::UNDEFINED)
-            .new_layout(vk::ImageLayout::GENERAL)
-            .src_access_mask(vk::AccessFlags::SHADER_READ)
-            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(bg.texels.raw)
-            .subresource_range(colour_layer())];
+        let to_general = [layout_change(
+            bg.texels.raw,
+            (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+            (
+                vk::AccessFlags::SHADER_READ,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+        )];
         let written = [vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::SHADER_WRITE)
             .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];

@@ -6,6 +6,7 @@
 //! go into an image a submitted frame may still sample.
 
 use super::app_image::AppImage;
+use super::barrier::layout_change;
 use super::device::GpuDevice;
 use super::engine::CameraRect;
 use super::error::GpuError;
@@ -213,15 +214,11 @@ impl TexelRing {
             return;
         }
         slot.in_general = true;
-        let to_general = [vk::ImageMemoryBarrier::default()
-            .old_layout(vk::ImageLayout::PREINITIALIZED)
-            .new_layout(vk::ImageLayout::GENERAL)
-            .src_access_mask(vk::AccessFlags::HOST_WRITE)
-            .dst_access_mask(vk::AccessFlags::SHADER_READ)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(slot.image.raw)
-            .subresource_range(colour_layer())];
+        let to_general = [layout_change(
+            slot.image.raw,
+            (vk::ImageLayout::PREINITIALIZED, vk::ImageLayout::GENERAL),
+            (vk::AccessFlags::HOST_WRITE, vk::AccessFlags::SHADER_READ),
+        )];
         // SAFETY: cmd is recording; the image is ours, in PREINITIALIZED until now.
         unsafe {
             gpu.device.cmd_pipeline_barrier(
