@@ -673,6 +673,17 @@ fn fresh_home(name: &str) -> PathBuf {
     root
 }
 
+/// Writes the layer's log in `root`'s state folder, as the layer would have left it.
+fn write_layer_log(root: &Path, text: &str) {
+    let log = root.join("state/contrastxr/layer.log");
+    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
+    std::fs::write(&log, text).unwrap();
+}
+
+/// A log whose last app ran on the system "Glasses" (a [device."Glasses"] table applied).
+const GLASSES_LOG: &str = "2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b\n\
+     2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it\n";
+
 /// `contrastxr doctor --json` in `root`: the process and its report.
 fn doctor(root: &Path, env: &[(&str, &str)]) -> (Output, serde_json::Value) {
     let o = isolated(root, &["doctor", "--json"], env);
@@ -863,10 +874,8 @@ fn doctor_names_the_config_files_bad_line() {
 #[test]
 fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     let root = fresh_home("doctor-log");
-    let log = root.join("state/contrastxr/layer.log");
-    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
-    std::fs::write(
-        &log,
+    write_layer_log(
+        &root,
         "\
 2026-01-01T00:00:00.000Z [pid 7] layer loaded into /usr/bin/a
 2026-01-01T00:00:00.500Z [pid 7] enhancement began 0.200 s after the session started
@@ -874,8 +883,7 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
 2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it
 2026-01-01T00:00:01.200Z [pid 9] environment blend mode OPAQUE is not ADDITIVE: passing frames through (set CONTRASTXR_FORCE=1 to act anyway)
 ",
-    )
-    .unwrap();
+    );
     let config = root.join("config/contrastxr/config.toml");
     std::fs::create_dir_all(config.parent().unwrap()).unwrap();
     std::fs::write(&config, "background = \"color:#808080\"\n").unwrap();
@@ -1049,14 +1057,7 @@ fn config_print_names_the_table_each_value_came_from() {
 #[test]
 fn doctor_suggests_another_background_for_glasses_without_a_colour_camera() {
     let root = fresh_home("doctor-no-colour-camera");
-    let log = root.join("state/contrastxr/layer.log");
-    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
-    std::fs::write(
-        &log,
-        "2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b\n\
-         2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it\n",
-    )
-    .unwrap();
+    write_layer_log(&root, GLASSES_LOG);
     let (_, report) = doctor(&root, &[]);
     let c = finding(&report, "camera");
     assert_eq!(c["status"], "problem", "{c}");
@@ -1171,14 +1172,7 @@ fn pan_then_animate_writes_an_animation_of_the_captures() {
 #[test]
 fn doctor_says_whether_the_profiles_camera_is_connected() {
     let root = fresh_home("doctor-profile-camera");
-    let log = root.join("state/contrastxr/layer.log");
-    std::fs::create_dir_all(log.parent().unwrap()).unwrap();
-    std::fs::write(
-        &log,
-        "2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b\n\
-         2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it\n",
-    )
-    .unwrap();
+    write_layer_log(&root, GLASSES_LOG);
     let shipped = root.join("devices.toml");
     std::fs::write(
         &shipped,
