@@ -17,6 +17,36 @@ pub struct ImageRegion {
     pub extent: (u32, u32),
 }
 
+impl ImageRegion {
+    /// The copy of a rectangle at `(x, y)` inside the region (`size` pixels) from or to a
+    /// buffer at `buffer_offset`, rows tightly packed.
+    pub fn copy_of(
+        &self,
+        buffer_offset: u64,
+        (x, y): (i32, i32),
+        (width, height): (u32, u32),
+    ) -> vk::BufferImageCopy {
+        vk::BufferImageCopy::default()
+            .buffer_offset(buffer_offset)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .base_array_layer(self.array_index)
+                    .layer_count(1),
+            )
+            .image_offset(vk::Offset3D {
+                x: self.offset.0 + x,
+                y: self.offset.1 + y,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width,
+                height,
+                depth: 1,
+            })
+    }
+}
+
 fn subresource(layer: u32) -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange::default()
         .aspect_mask(vk::ImageAspectFlags::COLOR)
@@ -94,23 +124,7 @@ pub fn record_region_copy(
     pixels: &GpuBuffer,
     to_buffer: bool,
 ) {
-    let copy = [vk::BufferImageCopy::default()
-        .image_subresource(
-            vk::ImageSubresourceLayers::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .base_array_layer(region.array_index)
-                .layer_count(1),
-        )
-        .image_offset(vk::Offset3D {
-            x: region.offset.0,
-            y: region.offset.1,
-            z: 0,
-        })
-        .image_extent(vk::Extent3D {
-            width: region.extent.0,
-            height: region.extent.1,
-            depth: 1,
-        })];
+    let copy = [region.copy_of(0, (0, 0), region.extent)];
     let d = &gpu.device;
     // SAFETY: cmd is recording; the image is in GENERAL (record_layout_barriers) and the
     // region lies inside it and fits `pixels` (the caller's contract).

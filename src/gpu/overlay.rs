@@ -108,24 +108,7 @@ fn record_into_image(gpu: &GpuDevice, cmd: vk::CommandBuffer, o: &Overlay, regio
         .map(|c| {
             let pixel = c.dst_offset / bpp;
             let (x, y) = ((pixel % width) as i32, (pixel / width) as i32);
-            vk::BufferImageCopy::default()
-                .buffer_offset(c.src_offset)
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default()
-                        .aspect_mask(vk::ImageAspectFlags::COLOR)
-                        .base_array_layer(region.array_index)
-                        .layer_count(1),
-                )
-                .image_offset(vk::Offset3D {
-                    x: region.offset.0 + x,
-                    y: region.offset.1 + y,
-                    z: 0,
-                })
-                .image_extent(vk::Extent3D {
-                    width: (c.size / bpp) as u32,
-                    height: 1,
-                    depth: 1,
-                })
+            region.copy_of(c.src_offset, (x, y), ((c.size / bpp) as u32, 1))
         })
         .collect();
     // SAFETY: cmd is recording; the image is in GENERAL with transfer usage and every run lies
