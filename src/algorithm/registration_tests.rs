@@ -8,6 +8,18 @@ fn deg(a: f64) -> f64 {
     a.to_radians()
 }
 
+/// A camera of `horizontal` x `vertical` degrees at `pose`, registered at DISTANCE.
+fn fov_camera(horizontal: f64, vertical: f64, pose: Pose) -> CameraProfile {
+    CameraProfile {
+        lens: Lens::Fov {
+            horizontal: deg(horizontal),
+            vertical: deg(vertical),
+        },
+        pose,
+        scene_distance: DISTANCE,
+    }
+}
+
 fn symmetric(h: f64, v: f64) -> Fov {
     Fov {
         angle_left: -deg(h) / 2.0,
@@ -118,14 +130,7 @@ fn assert_registers(fov: &Fov, views: &[Pose], profile: &CameraProfile) -> Vec<C
 #[test]
 fn camera_at_the_eye_with_the_same_fov_is_identity() {
     let fov = symmetric(90.0, 70.0);
-    let profile = CameraProfile {
-        lens: Lens::Fov {
-            horizontal: deg(90.0),
-            vertical: deg(70.0),
-        },
-        pose: Pose::IDENTITY,
-        scene_distance: DISTANCE,
-    };
+    let profile = fov_camera(90.0, 70.0, Pose::IDENTITY);
     let view = Pose {
         position: DVec3::new(1.0, 2.0, 3.0),
         orientation: DQuat::from_rotation_y(0.4),
@@ -144,14 +149,11 @@ fn camera_at_the_eye_with_the_same_fov_is_identity() {
 
 #[test]
 fn offset_camera_with_parallel_axes_registers_both_eyes_affinely() {
-    let profile = CameraProfile {
-        lens: Lens::Fov {
-            horizontal: deg(100.0),
-            vertical: deg(80.0),
-        },
-        pose: Pose::from_position_pitch_yaw_roll([0.01, 0.025, -0.07], [0.0; 3]),
-        scene_distance: DISTANCE,
-    };
+    let profile = fov_camera(
+        100.0,
+        80.0,
+        Pose::from_position_pitch_yaw_roll([0.01, 0.025, -0.07], [0.0; 3]),
+    );
     let views = eyes(DQuat::from_euler(glam::EulerRot::YXZ, 0.7, -0.2, 0.1));
     for fov in [symmetric(90.0, 70.0), ASYMMETRIC] {
         let m = assert_registers(&fov, &views, &profile);
@@ -192,14 +194,11 @@ fn canted_views_share_the_head_between_them() {
     let head = head_pose(&views).unwrap();
     assert!(head.orientation.angle_between(DQuat::IDENTITY) < 1e-12);
     assert!((head.position - DVec3::new(0.3, 1.6, -0.4)).length() < 1e-12);
-    let profile = CameraProfile {
-        lens: Lens::Fov {
-            horizontal: deg(110.0),
-            vertical: deg(90.0),
-        },
-        pose: Pose::from_position_pitch_yaw_roll([0.0, 0.02, -0.05], [-5.0, 0.0, 0.0]),
-        scene_distance: DISTANCE,
-    };
+    let profile = fov_camera(
+        110.0,
+        90.0,
+        Pose::from_position_pitch_yaw_roll([0.0, 0.02, -0.05], [-5.0, 0.0, 0.0]),
+    );
     assert_registers(&ASYMMETRIC, &views, &profile);
 }
 
@@ -208,14 +207,11 @@ fn a_camera_at_the_eye_registers_every_depth() {
     // Pure rotation: the homography holds off the plane too.
     let fov = ASYMMETRIC;
     let view = Pose::IDENTITY;
-    let profile = CameraProfile {
-        lens: Lens::Fov {
-            horizontal: deg(120.0),
-            vertical: deg(100.0),
-        },
-        pose: Pose::from_position_pitch_yaw_roll([0.0; 3], [3.0, -7.0, 1.0]),
-        scene_distance: DISTANCE,
-    };
+    let profile = fov_camera(
+        120.0,
+        100.0,
+        Pose::from_position_pitch_yaw_roll([0.0; 3], [3.0, -7.0, 1.0]),
+    );
     let m = view_mapping(&fov, &view, &view, &profile).unwrap();
     let camera = profile.pose;
     for p in [DVec3::new(0.3, -0.2, -0.5), DVec3::new(-4.0, 3.0, -25.0)] {
@@ -227,14 +223,7 @@ fn a_camera_at_the_eye_registers_every_depth() {
 
 #[test]
 fn unusable_inputs_are_refused() {
-    let profile = CameraProfile {
-        lens: Lens::Fov {
-            horizontal: deg(90.0),
-            vertical: deg(70.0),
-        },
-        pose: Pose::IDENTITY,
-        scene_distance: DISTANCE,
-    };
+    let profile = fov_camera(90.0, 70.0, Pose::IDENTITY);
     let v = Pose::IDENTITY;
     let mut fov = symmetric(90.0, 70.0);
     fov.angle_left = 0.9;
