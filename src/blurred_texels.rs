@@ -8,6 +8,7 @@
 use crate::algorithm::params::{Params, MAX_BLUR_SIZE};
 use crate::colour;
 use crate::image::RgbaImage;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 /// Bits per linear channel in a packed texel (the GPU's LINEAR_BITS, checked equal there).
@@ -47,6 +48,23 @@ pub struct BlurredTexels {
     pub height: u32,
     pub blur: BlurTaps,
     pub bytes: Vec<u8>,
+    /// Names these texels among all prepared in the process (a clone keeps it): what a mapped
+    /// image written with them says it holds.
+    pub serial: u64,
+}
+
+/// Where a live source hands each frame's texels, on its own thread, before it publishes the
+/// frame (camera/frame.rs): the frame engine's mapped images (gpu/texel_slots.rs), so that
+/// the app's frame call finds them already written. Never blocks on the consumer.
+pub trait TexelSink: Send + Sync {
+    fn offer(&self, texels: &BlurredTexels);
+}
+
+/// The next `BlurredTexels::serial` (0 is never given).
+static NEXT_SERIAL: AtomicU64 = AtomicU64::new(1);
+
+fn next_serial() -> u64 {
+    NEXT_SERIAL.fetch_add(1, Ordering::Relaxed)
 }
 
 /// 2^23: adding it rounds an f32 in [0, 2^22] to an integer, ties to even (the default rounding
@@ -84,6 +102,7 @@ impl BlurredTexels {
                 height: 0,
                 blur,
                 bytes: Vec::new(),
+                serial: next_serial(),
             };
         }
         let rows = SCRATCH.with_borrow_mut(|scratch| {
@@ -109,6 +128,7 @@ impl BlurredTexels {
             height: camera.height,
             blur,
             bytes,
+            serial: next_serial(),
         }
     }
 

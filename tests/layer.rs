@@ -705,6 +705,13 @@ fn captures_follow_a_changing_video_background() {
         "no {direct:?}: {}",
         run.describe()
     );
+    // And from the second camera frame on, the source's thread writes them there itself.
+    let source = "live frames' texels are written into the mapped images on the camera's thread";
+    assert!(
+        run.stderr.contains(source),
+        "no {source:?}: {}",
+        run.describe()
+    );
     let views = captures(&dir);
     assert_eq!(views.len(), 24, "12 frames x 2 views captured");
     let mut distinct: Vec<Vec<[u8; 4]>> = Vec::new();

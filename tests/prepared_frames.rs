@@ -2,11 +2,13 @@
 //! layer on, over consecutive frames of a live background: each frame's views get that frame's
 //! enhancement, whether its texels went straight into a mapped image (the direct path), through
 //! the staging copy (forced), or through the GPU's decode and blur passes, and the direct path
-//! gives what the staging copy gives, bit for bit.
+//! gives what the staging copy gives, bit for bit; also when a source's thread writes the
+//! texels into the mapped images before the frame (the engine's `texel_sink`), while another
+//! thread keeps offering other frames' texels.
 
 use ash::vk;
 use contrastxr::algorithm::Params;
-use contrastxr::blurred_texels::{BlurTaps, BlurredTexels};
+use contrastxr::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
 use contrastxr::gpu::app_image::AppImage;
 use contrastxr::gpu::buffer::GpuBuffer;
 use contrastxr::gpu::commands::Commands;
@@ -19,6 +21,8 @@ use contrastxr::gpu::{
 };
 use contrastxr::image::RgbaImage;
 use gpu_allocator::MemoryLocation;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 
 const OPTIONS: DeviceOptions = DeviceOptions {
     index: 0,
@@ -54,19 +58,35 @@ fn submit(gpu: &GpuDevice, record: impl FnOnce(vk::CommandBuffer)) {
     c.destroy(gpu).unwrap();
 }
 
+/// How prepared texels reach the views.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Path {
+    /// Written by the frame into a mapped image.
+    Direct,
+    /// Through the staging buffer and an image copy.
+    Staged,
+    /// Written into a mapped image by the "source" before the frame (once the images exist).
+    Source,
+    /// As `Source`, while a thread offers other frames' texels all along.
+    Busy,
+}
+
 /// Two app images (two swapchains of one image each), left in COLOR_ATTACHMENT_OPTIMAL as an
 /// app leaves them for the runtime, and a frame engine that enhances them.
 struct Rig {
     engine: FrameEngine,
     images: [AppImage; 2],
     buffer: GpuBuffer,
+    path: Path,
+    /// The engine's sink as the busy thread sees it (refreshed after each frame).
+    sink: Arc<Mutex<Option<Arc<dyn TexelSink>>>>,
 }
 
 impl Rig {
-    fn new(direct: bool) -> Rig {
+    fn new(path: Path) -> Rig {
         let gpu = GpuDevice::create(&OPTIONS).unwrap();
         let mut engine = FrameEngine::new(gpu, &[]).unwrap();
-        engine.set_direct_texels(direct);
+        engine.set_direct_texels(path != Path::Staged);
         let gpu = &engine.gpu;
         let images =
             [0, 1].map(|_| AppImage::new(gpu, REGION, vk::Format::R8G8B8A8_UNORM).unwrap());
@@ -77,6 +97,8 @@ impl Rig {
             engine,
             images,
             buffer,
+            path,
+            sink: Arc::default(),
         }
     }
 
@@ -162,10 +184,15 @@ impl Rig {
             wait_for_pipelines: true,
         };
         let views = [self.view(i, &params)];
+        let source = matches!(self.path, Path::Source | Path::Busy);
+        if let (true, true, Some(sink)) = (source, prepared, self.engine.texel_sink()) {
+            sink.offer(&texels);
+        }
         let out = self
             .engine
             .process(&views, background, &params, None, options);
         assert!(out.is_ok(), "frame {sequence}: {:?}", out.err());
+        *self.sink.lock().unwrap() = self.engine.texel_sink();
     }
 
     fn finish(mut self) {
@@ -215,14 +242,43 @@ const PAIRS: [[(usize, bool, u64); 2]; 6] = [
     [(2, true, 9), (0, true, 10)],
 ];
 
-/// The outputs of every frame of PAIRS, by the engine taking the direct path or not.
-fn outputs(direct: bool, display: &RgbaImage, cameras: &[RgbaImage]) -> Vec<Vec<u8>> {
-    let mut rig = Rig::new(direct);
+/// A thread offering texels of `others` to the rig's current sink until stopped.
+fn busy_source(
+    sink: Arc<Mutex<Option<Arc<dyn TexelSink>>>>,
+    others: Vec<RgbaImage>,
+    stop: Arc<AtomicBool>,
+) -> std::thread::JoinHandle<u64> {
+    let blur = BlurTaps::of(&Params::default());
+    let texels: Vec<BlurredTexels> = others
+        .iter()
+        .map(|c| BlurredTexels::prepare(c, blur))
+        .collect();
+    std::thread::spawn(move || {
+        let mut offered = 0;
+        while !stop.load(Ordering::Relaxed) {
+            let current = sink.lock().unwrap().clone();
+            if let Some(sink) = current {
+                sink.offer(&texels[offered as usize % texels.len()]);
+                offered += 1;
+            }
+            std::thread::yield_now();
+        }
+        offered
+    })
+}
+
+/// The outputs of every frame of PAIRS, by the engine taking `path`.
+fn outputs(path: Path, display: &RgbaImage, cameras: &[RgbaImage]) -> Vec<Vec<u8>> {
+    let mut rig = Rig::new(path);
+    let direct = path != Path::Staged;
     assert_eq!(
         rig.engine.direct_texels(),
         direct,
         "direct path on lavapipe"
     );
+    let stop = Arc::new(AtomicBool::new(false));
+    let others: Vec<RgbaImage> = (0..3).map(|k| noise(CAMERA.0, CAMERA.1, 90 + k)).collect();
+    let busy = (path == Path::Busy).then(|| busy_source(rig.sink.clone(), others, stop.clone()));
     let mut out = Vec::new();
     for pair in PAIRS {
         rig.put(display);
@@ -230,6 +286,20 @@ fn outputs(direct: bool, display: &RgbaImage, cameras: &[RgbaImage]) -> Vec<Vec<
             rig.frame(i, &cameras[camera], prepared, sequence);
         }
         out.extend([rig.get(0), rig.get(1)]);
+    }
+    stop.store(true, Ordering::Relaxed);
+    if let Some(busy) = busy {
+        assert!(busy.join().unwrap() > 0, "the busy source offered nothing");
+    }
+    if path == Path::Source {
+        // Every prepared frame but those that made the images (the first, and the first after
+        // each of the two size changes) sampled what the source wrote.
+        let counts = rig.engine.texels_from_source();
+        assert_eq!(
+            counts,
+            (7, 10),
+            "frames sampling the source's texels, of the ring's"
+        );
     }
     // Still on after the camera's size changed (the images made again).
     assert_eq!(rig.engine.direct_texels(), direct, "direct path kept");
@@ -242,15 +312,29 @@ fn consecutive_live_frames_each_get_their_own_background() {
     let display = noise(REGION.0, REGION.1, 21);
     let mut cameras: Vec<RgbaImage> = (0..4).map(|k| noise(CAMERA.0, CAMERA.1, 5 + k)).collect();
     cameras.push(noise(CAMERA.0 - 16, CAMERA.1 + 8, 11));
-    let direct = outputs(true, &display, &cameras);
-    let staged = outputs(false, &display, &cameras);
+    let direct = outputs(Path::Direct, &display, &cameras);
+    let staged = outputs(Path::Staged, &display, &cameras);
+    let source = outputs(Path::Source, &display, &cameras);
+    let busy = outputs(Path::Busy, &display, &cameras);
     let frames = PAIRS.iter().flatten();
-    for (n, ((camera, prepared, sequence), (d, s))) in
-        frames.zip(direct.iter().zip(&staged)).enumerate()
-    {
+    for (n, (camera, prepared, sequence)) in frames.enumerate() {
         let want = expected(&display, &cameras[*camera], *prepared);
-        assert!(*d == want, "frame {n} (sequence {sequence}): direct path");
-        assert!(*s == want, "frame {n} (sequence {sequence}): staging copy");
+        assert!(
+            direct[n] == want,
+            "frame {n} (sequence {sequence}): direct path"
+        );
+        assert!(
+            staged[n] == want,
+            "frame {n} (sequence {sequence}): staging copy"
+        );
+        assert!(
+            source[n] == want,
+            "frame {n} (sequence {sequence}): source's writes"
+        );
+        assert!(
+            busy[n] == want,
+            "frame {n} (sequence {sequence}): busy source"
+        );
     }
     // The cameras give different outputs: a frame sampling another's texels would show.
     let distinct: Vec<Vec<u8>> = cameras

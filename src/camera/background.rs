@@ -1,6 +1,6 @@
 //! The running background source the consumer holds.
 
-use crate::blurred_texels::BlurTaps;
+use crate::blurred_texels::{BlurTaps, TexelSink};
 use crate::camera::error::CameraError;
 use crate::camera::files::{color_frame, image_frame, open_video, play};
 use crate::camera::frame::{Frame, Shared, SourceStatus};
@@ -90,6 +90,14 @@ impl Background {
     pub fn prepare_with(&self, blur: BlurTaps) {
         if let Source::Threaded { shared, .. } = &self.source {
             shared.want(blur);
+        }
+    }
+
+    /// Makes a live source write each new frame's prepared texels into `sink` (None: stop), on
+    /// its own thread before the frame is published. Static sources have no thread: nothing to do.
+    pub fn deliver_texels_to(&self, sink: Option<Arc<dyn TexelSink>>) {
+        if let Source::Threaded { shared, .. } = &self.source {
+            shared.deliver_to(sink);
         }
     }
 

@@ -1,6 +1,6 @@
 //! Frames, source status, and the latest-frame mailbox shared with the producer thread.
 
-use crate::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
 use crate::image::RgbaImage;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, TryLockError};
@@ -46,6 +46,8 @@ pub(crate) struct Shared {
     pub(crate) stop: AtomicBool,
     /// The blur each published frame is prepared with (None: not prepared).
     blur: Mutex<Option<BlurTaps>>,
+    /// Where prepared texels are written before the frame is published (None: nowhere).
+    sink: Mutex<Option<Arc<dyn TexelSink>>>,
 }
 
 impl Shared {
@@ -57,6 +59,7 @@ impl Shared {
             down_since_ns: AtomicU64::new(0),
             stop: AtomicBool::new(false),
             blur: Mutex::new(None),
+            sink: Mutex::new(None),
         }
     }
 
@@ -68,12 +71,18 @@ impl Shared {
         self.epoch + Duration::from_nanos(stamp - 1)
     }
 
-    /// Publishes `frame`, first prepared with the blur asked for: on the producer's thread, so
-    /// that the consumer's frame calls only copy it.
+    /// Publishes `frame`, first prepared with the blur asked for and handed to the sink: on the
+    /// producer's thread, so that the consumer's frame calls at most copy it.
     pub(crate) fn publish(&self, mut frame: Frame) {
         let blur = *self.blur.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(blur) = blur {
-            frame.prepared = Some(Arc::new(BlurredTexels::prepare(&frame.image, blur)));
+            let texels = BlurredTexels::prepare(&frame.image, blur);
+            // Cloned out of the lock: the consumer's `deliver_to` never waits for a write.
+            let sink = self.sink.lock().unwrap_or_else(|e| e.into_inner()).clone();
+            if let Some(sink) = sink {
+                sink.offer(&texels);
+            }
+            frame.prepared = Some(Arc::new(texels));
         }
         let mut slot = self.mailbox.lock().unwrap_or_else(|e| e.into_inner());
         *slot = Some(frame);
@@ -88,6 +97,21 @@ impl Shared {
     pub(crate) fn want(&self, blur: BlurTaps) {
         if let Ok(mut slot) = self.blur.try_lock() {
             *slot = Some(blur);
+        }
+    }
+
+    /// Makes `sink` (None: none) receive the prepared texels of the frames published from now
+    /// on. Never waits: while the producer reads the setting, the request is left to the next
+    /// call.
+    pub(crate) fn deliver_to(&self, sink: Option<Arc<dyn TexelSink>>) {
+        if let Ok(mut slot) = self.sink.try_lock() {
+            let same = match (&*slot, &sink) {
+                (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                (a, b) => a.is_none() && b.is_none(),
+            };
+            if !same {
+                *slot = sink;
+            }
         }
     }
 

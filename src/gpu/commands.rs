@@ -81,10 +81,9 @@ impl Commands {
         self.submitted + 1
     }
 
-    /// Whether submission `n` (a [`Commands::next_submission`]) has finished or was never made:
-    /// what it used may be written again.
-    pub fn finished(&self, n: u64) -> bool {
-        n <= self.finished || n > self.submitted
+    /// Submissions up to this number have finished (known from the last wait).
+    pub fn finished_through(&self) -> u64 {
+        self.finished
     }
 
     /// Begins recording a one-time submission; the previous one must have been waited for.

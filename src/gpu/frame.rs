@@ -174,7 +174,9 @@ impl FrameEngine {
 
     /// Waits for the previous submission (normally long done) so its buffers can be reused.
     pub(super) fn wait_idle(&mut self) -> Result<(), GpuError> {
-        self.commands.wait(&self.gpu, 5_000_000_000)
+        self.commands.wait(&self.gpu, 5_000_000_000)?;
+        self.ring.finished_through(self.commands.finished_through());
+        Ok(())
     }
 
     /// Makes the GPU background frame hold `image` (sequence identifies a new camera frame).

@@ -39,6 +39,7 @@ pub mod shaders;
 pub mod shared_fetch;
 mod storage_image;
 pub mod texel_ring;
+pub mod texel_slots;
 pub mod warm_up;
 
 pub use device::{DeviceOptions, GpuDevice};

@@ -18,8 +18,9 @@ use super::prepared_staging::new_staging;
 use super::texel_ring::TexelRing;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
-use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
+use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use ash::vk;
+use std::sync::Arc;
 
 // The CPU packs texels as the shaders do.
 const _: () = assert!(crate::blurred_texels::LINEAR_BITS == LINEAR_BITS);
@@ -114,6 +115,19 @@ impl FrameEngine {
         self.direct_texels
     }
 
+    /// Where a live source should write its frames' texels, on its own thread, for the next
+    /// frames to sample without a copy: the mapped images, once made (the first frame with
+    /// prepared texels makes them). None on the staging path.
+    pub fn texel_sink(&self) -> Option<Arc<dyn TexelSink>> {
+        self.direct_texels.then(|| self.ring.sink())?
+    }
+
+    /// Frames whose texels the source's thread had written, of the frames that sampled the
+    /// mapped images.
+    pub fn texels_from_source(&self) -> (u64, u64) {
+        (self.ring.from_source, self.ring.frames)
+    }
+
     /// Makes the frame sample its prepared texels, written straight into a mapped image no
     /// submitted frame samples, when they were made for `params`. False, with nothing done,
     /// when the frame takes another path, or before the wait for the previous frame (not
@@ -137,11 +151,10 @@ impl FrameEngine {
         let mappings: Vec<CameraMapping> = views.iter().map(|v| v.mapping).collect();
         let needed = CameraRect::sampled_by(&mappings, size);
         let seq = background.sequence;
-        let commands = &self.commands;
-        let finished = |n| commands.finished(n);
+        let submission = self.commands.next_submission();
         match self
             .ring
-            .write(&self.gpu, (texels, seq), &needed, finished, idle)
+            .write(&self.gpu, texels, &needed, submission, idle)
         {
             Ok(true) => {
                 self.background_sequence = seq;
@@ -149,10 +162,11 @@ impl FrameEngine {
                 true
             }
             Ok(false) => false,
-            // From now on through the staging buffer; the images are freed at the end.
+            // From now on through the staging buffer; the images are freed at the end (and
+            // take no more writes from the source now).
             Err(_) => {
                 self.direct_texels = false;
-                self.ring.active = false;
+                self.ring.close_to_source();
                 false
             }
         }

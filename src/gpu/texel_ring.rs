@@ -3,7 +3,9 @@
 //! headsets), a live background's prepared texels go straight into such an image, mapped for
 //! its life, which the enhancement then samples as its `blurred_texels`: no staging buffer and
 //! no image copy (gpu/prepared_background.rs). A ring of them, so that a frame's texels never
-//! go into an image a submitted frame may still sample.
+//! go into an image a submitted frame may still sample; a live source's thread writes each new
+//! frame's texels into one before it publishes the frame (gpu/texel_slots.rs, which keeps
+//! what each image holds and who may write it), so that the frame only binds it.
 
 use super::app_image::AppImage;
 use super::barrier::layout_change;
@@ -11,23 +13,21 @@ use super::device::GpuDevice;
 use super::engine::CameraRect;
 use super::error::GpuError;
 use super::resources::{colour_layer, TEXELS_FORMAT};
-use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
+use super::texel_slots::{MappedRows, Taken, TexelSlots};
+use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use ash::vk;
+use std::sync::Arc;
 
-/// Images in the ring: the one the frame in flight samples and the one the next frame writes.
-const SLOTS: usize = 2;
+/// Images in the ring: the one a submitted frame samples, the newest the source wrote (which
+/// the next frame takes), and the one the source writes next.
+const SLOTS: usize = 3;
 
 /// One mapped image of the ring.
 struct MappedTexels {
     image: AppImage,
     view: vk::ImageView,
     /// Where the image's texels lie in its memory (vkGetImageSubresourceLayout).
-    offset: usize,
-    row_pitch: usize,
-    /// The camera frame (sequence) and rectangle of texels the image holds.
-    holds: Option<(u64, CameraRect)>,
-    /// The submission that last sampled it (Commands::next_submission when recorded).
-    read_by: u64,
+    rows: MappedRows,
     /// Moved from PREINITIALIZED to GENERAL (once, by the first frame that samples it).
     in_general: bool,
 }
@@ -57,16 +57,21 @@ impl MappedTexels {
         };
         let row = size.0 as usize * TEXEL_BYTES;
         let (offset, row_pitch) = (layout.offset as usize, layout.row_pitch as usize);
-        let fits = image.mapped_mut().is_some_and(|m| {
-            row_pitch >= row && offset + row_pitch * (size.1 as usize - 1) + row <= m.len()
+        let mapped = image.mapped_mut().map(|m| (m.as_mut_ptr(), m.len()));
+        let fits = mapped.is_some_and(|(_, len)| {
+            row_pitch >= row && offset + row_pitch * (size.1 as usize - 1) + row <= len
         });
+        let (ptr, len) = mapped.unwrap_or((std::ptr::null_mut(), 0));
+        let rows = MappedRows {
+            ptr,
+            len,
+            offset,
+            row_pitch,
+        };
         let mut texels = MappedTexels {
             image,
             view,
-            offset,
-            row_pitch,
-            holds: None,
-            read_by: 0,
+            rows,
             in_general: false,
         };
         if !fits {
@@ -86,20 +91,6 @@ impl MappedTexels {
         Ok(texels)
     }
 
-    /// Copies the rows of `rect` from `texels` (16 bytes per texel, rows packed).
-    fn write(&mut self, texels: &BlurredTexels, rect: &CameraRect) {
-        let (offset, pitch) = (self.offset, self.row_pitch);
-        let dst = self.image.mapped_mut().expect("checked in new");
-        let row = texels.width as usize * TEXEL_BYTES;
-        let right = (rect.x + rect.width).min(texels.width) as usize;
-        let span = rect.x as usize * TEXEL_BYTES..right * TEXEL_BYTES;
-        for y in rect.y as usize..(rect.y + rect.height) as usize {
-            let (src, at) = (y * row, offset + y * pitch);
-            dst[at + span.start..at + span.end]
-                .copy_from_slice(&texels.bytes[src + span.start..src + span.end]);
-        }
-    }
-
     fn destroy(&mut self, gpu: &GpuDevice) {
         // SAFETY: the view is ours (null is ignored) and the GPU no longer uses it.
         unsafe { gpu.device.destroy_image_view(self.view, None) };
@@ -111,12 +102,17 @@ impl MappedTexels {
 /// The frame engine's mapped texel images, made at the camera's size when first needed.
 #[derive(Default)]
 pub struct TexelRing {
-    slots: Vec<MappedTexels>,
+    images: Vec<MappedTexels>,
+    /// What the images hold and who may write them; shared with the source's thread.
+    slots: Option<Arc<TexelSlots>>,
     size: (u32, u32),
-    /// The slot written last.
+    /// The image the frame samples (when `active`).
     current: usize,
-    /// The frame being recorded samples the current slot (else the background frame's image).
+    /// The frame being recorded samples the current image (else the background frame's image).
     pub(super) active: bool,
+    /// Frames that sampled texels the source's thread wrote, and all frames that sampled the ring.
+    pub(super) from_source: u64,
+    pub(super) frames: u64,
 }
 
 impl TexelRing {
@@ -131,46 +127,51 @@ impl TexelRing {
         features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE)
     }
 
-    /// Makes the current slot hold `rect` of `texels` (camera frame `sequence`), writing only
-    /// a slot whose last reader is `finished`, and makes the frame sample it. False, with
-    /// nothing done, when every slot may still be sampled, or when the images must be (re)made
-    /// at the texels' size and a submission may be in flight (not `idle`); an error when they
-    /// cannot be made.
+    /// Makes the frame to be submitted as `submission` sample an image holding `rect` of
+    /// `texels`: one the source's thread wrote them into, else one written now that no
+    /// unfinished submission samples. False, with nothing done, when every image may still be
+    /// sampled, or when the images must be (re)made at the texels' size and a submission may be
+    /// in flight (not `idle`); an error when they cannot be made.
     pub fn write(
         &mut self,
         gpu: &GpuDevice,
-        (texels, sequence): (&BlurredTexels, u64),
+        texels: &BlurredTexels,
         rect: &CameraRect,
-        finished: impl Fn(u64) -> bool,
+        submission: u64,
         idle: bool,
     ) -> Result<bool, GpuError> {
         let size = (texels.width, texels.height);
-        if self.size != size || self.slots.len() < SLOTS {
+        if self.size != size || self.slots.is_none() {
             if !idle {
                 return Ok(false);
             }
             self.make(gpu, size)?;
         }
-        let rect = match self.slots[self.current].holds {
-            Some((s, done)) if s == sequence && done.contains(rect) => {
-                self.active = true;
-                return Ok(true);
-            }
-            Some((s, done)) if s == sequence => done.union(rect),
-            _ => *rect,
-        };
-        let free = (1..=SLOTS)
-            .map(|k| (self.current + k) % SLOTS)
-            .find(|&i| finished(self.slots[i].read_by));
-        let Some(next) = free else {
+        let slots = self.slots.as_ref().expect("made above");
+        let taken = slots
+            .take(texels.serial, rect, submission)
+            .or_else(|| slots.write_for_frame(texels, rect, submission));
+        let Some(Taken { slot, by_source }) = taken else {
             return Ok(false);
         };
-        let slot = &mut self.slots[next];
-        slot.write(texels, &rect);
-        slot.holds = Some((sequence, rect));
-        self.current = next;
+        self.current = slot;
         self.active = true;
+        self.frames += 1;
+        self.from_source += u64::from(by_source);
         Ok(true)
+    }
+
+    /// Where a live source writes its frames' texels (None before the images are made).
+    pub fn sink(&self) -> Option<Arc<dyn TexelSink>> {
+        let slots = self.slots.clone()?;
+        Some(slots)
+    }
+
+    /// Submissions up to `n` have finished.
+    pub(super) fn finished_through(&self, n: u64) {
+        if let Some(slots) = &self.slots {
+            slots.finished_through(n);
+        }
     }
 
     fn make(&mut self, gpu: &GpuDevice, size: (u32, u32)) -> Result<(), GpuError> {
@@ -182,15 +183,17 @@ impl TexelRing {
             )));
         }
         for _ in 0..SLOTS {
-            let slot = MappedTexels::new(gpu, size);
-            match slot {
-                Ok(s) => self.slots.push(s),
+            let image = MappedTexels::new(gpu, size);
+            match image {
+                Ok(i) => self.images.push(i),
                 Err(e) => {
                     self.destroy(gpu);
                     return Err(e);
                 }
             }
         }
+        let rows = self.images.iter().map(|i| i.rows).collect();
+        self.slots = Some(Arc::new(TexelSlots::new(size, rows)));
         self.size = size;
         self.current = 0;
         Ok(())
@@ -199,23 +202,25 @@ impl TexelRing {
     /// The view of the image the frame samples, when it is one of the ring's.
     pub(super) fn sampled_view(&self) -> Option<vk::ImageView> {
         self.active
-            .then(|| self.slots.get(self.current))?
+            .then(|| self.images.get(self.current))?
             .map(|s| s.view)
     }
 
-    /// Records, for submission `submission`, that it samples the current slot, and the slot's
+    /// Records, for submission `submission`, that it samples the current image, and the image's
     /// first layout change (PREINITIALIZED keeps what the host wrote) before the shaders read.
     pub(super) fn record_use(&mut self, gpu: &GpuDevice, cmd: vk::CommandBuffer, submission: u64) {
-        let Some(slot) = self.slots.get_mut(self.current).filter(|_| self.active) else {
+        let Some(image) = self.images.get_mut(self.current).filter(|_| self.active) else {
             return;
         };
-        slot.read_by = submission;
-        if slot.in_general {
+        if let Some(slots) = &self.slots {
+            slots.sampled_by(self.current, submission);
+        }
+        if image.in_general {
             return;
         }
-        slot.in_general = true;
+        image.in_general = true;
         let to_general = [layout_change(
-            slot.image.raw,
+            image.image.raw,
             (vk::ImageLayout::PREINITIALIZED, vk::ImageLayout::GENERAL),
             (vk::AccessFlags::HOST_WRITE, vk::AccessFlags::SHADER_READ),
         )];
@@ -233,9 +238,21 @@ impl TexelRing {
         };
     }
 
-    /// Frees the images. No submission may still sample them.
+    /// The frame samples no image of the ring, and the source's thread writes none from now on.
+    pub(super) fn close_to_source(&mut self) {
+        self.active = false;
+        if let Some(slots) = &self.slots {
+            slots.close();
+        }
+    }
+
+    /// Frees the images, once the source's thread can no longer write them (a write under way
+    /// ends first). No submission may still sample them.
     pub fn destroy(&mut self, gpu: &GpuDevice) {
-        for mut s in self.slots.drain(..) {
+        if let Some(slots) = self.slots.take() {
+            slots.close();
+        }
+        for mut s in self.images.drain(..) {
             s.destroy(gpu);
         }
         self.size = (0, 0);

@@ -254,6 +254,10 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = None;
 }
 
+/// The log's line once a frame sampled texels its source's thread wrote into a mapped image.
+const SOURCE_TEXELS: &str =
+    "live frames' texels are written into the mapped images on the camera's thread, before the frame call";
+
 /// How a frame's texels, when its source prepared them, reach the views (the log's line).
 fn prepared_texels_path(prepared: bool, processor: &Processor) -> Option<&'static str> {
     prepared.then_some(match processor.direct_texels() {
@@ -289,9 +293,11 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
         return;
     }
     sources::open_when_needed(s);
-    if let Some(bg) = &s.background {
-        // Live frames come prepared for these settings from the source's thread.
+    if let (Some(bg), Some(processor)) = (&s.background, &s.processor) {
+        // Live frames come prepared for these settings from the source's thread, which also
+        // writes them into the images the views sample once the engine has made them.
         bg.prepare_with(BlurTaps::of(&s.settings.params));
+        bg.deliver_texels_to(processor.texel_sink());
     }
     let Some(frame) = background_frame(s) else {
         return;
@@ -306,6 +312,7 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
     let background = super::processor::background(&frame.image, prepared, sequence);
     let done = processor.process(&items, background, &s.settings, options);
     let texels_path = prepared_texels_path(prepared.is_some(), processor);
+    let from_source = processor.texels_from_source();
     match done {
         Ok(views) => {
             if s.processed == 0 {
@@ -321,6 +328,9 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
             );
             if let Some(line) = texels_path {
                 log::once("prepared-texels-path", line);
+            }
+            if from_source {
+                log::once("source-texels", SOURCE_TEXELS);
             }
             let in_place = items.iter().filter(|i| i.in_place).count();
             log::once(

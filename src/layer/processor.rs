@@ -5,12 +5,13 @@ use super::indicator::{self, Timer};
 use super::log;
 use super::settings::Settings;
 use crate::algorithm::params::Params;
-use crate::blurred_texels::BlurredTexels;
+use crate::blurred_texels::{BlurredTexels, TexelSink};
 use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions};
 use crate::gpu::overlay::OverlayPixels;
 use crate::gpu::pipelines::{BuildReport, ShaderId};
 use crate::gpu::{CapturedView, FrameView, GpuDevice, GpuError};
 use crate::image::RgbaImage;
+use std::sync::Arc;
 use std::time::Instant;
 
 pub struct Processor {
@@ -71,6 +72,16 @@ impl Processor {
     /// Whether live frames' prepared texels go straight into the images the views sample.
     pub fn direct_texels(&self) -> bool {
         self.engine().direct_texels()
+    }
+
+    /// Where the session's live source should write its frames' texels (gpu/texel_slots.rs).
+    pub fn texel_sink(&self) -> Option<Arc<dyn TexelSink>> {
+        self.engine().texel_sink()
+    }
+
+    /// Whether a frame has sampled texels the source's thread wrote into a mapped image.
+    pub fn texels_from_source(&self) -> bool {
+        self.engine().texels_from_source().0 > 0
     }
 
     pub fn build_report(&self) -> Option<BuildReport> {

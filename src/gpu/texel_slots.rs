@@ -1,0 +1,415 @@
+//! The bookkeeping of the frame engine's mapped texel images (gpu/texel_ring.rs), shared with a
+//! live source's thread, which writes each new frame's texels into one of them before it
+//! publishes the frame (`TexelSink`): the app's frame call then only binds that image. Either
+//! side writes an image only when no submission may still sample it, the frame being recorded
+//! does not sample it, and no other write is under way in it. The engine frees the memory only
+//! after `close`, which waits for a write under way; a closed ring takes no more writes.
+
+use super::engine::CameraRect;
+use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
+use std::sync::{Condvar, Mutex, MutexGuard};
+
+/// Where one image's texels lie in its mapped memory.
+#[derive(Clone, Copy)]
+pub(super) struct MappedRows {
+    pub(super) ptr: *mut u8,
+    pub(super) len: usize,
+    pub(super) offset: usize,
+    pub(super) row_pitch: usize,
+}
+
+// SAFETY: the memory stays mapped until the ring's `close` has returned, and only the holder
+// of the slot's `writing` claim writes it.
+unsafe impl Send for MappedRows {}
+
+impl MappedRows {
+    /// Copies the rows of `rect` from `texels` (16 bytes per texel, rows packed). The caller
+    /// holds the slot's writing claim and no submission samples the image.
+    fn write(&self, texels: &BlurredTexels, rect: &CameraRect) {
+        // SAFETY: mapped for `len` bytes until `close` (which waits for this write), and no one
+        // else reads or writes it now (the caller's claim; no submission samples it).
+        let dst = unsafe { std::slice::from_raw_parts_mut(self.ptr, self.len) };
+        let row = texels.width as usize * TEXEL_BYTES;
+        let right = (rect.x + rect.width).min(texels.width) as usize;
+        let span = rect.x as usize * TEXEL_BYTES..right * TEXEL_BYTES;
+        for y in rect.y as usize..(rect.y + rect.height) as usize {
+            let (src, at) = (y * row, self.offset + y * self.row_pitch);
+            dst[at + span.start..at + span.end]
+                .copy_from_slice(&texels.bytes[src + span.start..src + span.end]);
+        }
+    }
+}
+
+struct Slot {
+    rows: MappedRows,
+    /// The texels (`BlurredTexels::serial`) and rectangle the image holds.
+    holds: Option<(u64, CameraRect)>,
+    /// The last submission that sampled it (the engine's `Commands` numbering).
+    read_by: u64,
+    /// A write is under way (by the engine or the source).
+    writing: bool,
+    /// Its texels were written by the source's thread.
+    by_source: bool,
+}
+
+struct State {
+    slots: Vec<Slot>,
+    size: (u32, u32),
+    /// Submissions up to this one have finished.
+    finished: u64,
+    /// The slot the frame being recorded (or the last one) samples.
+    sampled: Option<usize>,
+    /// The slot written last.
+    newest: Option<usize>,
+    closed: bool,
+}
+
+impl State {
+    /// A slot either side may write now: not sampled by a submission that may still run nor
+    /// by the frame being recorded, nor written, and not `keep`.
+    fn free(&self, keep: Option<usize>) -> Option<usize> {
+        (0..self.slots.len()).find(|&i| {
+            let s = &self.slots[i];
+            !s.writing && s.read_by <= self.finished && Some(i) != self.sampled && Some(i) != keep
+        })
+    }
+}
+
+/// What a frame's texels need: the slot that holds them, whether the source wrote it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Taken {
+    pub slot: usize,
+    pub by_source: bool,
+}
+
+/// The ring's slots, shared by the engine (an `Arc` it keeps) and a source's thread (as its
+/// `TexelSink`).
+pub struct TexelSlots {
+    state: Mutex<State>,
+    /// Signalled when a write ends (for `close`).
+    written: Condvar,
+}
+
+impl TexelSlots {
+    pub(super) fn new(size: (u32, u32), rows: Vec<MappedRows>) -> TexelSlots {
+        let slots = rows
+            .into_iter()
+            .map(|rows| Slot {
+                rows,
+                holds: None,
+                read_by: 0,
+                writing: false,
+                by_source: false,
+            })
+            .collect();
+        let state = State {
+            slots,
+            size,
+            finished: 0,
+            sampled: None,
+            newest: None,
+            closed: false,
+        };
+        TexelSlots {
+            state: Mutex::new(state),
+            written: Condvar::new(),
+        }
+    }
+
+    fn lock(&self) -> MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Submissions up to `n` have finished: the slots they sampled may be written again.
+    pub fn finished_through(&self, n: u64) {
+        let mut state = self.lock();
+        state.finished = state.finished.max(n);
+    }
+
+    /// Makes the frame to be submitted as `submission` sample a slot holding `rect` of the
+    /// texels `serial`, when one does: no write.
+    pub fn take(&self, serial: u64, rect: &CameraRect, submission: u64) -> Option<Taken> {
+        let mut state = self.lock();
+        let held = |s: &Slot| {
+            !s.writing
+                && s.holds
+                    .is_some_and(|(n, done)| n == serial && done.contains(rect))
+        };
+        let slot = (0..state.slots.len()).find(|&i| held(&state.slots[i]))?;
+        Some(state.sample(slot, submission))
+    }
+
+    /// Writes `rect` of `texels` (with what a slot already holds of them) into a free slot, and
+    /// makes the frame to be submitted as `submission` sample it. None, with nothing written,
+    /// when no slot is free.
+    pub fn write_for_frame(
+        &self,
+        texels: &BlurredTexels,
+        rect: &CameraRect,
+        submission: u64,
+    ) -> Option<Taken> {
+        let mut state = self.lock();
+        let rect = state
+            .slots
+            .iter()
+            .filter_map(|s| s.holds.filter(|(n, _)| *n == texels.serial))
+            .fold(*rect, |r, (_, done)| r.union(&done));
+        // Keeping the newest when another is free: it may be the source's, for the next frame.
+        let slot = state.free(state.newest).or_else(|| state.free(None))?;
+        state.slots[slot].writing = true;
+        drop(state);
+        self.write_claimed(slot, texels, &rect, false);
+        Some(self.lock().sample(slot, submission))
+    }
+
+    /// The submission `submission` samples `slot` too (a frame of several submissions).
+    pub fn sampled_by(&self, slot: usize, submission: u64) {
+        let mut state = self.lock();
+        if let Some(s) = state.slots.get_mut(slot) {
+            s.read_by = s.read_by.max(submission);
+        }
+    }
+
+    /// Takes no more writes, and waits for one under way to end: then the memory may go.
+    pub fn close(&self) {
+        let mut state = self.lock();
+        state.closed = true;
+        while state.slots.iter().any(|s| s.writing) {
+            state = self.written.wait(state).unwrap_or_else(|e| e.into_inner());
+        }
+    }
+
+    /// Writes into `slot`, claimed by the caller (`writing`), then records what it holds.
+    fn write_claimed(&self, slot: usize, texels: &BlurredTexels, rect: &CameraRect, source: bool) {
+        // The claim keeps the slot and its memory (`close` waits) for this write alone.
+        let rows = self.lock().slots[slot].rows;
+        rows.write(texels, rect);
+        let mut state = self.lock();
+        let s = &mut state.slots[slot];
+        s.holds = Some((texels.serial, *rect));
+        s.by_source = source;
+        s.writing = false;
+        state.newest = Some(slot);
+        drop(state);
+        self.written.notify_all();
+    }
+}
+
+impl State {
+    fn sample(&mut self, slot: usize, submission: u64) -> Taken {
+        self.sampled = Some(slot);
+        let s = &mut self.slots[slot];
+        s.read_by = s.read_by.max(submission);
+        Taken {
+            slot,
+            by_source: s.by_source,
+        }
+    }
+}
+
+impl TexelSink for TexelSlots {
+    /// On the source's thread: the whole frame into a free slot other than the newest (which
+    /// the next frame may take), when the ring is open and of the texels' size; else nothing.
+    fn offer(&self, texels: &BlurredTexels) {
+        let mut state = self.lock();
+        if state.closed || state.size != (texels.width, texels.height) {
+            return;
+        }
+        let newest = state.newest;
+        let Some(slot) = state.free(newest) else {
+            return;
+        };
+        state.slots[slot].writing = true;
+        drop(state);
+        let all = CameraRect::full((texels.width, texels.height));
+        self.write_claimed(slot, texels, &all, true);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blurred_texels::BlurTaps;
+    use crate::image::RgbaImage;
+    use std::sync::Arc;
+
+    const SIZE: (u32, u32) = (8, 4);
+
+    /// Texels of a flat camera frame of grey `code` (distinct codes give distinct bytes).
+    fn texels(code: u8) -> BlurredTexels {
+        let camera = RgbaImage::new(SIZE.0, SIZE.1, [code, code, code, 255]);
+        BlurredTexels::prepare(&camera, BlurTaps::of(&Default::default()))
+    }
+
+    /// Three slots over host memory laid out as a padded linear image (pitch > row).
+    struct Memory {
+        bytes: Vec<Vec<u8>>,
+    }
+
+    const PITCH: usize = SIZE.0 as usize * TEXEL_BYTES + 32;
+
+    impl Memory {
+        fn new() -> Memory {
+            let len = 16 + PITCH * SIZE.1 as usize;
+            Memory {
+                bytes: (0..3).map(|_| vec![0u8; len]).collect(),
+            }
+        }
+
+        fn slots(&mut self) -> TexelSlots {
+            let rows = self
+                .bytes
+                .iter_mut()
+                .map(|b| MappedRows {
+                    ptr: b.as_mut_ptr(),
+                    len: b.len(),
+                    offset: 16,
+                    row_pitch: PITCH,
+                })
+                .collect();
+            TexelSlots::new(SIZE, rows)
+        }
+
+        /// Whether slot `i` holds all of `t`, row by row.
+        fn holds(&self, i: usize, t: &BlurredTexels) -> bool {
+            let row = SIZE.0 as usize * TEXEL_BYTES;
+            (0..SIZE.1 as usize).all(|y| {
+                let at = 16 + y * PITCH;
+                self.bytes[i][at..at + row] == t.bytes[y * row..(y + 1) * row]
+            })
+        }
+    }
+
+    fn all() -> CameraRect {
+        CameraRect::full(SIZE)
+    }
+
+    #[test]
+    fn the_source_writes_a_frame_the_engine_then_takes_without_a_write() {
+        let mut memory = Memory::new();
+        let slots = memory.slots();
+        let a = texels(40);
+        slots.offer(&a);
+        let taken = slots.take(a.serial, &all(), 1).expect("held");
+        assert!(taken.by_source);
+        drop(slots);
+        assert!(memory.holds(taken.slot, &a));
+    }
+
+    #[test]
+    fn no_write_lands_in_a_slot_a_submission_may_still_sample() {
+        let mut memory = Memory::new();
+        let slots = memory.slots();
+        let frames: Vec<BlurredTexels> = (0..8).map(|k| texels(20 * k + 10)).collect();
+        slots.offer(&frames[0]);
+        let first = slots.take(frames[0].serial, &all(), 1).unwrap().slot;
+        // Submission 1 runs (never finished): the source keeps offering new frames, and the
+        // next frames (submissions 2, 3) take them.
+        for (k, t) in frames[1..].iter().enumerate() {
+            slots.offer(t);
+            if k % 3 == 0 {
+                slots.take(t.serial, &all(), 2 + k as u64 / 3);
+            }
+        }
+        drop(slots);
+        assert!(memory.holds(first, &frames[0]), "sampled slot overwritten");
+    }
+
+    #[test]
+    fn the_source_keeps_the_newest_frame_and_writes_past_finished_submissions() {
+        let mut memory = Memory::new();
+        let slots = memory.slots();
+        let (a, b, c) = (texels(10), texels(90), texels(170));
+        slots.offer(&a);
+        let sa = slots.take(a.serial, &all(), 1).unwrap().slot;
+        slots.offer(&b);
+        slots.offer(&c);
+        // b was the newest when c came: c went into the third slot, and neither a (in flight)
+        // nor b was touched.
+        let sb = slots.take(b.serial, &all(), 2).expect("b kept").slot;
+        assert_ne!(sa, sb);
+        slots.finished_through(1);
+        let d = texels(250);
+        slots.offer(&d);
+        let sc = slots.take(c.serial, &all(), 3);
+        let sd = slots
+            .take(d.serial, &all(), 3)
+            .expect("d written where a was")
+            .slot;
+        assert_eq!(sd, sa, "only a's slot was free");
+        assert!(sc.is_some(), "c was the newest when d came: kept");
+        drop(slots);
+        assert!(memory.holds(sd, &d));
+        assert!(memory.holds(sb, &b));
+    }
+
+    #[test]
+    fn the_engine_writes_what_no_slot_holds_and_unites_rectangles() {
+        let mut memory = Memory::new();
+        let slots = memory.slots();
+        let a = texels(60);
+        let left = CameraRect {
+            x: 0,
+            y: 0,
+            width: 4,
+            height: SIZE.1,
+        };
+        let right = CameraRect { x: 4, ..left };
+        let first = slots.write_for_frame(&a, &left, 1).unwrap();
+        assert!(!first.by_source);
+        assert!(
+            slots.take(a.serial, &right, 2).is_none(),
+            "right half not written"
+        );
+        slots.finished_through(1);
+        let both = slots.write_for_frame(&a, &right, 2).unwrap();
+        assert_ne!(
+            both.slot, first.slot,
+            "slot 1 is sampled by the frame before"
+        );
+        assert!(slots.take(a.serial, &all(), 3).is_some());
+        drop(slots);
+        assert!(memory.holds(both.slot, &a), "both halves in one slot");
+    }
+
+    #[test]
+    fn a_closed_ring_or_a_frame_of_another_size_takes_no_write() {
+        let mut memory = Memory::new();
+        let slots = memory.slots();
+        let other = BlurredTexels::prepare(
+            &RgbaImage::new(4, 4, [1, 2, 3, 255]),
+            BlurTaps::of(&Default::default()),
+        );
+        slots.offer(&other);
+        assert!(slots
+            .take(other.serial, &CameraRect::full((4, 4)), 1)
+            .is_none());
+        slots.close();
+        let a = texels(30);
+        slots.offer(&a);
+        assert!(slots.take(a.serial, &all(), 1).is_none());
+    }
+
+    #[test]
+    fn close_waits_for_a_write_under_way() {
+        let mut memory = Memory::new();
+        let slots = Arc::new(memory.slots());
+        let frames: Arc<Vec<BlurredTexels>> = Arc::new((0..4).map(|k| texels(50 * k)).collect());
+        let writer = {
+            let (slots, frames) = (slots.clone(), frames.clone());
+            std::thread::spawn(move || {
+                for k in 0..2000 {
+                    slots.offer(&frames[k % 4]);
+                    slots.finished_through(k as u64);
+                }
+            })
+        };
+        std::thread::sleep(std::time::Duration::from_millis(2));
+        slots.close();
+        // No write is under way after close returns, and none starts: the memory is stable.
+        let copy = memory.bytes.clone();
+        writer.join().unwrap();
+        drop(slots);
+        assert!(copy == memory.bytes, "a write after close");
+    }
+}
