@@ -74,6 +74,21 @@ impl CameraRect {
             && other.y + other.height <= self.y + self.height
     }
 
+    /// This rectangle grown by `margin` texels on each side within a `size` frame (x kept a
+    /// multiple of 4).
+    pub fn grown(&self, margin: u32, size: (u32, u32)) -> CameraRect {
+        let x = self.x.saturating_sub(margin) / 4 * 4;
+        let y = self.y.saturating_sub(margin);
+        let right = (self.x + self.width + margin).min(size.0);
+        let bottom = (self.y + self.height + margin).min(size.1);
+        CameraRect {
+            x,
+            y,
+            width: right.saturating_sub(x),
+            height: bottom.saturating_sub(y),
+        }
+    }
+
     /// The smallest rectangle holding both.
     pub fn union(&self, other: &CameraRect) -> CameraRect {
         let (x, y) = (self.x.min(other.x), self.y.min(other.y));

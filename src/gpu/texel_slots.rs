@@ -61,6 +61,8 @@ struct State {
     sampled: Option<usize>,
     /// The slot written last.
     newest: Option<usize>,
+    /// The texels the last frame sampled (None: none yet).
+    wanted: Option<CameraRect>,
     closed: bool,
 }
 
@@ -108,6 +110,7 @@ impl TexelSlots {
             finished: 0,
             sampled: None,
             newest: None,
+            wanted: None,
             closed: false,
         };
         TexelSlots {
@@ -130,6 +133,7 @@ impl TexelSlots {
     /// texels `serial`, when one does: no write.
     pub fn take(&self, serial: u64, rect: &CameraRect, submission: u64) -> Option<Taken> {
         let mut state = self.lock();
+        state.wanted = Some(*rect);
         let held = |s: &Slot| {
             !s.writing
                 && s.holds
@@ -149,6 +153,7 @@ impl TexelSlots {
         submission: u64,
     ) -> Option<Taken> {
         let mut state = self.lock();
+        state.wanted = Some(*rect);
         let rect = state
             .slots
             .iter()
@@ -207,12 +212,19 @@ impl State {
     }
 }
 
+/// Texels around what the last frame sampled that the source writes too, on each side: the
+/// views' mappings move with the head between frames (about 30 texels of a 640-wide camera per
+/// 30 Hz frame at 100 degrees per second). A frame that samples beyond writes them itself.
+pub const SOURCE_MARGIN: u32 = 48;
+
 impl TexelSink for TexelSlots {
-    /// On the source's thread: the whole frame into a free slot other than the newest (which
-    /// the next frame may take), when the ring is open and of the texels' size; else nothing.
+    /// On the source's thread: what the last frame sampled, grown by SOURCE_MARGIN (the whole
+    /// frame before any), into a free slot other than the newest (which the next frame may
+    /// take), when the ring is open and of the texels' size; else nothing.
     fn offer(&self, texels: &BlurredTexels) {
         let mut state = self.lock();
-        if state.closed || state.size != (texels.width, texels.height) {
+        let size = (texels.width, texels.height);
+        if state.closed || state.size != size {
             return;
         }
         let newest = state.newest;
@@ -220,9 +232,11 @@ impl TexelSink for TexelSlots {
             return;
         };
         state.slots[slot].writing = true;
+        let rect = state
+            .wanted
+            .map_or(CameraRect::full(size), |r| r.grown(SOURCE_MARGIN, size));
         drop(state);
-        let all = CameraRect::full((texels.width, texels.height));
-        self.write_claimed(slot, texels, &all, true);
+        self.write_claimed(slot, texels, &rect, true);
     }
 }
 
@@ -388,6 +402,49 @@ mod tests {
         let a = texels(30);
         slots.offer(&a);
         assert!(slots.take(a.serial, &all(), 1).is_none());
+    }
+
+    #[test]
+    fn the_source_writes_what_the_last_frame_sampled_and_a_margin() {
+        let size = (256u32, 4u32);
+        let pitch = size.0 as usize * TEXEL_BYTES;
+        let mut bytes: Vec<Vec<u8>> = (0..3).map(|_| vec![0u8; pitch * 4]).collect();
+        let rows = bytes
+            .iter_mut()
+            .map(|b| MappedRows {
+                ptr: b.as_mut_ptr(),
+                len: b.len(),
+                offset: 0,
+                row_pitch: pitch,
+            })
+            .collect();
+        let slots = TexelSlots::new(size, rows);
+        let blur = BlurTaps::of(&Default::default());
+        let camera = |code| BlurredTexels::prepare(&RgbaImage::new(256, 4, [code; 4]), blur);
+        let (a, b) = (camera(10), camera(200));
+        let sampled = CameraRect {
+            x: 100,
+            y: 0,
+            width: 40,
+            height: 4,
+        };
+        slots.write_for_frame(&a, &sampled, 1).unwrap();
+        slots.offer(&b);
+        // 52 = 100 - SOURCE_MARGIN, a multiple of 4; 188 = 140 + SOURCE_MARGIN.
+        let near = CameraRect {
+            x: 52,
+            width: 188 - 52,
+            ..sampled
+        };
+        let beyond = CameraRect { x: 48, ..near };
+        assert!(slots.take(b.serial, &beyond, 2).is_none());
+        let taken = slots.take(b.serial, &near, 2).expect("within the margin");
+        assert!(taken.by_source);
+        drop(slots);
+        let written =
+            |x: usize| bytes[taken.slot][x * TEXEL_BYTES..(x + 1) * TEXEL_BYTES] != [0; 16];
+        assert!(written(52) && written(187));
+        assert!(!written(51) && !written(188), "beyond the margin");
     }
 
     #[test]

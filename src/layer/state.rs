@@ -68,6 +68,10 @@ impl SessionState {
             p.stop_building();
             self.retired.push(p);
         }
+        // Its mapped images stay valid until it is dropped, but no frame samples them now.
+        if let Some(bg) = &self.background {
+            bg.deliver_texels_to(None);
+        }
     }
 }
 
