@@ -186,17 +186,38 @@ impl TexelSlots {
 
     /// Writes into `slot`, claimed by the caller (`writing`), then records what it holds.
     fn write_claimed(&self, slot: usize, texels: &BlurredTexels, rect: &CameraRect, source: bool) {
-        // The claim keeps the slot and its memory (`close` waits) for this write alone.
+        // The claim keeps the slot and its memory (`close` waits) for this write alone; the
+        // guard gives it up even if the write panics, so that `close` never waits for ever.
+        let claim = Claim { slots: self, slot };
         let rows = self.lock().slots[slot].rows;
         rows.write(texels, rect);
         let mut state = self.lock();
         let s = &mut state.slots[slot];
         s.holds = Some((texels.serial, *rect));
         s.by_source = source;
-        s.writing = false;
         state.newest = Some(slot);
         drop(state);
-        self.written.notify_all();
+        drop(claim);
+    }
+}
+
+/// A slot's `writing` claim: released, and `close` told, when dropped (also by a panic, which
+/// leaves the slot holding nothing).
+struct Claim<'a> {
+    slots: &'a TexelSlots,
+    slot: usize,
+}
+
+impl Drop for Claim<'_> {
+    fn drop(&mut self) {
+        let mut state = self.slots.lock();
+        let s = &mut state.slots[self.slot];
+        if std::thread::panicking() {
+            s.holds = None;
+        }
+        s.writing = false;
+        drop(state);
+        self.slots.written.notify_all();
     }
 }
 
@@ -445,6 +466,31 @@ mod tests {
             |x: usize| bytes[taken.slot][x * TEXEL_BYTES..(x + 1) * TEXEL_BYTES] != [0; 16];
         assert!(written(52) && written(187));
         assert!(!written(51) && !written(188), "beyond the margin");
+    }
+
+    #[test]
+    fn a_write_that_panics_gives_its_slot_back() {
+        // Memory too short for the frame: the write panics on its first row.
+        let mut short = vec![vec![0u8; 16]; 3];
+        let rows = short
+            .iter_mut()
+            .map(|b| MappedRows {
+                ptr: b.as_mut_ptr(),
+                len: b.len(),
+                offset: 0,
+                row_pitch: PITCH,
+            })
+            .collect();
+        let slots = TexelSlots::new(SIZE, rows);
+        let a = texels(70);
+        let offered = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| slots.offer(&a)));
+        assert!(offered.is_err(), "the write did not panic");
+        assert!(
+            slots.take(a.serial, &all(), 1).is_none(),
+            "holds a torn write"
+        );
+        // Returns: no claim is left behind.
+        slots.close();
     }
 
     #[test]
