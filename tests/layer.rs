@@ -706,7 +706,7 @@ fn captures_follow_a_changing_video_background() {
         run.describe()
     );
     // And from the second camera frame on, the source's thread writes them there itself.
-    let source = "live frames' texels are written into the mapped images on the camera's thread";
+    let source = "live frames' texels are written into mapped memory on the camera's thread";
     assert!(
         run.stderr.contains(source),
         "no {source:?}: {}",

@@ -59,9 +59,10 @@ pub struct FrameEngine {
     /// The background sequence the blurred camera image was prepared for (once per camera
     /// frame, whatever the number of views), and the camera texels prepared.
     pub(super) prepared_for: Option<(u64, CameraRect)>,
-    /// Texels prepared by the background's source, on their way into the sampled image.
+    /// Whether the camera buffer is behind the frame in use (its texels came prepared).
     pub(super) staged: PreparedStaging,
-    /// Mapped images prepared texels are written straight into, where the device allows.
+    /// Where prepared texels are written: mapped images the views sample where the device
+    /// allows (`direct_texels`), else staging buffers.
     pub(super) ring: TexelRing,
     pub(super) direct_texels: bool,
     pub(super) views: HashMap<ViewKey, PreparedView>,
@@ -305,8 +306,8 @@ impl FrameEngine {
         self.pipelines_ready(views, params, options.wait_for_pipelines)?;
         self.request_shared_fetches(views, params, background.image);
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
-        // Before the wait: prepared texels may go into a mapped image no submitted frame samples.
-        let written = self.write_direct(&background, views, params, false);
+        // Before the wait: prepared texels may be in, or go into, a slot no submitted frame reads.
+        let written = self.write_direct(&background, views, params, false)?;
         // The previous submission read the camera buffer the upload writes.
         self.wait_idle()?;
         if !written && !self.stage_prepared(&background, views, params)? {
@@ -408,7 +409,6 @@ impl FrameEngine {
             bg.destroy(&self.gpu);
         }
         self.overlays.destroy(&self.gpu);
-        self.staged.destroy(&self.gpu);
         self.ring.destroy(&self.gpu);
         self.app_views.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);

@@ -1,10 +1,11 @@
 //! A camera frame whose texels its source prepared on the CPU (crate::blurred_texels, on the
 //! source's own thread), instead of the camera upload and the decode and blur passes
-//! (gpu/record.rs, record_background): the frame writes the texels the views sample straight
-//! into a mapped image the views then sample (gpu/texel_ring.rs) where the device allows it,
-//! else into a host-visible staging buffer, copied into the background frame's image with one
-//! vkCmdCopyBufferToImage. The passes remain for frames that come without prepared texels, or
-//! with texels made for other blur settings, and for the offline engine.
+//! (gpu/record.rs, record_background): the texels the views sample are in a slot of the texel
+//! ring (gpu/texel_ring.rs), written by the source's thread before the frame or else by the
+//! frame: a mapped image the views then sample where the device allows it, else a host-visible
+//! staging buffer, copied into the background frame's image with one vkCmdCopyBufferToImage.
+//! The passes remain for frames that come without prepared texels, or with texels made for
+//! other blur settings, and for the offline engine.
 
 use super::barrier::layout_change;
 use super::buffer::GpuBuffer;
@@ -104,7 +105,7 @@ impl Engine {
 
 impl FrameEngine {
     /// Whether prepared texels go straight into mapped images: on where the device samples
-    /// them (the default), off forces the staging buffer and the image copy.
+    /// them (the default), off forces the staging buffers and the image copy.
     pub fn set_direct_texels(&mut self, on: bool) {
         self.direct_texels = on && TexelRing::supported(&self.gpu);
     }
@@ -116,66 +117,85 @@ impl FrameEngine {
     }
 
     /// Where a live source should write its frames' texels, on its own thread, for the next
-    /// frames to sample without a copy: the mapped images, once made (the first frame with
-    /// prepared texels makes them). None on the staging path.
+    /// frames to use without a write of their own: the texel ring, once made (the first frame
+    /// with prepared texels makes it).
     pub fn texel_sink(&self) -> Option<Arc<dyn TexelSink>> {
-        self.direct_texels.then(|| self.ring.sink())?
+        self.ring.sink()
     }
 
-    /// Frames whose texels the source's thread had written, of the frames that sampled the
-    /// mapped images.
+    /// Frames whose texels the source's thread had written, of the frames that used the ring.
     pub fn texels_from_source(&self) -> (u64, u64) {
         (self.ring.from_source, self.ring.frames)
     }
 
-    /// Makes the frame sample its prepared texels, written straight into a mapped image no
-    /// submitted frame samples, when they were made for `params`. False, with nothing done,
+    /// Makes the frame's background its prepared texels, when they were made for `params`, from
+    /// a slot of the texel ring: sampled there (mapped images), or copied from there into the
+    /// background frame's image, unless that holds them already. Ok(false), with nothing done,
     /// when the frame takes another path, or before the wait for the previous frame (not
-    /// `idle`) when the images must be (re)made or are all in use.
+    /// `idle`) when the slots must be (re)made or are all in use; an error when the staging
+    /// buffers cannot be made.
     pub(super) fn write_direct(
         &mut self,
         background: &FrameBackground,
         views: &[FrameView],
         params: &Params,
         idle: bool,
-    ) -> bool {
+    ) -> Result<bool, GpuError> {
         let image = background.image;
         let size = (image.width, image.height);
-        let texels = background.prepared.filter(|t| t.made_for(size, params));
-        let (true, Some(texels)) = (self.direct_texels, texels) else {
-            return false;
+        let Some(texels) = background.prepared.filter(|t| t.made_for(size, params)) else {
+            return Ok(false);
         };
         if self.background.as_ref().is_none_or(|b| b.size != size) {
-            return false;
+            return Ok(false);
         }
         let mappings: Vec<CameraMapping> = views.iter().map(|v| v.mapping).collect();
         let needed = CameraRect::sampled_by(&mappings, size);
         let seq = background.sequence;
+        let sampled = self.direct_texels;
+        let rect = match self.prepared_for {
+            _ if sampled => needed,
+            // The background frame's image holds them: nothing to copy.
+            Some((s, done)) if s == seq && done.contains(&needed) => {
+                self.ring.active = false;
+                self.uses_prepared(seq);
+                return Ok(true);
+            }
+            Some((s, done)) if s == seq => done.union(&needed),
+            _ => needed,
+        };
         let submission = self.commands.next_submission();
         match self
             .ring
-            .write(&self.gpu, texels, &needed, submission, idle)
+            .write(&self.gpu, texels, &rect, (submission, sampled), idle)
         {
             Ok(true) => {
-                self.background_sequence = seq;
-                self.staged.camera_behind = true;
-                true
+                self.uses_prepared(seq);
+                if !sampled {
+                    self.prepared_for = Some((seq, rect));
+                }
+                Ok(true)
             }
-            Ok(false) => false,
-            // From now on through the staging buffer; the images are freed at the end (and
-            // take no more writes from the source now).
-            Err(_) => {
+            Ok(false) => Ok(false),
+            // From now on through the staging buffers (made by the next call with `idle`).
+            Err(_) if sampled => {
                 self.direct_texels = false;
                 self.ring.close_to_source();
-                false
+                Ok(false)
             }
+            Err(e) => Err(e),
         }
     }
 
-    /// Makes the frame's background its prepared texels when they were made for `params`:
-    /// writes those the views sample into a mapped image (`write_direct`) or the staging buffer
-    /// for `record_prepared_copy`. False, with nothing done, when the frame must be prepared
-    /// on the GPU. Only with no submission in flight.
+    /// The frame's background is camera frame `seq`, whose texels came prepared.
+    fn uses_prepared(&mut self, seq: u64) {
+        self.background_sequence = seq;
+        self.staged.camera_behind = true;
+    }
+
+    /// `write_direct` with no submission in flight: the background frame made, and the slots
+    /// made or remade as needed. False, with nothing done, when the frame must be prepared on
+    /// the GPU.
     pub(super) fn stage_prepared(
         &mut self,
         background: &FrameBackground,
@@ -185,54 +205,22 @@ impl FrameEngine {
         let image = background.image;
         let size = (image.width, image.height);
         self.ring.active = false;
-        let Some(texels) = background.prepared.filter(|t| t.made_for(size, params)) else {
-            return Ok(false);
-        };
-        self.ensure_background(size)?;
-        if self.write_direct(background, views, params, true) {
-            return Ok(true);
-        }
-        let seq = background.sequence;
-        let mappings: Vec<CameraMapping> = views.iter().map(|v| v.mapping).collect();
-        let needed = CameraRect::sampled_by(&mappings, size);
-        let rect = match self.prepared_for {
-            Some((s, done)) if s == seq && done.contains(&needed) => return Ok(true),
-            Some((s, done)) if s == seq => done.union(&needed),
-            _ => needed,
-        };
-        self.write_staging(texels, &rect)?;
-        self.background_sequence = seq;
-        self.prepared_for = Some((seq, rect));
-        self.staged.camera_behind = true;
-        Ok(true)
-    }
-
-    /// Copies the rows of `rect` into the staging buffer (made or remade for the frame's size).
-    fn write_staging(&mut self, texels: &BlurredTexels, rect: &CameraRect) -> Result<(), GpuError> {
-        let bytes = texels.bytes.len() as u64;
-        if self
-            .staged
-            .buffer
-            .as_ref()
-            .is_none_or(|b| b.size != bytes.max(16))
+        if background
+            .prepared
+            .is_none_or(|t| !t.made_for(size, params))
         {
-            self.staged.destroy(&self.gpu);
-            self.staged.buffer = Some(new_staging(&self.gpu, bytes)?);
+            return Ok(false);
         }
-        let buffer = self.staged.buffer.as_mut().expect("made above");
-        let dst = buffer
-            .mapped_mut()
-            .ok_or_else(|| GpuError::Unsupported("staging buffer is not host-visible".into()))?;
-        let row = texels.width as usize * TEXEL_BYTES;
-        let right = (rect.x + rect.width).min(texels.width) as usize;
-        let span = rect.x as usize * TEXEL_BYTES..right * TEXEL_BYTES;
-        for y in rect.y as usize..(rect.y + rect.height) as usize {
-            let at = y * row;
-            let range = at + span.start..at + span.end;
-            dst[range.clone()].copy_from_slice(&texels.bytes[range]);
+        self.ensure_background(size)?;
+        // A second try takes the staging buffers when the mapped images could not be made.
+        for _ in 0..2 {
+            if self.write_direct(background, views, params, true)? {
+                return Ok(true);
+            }
         }
-        self.staged.pending = Some(*rect);
-        Ok(())
+        Err(GpuError::Unsupported(
+            "no slot of the texel ring is free with the GPU idle".into(),
+        ))
     }
 
     /// The GPU path for a frame whose texels came unprepared: the camera buffer must hold it,
@@ -266,12 +254,12 @@ impl FrameEngine {
         }
     }
 
-    /// Records the copy of the staged texels, once, at the start of the frame's commands.
+    /// Records the copy of the frame's staged texels, once, at the start of its commands.
     pub(super) fn record_prepared_copy(&mut self) {
-        let Some(rect) = self.staged.pending.take() else {
+        let Some(bg) = &self.background else {
             return;
         };
-        let (Some(bg), Some(staging)) = (&self.background, &self.staged.buffer) else {
+        let Some((staging, rect)) = self.ring.take_copy() else {
             return;
         };
         let cmd = self.commands.cmd;

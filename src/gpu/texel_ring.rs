@@ -1,25 +1,30 @@
-//! Sampled images the CPU writes: where the device samples R32G32B32A32_UINT images with linear
-//! tiling and has device-local host-visible memory for them (integrated GPUs, CPU drivers, standalone
-//! headsets), a live background's prepared texels go straight into such an image, mapped for
-//! its life, which the enhancement then samples as its `blurred_texels`: no staging buffer and
-//! no image copy (gpu/prepared_background.rs). A ring of them, so that a frame's texels never
-//! go into an image a submitted frame may still sample; a live source's thread writes each new
-//! frame's texels into one before it publishes the frame (gpu/texel_slots.rs, which keeps
-//! what each image holds and who may write it), so that the frame only binds it.
+//! Memory the CPU writes a live background's prepared texels into (gpu/prepared_background.rs),
+//! a ring of three so that a frame's texels never go into memory a submitted frame may still
+//! read, and so that a live source's thread can write each new frame's texels into one before
+//! it publishes the frame (gpu/texel_slots.rs keeps what each holds and who may write it); the
+//! frame then only uses it. Either
+//! - sampled images: where the device samples R32G32B32A32_UINT images with linear tiling and
+//!   has device-local host-visible memory for them (integrated GPUs, CPU drivers, standalone
+//!   headsets), images mapped for their life, which the enhancement samples as its
+//!   `blurred_texels`: no image copy; or
+//! - staging buffers (elsewhere, e.g. a discrete GPU), which the frame's commands copy into the
+//!   background frame's image with one vkCmdCopyBufferToImage.
 
 use super::app_image::AppImage;
 use super::barrier::layout_change;
+use super::buffer::GpuBuffer;
 use super::device::GpuDevice;
 use super::engine::CameraRect;
 use super::error::GpuError;
+use super::prepared_staging::new_staging;
 use super::resources::{colour_layer, TEXELS_FORMAT};
 use super::texel_slots::{MappedRows, Taken, TexelSlots};
 use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use ash::vk;
 use std::sync::Arc;
 
-/// Images in the ring: the one a submitted frame samples, the newest the source wrote (which
-/// the next frame takes), and the one the source writes next.
+/// Slots in the ring: the one a submitted frame reads, the newest the source wrote (which the
+/// next frame takes), and the one the source writes next.
 const SLOTS: usize = 3;
 
 /// One mapped image of the ring.
@@ -99,18 +104,37 @@ impl MappedTexels {
     }
 }
 
-/// The frame engine's mapped texel images, made at the camera's size when first needed.
+/// A slot's memory: an image the views sample, or a buffer copied into the background's image.
+enum SlotMemory {
+    Image(MappedTexels),
+    Buffer(GpuBuffer),
+}
+
+impl SlotMemory {
+    fn destroy(&mut self, gpu: &GpuDevice) {
+        match self {
+            SlotMemory::Image(i) => i.destroy(gpu),
+            SlotMemory::Buffer(b) => b.destroy(gpu),
+        }
+    }
+}
+
+/// The frame engine's texel ring, made at the camera's size when first needed.
 #[derive(Default)]
 pub struct TexelRing {
-    images: Vec<MappedTexels>,
-    /// What the images hold and who may write them; shared with the source's thread.
+    memory: Vec<SlotMemory>,
+    /// What the slots hold and who may write them; shared with the source's thread.
     slots: Option<Arc<TexelSlots>>,
     size: (u32, u32),
-    /// The image the frame samples (when `active`).
+    /// The slots are images the views sample (else staging buffers).
+    sampled: bool,
+    /// The slot the frame uses (when `active`).
     current: usize,
-    /// The frame being recorded samples the current image (else the background frame's image).
+    /// The frame being recorded uses the current slot: samples it (images), or copies from it
+    /// (buffers; `copy` says which rectangle).
     pub(super) active: bool,
-    /// Frames that sampled texels the source's thread wrote, and all frames that sampled the ring.
+    copy: Option<CameraRect>,
+    /// Frames that used texels the source's thread wrote, and all frames that used the ring.
     pub(super) from_source: u64,
     pub(super) frames: u64,
 }
@@ -127,25 +151,26 @@ impl TexelRing {
         features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE)
     }
 
-    /// Makes the frame to be submitted as `submission` sample an image holding `rect` of
-    /// `texels`: one the source's thread wrote them into, else one written now that no
-    /// unfinished submission samples. False, with nothing done, when every image may still be
-    /// sampled, or when the images must be (re)made at the texels' size and a submission may be
-    /// in flight (not `idle`); an error when they cannot be made.
+    /// Makes the frame to be submitted as `submission` use a slot holding `rect` of `texels`:
+    /// one the source's thread wrote them into, else one written now that no unfinished
+    /// submission reads. With `sampled` the slots are images the views sample, else staging
+    /// buffers the frame copies `rect` from. False, with nothing done, when every slot may still
+    /// be read, or when the slots must be (re)made (at the texels' size or of the other kind)
+    /// and a submission may be in flight (not `idle`); an error when they cannot be made.
     pub fn write(
         &mut self,
         gpu: &GpuDevice,
         texels: &BlurredTexels,
         rect: &CameraRect,
-        submission: u64,
+        (submission, sampled): (u64, bool),
         idle: bool,
     ) -> Result<bool, GpuError> {
         let size = (texels.width, texels.height);
-        if self.size != size || self.slots.is_none() {
+        if self.size != size || self.slots.is_none() || self.sampled != sampled {
             if !idle {
                 return Ok(false);
             }
-            self.make(gpu, size)?;
+            self.make(gpu, size, sampled)?;
         }
         let slots = self.slots.as_ref().expect("made above");
         let taken = slots
@@ -156,6 +181,7 @@ impl TexelRing {
         };
         self.current = slot;
         self.active = true;
+        self.copy = (!sampled).then_some(*rect);
         self.frames += 1;
         self.from_source += u64::from(by_source);
         Ok(true)
@@ -174,47 +200,65 @@ impl TexelRing {
         }
     }
 
-    fn make(&mut self, gpu: &GpuDevice, size: (u32, u32)) -> Result<(), GpuError> {
+    fn make(&mut self, gpu: &GpuDevice, size: (u32, u32), sampled: bool) -> Result<(), GpuError> {
         self.destroy(gpu);
-        if !fits_device(gpu, size) {
+        if sampled && !fits_device(gpu, size) {
             return Err(GpuError::Unsupported(format!(
                 "no linear texel image of {}x{}",
                 size.0, size.1
             )));
         }
         for _ in 0..SLOTS {
-            let image = MappedTexels::new(gpu, size);
-            match image {
-                Ok(i) => self.images.push(i),
+            let memory = match sampled {
+                true => MappedTexels::new(gpu, size).map(SlotMemory::Image),
+                false => staging_slot(gpu, size).map(SlotMemory::Buffer),
+            };
+            match memory {
+                Ok(m) => self.memory.push(m),
                 Err(e) => {
                     self.destroy(gpu);
                     return Err(e);
                 }
             }
         }
-        let rows = self.images.iter().map(|i| i.rows).collect();
+        let rows = self.memory.iter_mut().map(|m| rows_of(m, size.0)).collect();
         self.slots = Some(Arc::new(TexelSlots::new(size, rows)));
         self.size = size;
+        self.sampled = sampled;
         self.current = 0;
         Ok(())
     }
 
     /// The view of the image the frame samples, when it is one of the ring's.
     pub(super) fn sampled_view(&self) -> Option<vk::ImageView> {
-        self.active
-            .then(|| self.images.get(self.current))?
-            .map(|s| s.view)
+        match self.memory.get(self.current).filter(|_| self.active)? {
+            SlotMemory::Image(i) => Some(i.view),
+            SlotMemory::Buffer(_) => None,
+        }
     }
 
-    /// Records, for submission `submission`, that it samples the current image, and the image's
+    /// The staging buffer and rectangle the frame copies into the background's image, once:
+    /// laid out as the image, 16 bytes per texel (`Engine::record_texels_upload`).
+    pub(super) fn take_copy(&mut self) -> Option<(&GpuBuffer, CameraRect)> {
+        let rect = self.copy.take().filter(|_| self.active)?;
+        match self.memory.get(self.current)? {
+            SlotMemory::Buffer(b) => Some((b, rect)),
+            SlotMemory::Image(_) => None,
+        }
+    }
+
+    /// Records, for submission `submission`, that it reads the current slot, and an image's
     /// first layout change (PREINITIALIZED keeps what the host wrote) before the shaders read.
     pub(super) fn record_use(&mut self, gpu: &GpuDevice, cmd: vk::CommandBuffer, submission: u64) {
-        let Some(image) = self.images.get_mut(self.current).filter(|_| self.active) else {
+        if !self.active {
             return;
-        };
+        }
         if let Some(slots) = &self.slots {
             slots.sampled_by(self.current, submission);
         }
+        let Some(SlotMemory::Image(image)) = self.memory.get_mut(self.current) else {
+            return;
+        };
         if image.in_general {
             return;
         }
@@ -238,25 +282,57 @@ impl TexelRing {
         };
     }
 
-    /// The frame samples no image of the ring, and the source's thread writes none from now on.
+    /// The frame uses no slot of the ring, and the source's thread writes none from now on.
     pub(super) fn close_to_source(&mut self) {
         self.active = false;
+        self.copy = None;
         if let Some(slots) = &self.slots {
             slots.close();
         }
     }
 
-    /// Frees the images, once the source's thread can no longer write them (a write under way
-    /// ends first). No submission may still sample them.
+    /// Frees the slots' memory, once the source's thread can no longer write it (a write under
+    /// way ends first). No submission may still read it.
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         if let Some(slots) = self.slots.take() {
             slots.close();
         }
-        for mut s in self.images.drain(..) {
-            s.destroy(gpu);
+        for mut m in self.memory.drain(..) {
+            m.destroy(gpu);
         }
         self.size = (0, 0);
         self.active = false;
+        self.copy = None;
+    }
+}
+
+/// A host-visible staging buffer for a `size` frame's texels, laid out as the image.
+fn staging_slot(gpu: &GpuDevice, size: (u32, u32)) -> Result<GpuBuffer, GpuError> {
+    let bytes = u64::from(size.0) * u64::from(size.1) * TEXEL_BYTES as u64;
+    let mut buffer = new_staging(gpu, bytes.max(16))?;
+    if buffer.mapped_mut().is_none() {
+        buffer.destroy(gpu);
+        return Err(GpuError::Unsupported(
+            "the staging buffer is not host-visible".into(),
+        ));
+    }
+    Ok(buffer)
+}
+
+/// Where a slot's texels of a `width`-wide frame lie in its mapped memory (mapped: checked when
+/// it was made; a buffer's rows are packed).
+fn rows_of(memory: &mut SlotMemory, width: u32) -> MappedRows {
+    match memory {
+        SlotMemory::Image(i) => i.rows,
+        SlotMemory::Buffer(b) => {
+            let m = b.mapped_mut().expect("checked in staging_slot");
+            MappedRows {
+                ptr: m.as_mut_ptr(),
+                len: m.len(),
+                offset: 0,
+                row_pitch: width as usize * TEXEL_BYTES,
+            }
+        }
     }
 }
 

@@ -256,7 +256,7 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
 
 /// The log's line once a frame sampled texels its source's thread wrote into a mapped image.
 const SOURCE_TEXELS: &str =
-    "live frames' texels are written into the mapped images on the camera's thread, before the frame call";
+    "live frames' texels are written into mapped memory on the camera's thread, before the frame call";
 
 /// How a frame's texels, when its source prepared them, reach the views (the log's line).
 fn prepared_texels_path(prepared: bool, processor: &Processor) -> Option<&'static str> {
