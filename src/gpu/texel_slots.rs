@@ -283,6 +283,17 @@ mod tests {
 
     const PITCH: usize = SIZE.0 as usize * TEXEL_BYTES + 32;
 
+    /// Slots over `bytes`, one buffer each, rows from `offset` every `row_pitch` bytes.
+    fn rows_over(bytes: &mut [Vec<u8>], offset: usize, row_pitch: usize) -> Vec<MappedRows> {
+        let rows = bytes.iter_mut().map(|b| MappedRows {
+            ptr: b.as_mut_ptr(),
+            len: b.len(),
+            offset,
+            row_pitch,
+        });
+        rows.collect()
+    }
+
     impl Memory {
         fn new() -> Memory {
             let len = 16 + PITCH * SIZE.1 as usize;
@@ -292,17 +303,7 @@ mod tests {
         }
 
         fn slots(&mut self) -> TexelSlots {
-            let rows = self
-                .bytes
-                .iter_mut()
-                .map(|b| MappedRows {
-                    ptr: b.as_mut_ptr(),
-                    len: b.len(),
-                    offset: 16,
-                    row_pitch: PITCH,
-                })
-                .collect();
-            TexelSlots::new(SIZE, rows)
+            TexelSlots::new(SIZE, rows_over(&mut self.bytes, 16, PITCH))
         }
 
         /// Whether slot `i` holds all of `t`, row by row.
@@ -430,16 +431,7 @@ mod tests {
         let size = (256u32, 4u32);
         let pitch = size.0 as usize * TEXEL_BYTES;
         let mut bytes: Vec<Vec<u8>> = (0..3).map(|_| vec![0u8; pitch * 4]).collect();
-        let rows = bytes
-            .iter_mut()
-            .map(|b| MappedRows {
-                ptr: b.as_mut_ptr(),
-                len: b.len(),
-                offset: 0,
-                row_pitch: pitch,
-            })
-            .collect();
-        let slots = TexelSlots::new(size, rows);
+        let slots = TexelSlots::new(size, rows_over(&mut bytes, 0, pitch));
         let blur = BlurTaps::of(&Default::default());
         let camera = |code| BlurredTexels::prepare(&RgbaImage::new(256, 4, [code; 4]), blur);
         let (a, b) = (camera(10), camera(200));
@@ -472,16 +464,7 @@ mod tests {
     fn a_write_that_panics_gives_its_slot_back() {
         // Memory too short for the frame: the write panics on its first row.
         let mut short = vec![vec![0u8; 16]; 3];
-        let rows = short
-            .iter_mut()
-            .map(|b| MappedRows {
-                ptr: b.as_mut_ptr(),
-                len: b.len(),
-                offset: 0,
-                row_pitch: PITCH,
-            })
-            .collect();
-        let slots = TexelSlots::new(SIZE, rows);
+        let slots = TexelSlots::new(SIZE, rows_over(&mut short, 0, PITCH));
         let a = texels(70);
         let offered = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| slots.offer(&a)));
         assert!(offered.is_err(), "the write did not panic");
