@@ -9,7 +9,6 @@ use super::commands::Commands;
 use super::frame_view::{CapturedView, FrameView, ViewKey};
 use super::overlay::{OverlayPixels, Overlays};
 use super::pipelines::{BuildMode, BuildReport, ShaderId};
-use super::prepared_staging::PreparedStaging;
 use super::texel_ring::TexelRing;
 use super::warm_up::{WarmUp, WarmUpSlot};
 use super::{BackgroundFrame, CameraRect, Engine, GpuDevice, GpuError, Placement, ViewTarget};
@@ -59,8 +58,8 @@ pub struct FrameEngine {
     /// The background sequence the blurred camera image was prepared for (once per camera
     /// frame, whatever the number of views), and the camera texels prepared.
     pub(super) prepared_for: Option<(u64, CameraRect)>,
-    /// Whether the camera buffer is behind the frame in use (its texels came prepared).
-    pub(super) staged: PreparedStaging,
+    /// The camera buffer does not hold the frame in use (its texels came prepared).
+    pub(super) camera_behind: bool,
     /// Where prepared texels are written: mapped images the views sample where the device
     /// allows (`direct_texels`), else staging buffers.
     pub(super) ring: TexelRing,
@@ -99,7 +98,7 @@ impl FrameEngine {
             background: None,
             background_sequence: 0,
             prepared_for: None,
-            staged: PreparedStaging::default(),
+            camera_behind: false,
             ring: TexelRing::default(),
             direct_texels: TexelRing::supported(&gpu),
             views: HashMap::new(),

@@ -190,7 +190,7 @@ impl FrameEngine {
     /// The frame's background is camera frame `seq`, whose texels came prepared.
     fn uses_prepared(&mut self, seq: u64) {
         self.background_sequence = seq;
-        self.staged.camera_behind = true;
+        self.camera_behind = true;
     }
 
     /// `write_direct` with no submission in flight: the background frame made, and the slots
@@ -230,7 +230,7 @@ impl FrameEngine {
         background: &FrameBackground,
     ) -> Result<(), GpuError> {
         self.ring.active = false;
-        let behind = std::mem::take(&mut self.staged.camera_behind);
+        let behind = std::mem::take(&mut self.camera_behind);
         if behind && self.background_sequence == background.sequence {
             if let Some(bg) = self.background.as_mut() {
                 bg.upload(&background.image.pixels)?;
