@@ -163,8 +163,7 @@ impl TexelSlots {
         let slot = state.free(state.newest).or_else(|| state.free(None))?;
         state.slots[slot].writing = true;
         drop(state);
-        self.write_claimed(slot, texels, &rect, false);
-        Some(self.lock().sample(slot, submission))
+        Some(self.write_claimed(slot, texels, &rect, Some(submission)))
     }
 
     /// The submission `submission` samples `slot` too (a frame of several submissions).
@@ -184,37 +183,54 @@ impl TexelSlots {
         }
     }
 
-    /// Writes into `slot`, claimed by the caller (`writing`), then records what it holds.
-    fn write_claimed(&self, slot: usize, texels: &BlurredTexels, rect: &CameraRect, source: bool) {
+    /// Writes into `slot`, claimed by the caller (`writing`), then records what it holds and
+    /// gives the claim back; for the engine's frame (`reader`: the submission that will read
+    /// it), marks the slot the frame's in the same critical section, so that no other write
+    /// can claim it in between.
+    fn write_claimed(
+        &self,
+        slot: usize,
+        texels: &BlurredTexels,
+        rect: &CameraRect,
+        reader: Option<u64>,
+    ) -> Taken {
         // The claim keeps the slot and its memory (`close` waits) for this write alone; the
-        // guard gives it up even if the write panics, so that `close` never waits for ever.
-        let claim = Claim { slots: self, slot };
+        // guard gives it up if the write panics, so that `close` never waits for ever.
+        let unwinding = Unwinding { slots: self, slot };
         let rows = self.lock().slots[slot].rows;
         rows.write(texels, rect);
+        std::mem::forget(unwinding);
         let mut state = self.lock();
         let s = &mut state.slots[slot];
         s.holds = Some((texels.serial, *rect));
-        s.by_source = source;
+        s.by_source = reader.is_none();
+        s.writing = false;
         state.newest = Some(slot);
+        let taken = match reader {
+            Some(submission) => state.sample(slot, submission),
+            None => Taken {
+                slot,
+                by_source: true,
+            },
+        };
         drop(state);
-        drop(claim);
+        self.written.notify_all();
+        taken
     }
 }
 
-/// A slot's `writing` claim: released, and `close` told, when dropped (also by a panic, which
-/// leaves the slot holding nothing).
-struct Claim<'a> {
+/// Gives a slot's `writing` claim back, holding nothing, when a write panics (dropped while
+/// unwinding; a finished write forgets it and gives the claim back itself).
+struct Unwinding<'a> {
     slots: &'a TexelSlots,
     slot: usize,
 }
 
-impl Drop for Claim<'_> {
+impl Drop for Unwinding<'_> {
     fn drop(&mut self) {
         let mut state = self.slots.lock();
         let s = &mut state.slots[self.slot];
-        if std::thread::panicking() {
-            s.holds = None;
-        }
+        s.holds = None;
         s.writing = false;
         drop(state);
         self.slots.written.notify_all();
@@ -257,7 +273,7 @@ impl TexelSink for TexelSlots {
             .wanted
             .map_or(CameraRect::full(size), |r| r.grown(SOURCE_MARGIN, size));
         drop(state);
-        self.write_claimed(slot, texels, &rect, true);
+        self.write_claimed(slot, texels, &rect, None);
     }
 }
 
