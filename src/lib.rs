@@ -19,3 +19,4 @@ pub mod gpu;
 pub mod image;
 pub mod layer;
 pub mod reference;
+pub mod user_file;

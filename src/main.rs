@@ -3,5 +3,19 @@
 mod cli;
 
 fn main() {
-    std::process::exit(cli::main(std::env::args().skip(1).collect()));
+    let argv: Result<Vec<String>, _> = std::env::args_os()
+        .skip(1)
+        .map(std::ffi::OsString::into_string)
+        .collect();
+    match argv {
+        Ok(argv) => std::process::exit(cli::main(argv)),
+        // Paths in settings are UTF-8 text (as in the config file): another one is refused.
+        Err(bad) => {
+            eprintln!(
+                "contrastxr: argument {} is not UTF-8 text; give its path in UTF-8",
+                bad.to_string_lossy()
+            );
+            std::process::exit(1);
+        }
+    }
 }

@@ -14,7 +14,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 pub(crate) fn image_frame(path: &Path) -> Result<Frame, CameraError> {
-    let image = RgbaImage::load(path).map_err(CameraError::File)?;
+    let image = RgbaImage::load(path).map_err(|e| CameraError::File(format!("image:{e}")))?;
     Ok(static_frame(image))
 }
 
@@ -78,7 +78,7 @@ pub(crate) fn open_video(
         }
         Ok((Box::new(PngFolder { files }), fps))
     } else {
-        let y4m = Y4m::open(path).map_err(CameraError::File)?;
+        let y4m = Y4m::open(path).map_err(|e| CameraError::File(format!("video:{e}")))?;
         let fps = y4m.fps;
         Ok((Box::new(y4m), fps))
     }

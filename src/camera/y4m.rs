@@ -4,6 +4,7 @@
 
 use crate::camera::convert::{bt601_full_to_rgb, bt601_limited_to_rgb};
 use crate::image::RgbaImage;
+use crate::user_file;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
@@ -33,13 +34,21 @@ pub(crate) struct Y4m {
 
 impl Y4m {
     pub(crate) fn open(path: &Path) -> Result<Y4m, String> {
-        let file = File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+        // Any length (a video), but a regular file: a FIFO or /dev/zero never hangs or floods.
+        let file =
+            user_file::open(path, u64::MAX).map_err(|why| format!("{} {why}", path.display()))?;
         let mut reader = BufReader::new(file);
-        let mut header = String::new();
-        reader
-            .read_line(&mut header)
+        let mut header = Vec::new();
+        (&mut reader)
+            .take(MAX_LINE)
+            .read_until(b'\n', &mut header)
             .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let mut y4m = parse_header(header.trim_end())
+        if !header.ends_with(b"\n") {
+            return Err(format!("{} has no Y4M header line", path.display()));
+        }
+        // The header is untrusted: bytes that are not text are no signature.
+        let text = String::from_utf8_lossy(&header);
+        let mut y4m = parse_header(text.trim_end())
             .map_err(|e| format!("{} is not a usable Y4M file: {e}", path.display()))?;
         y4m.path = path.to_path_buf();
         y4m.offsets = index_frames(&mut reader, header.len() as u64, y4m.frame_bytes())
@@ -75,8 +84,8 @@ impl Y4m {
         index: usize,
         into: RgbaImage,
     ) -> Result<RgbaImage, String> {
-        let mut file =
-            File::open(&self.path).map_err(|e| format!("{}: {e}", self.path.display()))?;
+        let mut file = user_file::open(&self.path, u64::MAX)
+            .map_err(|why| format!("{} {why}", self.path.display()))?;
         let mut data = std::mem::take(&mut self.data);
         data.resize(self.frame_bytes() as usize, 0);
         let read = file
@@ -116,8 +125,8 @@ impl Y4m {
     }
 }
 
-/// The largest width or height of a video read.
-const MAX_SIDE: u32 = 16384;
+/// The longest header line read (the stream header and each FRAME header are short).
+const MAX_LINE: u64 = 4096;
 
 fn parse_header(line: &str) -> Result<Y4m, String> {
     let mut tokens = line.split(' ');
@@ -155,12 +164,7 @@ fn parse_header(line: &str) -> Result<Y4m, String> {
         return Err("width or height missing".into());
     }
     // Frame sizes are computed in u32: a bound keeps them exact (and allocations sane).
-    if y4m.width > MAX_SIDE || y4m.height > MAX_SIDE {
-        return Err(format!(
-            "{}x{} is larger than {MAX_SIDE}x{MAX_SIDE}",
-            y4m.width, y4m.height
-        ));
-    }
+    user_file::check_dimensions(y4m.width, y4m.height)?;
     Ok(y4m)
 }
 
@@ -218,7 +222,8 @@ fn index_frames(
             .seek(SeekFrom::Start(pos))
             .map_err(|e| e.to_string())?;
         let mut line = Vec::new();
-        reader
+        (&mut *reader)
+            .take(MAX_LINE)
             .read_until(b'\n', &mut line)
             .map_err(|e| e.to_string())?;
         if !line.starts_with(b"FRAME") {

@@ -91,6 +91,8 @@ fn count(args: &mut Args, name: &str, default: usize) -> Result<usize, CliError>
 
 /// The captures of `view` in `dir`, in frame order.
 fn captures(dir: &Path, view: usize) -> Result<Vec<Capture>, CliError> {
+    contrastxr::user_file::folder(dir)
+        .map_err(|why| CliError::Failure(format!("capture folder {} {why}", dir.display())))?;
     let entries = std::fs::read_dir(dir)
         .map_err(|e| CliError::Failure(format!("cannot read {}: {e}", dir.display())))?;
     let suffix = format!("-view-{view}.json");
@@ -115,7 +117,7 @@ fn captures(dir: &Path, view: usize) -> Result<Vec<Capture>, CliError> {
 }
 
 fn capture(stem: PathBuf, json: &Path) -> Capture {
-    let display_time_ns = std::fs::read(json)
+    let display_time_ns = contrastxr::user_file::read(json, contrastxr::user_file::TEXT_BYTES)
         .ok()
         .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
         .and_then(|v| v["display_time"].as_i64());

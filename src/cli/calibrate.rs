@@ -285,7 +285,7 @@ fn settings_now(target: &Target) -> config::Settings {
         .into_iter()
         .flatten()
         .find(|p| p.is_file());
-    let text = file.and_then(|p| std::fs::read_to_string(p).ok());
+    let text = file.and_then(|p| contrastxr::user_file::read_text(p).ok());
     let source = file
         .zip(text.as_deref())
         .map(|(path, text)| config::Source { path, text });

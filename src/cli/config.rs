@@ -58,8 +58,8 @@ fn found() -> Result<PathBuf, CliError> {
 }
 
 fn check(path: PathBuf) -> Result<(), CliError> {
-    let text = std::fs::read_to_string(&path)
-        .map_err(|e| CliError::Failure(format!("cannot read {}: {e}", path.display())))?;
+    let text = contrastxr::user_file::read_text(&path)
+        .map_err(|why| CliError::Failure(format!("config {} {why}", path.display())))?;
     let problems = config::check(Source {
         path: &path,
         text: &text,

@@ -31,7 +31,7 @@ fn current_settings(path: &Path, seed: Option<&Path>, app: Option<&str>) -> conf
         .into_iter()
         .flatten()
         .find(|p| p.is_file());
-    let text = file.and_then(|p| std::fs::read_to_string(p).ok());
+    let text = file.and_then(|p| contrastxr::user_file::read_text(p).ok());
     let source = file
         .zip(text.as_deref())
         .map(|(path, text)| Source { path, text });

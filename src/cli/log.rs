@@ -26,7 +26,12 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         print(&format!("{}\n", path.display()));
         return Ok(());
     }
-    let read = |p: &std::path::Path| std::fs::read_to_string(p).unwrap_or_default();
+    // The layer caps each file at log::MAX_BYTES; anything else there is not read whole.
+    let read = |p: &std::path::Path| {
+        contrastxr::user_file::read(p, 2 * log::MAX_BYTES)
+            .map(|b| String::from_utf8_lossy(&b).into_owned())
+            .unwrap_or_default()
+    };
     let text = read(&log::rotated(&path)) + &read(&path);
     if text.is_empty() {
         return Err(CliError::Failure(format!(

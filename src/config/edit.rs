@@ -11,11 +11,16 @@ use std::path::Path;
 use toml_edit::{DocumentMut, Item};
 
 fn read(path: &Path, seed: Option<&Path>) -> Result<String, String> {
-    let from = if path.exists() { Some(path) } else { seed };
+    // A link is read through (a dangling one or a loop is refused, not silently replaced).
+    let from = if std::fs::symlink_metadata(path).is_ok() {
+        Some(path)
+    } else {
+        seed
+    };
     match from {
         None => Ok(String::new()),
         Some(p) => {
-            std::fs::read_to_string(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
+            crate::user_file::read_text(p).map_err(|why| format!("config {} {why}", p.display()))
         }
     }
 }

@@ -11,6 +11,9 @@ pub const SYSTEM_PATH: &str = "/etc/xdg/contrastxr/config.toml";
 #[derive(Clone, Debug, Default)]
 pub struct Env {
     vars: HashMap<String, String>,
+    /// Wanted variables whose value is not UTF-8 (a path from another encoding): left out, and
+    /// said once as a problem rather than silently ignored.
+    not_utf8: Vec<String>,
 }
 
 impl Env {
@@ -18,12 +21,26 @@ impl Env {
         let wanted = |k: &str| {
             k.starts_with("CONTRASTXR") || ["XDG_CONFIG_HOME", "XDG_DATA_HOME", "HOME"].contains(&k)
         };
-        Env {
-            vars: std::env::vars_os()
-                .filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?)))
-                .filter(|(k, _)| wanted(k))
-                .collect(),
+        let mut env = Env::default();
+        for (k, v) in std::env::vars_os() {
+            let Some(k) = k.into_string().ok().filter(|k| wanted(k)) else {
+                continue;
+            };
+            match v.into_string() {
+                Ok(v) => drop(env.vars.insert(k, v)),
+                Err(_) => env.not_utf8.push(k),
+            }
         }
+        env.not_utf8.sort();
+        env
+    }
+
+    /// One problem line per wanted variable whose value is not UTF-8.
+    pub fn unreadable_problems(&self) -> Vec<String> {
+        self.not_utf8
+            .iter()
+            .map(|k| format!("{k} is not UTF-8 text; ignored"))
+            .collect()
     }
 
     pub fn from_pairs<'a>(pairs: impl IntoIterator<Item = (&'a str, &'a str)>) -> Env {
@@ -32,6 +49,7 @@ impl Env {
                 .into_iter()
                 .map(|(k, v)| (k.to_string(), v.to_string()))
                 .collect(),
+            not_utf8: Vec::new(),
         }
     }
 
@@ -68,6 +86,11 @@ pub fn find(env: &Env) -> Option<PathBuf> {
 /// The file `contrastxr set` and `toggle` write: the one apps read, except that the system
 /// file is not edited in place: its content is the start of a new user file.
 pub fn for_writing(env: &Env) -> Result<(PathBuf, Option<PathBuf>), String> {
+    if env.not_utf8.iter().any(|k| k == "CONTRASTXR_CONFIG") {
+        return Err(
+            "CONTRASTXR_CONFIG is not UTF-8 text: give the config file a UTF-8 path".into(),
+        );
+    }
     if let Some(p) = env.non_empty("CONTRASTXR_CONFIG") {
         return Ok((PathBuf::from(p), None));
     }

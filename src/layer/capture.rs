@@ -68,6 +68,16 @@ pub fn settings_json(settings: &Settings) -> serde_json::Value {
     serde_json::Value::Object(map)
 }
 
+/// Makes the capture folder where it is missing; a path that is not a writable folder (a file,
+/// a device node, a FIFO) is refused in words, before anything is opened there.
+pub fn prepare_folder(dir: &Path) -> Result<(), String> {
+    let refused = |why: String| format!("capture folder {} {why}", dir.display());
+    if std::fs::symlink_metadata(dir).is_err() {
+        std::fs::create_dir_all(dir).map_err(|e| refused(format!("cannot be created ({e})")))?;
+    }
+    crate::user_file::folder(dir).map_err(refused)
+}
+
 /// Writes the files of one captured view; errors are returned as one sentence.
 pub fn write_view(
     dir: &Path,
@@ -78,7 +88,7 @@ pub fn write_view(
     settings: &Settings,
     motion: serde_json::Map<String, serde_json::Value>,
 ) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    prepare_folder(dir)?;
     let item = &captured.view;
     let (w, h) = item.key.extent;
     let stem = dir.join(format!("frame-{frame}-view-{view}"));
