@@ -125,12 +125,20 @@ pub fn read_text(path: &Path) -> Result<String, String> {
 /// takes longer (a stalled network or FUSE file system) is refused; its thread ends on its own
 /// when the read returns. For the app's thread, which must never wait long.
 pub fn read_text_within(path: &Path, limit: Duration) -> Result<String, String> {
-    let (tx, rx) = std::sync::mpsc::channel();
     let owned = path.to_path_buf();
+    within(limit, move || read_text(&owned))
+}
+
+/// `work`'s answer if it comes within `limit`, run on a thread of its own.
+fn within<T: Send + 'static>(
+    limit: Duration,
+    work: impl FnOnce() -> Result<T, String> + Send + 'static,
+) -> Result<T, String> {
+    let (tx, rx) = std::sync::mpsc::channel();
     let reader = std::thread::Builder::new()
         .name("contrastxr-read".into())
         .spawn(move || {
-            let _ = tx.send(read_text(&owned));
+            let _ = tx.send(work());
         })
         .map_err(|e| format!("cannot be read (no thread: {e})"))?;
     match rx.recv_timeout(limit) {
@@ -243,6 +251,17 @@ mod tests {
         assert_eq!(text, "x = 1\n");
         let err = read_text_within(Path::new("/dev/zero"), APP_THREAD_READ).unwrap_err();
         assert_eq!(err, "is a character device, not a file");
+        // A read that stalls (a hung network mount) is given up on at the bound.
+        let stalled = || {
+            std::thread::sleep(Duration::from_millis(400));
+            Ok(())
+        };
+        let start = std::time::Instant::now();
+        assert_eq!(
+            within(APP_THREAD_READ, stalled).unwrap_err(),
+            "took more than 50 ms to read"
+        );
+        assert!(start.elapsed() < Duration::from_millis(400));
         let _ = std::fs::remove_dir_all(&dir);
     }
 
