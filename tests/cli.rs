@@ -11,8 +11,30 @@ const DISPLAY: &str = "samples/display-hand-interaction.png";
 const YELLOW: &str = "samples/background-yellow-wall.png";
 const SKY: &str = "samples/background-blue-sky.png";
 
+/// The tool with HOME and the XDG folders of its own (a scratch home per test process; the
+/// cache kept across runs, for Mesa's shader cache): no test reads or writes the user's files.
+fn command() -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_contrastxr"));
+    cmd.envs(own_folders());
+    cmd
+}
+
+fn own_folders() -> [(&'static str, PathBuf); 5] {
+    let home = scratch("home");
+    [
+        ("XDG_CONFIG_HOME", home.join("config")),
+        ("XDG_DATA_HOME", home.join("data")),
+        ("XDG_STATE_HOME", home.join("state")),
+        (
+            "XDG_CACHE_HOME",
+            Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-cache"),
+        ),
+        ("HOME", home),
+    ]
+}
+
 fn contrastxr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+    command()
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
@@ -417,7 +439,7 @@ fn negative_values_reach_the_checks() {
     // `set lambda_e -0.1` reaches the setting's range check (and writes nothing).
     let config = scratch("negative.toml");
     let _ = std::fs::remove_file(&config);
-    let o = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+    let o = command()
         .args(["set", "lambda_e", "-0.1"])
         .env("CONTRASTXR_CONFIG", &config)
         .output()
@@ -429,7 +451,7 @@ fn negative_values_reach_the_checks() {
         stderr(&o)
     );
     assert!(!config.exists());
-    let o = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+    let o = command()
         .args(["set", "fov_offset=-0.1,0.2"])
         .env("CONTRASTXR_CONFIG", &config)
         .output()
@@ -449,7 +471,7 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
     std::fs::create_dir_all(original.parent().unwrap()).unwrap();
     std::fs::write(&original, b"\x7fELF stand-in for the built library").unwrap();
     let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+        command()
             .args(args)
             .env("XDG_DATA_HOME", &home)
             .output()
@@ -487,7 +509,7 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
 /// `contrastxr calibrate` driven line by line on stdin (not a terminal) against a config file.
 fn calibrate(config: &Path, args: &[&str], stdin: &str) -> Output {
     use std::io::Write;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+    let mut child = command()
         .arg("calibrate")
         .args(args)
         .env("CONTRASTXR_CONFIG", config)
@@ -591,6 +613,7 @@ fn calibrate_takes_single_keys_on_a_terminal() {
     let config = scratch("calibrate-tty.toml");
     std::fs::write(&config, "lambda_e = 0.5\n").unwrap();
     let mut child = Command::new("script")
+        .envs(own_folders())
         .args([
             "-qec",
             &format!("{} calibrate", env!("CARGO_BIN_EXE_contrastxr")),
