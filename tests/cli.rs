@@ -761,7 +761,17 @@ fn doctor_without_a_manifest_reports_the_problem_and_its_fix() {
         text(m, "detail").contains(&user_dir.display().to_string()),
         "{m}"
     );
-    assert!(text(m, "fix").contains("contrastxr install --user"), "{m}");
+    // The fix names the tool as the user can run it: this build is not on PATH, and sudo's
+    // PATH would not find it either.
+    let exe = env!("CARGO_BIN_EXE_contrastxr");
+    assert!(
+        text(m, "fix").contains(&format!("`{exe} install --user`")),
+        "{m}"
+    );
+    assert!(
+        text(m, "fix").contains(&format!("`sudo {exe} install --system`")),
+        "{m}"
+    );
     assert_eq!(finding(&report, "library")["status"], "warn");
     // Every finding, in order; a fix exactly where the status is not ok.
     let findings = report["findings"].as_array().unwrap();
@@ -935,10 +945,16 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     assert!(text(p, "detail").contains("[device.\"Glasses\"]"), "{p}");
     // The shipped profiles: none for this headset, then one that names it.
     let d = finding(&report, "device-profile");
-    assert!(
-        text(d, "detail").starts_with("no shipped device profiles"),
-        "{d}"
-    );
+    if !profiles_installed_here() {
+        assert_eq!(d["status"], "warn", "{d}");
+        let searched = format!(
+            "no device profiles found (searched {}, /usr/local/lib/contrastxr/devices.toml, \
+             /usr/share/contrastxr/devices.toml)",
+            root.join("data/contrastxr/devices.toml").display()
+        );
+        assert_eq!(text(d, "detail"), searched, "{d}");
+        assert!(text(d, "fix").contains("install --user"), "{d}");
+    }
     let shipped = root.join("devices.toml");
     std::fs::write(
         &shipped,
@@ -1240,4 +1256,104 @@ fn doctor_says_whether_the_profiles_camera_is_connected() {
         root.join("dev/video3").display()
     );
     assert!(text(d, "detail").ends_with(&connected), "{d}");
+}
+
+/// Shipped profiles installed on this machine (the package's or `install --system`'s), which
+/// an isolated home cannot hide.
+fn profiles_installed_here() -> bool {
+    [
+        "/usr/share/contrastxr/devices.toml",
+        "/usr/local/lib/contrastxr/devices.toml",
+    ]
+    .iter()
+    .any(|p| Path::new(p).exists())
+}
+
+/// `config path` with no config file names the one `set` would create, and exits 0.
+#[test]
+fn config_path_names_the_file_set_would_create() {
+    let root = fresh_home("config-path");
+    let user = root.join("config/contrastxr/config.toml");
+    let o = isolated(&root, &["config", "path"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        format!("{}\n", user.display())
+    );
+    assert!(stderr(&o).contains("no config file yet"), "{}", stderr(&o));
+    // Once it exists: the path alone.
+    let o = isolated(&root, &["set", "lambda_e", "0.5"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = isolated(&root, &["config", "path"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        format!("{}\n", user.display())
+    );
+    assert_eq!(stderr(&o), "");
+}
+
+/// `config print --device` says which device profiles file it read, or where it looked.
+#[test]
+fn config_print_device_names_the_profiles_file_or_the_folders_searched() {
+    let root = fresh_home("config-print-profiles");
+    let print = |env: &[(&str, &str)]| {
+        let o = isolated(
+            &root,
+            &["config", "print", "--device", "Monado: Rokid Max"],
+            env,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    if !profiles_installed_here() {
+        let out = print(&[]);
+        let searched = format!(
+            "# device profiles: none found (searched {}, ",
+            root.join("data/contrastxr/devices.toml").display()
+        );
+        assert!(out.contains(&searched), "{searched:?} not in\n{out}");
+        assert!(
+            out.contains("environment_blend_mode = \"\"  # default"),
+            "{out}"
+        );
+    }
+    let shipped = root.join("devices.toml");
+    std::fs::write(&shipped, "[device.\"Monado: Rokid Max\"]\nlambda_e = 0.3\n").unwrap();
+    let out = print(&[("CONTRASTXR_DEVICES", shipped.to_str().unwrap())]);
+    let read = format!("# device profiles: {}\n", shipped.display());
+    assert!(out.contains(&read), "{read:?} not in\n{out}");
+    // Without --device no profile applies, and none is named.
+    let o = isolated(&root, &["config", "print"], &[]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("# device profiles"));
+}
+
+/// A camera named by USB id in the user's settings is checked before any app has run.
+#[test]
+fn doctor_checks_the_usb_camera_of_the_settings_before_an_app_ran() {
+    let root = fresh_home("doctor-usb-ids-no-app");
+    let sys = root.join("sys");
+    std::fs::create_dir_all(sys.join("class/video4linux")).unwrap();
+    let env = [
+        ("CONTRASTXR_CAMERA_USB_IDS", "0c45:636b"),
+        ("CONTRASTXR_SYSFS_ROOT", sys.to_str().unwrap()),
+    ];
+    let (_, report) = doctor(&root, &env);
+    let d = finding(&report, "device-profile");
+    assert_eq!(d["status"], "warn", "{d}");
+    let named = "its camera, camera_usb_ids = \"0c45:636b\" (env CONTRASTXR_CAMERA_USB_IDS), \
+                 is not connected";
+    assert!(text(d, "detail").ends_with(named), "{d}");
+    assert!(text(d, "fix").contains("0c45:636b"), "{d}");
+}
+
+#[test]
+fn completions_without_a_shell_names_every_shell() {
+    let o = contrastxr(&["completions"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("bash, zsh, fish, elvish or powershell"),
+        "{}",
+        stderr(&o)
+    );
 }
