@@ -1357,3 +1357,18 @@ fn completions_without_a_shell_names_every_shell() {
         stderr(&o)
     );
 }
+
+/// The help of the commands that run the method: the engine option indented like the others,
+/// and the image formats they read.
+#[test]
+fn enhance_and_evaluate_help_line_up_every_option() {
+    for command in ["enhance", "evaluate"] {
+        let o = contrastxr(&[command, "--help"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let help = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(help.contains("\n  --engine E "), "{help}");
+        assert!(help.contains("\n  --lambda-e F "), "{help}");
+    }
+    let help = String::from_utf8_lossy(&contrastxr(&["enhance", "--help"]).stdout).into_owned();
+    assert!(help.contains("PNG or JPEG in, PNG out"), "{help}");
+}
