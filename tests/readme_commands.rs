@@ -271,7 +271,7 @@ fn help(subcommand: &str) -> Output {
 fn syntax_problems(command: &str) -> Vec<String> {
     let mut problems = Vec::new();
     for (sub, options) in parts(command) {
-        if sub.starts_with('<') {
+        if sub.starts_with('<') || sub == "..." {
             continue;
         }
         let o = help(&sub);
