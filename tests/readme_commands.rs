@@ -435,3 +435,54 @@ fn the_checks_find_what_is_wrong() {
         ["contrastxr install --system", "contrastxr log --all"]
     );
 }
+
+/// Variables for tests and development, documented where they are used rather than in the
+/// README's table: fault points (docs/control.md), the V4L2 and sysfs stand-ins of the camera
+/// tests, the GPU tests' device and validation switches, and a unit test's made-up name.
+const NOT_FOR_USERS: &[&str] = &[
+    "CONTRASTXR_FAULT",
+    "CONTRASTXR_SYSFS_ROOT",
+    "CONTRASTXR_V4L2_DIR",
+    "CONTRASTXR_VK_DEVICE",
+    "CONTRASTXR_VK_VALIDATION",
+    "CONTRASTXR_X",
+];
+
+/// The `"CONTRASTXR_..."` string literals of the `.rs` files under `dir`.
+fn variables_read(dir: &Path, found: &mut Vec<String>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            variables_read(&path, found);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            let text = std::fs::read_to_string(&path).unwrap();
+            for piece in text.split("\"CONTRASTXR_").skip(1) {
+                let name: String = piece
+                    .chars()
+                    .take_while(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || *c == '_')
+                    .collect();
+                if piece[name.len()..].starts_with('"') {
+                    found.push(format!("CONTRASTXR_{name}"));
+                }
+            }
+        }
+    }
+}
+
+/// The README's table names every variable the code reads (settings_tables.rs checks the
+/// config keys'; this also catches the others, such as `CONTRASTXR_DEVICES`).
+#[test]
+fn the_readme_names_every_variable_the_code_reads() {
+    let mut read = Vec::new();
+    variables_read(&Path::new(REPO).join("src"), &mut read);
+    read.sort();
+    read.dedup();
+    assert!(read.iter().any(|v| v == "CONTRASTXR_DEVICES"), "{read:?}");
+    let readme = std::fs::read_to_string(Path::new(REPO).join("README.md")).unwrap();
+    let missing: Vec<&String> = read
+        .iter()
+        .filter(|v| !NOT_FOR_USERS.contains(&v.as_str()))
+        .filter(|v| !readme.contains(&format!("| `{v}`")) && !readme.contains(&format!(", `{v}`")))
+        .collect();
+    assert!(missing.is_empty(), "README.md's table lacks {missing:?}");
+}
