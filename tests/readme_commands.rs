@@ -486,3 +486,31 @@ fn the_readme_names_every_variable_the_code_reads() {
         .collect();
     assert!(missing.is_empty(), "README.md's table lacks {missing:?}");
 }
+
+/// The README's short config is one `contrastxr config check` accepts.
+#[test]
+fn the_readmes_short_config_is_valid() {
+    let readme = std::fs::read_to_string(Path::new(REPO).join("README.md")).unwrap();
+    let after = readme
+        .split_once("### A short config")
+        .expect("the README has a short config")
+        .1;
+    let block: Vec<&str> = after
+        .lines()
+        .skip_while(|l| !l.starts_with("    "))
+        .take_while(|l| l.starts_with("    ") || l.is_empty())
+        .map(|l| l.strip_prefix("    ").unwrap_or(l))
+        .collect();
+    assert!(block.iter().any(|l| l.starts_with("[device.")), "{block:?}");
+    let file = Path::new(env!("CARGO_TARGET_TMPDIR")).join("readme-short-config.toml");
+    std::fs::write(&file, block.join("\n")).unwrap();
+    let o = Command::new(TOOL)
+        .args(["config", "check"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let said =
+        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{said}");
+    assert!(said.ends_with(": ok\n"), "{said}");
+}
