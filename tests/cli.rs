@@ -1372,3 +1372,21 @@ fn enhance_and_evaluate_help_line_up_every_option() {
     let help = String::from_utf8_lossy(&contrastxr(&["enhance", "--help"]).stdout).into_owned();
     assert!(help.contains("PNG or JPEG in, PNG out"), "{help}");
 }
+
+/// Doctor names documents where the reader has them: the package's installed copy, else this
+/// build's checkout (never a bare `docs/...`, dead outside the source tree).
+#[test]
+fn doctor_names_documents_that_exist() {
+    let root = fresh_home("doctor-docs");
+    let (_, report) = doctor(&root, &[]);
+    let steam = text(finding(&report, "steam"), "detail").to_string();
+    let doc = steam
+        .rsplit_once('(')
+        .and_then(|(_, rest)| rest.strip_suffix(')'))
+        .unwrap_or_else(|| panic!("no document named: {steam}"));
+    assert!(doc.ends_with("steam-flatpak.md"), "{steam}");
+    assert!(
+        Path::new(doc).is_absolute() && Path::new(doc).is_file(),
+        "{steam}"
+    );
+}

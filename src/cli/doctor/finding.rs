@@ -69,13 +69,18 @@ pub fn var(name: &str) -> Option<String> {
 const DOCS: &str = "/usr/share/doc/contrastxr";
 
 /// A document of docs/, named where the reader has it: the package's installed copy, else the
-/// source checkout's.
+/// checkout this tool was built in (`<checkout>/target/<profile>/contrastxr`), else by its
+/// place in the source.
 pub fn doc(name: &str) -> String {
     let installed = std::path::Path::new(DOCS).join("docs").join(name);
-    match installed.is_file() {
-        true => installed.display().to_string(),
-        false => format!("docs/{name}"),
-    }
+    let checkout = std::env::current_exe()
+        .ok()
+        .and_then(|exe| Some(exe.parent()?.parent()?.parent()?.join("docs").join(name)));
+    [Some(installed), checkout]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file())
+        .map_or(format!("docs/{name}"), |p| p.display().to_string())
 }
 
 /// The folders sudo's `secure_path` searches (Debian's default): a tool elsewhere (a source
