@@ -19,7 +19,7 @@ fi
 needs_cargo() {
   command -v cargo >/dev/null && return 0
   if [ -n "${SUDO_USER:-}" ]; then
-    echo "$1: cargo is neither on root's PATH nor in ~$SUDO_USER/.cargo/bin: run \`sudo env PATH=\"\$PATH\" $0\` with the PATH that finds cargo" >&2
+    echo "$1: cargo is neither on root's PATH nor in ~$SUDO_USER/.cargo/bin: from your shell, where cargo works, run \`sudo env PATH=\"\$PATH\" CARGO_HOME=\"\${CARGO_HOME:-\$HOME/.cargo}\" RUSTUP_HOME=\"\${RUSTUP_HOME:-\$HOME/.rustup}\" $0\`" >&2
   else
     echo "$1: cargo is not on PATH: install Rust with rustup (https://rustup.rs), then run this again" >&2
   fi
