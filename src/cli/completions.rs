@@ -21,7 +21,11 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
                 "unknown shell {name:?}: bash, zsh, fish, elvish or powershell"
             ))
         })?,
-        _ => return Err(CliError::Usage("say which shell: bash, zsh or fish".into())),
+        _ => {
+            return Err(CliError::Usage(
+                "say which shell: bash, zsh, fish, elvish or powershell".into(),
+            ))
+        }
     };
     let mut script = Vec::new();
     clap_complete::generate(

@@ -18,8 +18,11 @@ pub fn usage() -> String {
      \x20      level, FILE [device.\"SYSTEM\"]:LINE or FILE [app.\"NAME\"]:LINE, or env VAR),\n\
      \x20      including this shell's CONTRASTXR_* variables; with --device, on the headset\n\
      \x20      whose XrSystemProperties.systemName is SYSTEM (its [device.\"SYSTEM\"] table).\n\
+     \x20      With --device it also names the device profiles file it read, or the folders\n\
+     \x20      searched when there is none.\n\
      path:  the file the layer reads: $CONTRASTXR_CONFIG, else\n\
-     \x20      $XDG_CONFIG_HOME/contrastxr/config.toml, else /etc/xdg/contrastxr/config.toml.\n"
+     \x20      $XDG_CONFIG_HOME/contrastxr/config.toml, else /etc/xdg/contrastxr/config.toml;\n\
+     \x20      with none of them, the file `contrastxr set` would create.\n"
         .to_string()
 }
 
@@ -39,10 +42,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             print_settings(app.as_deref().unwrap_or(""), device.as_deref());
             Ok(())
         }
-        ("path", []) => {
-            print(&format!("{}\n", found()?.display()));
-            Ok(())
-        }
+        ("path", []) => path(),
         _ => Err(CliError::Usage(format!(
             "unknown or misused config subcommand {what:?}"
         ))),
@@ -55,6 +55,38 @@ fn found() -> Result<PathBuf, CliError> {
          /etc/xdg/contrastxr/config.toml exists"
             .into(),
     ))
+}
+
+/// The file the layer reads, or, when there is none, the one `set` would create (said on
+/// stderr, so stdout stays the path alone).
+fn path() -> Result<(), CliError> {
+    let env = Env::capture();
+    if let Some(p) = config::path::find(&env) {
+        print(&format!("{}\n", p.display()));
+        return Ok(());
+    }
+    let (p, _) = config::path::for_writing(&env).map_err(CliError::Failure)?;
+    eprintln!("contrastxr: no config file yet; `contrastxr set KEY VALUE` creates this one");
+    print(&format!("{}\n", p.display()));
+    Ok(())
+}
+
+/// The comment line naming the device profiles file a `--device` print read, or where none was.
+fn profiles_line(env: &Env) -> String {
+    match config::shipped::find(env) {
+        Some(p) if p.is_file() => format!("# device profiles: {}\n", p.display()),
+        Some(p) => format!("# device profiles: none ({} does not exist)\n", p.display()),
+        None => {
+            let searched: Vec<String> = config::shipped::searched(env)
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect();
+            format!(
+                "# device profiles: none found (searched {})\n",
+                searched.join(", ")
+            )
+        }
+    }
 }
 
 fn check(path: PathBuf) -> Result<(), CliError> {
@@ -79,7 +111,8 @@ fn check(path: PathBuf) -> Result<(), CliError> {
 }
 
 fn print_settings(app: &str, device: Option<&str>) {
-    let r = config::load_for(config::Who { app, device }, &Env::capture());
+    let env = Env::capture();
+    let r = config::load_for(config::Who { app, device }, &env);
     let on = device.map_or(String::new(), |d| format!(" on system {d:?}"));
     let mut out = format!(
         "# contrastxr settings for app {app:?}{on}; config file: {}\n",
@@ -87,6 +120,9 @@ fn print_settings(app: &str, device: Option<&str>) {
             .as_ref()
             .map_or("none".into(), |p| p.display().to_string())
     );
+    if device.is_some() {
+        out += &profiles_line(&env);
+    }
     for i in 0..KEYS.len() {
         out += &r.line(i);
         out.push('\n');

@@ -14,8 +14,8 @@ pub const OPTIONS: &[Opt] = &[
 const USAGE: &str =
     "usage: contrastxr enhance --display D.png --background B.png -o OUT.png [options]\n\n\
      Enhances the colour contrast of the display image (virtual content; black is transparent)\n\
-     against the background image (a camera frame of any size). PNG in and out, RGB or RGBA;\n\
-     alpha passes through and the output has the display's layout.\n\n";
+     against the background image (a camera frame of any size). PNG or JPEG in, PNG out,\n\
+     RGB or RGBA; alpha passes through and the output has the display's layout.\n\n";
 
 pub fn run(args: &mut Args) -> Result<(), CliError> {
     let display_path = args.required(&["--display"])?;

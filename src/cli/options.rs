@@ -86,9 +86,8 @@ pub fn method_usage() -> String {
     s
 }
 /// The help of [`ENGINE_OPTIONS`], for the commands that run the method.
-pub const ENGINE_USAGE: &str = "\
-  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)
-";
+pub const ENGINE_USAGE: &str =
+    "  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)\n";
 
 /// The option [`engine`] reads.
 pub const ENGINE_OPTIONS: &[Opt] = &[Opt::value("--engine", "E")];

@@ -29,6 +29,11 @@ pub fn find(env: &Env) -> Option<PathBuf> {
     if let Some(p) = env.get("CONTRASTXR_DEVICES").filter(|p| !p.is_empty()) {
         return Some(PathBuf::from(p));
     }
+    searched(env).into_iter().find(|p| p.is_file())
+}
+
+/// The files [`find`] tries in turn when `CONTRASTXR_DEVICES` is unset.
+pub fn searched(env: &Env) -> Vec<PathBuf> {
     let data_home = env
         .get("XDG_DATA_HOME")
         .filter(|d| !d.is_empty())
@@ -44,7 +49,7 @@ pub fn find(env: &Env) -> Option<PathBuf> {
         .into_iter()
         .chain(user)
         .chain([system, PathBuf::from(PACKAGED_PATH)])
-        .find(|p| p.is_file())
+        .collect()
 }
 
 #[cfg(test)]

@@ -24,12 +24,20 @@ struct Log {
 }
 
 /// `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state/...`).
+#[cfg(not(test))]
 pub fn path() -> Option<PathBuf> {
     let state = std::env::var_os("XDG_STATE_HOME")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)
         .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/state")))?;
     Some(state.join("contrastxr").join("layer.log"))
+}
+
+/// Unit tests log to stderr only: written to the user's file, their lines would make
+/// `contrastxr log` and `doctor` name a test binary as the last app.
+#[cfg(test)]
+pub fn path() -> Option<PathBuf> {
+    None
 }
 
 /// The rotated file beside `path`: `layer.log.1`.

@@ -1,7 +1,7 @@
 //! The config file and its problems, what the last app that loaded the layer logged about it,
 //! and Steam's pressure-vessel setting.
 
-use super::finding::{var, Finding};
+use super::finding::{doc, var, Finding};
 use contrastxr::config::{self, Env, Source};
 use contrastxr::layer::log;
 use std::path::{Path, PathBuf};
@@ -88,7 +88,8 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
             "if the headset is see-through but its runtime reports another blend mode, set \
              environment_blend_mode = \"additive\" in its [device.\"...\"] table (or \
              CONTRASTXR_ENVIRONMENT_BLEND_MODE=additive): apps then render black around their \
-             content; force = true (CONTRASTXR_FORCE=1) acts on opaque frames as they are"
+             content; not force = true, which acts on opaque frames as they are and recolours \
+             the whole background of an app that believes the display is opaque"
         } else if text.contains("background") {
             "check the camera finding and the background setting (`contrastxr camera list`)"
         } else if text.contains("not a Vulkan session") {
@@ -134,8 +135,11 @@ impl LastApp {
             return Finding::warn(
                 NAME,
                 format!("no app has loaded the layer yet (no start of an app in {where_})"),
-                "start an OpenXR app with CONTRASTXR=1 (for Steam games see \
-                 docs/steam-flatpak.md), then run doctor again",
+                format!(
+                    "start an OpenXR app with CONTRASTXR=1 (for Steam games see {}), then run \
+                     doctor again",
+                    doc("steam-flatpak.md")
+                ),
             );
         };
         let exe = first.text.strip_prefix(log::LOADED).unwrap_or(first.text);
@@ -192,13 +196,16 @@ pub fn steam() -> Finding {
                  not import host OpenXR layers without it",
                 set.map_or("not set here".into(), |v| format!("{v:?}, not 1"))
             ),
-            format!("in each game's launch options: {OPTIONS} (docs/steam-flatpak.md)"),
+            format!(
+                "in each game's launch options: {OPTIONS} ({})",
+                doc("steam-flatpak.md")
+            ),
         ),
         _ => Finding::ok(
             NAME,
             format!(
-                "Steam not found; for Steam games the launch options need {OPTIONS} \
-                 (docs/steam-flatpak.md)"
+                "Steam not found; for Steam games the launch options need {OPTIONS} ({})",
+                doc("steam-flatpak.md")
             ),
         ),
     }

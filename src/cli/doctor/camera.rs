@@ -1,7 +1,7 @@
 //! The background source the layer would open (the V4L2 cameras and their formats, as
 //! `contrastxr camera list` shows them) and whether the camera's profile is described.
 
-use super::finding::{Finding, Status};
+use super::finding::{doc, tool, Finding, Status};
 use contrastxr::camera::v4l2::{self, Mode};
 use contrastxr::camera::{parse_source, SourceSpec};
 use contrastxr::config::{self, Env, Who};
@@ -72,10 +72,17 @@ fn describe(c: &Camera) -> String {
 }
 
 const NAME: &str = "camera";
-const LIST: &str = "`contrastxr camera list` shows the cameras, `contrastxr camera test \
-    /dev/videoN -o DIR` saves frames to see which one looks at the world";
+/// How to see which camera looks at the world.
+fn list() -> String {
+    format!(
+        "`{0} camera list` shows the cameras, `{0} camera test /dev/videoN -o DIR` saves frames \
+         to see which one looks at the world",
+        tool()
+    )
+}
 
 fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
+    let list = list();
     let dir = v4l2::device_dir();
     let found = cameras(&dir);
     let chosen = match wanted {
@@ -91,8 +98,9 @@ fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
             NAME,
             format!("background = \"{spec}\", but {what}: the layer passes frames through"),
             format!(
-                "connect the headset's camera and set background = \"v4l2:/dev/videoN\" ({LIST}); \
-                 without a camera, background = \"image:PATH\" or \"color:#RRGGBB\""
+                "connect the headset's camera and `{0} set background v4l2:/dev/videoN` ({list}); \
+                 without a camera, `{0} set background image:PATH` (or color:#RRGGBB)",
+                tool()
             ),
         );
     };
@@ -103,7 +111,7 @@ fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
                 "background = \"{spec}\" opens {}, which offers no usable format",
                 describe(c)
             ),
-            format!("choose another camera ({LIST})"),
+            format!("choose another camera ({list})"),
         );
     }
     let others: Vec<String> = found
@@ -117,9 +125,10 @@ fn v4l2_finding(spec: &str, wanted: Option<&Path>) -> Finding {
             NAME,
             format!("{detail}; also here: {}", others.join(", ")),
             format!(
-                "v4l2:auto took one of several cameras: name the headset's world camera, \
-                 background = \"v4l2:/dev/videoN\" ({LIST}), or list its USB id first in \
-                 camera_usb_ids (`lsusb` shows it as VID:PID)"
+                "v4l2:auto took one of several cameras: name the headset's world camera, `{} \
+                 set background v4l2:/dev/videoN` ({list}), or list its USB id first in \
+                 camera_usb_ids (`lsusb` shows it as VID:PID)",
+                tool()
             ),
         );
     }
@@ -138,9 +147,12 @@ fn without_colour_camera(spec: &str, found: Finding) -> Finding {
             "background = \"{spec}\", but the headset's profile says it has no colour camera \
              (colour_camera = false) and no camera of your own is connected"
         ),
-        "set background = \"image:PATH\", \"video:PATH\" or \"color:#RRGGBB\" (a photo or a \
-         colour like the place you wear it in); or connect a USB camera, set colour_camera = \
-         true and describe it (camera_fov)",
+        format!(
+            "`{0} set background image:PATH` (or video:PATH, or color:#RRGGBB: a photo or a \
+             colour like the place you wear it in); or connect a USB camera, `{0} set \
+             colour_camera true` and describe it (camera_fov)",
+            tool()
+        ),
     )
 }
 
@@ -152,13 +164,17 @@ pub fn camera(spec: &str, colour_camera: bool) -> Finding {
         false => without_colour_camera(spec, v4l2_finding(spec, wanted)),
     };
     match parse_source(spec) {
-        Err(e) => Finding::problem(NAME, e, "set background to v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH, world:PATH or color:#RRGGBB"),
+        Err(e) => Finding::problem(NAME, e, format!("`{} set background SOURCE`, SOURCE one of v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH, world:PATH, color:#RRGGBB", tool())),
         Ok(SourceSpec::V4l2Auto) => v4l2(None),
         Ok(SourceSpec::V4l2Device(p)) => v4l2(Some(&p)),
         Ok(SourceSpec::Image(p) | SourceSpec::Video(p) | SourceSpec::World(p)) if !p.exists() => Finding::problem(
             NAME,
             format!("background = \"{spec}\", but {} does not exist", p.display()),
-            "fix the path in the config's background setting",
+            format!(
+                "point the background at a file that exists: `{} set background {}`",
+                tool(),
+                spec.split_once(':').map_or("image", |(kind, _)| kind).to_string() + ":PATH"
+            ),
         ),
         Ok(SourceSpec::Image(_) | SourceSpec::Video(_)) => Finding::ok(
             NAME,
@@ -218,6 +234,7 @@ pub fn profile(env: &Env, system: Option<&str>) -> Finding {
         }
     }
     let device = system.map_or("<systemName>".to_string(), str::to_string);
+    let tool = tool();
     let whose = system.map_or(String::new(), |s| format!(" for {s:?}"));
     Finding::warn(
         NAME,
@@ -226,9 +243,9 @@ pub fn profile(env: &Env, system: Option<&str>) -> Finding {
              paper's HoloLens values), which will not line up with what you see"
         ),
         format!(
-            "describe the camera in [device.{device:?}] (docs/calibration.md; the name is in \
-             `contrastxr log` once an app ran), then run `contrastxr calibrate --device {device:?}` \
-             wearing the headset"
+            "describe the camera in [device.{device:?}] ({}; the name is in `{tool} log` once \
+             an app ran), then run `{tool} calibrate --device {device:?}` wearing the headset",
+            doc("calibration.md")
         ),
     )
 }

@@ -1,7 +1,7 @@
 //! Whether the library a manifest names loads as the OpenXR loader would load it, and exports
 //! the negotiation function the loader calls first.
 
-use super::finding::Finding;
+use super::finding::{tool, Finding};
 use std::ffi::{CStr, CString, OsStr};
 use std::os::unix::ffi::OsStrExt;
 use std::path::{Path, PathBuf};
@@ -77,9 +77,15 @@ fn is_elf(path: &Path) -> bool {
         .is_ok_and(|()| magic == *b"\x7fELF")
 }
 
-const REINSTALL: &str = "rebuild and reinstall the layer: `cargo build --release` and \
-    `contrastxr install --user --library target/release/libcontrastxr.so` (or reinstall the \
-    Debian package)";
+/// A source build reinstalls its own library; the package's tool has none beside it.
+fn reinstall() -> String {
+    format!(
+        "reinstall the layer: in the source checkout `cargo build --release` and `{} install \
+         --user --library target/release/libcontrastxr.so`, or reinstall the Debian package \
+         (`sudo apt install --reinstall contrastxr`)",
+        tool()
+    )
+}
 
 /// The finding for `library`, as written in the manifest at `manifest`.
 pub fn library_finding(manifest: &Path, library: &str) -> Finding {
@@ -93,14 +99,14 @@ pub fn library_finding(manifest: &Path, library: &str) -> Finding {
                     p.display(),
                     manifest.display()
                 ),
-                REINSTALL,
+                reinstall(),
             )
         }
         Library::Path(p) if !is_elf(&p) => {
             return Finding::problem(
                 NAME,
                 format!("{} is not an ELF shared library", p.display()),
-                REINSTALL,
+                reinstall(),
             )
         }
         Library::Path(p) => (p.clone().into_os_string(), p.display().to_string()),
@@ -118,14 +124,15 @@ pub fn library_finding(manifest: &Path, library: &str) -> Finding {
             NAME,
             format!("{shown} cannot be loaded: {why}"),
             format!(
-                "{REINSTALL}; `ldd {}` shows a missing dependency",
+                "{}; `ldd {}` shows a missing dependency",
+                reinstall(),
                 Path::new(&target).display()
             ),
         ),
         Err(LoadError::NoNegotiate) => Finding::problem(
             NAME,
             format!("{shown} loads but does not export xrNegotiateLoaderApiLayerInterface"),
-            REINSTALL,
+            reinstall(),
         ),
     }
 }

@@ -8,7 +8,7 @@
 //! layers `XR_API_LAYER_PATH`, when set, replaces them all. `$XDG_CONFIG_HOME` is searched only
 //! for the active runtime, never for layers, so a manifest there is reported as not seen.
 
-use super::finding::{var, Finding};
+use super::finding::{tool, tool_as_root, var, Finding};
 use super::library::library_finding;
 use contrastxr::layer::LAYER_NAME;
 use std::path::{Path, PathBuf};
@@ -181,7 +181,11 @@ impl Search {
             return Finding::problem(
                 NAME,
                 format!("{}: {p}, so the loader skips it", m.path.display()),
-                "write it again: `contrastxr install --user` (or --system)",
+                format!(
+                    "write it again: `{} install --user` (or `{} install --system`)",
+                    tool(),
+                    tool_as_root()
+                ),
             );
         }
         let library = m.library.as_deref().unwrap_or("?");
@@ -197,7 +201,8 @@ impl Search {
                 detail + "; apps load it only when asked to",
                 format!(
                     "start apps with XR_ENABLE_API_LAYERS={LAYER_NAME}, or install the \
-                     implicit manifest: `contrastxr install --user`"
+                     implicit manifest: `{} install --user`",
+                    tool()
                 ),
             );
         }
@@ -209,7 +214,12 @@ impl Search {
                     self.implicit.len(),
                     list(&self.implicit)
                 ),
-                "keep one: `contrastxr uninstall --user` (or --system) removes an installed copy",
+                format!(
+                    "keep one: `{} uninstall --user` (or `{} uninstall --system`) removes an \
+                     installed copy",
+                    tool(),
+                    tool_as_root()
+                ),
             );
         }
         // The loader leaves an implicit layer out when its disable variable is set at all.
@@ -236,8 +246,11 @@ impl Search {
                      $XDG_CONFIG_HOME",
                     m.path.display()
                 ),
-                "remove it and run `contrastxr install --user`, which writes \
-                 $XDG_DATA_HOME/openxr/1/api_layers/implicit.d/contrastxr.json",
+                format!(
+                    "remove it and run `{} install --user`, which writes \
+                     $XDG_DATA_HOME/openxr/1/api_layers/implicit.d/contrastxr.json",
+                    tool()
+                ),
             );
         }
         let dirs: Vec<String> = self
@@ -252,8 +265,12 @@ impl Search {
                 dirs.join(", "),
                 var("XR_API_LAYER_PATH").map_or(String::new(), |p| format!("; explicit: {p}"))
             ),
-            "install the layer: `contrastxr install --user` (or `sudo contrastxr install \
-             --system`, or the Debian package)",
+            format!(
+                "install the layer: `{} install --user` (or `{} install --system`, or the \
+                 Debian package)",
+                tool(),
+                tool_as_root()
+            ),
         )
     }
 
@@ -264,7 +281,7 @@ impl Search {
                 None => Finding::problem(
                     "library",
                     format!("{} names no library_path", m.path.display()),
-                    "write the manifest again: `contrastxr install --user`",
+                    format!("write the manifest again: `{} install --user`", tool()),
                 ),
             },
             None => Finding::warn(

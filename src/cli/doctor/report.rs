@@ -19,8 +19,9 @@ pub fn usage() -> String {
      \x20 config          the config file and its problems (file, line and key)\n\
      \x20 camera          the background source: the V4L2 cameras and their formats\n\
      \x20 camera-profile  whether the camera's position and lens are described\n\
-     \x20 device-profile  the shipped device profile that matched the last app's headset, and\n\
-     \x20                 whether the camera its settings name (camera_usb_ids) is connected\n\
+     \x20 device-profile  the shipped device profile that matched the last app's headset (or\n\
+     \x20                 the files searched, when none is found), and whether the camera the\n\
+     \x20                 settings name (camera_usb_ids) is connected, before any app ran too\n\
      \x20 last-app        what the last app that loaded the layer logged: on, or why not\n\
      \x20 steam           PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS, which Steam games need\n\
      --json: one JSON object with every finding (name, status, detail, fix).\n\

@@ -30,9 +30,46 @@ fn candidates() -> Vec<PathBuf> {
         .collect()
 }
 
-const INSTALL_RUNTIME: &str = "install an OpenXR runtime and make it the active one (Debian: \
-    `sudo apt install monado-service libopenxr1-monado`, which links \
-    /etc/xdg/openxr/1/active_runtime.json to it), or point XR_RUNTIME_JSON at its manifest";
+/// `ID` and `VERSION_ID` of /etc/os-release (e.g. `debian`, `12`).
+fn distribution() -> (String, String) {
+    let text = std::fs::read_to_string("/etc/os-release").unwrap_or_default();
+    let field = |name: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(name)?.strip_prefix('='))
+            .map_or(String::new(), |v| v.trim_matches('"').to_string())
+    };
+    (field("ID"), field("VERSION_ID"))
+}
+
+fn install_runtime() -> String {
+    let (id, version) = distribution();
+    install_runtime_on(&id, &version)
+}
+
+/// How to get a runtime on distribution `id` `version`: Debian packages Monado from 13 on (and
+/// in testing, which has no VERSION_ID); Debian 12 has none.
+fn install_runtime_on(id: &str, version: &str) -> String {
+    const ACTIVE: &str = "make it the active one (its manifest linked as \
+        /etc/xdg/openxr/1/active_runtime.json), or point XR_RUNTIME_JSON at its manifest";
+    let major: u32 = version
+        .split('.')
+        .next()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    match id {
+        "debian" if major >= 13 || version.is_empty() => {
+            "install Monado: `sudo apt install monado-service \
+            libopenxr1-monado` (which makes it the active runtime)"
+                .into()
+        }
+        "debian" => format!(
+            "Debian {version} packages no OpenXR runtime: build Monado from source \
+             (https://monado.freedesktop.org/getting-started.html) or install your headset's \
+             own runtime, then {ACTIVE}"
+        ),
+        _ => format!("install an OpenXR runtime (e.g. Monado) and {ACTIVE}"),
+    }
+}
 
 /// The runtime manifest's name and library, resolved as the loader resolves it.
 fn read_runtime(file: &Path) -> Result<(String, PathBuf), String> {
@@ -71,7 +108,7 @@ pub fn runtime() -> Finding {
                         dirs.join(", "),
                         std::env::consts::ARCH
                     ),
-                    INSTALL_RUNTIME,
+                    install_runtime(),
                 );
             }
         },
@@ -82,7 +119,7 @@ pub fn runtime() -> Finding {
             return Finding::problem(
                 NAME,
                 format!("active runtime manifest {}{how}: {why}", file.display()),
-                INSTALL_RUNTIME,
+                install_runtime(),
             )
         }
     };
@@ -94,7 +131,10 @@ pub fn runtime() -> Finding {
                 "active runtime {name} ({}{how}) names {lib}, which does not exist",
                 file.display()
             ),
-            format!("reinstall the runtime, or select another one; {INSTALL_RUNTIME}"),
+            format!(
+                "reinstall the runtime, or select another one; {}",
+                install_runtime()
+            ),
         );
     }
     let lookup = if library.is_absolute() {
@@ -204,5 +244,25 @@ pub fn vulkan() -> Finding {
                 Finding::ok(NAME, detail)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::install_runtime_on;
+
+    #[test]
+    fn the_runtime_fix_fits_the_distribution() {
+        let apt = "sudo apt install monado-service libopenxr1-monado";
+        assert!(install_runtime_on("debian", "13").contains(apt));
+        assert!(
+            install_runtime_on("debian", "").contains(apt),
+            "testing, sid"
+        );
+        let bookworm = install_runtime_on("debian", "12");
+        assert!(!bookworm.contains("apt install"), "{bookworm}");
+        assert!(bookworm.contains("Debian 12 packages no OpenXR runtime"));
+        assert!(bookworm.contains("monado.freedesktop.org"));
+        assert!(!install_runtime_on("fedora", "41").contains("apt"));
     }
 }
