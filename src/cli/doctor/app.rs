@@ -33,12 +33,12 @@ pub fn config(env: &Env) -> Finding {
             format!("no config file: defaults apply (`contrastxr set` writes {user})"),
         );
     };
-    let mut problems = match std::fs::read_to_string(&path) {
+    let mut problems = match contrastxr::user_file::read_text(&path) {
         Ok(text) => config::check(Source {
             path: &path,
             text: &text,
         }),
-        Err(e) => vec![format!("config {}: cannot read it ({e})", path.display())],
+        Err(why) => vec![format!("config {} {why}", path.display())],
     };
     let from_env = config::load("", env).problems.into_iter();
     problems.extend(from_env.filter(|p| p.starts_with("environment variable")));
@@ -103,7 +103,12 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
 impl LastApp {
     pub fn read() -> LastApp {
         let path = log::path();
-        let read = |p: &Path| std::fs::read_to_string(p).unwrap_or_default();
+        // The layer caps each file at log::MAX_BYTES; anything else there is not read whole.
+        let read = |p: &Path| {
+            contrastxr::user_file::read(p, 2 * log::MAX_BYTES)
+                .map(|b| String::from_utf8_lossy(&b).into_owned())
+                .unwrap_or_default()
+        };
         let text = path
             .as_deref()
             .map_or(String::new(), |p| read(&log::rotated(p)) + &read(p));

@@ -196,7 +196,7 @@ fn device_tables(env: &Env) -> Vec<String> {
     let Some(path) = config::path::find(env) else {
         return Vec::new();
     };
-    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let text = contrastxr::user_file::read_text(&path).unwrap_or_default();
     config::file::parse(&text)
         .map(|f| f.devices.into_iter().map(|(name, _)| name).collect())
         .unwrap_or_default()

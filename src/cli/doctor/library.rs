@@ -72,9 +72,10 @@ fn load(target: &OsStr) -> Result<(), LoadError> {
 fn is_elf(path: &Path) -> bool {
     use std::io::Read;
     let mut magic = [0u8; 4];
-    std::fs::File::open(path)
-        .and_then(|mut f| f.read_exact(&mut magic))
-        .is_ok_and(|()| magic == *b"\x7fELF")
+    contrastxr::user_file::open(path, u64::MAX)
+        .ok()
+        .and_then(|mut f| f.read_exact(&mut magic).ok())
+        .is_some_and(|()| magic == *b"\x7fELF")
 }
 
 /// A source build reinstalls its own library; the package's tool has none beside it.

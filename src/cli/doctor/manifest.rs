@@ -87,7 +87,7 @@ fn string_at<'a>(v: &'a serde_json::Value, key: &str) -> Option<&'a str> {
 /// The manifest at `path` if it names this layer (or looks like ours but cannot be read).
 fn read(path: &Path, implicit: bool) -> Option<Manifest> {
     let ours_by_name = path.file_name()?.to_string_lossy().contains("contrastxr");
-    let text = std::fs::read_to_string(path).ok()?;
+    let text = contrastxr::user_file::read_text(path).ok()?;
     let mut m = Manifest {
         path: path.to_path_buf(),
         implicit,

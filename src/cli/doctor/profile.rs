@@ -11,7 +11,7 @@ const NAME: &str = "device-profile";
 /// The shipped profiles' file and its `[device."..."]` table names.
 fn shipped_tables(env: &Env) -> Option<(String, Vec<String>)> {
     let path = shipped::find(env)?;
-    let text = std::fs::read_to_string(&path).ok()?;
+    let text = contrastxr::user_file::read_text(&path).ok()?;
     let parsed = file::parse(&text).ok()?;
     let names = parsed.devices.into_iter().map(|(n, _)| n).collect();
     Some((path.display().to_string(), names))

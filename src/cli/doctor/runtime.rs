@@ -73,7 +73,8 @@ fn install_runtime_on(id: &str, version: &str) -> String {
 
 /// The runtime manifest's name and library, resolved as the loader resolves it.
 fn read_runtime(file: &Path) -> Result<(String, PathBuf), String> {
-    let text = std::fs::read_to_string(file).map_err(|e| format!("cannot read it ({e})"))?;
+    // XR_RUNTIME_JSON may name anything: read as every named file is (user_file).
+    let text = contrastxr::user_file::read_text(file)?;
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("not valid JSON ({e})"))?;
     let runtime = &v["runtime"];
