@@ -26,7 +26,8 @@ struct SubImage {
     mapping: Option<CameraMapping>,
 }
 
-/// The sub-images of the frame's layers that the layer enhances.
+/// The sub-images of the frame's layers that the layer enhances. Each view's mapping is logged
+/// (once per settings) when `enhancing`: a session passed through has none to tell.
 ///
 /// # Safety
 /// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
@@ -34,6 +35,7 @@ unsafe fn sub_images(
     info: &xr::FrameEndInfo,
     settings: &Settings,
     motion: &mut FrameMotion,
+    enhancing: bool,
 ) -> Vec<SubImage> {
     let mut out = Vec::new();
     if info.layers.is_null() {
@@ -57,7 +59,9 @@ unsafe fn sub_images(
             let geometry: Vec<_> = views.iter().map(ViewGeometry::from_xr).collect();
             let mappings = motion.mappings(settings, &geometry, proj.space);
             for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
-                registration::log_mapping(settings, k, &mapping, &source);
+                if enhancing {
+                    registration::log_mapping(settings, k, &mapping, &source);
+                }
                 out.push(SubImage {
                     sub: view.sub_image,
                     mapping: Some(mapping),
@@ -244,8 +248,9 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = s.background.as_ref().and_then(|bg| bg.latest());
     let captured_at = s.frame_in_use.as_ref().map(|f| f.captured_at);
     let mut moving = motion::at_end_frame(s, info.display_time, captured_at);
+    let enhancing = s.processor.is_some();
     // SAFETY: the app's frame end info, valid for this call.
-    let subs = unsafe { sub_images(info, &s.settings, &mut moving) };
+    let subs = unsafe { sub_images(info, &s.settings, &mut moving, enhancing) };
     moving.finish(s);
     let items = frame_items(&subs, &s.settings);
     s.regions_seen |= !subs.is_empty();

@@ -388,12 +388,29 @@ pub fn scratch_dir(name: &str) -> PathBuf {
 impl Sandbox {
     /// [`Sandbox::run`] with its own time limit in seconds (long soaks).
     pub fn run_for(&self, cmd: &[&str], env: &[(&str, &str)], timeout_s: u64) -> SandboxRun {
+        self.run_with(&[], cmd, env, timeout_s)
+    }
+
+    /// [`Sandbox::run_for`] with an X server beside the service (`run --x11`), for OpenGL apps.
+    pub fn run_x11_for(&self, cmd: &[&str], env: &[(&str, &str)], timeout_s: u64) -> SandboxRun {
+        self.run_with(&["--x11"], cmd, env, timeout_s)
+    }
+
+    fn run_with(
+        &self,
+        options: &[&str],
+        cmd: &[&str],
+        env: &[(&str, &str)],
+        timeout_s: u64,
+    ) -> SandboxRun {
         // A hung app or runtime must fail the test, not hang it: `timeout` signals the script's
         // whole process group, and the script's PID namespace takes everything inside down.
         let output = Command::new("timeout")
             .args(["--kill-after=10", &timeout_s.to_string()])
             .arg(&self.script)
-            .args(["run", "--"])
+            .arg("run")
+            .args(options)
+            .arg("--")
             .args(cmd)
             // Frames counted and captured from the first on: the first frame waits for the
             // layer's pipelines (tests of the default, "background", set it themselves).
