@@ -165,6 +165,33 @@ impl Fov {
 }
 
 impl Lens {
+    /// The camera-space ray (z = -1) through camera uv: the inverse of [`Lens::projection`],
+    /// beside it so the two read the same conventions (the half texel, y up).
+    pub fn ray(&self, u: f64, v: f64) -> DVec3 {
+        match *self {
+            Lens::Fov {
+                horizontal,
+                vertical,
+            } => DVec3::new(
+                (u - 0.5) * 2.0 * (horizontal / 2.0).tan(),
+                -(v - 0.5) * 2.0 * (vertical / 2.0).tan(),
+                -1.0,
+            ),
+            Lens::Pixels {
+                fx,
+                fy,
+                cx,
+                cy,
+                width,
+                height,
+            } => DVec3::new(
+                (u * width - cx - 0.5) / fx,
+                -(v * height - cy - 0.5) / fy,
+                -1.0,
+            ),
+        }
+    }
+
     /// Takes a camera-space point to homogeneous camera uv (w = the depth in front, -z).
     fn projection(&self) -> Result<DMat3, RegistrationError> {
         // u = (fx x / -z + cx + 0.5) / width; v = (fy (-y) / -z + cy + 0.5) / height, with the

@@ -279,3 +279,32 @@ fn a_nudge_moves_and_scales_the_picture_about_the_centre() {
     }
     assert_eq!(Nudge::NONE.apply(&base), base);
 }
+
+#[test]
+fn a_lens_ray_projects_back_to_its_uv() {
+    let lenses = [
+        Lens::Fov {
+            horizontal: deg(100.0),
+            vertical: deg(80.0),
+        },
+        Lens::Pixels {
+            fx: 500.0,
+            fy: 480.0,
+            cx: 310.0,
+            cy: 250.0,
+            width: 640.0,
+            height: 480.0,
+        },
+    ];
+    for lens in lenses {
+        let projection = lens.projection().unwrap();
+        for (u, v) in [(0.5, 0.5), (0.1, 0.8), (0.93, 0.07)] {
+            let p = projection * lens.ray(u, v);
+            let (pu, pv) = (p.x / p.z, p.y / p.z);
+            assert!(
+                (pu - u).abs() < 1e-12 && (pv - v).abs() < 1e-12,
+                "{lens:?}: ({u}, {v}) -> ({pu}, {pv})"
+            );
+        }
+    }
+}

@@ -9,7 +9,7 @@
 //! tracks the head. The consumer takes the [`HeadPoses::wanted`] times (CLOCK_MONOTONIC ns),
 //! locates the head at each and [`HeadPoses::record`]s the answer.
 
-use crate::algorithm::registration::{CameraProfile, Lens, Pose};
+use crate::algorithm::registration::{CameraProfile, Pose};
 use crate::algorithm::reprojection::panorama_uv;
 use crate::camera::clock::{instant_of_ns, monotonic_now_ns};
 use crate::camera::error::CameraError;
@@ -17,7 +17,6 @@ use crate::camera::frame::{Frame, Shared};
 use crate::camera::log::log;
 use crate::camera::CaptureConfig;
 use crate::image::RgbaImage;
-use glam::DVec3;
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
@@ -189,32 +188,6 @@ impl Camera {
     }
 }
 
-/// The camera-space ray (z = -1) through camera uv.
-fn ray(lens: &Lens, u: f64, v: f64) -> DVec3 {
-    match *lens {
-        Lens::Fov {
-            horizontal,
-            vertical,
-        } => DVec3::new(
-            (u - 0.5) * 2.0 * (horizontal / 2.0).tan(),
-            -(v - 0.5) * 2.0 * (vertical / 2.0).tan(),
-            -1.0,
-        ),
-        Lens::Pixels {
-            fx,
-            fy,
-            cx,
-            cy,
-            width,
-            height,
-        } => DVec3::new(
-            (u * width - cx - 0.5) / fx,
-            -(v * height - cy - 0.5) / fy,
-            -1.0,
-        ),
-    }
-}
-
 /// What a camera mounted as `profile` says on a head at `head` sees of the panorama.
 pub fn render(
     panorama: &RgbaImage,
@@ -229,7 +202,7 @@ pub fn render(
         for x in 0..width {
             let u = (f64::from(x) + 0.5) / f64::from(width);
             let v = (f64::from(y) + 0.5) / f64::from(height);
-            let uv = panorama_uv(turn * ray(&profile.lens, u, v));
+            let uv = panorama_uv(turn * profile.lens.ray(u, v));
             out.set(x, y, sample(panorama, uv.x, uv.y));
         }
     }
@@ -264,7 +237,8 @@ fn sample(p: &RgbaImage, u: f64, v: f64) -> [u8; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DQuat;
+    use crate::algorithm::registration::Lens;
+    use glam::{DQuat, DVec3};
 
     /// A panorama whose red channel is the longitude (0..255 over 360 degrees) and green the
     /// latitude.

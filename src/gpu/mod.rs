@@ -4,7 +4,9 @@
 
 pub mod app_image;
 pub mod app_views;
-pub mod approx;
+// The shader's approximations mirrored in f32: only their accuracy tests use them.
+#[cfg(test)]
+mod approx;
 pub mod barrier;
 pub mod bench;
 mod bench_case;
