@@ -327,10 +327,15 @@ pub const PARAMS: [(&str, ParamType); 23] = [
 /// The byte offset of each PARAMS field, and the block's size (a multiple of its largest
 /// alignment), as WGSL lays them out.
 pub const fn params_layout() -> ([u32; PARAMS.len()], u32) {
-    let mut offsets = [0u32; PARAMS.len()];
+    layout_of(&PARAMS)
+}
+
+/// `params_layout` of any field list (the tests lay out altered copies of PARAMS).
+pub const fn layout_of<const N: usize>(params: &[(&str, ParamType); N]) -> ([u32; N], u32) {
+    let mut offsets = [0u32; N];
     let (mut at, mut align, mut i) = (0u32, 4u32, 0);
-    while i < PARAMS.len() {
-        let ty = PARAMS[i].1;
+    while i < N {
+        let ty = params[i].1;
         at = at.div_ceil(ty.align()) * ty.align();
         offsets[i] = at;
         at += ty.size();
