@@ -16,6 +16,72 @@ mod interface {
 }
 use interface::*;
 
+// The method table (src/algorithm/method_table.rs): what build.rs needs of each entry.
+include!("src/algorithm/method_table.rs");
+
+/// A method as build.rs sees its entry.
+struct BuildMethod {
+    name: &'static str,
+    code: u32,
+    /// `Scaled` or `Linear` (the entry's reference).
+    space: &'static str,
+    wgsl: &'static str,
+}
+
+macro_rules! build_methods {
+    ($($variant:ident {
+        name: $name:literal,
+        code: $code:literal,
+        doc: $doc:literal,
+        comparison: $comparison:literal,
+        reference: $space:ident($f:ident),
+        wgsl: $wgsl:literal,
+        $($rest:tt)*
+    }),* $(,)?) => {
+        &[$(BuildMethod {
+            name: $name,
+            code: $code,
+            space: stringify!($space),
+            wgsl: $wgsl,
+        }),*]
+    };
+}
+
+/// Every method of the table.
+const METHODS: &[BuildMethod] = with_methods!(build_methods);
+
+/// The code of the method the single passes and the background mode are built with (their
+/// METHOD is never read; `paper`'s).
+fn paper_code() -> u32 {
+    METHODS
+        .iter()
+        .find(|m| m.name == "paper")
+        .expect("paper")
+        .code
+}
+
+/// A method's WGSL, appended to shaders/enhance.wgsl in its variants: the entry's file, and a
+/// stand-in for the function of the other space (enhance.wgsl calls both, behind the constant
+/// METHOD_LINEAR).
+fn method_wgsl(code: u32) -> String {
+    let m = METHODS
+        .iter()
+        .find(|m| m.code == code)
+        .expect("a method's code");
+    println!("cargo:rerun-if-changed={}", m.wgsl);
+    let own = fs::read_to_string(m.wgsl).unwrap_or_else(|e| panic!("{} ({}): {e}", m.wgsl, m.name));
+    let linear = m.space == "Linear";
+    let stand_in = if linear {
+        "fn method_scaled(s: Step) -> Colours {\n    return s.d;\n}\n"
+    } else {
+        "fn method_linear(display: Colours, bg: Background) -> Colours {\n    return display;\n}\n"
+    };
+    format!(
+        "\n// The method `{}` ({}).\nconst METHOD_LINEAR: bool = {linear};\n{own}{stand_in}",
+        m.name, m.wgsl
+    )
+}
+
 /// Stage files and their entry points.
 const STAGES: &[(&str, &[&str])] = &[("enhance", &["finish_tiles"]), ("copy", &["copy_pixels"])];
 
@@ -45,12 +111,19 @@ fn pixel_accesses() -> Vec<(u32, u32)> {
 /// (src/gpu/shared_fetch.rs): built only for the defaults (the paper's method in mode enhance,
 /// extras off), each variant costing about 40 kB of library.
 fn enhance_variants() -> Vec<(u32, u32, bool, bool)> {
-    let mut v: Vec<(u32, u32, bool, bool)> = (0..METHODS)
-        .flat_map(|m| ENHANCE_MODES.iter().map(move |&mode| (m, mode)))
+    let mut codes: Vec<u32> = METHODS.iter().map(|m| m.code).collect();
+    codes.sort();
+    assert!(
+        codes.windows(2).all(|w| w[0] != w[1]),
+        "src/algorithm/method_table.rs: two methods share a code"
+    );
+    let mut v: Vec<(u32, u32, bool, bool)> = METHODS
+        .iter()
+        .flat_map(|m| ENHANCE_MODES.iter().map(move |&mode| (m.code, mode)))
         .flat_map(|(m, mode)| [(m, mode, false, false), (m, mode, true, false)])
         .collect();
-    v.push((0, MODE_BACKGROUND, false, false));
-    v.push((METHOD_PAPER, MODE_ENHANCE, false, true));
+    v.push((paper_code(), MODE_BACKGROUND, false, false));
+    v.push((paper_code(), MODE_ENHANCE, false, true));
     v
 }
 
@@ -441,6 +514,7 @@ fn main() {
         let mut body = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
         if *stage == "enhance" {
             body += &sampling(false);
+            body += &method_wgsl(paper_code());
         }
         let source = format!(
             "{}\n{}{body}",
@@ -495,10 +569,11 @@ fn main() {
                 if shared { "_s" } else { "" }
             );
             let source = format!(
-                "{}\n{}{body}{}",
+                "{}\n{}{body}{}{}",
                 prefix(access_code, format),
                 specialise((method, mode, format), extras),
-                if shared { &shared_fetch } else { &general }
+                if shared { &shared_fetch } else { &general },
+                method_wgsl(method)
             );
             write(&file, "enhance", &source, "enhance");
             let in_place = (access_code == ACCESS_IN_PLACE).then_some(format);
@@ -513,9 +588,10 @@ fn main() {
     for (access_code, format) in pixel_accesses() {
         let file = format!("classify_f{format}_a{access_code}");
         let source = format!(
-            "{}\n{}{body}{general}",
+            "{}\n{}{body}{general}{}",
             prefix(access_code, format),
-            specialise((0, 0, format), false)
+            specialise((paper_code(), 0, format), false),
+            method_wgsl(paper_code())
         );
         write(&file, "enhance", &source, "classify");
         let in_place = (access_code == ACCESS_IN_PLACE).then_some(format);
