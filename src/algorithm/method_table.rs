@@ -86,6 +86,17 @@ macro_rules! with_methods {
                 push: ["k_v", "k_b"],
                 passes: [Classify, FinishTiles, Enhance],
             },
+            Luminance {
+                name: "luminance",
+                code: 5,
+                doc: "Only L* moves, away from the background's, by lambda_e (hue and chroma kept).",
+                comparison: true,
+                reference: Scaled(luminance),
+                wgsl: "shaders/methods/luminance.wgsl",
+                settings: ["lambda_e", "luminance_cap"],
+                push: ["lambda_e"],
+                passes: [Classify, FinishTiles, Enhance],
+            },
         }
     };
 }

@@ -111,3 +111,25 @@ pub(super) fn lum_chroma(display: DVec3, _: DVec3, e: DVec3, _: &Params, m: &mut
     }
     display + hue_change(display, e, m).length() * (display / len)
 }
+
+/// `luminance`: only L' moves, away from B's L', by lambda_e, and stays in [-1, 1] (L* in
+/// [0, 100]); a' and b' (hue and chroma) are kept. Where D's L' equals B's it moves toward the
+/// side with more room: up where L'_D <= 0, else down (docs/algorithm.md, Comparison methods).
+pub(super) fn luminance(
+    display: DVec3,
+    background: DVec3,
+    _: DVec3,
+    params: &Params,
+    m: &mut Margin,
+) -> DVec3 {
+    let above = display.x - background.x;
+    m.note(above, 0.0);
+    let up = if above == 0.0 {
+        display.x <= 0.0
+    } else {
+        above > 0.0
+    };
+    let step = f64::from(params.lambda_e);
+    let l = display.x + if up { step } else { -step };
+    DVec3::new(l.clamp(-1.0, 1.0), display.y, display.z)
+}
