@@ -39,8 +39,9 @@ pub enum Pass {
     Enhance,
 }
 
-/// The passes the recorder implements, in its order: every entry's `passes` must be these
-/// (a test holds them to it).
+/// The passes the recorder implements (src/gpu/record.rs runs an entry's `passes` in their
+/// order; its arms assume this one): every entry's `passes` must be these (a test holds them
+/// to it).
 pub const PER_PIXEL_PASSES: [Pass; 3] = [Pass::Classify, Pass::FinishTiles, Pass::Enhance];
 
 /// One method, as its entry in method_table.rs says.
