@@ -491,6 +491,7 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=src/gpu/approx_constants.rs");
     println!("cargo:rerun-if-changed=src/gpu/interface.rs");
+    println!("cargo:rerun-if-changed=src/algorithm/method_table.rs");
     let prefix = |access_code: u32, format: u32| {
         colour_constants() + &interface_wgsl(access_code, format) + &common + &access(access_code)
     };
