@@ -16,6 +16,72 @@ mod interface {
 }
 use interface::*;
 
+// The method table (src/algorithm/method_table.rs): what build.rs needs of each entry.
+include!("src/algorithm/method_table.rs");
+
+/// A method as build.rs sees its entry.
+struct BuildMethod {
+    name: &'static str,
+    code: u32,
+    /// `Scaled` or `Linear` (the entry's reference).
+    space: &'static str,
+    wgsl: &'static str,
+}
+
+macro_rules! build_methods {
+    ($($variant:ident {
+        name: $name:literal,
+        code: $code:literal,
+        doc: $doc:literal,
+        comparison: $comparison:literal,
+        reference: $space:ident($f:ident),
+        wgsl: $wgsl:literal,
+        $($rest:tt)*
+    }),* $(,)?) => {
+        &[$(BuildMethod {
+            name: $name,
+            code: $code,
+            space: stringify!($space),
+            wgsl: $wgsl,
+        }),*]
+    };
+}
+
+/// Every method of the table.
+const METHODS: &[BuildMethod] = with_methods!(build_methods);
+
+/// The code of the method the single passes and the background mode are built with (their
+/// METHOD is never read; `paper`'s).
+fn paper_code() -> u32 {
+    METHODS
+        .iter()
+        .find(|m| m.name == "paper")
+        .expect("paper")
+        .code
+}
+
+/// A method's WGSL, appended to shaders/enhance.wgsl in its variants: the entry's file, and a
+/// stand-in for the function of the other space (enhance.wgsl calls both, behind the constant
+/// METHOD_LINEAR).
+fn method_wgsl(code: u32) -> String {
+    let m = METHODS
+        .iter()
+        .find(|m| m.code == code)
+        .expect("a method's code");
+    println!("cargo:rerun-if-changed={}", m.wgsl);
+    let own = fs::read_to_string(m.wgsl).unwrap_or_else(|e| panic!("{} ({}): {e}", m.wgsl, m.name));
+    let linear = m.space == "Linear";
+    let stand_in = if linear {
+        "fn method_scaled(s: Step) -> Colours {\n    return s.d;\n}\n"
+    } else {
+        "fn method_linear(display: Colours, bg: Background) -> Colours {\n    return display;\n}\n"
+    };
+    format!(
+        "\n// The method `{}` ({}).\nconst METHOD_LINEAR: bool = {linear};\n{own}{stand_in}",
+        m.name, m.wgsl
+    )
+}
+
 /// Stage files and their entry points.
 const STAGES: &[(&str, &[&str])] = &[("enhance", &["finish_tiles"]), ("copy", &["copy_pixels"])];
 
@@ -45,12 +111,19 @@ fn pixel_accesses() -> Vec<(u32, u32)> {
 /// (src/gpu/shared_fetch.rs): built only for the defaults (the paper's method in mode enhance,
 /// extras off), each variant costing about 40 kB of library.
 fn enhance_variants() -> Vec<(u32, u32, bool, bool)> {
-    let mut v: Vec<(u32, u32, bool, bool)> = (0..METHODS)
-        .flat_map(|m| ENHANCE_MODES.iter().map(move |&mode| (m, mode)))
+    let mut codes: Vec<u32> = METHODS.iter().map(|m| m.code).collect();
+    codes.sort();
+    assert!(
+        codes.windows(2).all(|w| w[0] != w[1]),
+        "src/algorithm/method_table.rs: two methods share a code"
+    );
+    let mut v: Vec<(u32, u32, bool, bool)> = METHODS
+        .iter()
+        .flat_map(|m| ENHANCE_MODES.iter().map(move |&mode| (m.code, mode)))
         .flat_map(|(m, mode)| [(m, mode, false, false), (m, mode, true, false)])
         .collect();
-    v.push((0, MODE_BACKGROUND, false, false));
-    v.push((METHOD_PAPER, MODE_ENHANCE, false, true));
+    v.push((paper_code(), MODE_BACKGROUND, false, false));
+    v.push((paper_code(), MODE_ENHANCE, false, true));
     v
 }
 
@@ -354,6 +427,63 @@ fn sampling(shared: bool) -> String {
     fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
+/// One embedded shader as build.rs writes it into the generated table (src/gpu/shaders.rs).
+struct Module {
+    /// The SPIR-V file's name (without `.spv`).
+    file: String,
+    entry: &'static str,
+    /// Works on the camera frame (the background's descriptor set) rather than on a view.
+    camera: bool,
+    /// The FORMAT code of an in-place variant (it reads and writes `app_image`).
+    in_place: Option<u32>,
+}
+
+/// The generated table: every module once in MODULES (a ShaderId is an index there, written
+/// here with the list, never counted by hand), the single shaders' ids by name, and each
+/// family's variants with their ids.
+#[derive(Default)]
+struct Table {
+    modules: Vec<Module>,
+    /// Rust items naming ids (`pub const NAME: usize = id;`, the families' tables).
+    items: String,
+}
+
+impl Table {
+    fn add(
+        &mut self,
+        file: &str,
+        entry: &'static str,
+        camera: bool,
+        in_place: Option<u32>,
+    ) -> usize {
+        self.modules.push(Module {
+            file: file.to_string(),
+            entry,
+            camera,
+            in_place,
+        });
+        self.modules.len() - 1
+    }
+
+    fn single(&mut self, name: &str, file: &str, entry: &'static str, camera: bool) {
+        let id = self.add(file, entry, camera, None);
+        self.items += &format!("/// The id of `{file}`.\npub const ID_{name}: usize = {id};\n");
+    }
+
+    fn source(&self) -> String {
+        let mut s = String::from("// Generated by build.rs.\n");
+        s += "/// Every embedded shader; a ShaderId is an index into this list.\n";
+        s += "pub static MODULES: &[ShaderModule] = &[\n";
+        for m in &self.modules {
+            s += &format!(
+                "    spirv!(\"{}\", \"{}\", {}, {:?}),\n",
+                m.file, m.entry, m.camera, m.in_place
+            );
+        }
+        s + "];\n" + &self.items
+    }
+}
+
 fn main() {
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     let common = fs::read_to_string("shaders/common.wgsl").expect("shaders/common.wgsl");
@@ -361,6 +491,7 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=src/gpu/approx_constants.rs");
     println!("cargo:rerun-if-changed=src/gpu/interface.rs");
+    println!("cargo:rerun-if-changed=src/algorithm/method_table.rs");
     let prefix = |access_code: u32, format: u32| {
         colour_constants() + &interface_wgsl(access_code, format) + &common + &access(access_code)
     };
@@ -374,12 +505,17 @@ fn main() {
             "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\n"
         )
     };
+    let mut table = Table::default();
+    // The table's order: the single shaders (decode_camera, finish_tiles, copy_pixels,
+    // copy_rows), the background passes, the `enhance` and then the `classify` variants.
+    table.single("DECODE_CAMERA", "decode_camera", "decode", true);
     for (stage, entries) in STAGES {
         let path = format!("shaders/{stage}.wgsl");
         println!("cargo:rerun-if-changed={path}");
         let mut body = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
         if *stage == "enhance" {
             body += &sampling(false);
+            body += &method_wgsl(paper_code());
         }
         let source = format!(
             "{}\n{}{body}",
@@ -388,30 +524,7 @@ fn main() {
         );
         for entry in *entries {
             write(entry, stage, &source, entry);
-        }
-    }
-    // The background pass once per blur half-width (Params::blur_taps: at most 7), so that its
-    // loops have constant trip counts (see shaders/background.wgsl).
-    println!("cargo:rerun-if-changed=shaders/background.wgsl");
-    let body = fs::read_to_string("shaders/background.wgsl").unwrap();
-    let mut table = String::from("// Generated by build.rs.\n");
-    table += "/// The background pass, one per blur half-width (index = half-width).\n";
-    table += "pub static DECODE_BLUR: &[ShaderModule] = &[\n";
-    for half in 0..=MAX_BLUR_HALF {
-        table += &format!("    spirv!(\"decode_blur_{half}\", \"decode_blur\"),\n");
-        let source = format!(
-            "{}\n{}const BLUR_HALF: u32 = {half}u;\n{body}",
-            prefix(ACCESS_NARROW, FORMAT_CODES[0]),
-            specialise((0, 0, FORMAT_CODES[0]), false)
-        );
-        write(
-            &format!("decode_blur_{half}"),
-            "background",
-            &source,
-            "decode_blur",
-        );
-        if half == 0 {
-            write("decode_camera", "background", &source, "decode");
+            table.single(&entry.to_uppercase(), entry, entry, false);
         }
     }
     println!("cargo:rerun-if-changed=shaders/copy_wide.wgsl");
@@ -422,12 +535,33 @@ fn main() {
         specialise((0, 0, 0), false)
     );
     write("copy_rows", "copy_wide", &source, "copy_rows");
-    table += "];\n";
+    table.single("COPY_ROWS", "copy_rows", "copy_rows", false);
+    // The background pass once per blur half-width (Params::blur_taps: at most 7), so that its
+    // loops have constant trip counts (see shaders/background.wgsl); its half-width 0 source
+    // also holds `decode`, the camera texels' decode.
+    println!("cargo:rerun-if-changed=shaders/background.wgsl");
+    let body = fs::read_to_string("shaders/background.wgsl").unwrap();
+    let mut blur_ids = Vec::new();
+    for half in 0..=MAX_BLUR_HALF {
+        let source = format!(
+            "{}\n{}const BLUR_HALF: u32 = {half}u;\n{body}",
+            prefix(ACCESS_NARROW, FORMAT_CODES[0]),
+            specialise((0, 0, FORMAT_CODES[0]), false)
+        );
+        let file = format!("decode_blur_{half}");
+        write(&file, "background", &source, "decode_blur");
+        if half == 0 {
+            write("decode_camera", "background", &source, "decode");
+        }
+        blur_ids.push(table.add(&file, "decode_blur", true, None));
+    }
+    table.items += &format!(
+        "/// The background pass's id for each blur half-width (index = half-width).\npub static DECODE_BLUR: &[usize] = &{blur_ids:?};\n"
+    );
     let body = fs::read_to_string("shaders/enhance.wgsl").unwrap();
     let [general, shared_fetch] = [false, true].map(sampling);
-    table += "/// (method, mode, format, access, extras, shared fetches, SPIR-V) of each `enhance`\n/// variant.\n";
-    table +=
-        "pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, ShaderModule)] = &[\n";
+    let mut variants = String::from("/// (method, mode, format, access, extras, shared fetches, id) of each `enhance`\n/// variant.\n");
+    variants += "pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[\n";
     for (access_code, format) in pixel_accesses() {
         for (method, mode, extras, shared) in enhance_variants() {
             let file = format!(
@@ -436,29 +570,36 @@ fn main() {
                 if shared { "_s" } else { "" }
             );
             let source = format!(
-                "{}\n{}{body}{}",
+                "{}\n{}{body}{}{}",
                 prefix(access_code, format),
                 specialise((method, mode, format), extras),
-                if shared { &shared_fetch } else { &general }
+                if shared { &shared_fetch } else { &general },
+                method_wgsl(method)
             );
             write(&file, "enhance", &source, "enhance");
-            table += &format!(
-                "    ({method}, {mode}, {format}, {access_code}, {extras}, {shared}, spirv!(\"{file}\", \"enhance\")),\n"
+            let in_place = (access_code == ACCESS_IN_PLACE).then_some(format);
+            let id = table.add(&file, "enhance", false, in_place);
+            variants += &format!(
+                "    ({method}, {mode}, {format}, {access_code}, {extras}, {shared}, {id}),\n"
             );
         }
     }
-    table += "];\n/// (format, access, SPIR-V) of each `classify` variant.\n";
-    table += "pub static CLASSIFY_VARIANTS: &[(u32, u32, ShaderModule)] = &[\n";
+    variants += "];\n/// (format, access, id) of each `classify` variant.\n";
+    variants += "pub static CLASSIFY_VARIANTS: &[(u32, u32, usize)] = &[\n";
     for (access_code, format) in pixel_accesses() {
         let file = format!("classify_f{format}_a{access_code}");
         let source = format!(
-            "{}\n{}{body}{general}",
+            "{}\n{}{body}{general}{}",
             prefix(access_code, format),
-            specialise((0, 0, format), false)
+            specialise((paper_code(), 0, format), false),
+            method_wgsl(paper_code())
         );
         write(&file, "enhance", &source, "classify");
-        table += &format!("    ({format}, {access_code}, spirv!(\"{file}\", \"classify\")),\n");
+        let in_place = (access_code == ACCESS_IN_PLACE).then_some(format);
+        let id = table.add(&file, "classify", false, in_place);
+        variants += &format!("    ({format}, {access_code}, {id}),\n");
     }
-    table += "];\n";
-    fs::write(out.join("enhance_variants.rs"), table).unwrap();
+    variants += "];\n";
+    table.items += &variants;
+    fs::write(out.join("shader_table.rs"), table.source()).unwrap();
 }

@@ -1,7 +1,9 @@
 // The per-pixel enhancement (docs/algorithm.md, Per-pixel optimisation: Algorithm 1 and its
-// four constraints) and the comparison methods (docs/algorithm.md, Comparison methods), on one display region's raw pixels, in place, four pixels
-// at a time (Colours in common.wgsl). Every branch is a per-pixel select: a CPU driver runs all
-// of them anyway. A pixel the method leaves unchanged keeps its words, bit for bit.
+// four constraints) and the comparison methods (docs/algorithm.md, Comparison methods), on one
+// display region's raw pixels, in place, four pixels at a time; each variant's method is its
+// own file in shaders/methods/ (src/algorithm/method_table.rs), which build.rs appends
+// (Colours in common.wgsl). Every branch is a per-pixel select: a CPU driver runs all of them
+// anyway. A pixel the method leaves unchanged keeps its words, bit for bit.
 
 // u32 words per pixel: 2 for the 16-bit formats.
 const WORDS: u32 = select(1u, 2u, (FORMAT & 255u) == LAYOUT_RGBA16_UNORM || (FORMAT & 255u) == LAYOUT_RGBA16_FLOAT);
@@ -223,43 +225,37 @@ fn cap_luminance(display: Colours, out: Colours) -> Colours {
     return pick(out, per_pixel(limit / y, out), (y > limit) & vec4<bool>(pc.luminance_cap > 0.0));
 }
 
-// Algorithm 1 in the scaled space; returns P (== D where nothing changes). One reciprocal of
-// |I - D| serves both E and cos_l, since |E| = min(|I - D|, lambda_e).
+// What a scaled-space method starts from (per pixel, four at a time): D and B, the change
+// vector E (at most lambda_e long, toward I = -B/|B|), I - D and 1/|I - D| (0 where I = D),
+// E'.D' and the hue part (hue_a, hue_b) of E' = (0, E.a, E.b). Chroma constraint: E'_ch is E's
+// a*b* part along D's a*b* direction, E'_h the rest; an achromatic D (|D'| <= 1e-6) has no
+// chroma direction, so all of E' is hue.
+struct Step {
+    d: Colours,
+    b: Colours,
+    e: Colours,
+    to_i: Colours,
+    inv_n: vec4<f32>,
+    ed: vec4<f32>,
+    hue_a: vec4<f32>,
+    hue_b: vec4<f32>,
+}
+
+// The method's P in the scaled space (== D where nothing changes). The method's own
+// `method_scaled(s: Step) -> Colours` (shaders/methods/, appended by build.rs) gives P; one
+// reciprocal of |I - D| serves both E and cos_l, since |E| = min(|I - D|, lambda_e).
 fn enhance_scaled(d: Colours, b: Colours) -> Colours {
     let nb2 = dots(b, b);
     let to_i = per_pixel(-1.0 / sqrt(nb2), b) - d;
     let n = sqrt(dots(to_i, to_i));
     let inv_n = select(vec4<f32>(0.0), 1.0 / n, n > vec4<f32>(0.0));
     let e = per_pixel(min(n, vec4<f32>(pc.lambda_e)) * inv_n, to_i);
-    // Chroma constraint: E'_ch is E's a*b* part along D's a*b* direction, E'_h the rest; an
-    // achromatic D (|D'| <= 1e-6) has no chroma direction, so all of E' is hue.
     let d2 = d[1] * d[1] + d[2] * d[2];
     let ed = e[1] * d[1] + e[2] * d[2];
     let along = select(ed / d2, vec4<f32>(0.0), d2 <= vec4<f32>(1e-12));
     let hue_a = e[1] - along * d[1];
     let hue_b = e[2] - along * d[2];
-    var p: Colours;
-    switch METHOD {
-        case METHOD_HUE_ONLY: {
-            p = d + Colours(vec4<f32>(0.0), hue_a, hue_b);
-        }
-        case METHOD_OTHER_HUE: {
-            p = d - Colours(vec4<f32>(0.0), hue_a, hue_b);
-        }
-        case METHOD_LUM_CHROMA: {
-            let nd = sqrt(dots(d, d));
-            let moved = d + per_pixel(sqrt(hue_a * hue_a + hue_b * hue_b) / nd, d);
-            p = pick(moved, d, nd <= vec4<f32>(1e-6));
-        }
-        default: {
-            // E'_ch kept only where it does not reduce chroma (E'.D' >= 0); luminance scaled
-            // by 1 - |cos_l|.
-            let keeps = ed >= vec4<f32>(0.0);
-            let cos_l = to_i[0] * inv_n;
-            let dir = Colours((1.0 - abs(cos_l)) * e[0], select(hue_a, e[1], keeps), select(hue_b, e[2], keeps));
-            p = jnd_constraint(d, achromatic_boost(d, d + dir, b), b);
-        }
-    }
+    let p = method_scaled(Step(d, b, e, to_i, inv_n, ed, hue_a, hue_b));
     // |B| <= 1e-6: no complementary direction.
     return pick(p, d, nb2 <= vec4<f32>(1e-12));
 }
@@ -280,8 +276,9 @@ struct Background {
 
 fn enhance_linear(display: Colours, bg: Background) -> Enhanced {
     let b = bg.scaled;
-    if (METHOD == METHOD_SUBTRACTION) {
-        let out = pc.k_v * display - pc.k_b * bg.linear;
+    if (METHOD_LINEAR) {
+        // A method in linear light (shaders/methods/, `method_linear`): every pixel changes.
+        let out = method_linear(display, bg);
         return Enhanced(cap_luminance(display, clip(out)), vec4<bool>(true));
     }
     let d = linear_to_scaled(display);

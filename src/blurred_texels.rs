@@ -11,9 +11,9 @@ use crate::image::RgbaImage;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
-/// Bits per linear channel in a packed texel (the GPU's LINEAR_BITS, checked equal there).
-pub const LINEAR_BITS: u32 = 21;
-pub const LINEAR_MAX: u32 = (1 << LINEAR_BITS) - 1;
+/// Bits per linear channel in a packed texel, and its largest code: the shader interface's
+/// (src/gpu/interface.rs), the one definition.
+pub use crate::gpu::interface::{LINEAR_BITS, LINEAR_MAX};
 /// Bytes per texel: two packed texels (the texel and its right neighbour), 8 bytes each.
 pub const TEXEL_BYTES: usize = 16;
 /// Taps at offsets 0..=half for the widest blur.

@@ -1,44 +1,6 @@
 //! The method's settings, shared by the CPU reference, the GPU engine, the CLI and the layer.
 
-/// Which per-pixel method runs (docs/algorithm.md, Per-pixel optimisation and Comparison methods).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Method {
-    /// Algorithm 1 with its four constraints (the paper's method).
-    Paper,
-    /// P = D + E'_h.
-    HueOnly,
-    /// P = D - E'_h.
-    OtherHue,
-    /// P = D + |E'_h| * OD/|OD|.
-    LumChroma,
-    /// Weiland et al. 2009: clip(k_v * display - k_b * background) in linear light.
-    Subtraction,
-}
-
-impl Method {
-    pub const ALL: [Method; 5] = [
-        Method::Paper,
-        Method::HueOnly,
-        Method::OtherHue,
-        Method::LumChroma,
-        Method::Subtraction,
-    ];
-
-    /// The name used on the command line and in config/JSON.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Paper => "paper",
-            Method::HueOnly => "hue-only",
-            Method::OtherHue => "other-hue",
-            Method::LumChroma => "lum-chroma",
-            Method::Subtraction => "subtraction",
-        }
-    }
-
-    pub fn parse(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
-    }
-}
+pub use super::methods::Method;
 
 /// What the layer shows (docs/control.md, Modes). `Enhance` is the product; the others are for
 /// comparison and calibration while wearing the headset. Comparison methods are `Method`s.

@@ -4,9 +4,10 @@
 use glam::DVec3;
 
 use super::conformance::PixelTrace;
+use super::methods::Reference;
 use super::params::{SUBTRACTION_K_B, SUBTRACTION_K_V};
 use super::scaled::enhance_scaled_traced;
-use super::{Method, Params};
+use super::Params;
 use crate::colour;
 
 /// Linear result with the smallest branch margin (scaled units; infinite when no branch ran).
@@ -50,10 +51,8 @@ fn enhance_linear_traced(
     bg_scaled: DVec3,
     params: &Params,
 ) -> LinearOutcome {
-    if params.method == Method::Subtraction {
-        let k_v = f64::from(SUBTRACTION_K_V);
-        let k_b = f64::from(SUBTRACTION_K_B);
-        let unclipped = k_v * display_linear - k_b * bg_linear;
+    if let Reference::Linear(method) = params.method.entry().reference {
+        let unclipped = method(display_linear, bg_linear, params);
         return LinearOutcome {
             unclipped,
             margin: f64::INFINITY,
@@ -74,6 +73,14 @@ fn enhance_linear_traced(
         margin: out.margin,
         cap_scale: luminance_cap_scale(display_linear, unclipped, params.luminance_cap),
     }
+}
+
+/// `subtraction` (Weiland et al. 2009), the linear-light reference its entry names: k_v x the
+/// display minus k_b x the unattenuated background, before the clip.
+pub(super) fn subtraction(display_linear: DVec3, bg_linear: DVec3, _: &Params) -> DVec3 {
+    let k_v = f64::from(SUBTRACTION_K_V);
+    let k_b = f64::from(SUBTRACTION_K_B);
+    k_v * display_linear - k_b * bg_linear
 }
 
 /// The method on one pixel in linear light. `bg_linear` is the blurred, FoV-mapped,

@@ -8,8 +8,9 @@ use super::constraints::{
     ab_plane, change_vector, chroma_constraint, jnd_constraint, luminance_constraint, split_chroma,
     Margin,
 };
+use super::methods::Reference;
 use super::params::ACHROMATIC_CHROMA;
-use super::{Method, Params};
+use super::Params;
 
 /// P and how close the computation came to a branch flip.
 #[derive(Clone, Copy, Debug)]
@@ -20,8 +21,9 @@ pub struct ScaledOutcome {
     pub margin: f64,
 }
 
-/// The method's P for display colour D on background B (both scaled). `Method::Subtraction`
-/// is defined in linear light (see `enhance_linear`); here it returns D unchanged.
+/// The method's P for display colour D on background B (both scaled): its entry's scaled
+/// reference (src/algorithm/method_table.rs) where there is a change vector E. A method in
+/// linear light (subtraction; see `enhance_linear`) returns D unchanged here.
 pub fn enhance_scaled(display: DVec3, background: DVec3, params: &Params) -> DVec3 {
     enhance_scaled_traced(display, background, params).p
 }
@@ -29,21 +31,27 @@ pub fn enhance_scaled(display: DVec3, background: DVec3, params: &Params) -> DVe
 pub fn enhance_scaled_traced(display: DVec3, background: DVec3, params: &Params) -> ScaledOutcome {
     let mut m = Margin::new();
     let lambda_e = f64::from(params.lambda_e);
-    let p = match change_vector(display, background, lambda_e, &mut m) {
-        None => display,
-        Some(e) => match params.method {
-            Method::Paper => paper(display, background, e, params, &mut m),
-            Method::HueOnly => display + hue_change(display, e, &mut m),
-            Method::OtherHue => display - hue_change(display, e, &mut m),
-            Method::LumChroma => lum_chroma(display, e, &mut m),
-            Method::Subtraction => display,
-        },
+    let p = match (
+        change_vector(display, background, lambda_e, &mut m),
+        params.method.entry().reference,
+    ) {
+        (Some(e), Reference::Scaled(method)) => method(display, background, e, params, &mut m),
+        _ => display,
     };
     ScaledOutcome { p, margin: m.0 }
 }
 
+// The methods' scaled references, as their entries in method_table.rs name them: P from D, B
+// and E.
+
 /// Algorithm 1: the chroma and luminance constraints shape E into dir; P = D + dir; then JND.
-fn paper(display: DVec3, background: DVec3, e: DVec3, params: &Params, m: &mut Margin) -> DVec3 {
+pub(super) fn paper(
+    display: DVec3,
+    background: DVec3,
+    e: DVec3,
+    params: &Params,
+    m: &mut Margin,
+) -> DVec3 {
     let dir_ab = chroma_constraint(display, e, m);
     let dir = DVec3::new(luminance_constraint(e), dir_ab.y, dir_ab.z);
     let p = achromatic_boost(display, display + dir, background, params, m);
@@ -84,12 +92,44 @@ fn hue_change(display: DVec3, e: DVec3, m: &mut Margin) -> DVec3 {
     split_chroma(display, e, m).map_or(ab_plane(e), |s| s.hue)
 }
 
+/// `hue-only`: P = D + E'_h.
+pub(super) fn hue_only(display: DVec3, _: DVec3, e: DVec3, _: &Params, m: &mut Margin) -> DVec3 {
+    display + hue_change(display, e, m)
+}
+
+/// `other-hue`: P = D - E'_h.
+pub(super) fn other_hue(display: DVec3, _: DVec3, e: DVec3, _: &Params, m: &mut Margin) -> DVec3 {
+    display - hue_change(display, e, m)
+}
+
 /// Luminance and chroma only: |E'_h| along OD (away from mid grey).
-fn lum_chroma(display: DVec3, e: DVec3, m: &mut Margin) -> DVec3 {
+pub(super) fn lum_chroma(display: DVec3, _: DVec3, e: DVec3, _: &Params, m: &mut Margin) -> DVec3 {
     let len = display.length();
     m.note(len, DIRECTION_EPSILON);
     if len <= DIRECTION_EPSILON {
         return display;
     }
     display + hue_change(display, e, m).length() * (display / len)
+}
+
+/// `luminance`: only L' moves, away from B's L', by lambda_e, and stays in [-1, 1] (L* in
+/// [0, 100]); a' and b' (hue and chroma) are kept. Where D's L' equals B's it moves toward the
+/// side with more room: up where L'_D <= 0, else down (docs/algorithm.md, Comparison methods).
+pub(super) fn luminance(
+    display: DVec3,
+    background: DVec3,
+    _: DVec3,
+    params: &Params,
+    m: &mut Margin,
+) -> DVec3 {
+    let above = display.x - background.x;
+    m.note(above, 0.0);
+    let up = if above == 0.0 {
+        display.x <= 0.0
+    } else {
+        above > 0.0
+    };
+    let step = f64::from(params.lambda_e);
+    let l = display.x + if up { step } else { -step };
+    DVec3::new(l.clamp(-1.0, 1.0), display.y, display.z)
 }

@@ -21,18 +21,9 @@ pub struct Key {
     get: fn(&Settings) -> Value,
 }
 
-/// The values of `mode`: the view modes, and the comparison methods (shown in mode enhance).
-pub const MODES: [&str; 9] = [
-    "enhance",
-    "off",
-    "split",
-    "heatmap",
-    "background",
-    "subtraction",
-    "hue-only",
-    "other-hue",
-    "lum-chroma",
-];
+/// The values of `mode`: the view modes, and the comparison methods (shown in mode enhance),
+/// from the method table (src/algorithm/method_table.rs).
+pub use crate::algorithm::methods::MODES;
 
 fn float(v: Value) -> Result<f32, String> {
     match v {
@@ -159,7 +150,7 @@ fn set_mode(s: &mut Settings, v: Value) -> Result<(), String> {
     let name = text(v)?;
     if let Some(mode) = ViewMode::parse(&name) {
         s.params.mode = mode;
-    } else if let Some(method) = Method::parse(&name).filter(|m| *m != Method::Paper) {
+    } else if let Some(method) = Method::parse(&name).filter(|m| m.entry().comparison) {
         // A comparison method is shown like the paper's: mode enhance with that method.
         s.params.mode = ViewMode::Enhance;
         s.params.method = method;
@@ -203,7 +194,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_METHOD",
         env_negated: false,
         kind: Kind::Text,
-        doc: "paper, hue-only, other-hue, lum-chroma or subtraction",
+        doc: crate::algorithm::methods::METHOD_DOC,
         set: set_method,
         get: |s| Value::Text(s.params.method.name().into()),
     },
@@ -212,7 +203,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_MODE",
         env_negated: false,
         kind: Kind::Text,
-        doc: "enhance, off, split, heatmap, background, or a comparison method (subtraction, hue-only, other-hue, lum-chroma)",
+        doc: crate::algorithm::methods::MODE_DOC,
         set: set_mode,
         get: |s| Value::Text(s.params.mode.name().into()),
     },

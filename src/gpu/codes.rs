@@ -4,15 +4,10 @@
 use super::interface::*;
 use crate::algorithm::params::{Method, ViewMode};
 
-/// The code the shaders use for a method.
+/// The code the shaders use for a method: its entry's (src/algorithm/method_table.rs), for
+/// which build.rs builds its `enhance` variants.
 pub fn method_code(method: Method) -> u32 {
-    match method {
-        Method::Paper => METHOD_PAPER,
-        Method::HueOnly => METHOD_HUE_ONLY,
-        Method::OtherHue => METHOD_OTHER_HUE,
-        Method::LumChroma => METHOD_LUM_CHROMA,
-        Method::Subtraction => METHOD_SUBTRACTION,
-    }
+    method.entry().code
 }
 
 /// The code the shaders use for a view mode.
@@ -30,7 +25,7 @@ pub fn mode_code(mode: ViewMode) -> u32 {
 mod tests {
     use super::*;
 
-    /// Every method has a code of its own below METHODS (the variants build.rs makes).
+    /// Every method has a code of its own, and build.rs built its variants.
     #[test]
     fn method_codes_are_distinct_and_built() {
         let codes: Vec<u32> = Method::ALL.into_iter().map(method_code).collect();
@@ -38,7 +33,13 @@ mod tests {
         sorted.sort();
         sorted.dedup();
         assert_eq!(sorted.len(), codes.len(), "{codes:?}");
-        assert!(codes.iter().all(|&c| c < METHODS), "{codes:?}");
+        for c in codes {
+            let built = crate::gpu::shaders::ENHANCE_VARIANTS.iter();
+            assert!(
+                built.clone().any(|v| v.0 == c && v.1 == MODE_ENHANCE),
+                "{c}"
+            );
+        }
     }
 
     #[test]

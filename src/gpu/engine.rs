@@ -20,6 +20,7 @@ use super::pipelines::{
 };
 use super::shared_fetch::shares_fetches;
 use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::methods::Pass;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -362,20 +363,24 @@ impl Engine {
             return Ok(Vec::new());
         }
         let half = params.blur_taps().len() as u32 / 2;
-        let mut ids = vec![
-            pipelines::DECODE_CAMERA,
-            pipelines::decode_blur(half)?,
-            pipelines::FINISH_TILES,
-        ];
+        let mut ids = vec![pipelines::DECODE_CAMERA, pipelines::decode_blur(half)?];
+        // The method's passes (its entry in src/algorithm/method_table.rs): the one shader
+        // every view shares first, then each view's own.
+        let passes = params.method.entry().passes;
+        if passes.contains(&Pass::FinishTiles) {
+            ids.push(pipelines::FINISH_TILES);
+        }
         let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
         for view in views {
             let code = view.format.shader_code();
             let access = view.access();
             let codes = (method_code(params.method), mode_code(params.mode), code);
-            for id in [
-                pipelines::classify(code, access)?,
-                pipelines::enhance(codes, access, extras)?,
-            ] {
+            for pass in passes {
+                let id = match pass {
+                    Pass::Classify => pipelines::classify(code, access)?,
+                    Pass::FinishTiles => continue,
+                    Pass::Enhance => pipelines::enhance(codes, access, extras)?,
+                };
                 if !ids.contains(&id) {
                     ids.push(id);
                 }

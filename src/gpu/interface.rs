@@ -205,16 +205,10 @@ pub const MODE_BACKGROUND: u32 = 4;
 /// one variant of its own).
 pub const ENHANCE_MODES: [u32; 3] = [MODE_ENHANCE, MODE_SPLIT, MODE_HEATMAP];
 
-/// The method (Method).
-pub const METHOD_PAPER: u32 = 0;
-pub const METHOD_HUE_ONLY: u32 = 1;
-pub const METHOD_OTHER_HUE: u32 = 2;
-pub const METHOD_LUM_CHROMA: u32 = 3;
-pub const METHOD_SUBTRACTION: u32 = 4;
-pub const METHODS: u32 = 5;
+// The method codes are the method table's (src/algorithm/method_table.rs, `code`).
 
 /// The codes written into every shader as WGSL constants, by name.
-pub const CODES: [(&str, u32); 28] = [
+pub const CODES: [(&str, u32); 23] = [
     ("TILE", TILE),
     ("DECODE_ROWS", DECODE_ROWS),
     ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
@@ -230,11 +224,6 @@ pub const CODES: [(&str, u32); 28] = [
     ("MODE_SPLIT", MODE_SPLIT),
     ("MODE_HEATMAP", MODE_HEATMAP),
     ("MODE_BACKGROUND", MODE_BACKGROUND),
-    ("METHOD_PAPER", METHOD_PAPER),
-    ("METHOD_HUE_ONLY", METHOD_HUE_ONLY),
-    ("METHOD_OTHER_HUE", METHOD_OTHER_HUE),
-    ("METHOD_LUM_CHROMA", METHOD_LUM_CHROMA),
-    ("METHOD_SUBTRACTION", METHOD_SUBTRACTION),
     ("LINEAR_BITS", LINEAR_BITS),
     ("LINEAR_MAX", LINEAR_MAX),
     ("CLASSIFY_WORKGROUP_X", CLASSIFY_WORKGROUP[0]),
@@ -327,10 +316,15 @@ pub const PARAMS: [(&str, ParamType); 23] = [
 /// The byte offset of each PARAMS field, and the block's size (a multiple of its largest
 /// alignment), as WGSL lays them out.
 pub const fn params_layout() -> ([u32; PARAMS.len()], u32) {
-    let mut offsets = [0u32; PARAMS.len()];
+    layout_of(&PARAMS)
+}
+
+/// `params_layout` of any field list (the tests lay out altered copies of PARAMS).
+pub const fn layout_of<const N: usize>(params: &[(&str, ParamType); N]) -> ([u32; N], u32) {
+    let mut offsets = [0u32; N];
     let (mut at, mut align, mut i) = (0u32, 4u32, 0);
-    while i < PARAMS.len() {
-        let ty = PARAMS[i].1;
+    while i < N {
+        let ty = params[i].1;
         at = at.div_ceil(ty.align()) * ty.align();
         offsets[i] = at;
         at += ty.size();

@@ -14,7 +14,6 @@ use super::engine::{barrier, BackgroundFrame, CameraRect, Engine};
 use super::error::GpuError;
 use super::frame::{FrameBackground, FrameEngine};
 use super::frame_view::FrameView;
-use super::interface::LINEAR_BITS;
 use super::prepared_staging::new_staging;
 use super::texel_ring::TexelRing;
 use crate::algorithm::mapping::CameraMapping;
@@ -22,9 +21,6 @@ use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use ash::vk;
 use std::sync::Arc;
-
-// The CPU packs texels as the shaders do.
-const _: () = assert!(crate::blurred_texels::LINEAR_BITS == LINEAR_BITS);
 
 /// A host-visible buffer holding all of `texels`, laid out as the image (for `record_texels_upload`).
 pub fn staging_buffer(gpu: &GpuDevice, texels: &BlurredTexels) -> Result<GpuBuffer, GpuError> {

@@ -1,5 +1,6 @@
 //! The push-constant block every pass shares, laid out as the shaders' `Params`
-//! (src/gpu/interface.rs, PARAMS), with the layout checked against that table at compile time.
+//! (src/gpu/interface.rs, PARAMS), with each field's name and offset checked against that
+//! table at compile time.
 
 use super::codes::mode_code;
 use super::interface::{self, BLUR_TAPS, PARAMS_SIZE, TILE};
@@ -32,48 +33,90 @@ pub struct PushConstants {
     pub region_origin: u32,
 }
 
-/// Each PushConstants field's byte offset, in PARAMS order (the mapping stands for map_00 ..=
-/// map_22, one f32 each).
-const PUSH_OFFSETS: [usize; interface::PARAMS.len()] = {
-    use std::mem::offset_of;
-    let m = offset_of!(PushConstants, mapping);
+/// A PushConstants field by the PARAMS name it stands for, and its byte offset: the name is
+/// the field's own (one token gives both), so a field moved, renamed or swapped on either side
+/// fails the check below.
+macro_rules! field {
+    ($name:ident) => {
+        (
+            stringify!($name),
+            std::mem::offset_of!(PushConstants, $name),
+        )
+    };
+}
+
+/// Each PARAMS field as PushConstants holds it, in PARAMS order (the mapping stands for
+/// map_00 ..= map_22, one f32 each, row-major).
+const PUSH_FIELDS: [(&str, usize); interface::PARAMS.len()] = {
+    let m = std::mem::offset_of!(PushConstants, mapping);
     [
-        offset_of!(PushConstants, camera_size),
-        offset_of!(PushConstants, region_size),
-        offset_of!(PushConstants, lambda_e),
-        offset_of!(PushConstants, lambda_jnd),
-        offset_of!(PushConstants, transmittance),
-        offset_of!(PushConstants, blur_half),
-        offset_of!(PushConstants, taps),
-        offset_of!(PushConstants, k_v),
-        offset_of!(PushConstants, k_b),
-        offset_of!(PushConstants, mode),
-        offset_of!(PushConstants, tile_columns),
-        offset_of!(PushConstants, achromatic_boost),
-        offset_of!(PushConstants, luminance_cap),
-        m,
-        m + 4,
-        m + 8,
-        m + 12,
-        m + 16,
-        m + 20,
-        m + 24,
-        m + 28,
-        m + 32,
-        offset_of!(PushConstants, region_origin),
+        field!(camera_size),
+        field!(region_size),
+        field!(lambda_e),
+        field!(lambda_jnd),
+        field!(transmittance),
+        field!(blur_half),
+        field!(taps),
+        field!(k_v),
+        field!(k_b),
+        field!(mode),
+        field!(tile_columns),
+        field!(achromatic_boost),
+        field!(luminance_cap),
+        ("map_00", m),
+        ("map_01", m + 4),
+        ("map_02", m + 8),
+        ("map_10", m + 12),
+        ("map_11", m + 16),
+        ("map_12", m + 20),
+        ("map_20", m + 24),
+        ("map_21", m + 28),
+        ("map_22", m + 32),
+        field!(region_origin),
     ]
 };
 
-const _: () = {
-    let (offsets, _) = interface::params_layout();
+const fn same_name(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
     let mut i = 0;
-    while i < offsets.len() {
-        assert!(
-            PUSH_OFFSETS[i] == offsets[i] as usize,
-            "PushConstants differs from PARAMS"
-        );
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
         i += 1;
     }
+    true
+}
+
+/// The first PARAMS field (by index) that `fields` does not hold under the same name at the
+/// offset `offsets` gives it; None where all agree.
+const fn first_mismatch(
+    fields: &[(&str, usize)],
+    params: &[(&str, interface::ParamType)],
+    offsets: &[u32],
+) -> Option<usize> {
+    if fields.len() != params.len() {
+        return Some(0);
+    }
+    let mut i = 0;
+    while i < fields.len() {
+        if !same_name(fields[i].0, params[i].0) || fields[i].1 != offsets[i] as usize {
+            return Some(i);
+        }
+        i += 1;
+    }
+    None
+}
+
+const _: () = {
+    let (offsets, _) = interface::params_layout();
+    assert!(
+        first_mismatch(&PUSH_FIELDS, &interface::PARAMS, &offsets).is_none(),
+        "PushConstants differs from PARAMS (a field's name or offset)"
+    );
     assert!(std::mem::size_of::<PushConstants>() == PARAMS_SIZE as usize);
 };
 
@@ -117,5 +160,30 @@ impl PushConstants {
                 std::mem::size_of::<Self>(),
             )
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The check fails where two PARAMS fields of the same type trade places (the shaders
+    /// would read lambda_jnd as lambda_e), or where a name is changed on one side.
+    #[test]
+    fn swapped_or_renamed_fields_fail_the_check() {
+        let (offsets, _) = interface::params_layout();
+        assert_eq!(
+            first_mismatch(&PUSH_FIELDS, &interface::PARAMS, &offsets),
+            None
+        );
+        let mut swapped = interface::PARAMS;
+        swapped.swap(2, 3);
+        assert_eq!(swapped[2].0, "lambda_jnd");
+        let (offsets, _) = interface::layout_of(&swapped);
+        assert_eq!(first_mismatch(&PUSH_FIELDS, &swapped, &offsets), Some(2));
+        let mut renamed = interface::PARAMS;
+        renamed[7].0 = "k_w";
+        let (offsets, _) = interface::layout_of(&renamed);
+        assert_eq!(first_mismatch(&PUSH_FIELDS, &renamed, &offsets), Some(7));
     }
 }

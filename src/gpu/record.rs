@@ -9,6 +9,7 @@ use super::interface::{CLASSIFY_WORKGROUP, DECODE_ROWS, TILE_LIST_DISPATCH_OFFSE
 use super::pipelines::{self, PushConstants};
 use super::shared_fetch::shares_fetches;
 use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::methods::Pass;
 use crate::algorithm::params::{Params, ViewMode};
 use ash::vk;
 
@@ -228,23 +229,40 @@ impl Engine {
         push.region_origin = (view.origin.0 & 0xffff) | (view.origin.1 << 16);
         let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
         use vk::PipelineStageFlags as S;
-        barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
-        // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at least 4 bytes.
-        unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
-        barrier(gpu, cmd, S::TRANSFER, COMPUTE);
-        let classify = (classify, (CLASSIFY_WORKGROUP[0], CLASSIFY_WORKGROUP[1]));
-        self.dispatch_in(gpu, cmd, classify, view.set, &push, tiles);
-        barrier(gpu, cmd, COMPUTE, COMPUTE);
-        // A 1x1 grid is one workgroup of one invocation.
-        self.dispatch(gpu, cmd, finish_tiles, view.set, &push, (1, 1));
-        barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
-        self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
-        // SAFETY: cmd is recording with the pipeline bound above; the tile buffer has
-        // INDIRECT_BUFFER usage and its arguments were written by finish_tiles.
-        unsafe {
-            gpu.device
-                .cmd_dispatch_indirect(cmd, view.tiles.raw, TILE_LIST_DISPATCH_OFFSET)
-        };
+        // The method's passes, in its entry's order (src/algorithm/method_table.rs; every
+        // entry's are PER_PIXEL_PASSES, which these arms implement).
+        for pass in params.method.entry().passes {
+            match pass {
+                Pass::Classify => {
+                    barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
+                    // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at
+                    // least 4 bytes.
+                    unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
+                    barrier(gpu, cmd, S::TRANSFER, COMPUTE);
+                    let classify = (classify, (CLASSIFY_WORKGROUP[0], CLASSIFY_WORKGROUP[1]));
+                    self.dispatch_in(gpu, cmd, classify, view.set, &push, tiles);
+                }
+                Pass::FinishTiles => {
+                    barrier(gpu, cmd, COMPUTE, COMPUTE);
+                    // A 1x1 grid is one workgroup of one invocation.
+                    self.dispatch(gpu, cmd, finish_tiles, view.set, &push, (1, 1));
+                }
+                Pass::Enhance => {
+                    barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
+                    self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
+                    // SAFETY: cmd is recording with the pipeline bound above; the tile buffer
+                    // has INDIRECT_BUFFER usage and its arguments were written by
+                    // finish_tiles.
+                    unsafe {
+                        gpu.device.cmd_dispatch_indirect(
+                            cmd,
+                            view.tiles.raw,
+                            TILE_LIST_DISPATCH_OFFSET,
+                        )
+                    };
+                }
+            }
+        }
         Ok(())
     }
 

@@ -1,23 +1,20 @@
 //! The shaders by identity: which embedded SPIR-V module a pass, a blur width, a method, a view
-//! mode and a pixel format need (indices into `shaders::all()`).
+//! mode and a pixel format need (ids into `shaders::all()`, generated with it by build.rs).
 
 use super::codes::mode_code;
 use super::error::GpuError;
-use super::interface::ACCESS_IN_PLACE;
 use super::shaders;
 use crate::algorithm::params::ViewMode;
 
-/// One shader of `shaders::all()`, by its index there.
+/// One shader of `shaders::all()`, by its id: its index there, which build.rs writes with the
+/// list (src/gpu/shaders.rs), so no id here is counted by position.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ShaderId(pub(super) usize);
 
-/// Indices into `shaders::all()` (its order: the fixed shaders, DECODE_BLUR, ENHANCE_VARIANTS,
-/// CLASSIFY_VARIANTS).
-pub const DECODE_CAMERA: ShaderId = ShaderId(0);
-pub const FINISH_TILES: ShaderId = ShaderId(1);
-pub const COPY_PIXELS: ShaderId = ShaderId(2);
-pub const COPY_ROWS: ShaderId = ShaderId(3);
-const FIXED: usize = 4;
+pub const DECODE_CAMERA: ShaderId = ShaderId(shaders::ID_DECODE_CAMERA);
+pub const FINISH_TILES: ShaderId = ShaderId(shaders::ID_FINISH_TILES);
+pub const COPY_PIXELS: ShaderId = ShaderId(shaders::ID_COPY_PIXELS);
+pub const COPY_ROWS: ShaderId = ShaderId(shaders::ID_COPY_ROWS);
 
 fn unsupported() -> GpuError {
     GpuError::Unsupported("no shader for this method, mode and format".into())
@@ -26,14 +23,14 @@ fn unsupported() -> GpuError {
 /// Whether a shader works on the camera frame (the background's descriptor set) rather than
 /// on a view.
 pub fn reads_camera(ShaderId(k): ShaderId) -> bool {
-    k == DECODE_CAMERA.0 || (FIXED..FIXED + shaders::DECODE_BLUR.len()).contains(&k)
+    shaders::MODULES.get(k).is_some_and(|m| m.camera)
 }
 
 /// The background pass for a blur half-width (0..=7).
 pub fn decode_blur(half: u32) -> Result<ShaderId, GpuError> {
-    let k = half as usize;
-    (k < shaders::DECODE_BLUR.len())
-        .then_some(ShaderId(FIXED + k))
+    shaders::DECODE_BLUR
+        .get(half as usize)
+        .map(|&k| ShaderId(k))
         .ok_or_else(unsupported)
 }
 
@@ -63,44 +60,31 @@ fn enhance_variant(
         (method, extras)
     };
     let wanted = (method, mode, format, access, extras, shared);
-    let k = shaders::ENHANCE_VARIANTS
+    shaders::ENHANCE_VARIANTS
         .iter()
-        .position(|&(m, v, f, a, e, s, _)| (m, v, f, a, e, s) == wanted)?;
-    Some(ShaderId(FIXED + shaders::DECODE_BLUR.len() + k))
+        .find(|&&(m, v, f, a, e, s, _)| (m, v, f, a, e, s) == wanted)
+        .map(|&(.., k)| ShaderId(k))
 }
 
 /// The `classify` shader for a pixel format (shader code) and pixel access.
 pub fn classify(format: u32, access: u32) -> Result<ShaderId, GpuError> {
-    let k = shaders::CLASSIFY_VARIANTS
+    shaders::CLASSIFY_VARIANTS
         .iter()
-        .position(|&(f, a, _)| f == format && a == access)
-        .ok_or_else(unsupported)?;
-    let offset = FIXED + shaders::DECODE_BLUR.len() + shaders::ENHANCE_VARIANTS.len();
-    Ok(ShaderId(offset + k))
+        .find(|&&(f, a, _)| f == format && a == access)
+        .map(|&(_, _, k)| ShaderId(k))
+        .ok_or_else(unsupported)
 }
 
 /// The FORMAT code of an in-place variant (it reads and writes `app_image`); None for the
 /// others.
 pub fn in_place_format(ShaderId(k): ShaderId) -> Option<u32> {
-    let enhance = FIXED + shaders::DECODE_BLUR.len();
-    let classify = enhance + shaders::ENHANCE_VARIANTS.len();
-    let (format, access) = match k {
-        k if (enhance..classify).contains(&k) => {
-            let (_, _, f, a, _, _, _) = shaders::ENHANCE_VARIANTS[k - enhance];
-            (f, a)
-        }
-        k if k >= classify => {
-            let (f, a, _) = *shaders::CLASSIFY_VARIANTS.get(k - classify)?;
-            (f, a)
-        }
-        _ => return None,
-    };
-    (access == ACCESS_IN_PLACE).then_some(format)
+    shaders::MODULES.get(k)?.in_place
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::interface::ACCESS_IN_PLACE;
 
     /// The ids name the shaders they stand for in `shaders::all()`.
     #[test]
@@ -113,12 +97,15 @@ mod tests {
         assert_eq!(name(COPY_ROWS), "copy_rows");
         assert_eq!(name(decode_blur(3).unwrap()), "decode_blur_3");
         assert!(decode_blur(8).is_err());
-        for &(m, v, f, w, e, shared, ref module) in shaders::ENHANCE_VARIANTS {
+        for &(m, v, f, w, e, shared, k) in shaders::ENHANCE_VARIANTS {
             let id = match shared {
                 true => enhance_shared((m, v, f), w, e),
                 false => enhance((m, v, f), w, e).ok(),
             };
-            assert_eq!(name(id.unwrap()), module.name);
+            assert_eq!(id, Some(ShaderId(k)));
+            let s = if shared { "_s" } else { "" };
+            let file = format!("enhance_m{m}_v{v}_f{f}_a{w}_e{}{s}", u8::from(e));
+            assert_eq!(name(ShaderId(k)), file);
         }
         // The defaults have a shared-fetch variant for every format and access; the others
         // none.
@@ -131,8 +118,9 @@ mod tests {
                 enhance_shared((paper, mode_code(ViewMode::Background), f), w, false).is_none()
             );
         }
-        for &(f, w, ref module) in shaders::CLASSIFY_VARIANTS {
-            assert_eq!(name(classify(f, w).unwrap()), module.name);
+        for &(f, w, k) in shaders::CLASSIFY_VARIANTS {
+            assert_eq!(classify(f, w).unwrap(), ShaderId(k));
+            assert_eq!(name(ShaderId(k)), format!("classify_f{f}_a{w}"));
         }
         assert!(reads_camera(decode_blur(7).unwrap()) && reads_camera(DECODE_CAMERA));
         let rgba8 = crate::gpu::interface::LAYOUT_RGBA8;

@@ -5,6 +5,10 @@ pub struct ShaderModule {
     /// The SPIR-V file's name (the entry, or the entry and its specialisation).
     pub name: &'static str,
     pub entry: &'static str,
+    /// Works on the camera frame (the background's descriptor set) rather than on a view.
+    pub camera: bool,
+    /// The FORMAT code of an in-place variant (it reads and writes `app_image`).
+    pub in_place: Option<u32>,
     bytes: &'static [u8],
 }
 
@@ -23,34 +27,23 @@ impl ShaderModule {
 }
 
 macro_rules! spirv {
-    ($entry:literal) => {
-        spirv!($entry, $entry)
-    };
-    ($name:literal, $entry:literal) => {
+    ($name:literal, $entry:literal, $camera:literal, $in_place:expr) => {
         ShaderModule {
             name: $name,
             entry: $entry,
+            camera: $camera,
+            in_place: $in_place,
             bytes: include_bytes!(concat!(env!("OUT_DIR"), "/", $name, ".spv")),
         }
     };
 }
 
-/// The background's first pass: decodes the camera texels (the blur passes read them).
-pub const DECODE_CAMERA: ShaderModule = spirv!("decode_camera", "decode");
-pub const FINISH_TILES: ShaderModule = spirv!("finish_tiles");
-pub const COPY_PIXELS: ShaderModule = spirv!("copy_pixels");
-pub const COPY_ROWS: ShaderModule = spirv!("copy_rows");
+// MODULES (every shader; a ShaderId is an index there), the single shaders' ids (ID_*) and
+// the families' tables with their ids (DECODE_BLUR, ENHANCE_VARIANTS, CLASSIFY_VARIANTS), all
+// written together by build.rs from src/gpu/interface.rs.
+include!(concat!(env!("OUT_DIR"), "/shader_table.rs"));
 
-// DECODE_BLUR, ENHANCE_VARIANTS and CLASSIFY_VARIANTS, generated from src/gpu/interface.rs.
-include!(concat!(env!("OUT_DIR"), "/enhance_variants.rs"));
-
-/// Every embedded shader (for spirv-val in the tests).
+/// Every embedded shader (for spirv-val in the tests), in id order.
 pub fn all() -> Vec<&'static ShaderModule> {
-    let fixed = [&DECODE_CAMERA, &FINISH_TILES, &COPY_PIXELS, &COPY_ROWS];
-    fixed
-        .into_iter()
-        .chain(DECODE_BLUR.iter())
-        .chain(ENHANCE_VARIANTS.iter().map(|(_, _, _, _, _, _, m)| m))
-        .chain(CLASSIFY_VARIANTS.iter().map(|(_, _, m)| m))
-        .collect()
+    MODULES.iter().collect()
 }
