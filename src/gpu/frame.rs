@@ -273,7 +273,7 @@ impl FrameEngine {
 
     /// Drops the buffers of a destroyed swapchain's views.
     pub fn forget_swapchain(&mut self, swapchain: u64) {
-        if self.wait_idle().is_err() {
+        if crate::fault::hit("swapchain-wait") || self.wait_idle().is_err() {
             return;
         }
         let keys: Vec<ViewKey> = self
@@ -394,7 +394,12 @@ impl FrameEngine {
             return Ok(());
         }
         self.torn_down = true;
-        let idle = self.wait_idle();
+        let idle = crate::fault::check("device-lost")
+            .map_err(|_| GpuError::Vulkan {
+                call: "vkWaitForFences",
+                result: ash::vk::Result::ERROR_DEVICE_LOST,
+            })
+            .and_then(|()| self.wait_idle());
         // The pipeline thread uses the app's device: it ends before anything is destroyed.
         self.engine.join_building();
         if let Err(e) = idle {

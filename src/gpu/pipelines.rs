@@ -102,6 +102,9 @@ impl Shared {
         if self.lock().stop || process_exit::exiting() {
             return Slot::Failed("the pipeline thread was stopped".into());
         }
+        if crate::fault::hit("build-panic") {
+            panic!("fault injected at build-panic (CONTRASTXR_FAULT)");
+        }
         let slot = match compute_pipeline(self, self.modules[k]) {
             Ok(p) => Slot::Built(p),
             Err(e) => Slot::Failed(e.to_string()),

@@ -124,6 +124,7 @@ impl WarmUp {
     /// A device beside `app`'s, with a camera frame and a view (the widest pixel format, so
     /// every variant stays inside the buffers) zero-filled.
     pub fn new(app: &GpuDevice) -> Result<WarmUp, GpuError> {
+        crate::fault::check("warm-up-device").map_err(GpuError::Unsupported)?;
         let gpu = GpuDevice::create_beside(app)?;
         let mut engine = Engine::new(&gpu, 1, BuildMode::Inline, None)?;
         let mut commands = match Commands::new(&gpu) {

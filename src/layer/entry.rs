@@ -326,8 +326,14 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
             for s in sessions {
                 session::forget(xr::Session::from_raw(s));
             }
+            if crate::fault::hit("destroy-bookkeeping") {
+                panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
+            }
             state::registry().instances.remove(&instance.into_raw());
             settings::forget_live(instance.into_raw());
+            if let Some((name, n)) = crate::fault::reached() {
+                log::info(&format!("fault point {name} reached {n} times"));
+            }
             // SAFETY: forwarding the app's call.
             Ok(unsafe { (state.next.destroy_instance)(instance) })
         },

@@ -155,6 +155,9 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
             lock(&s).motion.destroy(&next);
             let t = std::time::Instant::now();
             forget(session);
+            if crate::fault::hit("destroy-bookkeeping") {
+                panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
+            }
             log::debug(&format!(
                 "session state released in {:.3} s",
                 t.elapsed().as_secs_f64()

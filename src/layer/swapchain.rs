@@ -162,6 +162,9 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
             let sc = state::swapchain(swapchain).ok_or(LayerError::UnknownHandle("XrSwapchain"))?;
+            if crate::fault::hit("destroy-bookkeeping") {
+                panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
+            }
             let next = with_session(&sc, |s, sc| {
                 // A held release goes with the swapchain: the image is never composed again.
                 sc.states = ImageStates::default();

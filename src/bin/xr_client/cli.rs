@@ -46,6 +46,9 @@ usage: contrastxr-xr-client [options]
   --script OPS            instead of frames, run one scripted sequence of raw swapchain and
                           frame calls (comma-separated: acquire wait release begin end
                           end-empty destroy create) and report each call's XrResult (`script`)
+  --after-device-ms N     after the last session, destroy the Vulkan device and wait N ms
+                          before xrDestroyInstance (a layer must not touch the device's memory
+                          after xrDestroySession)
   --check-untouched       read each swapchain image back when it is acquired again and report
                           the frames whose pixels changed after the client wrote them
   The JSON report holds resident memory and open file descriptors every 50 frames
@@ -94,6 +97,8 @@ pub struct Options {
     pub churn_formats: bool,
     pub script: Option<Vec<crate::script::Op>>,
     pub content: Content,
+    /// Milliseconds between destroying the Vulkan device and xrDestroyInstance.
+    pub after_device_ms: u64,
 }
 
 impl Default for Options {
@@ -120,6 +125,7 @@ impl Default for Options {
             churn_formats: false,
             script: None,
             content: Content::Panels,
+            after_device_ms: 0,
         }
     }
 }
@@ -163,6 +169,11 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--script" => options.script = Some(crate::script::parse(&value()?)?),
             "--sessions" => {
                 options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?
+            }
+            "--after-device-ms" => {
+                options.after_device_ms = value()?
+                    .parse()
+                    .map_err(|_| "--after-device-ms needs milliseconds")?
             }
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown argument {other}\n{USAGE}")),

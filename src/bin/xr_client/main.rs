@@ -167,6 +167,9 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
             break;
         }
     }
+    // The device goes before the instance (a layer may still be closing a session's work).
+    drop(gpu);
+    std::thread::sleep(std::time::Duration::from_millis(options.after_device_ms));
     Ok(())
 }
 
