@@ -311,26 +311,11 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
             let state = state::instance(instance).ok_or(LayerError::UnknownHandle("XrInstance"))?;
-            // Sessions left alive by the app die with the instance: drop our GPU state first.
-            // Lock order: sessions are locked only after the registry lock is dropped.
-            let all: Vec<(u64, Arc<std::sync::Mutex<state::SessionState>>)> = state::registry()
-                .sessions
-                .iter()
-                .map(|(k, s)| (*k, s.clone()))
-                .collect();
-            let sessions: Vec<u64> = all
-                .into_iter()
-                .filter(|(_, s)| lock(s).instance == instance)
-                .map(|(k, _)| k)
-                .collect();
-            for s in sessions {
-                session::forget(xr::Session::from_raw(s));
-            }
-            if crate::fault::hit("destroy-bookkeeping") {
-                panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
-            }
-            state::registry().instances.remove(&instance.into_raw());
-            settings::forget_live(instance.into_raw());
+            // A panic in the layer's own part is logged; the runtime gets the call regardless.
+            guard("xrDestroyInstance", xr::Result::SUCCESS, || {
+                forget_instance(instance);
+                Ok(xr::Result::SUCCESS)
+            });
             if let Some((name, n)) = crate::fault::reached() {
                 log::info(&format!("fault point {name} reached {n} times"));
             }
@@ -338,4 +323,28 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
             Ok(unsafe { (state.next.destroy_instance)(instance) })
         },
     )
+}
+
+/// Drops the layer's state of an instance, and of the sessions the app left alive with it
+/// (their GPU state first).
+fn forget_instance(instance: xr::Instance) {
+    // Lock order: sessions are locked only after the registry lock is dropped.
+    let all: Vec<(u64, Arc<std::sync::Mutex<state::SessionState>>)> = state::registry()
+        .sessions
+        .iter()
+        .map(|(k, s)| (*k, s.clone()))
+        .collect();
+    let sessions: Vec<u64> = all
+        .into_iter()
+        .filter(|(_, s)| lock(s).instance == instance)
+        .map(|(k, _)| k)
+        .collect();
+    for s in sessions {
+        session::forget(xr::Session::from_raw(s));
+    }
+    if crate::fault::hit("destroy-bookkeeping") {
+        panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
+    }
+    state::registry().instances.remove(&instance.into_raw());
+    settings::forget_live(instance.into_raw());
 }

@@ -152,16 +152,20 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
         || {
             let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
             let next = lock(&s).next;
-            lock(&s).motion.destroy(&next);
-            let t = std::time::Instant::now();
-            forget(session);
-            if crate::fault::hit("destroy-bookkeeping") {
-                panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
-            }
-            log::debug(&format!(
-                "session state released in {:.3} s",
-                t.elapsed().as_secs_f64()
-            ));
+            // A panic in the layer's own part is logged; the runtime gets the call regardless.
+            guard("xrDestroySession", xr::Result::SUCCESS, || {
+                lock(&s).motion.destroy(&next);
+                let t = std::time::Instant::now();
+                forget(session);
+                if crate::fault::hit("destroy-bookkeeping") {
+                    panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
+                }
+                log::debug(&format!(
+                    "session state released in {:.3} s",
+                    t.elapsed().as_secs_f64()
+                ));
+                Ok(xr::Result::SUCCESS)
+            });
             // SAFETY: forwarding the app's call after releasing everything the layer made.
             Ok(unsafe { (next.destroy_session)(session) })
         },
