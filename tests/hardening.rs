@@ -383,6 +383,31 @@ fn a_failed_wait_at_swapchain_destroy_retires_the_session() {
     assert!(modified.iter().all(|&f| f < 10), "{modified:?}");
 }
 
+/// An app whose stderr is a full pipe nobody reads, with debug logging: no frame-loop call
+/// waits for the layer's log lines (each under 100 ms over 600 frames).
+#[test]
+fn logging_never_blocks_the_app() {
+    let tag = "stderr-full";
+    let env = [
+        ("CONTRASTXR_LOG", "debug"),
+        ("CONTRASTXR_PIPELINES", "background"),
+    ];
+    let args = [
+        "--frames",
+        "600",
+        "--size",
+        SIZE,
+        "--timing",
+        "--stderr-full",
+    ];
+    let Some(r) = client(tag, &no_config(tag), &env, &args) else {
+        return;
+    };
+    r.assert_ran(600);
+    let longest = longest_call_ms(&r.report);
+    assert!(longest < 100.0, "{}", r.report["timing"]["calls"]);
+}
+
 /// More view regions in one frame than the layer keeps buffers for (2 projection views and 20
 /// quad layers, one per strip of the quad's image): every frame is enhanced, nothing fails.
 #[test]

@@ -49,6 +49,13 @@ usage: contrastxr-xr-client [options]
   --after-device-ms N     after the last session, destroy the Vulkan device and wait N ms
                           before xrDestroyInstance (a layer must not touch the device's memory
                           after xrDestroySession)
+  --instances N           create, run (--sessions each) and destroy N instances in turn
+                          (default 1)
+  --linger-ms N           after the last xrDestroyInstance, run on N ms, then report the
+                          layer's threads still running and whether its library is mapped
+                          (`after_instances`)
+  --stderr-full           run the frame loop with stderr a full pipe nobody reads: a layer
+                          that writes to it must not block the app's calls
   --check-untouched       read each swapchain image back when it is acquired again and report
                           the frames whose pixels changed after the client wrote them
   The JSON report holds resident memory and open file descriptors every 50 frames
@@ -99,6 +106,10 @@ pub struct Options {
     pub content: Content,
     /// Milliseconds between destroying the Vulkan device and xrDestroyInstance.
     pub after_device_ms: u64,
+    pub stderr_full: bool,
+    pub instances: u32,
+    /// Milliseconds to run on after the last xrDestroyInstance (None: report nothing).
+    pub linger_ms: Option<u64>,
 }
 
 impl Default for Options {
@@ -126,6 +137,9 @@ impl Default for Options {
             script: None,
             content: Content::Panels,
             after_device_ms: 0,
+            stderr_full: false,
+            instances: 1,
+            linger_ms: None,
         }
     }
 }
@@ -159,6 +173,17 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--provoke-vk-validation-error" => options.provoke_vk_error = true,
             "--provoke-vk-sync-hazard" => options.provoke_sync_hazard = true,
             "--provoke-vk-leak" => options.provoke_leak = true,
+            "--instances" => {
+                options.instances = value()?.parse().map_err(|_| "--instances needs a count")?
+            }
+            "--linger-ms" => {
+                options.linger_ms = Some(
+                    value()?
+                        .parse()
+                        .map_err(|_| "--linger-ms needs milliseconds")?,
+                )
+            }
+            "--stderr-full" => options.stderr_full = true,
             "--check-untouched" => options.check_untouched = true,
             "--pipelined" => options.pipelined = true,
             "--churn-swapchains" => options.churn_swapchains = true,

@@ -9,7 +9,9 @@ mod cli;
 mod error;
 mod format;
 mod frame_loop;
+mod full_stderr;
 mod gpu;
+mod leftovers;
 mod memory;
 mod pattern;
 mod report;
@@ -59,8 +61,15 @@ fn main() -> ExitCode {
         calls: timing::Calls::new(options.timing),
         ..Stats::default()
     };
-    if let Err(e) = run(&options, &mut report, &mut stats) {
-        report.errors.push(e.0);
+    for _ in 0..options.instances.max(1) {
+        if let Err(e) = run(&options, &mut report, &mut stats) {
+            report.errors.push(e.0);
+            break;
+        }
+    }
+    if let Some(ms) = options.linger_ms {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+        report.after_instances = Some(leftovers::look());
     }
     report.frames_submitted = stats.frames_submitted;
     report.script = std::mem::take(&mut stats.script);
@@ -76,7 +85,7 @@ fn main() -> ExitCode {
     let ran = options.list_formats
         || stats.script_ran
         || (options.script.is_none()
-            && stats.frames_submitted >= options.frames * options.sessions);
+            && stats.frames_submitted >= options.frames * options.sessions * options.instances);
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     print(&report, &options);
     if report.ok {
@@ -275,7 +284,11 @@ fn run_frames(
         format,
         ahead: None,
     };
+    // Only around the frame loop: the runtime's client library logs to stderr too, at
+    // xrCreateInstance and at a session's changes.
+    let stderr = options.stderr_full.then(full_stderr::install).flatten();
     let result = frame_loop::run(instance, &mut scene, waiter, stream, options, stats);
+    stderr.into_iter().for_each(full_stderr::restore);
     stats.calls.absorb(scene.projection.calls(), "");
     if let Some(quad) = &scene.quad {
         stats.calls.absorb(quad.calls(), " (quad)");

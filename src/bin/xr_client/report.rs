@@ -44,6 +44,9 @@ pub struct Report {
     /// With --timing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timing: Option<Timing>,
+    /// With --linger-ms: what of the layer is left after the last xrDestroyInstance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub after_instances: Option<crate::leftovers::Leftovers>,
 }
 
 /// Per-frame times in milliseconds over the frames after the first `warm_up` (the steady
