@@ -43,6 +43,7 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
             {
                 return Err(LayerError::Loader("bad negotiation or chain structs"));
             }
+            stay_mapped();
             req.layer_interface_version = 1;
             req.layer_api_version = xr::CURRENT_API_VERSION;
             req.get_instance_proc_addr = Some(get_instance_proc_addr);
@@ -50,6 +51,30 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
             Ok(xr::Result::SUCCESS)
         },
     )
+}
+
+/// Keeps this library mapped for the rest of the process (`RTLD_NODELETE`): the loader closes
+/// it at xrDestroyInstance, while a thread of the layer may still be ending (a camera still
+/// opening on the reopen helper, a capture thread closing its device) or a thread-local
+/// destructor may be pending. Each such thread ends on its own within a second; none then
+/// runs code of an unmapped library.
+fn stay_mapped() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // SAFETY: Dl_info is plain C data; all-zero is a valid value for dladdr to fill.
+        let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
+        let here = stay_mapped as *const std::ffi::c_void;
+        // SAFETY: dladdr on an address of this library's code, with a valid out pointer.
+        if unsafe { libc::dladdr(here, &mut info) } == 0 || info.dli_fname.is_null() {
+            return log::info("cannot keep the layer's library mapped (dladdr failed)");
+        }
+        let flags = libc::RTLD_NOW | libc::RTLD_NOLOAD | libc::RTLD_NODELETE;
+        // SAFETY: RTLD_NOLOAD only promotes this already loaded library (its own name, from
+        // dladdr); the handle is kept on purpose: the library is never unloaded.
+        if unsafe { libc::dlopen(info.dli_fname, flags) }.is_null() {
+            log::info("cannot keep the layer's library mapped (dlopen RTLD_NODELETE failed)");
+        }
+    });
 }
 
 fn startup_line(settings: &Settings, app: &str) -> String {
