@@ -366,21 +366,33 @@ fn a_lost_device_at_session_end_leaves_no_writer() {
 
 /// The fence wait in xrDestroySwapchain fails: the app's image views stay alive, keyed by
 /// handles the runtime may give out again, so the session passes through from then on (one
-/// line), never enhancing a later swapchain through a stale view.
+/// line), never enhancing a later swapchain through a stale view. Without Vulkan validation:
+/// a churn thread shares the app's queue with Monado's swapchain calls (tests/startup.rs).
 #[test]
 fn a_failed_wait_at_swapchain_destroy_retires_the_session() {
-    let tag = "fault-swapchain-wait";
-    let env = [("CONTRASTXR_FAULT", "swapchain-wait")];
-    let args = [CHECKED, &["--churn-swapchains"][..]].concat();
-    let Some(r) = client(tag, &no_config(tag), &env, &args) else {
-        return;
-    };
-    r.assert_ran(20);
-    let about = r.lines_with("passing");
-    assert_eq!(about.len(), 1, "{:#?}", r.lines);
+    let Some(sandbox) = sandbox() else { return };
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_FAULT", "swapchain-wait"),
+    ];
+    let cmd = [&[XR_CLIENT, "--json"][..], CHECKED, &["--churn-swapchains"]].concat();
+    let run = sandbox.run(&cmd, &env);
+    run.assert_success();
+    let lines = layer_lines(&run);
+    let about: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+    assert_eq!(about.len(), 1, "{lines:#?}");
     assert!(about[0].contains("xrDestroySwapchain"), "{about:?}");
-    let modified = r.modified();
-    assert!(modified.iter().all(|&f| f < 10), "{modified:?}");
+    let report = run.client_report();
+    let modified = report["frames_modified"]
+        .as_array()
+        .expect("frames_modified");
+    assert!(
+        modified.iter().all(|f| f.as_u64() < Some(10)),
+        "{modified:?}"
+    );
 }
 
 /// An app whose stderr is a full pipe nobody reads, with debug logging: no frame-loop call
@@ -404,7 +416,17 @@ fn logging_never_blocks_the_app() {
         return;
     };
     r.assert_ran(600);
-    let longest = longest_call_ms(&r.report);
+    // The calls the layer intercepts (it logs in no other): xrWaitFrame and xrBeginFrame are
+    // the runtime's alone, and xrWaitFrame's pacing wait swings on a loaded machine.
+    let calls = r.report["timing"]["calls"]
+        .as_object()
+        .expect("timing.calls");
+    let longest = calls
+        .iter()
+        .filter(|(name, _)| !["xrWaitFrame", "xrBeginFrame"].contains(&name.as_str()))
+        .filter_map(|(_, c)| c["max_ms"].as_f64())
+        .fold(0.0, f64::max);
+    eprintln!("longest call the layer intercepts: {longest:.1} ms");
     assert!(longest < 100.0, "{}", r.report["timing"]["calls"]);
 }
 
