@@ -430,6 +430,32 @@ fn logging_never_blocks_the_app() {
     assert!(longest < 100.0, "{}", r.report["timing"]["calls"]);
 }
 
+/// The layer takes the app's Vulkan functions from the app's own vkGetInstanceProcAddr (given
+/// with XR_KHR_vulkan_enable2): the client's counting one is called inside xrCreateSession
+/// more with the layer on than off.
+#[test]
+fn the_layer_uses_the_apps_own_vulkan() {
+    let Some(sandbox) = sandbox() else { return };
+    let calls = |on: &str| {
+        let env = [
+            ("CONTRASTXR", on),
+            ("CONTRASTXR_FORCE", "1"),
+            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ];
+        let run = sandbox.run(
+            &[XR_CLIENT, "--json", "--frames", "5", "--size", SIZE],
+            &env,
+        );
+        run.assert_success();
+        let report = run.client_report();
+        report["vk_gipa_calls_in_create_session"]
+            .as_u64()
+            .expect("vk_gipa_calls_in_create_session")
+    };
+    let (off, on) = (calls("0"), calls("1"));
+    assert!(on > off, "layer off: {off} calls, on: {on}");
+}
+
 /// More view regions in one frame than the layer keeps buffers for (2 projection views and 20
 /// quad layers, one per strip of the quad's image): every frame is enhanced, nothing fails.
 #[test]

@@ -6,7 +6,7 @@ use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
 use super::settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
-use super::{app_spaces, blend, log, session, swapchain, timespec};
+use super::{app_spaces, app_vulkan, blend, log, session, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};
@@ -226,6 +226,10 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
             "xrDestroyInstance" => {
                 std::mem::transmute::<pfn::DestroyInstance, pfn::VoidFunction>(destroy_instance)
             }
+            "xrCreateVulkanInstanceKHR" => std::mem::transmute::<
+                pfn::CreateVulkanInstanceKHR,
+                pfn::VoidFunction,
+            >(app_vulkan::create_vulkan_instance),
             "xrCreateSession" => std::mem::transmute::<pfn::CreateSession, pfn::VoidFunction>(
                 session::create_session,
             ),
@@ -372,4 +376,5 @@ fn forget_instance(instance: xr::Instance) {
     }
     state::registry().instances.remove(&instance.into_raw());
     settings::forget_live(instance.into_raw());
+    app_vulkan::forget(instance);
 }

@@ -10,7 +10,7 @@ use super::processor::Processor;
 use super::settings::Settings;
 use super::state::{self, lock, SessionState};
 use super::{blend, device, frame, log, sources, swapchain};
-use crate::gpu::{Engine, GpuDevice};
+use crate::gpu::{Engine, GpuDevice, GpuError};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::sync::{Arc, Mutex};
@@ -81,17 +81,20 @@ pub unsafe extern "system" fn create_session(
 /// The session's processor on the app's device (its pipelines start building at once). The
 /// background is not opened here: a camera opens only when a frame is to be enhanced.
 fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Processor> {
+    let raw_instance = vk::Instance::from_raw(b.instance as u64);
+    let entry = super::app_vulkan::entry_for(raw_instance).map_err(GpuError::NoLoader);
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
     // alive until after xrDestroySession, where the processor is dropped first.
-    let gpu = unsafe {
+    let gpu = entry.and_then(|entry| unsafe {
         GpuDevice::borrow(
-            vk::Instance::from_raw(b.instance as u64),
+            entry,
+            raw_instance,
             vk::PhysicalDevice::from_raw(b.physical_device as u64),
             vk::Device::from_raw(b.device as u64),
             b.queue_family_index,
             b.queue_index,
         )
-    };
+    });
     // The background preparation's shaders first: the views' ones need a swapchain's format.
     let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
     let gpu = gpu.and_then(|gpu| gpu.queue_has_compute().map(|_| gpu));

@@ -10,6 +10,7 @@ mod error;
 mod format;
 mod frame_loop;
 mod full_stderr;
+mod gipa;
 mod gpu;
 mod leftovers;
 mod memory;
@@ -198,11 +199,13 @@ fn run_session(
     stats: &mut Stats,
 ) -> Result<()> {
     let (instance, system, gpu) = (world.instance, world.system, world.gpu);
+    let gipa_calls = gipa::calls();
     // SAFETY: the Vulkan objects were made through this instance for this system, and `gpu`
-    // outlives the session (it is dropped after `run` returns).
+    // outlives the session (`run` drops it after its sessions).
     let (session, mut waiter, mut stream) =
         unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
             .ctx("xrCreateSession")?;
+    report.vk_gipa_calls_in_create_session += gipa::calls() - gipa_calls;
     stats.startup.session_created();
     let offered = session
         .enumerate_swapchain_formats()

@@ -44,6 +44,9 @@ pub struct Report {
     /// With --timing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timing: Option<Timing>,
+    /// Calls of the vkGetInstanceProcAddr the client gave the runtime, made inside its
+    /// xrCreateSession calls (by the runtime and the API layers).
+    pub vk_gipa_calls_in_create_session: u32,
     /// With --linger-ms: what of the layer is left after the last xrDestroyInstance.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub after_instances: Option<crate::leftovers::Leftovers>,
