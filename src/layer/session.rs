@@ -115,6 +115,10 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Proce
     Some(processor)
 }
 
+/// How long the session's end waits for its background's thread (a camera restoring its
+/// controls and closing).
+const CLOSE_WAIT: std::time::Duration = std::time::Duration::from_millis(300);
+
 /// Drops the layer's state of a session (its GPU objects first) and of its swapchains.
 pub fn forget(session: xr::Session) {
     let removed = state::registry().sessions.remove(&session.into_raw());
@@ -126,8 +130,12 @@ pub fn forget(session: xr::Session) {
         // threads end and the warm-up devices are destroyed here.
         s.processor = None;
         s.retired.clear();
-        // Closes the camera: it is open only while a session runs.
-        s.background = None;
+        // Closes the camera (controls restored) before the app may exit: it is open only
+        // while a session runs.
+        let closed = s.background.take().map(|bg| bg.close_within(CLOSE_WAIT));
+        if closed == Some(false) {
+            log::info("the background's thread did not end within 0.3 s of the session's end: it closes its device on its own");
+        }
     }
     // Lock order: the registry is never held while a swapchain is locked.
     let all: Vec<(u64, Arc<Mutex<state::SwapchainState>>)> = state::registry()
