@@ -1,7 +1,7 @@
 //! The layer against its own unloading (Monado sandbox; see tests/common/mod.rs for the
 //! skip/require rule): an app creates and destroys instances in turn, each session's
 //! background still starting (a camera opening on the reopen helper) or running (a video's
-//! player) when the session ends, and then runs on. The OpenXR loader closes the layer's
+//! player, a `world:` camera) when the session ends, and then runs on. The OpenXR loader closes the layer's
 //! library at xrDestroyInstance: the library stays mapped by design (RTLD_NODELETE), and
 //! every thread of the layer ends on its own within a second.
 
@@ -51,14 +51,19 @@ fn nothing_of_the_layer_outlives_its_instances() {
     );
     let camera = format!("v4l2:{}", node.display());
     let video = format!("video:{}", video(&dir).display());
+    let panorama = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/background-meadow.png");
+    let world = format!("world:{}", panorama.display());
+    let backgrounds = [&camera, &video, &world];
     for run in 0..10 {
-        let background = if run % 2 == 0 { &camera } else { &video };
+        let background = backgrounds[run % backgrounds.len()];
         let env = [
             ("CONTRASTXR", "1"),
             ("CONTRASTXR_FORCE", "1"),
             // The background opens on the reopen helper while frames pass through.
             ("CONTRASTXR_PIPELINES", "background"),
             ("CONTRASTXR_BACKGROUND", background.as_str()),
+            // world: films through a camera profile.
+            ("CONTRASTXR_CAMERA_FOV", "100,80"),
         ];
         // The camera takes 800 ms to open: each session (5 frames, 250 ms) ends while the
         // helper is still opening it. The stand-in's variables go on the command line.
@@ -89,5 +94,8 @@ fn nothing_of_the_layer_outlives_its_instances() {
             "run {run}: {lines:#?}"
         );
         assert_eq!(left["layer_mapped"], true, "run {run}");
+        // The video's and the world's threads ran (the camera is still opening at each end).
+        let opened = lines.iter().any(|l| l.starts_with("background is now"));
+        assert!(opened || background == &camera, "run {run}: {lines:#?}");
     }
 }
