@@ -430,6 +430,53 @@ fn logging_never_blocks_the_app() {
     assert!(longest < 100.0, "{}", r.report["timing"]["calls"]);
 }
 
+/// A log folder the layer cannot write is said once on stderr, with the path and why, and the
+/// app runs on: a path under /dev/null, and a FIFO nobody reads where the log file would be
+/// (opening it for writing would block for ever).
+#[test]
+fn an_unwritable_log_file_is_said_once_and_never_blocks() {
+    let Some(sandbox) = sandbox() else { return };
+    let dir = scratch_dir("log-fifo");
+    std::fs::create_dir_all(dir.join("contrastxr")).unwrap();
+    let fifo = dir.join("contrastxr/layer.log");
+    let status = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(
+        status.is_ok_and(|s| s.success()),
+        "mkfifo {}",
+        fifo.display()
+    );
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let fifo_home = format!("XDG_STATE_HOME={}", dir.display());
+    let cases = [
+        (
+            "XDG_STATE_HOME=/dev/null",
+            "cannot create /dev/null/contrastxr",
+        ),
+        (fifo_home.as_str(), "layer.log"),
+    ];
+    for (state_home, why) in cases {
+        // The sandbox passes no XDG_STATE_HOME: it goes on the command line.
+        let cmd = [
+            "/usr/bin/env",
+            state_home,
+            XR_CLIENT,
+            "--json",
+            "--frames",
+            "5",
+        ];
+        let run = sandbox.run_for(&[&cmd[..], &["--size", SIZE]].concat(), &env, 60);
+        run.assert_success();
+        let lines = layer_lines(&run);
+        let said: Vec<_> = lines.iter().filter(|l| l.contains("log file")).collect();
+        assert_eq!(said.len(), 1, "{state_home}: {lines:#?}");
+        assert!(said[0].contains(why), "{state_home}: {said:?}");
+    }
+}
+
 /// The layer takes the app's Vulkan functions from the app's own vkGetInstanceProcAddr (given
 /// with XR_KHR_vulkan_enable2): the client's counting one is called inside xrCreateSession
 /// more with the layer on than off.
