@@ -266,6 +266,13 @@ mod tests {
         assert_eq!(o.content, Content::Panels);
         let o = parse_str("--content typical").unwrap();
         assert_eq!(o.content, Content::Typical);
+        let o = parse_str("--instances 3 --linger-ms 1000 --after-device-ms 5 --stderr-full");
+        let o = o.unwrap();
+        assert_eq!(
+            (o.instances, o.linger_ms, o.after_device_ms),
+            (3, Some(1000), 5)
+        );
+        assert!(o.stderr_full);
     }
 
     #[test]
@@ -280,6 +287,9 @@ mod tests {
             "--frames",
             "--bogus",
             "--script acquire,jump",
+            "--instances x",
+            "--linger-ms -1",
+            "--after-device-ms",
         ] {
             assert!(parse_str(bad).is_err(), "{bad}");
         }
