@@ -180,6 +180,10 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     // The device goes before the instance (a layer may still be closing a session's work).
     drop(gpu);
     std::thread::sleep(std::time::Duration::from_millis(options.after_device_ms));
+    // The last reference to the instance: xrDestroyInstance.
+    let t = std::time::Instant::now();
+    drop(instance);
+    report.teardown_ms.instance(t.elapsed());
     Ok(())
 }
 
@@ -236,6 +240,10 @@ fn run_session(
         result
     });
     report.swapchains_churned += churned.into_inner();
+    // The last references to the session: xrDestroySession.
+    let t = std::time::Instant::now();
+    drop((session, waiter, stream));
+    report.teardown_ms.session(t.elapsed());
     result
 }
 
