@@ -4,13 +4,14 @@
 //! atomic load and a branch, so the calls stay in release builds.
 //!
 //! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
-//! `camera-loss`, `end-frame`, `queue-without-compute` (see [`POINTS`]). This module must not depend on anything else in the crate.
+//! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
+//! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait` (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 8] = [
+pub const POINTS: [(&str, &str); 13] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -29,6 +30,26 @@ pub const POINTS: [(&str, &str); 8] = [
     (
         "queue-without-compute",
         "checking the app's queue family for compute support (as if it had none)",
+    ),
+    (
+        "build-panic",
+        "a panic while building a shader pipeline on the pipeline thread",
+    ),
+    (
+        "destroy-bookkeeping",
+        "a panic in the layer's own part of xrDestroySwapchain, xrDestroySession and xrDestroyInstance",
+    ),
+    (
+        "warm-up-device",
+        "making a CPU driver's warm-up device (gpu/warm_up.rs)",
+    ),
+    (
+        "device-lost",
+        "the fence wait at the session's end (xrDestroySession) fails with VK_ERROR_DEVICE_LOST",
+    ),
+    (
+        "swapchain-wait",
+        "the fence wait in xrDestroySwapchain fails",
     ),
     (
         "end-frame",
@@ -73,6 +94,12 @@ pub fn hit(name: &str) -> bool {
         Some(a) if a.name == name => a.hits.fetch_add(1, Ordering::Relaxed) >= a.from_hit,
         _ => false,
     }
+}
+
+/// The armed point and how often it was reached so far (None when none is armed): the layer
+/// says so at xrDestroyInstance, for the tests that count how often a failure is retried.
+pub fn reached() -> Option<(&'static str, u64)> {
+    armed().map(|a| (a.name.as_str(), a.hits.load(Ordering::Relaxed)))
 }
 
 /// Pause points: no failure, a short sleep that widens a race window, for the tests that race

@@ -157,3 +157,54 @@ fn a_slow_camera_closes_after_enhancing_stops_and_no_call_waits_for_it() {
         assert!(max < 100.0, "{name} took {max} ms: {report}");
     }
 }
+
+/// An app that exits right after xrDestroySession (the client's next calls are
+/// xrDestroyInstance and its exit): the session's end waits, boundedly, for the capture thread,
+/// which restores the camera's controls and closes it, so the stand-in sees the close every
+/// time (5 of 5 runs).
+#[test]
+fn the_camera_is_closed_when_the_session_ends() {
+    let Some(sandbox) = sandbox() else {
+        return;
+    };
+    let dir = scratch_dir("camera-closed-at-end");
+    let lib = fake_library(&dir);
+    let node = dir.join("video7");
+    std::fs::write(&node, b"").unwrap();
+    let log = dir.join("events");
+    let background = format!("v4l2:{}", node.display());
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", background.as_str()),
+    ];
+    let (preload, device, log_to) = (
+        format!("LD_PRELOAD={}", lib.display()),
+        format!("FAKE_V4L2_DEVICE={}", node.display()),
+        format!("FAKE_V4L2_LOG={}", log.display()),
+    );
+    let cmd = [
+        "/usr/bin/env",
+        &preload,
+        &device,
+        &log_to,
+        XR_CLIENT,
+        "--json",
+        "--size",
+        "64x48",
+        "--frames",
+        "20",
+    ];
+    for run in 0..5 {
+        let _ = std::fs::remove_file(&log);
+        let out = sandbox.run(&cmd, &env);
+        out.assert_success();
+        let events: Vec<String> = events(&log).into_iter().map(|(w, _)| w).collect();
+        assert_eq!(
+            events,
+            ["open", "close"],
+            "run {run}: {:#?}",
+            layer_lines(&out)
+        );
+    }
+}

@@ -11,7 +11,8 @@
 mod common;
 
 use common::{
-    layer_lines, sandbox, scratch_dir, SandboxRun, Validation, CLI, SYNC_VALIDATION, XR_CLIENT,
+    layer_lines, sandbox, scratch_dir, ApiDump, SandboxRun, Validation, CLI, SYNC_VALIDATION,
+    XR_CLIENT,
 };
 use contrastxr::config::{self, Env, Source, KEYS};
 use contrastxr::image::RgbaImage;
@@ -210,6 +211,13 @@ fn fault_at_pipeline_creation() {
     fault("pipeline-creation", "fault injected at pipeline-creation");
 }
 
+/// A panic while a pipeline builds fails its slot (the session passes through, one line), and
+/// the build is no longer counted as in progress.
+#[test]
+fn a_panic_in_a_build_fails_its_pipeline() {
+    fault("build-panic", "internal error building the");
+}
+
 #[test]
 fn an_app_queue_without_compute_passes_through() {
     fault("queue-without-compute", "has no compute support");
@@ -256,6 +264,243 @@ fn a_panic_in_end_frame_still_forwards_the_frame() {
             "{about:?}"
         );
     }
+}
+
+/// A panic in the layer's own part of xrDestroySwapchain, xrDestroySession and
+/// xrDestroyInstance still forwards each call: api_dump, below the layer, sees the runtime get
+/// every one of them, and the app ends cleanly.
+#[test]
+fn destroy_calls_reach_the_runtime_after_a_panic() {
+    let tag = "fault-destroy-bookkeeping";
+    let Some(sandbox) = sandbox() else { return };
+    let dump = ApiDump::new(tag);
+    let mut env = vec![
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_FAULT", "destroy-bookkeeping"),
+        ("XR_ENABLE_API_LAYERS", ApiDump::LAYER),
+    ];
+    env.extend(dump.env());
+    let run = sandbox.run(
+        &[XR_CLIENT, "--json", "--frames", "10", "--size", SIZE],
+        &env,
+    );
+    run.assert_success();
+    let lines = layer_lines(&run);
+    for call in [
+        "xrDestroySwapchain",
+        "xrDestroySession",
+        "xrDestroyInstance",
+    ] {
+        assert_eq!(dump.calls(call).len(), 1, "{call}: {lines:#?}");
+        let said = format!("internal error in {call}: fault injected");
+        assert_eq!(
+            lines.iter().filter(|l| l.contains(&said)).count(),
+            1,
+            "{lines:#?}"
+        );
+    }
+}
+
+/// A CPU driver's warm-up device that cannot be made is tried once per session, not in every
+/// frame call, and said in one line.
+#[test]
+fn a_failed_warm_up_device_is_tried_once() {
+    let tag = "fault-warm-up-device";
+    let env = [("CONTRASTXR_FAULT", "warm-up-device")];
+    let Some(r) = client(tag, &no_config(tag), &env, CHECKED) else {
+        return;
+    };
+    r.assert_ran(20);
+    let said = r.lines_with("no warm-up device (fault injected at warm-up-device");
+    assert_eq!(said.len(), 1, "{:#?}", r.lines);
+    let reached = r.lines_with("fault point warm-up-device reached");
+    assert_eq!(reached, ["fault point warm-up-device reached 1 times"]);
+}
+
+/// A `video:` background of `frames` 640x480 frames at 100 Hz (a y4m file, 4:2:0), each a
+/// different grey: its thread prepares a new frame's texels every 10 ms.
+fn fast_video(tag: &str, frames: u8) -> PathBuf {
+    let path = scratch_dir(tag).join("fast.y4m");
+    let (w, h) = (640, 480);
+    let mut bytes = format!("YUV4MPEG2 W{w} H{h} F100:1 C420jpeg\n").into_bytes();
+    for i in 0..frames {
+        bytes.extend_from_slice(b"FRAME\n");
+        bytes.extend(std::iter::repeat_n(40 + i * 20, w * h));
+        bytes.extend(std::iter::repeat_n(128, w * h / 2));
+    }
+    std::fs::write(&path, bytes).expect("write the video");
+    path
+}
+
+/// The fence wait at xrDestroySession fails (VK_ERROR_DEVICE_LOST) while a live background
+/// writes its texels into the layer's mapped images, and the app destroys its device right
+/// after xrDestroySession and runs on: the layer closed those images to the source's thread
+/// first, so no run crashes on a write into freed memory (10 of 10).
+#[test]
+fn a_lost_device_at_session_end_leaves_no_writer() {
+    let tag = "fault-device-lost";
+    let Some(sandbox) = sandbox() else { return };
+    let video = format!("video:{}", fast_video(tag, 8).display());
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", video.as_str()),
+        ("CONTRASTXR_FAULT", "device-lost"),
+    ];
+    let cmd = [XR_CLIENT, "--json", "--frames", "30", "--size", SIZE];
+    let cmd = [&cmd[..], &["--after-device-ms", "500"]].concat();
+    for i in 0..10 {
+        let run = sandbox.run(&cmd, &env);
+        assert!(run.status.success(), "run {i}: {}", run.describe());
+        let lines = layer_lines(&run);
+        let said = "did not finish the layer's last work (vkWaitForFences failed";
+        assert_eq!(
+            lines.iter().filter(|l| l.contains(said)).count(),
+            1,
+            "{lines:#?}"
+        );
+    }
+}
+
+/// The fence wait in xrDestroySwapchain fails: the app's image views stay alive, keyed by
+/// handles the runtime may give out again, so the session passes through from then on (one
+/// line), never enhancing a later swapchain through a stale view. Without Vulkan validation:
+/// a churn thread shares the app's queue with Monado's swapchain calls (tests/startup.rs).
+#[test]
+fn a_failed_wait_at_swapchain_destroy_retires_the_session() {
+    let Some(sandbox) = sandbox() else { return };
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_FAULT", "swapchain-wait"),
+    ];
+    let cmd = [&[XR_CLIENT, "--json"][..], CHECKED, &["--churn-swapchains"]].concat();
+    let run = sandbox.run(&cmd, &env);
+    run.assert_success();
+    let lines = layer_lines(&run);
+    let about: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+    assert_eq!(about.len(), 1, "{lines:#?}");
+    assert!(about[0].contains("xrDestroySwapchain"), "{about:?}");
+    let report = run.client_report();
+    let modified = report["frames_modified"]
+        .as_array()
+        .expect("frames_modified");
+    assert!(
+        modified.iter().all(|f| f.as_u64() < Some(10)),
+        "{modified:?}"
+    );
+}
+
+/// An app whose stderr is a full pipe nobody reads, with debug logging: no frame-loop call
+/// waits for the layer's log lines (each under 100 ms over 600 frames).
+#[test]
+fn logging_never_blocks_the_app() {
+    let tag = "stderr-full";
+    let env = [
+        ("CONTRASTXR_LOG", "debug"),
+        ("CONTRASTXR_PIPELINES", "background"),
+    ];
+    let args = [
+        "--frames",
+        "600",
+        "--size",
+        SIZE,
+        "--timing",
+        "--stderr-full",
+    ];
+    let Some(r) = client(tag, &no_config(tag), &env, &args) else {
+        return;
+    };
+    r.assert_ran(600);
+    // The calls the layer intercepts (it logs in no other): xrWaitFrame and xrBeginFrame are
+    // the runtime's alone, and xrWaitFrame's pacing wait swings on a loaded machine.
+    let calls = r.report["timing"]["calls"]
+        .as_object()
+        .expect("timing.calls");
+    let longest = calls
+        .iter()
+        .filter(|(name, _)| !["xrWaitFrame", "xrBeginFrame"].contains(&name.as_str()))
+        .filter_map(|(_, c)| c["max_ms"].as_f64())
+        .fold(0.0, f64::max);
+    eprintln!("longest call the layer intercepts: {longest:.1} ms");
+    assert!(longest < 100.0, "{}", r.report["timing"]["calls"]);
+}
+
+/// A log folder the layer cannot write is said once on stderr, with the path and why, and the
+/// app runs on: a path under /dev/null, and a FIFO nobody reads where the log file would be
+/// (opening it for writing would block for ever).
+#[test]
+fn an_unwritable_log_file_is_said_once_and_never_blocks() {
+    let Some(sandbox) = sandbox() else { return };
+    let dir = scratch_dir("log-fifo");
+    std::fs::create_dir_all(dir.join("contrastxr")).unwrap();
+    let fifo = dir.join("contrastxr/layer.log");
+    let status = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(
+        status.is_ok_and(|s| s.success()),
+        "mkfifo {}",
+        fifo.display()
+    );
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let fifo_home = format!("XDG_STATE_HOME={}", dir.display());
+    let cases = [
+        (
+            "XDG_STATE_HOME=/dev/null",
+            "cannot create /dev/null/contrastxr",
+        ),
+        (fifo_home.as_str(), "layer.log"),
+    ];
+    for (state_home, why) in cases {
+        // The sandbox passes no XDG_STATE_HOME: it goes on the command line.
+        let cmd = [
+            "/usr/bin/env",
+            state_home,
+            XR_CLIENT,
+            "--json",
+            "--frames",
+            "5",
+        ];
+        let run = sandbox.run_for(&[&cmd[..], &["--size", SIZE]].concat(), &env, 60);
+        run.assert_success();
+        let lines = layer_lines(&run);
+        let said: Vec<_> = lines.iter().filter(|l| l.contains("log file")).collect();
+        assert_eq!(said.len(), 1, "{state_home}: {lines:#?}");
+        assert!(said[0].contains(why), "{state_home}: {said:?}");
+    }
+}
+
+/// The layer takes the app's Vulkan functions from the app's own vkGetInstanceProcAddr (given
+/// with XR_KHR_vulkan_enable2): the client's counting one is called inside xrCreateSession
+/// more with the layer on than off.
+#[test]
+fn the_layer_uses_the_apps_own_vulkan() {
+    let Some(sandbox) = sandbox() else { return };
+    let calls = |on: &str| {
+        let env = [
+            ("CONTRASTXR", on),
+            ("CONTRASTXR_FORCE", "1"),
+            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ];
+        let run = sandbox.run(
+            &[XR_CLIENT, "--json", "--frames", "5", "--size", SIZE],
+            &env,
+        );
+        run.assert_success();
+        let report = run.client_report();
+        report["vk_gipa_calls_in_create_session"]
+            .as_u64()
+            .expect("vk_gipa_calls_in_create_session")
+    };
+    let (off, on) = (calls("0"), calls("1"));
+    assert!(on > off, "layer off: {off} calls, on: {on}");
 }
 
 /// More view regions in one frame than the layer keeps buffers for (2 projection views and 20

@@ -152,6 +152,20 @@ impl Background {
         }
     }
 
+    /// Stops a live source and waits at most `bound` for its thread to end (a camera's
+    /// controls restored, its device closed). False when the thread still runs then: it ends
+    /// on its own.
+    pub fn close_within(mut self, bound: Duration) -> bool {
+        let Some(thread) = self.stop() else {
+            return true;
+        };
+        let deadline = Instant::now() + bound;
+        while !thread.is_finished() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        thread.is_finished() && thread.join().is_ok()
+    }
+
     fn stop(&mut self) -> Option<JoinHandle<()>> {
         let Source::Threaded { shared, thread, .. } = &mut self.source else {
             return None;

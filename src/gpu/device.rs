@@ -342,10 +342,13 @@ impl GpuDevice {
     /// Wraps a device that belongs to someone else (the app's, in the layer). Nothing of it is
     /// destroyed on drop; only the allocator's memory is freed.
     ///
+    /// `entry` is the app's own Vulkan loader (the layer never loads another).
+    ///
     /// # Safety
-    /// The handles must be valid, belong together, and outlive this object; `queue_family` and
-    /// `queue_index` must name a queue the device was created with.
+    /// The handles must be valid, belong together, come from `entry`'s loader and outlive this
+    /// object; `queue_family` and `queue_index` must name a queue the device was created with.
     pub unsafe fn borrow(
+        entry: ash::Entry,
         raw_instance: vk::Instance,
         physical: vk::PhysicalDevice,
         raw_device: vk::Device,
@@ -353,7 +356,6 @@ impl GpuDevice {
         queue_index: u32,
     ) -> Result<GpuDevice, GpuError> {
         crate::fault::check("device-setup").map_err(GpuError::Unsupported)?;
-        let entry = load_entry()?;
         // SAFETY: the caller guarantees the instance handle is valid.
         let instance = unsafe { ash::Instance::load(entry.static_fn(), raw_instance) };
         // SAFETY: the caller guarantees the device handle is valid and from this instance.

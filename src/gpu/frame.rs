@@ -272,10 +272,11 @@ impl FrameEngine {
     }
 
     /// Drops the buffers of a destroyed swapchain's views.
-    pub fn forget_swapchain(&mut self, swapchain: u64) {
-        if self.wait_idle().is_err() {
-            return;
-        }
+    /// An error when the GPU did not finish: the swapchain's views then stay alive (and the
+    /// caller must stop using this engine: their handles may be given out again).
+    pub fn forget_swapchain(&mut self, swapchain: u64) -> Result<(), GpuError> {
+        crate::fault::check("swapchain-wait").map_err(GpuError::Unsupported)?;
+        self.wait_idle()?;
         let keys: Vec<ViewKey> = self
             .views
             .keys()
@@ -288,6 +289,7 @@ impl FrameEngine {
             }
         }
         self.app_views.forget(&self.gpu, swapchain);
+        Ok(())
     }
 
     /// Enhances every view's region of the app's images in place, and draws `overlay` over
@@ -394,7 +396,15 @@ impl FrameEngine {
             return Ok(());
         }
         self.torn_down = true;
-        let idle = self.wait_idle();
+        // On every path, also when the GPU never finishes: the source's thread writes the
+        // mapped images no more (the app may free them with its device right after).
+        self.ring.close_to_source();
+        let idle = crate::fault::check("device-lost")
+            .map_err(|_| GpuError::Vulkan {
+                call: "vkWaitForFences",
+                result: ash::vk::Result::ERROR_DEVICE_LOST,
+            })
+            .and_then(|()| self.wait_idle());
         // The pipeline thread uses the app's device: it ends before anything is destroyed.
         self.engine.join_building();
         if let Err(e) = idle {

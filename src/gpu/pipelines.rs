@@ -16,6 +16,7 @@ use super::process_exit;
 use super::shaders::{self, ShaderModule};
 use ash::vk;
 use std::collections::VecDeque;
+use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -101,6 +102,9 @@ impl Shared {
         // device: nothing more is made on it.
         if self.lock().stop || process_exit::exiting() {
             return Slot::Failed("the pipeline thread was stopped".into());
+        }
+        if crate::fault::hit("build-panic") {
+            panic!("fault injected at build-panic (CONTRASTXR_FAULT)");
         }
         let slot = match compute_pipeline(self, self.modules[k]) {
             Ok(p) => Slot::Built(p),
@@ -390,19 +394,31 @@ fn build_requests(shared: &Shared, mut warm_up: Option<WarmUpHook>) {
             }
         };
         // Nothing starts once the process is exiting (see gpu/process_exit.rs).
-        if !process_exit::begin() {
+        let Some(_busy) = process_exit::Busy::begin() else {
             return;
-        }
+        };
         match next {
-            None => save_if_changed(shared),
+            None => {
+                let _ = catch_unwind(AssertUnwindSafe(|| save_if_changed(shared)));
+            }
             Some(k) => {
-                let slot = shared.build(k, warm_up.as_mut());
+                let slot = catch_unwind(AssertUnwindSafe(|| shared.build(k, warm_up.as_mut())))
+                    .unwrap_or_else(|p| Slot::Failed(panicked(shared.modules[k].name, &*p)));
                 shared.lock().slots[k] = slot;
                 shared.changed.notify_all();
             }
         }
-        process_exit::end();
     }
+}
+
+/// What a build that panicked fails its slot with (the session's one line names it).
+fn panicked(shader: &str, panic: &(dyn std::any::Any + Send)) -> String {
+    let what = panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into());
+    format!("internal error building the {shader} pipeline: {what}")
 }
 
 /// The descriptor type of a binding's kind.

@@ -39,20 +39,27 @@ pub fn watch() {
     });
 }
 
-/// A build may start: false once the process is exiting. Pair with [`end`].
-pub fn begin() -> bool {
-    let mut w = lock();
-    if w.exiting {
-        return false;
+/// A build in progress: counted from [`Busy::begin`] until dropped, also when the build
+/// panics (a count left raised would make every later exit wait the full bound).
+pub struct Busy(());
+
+impl Busy {
+    /// A build may start: None once the process is exiting.
+    pub fn begin() -> Option<Busy> {
+        let mut w = lock();
+        if w.exiting {
+            return None;
+        }
+        w.busy += 1;
+        Some(Busy(()))
     }
-    w.busy += 1;
-    true
 }
 
-/// A build that [`begin`] let start has ended.
-pub fn end() {
-    lock().busy -= 1;
-    work().1.notify_all();
+impl Drop for Busy {
+    fn drop(&mut self) {
+        lock().busy -= 1;
+        work().1.notify_all();
+    }
 }
 
 /// Whether the process is exiting (a build checks before it touches the app's device).

@@ -59,9 +59,17 @@ pub struct WarmUp {
 /// A session's warm-up device, shared by the app's thread (which makes it when a shader that
 /// still needs a warm-up is requested, and drops it after the building thread has ended) and
 /// the building thread (which dispatches on it). Empty until needed.
-pub type WarmUpSlot = Arc<Mutex<Option<WarmUp>>>;
+pub type WarmUpSlot = Arc<Mutex<Device>>;
 
-fn lock(slot: &WarmUpSlot) -> std::sync::MutexGuard<'_, Option<WarmUp>> {
+/// The warm-up device of a session, and whether making it was tried: a device that could not
+/// be made is not tried again in that session (that would be a vkCreateDevice per frame).
+#[derive(Default)]
+pub struct Device {
+    warm_up: Option<WarmUp>,
+    tried: bool,
+}
+
+fn lock(slot: &WarmUpSlot) -> std::sync::MutexGuard<'_, Device> {
     // A panic while holding it leaves a usable slot.
     slot.lock().unwrap_or_else(|p| p.into_inner())
 }
@@ -77,7 +85,7 @@ impl WarmUp {
         let kind = DeviceKind::of(gpu);
         let shared = slot.clone();
         let hook: WarmUpHook = Box::new(move |id| {
-            if let Some(w) = lock(&shared).as_mut() {
+            if let Some(w) = lock(&shared).warm_up.as_mut() {
                 w.once(kind, id);
             }
         });
@@ -87,7 +95,8 @@ impl WarmUp {
     /// Makes the warm-up device in `slot`, on the caller's thread (the app's, before it asks
     /// for `ids` to be built), when one of them still needs a warm-up in this process.
     /// Failures are not fatal: the compile then happens at first dispatch on the app's queue.
-    /// Returns what making the device gave, when this call made (or tried to make) one.
+    /// Returns what making the device gave, when this call made (or tried to make) one: at
+    /// most once per slot.
     pub fn prepare(
         slot: &WarmUpSlot,
         app: &GpuDevice,
@@ -104,12 +113,12 @@ impl WarmUp {
             Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner(),
             Err(std::sync::TryLockError::WouldBlock) => return None,
         };
-        if slot.is_some() {
+        if std::mem::replace(&mut slot.tried, true) {
             return None;
         }
         match WarmUp::new(app) {
             Ok(w) => {
-                *slot = Some(w);
+                slot.warm_up = Some(w);
                 Some(Ok(()))
             }
             Err(e) => Some(Err(e)),
@@ -124,6 +133,7 @@ impl WarmUp {
     /// A device beside `app`'s, with a camera frame and a view (the widest pixel format, so
     /// every variant stays inside the buffers) zero-filled.
     pub fn new(app: &GpuDevice) -> Result<WarmUp, GpuError> {
+        crate::fault::check("warm-up-device").map_err(GpuError::Unsupported)?;
         let gpu = GpuDevice::create_beside(app)?;
         let mut engine = Engine::new(&gpu, 1, BuildMode::Inline, None)?;
         let mut commands = match Commands::new(&gpu) {

@@ -6,7 +6,7 @@ use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
 use super::settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
-use super::{app_spaces, blend, log, session, swapchain, timespec};
+use super::{app_spaces, app_vulkan, blend, log, session, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};
@@ -43,6 +43,7 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
             {
                 return Err(LayerError::Loader("bad negotiation or chain structs"));
             }
+            stay_mapped();
             req.layer_interface_version = 1;
             req.layer_api_version = xr::CURRENT_API_VERSION;
             req.get_instance_proc_addr = Some(get_instance_proc_addr);
@@ -50,6 +51,30 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
             Ok(xr::Result::SUCCESS)
         },
     )
+}
+
+/// Keeps this library mapped for the rest of the process (`RTLD_NODELETE`): the loader closes
+/// it at xrDestroyInstance, while a thread of the layer may still be ending (a camera still
+/// opening on the reopen helper, a capture thread closing its device) or a thread-local
+/// destructor may be pending. Each such thread ends on its own within a second; none then
+/// runs code of an unmapped library.
+fn stay_mapped() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // SAFETY: Dl_info is plain C data; all-zero is a valid value for dladdr to fill.
+        let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
+        let here = stay_mapped as *const std::ffi::c_void;
+        // SAFETY: dladdr on an address of this library's code, with a valid out pointer.
+        if unsafe { libc::dladdr(here, &mut info) } == 0 || info.dli_fname.is_null() {
+            return log::info("cannot keep the layer's library mapped (dladdr failed)");
+        }
+        let flags = libc::RTLD_NOW | libc::RTLD_NOLOAD | libc::RTLD_NODELETE;
+        // SAFETY: RTLD_NOLOAD only promotes this already loaded library (its own name, from
+        // dladdr); the handle is kept on purpose: the library is never unloaded.
+        if unsafe { libc::dlopen(info.dli_fname, flags) }.is_null() {
+            log::info("cannot keep the layer's library mapped (dlopen RTLD_NODELETE failed)");
+        }
+    });
 }
 
 fn startup_line(settings: &Settings, app: &str) -> String {
@@ -201,6 +226,10 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
             "xrDestroyInstance" => {
                 std::mem::transmute::<pfn::DestroyInstance, pfn::VoidFunction>(destroy_instance)
             }
+            "xrCreateVulkanInstanceKHR" => std::mem::transmute::<
+                pfn::CreateVulkanInstanceKHR,
+                pfn::VoidFunction,
+            >(app_vulkan::create_vulkan_instance),
             "xrCreateSession" => std::mem::transmute::<pfn::CreateSession, pfn::VoidFunction>(
                 session::create_session,
             ),
@@ -311,25 +340,41 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
             let state = state::instance(instance).ok_or(LayerError::UnknownHandle("XrInstance"))?;
-            // Sessions left alive by the app die with the instance: drop our GPU state first.
-            // Lock order: sessions are locked only after the registry lock is dropped.
-            let all: Vec<(u64, Arc<std::sync::Mutex<state::SessionState>>)> = state::registry()
-                .sessions
-                .iter()
-                .map(|(k, s)| (*k, s.clone()))
-                .collect();
-            let sessions: Vec<u64> = all
-                .into_iter()
-                .filter(|(_, s)| lock(s).instance == instance)
-                .map(|(k, _)| k)
-                .collect();
-            for s in sessions {
-                session::forget(xr::Session::from_raw(s));
+            // A panic in the layer's own part is logged; the runtime gets the call regardless.
+            guard("xrDestroyInstance", xr::Result::SUCCESS, || {
+                forget_instance(instance);
+                Ok(xr::Result::SUCCESS)
+            });
+            if let Some((name, n)) = crate::fault::reached().filter(|(_, n)| *n > 0) {
+                log::info(&format!("fault point {name} reached {n} times"));
             }
-            state::registry().instances.remove(&instance.into_raw());
-            settings::forget_live(instance.into_raw());
             // SAFETY: forwarding the app's call.
             Ok(unsafe { (state.next.destroy_instance)(instance) })
         },
     )
+}
+
+/// Drops the layer's state of an instance, and of the sessions the app left alive with it
+/// (their GPU state first).
+fn forget_instance(instance: xr::Instance) {
+    // Lock order: sessions are locked only after the registry lock is dropped.
+    let all: Vec<(u64, Arc<std::sync::Mutex<state::SessionState>>)> = state::registry()
+        .sessions
+        .iter()
+        .map(|(k, s)| (*k, s.clone()))
+        .collect();
+    let sessions: Vec<u64> = all
+        .into_iter()
+        .filter(|(_, s)| lock(s).instance == instance)
+        .map(|(k, _)| k)
+        .collect();
+    for s in sessions {
+        session::forget(xr::Session::from_raw(s));
+    }
+    if crate::fault::hit("destroy-bookkeeping") {
+        panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
+    }
+    state::registry().instances.remove(&instance.into_raw());
+    settings::forget_live(instance.into_raw());
+    app_vulkan::forget(instance);
 }

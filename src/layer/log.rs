@@ -4,6 +4,10 @@
 //! it becomes `layer.log.1` (replacing the previous one) and a new file starts, so two files
 //! at most. The first line a process writes is a [`LOADED`] marker, which is how
 //! `contrastxr log` finds the last app's lines. `CONTRASTXR_LOG=debug` adds debug lines.
+//!
+//! Logging never blocks an app's call: a line stderr cannot take at once (a pipe nobody reads)
+//! is dropped and counted, and the file is opened non-blocking, a regular file only, never
+//! through a symlink. A log file that cannot be written is said once on stderr.
 
 use std::collections::HashSet;
 use std::io::Write;
@@ -21,6 +25,10 @@ struct Log {
     file: Option<std::fs::File>,
     seen: HashSet<String>,
     debug: bool,
+    /// Lines stderr could not take without blocking, not yet reported there.
+    dropped: u64,
+    /// Why the file cannot be written has been said on stderr.
+    said_unwritable: bool,
 }
 
 /// `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state/...`).
@@ -47,13 +55,36 @@ pub fn rotated(path: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-fn open_file(path: &Path) -> Option<std::fs::File> {
-    std::fs::create_dir_all(path.parent()?).ok()?;
-    std::fs::OpenOptions::new()
+/// Opens the log file for appending without blocking (a FIFO there fails at once), only a
+/// regular file and never through a symlink at its last component; the error names the path.
+fn open_file(path: &Path) -> Result<std::fs::File, String> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let dir = path.parent().unwrap_or(Path::new("/"));
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let file = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_CLOEXEC | libc::O_NOFOLLOW)
         .open(path)
-        .ok()
+        .map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    match file.metadata() {
+        Ok(m) if m.is_file() => Ok(file),
+        Ok(_) => Err(format!("{} is not a regular file", path.display())),
+        Err(e) => Err(format!("cannot read {}: {e}", path.display())),
+    }
+}
+
+/// The file, or None after saying once on stderr why it cannot be written.
+fn open_or_say(log: &mut Log, path: &Path) -> Option<std::fs::File> {
+    match open_file(path) {
+        Ok(f) => Some(f),
+        Err(e) => {
+            if !std::mem::replace(&mut log.said_unwritable, true) {
+                write_stderr(log, &format!("log file not written: {e}"));
+            }
+            None
+        }
+    }
 }
 
 /// Days since 1970-01-01 to (year, month, day) in the proleptic Gregorian calendar
@@ -91,11 +122,14 @@ fn log() -> &'static Mutex<Log> {
     LOG.get_or_init(|| {
         let path = path();
         let mut log = Log {
-            file: path.as_deref().and_then(open_file),
-            path,
+            file: None,
+            path: path.clone(),
             seen: HashSet::new(),
             debug: std::env::var("CONTRASTXR_LOG").is_ok_and(|v| v == "debug"),
+            dropped: 0,
+            said_unwritable: false,
         };
+        log.file = path.and_then(|p| open_or_say(&mut log, &p));
         let exe = std::env::current_exe()
             .map_or("an unknown program".into(), |p| p.display().to_string());
         write_file(&mut log, &format!("{LOADED}{exe}"));
@@ -116,9 +150,9 @@ fn keep_in_bounds(log: &mut Log) {
         matches!((&ours, &at_path), (Some(a), Some(b)) if a.ino() == b.ino() && a.dev() == b.dev());
     if at_path.as_ref().is_some_and(|m| m.len() >= MAX_BYTES) {
         let _ = std::fs::rename(&path, rotated(&path));
-        log.file = open_file(&path);
+        log.file = open_or_say(log, &path);
     } else if !same {
-        log.file = open_file(&path);
+        log.file = open_or_say(log, &path);
     }
 }
 
@@ -130,8 +164,41 @@ fn write_file(log: &mut Log, line: &str) {
     }
 }
 
+/// Writes `bytes` to `fd` only if that cannot block: poll first, and at most `PIPE_BUF` bytes,
+/// which a pipe that polls writable takes whole. False when nothing was written.
+fn write_now(fd: i32, bytes: &[u8]) -> bool {
+    let bytes = &bytes[..bytes.len().min(libc::PIPE_BUF)];
+    let mut poll = libc::pollfd {
+        fd,
+        events: libc::POLLOUT,
+        revents: 0,
+    };
+    // SAFETY: one valid pollfd, and no waiting (timeout 0).
+    let ready = unsafe { libc::poll(&mut poll, 1, 0) } == 1 && poll.revents == libc::POLLOUT;
+    // SAFETY: a valid buffer of `len` bytes; fd is only written, never closed here.
+    ready && unsafe { libc::write(fd, bytes.as_ptr().cast(), bytes.len()) } > 0
+}
+
+/// One line to stderr, or dropped and counted when stderr would block.
+fn write_stderr(log: &mut Log, line: &str) {
+    if log.dropped > 0 {
+        let said = format!(
+            "contrastxr: {} lines not written: stderr would have blocked\n",
+            log.dropped
+        );
+        if !write_now(2, said.as_bytes()) {
+            log.dropped += 1;
+            return;
+        }
+        log.dropped = 0;
+    }
+    if !write_now(2, format!("contrastxr: {line}\n").as_bytes()) {
+        log.dropped += 1;
+    }
+}
+
 fn write_line(log: &mut Log, line: &str) {
-    eprintln!("contrastxr: {line}");
+    write_stderr(log, line);
     write_file(log, line);
 }
 
@@ -216,10 +283,12 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         let path = dir.join("layer.log");
         let mut log = Log {
-            file: open_file(&path),
+            file: open_file(&path).ok(),
             path: Some(path.clone()),
             seen: HashSet::new(),
             debug: false,
+            dropped: 0,
+            said_unwritable: false,
         };
         let line = "x".repeat(1000);
         for _ in 0..1100 {
@@ -235,6 +304,66 @@ mod tests {
             1100 * (line.len() + "2026-01-01T00:00:00.000Z [pid ] \n".len())
                 + 1100 * std::process::id().to_string().len()
         );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A pipe's two ends, the write end filled until it takes no more.
+    fn full_pipe() -> (i32, i32) {
+        let mut fds = [0; 2];
+        // SAFETY: a valid array for the two descriptors.
+        assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+        // SAFETY: fds[1] is ours; O_NONBLOCK only while it is filled.
+        unsafe { libc::fcntl(fds[1], libc::F_SETFL, libc::O_NONBLOCK) };
+        let block = [b'x'; 4096];
+        // SAFETY: writes from a valid buffer to our own pipe.
+        while unsafe { libc::write(fds[1], block.as_ptr().cast(), block.len()) } > 0 {}
+        // SAFETY: as above: back to blocking, as an app's stderr is.
+        unsafe { libc::fcntl(fds[1], libc::F_SETFL, 0) };
+        (fds[0], fds[1])
+    }
+
+    #[test]
+    fn a_full_pipe_takes_no_line_and_never_blocks() {
+        let (read, write) = full_pipe();
+        let t = std::time::Instant::now();
+        assert!(!write_now(write, b"contrastxr: a line\n"));
+        assert!(
+            t.elapsed() < Duration::from_millis(100),
+            "{:?}",
+            t.elapsed()
+        );
+        let mut room = [0u8; 65536];
+        // SAFETY: reads into a valid buffer from our own pipe.
+        assert!(unsafe { libc::read(read, room.as_mut_ptr().cast(), room.len()) } > 0);
+        assert!(write_now(write, b"contrastxr: a line\n"));
+        // SAFETY: both ends are ours.
+        unsafe { (libc::close(read), libc::close(write)) };
+    }
+
+    #[test]
+    fn an_unwritable_log_file_is_named_with_why() {
+        let dir = std::env::temp_dir().join(format!("contrastxr-log-open-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let under_dev_null = Path::new("/dev/null/contrastxr/layer.log");
+        let e = open_file(under_dev_null).unwrap_err();
+        assert!(
+            e.contains("/dev/null/contrastxr") && e.contains("Not a directory"),
+            "{e}"
+        );
+        // A FIFO nobody reads fails at once instead of blocking the open.
+        let fifo = dir.join("fifo.log");
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        assert!(open_file(&fifo).unwrap_err().contains("fifo.log"));
+        // A symlink at the last component is not followed.
+        let target = dir.join("elsewhere.log");
+        let link = dir.join("link.log");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        assert!(open_file(&link).unwrap_err().contains("link.log"));
+        assert!(!target.exists());
+        assert!(open_file(&dir.join("layer.log")).is_ok());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

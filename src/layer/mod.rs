@@ -4,6 +4,7 @@
 //! failure turns the affected session into pass-through with one log line.
 
 mod app_spaces;
+mod app_vulkan;
 mod blend;
 pub mod capture;
 mod device;

@@ -27,11 +27,14 @@ impl Processor {
     /// the engine's own thread, `first` first.
     pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<Processor, GpuError> {
         let started = Instant::now();
-        Ok(Processor {
-            engine: Some(FrameEngine::new(gpu, first)?),
+        let processor = Processor {
+            engine: Some(FrameEngine::new(gpu, &[])?),
             indicator: Timer::default(),
             started,
-        })
+        };
+        // Through request: a warm-up device that cannot be made is said here.
+        processor.request(first);
+        Ok(processor)
     }
 
     fn engine(&self) -> &FrameEngine {
@@ -62,8 +65,8 @@ impl Processor {
                 "warm-up device made on the app's thread in {:.3} s",
                 t.elapsed().as_secs_f64()
             )),
-            Some(Err(e)) => log::debug(&format!(
-                "no warm-up device ({e}): shaders compile at their first dispatch"
+            Some(Err(e)) => log::info(&format!(
+                "no warm-up device ({e}): shaders compile at their first dispatch; not tried again in this session"
             )),
             None => {}
         }
@@ -88,8 +91,9 @@ impl Processor {
         self.engine().build_report()
     }
 
-    pub fn forget_swapchain(&mut self, swapchain: u64) {
-        self.engine_mut().forget_swapchain(swapchain);
+    /// An error when the GPU did not finish: the session must then stop using this processor.
+    pub fn forget_swapchain(&mut self, swapchain: u64) -> Result<(), GpuError> {
+        self.engine_mut().forget_swapchain(swapchain)
     }
 
     /// Enhances the views with the newest background, and draws the indicator while it shows.

@@ -10,7 +10,7 @@ use super::processor::Processor;
 use super::settings::Settings;
 use super::state::{self, lock, SessionState};
 use super::{blend, device, frame, log, sources, swapchain};
-use crate::gpu::{Engine, GpuDevice};
+use crate::gpu::{Engine, GpuDevice, GpuError};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::sync::{Arc, Mutex};
@@ -81,17 +81,20 @@ pub unsafe extern "system" fn create_session(
 /// The session's processor on the app's device (its pipelines start building at once). The
 /// background is not opened here: a camera opens only when a frame is to be enhanced.
 fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Processor> {
+    let raw_instance = vk::Instance::from_raw(b.instance as u64);
+    let entry = super::app_vulkan::entry_for(raw_instance).map_err(GpuError::NoLoader);
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
     // alive until after xrDestroySession, where the processor is dropped first.
-    let gpu = unsafe {
+    let gpu = entry.and_then(|entry| unsafe {
         GpuDevice::borrow(
-            vk::Instance::from_raw(b.instance as u64),
+            entry,
+            raw_instance,
             vk::PhysicalDevice::from_raw(b.physical_device as u64),
             vk::Device::from_raw(b.device as u64),
             b.queue_family_index,
             b.queue_index,
         )
-    };
+    });
     // The background preparation's shaders first: the views' ones need a swapchain's format.
     let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
     let gpu = gpu.and_then(|gpu| gpu.queue_has_compute().map(|_| gpu));
@@ -112,6 +115,10 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Proce
     Some(processor)
 }
 
+/// How long the session's end waits for its background's thread (a camera restoring its
+/// controls and closing).
+const CLOSE_WAIT: std::time::Duration = std::time::Duration::from_millis(300);
+
 /// Drops the layer's state of a session (its GPU objects first) and of its swapchains.
 pub fn forget(session: xr::Session) {
     let removed = state::registry().sessions.remove(&session.into_raw());
@@ -123,8 +130,12 @@ pub fn forget(session: xr::Session) {
         // threads end and the warm-up devices are destroyed here.
         s.processor = None;
         s.retired.clear();
-        // Closes the camera: it is open only while a session runs.
-        s.background = None;
+        // Closes the camera (controls restored) before the app may exit: it is open only
+        // while a session runs.
+        let closed = s.background.take().map(|bg| bg.close_within(CLOSE_WAIT));
+        if closed == Some(false) {
+            log::info("the background's thread did not end within 0.3 s of the session's end: it closes its device on its own");
+        }
     }
     // Lock order: the registry is never held while a swapchain is locked.
     let all: Vec<(u64, Arc<Mutex<state::SwapchainState>>)> = state::registry()
@@ -152,13 +163,20 @@ pub unsafe extern "system" fn destroy_session(session: xr::Session) -> xr::Resul
         || {
             let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
             let next = lock(&s).next;
-            lock(&s).motion.destroy(&next);
-            let t = std::time::Instant::now();
-            forget(session);
-            log::debug(&format!(
-                "session state released in {:.3} s",
-                t.elapsed().as_secs_f64()
-            ));
+            // A panic in the layer's own part is logged; the runtime gets the call regardless.
+            guard("xrDestroySession", xr::Result::SUCCESS, || {
+                lock(&s).motion.destroy(&next);
+                let t = std::time::Instant::now();
+                forget(session);
+                if crate::fault::hit("destroy-bookkeeping") {
+                    panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
+                }
+                log::debug(&format!(
+                    "session state released in {:.3} s",
+                    t.elapsed().as_secs_f64()
+                ));
+                Ok(xr::Result::SUCCESS)
+            });
             // SAFETY: forwarding the app's call after releasing everything the layer made.
             Ok(unsafe { (next.destroy_session)(session) })
         },

@@ -162,19 +162,40 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
             let sc = state::swapchain(swapchain).ok_or(LayerError::UnknownHandle("XrSwapchain"))?;
-            let next = with_session(&sc, |s, sc| {
-                // A held release goes with the swapchain: the image is never composed again.
-                sc.states = ImageStates::default();
-                if let Some(p) = s.and_then(|s| s.processor.as_mut()) {
-                    p.forget_swapchain(swapchain.into_raw());
+            let next = lock(&sc).next;
+            // A panic in the layer's own part is logged; the runtime gets the call regardless.
+            guard("xrDestroySwapchain", xr::Result::SUCCESS, || {
+                if crate::fault::hit("destroy-bookkeeping") {
+                    panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
                 }
-                sc.next
+                forget(&sc, swapchain);
+                Ok(xr::Result::SUCCESS)
             });
-            state::registry().swapchains.remove(&swapchain.into_raw());
             // SAFETY: forwarding the app's call.
             Ok(unsafe { (next.destroy_swapchain)(swapchain) })
         },
     )
+}
+
+/// The layer's state of a swapchain the app destroys (the session's views of its images too).
+fn forget(sc: &Arc<Mutex<SwapchainState>>, swapchain: xr::Swapchain) {
+    with_session(sc, |s, sc| {
+        // A held release goes with the swapchain: the image is never composed again.
+        sc.states = ImageStates::default();
+        let Some(s) = s else { return };
+        let forgotten = s
+            .processor
+            .as_mut()
+            .map(|p| p.forget_swapchain(swapchain.into_raw()));
+        if let Some(Err(e)) = forgotten {
+            // Its image views stay alive under handles the runtime may reuse: no more frames.
+            log::info(&format!(
+                "xrDestroySwapchain: {e}: passing this session's frames through from now on"
+            ));
+            s.retire_processor();
+        }
+    });
+    state::registry().swapchains.remove(&swapchain.into_raw());
 }
 
 /// # Safety

@@ -46,6 +46,16 @@ usage: contrastxr-xr-client [options]
   --script OPS            instead of frames, run one scripted sequence of raw swapchain and
                           frame calls (comma-separated: acquire wait release begin end
                           end-empty destroy create) and report each call's XrResult (`script`)
+  --after-device-ms N     after the last session, destroy the Vulkan device and wait N ms
+                          before xrDestroyInstance (a layer must not touch the device's memory
+                          after xrDestroySession)
+  --instances N           create, run (--sessions each) and destroy N instances in turn
+                          (default 1)
+  --linger-ms N           after the last xrDestroyInstance, run on N ms, then report the
+                          layer's threads still running and whether its library is mapped
+                          (`after_instances`)
+  --stderr-full           run the frame loop with stderr a full pipe nobody reads: a layer
+                          that writes to it must not block the app's calls
   --check-untouched       read each swapchain image back when it is acquired again and report
                           the frames whose pixels changed after the client wrote them
   The JSON report holds resident memory and open file descriptors every 50 frames
@@ -94,6 +104,12 @@ pub struct Options {
     pub churn_formats: bool,
     pub script: Option<Vec<crate::script::Op>>,
     pub content: Content,
+    /// Milliseconds between destroying the Vulkan device and xrDestroyInstance.
+    pub after_device_ms: u64,
+    pub stderr_full: bool,
+    pub instances: u32,
+    /// Milliseconds to run on after the last xrDestroyInstance (None: report nothing).
+    pub linger_ms: Option<u64>,
 }
 
 impl Default for Options {
@@ -120,6 +136,10 @@ impl Default for Options {
             churn_formats: false,
             script: None,
             content: Content::Panels,
+            after_device_ms: 0,
+            stderr_full: false,
+            instances: 1,
+            linger_ms: None,
         }
     }
 }
@@ -153,6 +173,17 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--provoke-vk-validation-error" => options.provoke_vk_error = true,
             "--provoke-vk-sync-hazard" => options.provoke_sync_hazard = true,
             "--provoke-vk-leak" => options.provoke_leak = true,
+            "--instances" => {
+                options.instances = value()?.parse().map_err(|_| "--instances needs a count")?
+            }
+            "--linger-ms" => {
+                options.linger_ms = Some(
+                    value()?
+                        .parse()
+                        .map_err(|_| "--linger-ms needs milliseconds")?,
+                )
+            }
+            "--stderr-full" => options.stderr_full = true,
             "--check-untouched" => options.check_untouched = true,
             "--pipelined" => options.pipelined = true,
             "--churn-swapchains" => options.churn_swapchains = true,
@@ -163,6 +194,11 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--script" => options.script = Some(crate::script::parse(&value()?)?),
             "--sessions" => {
                 options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?
+            }
+            "--after-device-ms" => {
+                options.after_device_ms = value()?
+                    .parse()
+                    .map_err(|_| "--after-device-ms needs milliseconds")?
             }
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown argument {other}\n{USAGE}")),
@@ -230,6 +266,13 @@ mod tests {
         assert_eq!(o.content, Content::Panels);
         let o = parse_str("--content typical").unwrap();
         assert_eq!(o.content, Content::Typical);
+        let o = parse_str("--instances 3 --linger-ms 1000 --after-device-ms 5 --stderr-full");
+        let o = o.unwrap();
+        assert_eq!(
+            (o.instances, o.linger_ms, o.after_device_ms),
+            (3, Some(1000), 5)
+        );
+        assert!(o.stderr_full);
     }
 
     #[test]
@@ -244,6 +287,9 @@ mod tests {
             "--frames",
             "--bogus",
             "--script acquire,jump",
+            "--instances x",
+            "--linger-ms -1",
+            "--after-device-ms",
         ] {
             assert!(parse_str(bad).is_err(), "{bad}");
         }

@@ -279,7 +279,7 @@ fn create_instance(
             std::mem::transmute::<
                 vk::PFN_vkGetInstanceProcAddr,
                 xr::sys::platform::VkGetInstanceProcAddr,
-            >(entry.static_fn().get_instance_proc_addr),
+            >(crate::gipa::counting(entry)),
             &info as *const _ as *const _,
         )
     }
@@ -346,7 +346,7 @@ fn create_device(
             std::mem::transmute::<
                 vk::PFN_vkGetInstanceProcAddr,
                 xr::sys::platform::VkGetInstanceProcAddr,
-            >(entry.static_fn().get_instance_proc_addr),
+            >(crate::gipa::counting(entry)),
             physical_device.as_raw() as _,
             &info as *const _ as *const _,
         )

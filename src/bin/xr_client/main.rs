@@ -9,7 +9,10 @@ mod cli;
 mod error;
 mod format;
 mod frame_loop;
+mod full_stderr;
+mod gipa;
 mod gpu;
+mod leftovers;
 mod memory;
 mod pattern;
 mod report;
@@ -59,8 +62,15 @@ fn main() -> ExitCode {
         calls: timing::Calls::new(options.timing),
         ..Stats::default()
     };
-    if let Err(e) = run(&options, &mut report, &mut stats) {
-        report.errors.push(e.0);
+    for _ in 0..options.instances.max(1) {
+        if let Err(e) = run(&options, &mut report, &mut stats) {
+            report.errors.push(e.0);
+            break;
+        }
+    }
+    if let Some(ms) = options.linger_ms {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+        report.after_instances = Some(leftovers::look());
     }
     report.frames_submitted = stats.frames_submitted;
     report.script = std::mem::take(&mut stats.script);
@@ -76,7 +86,7 @@ fn main() -> ExitCode {
     let ran = options.list_formats
         || stats.script_ran
         || (options.script.is_none()
-            && stats.frames_submitted >= options.frames * options.sessions);
+            && stats.frames_submitted >= options.frames * options.sessions * options.instances);
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     print(&report, &options);
     if report.ok {
@@ -167,6 +177,13 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
             break;
         }
     }
+    // The device goes before the instance (a layer may still be closing a session's work).
+    drop(gpu);
+    std::thread::sleep(std::time::Duration::from_millis(options.after_device_ms));
+    // The last reference to the instance: xrDestroyInstance.
+    let t = std::time::Instant::now();
+    drop(instance);
+    report.teardown_ms.instance(t.elapsed());
     Ok(())
 }
 
@@ -186,11 +203,13 @@ fn run_session(
     stats: &mut Stats,
 ) -> Result<()> {
     let (instance, system, gpu) = (world.instance, world.system, world.gpu);
+    let gipa_calls = gipa::calls();
     // SAFETY: the Vulkan objects were made through this instance for this system, and `gpu`
-    // outlives the session (it is dropped after `run` returns).
+    // outlives the session (`run` drops it after its sessions).
     let (session, mut waiter, mut stream) =
         unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
             .ctx("xrCreateSession")?;
+    report.vk_gipa_calls_in_create_session += gipa::calls() - gipa_calls;
     stats.startup.session_created();
     let offered = session
         .enumerate_swapchain_formats()
@@ -221,6 +240,10 @@ fn run_session(
         result
     });
     report.swapchains_churned += churned.into_inner();
+    // The last references to the session: xrDestroySession.
+    let t = std::time::Instant::now();
+    drop((session, waiter, stream));
+    report.teardown_ms.session(t.elapsed());
     result
 }
 
@@ -272,7 +295,11 @@ fn run_frames(
         format,
         ahead: None,
     };
+    // Only around the frame loop: the runtime's client library logs to stderr too, at
+    // xrCreateInstance and at a session's changes.
+    let stderr = options.stderr_full.then(full_stderr::install).flatten();
     let result = frame_loop::run(instance, &mut scene, waiter, stream, options, stats);
+    stderr.into_iter().for_each(full_stderr::restore);
     stats.calls.absorb(scene.projection.calls(), "");
     if let Some(quad) = &scene.quad {
         stats.calls.absorb(quad.calls(), " (quad)");

@@ -44,6 +44,33 @@ pub struct Report {
     /// With --timing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timing: Option<Timing>,
+    /// The longest xrDestroySession and xrDestroyInstance, in ms (the layer's teardown).
+    pub teardown_ms: Teardown,
+    /// Calls of the vkGetInstanceProcAddr the client gave the runtime, made inside its
+    /// xrCreateSession calls (by the runtime and the API layers).
+    pub vk_gipa_calls_in_create_session: u32,
+    /// With --linger-ms: what of the layer is left after the last xrDestroyInstance.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub after_instances: Option<crate::leftovers::Leftovers>,
+}
+
+/// The longest destroy calls of the run, in milliseconds.
+#[derive(Serialize, Debug, Default)]
+pub struct Teardown {
+    #[serde(rename = "xrDestroySession")]
+    pub destroy_session: f64,
+    #[serde(rename = "xrDestroyInstance")]
+    pub destroy_instance: f64,
+}
+
+impl Teardown {
+    pub fn session(&mut self, took: std::time::Duration) {
+        self.destroy_session = self.destroy_session.max(took.as_secs_f64() * 1e3);
+    }
+
+    pub fn instance(&mut self, took: std::time::Duration) {
+        self.destroy_instance = self.destroy_instance.max(took.as_secs_f64() * 1e3);
+    }
 }
 
 /// Per-frame times in milliseconds over the frames after the first `warm_up` (the steady
