@@ -43,7 +43,12 @@ pub unsafe extern "system" fn create_session(
             // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
             Some(b) => set_up(unsafe { &*b }, &settings),
             None => {
-                log::info("session is not a Vulkan session: passing its frames through untouched");
+                // SAFETY: the runtime accepted info, so it and its next chain are valid.
+                let api = unsafe { info.as_ref().and_then(|i| super::ffi::graphics_api(i.next)) };
+                let api = api.unwrap_or("no known graphics binding");
+                log::info(&format!(
+                    "session is not a Vulkan session ({api}): contrastxr enhances Vulkan sessions only; passing its frames through untouched"
+                ));
                 None
             }
         };
