@@ -5,15 +5,22 @@
 //! at most. The first line a process writes is a [`LOADED`] marker, which is how
 //! `contrastxr log` finds the last app's lines. `CONTRASTXR_LOG=debug` adds debug lines.
 //!
-//! Logging never blocks an app's call: a line stderr cannot take at once (a pipe nobody reads)
-//! is dropped and counted, and the file is opened non-blocking, a regular file only, never
-//! through a symlink. A log file that cannot be written is said once on stderr.
+//! Logging never blocks an app's call: a line stderr cannot take at once (a pipe read slowly,
+//! or by nobody) waits in a bounded backlog that a thread of the log's own writes in order;
+//! past [`BACKLOG_LINES`] lines are dropped and counted. The file is opened non-blocking, a
+//! regular file only, never through a symlink. A log file that cannot be written is said once
+//! on stderr.
 
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::{sync_channel, SyncSender};
 use std::sync::{Mutex, OnceLock};
 use std::time::{SystemTime, UNIX_EPOCH};
+
+/// Lines waiting for a slow stderr; past this many, lines are dropped and counted.
+pub const BACKLOG_LINES: usize = 256;
 
 /// Size past which the log file is rotated.
 pub const MAX_BYTES: u64 = 1 << 20;
@@ -179,20 +186,63 @@ fn write_now(fd: i32, bytes: &[u8]) -> bool {
     ready && unsafe { libc::write(fd, bytes.as_ptr().cast(), bytes.len()) } > 0
 }
 
-/// One line to stderr, or dropped and counted when stderr would block.
+/// Lines stderr could not take at once, for the log's writer thread.
+static BACKLOG: OnceLock<Option<SyncSender<Vec<u8>>>> = OnceLock::new();
+/// How many lines of the backlog are not yet written.
+static WAITING: AtomicUsize = AtomicUsize::new(0);
+
+/// The backlog, its writer thread started at the first line stderr could not take (the thread
+/// may block on stderr for as long as its reader makes it; the app never does).
+fn backlog() -> Option<&'static SyncSender<Vec<u8>>> {
+    BACKLOG
+        .get_or_init(|| {
+            let (lines, rx) = sync_channel::<Vec<u8>>(BACKLOG_LINES);
+            let writer = move || {
+                for bytes in rx {
+                    let _ = std::io::stderr().write_all(&bytes);
+                    WAITING.fetch_sub(1, Ordering::SeqCst);
+                }
+            };
+            let spawned = std::thread::Builder::new()
+                .name("contrastxr-log".into())
+                .spawn(writer);
+            spawned.ok().map(|_| lines)
+        })
+        .as_ref()
+}
+
+/// `bytes` to stderr now when no line waits before them and it cannot block; else into the
+/// backlog, in order. False when the backlog is full (the line is lost).
+fn send_to_stderr(bytes: Vec<u8>) -> bool {
+    if WAITING.load(Ordering::SeqCst) == 0 && write_now(2, &bytes) {
+        return true;
+    }
+    let Some(lines) = backlog() else {
+        return false;
+    };
+    WAITING.fetch_add(1, Ordering::SeqCst);
+    let sent = lines.try_send(bytes).is_ok();
+    if !sent {
+        WAITING.fetch_sub(1, Ordering::SeqCst);
+    }
+    sent
+}
+
+/// One line to stderr (now, or through the backlog), or dropped and counted when the backlog
+/// is full.
 fn write_stderr(log: &mut Log, line: &str) {
     if log.dropped > 0 {
         let said = format!(
             "contrastxr: {} lines not written: stderr would have blocked\n",
             log.dropped
         );
-        if !write_now(2, said.as_bytes()) {
+        if !send_to_stderr(said.into_bytes()) {
             log.dropped += 1;
             return;
         }
         log.dropped = 0;
     }
-    if !write_now(2, format!("contrastxr: {line}\n").as_bytes()) {
+    if !send_to_stderr(format!("contrastxr: {line}\n").into_bytes()) {
         log.dropped += 1;
     }
 }
