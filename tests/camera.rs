@@ -7,6 +7,8 @@
 //! Expected pixels are computed here from the BT.601 / JFIF equations in floating point,
 //! independently of the crate's fixed-point conversion.
 
+mod common;
+
 use contrastxr::camera::v4l2::usb::UsbId;
 use contrastxr::camera::{cli, parse_source, Background, CaptureConfig, SourceSpec, SourceStatus};
 use contrastxr::image::RgbaImage;
@@ -295,19 +297,9 @@ fn temp_dir(name: &str) -> PathBuf {
 fn fake_library() -> &'static Path {
     static LIB: OnceLock<PathBuf> = OnceLock::new();
     LIB.get_or_init(|| {
-        let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fake-v4l2/fake_v4l2.c");
         let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fake-v4l2");
         std::fs::create_dir_all(&dir).unwrap();
-        let lib = dir.join("libfake_v4l2.so");
-        let status = Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
-            .args(["-shared", "-fPIC", "-O2", "-Wall", "-o"])
-            .arg(&lib)
-            .arg(&source)
-            .args(["-ldl", "-lpthread"])
-            .status()
-            .expect("a C compiler (cc) is needed to build the V4L2 stand-in");
-        assert!(status.success(), "building {} failed", source.display());
-        lib
+        common::fake_v4l2(&dir)
     })
 }
 

@@ -6,23 +6,9 @@
 mod common;
 
 use common::{layer_lines, sandbox, scratch_dir, CLI, XR_CLIENT};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
-
-fn fake_library(dir: &Path) -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fake-v4l2/fake_v4l2.c");
-    let lib = dir.join("libfake_v4l2.so");
-    let status = Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
-        .args(["-shared", "-fPIC", "-O2", "-Wall", "-o"])
-        .arg(&lib)
-        .arg(&source)
-        .args(["-ldl", "-lpthread"])
-        .status()
-        .expect("a C compiler (cc) is needed to build the V4L2 stand-in");
-    assert!(status.success(), "building {} failed", source.display());
-    lib
-}
 
 /// "open MS" / "close MS" lines the stand-in appended.
 fn events(log: &Path) -> Vec<(String, u128)> {
@@ -46,7 +32,7 @@ fn a_slow_camera_closes_after_enhancing_stops_and_no_call_waits_for_it() {
         return;
     };
     let dir = scratch_dir("camera-idle");
-    let lib = fake_library(&dir);
+    let lib = common::fake_v4l2(&dir);
     let node = dir.join("video7");
     std::fs::write(&node, b"").unwrap();
     let log = dir.join("events");
@@ -168,7 +154,7 @@ fn the_camera_is_closed_when_the_session_ends() {
         return;
     };
     let dir = scratch_dir("camera-closed-at-end");
-    let lib = fake_library(&dir);
+    let lib = common::fake_v4l2(&dir);
     let node = dir.join("video7");
     std::fs::write(&node, b"").unwrap();
     let log = dir.join("events");

@@ -9,21 +9,6 @@ mod common;
 
 use common::{layer_lines, sandbox, scratch_dir, XR_CLIENT};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn fake_library(dir: &Path) -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fake-v4l2/fake_v4l2.c");
-    let lib = dir.join("libfake_v4l2.so");
-    let status = Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
-        .args(["-shared", "-fPIC", "-O2", "-Wall", "-o"])
-        .arg(&lib)
-        .arg(&source)
-        .args(["-ldl", "-lpthread"])
-        .status()
-        .expect("a C compiler (cc) is needed to build the V4L2 stand-in");
-    assert!(status.success(), "building {} failed", source.display());
-    lib
-}
 
 /// A small `video:` background at 100 Hz (y4m, 4:2:0).
 fn video(dir: &Path) -> PathBuf {
@@ -42,7 +27,7 @@ fn video(dir: &Path) -> PathBuf {
 fn nothing_of_the_layer_outlives_its_instances() {
     let Some(sandbox) = sandbox() else { return };
     let dir = scratch_dir("unload");
-    let lib = fake_library(&dir);
+    let lib = common::fake_v4l2(&dir);
     let node = dir.join("video7");
     std::fs::write(&node, b"").unwrap();
     let (preload, device) = (

@@ -429,3 +429,19 @@ impl Sandbox {
         }
     }
 }
+
+/// Builds the V4L2 stand-in (tests/fake-v4l2, an LD_PRELOAD library; docs/camera.md) into
+/// `dir` with the C compiler.
+pub fn fake_v4l2(dir: &Path) -> PathBuf {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fake-v4l2/fake_v4l2.c");
+    let lib = dir.join("libfake_v4l2.so");
+    let status = Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
+        .args(["-shared", "-fPIC", "-O2", "-Wall", "-o"])
+        .arg(&lib)
+        .arg(&source)
+        .args(["-ldl", "-lpthread"])
+        .status()
+        .expect("a C compiler (cc) is needed to build the V4L2 stand-in");
+    assert!(status.success(), "building {} failed", source.display());
+    lib
+}
