@@ -904,6 +904,25 @@ fn doctor_names_the_config_files_bad_line() {
     );
 }
 
+/// An app whose session was OpenGL: doctor names the API from the log and says which one the
+/// layer enhances.
+#[test]
+fn doctor_names_the_last_sessions_graphics_api() {
+    let root = fresh_home("doctor-opengl");
+    write_layer_log(
+        &root,
+        "\
+2026-01-01T00:00:00.000Z [pid 7] layer loaded into /usr/bin/blender
+2026-01-01T00:00:00.300Z [pid 7] session is not a Vulkan session (OpenGL (Xlib)): contrastxr enhances Vulkan sessions only; passing its frames through untouched
+",
+    );
+    let (_, report) = doctor(&root, &[]);
+    let l = finding(&report, "last-app");
+    assert_eq!(l["status"], "warn", "{l}");
+    assert!(text(l, "detail").contains("(OpenGL (Xlib))"), "{l}");
+    assert!(text(l, "fix").contains("Vulkan"), "{l}");
+}
+
 #[test]
 fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     let root = fresh_home("doctor-log");
@@ -914,7 +933,7 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
 2026-01-01T00:00:00.500Z [pid 7] enhancement began 0.200 s after the session started
 2026-01-01T00:00:01.000Z [pid 9] layer loaded into /usr/bin/b
 2026-01-01T00:00:01.100Z [pid 9] system \"Glasses\": settings in a [device.\"Glasses\"] config table apply to it
-2026-01-01T00:00:01.200Z [pid 9] environment blend mode OPAQUE is not ADDITIVE: passing frames through (set CONTRASTXR_FORCE=1 to act anyway)
+2026-01-01T00:00:01.200Z [pid 9] environment blend mode OPAQUE is not ADDITIVE: passing frames through (see-through glasses whose runtime says opaque: set environment_blend_mode = \"additive\")
 ",
     );
     let config = root.join("config/contrastxr/config.toml");

@@ -203,7 +203,7 @@ fn acts_on(s: &SessionState, mode: Option<xr::EnvironmentBlendMode>) -> bool {
         return false;
     };
     log::once("blend-mode", &format!(
-        "environment blend mode {mode:?} is not ADDITIVE: passing frames through (set CONTRASTXR_FORCE=1 to act anyway)"
+        "environment blend mode {mode:?} is not ADDITIVE: passing frames through (see-through glasses whose runtime says opaque: set environment_blend_mode = \"additive\")"
     ));
     false
 }
