@@ -194,3 +194,64 @@ fn the_camera_is_closed_when_the_session_ends() {
         );
     }
 }
+
+/// An app that stops ending frames (paused, idle) for 5 s before it ends its session: the
+/// camera's own thread closes it (controls restored, device closed) 2 s after the last frame
+/// took one, long before xrDestroySession; and nothing is left open at the end.
+#[test]
+fn the_camera_closes_on_its_own_when_the_app_stops_ending_frames() {
+    let Some(sandbox) = sandbox() else {
+        return;
+    };
+    let dir = scratch_dir("camera-closed-when-paused");
+    let lib = common::fake_v4l2(&dir);
+    let node = dir.join("video7");
+    std::fs::write(&node, b"").unwrap();
+    let log = dir.join("events");
+    let background = format!("v4l2:{}", node.display());
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", background.as_str()),
+    ];
+    let (preload, device, log_to) = (
+        format!("LD_PRELOAD={}", lib.display()),
+        format!("FAKE_V4L2_DEVICE={}", node.display()),
+        format!("FAKE_V4L2_LOG={}", log.display()),
+    );
+    let cmd = [
+        "/usr/bin/env",
+        &preload,
+        &device,
+        &log_to,
+        XR_CLIENT,
+        "--json",
+        "--size",
+        "64x48",
+        "--frames",
+        "20",
+        "--idle-ms",
+        "5000",
+    ];
+    let out = sandbox.run(&cmd, &env);
+    let ended = now_ms();
+    out.assert_success();
+    let events = events(&log);
+    let what: Vec<&str> = events.iter().map(|(w, _)| w.as_str()).collect();
+    assert_eq!(what, ["open", "close"], "{:#?}", layer_lines(&out));
+    // Closed about 2 s after the last frame, not at xrDestroySession (5 s after it).
+    let closed = events[1].1;
+    assert!(
+        ended - closed > 2000,
+        "closed {} ms before the app's end: {:#?}",
+        ended - closed,
+        layer_lines(&out)
+    );
+    let lines = layer_lines(&out);
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("the camera is closed until the next one")),
+        "{lines:#?}"
+    );
+}

@@ -77,10 +77,13 @@ impl Background {
         crate::fault::check("camera-loss").ok()?;
         match &self.source {
             Source::Static(frame) => Some(frame.clone()),
-            Source::Threaded { shared, .. } => match self.status() {
-                SourceStatus::Lost => None,
-                _ => shared.peek(),
-            },
+            Source::Threaded { shared, .. } => {
+                shared.mark_used();
+                match self.status() {
+                    SourceStatus::Lost => None,
+                    _ => shared.peek(),
+                }
+            }
         }
     }
 

@@ -44,6 +44,11 @@ pub(crate) struct Shared {
     /// Nanoseconds after `epoch` (+1; 0 = not down) since the device has been lost.
     down_since_ns: AtomicU64,
     pub(crate) stop: AtomicBool,
+    /// Nanoseconds after `epoch` (+1; 0 = never) the consumer last took a frame.
+    last_used_ns: AtomicU64,
+    /// Nanoseconds after `epoch` (+1; 0 = not resting) since the producer closed its device
+    /// because nobody took a frame (it opens again at the next use).
+    resting_since_ns: AtomicU64,
     /// The blur each published frame is prepared with (None: not prepared).
     blur: Mutex<Option<BlurTaps>>,
     /// Where prepared texels are written before the frame is published (None: nowhere).
@@ -58,6 +63,8 @@ impl Shared {
             last_frame_ns: AtomicU64::new(0),
             down_since_ns: AtomicU64::new(0),
             stop: AtomicBool::new(false),
+            last_used_ns: AtomicU64::new(0),
+            resting_since_ns: AtomicU64::new(0),
             blur: Mutex::new(None),
             sink: Mutex::new(None),
         }
@@ -90,6 +97,36 @@ impl Shared {
         self.last_frame_ns
             .store(self.stamp(Instant::now()), Ordering::Release);
         self.down_since_ns.store(0, Ordering::Release);
+        self.resting_since_ns.store(0, Ordering::Release);
+    }
+
+    /// Notes that the consumer took a frame now (it still wants the source).
+    pub(crate) fn mark_used(&self) {
+        self.last_used_ns
+            .store(self.stamp(Instant::now()), Ordering::Release);
+    }
+
+    /// How long nobody has taken a frame, counted from `opened` at the latest.
+    pub(crate) fn unused_for(&self, opened: Instant) -> Duration {
+        let used = self.last_used_ns.load(Ordering::Acquire);
+        let since = match used {
+            0 => opened,
+            u => self.instant(u).max(opened),
+        };
+        since.elapsed()
+    }
+
+    /// Whether the consumer took a frame after `t`.
+    pub(crate) fn used_since(&self, t: Instant) -> bool {
+        let used = self.last_used_ns.load(Ordering::Acquire);
+        used != 0 && self.instant(used) > t
+    }
+
+    /// The producer closed its device for want of use: until its next frame the consumer sees
+    /// it waiting (from its next use), not lost.
+    pub(crate) fn rest(&self) {
+        self.resting_since_ns
+            .store(self.stamp(Instant::now()), Ordering::Release);
     }
 
     /// Asks for the frames published from now on to be prepared with `blur`. Never waits: while
@@ -155,6 +192,17 @@ impl Shared {
     pub(crate) fn status(&self, now: Instant, stall: Duration, grace: Duration) -> SourceStatus {
         let last = self.last_frame_ns.load(Ordering::Acquire);
         let down = self.down_since_ns.load(Ordering::Acquire);
+        let resting = self.resting_since_ns.load(Ordering::Acquire);
+        if resting != 0 {
+            // Reopening since the first use after the rest: as long as an open may take.
+            let used = self.last_used_ns.load(Ordering::Acquire).max(resting);
+            let since = self.instant(used);
+            return if now.saturating_duration_since(since) > stall + grace {
+                SourceStatus::Lost
+            } else {
+                SourceStatus::Waiting { since }
+            };
+        }
         if last == 0 {
             // `epoch` is when the source was opened: waiting (or reopening) since then.
             let since = self.epoch;
@@ -231,5 +279,29 @@ mod tests {
         f.sequence = 2;
         s.publish(f);
         assert_eq!(s.peek().map(|f| f.sequence), Some(2));
+    }
+
+    #[test]
+    fn a_resting_source_waits_from_its_next_use_and_lives_again_at_its_next_frame() {
+        let s = Shared::new();
+        let (stall, grace) = (Duration::from_millis(100), Duration::from_millis(200));
+        s.publish(frame());
+        s.rest();
+        let rested = Instant::now();
+        assert!(!s.used_since(rested));
+        // Long after the last frame, a resting source is not lost: it waits.
+        let later = rested + Duration::from_millis(250);
+        assert!(matches!(
+            s.status(later, stall, grace),
+            SourceStatus::Waiting { .. }
+        ));
+        std::thread::sleep(Duration::from_millis(2));
+        s.mark_used();
+        assert!(s.used_since(rested));
+        // From its next use it has an open's time to deliver, then it is lost.
+        let much_later = Instant::now() + stall + grace + Duration::from_millis(50);
+        assert_eq!(s.status(much_later, stall, grace), SourceStatus::Lost);
+        s.publish(frame());
+        assert_eq!(s.status(Instant::now(), stall, grace), SourceStatus::Live);
     }
 }

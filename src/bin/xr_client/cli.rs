@@ -46,6 +46,8 @@ usage: contrastxr-xr-client [options]
   --script OPS            instead of frames, run one scripted sequence of raw swapchain and
                           frame calls (comma-separated: acquire wait release begin end
                           end-empty destroy create) and report each call's XrResult (`script`)
+  --idle-ms N             after the frames, keep each session N ms without ending a frame
+                          before xrDestroySession (an app paused or idle)
   --after-device-ms N     after the last session, destroy the Vulkan device and wait N ms
                           before xrDestroyInstance (a layer must not touch the device's memory
                           after xrDestroySession)
@@ -106,6 +108,7 @@ pub struct Options {
     pub content: Content,
     /// Milliseconds between destroying the Vulkan device and xrDestroyInstance.
     pub after_device_ms: u64,
+    pub idle_ms: u64,
     pub stderr_full: bool,
     pub instances: u32,
     /// Milliseconds to run on after the last xrDestroyInstance (None: report nothing).
@@ -137,6 +140,7 @@ impl Default for Options {
             script: None,
             content: Content::Panels,
             after_device_ms: 0,
+            idle_ms: 0,
             stderr_full: false,
             instances: 1,
             linger_ms: None,
@@ -194,6 +198,11 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--script" => options.script = Some(crate::script::parse(&value()?)?),
             "--sessions" => {
                 options.sessions = value()?.parse().map_err(|_| "--sessions needs a count")?
+            }
+            "--idle-ms" => {
+                options.idle_ms = value()?
+                    .parse()
+                    .map_err(|_| "--idle-ms needs milliseconds")?
             }
             "--after-device-ms" => {
                 options.after_device_ms = value()?

@@ -240,6 +240,8 @@ fn run_session(
         result
     });
     report.swapchains_churned += churned.into_inner();
+    // An app that stops ending frames (paused, idle) before it ends the session.
+    std::thread::sleep(std::time::Duration::from_millis(options.idle_ms));
     // The last references to the session: xrDestroySession.
     let t = std::time::Instant::now();
     drop((session, waiter, stream));

@@ -29,6 +29,20 @@ const FIRST_OPEN_TIMEOUT: Duration = Duration::from_secs(10);
 /// The longest a poll waits, so that a stop request is noticed promptly.
 const POLL_SLICE: Duration = Duration::from_millis(100);
 const FIRST_BACKOFF: Duration = Duration::from_millis(100);
+/// A camera nobody took a frame from for this long is closed by its own thread (its light goes
+/// off, its controls are restored) also when the app makes no more frame calls (paused, idle);
+/// it opens again at the next use.
+const CLOSE_UNUSED: Duration = Duration::from_secs(2);
+/// How often a closed, unused camera looks for a new use.
+const REST_POLL: Duration = Duration::from_millis(50);
+
+/// Why a stream ended without an error.
+enum Ended {
+    /// Asked to stop: the source is closing.
+    Stopped,
+    /// Nobody took a frame for [`CLOSE_UNUSED`].
+    Unused,
+}
 /// Buffers in the driver's queue: enough to ride out a slow conversion, few enough for latency.
 const BUFFER_COUNT: u32 = 4;
 
@@ -217,7 +231,12 @@ fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Opt
         drop(current);
         let delivered = capture.sequence > sequence_before;
         match ended {
-            Ok(Ok(())) => break,
+            Ok(Ok(Ended::Stopped)) => break,
+            Ok(Ok(Ended::Unused)) => {
+                rest_until_used(shared);
+                backoff = FIRST_BACKOFF;
+                continue;
+            }
             _ if quiet && !delivered => {}
             Ok(Err(e)) => log(&format!("lost the camera: {e}")),
             Err(_) => log("lost the camera: the driver failed (v4l panicked)"),
@@ -231,6 +250,17 @@ fn run(target: Option<PathBuf>, cfg: &CaptureConfig, shared: &Shared, first: Opt
         }
         shared.mark_down();
         capture.status.update(shared, cfg);
+    }
+}
+
+/// After the device was closed for want of use: says so, and waits (without the device) until
+/// a frame is taken again or the source stops.
+fn rest_until_used(shared: &Shared) {
+    log("no frame taken for 2 s: the camera is closed until the next one");
+    shared.rest();
+    let rested = Instant::now();
+    while !shared.stopping() && !shared.used_since(rested) {
+        shared.sleep_until(Instant::now() + REST_POLL);
     }
 }
 
@@ -252,7 +282,7 @@ impl Capture {
         session: &Session,
         cfg: &CaptureConfig,
         shared: &Shared,
-    ) -> io::Result<()> {
+    ) -> io::Result<Ended> {
         let mut stream =
             MmapStream::with_buffers(&session.device, Type::VideoCapture, BUFFER_COUNT)?;
         // `next()` must never time out once streaming: the v4l crate would then queue the same
@@ -265,8 +295,12 @@ impl Capture {
         let mut last_frame = Instant::now();
         let mut started = false;
         let mut bad_frame_logged = false;
+        let opened = Instant::now();
         while !shared.stopping() {
             self.status.update(shared, cfg);
+            if shared.unused_for(opened) > CLOSE_UNUSED {
+                return Ok(Ended::Unused);
+            }
             let stalled = || {
                 let ms = cfg.stall_timeout.as_millis();
                 io::Error::new(io::ErrorKind::TimedOut, format!("no frame for {ms} ms"))
@@ -301,7 +335,7 @@ impl Capture {
                 Err(_) => {}
             }
         }
-        Ok(())
+        Ok(Ended::Stopped)
     }
 
     fn convert(
