@@ -2,8 +2,10 @@
 //! modules it names (`use super::x`, `crate::a::b` paths), back to itself. A circle means two
 //! files each need the other, so neither can be read, changed or tested alone.
 //!
-//! A module's front door (`mod.rs`, the crate roots) only declares and re-exports its files, so
-//! references that resolve to it are not counted; test modules (`mod tests`) are left out.
+//! A module's front door (`mod.rs`, the crate roots) only declares and re-exports its files: a
+//! name taken through it counts as an import of the file that defines it (`super::Thing` with
+//! `pub use file::Thing` in the folder's mod.rs is an import of `file.rs`), so a two-way tie
+//! through the re-exports is a circle too. Test modules (`mod tests`) are left out.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -143,7 +145,30 @@ fn expand(rest: &str) -> Vec<Vec<String>> {
     vec![head]
 }
 
-/// Each file's imports of other files (front doors left out).
+/// The file that defines `path`'s item when `path` names it through a folder's front door
+/// (`super::Thing` where the folder's mod.rs has `pub use file::Thing` or `file::{Thing, ..}`).
+fn through_front_door(root: &Path, path: &[String]) -> Option<PathBuf> {
+    (1..path.len()).rev().find_map(|n| {
+        let door = root.join(path[..n].join("/")).join("mod.rs");
+        let door = if n == 0 { root.join("lib.rs") } else { door };
+        let text = std::fs::read_to_string(&door).ok()?;
+        let item = &path[n];
+        let code = code(&text);
+        code.split("pub use ").skip(1).find_map(|decl| {
+            let decl = &decl[..decl.find(';')?];
+            expand(decl)
+                .into_iter()
+                .find(|p| p.last() == Some(item))
+                .and_then(|p| {
+                    let mut full = path[..n].to_vec();
+                    full.extend(p[..p.len() - 1].iter().cloned());
+                    resolve(root, &full)
+                })
+        })
+    })
+}
+
+/// Each file's imports of other files, also through a folder's re-exports.
 fn import_graph() -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
     let mut files = Vec::new();
     rust_files(Path::new(SRC), &mut files);
@@ -153,7 +178,7 @@ fn import_graph() -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
         let text = std::fs::read_to_string(file).unwrap();
         let targets: BTreeSet<PathBuf> = named_paths(&code(&text), &module)
             .iter()
-            .filter_map(|p| resolve(&root, p))
+            .filter_map(|p| resolve(&root, p).or_else(|| through_front_door(&root, p)))
             .filter(|t| t != file)
             .collect();
         graph.insert(file.clone(), targets);
@@ -195,10 +220,29 @@ fn no_file_of_src_imports_itself_through_others() {
             circles.insert(names.join(" <-> "));
         }
     }
+    circles.retain(|c| !KNOWN_TIES.contains(&c.as_str()));
     assert!(circles.is_empty(), "import circles:\n{}", {
         let list: Vec<_> = circles.into_iter().collect();
         list.join("\n")
     });
+}
+
+/// Circles that run through a folder's re-exports and are not undone yet: this list may only
+/// shrink. The method table's entries name their CPU references (params.rs's `Params` in
+/// their signatures) while `Params` names the `Method` the table defines.
+const KNOWN_TIES: [&str; 1] = ["algorithm/methods.rs <-> algorithm/params.rs"];
+
+/// Every known tie is still one (a tie undone must leave the list).
+#[test]
+fn the_known_ties_are_still_ties() {
+    let graph = import_graph();
+    for tie in KNOWN_TIES {
+        let first = PathBuf::from(SRC).join(tie.split(" <-> ").next().unwrap());
+        assert!(
+            circle(&graph, &first).is_some(),
+            "{tie} is undone: take it off KNOWN_TIES"
+        );
+    }
 }
 
 /// The check sees a circle when there is one (two files of a made-up module naming each other).

@@ -88,7 +88,7 @@ pub struct CaptureConfig {
     pub world_latency_ms: f32,
     /// `world:` source: the simulated camera and the head poses it is carried by (set by the
     /// consumer when it opens the source; None in settings).
-    pub world: Option<super::world::WorldRig>,
+    pub world: Option<super::rig::WorldRig>,
 }
 
 /// Camera settings that otherwise drift (automatic exposure, white balance, gain), each either

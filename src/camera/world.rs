@@ -15,80 +15,16 @@ use crate::camera::clock::{instant_of_ns, monotonic_now_ns};
 use crate::camera::error::CameraError;
 use crate::camera::frame::{Frame, Shared};
 use crate::camera::log::log;
+use crate::camera::rig::WorldRig;
 use crate::camera::CaptureConfig;
 use crate::image::RgbaImage;
 use std::collections::VecDeque;
 use std::path::Path;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 
-/// Located poses kept for the camera thread to take (older ones are dropped).
-const KEPT_POSES: usize = 512;
 /// A frame whose head pose is not known this long after it was due is dropped.
 const POSE_WAIT_NS: i64 = 1_000_000_000;
-
-/// The head poses a `world:` source asks for and the consumer answers.
-#[derive(Default)]
-pub struct HeadPoses {
-    book: Mutex<PoseBook>,
-}
-
-#[derive(Default)]
-struct PoseBook {
-    wanted: Vec<i64>,
-    located: VecDeque<(i64, Option<Pose>)>,
-}
-
-impl HeadPoses {
-    fn book(&self) -> std::sync::MutexGuard<'_, PoseBook> {
-        self.book.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// The capture times (CLOCK_MONOTONIC ns) whose head pose is wanted, taken away.
-    pub fn wanted(&self) -> Vec<i64> {
-        std::mem::take(&mut self.book().wanted)
-    }
-
-    /// The head's pose in the world at `time` (None: it could not be located).
-    pub fn record(&self, time: i64, pose: Option<Pose>) {
-        let mut book = self.book();
-        book.located.push_back((time, pose));
-        while book.located.len() > KEPT_POSES {
-            book.located.pop_front();
-        }
-    }
-
-    fn want(&self, time: i64) {
-        self.book().wanted.push(time);
-    }
-
-    /// The recorded answer for `time`: None while not answered.
-    fn take(&self, time: i64) -> Option<Option<Pose>> {
-        let mut book = self.book();
-        let at = book.located.iter().position(|(t, _)| *t == time)?;
-        book.located.remove(at).map(|(_, pose)| pose)
-    }
-}
-
-/// What a `world:` source needs besides the panorama: the simulated camera (lens and mount on
-/// the head) and where the head's poses come from.
-#[derive(Clone)]
-pub struct WorldRig {
-    pub profile: CameraProfile,
-    pub poses: Arc<HeadPoses>,
-}
-
-impl PartialEq for WorldRig {
-    fn eq(&self, other: &Self) -> bool {
-        self.profile == other.profile && Arc::ptr_eq(&self.poses, &other.poses)
-    }
-}
-
-impl std::fmt::Debug for WorldRig {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "WorldRig({:?})", self.profile)
-    }
-}
 
 /// Starts the simulated camera's thread.
 pub(crate) fn spawn(
@@ -238,6 +174,7 @@ fn sample(p: &RgbaImage, u: f64, v: f64) -> [u8; 4] {
 mod tests {
     use super::*;
     use crate::algorithm::registration::Lens;
+    use crate::camera::rig::HeadPoses;
     use glam::{DQuat, DVec3};
 
     /// A panorama whose red channel is the longitude (0..255 over 360 degrees) and green the

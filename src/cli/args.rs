@@ -79,6 +79,8 @@ pub fn positionals_arg(name: &'static str) -> Arg {
 /// A subcommand's parsed command line, taken out option by option.
 pub struct Args {
     matches: ArgMatches,
+    /// The whole command line's declaration, for the commands that describe it (completions).
+    tree: Option<clap::Command>,
 }
 
 fn id_of(names: &[&str]) -> String {
@@ -91,7 +93,21 @@ fn id_of(names: &[&str]) -> String {
 
 impl Args {
     pub fn new(matches: ArgMatches) -> Self {
-        Args { matches }
+        Args {
+            matches,
+            tree: None,
+        }
+    }
+
+    /// The same, with the declaration of every subcommand and option (the dispatcher's).
+    pub fn with_tree(mut self, tree: clap::Command) -> Self {
+        self.tree = Some(tree);
+        self
+    }
+
+    /// The declaration of every subcommand and option, when the dispatcher gave it.
+    pub fn tree(&mut self) -> Option<clap::Command> {
+        self.tree.take()
     }
 
     /// Whether a boolean flag was given.

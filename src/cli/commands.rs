@@ -1,7 +1,8 @@
 //! The tool's subcommands: name, summary, usage, options and what runs them.
 
+use super::args::Args;
 use super::args::Opt;
-use super::error::Command;
+use super::error::CliError;
 use super::{
     animate, bench, calibrate, camera, completions, config, control, doctor, enhance, evaluate,
     install, log, options, pan,
@@ -13,7 +14,7 @@ pub struct Subcommand {
     pub summary: &'static str,
     /// Its `--help` text.
     pub usage: fn() -> String,
-    pub run: Command,
+    pub run: fn(&mut Args) -> Result<(), CliError>,
     /// Every option it reads from [`Args`], in groups (a group can be shared between commands).
     pub options: &'static [&'static [Opt]],
     /// The name of its positional arguments in the help (`KEY VALUE`); None: it takes none.

@@ -27,13 +27,11 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             ))
         }
     };
+    let mut tree = args
+        .tree()
+        .ok_or_else(|| CliError::Failure("no command declarations to describe".into()))?;
     let mut script = Vec::new();
-    clap_complete::generate(
-        shell,
-        &mut super::parse::command(),
-        "contrastxr",
-        &mut script,
-    );
+    clap_complete::generate(shell, &mut tree, "contrastxr", &mut script);
     super::print(&String::from_utf8_lossy(&script));
     Ok(())
 }

@@ -1,7 +1,5 @@
 //! How a command ends: its error (which decides the exit code) and its output.
 
-use super::args::Args;
-
 /// Why a command failed; decides the exit code.
 #[derive(Debug)]
 pub enum CliError {
@@ -10,8 +8,6 @@ pub enum CliError {
     /// The command could not do its job: missing file, unreadable PNG, bad value (exit code 1).
     Failure(String),
 }
-
-pub type Command = fn(&mut Args) -> Result<(), CliError>;
 
 /// Writes to stdout; a reader that went away (`| head`) is not an error worth a panic.
 pub fn print(text: &str) {

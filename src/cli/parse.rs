@@ -113,7 +113,8 @@ pub fn main(argv: Vec<String>) -> i32 {
         .iter()
         .find(|c| c.name == name)
         .expect("clap only accepts declared subcommands");
-    finish(name, (command.run)(&mut Args::new(sub.clone())))
+    let mut args = Args::new(sub.clone()).with_tree(self::command());
+    finish(name, (command.run)(&mut args))
 }
 
 fn parse_error(e: &clap::Error, name: &str) -> i32 {
