@@ -196,7 +196,12 @@ fn fault(point: &str, says: &str) {
             assert!(modified.is_empty(), "frames changed: {modified:?}");
         }
         let about = r.lines_with("passing");
-        assert_eq!(about.len(), 1, "{mode:?}: {about:#?}");
+        assert_eq!(
+            about.len(),
+            1,
+            "{mode:?}: {about:#?}; all lines: {:#?}",
+            r.lines
+        );
         assert!(about[0].contains(says), "{mode:?}: {about:?}");
     }
 }

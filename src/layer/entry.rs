@@ -44,6 +44,7 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
                 return Err(LayerError::Loader("bad negotiation or chain structs"));
             }
             stay_mapped();
+            super::log::quiet_panics();
             req.layer_interface_version = 1;
             req.layer_api_version = xr::CURRENT_API_VERSION;
             req.get_instance_proc_addr = Some(get_instance_proc_addr);

@@ -124,8 +124,10 @@ pub fn rfc3339(time: SystemTime) -> String {
     )
 }
 
+/// The process's log, made at its first line.
+static LOG: OnceLock<Mutex<Log>> = OnceLock::new();
+
 fn log() -> &'static Mutex<Log> {
-    static LOG: OnceLock<Mutex<Log>> = OnceLock::new();
     LOG.get_or_init(|| {
         let path = path();
         let mut log = Log {
@@ -252,16 +254,39 @@ fn write_line(log: &mut Log, line: &str) {
     write_file(log, line);
 }
 
+/// The log, also after a panic while it was held (its state is a file handle and a set of
+/// keys: never half-changed in a way that matters).
+fn lock() -> Option<std::sync::MutexGuard<'static, Log>> {
+    Some(log().lock().unwrap_or_else(|p| p.into_inner()))
+}
+
+/// Makes a panic in the layer's code one line of this log instead of the default report on
+/// stderr (a backtrace, written blocking): every panic is caught at the layer's boundary, which
+/// says what happened to the session; the app never waits for stderr. The hook is the layer
+/// library's own (it has its own copy of std), never the app's.
+pub fn quiet_panics() {
+    static SET: std::sync::Once = std::sync::Once::new();
+    SET.call_once(|| {
+        std::panic::set_hook(Box::new(|info| {
+            // Only a log already made, and not held (a panic inside the log's own code): the
+            // line is left out rather than waited for.
+            if let Some(Ok(mut log)) = LOG.get().map(Mutex::try_lock) {
+                write_line(&mut log, &format!("internal panic (caught): {info}"));
+            }
+        }));
+    });
+}
+
 /// Logs a line unconditionally (startup, state changes).
 pub fn info(line: &str) {
-    if let Ok(mut log) = log().lock() {
+    if let Some(mut log) = lock() {
         write_line(&mut log, line);
     }
 }
 
 /// Logs a line the first time `key` is seen in this process; per-frame conditions use this.
 pub fn once(key: &str, line: &str) {
-    if let Ok(mut log) = log().lock() {
+    if let Some(mut log) = lock() {
         if log.seen.insert(key.to_string()) {
             write_line(&mut log, line);
         }
@@ -269,7 +294,7 @@ pub fn once(key: &str, line: &str) {
 }
 
 pub fn debug(line: &str) {
-    if let Ok(mut log) = log().lock() {
+    if let Some(mut log) = lock() {
         if log.debug {
             write_line(&mut log, line);
         }
