@@ -144,16 +144,21 @@ fn a_slow_camera_closes_after_enhancing_stops_and_no_call_waits_for_it() {
     }
 }
 
-/// An app that exits right after xrDestroySession (the client's next calls are
-/// xrDestroyInstance and its exit): the session's end waits, boundedly, for the capture thread,
-/// which restores the camera's controls and closes it, so the stand-in sees the close every
-/// time (5 of 5 runs).
-#[test]
-fn the_camera_is_closed_when_the_session_ends() {
-    let Some(sandbox) = sandbox() else {
-        return;
-    };
-    let dir = scratch_dir("camera-closed-at-end");
+/// A run of the client (`--size 64x48 --frames 20`, then `extra`) through the layer with the
+/// V4L2 stand-in as its camera, in a scratch folder `tag`: the run, and the stand-in's
+/// "open"/"close" events.
+struct StandInRun {
+    out: common::SandboxRun,
+    events: Vec<(String, u128)>,
+}
+
+fn run_with_stand_in(
+    sandbox: &common::Sandbox,
+    tag: &str,
+    extra: &[&str],
+    runs: usize,
+) -> Vec<StandInRun> {
+    let dir = scratch_dir(tag);
     let lib = common::fake_v4l2(&dir);
     let node = dir.join("video7");
     std::fs::write(&node, b"").unwrap();
@@ -169,7 +174,7 @@ fn the_camera_is_closed_when_the_session_ends() {
         format!("FAKE_V4L2_DEVICE={}", node.display()),
         format!("FAKE_V4L2_LOG={}", log.display()),
     );
-    let cmd = [
+    let mut cmd = vec![
         "/usr/bin/env",
         &preload,
         &device,
@@ -181,16 +186,37 @@ fn the_camera_is_closed_when_the_session_ends() {
         "--frames",
         "20",
     ];
-    for run in 0..5 {
-        let _ = std::fs::remove_file(&log);
-        let out = sandbox.run(&cmd, &env);
-        out.assert_success();
-        let events: Vec<String> = events(&log).into_iter().map(|(w, _)| w).collect();
+    cmd.extend(extra);
+    (0..runs)
+        .map(|_| {
+            let _ = std::fs::remove_file(&log);
+            let out = sandbox.run(&cmd, &env);
+            StandInRun {
+                out,
+                events: events(&log),
+            }
+        })
+        .collect()
+}
+
+/// An app that exits right after xrDestroySession (the client's next calls are
+/// xrDestroyInstance and its exit): the session's end waits, boundedly, for the capture thread,
+/// which restores the camera's controls and closes it, so the stand-in sees the close every
+/// time (5 of 5 runs).
+#[test]
+fn the_camera_is_closed_when_the_session_ends() {
+    let Some(sandbox) = sandbox() else {
+        return;
+    };
+    let runs = run_with_stand_in(&sandbox, "camera-closed-at-end", &[], 5);
+    for (run, r) in runs.iter().enumerate() {
+        r.out.assert_success();
+        let events: Vec<&str> = r.events.iter().map(|(w, _)| w.as_str()).collect();
         assert_eq!(
             events,
             ["open", "close"],
             "run {run}: {:#?}",
-            layer_lines(&out)
+            layer_lines(&r.out)
         );
     }
 }
@@ -203,40 +229,11 @@ fn the_camera_closes_on_its_own_when_the_app_stops_ending_frames() {
     let Some(sandbox) = sandbox() else {
         return;
     };
-    let dir = scratch_dir("camera-closed-when-paused");
-    let lib = common::fake_v4l2(&dir);
-    let node = dir.join("video7");
-    std::fs::write(&node, b"").unwrap();
-    let log = dir.join("events");
-    let background = format!("v4l2:{}", node.display());
-    let env = [
-        ("CONTRASTXR", "1"),
-        ("CONTRASTXR_FORCE", "1"),
-        ("CONTRASTXR_BACKGROUND", background.as_str()),
-    ];
-    let (preload, device, log_to) = (
-        format!("LD_PRELOAD={}", lib.display()),
-        format!("FAKE_V4L2_DEVICE={}", node.display()),
-        format!("FAKE_V4L2_LOG={}", log.display()),
-    );
-    let cmd = [
-        "/usr/bin/env",
-        &preload,
-        &device,
-        &log_to,
-        XR_CLIENT,
-        "--json",
-        "--size",
-        "64x48",
-        "--frames",
-        "20",
-        "--idle-ms",
-        "5000",
-    ];
-    let out = sandbox.run(&cmd, &env);
+    let tag = "camera-closed-when-paused";
+    let r = run_with_stand_in(&sandbox, tag, &["--idle-ms", "5000"], 1).remove(0);
     let ended = now_ms();
+    let (out, events) = (r.out, r.events);
     out.assert_success();
-    let events = events(&log);
     let what: Vec<&str> = events.iter().map(|(w, _)| w.as_str()).collect();
     assert_eq!(what, ["open", "close"], "{:#?}", layer_lines(&out));
     // Closed about 2 s after the last frame, not at xrDestroySession (5 s after it).
