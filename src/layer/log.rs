@@ -256,8 +256,8 @@ fn write_line(log: &mut Log, line: &str) {
 
 /// The log, also after a panic while it was held (its state is a file handle and a set of
 /// keys: never half-changed in a way that matters).
-fn lock() -> Option<std::sync::MutexGuard<'static, Log>> {
-    Some(log().lock().unwrap_or_else(|p| p.into_inner()))
+fn lock() -> std::sync::MutexGuard<'static, Log> {
+    log().lock().unwrap_or_else(|p| p.into_inner())
 }
 
 /// Makes a panic in the layer's code one line of this log instead of the default report on
@@ -279,25 +279,21 @@ pub fn quiet_panics() {
 
 /// Logs a line unconditionally (startup, state changes).
 pub fn info(line: &str) {
-    if let Some(mut log) = lock() {
-        write_line(&mut log, line);
-    }
+    write_line(&mut lock(), line);
 }
 
 /// Logs a line the first time `key` is seen in this process; per-frame conditions use this.
 pub fn once(key: &str, line: &str) {
-    if let Some(mut log) = lock() {
-        if log.seen.insert(key.to_string()) {
-            write_line(&mut log, line);
-        }
+    let mut log = lock();
+    if log.seen.insert(key.to_string()) {
+        write_line(&mut log, line);
     }
 }
 
 pub fn debug(line: &str) {
-    if let Some(mut log) = lock() {
-        if log.debug {
-            write_line(&mut log, line);
-        }
+    let mut log = lock();
+    if log.debug {
+        write_line(&mut log, line);
     }
 }
 
