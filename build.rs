@@ -314,7 +314,15 @@ fn check_tile_list(here: &str, inner: &naga::TypeInner) {
     assert_eq!(index, TILE_LIST_HEADER_WORDS * 4, "{here}: TileList.index at byte {index} in the shader, TILE_LIST_HEADER_WORDS {TILE_LIST_HEADER_WORDS} words");
 }
 
-fn compile(name: &str, source: &str, entry: &str) -> Vec<u32> {
+/// A shader parsed, validated and checked against src/gpu/interface.rs: both back ends (SPIR-V
+/// for Vulkan, GLSL for OpenGL) write from the same module.
+struct Parsed {
+    name: String,
+    module: naga::Module,
+    info: naga::valid::ModuleInfo,
+}
+
+fn parse(name: &str, source: &str) -> Parsed {
     let module = naga::front::wgsl::parse_str(source)
         .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
     let info = naga::valid::Validator::new(
@@ -325,26 +333,160 @@ fn compile(name: &str, source: &str, entry: &str) -> Vec<u32> {
     .validate(&module)
     .unwrap_or_else(|e| panic!("{name}.wgsl: {}\n{e:?}", e.emit_to_string(source)));
     check_interface(name, &module);
-    let policy = naga::proc::BoundsCheckPolicy::ReadZeroSkipWrite;
+    Parsed {
+        name: name.to_string(),
+        module,
+        info,
+    }
+}
+
+/// Out-of-bounds reads give zero, out-of-bounds writes are skipped (the narrow access reads
+/// up to three words past a region's last pixel).
+const BOUNDS: naga::proc::BoundsCheckPolicies = naga::proc::BoundsCheckPolicies {
+    index: naga::proc::BoundsCheckPolicy::ReadZeroSkipWrite,
+    buffer: naga::proc::BoundsCheckPolicy::ReadZeroSkipWrite,
+    image_load: naga::proc::BoundsCheckPolicy::ReadZeroSkipWrite,
+    binding_array: naga::proc::BoundsCheckPolicy::ReadZeroSkipWrite,
+};
+
+fn spirv(parsed: &Parsed, entry: &str) -> Vec<u32> {
     let options = naga::back::spv::Options {
         // SPIR-V 1.0: apps may create Vulkan 1.0 instances (hello_xr does).
         lang_version: (1, 0),
         flags: naga::back::spv::WriterFlags::empty(),
         force_loop_bounding: false,
-        bounds_check_policies: naga::proc::BoundsCheckPolicies {
-            index: policy,
-            buffer: policy,
-            image_load: policy,
-            binding_array: policy,
-        },
+        bounds_check_policies: BOUNDS,
         ..Default::default()
     };
     let pipeline = naga::back::spv::PipelineOptions {
         shader_stage: naga::ShaderStage::Compute,
         entry_point: entry.to_string(),
     };
-    naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
-        .unwrap_or_else(|e| panic!("{name}.wgsl entry {entry}: {e}"))
+    naga::back::spv::write_vec(&parsed.module, &parsed.info, &options, Some(&pipeline))
+        .unwrap_or_else(|e| panic!("{}.wgsl entry {entry}: {e}", parsed.name))
+}
+
+/// The GLSL version the OpenGL backend's programs are written in (core profile; compute
+/// shaders and `layout(binding)` on every resource).
+const GLSL_VERSION: u16 = 430;
+
+/// One item of `Params` as naga's GLSL declares it (a uniform, since GLSL outside Vulkan has
+/// no push constants): its uniform name, byte offset in PARAMS and type (a `GlParam` variant
+/// of src/gpu/opengl/programs.rs).
+#[derive(Clone, PartialEq, Debug)]
+struct GlUniform {
+    path: String,
+    offset: u32,
+    kind: &'static str,
+}
+
+/// The GLSL of `entry`, with every resource at the binding point BINDINGS gives it, checked
+/// against src/gpu/interface.rs: every uniform naga made of the push constants is a PARAMS
+/// field (by name, at its PARAMS offset, of its type), and every resource the entry uses is declared at
+/// its binding.
+fn glsl(parsed: &Parsed, entry: &str) -> (String, Vec<GlUniform>) {
+    let here = format!(
+        "{}.wgsl entry {entry} (GLSL) vs src/gpu/interface.rs",
+        parsed.name
+    );
+    let binding_map = BINDINGS
+        .iter()
+        .map(|b| {
+            let rb = naga::ResourceBinding {
+                group: 0,
+                binding: b.number,
+            };
+            (
+                rb,
+                u8::try_from(b.number).expect("a GL binding point below 256"),
+            )
+        })
+        .collect();
+    let options = naga::back::glsl::Options {
+        version: naga::back::glsl::Version::Desktop(GLSL_VERSION),
+        writer_flags: naga::back::glsl::WriterFlags::empty(),
+        binding_map,
+        zero_initialize_workgroup_memory: true,
+    };
+    let pipeline = naga::back::glsl::PipelineOptions {
+        shader_stage: naga::ShaderStage::Compute,
+        entry_point: entry.to_string(),
+        multiview: None,
+    };
+    let mut text = String::new();
+    let mut writer = naga::back::glsl::Writer::new(
+        &mut text,
+        &parsed.module,
+        &parsed.info,
+        &options,
+        &pipeline,
+        BOUNDS,
+    )
+    .unwrap_or_else(|e| panic!("{here}: {e}"));
+    let reflection = writer.write().unwrap_or_else(|e| panic!("{here}: {e}"));
+    let (offsets, _) = params_layout();
+    let mut uniforms = Vec::new();
+    for item in &reflection.immediates_items {
+        let path = &item.access_path;
+        let field = path
+            .split_once('.')
+            .map(|(_, f)| f.split('[').next().unwrap_or(f))
+            .unwrap_or_else(|| panic!("{here}: uniform `{path}` is not a field of Params"));
+        // naga's GLSL namer appends `_` to a name ending in a digit (map_00 -> map_00_).
+        let field = match field.strip_suffix('_') {
+            Some(f) if f.ends_with(|c: char| c.is_ascii_digit()) => f,
+            _ => field,
+        };
+        let (k, (_, ty)) = PARAMS
+            .iter()
+            .enumerate()
+            .find(|(_, (n, _))| *n == field)
+            .unwrap_or_else(|| panic!("{here}: uniform `{path}` is not in PARAMS"));
+        let element = path
+            .rsplit_once('[')
+            .and_then(|(_, i)| i.trim_end_matches(']').parse::<u32>().ok())
+            .unwrap_or(0);
+        let offset = offsets[k] + 16 * element;
+        assert_eq!(
+            item.offset, offset,
+            "{here}: `{path}` at byte {} in the GLSL, {offset} in PARAMS",
+            item.offset
+        );
+        use naga::back::glsl::{GlslScalarKind as S, GlslUniformType as U};
+        let kind = match (ty, item.ty) {
+            (ParamType::U32, U::Scalar(s)) if s.kind == S::Uint => "U32",
+            (ParamType::F32, U::Scalar(s)) if s.kind == S::Float => "F32",
+            (ParamType::Vec2U32, U::Vector { scalar, .. }) if scalar.kind == S::Uint => "UVec2",
+            (ParamType::Vec4F32Array(_), U::Vector { scalar, .. }) if scalar.kind == S::Float => {
+                "Vec4"
+            }
+            (ty, glsl) => panic!("{here}: `{path}` is {glsl:?} in the GLSL, {ty:?} in PARAMS"),
+        };
+        uniforms.push(GlUniform {
+            path: path.clone(),
+            offset,
+            kind,
+        });
+    }
+    let ep = parsed
+        .module
+        .entry_points
+        .iter()
+        .position(|e| e.name == entry)
+        .expect("the entry point");
+    let used = parsed.info.get_entry_point(ep);
+    for (handle, var) in parsed.module.global_variables.iter() {
+        let (Some(rb), false) = (&var.binding, used[handle].is_empty()) else {
+            continue;
+        };
+        let decl = format!("binding = {}", rb.binding);
+        assert!(
+            text.contains(&decl),
+            "{here}: `{}` is used but the GLSL declares nothing at `{decl}`",
+            var.name.as_deref().unwrap_or("?")
+        );
+    }
+    (text, uniforms)
 }
 
 /// Rewrites naga's storage buffers into the SPIR-V 1.0 / Vulkan 1.0 form: `StorageBuffer`
@@ -484,6 +626,57 @@ impl Table {
     }
 }
 
+/// Whether the OpenGL backend gets a GLSL variant for this (pixel access, FORMAT code): the
+/// buffer accesses (it copies each view into a buffer object), for every format but the BGRA
+/// ones (OpenGL has no BGRA internal format).
+fn gl_variant(access: u32, format: u32) -> bool {
+    access != ACCESS_IN_PLACE && format & !FORMAT_SRGB_BIT != LAYOUT_BGRA8
+}
+
+/// The OpenGL backend's generated table (src/gpu/opengl/programs.rs includes it): every GLSL
+/// module once (a program id is an index there), the Params uniforms every module shares,
+/// the single programs' ids and the families' variants.
+#[derive(Default)]
+struct GlTable {
+    files: Vec<String>,
+    uniforms: Option<Vec<GlUniform>>,
+    items: String,
+}
+
+impl GlTable {
+    /// Writes `file`.glsl from a parsed module and lists it; its id.
+    fn add(&mut self, out: &std::path::Path, file: &str, parsed: &Parsed, entry: &str) -> usize {
+        let (text, uniforms) = glsl(parsed, entry);
+        fs::write(out.join(format!("{file}.glsl")), text).unwrap();
+        // The engine sets them by one list: naga declares the whole block in every module
+        // whose entry reads it (finish_tiles reads none).
+        match &self.uniforms {
+            _ if uniforms.is_empty() => {}
+            None => self.uniforms = Some(uniforms),
+            Some(u) => assert_eq!(*u, uniforms, "{file}.glsl: its Params uniforms differ"),
+        }
+        self.files.push(file.to_string());
+        self.files.len() - 1
+    }
+
+    fn source(&self) -> String {
+        let mut s = String::from("// Generated by build.rs.\n");
+        s += "/// Every embedded GLSL module (file name, source); a program id is an index here.\n";
+        s += "pub static GL_MODULES: &[(&str, &str)] = &[\n";
+        for f in &self.files {
+            s += &format!(
+                "    (\"{f}\", include_str!(concat!(env!(\"OUT_DIR\"), \"/{f}.glsl\"))),\n"
+            );
+        }
+        s += "];\n/// The uniforms naga's GLSL declares for `Params` (name, PARAMS byte offset, type).\n";
+        s += "pub static GL_PARAMS: &[(&str, u32, GlParam)] = &[\n";
+        for u in self.uniforms.iter().flatten() {
+            s += &format!("    (\"{}\", {}, GlParam::{}),\n", u.path, u.offset, u.kind);
+        }
+        s + "];\n" + &self.items
+    }
+}
+
 fn main() {
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     let common = fs::read_to_string("shaders/common.wgsl").expect("shaders/common.wgsl");
@@ -495,11 +688,14 @@ fn main() {
     let prefix = |access_code: u32, format: u32| {
         colour_constants() + &interface_wgsl(access_code, format) + &common + &access(access_code)
     };
-    let write = |file: &str, stage: &str, source: &str, entry: &str| {
-        let words = storage_buffers_to_vulkan10(compile(stage, source, entry));
+    let write = |file: &str, stage: &str, source: &str, entry: &str| -> Parsed {
+        let parsed = parse(stage, source);
+        let words = storage_buffers_to_vulkan10(spirv(&parsed, entry));
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         fs::write(out.join(format!("{file}.spv")), bytes).unwrap();
+        parsed
     };
+    let mut gl = GlTable::default();
     let specialise = |(method, mode, format): (u32, u32, u32), extras: bool| {
         format!(
             "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\n"
@@ -523,8 +719,14 @@ fn main() {
             specialise((0, 0, FORMAT_CODES[0]), false)
         );
         for entry in *entries {
-            write(entry, stage, &source, entry);
+            let parsed = write(entry, stage, &source, entry);
             table.single(&entry.to_uppercase(), entry, entry, false);
+            if *entry == "finish_tiles" {
+                let id = gl.add(&out, entry, &parsed, entry);
+                gl.items += &format!(
+                    "/// The id of `{entry}.glsl`.\npub const GL_FINISH_TILES: usize = {id};\n"
+                );
+            }
         }
     }
     println!("cargo:rerun-if-changed=shaders/copy_wide.wgsl");
@@ -534,7 +736,7 @@ fn main() {
         prefix(ACCESS_WIDE, 0),
         specialise((0, 0, 0), false)
     );
-    write("copy_rows", "copy_wide", &source, "copy_rows");
+    let _ = write("copy_rows", "copy_wide", &source, "copy_rows");
     table.single("COPY_ROWS", "copy_rows", "copy_rows", false);
     // The background pass once per blur half-width (Params::blur_taps: at most 7), so that its
     // loops have constant trip counts (see shaders/background.wgsl); its half-width 0 source
@@ -549,9 +751,9 @@ fn main() {
             specialise((0, 0, FORMAT_CODES[0]), false)
         );
         let file = format!("decode_blur_{half}");
-        write(&file, "background", &source, "decode_blur");
+        let _ = write(&file, "background", &source, "decode_blur");
         if half == 0 {
-            write("decode_camera", "background", &source, "decode");
+            let _ = write("decode_camera", "background", &source, "decode");
         }
         blur_ids.push(table.add(&file, "decode_blur", true, None));
     }
@@ -560,6 +762,7 @@ fn main() {
     );
     let body = fs::read_to_string("shaders/enhance.wgsl").unwrap();
     let [general, shared_fetch] = [false, true].map(sampling);
+    let (mut gl_enhance, mut gl_classify) = (String::new(), String::new());
     let mut variants = String::from("/// (method, mode, format, access, extras, shared fetches, id) of each `enhance`\n/// variant.\n");
     variants += "pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[\n";
     for (access_code, format) in pixel_accesses() {
@@ -576,12 +779,19 @@ fn main() {
                 if shared { &shared_fetch } else { &general },
                 method_wgsl(method)
             );
-            write(&file, "enhance", &source, "enhance");
+            let parsed = write(&file, "enhance", &source, "enhance");
             let in_place = (access_code == ACCESS_IN_PLACE).then_some(format);
             let id = table.add(&file, "enhance", false, in_place);
             variants += &format!(
                 "    ({method}, {mode}, {format}, {access_code}, {extras}, {shared}, {id}),\n"
             );
+            // The general sampling only: the shared fetches are a Vulkan-side optimisation.
+            if gl_variant(access_code, format) && !shared {
+                let id = gl.add(&out, &file, &parsed, "enhance");
+                gl_enhance += &format!(
+                    "    ({method}, {mode}, {format}, {access_code}, {extras}, {shared}, {id}),\n"
+                );
+            }
         }
     }
     variants += "];\n/// (format, access, id) of each `classify` variant.\n";
@@ -594,12 +804,20 @@ fn main() {
             specialise((paper_code(), 0, format), false),
             method_wgsl(paper_code())
         );
-        write(&file, "enhance", &source, "classify");
+        let parsed = write(&file, "enhance", &source, "classify");
         let in_place = (access_code == ACCESS_IN_PLACE).then_some(format);
         let id = table.add(&file, "classify", false, in_place);
         variants += &format!("    ({format}, {access_code}, {id}),\n");
+        if gl_variant(access_code, format) {
+            let id = gl.add(&out, &file, &parsed, "classify");
+            gl_classify += &format!("    ({format}, {access_code}, {id}),\n");
+        }
     }
     variants += "];\n";
     table.items += &variants;
     fs::write(out.join("shader_table.rs"), table.source()).unwrap();
+    gl.items += "/// (method, mode, format, access, extras, shared fetches, id) of each `enhance` GLSL\n/// variant.\n";
+    gl.items += &format!("pub static GL_ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[\n{gl_enhance}];\n");
+    gl.items += &format!("/// (format, access, id) of each `classify` GLSL variant.\npub static GL_CLASSIFY_VARIANTS: &[(u32, u32, usize)] = &[\n{gl_classify}];\n");
+    fs::write(out.join("gl_shader_table.rs"), gl.source()).unwrap();
 }
