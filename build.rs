@@ -366,9 +366,10 @@ fn spirv(parsed: &Parsed, entry: &str) -> Vec<u32> {
         .unwrap_or_else(|e| panic!("{}.wgsl entry {entry}: {e}", parsed.name))
 }
 
-/// The GLSL version the OpenGL backend's programs are written in (core profile; compute
-/// shaders and `layout(binding)` on every resource).
-const GLSL_VERSION: u16 = 430;
+/// The GLSL version the OpenGL backend's programs are written in (core profile): 4.50, the
+/// first with `mix` of integer vectors by a boolean vector, which naga writes for WGSL's
+/// `select` on them.
+const GLSL_VERSION: u16 = 450;
 
 /// One item of `Params` as naga's GLSL declares it (a uniform, since GLSL outside Vulkan has
 /// no push constants): its uniform name, byte offset in PARAMS and type (a `GlParam` variant

@@ -26,6 +26,7 @@ pub mod image_copy;
 pub mod interface;
 pub mod offline;
 mod offline_in_place;
+pub mod opengl;
 pub mod overlay;
 pub mod pipeline_cache;
 pub mod pipelines;

@@ -1,0 +1,120 @@
+//! What the current context offers the backend, read with GL 1.x/3.x queries only (no call
+//! that could raise an error on an older context), before anything else runs.
+
+use super::error::GlError;
+use super::functions::{self as gl, Gl};
+use std::ffi::CStr;
+
+/// The context's version and the extensions the backend looks for.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Caps {
+    pub version: (i32, i32),
+    /// GL_KHR_parallel_shader_compile (or the ARB one): compile and link without blocking.
+    pub parallel_compile: bool,
+    /// glGetGraphicsResetStatus is there (core in 4.5).
+    pub reset_status: bool,
+    /// glGetProgramBinary gives something (at least one binary format).
+    pub program_binaries: bool,
+    /// GL_VENDOR, GL_RENDERER and GL_VERSION, which name the program binaries' cache file.
+    pub driver: String,
+}
+
+fn text(gl: &Gl, name: gl::Enum) -> String {
+    // SAFETY: glGetString is GL 1.0, valid with any current context; a non-null result is a
+    // static NUL-terminated string.
+    let p = unsafe { (gl.get_string)(name) };
+    if p.is_null() {
+        return String::new();
+    }
+    // SAFETY: see above.
+    unsafe { CStr::from_ptr(p.cast()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// "4.5 (Core Profile) Mesa ..." -> (4, 5); also "OpenGL ES 3.2 ...".
+fn parse_version(v: &str) -> Option<(i32, i32)> {
+    let digits = v.trim_start_matches(|c: char| !c.is_ascii_digit());
+    let mut parts = digits.split(|c: char| !c.is_ascii_digit());
+    Some((parts.next()?.parse().ok()?, parts.next()?.parse().ok()?))
+}
+
+impl Caps {
+    /// The current context's caps, or why the backend cannot run on it: OpenGL ES, a version
+    /// before 4.3 (no compute shaders) or before 4.5 (GLSL 4.50, direct state access,
+    /// glGetTextureSubImage).
+    pub fn check(gl: &Gl) -> Result<Caps, GlError> {
+        let version_text = text(gl, gl::VERSION);
+        if version_text.is_empty() {
+            return Err(GlError::Unsupported("no OpenGL context is current".into()));
+        }
+        if version_text.starts_with("OpenGL ES") {
+            return Err(GlError::Unsupported(format!(
+                "the context is OpenGL ES ({version_text}), not desktop OpenGL"
+            )));
+        }
+        let version = parse_version(&version_text).unwrap_or((0, 0));
+        if version < (4, 3) {
+            return Err(GlError::Unsupported(format!(
+                "the context is OpenGL {}.{}, older than 4.3 (no compute shaders)",
+                version.0, version.1
+            )));
+        }
+        // The programs are GLSL 4.50 (build.rs), and the recipe uses 4.5's direct state access
+        // and glGetTextureSubImage.
+        if version < (4, 5) {
+            return Err(GlError::Unsupported(format!(
+                "the context is OpenGL {}.{}, older than 4.5 (the layer's programs are GLSL 4.50)",
+                version.0, version.1
+            )));
+        }
+        let mut count = 0;
+        // SAFETY: GL 3.0 query into a valid i32 (the context is 4.5 or later).
+        unsafe { (gl.get_integerv)(gl::NUM_EXTENSIONS, &mut count) };
+        let extensions: Vec<String> = (0..count.max(0) as u32)
+            .filter_map(|i| {
+                // SAFETY: i < GL_NUM_EXTENSIONS; a non-null result is a static string.
+                let p = unsafe { (gl.get_stringi)(gl::EXTENSIONS, i) };
+                (!p.is_null()).then(|| {
+                    // SAFETY: non-null: a static NUL-terminated string (see above).
+                    unsafe { CStr::from_ptr(p.cast()) }
+                        .to_string_lossy()
+                        .into_owned()
+                })
+            })
+            .collect();
+        let has = |name: &str| extensions.iter().any(|e| e == name);
+        let mut formats = 0;
+        // SAFETY: GL 4.1 query into a valid i32.
+        unsafe { (gl.get_integerv)(gl::NUM_PROGRAM_BINARY_FORMATS, &mut formats) };
+        Ok(Caps {
+            version,
+            parallel_compile: has("GL_KHR_parallel_shader_compile")
+                || has("GL_ARB_parallel_shader_compile"),
+            // Core in 4.5.
+            reset_status: true,
+            program_binaries: formats > 0,
+            driver: format!(
+                "{} | {} | {version_text}",
+                text(gl, gl::VENDOR),
+                text(gl, gl::RENDERER)
+            ),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_version;
+
+    #[test]
+    fn versions_are_read_from_the_version_string() {
+        assert_eq!(
+            parse_version("4.5 (Core Profile) Mesa 22.3.6"),
+            Some((4, 5))
+        );
+        assert_eq!(parse_version("4.6.0 NVIDIA 550.54"), Some((4, 6)));
+        assert_eq!(parse_version("OpenGL ES 3.2 Mesa"), Some((3, 2)));
+        assert_eq!(parse_version("garbage"), None);
+    }
+}

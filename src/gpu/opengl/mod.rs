@@ -1,0 +1,25 @@
+//! The GPU engine on the app's OpenGL context: the same compute passes as the Vulkan path,
+//! from the same WGSL (build.rs writes GLSL 430 of the modules this backend runs, checked
+//! against src/gpu/interface.rs as the SPIR-V is), on a copy of each view in a buffer object.
+//!
+//! Called on the app's thread with its context current (the layer's xrEndFrame): no GL call is
+//! made on a thread of the layer's own, the app's GL state is put back after each call
+//! (state.rs) and its pending GL error is never read or changed. Frames pass through untouched
+//! while the programs build (programs.rs) and, with a one-sentence reason (error.rs), where the
+//! context, a format or a program cannot serve. Raw GL names and constants stay in this folder.
+
+pub mod binary_cache;
+pub mod caps;
+pub mod engine;
+pub mod error;
+pub mod format;
+pub mod functions;
+pub mod offline;
+pub mod programs;
+pub mod state;
+
+pub use engine::{GlEngine, GlTarget, GlView, Outcome};
+pub use error::GlError;
+pub use format::GlFormat;
+pub use functions::Gl;
+pub use offline::GlOffline;
