@@ -1,0 +1,709 @@
+//! The OpenGL backend on an EGL surfaceless context (Mesa's llvmpipe on the host): its output
+//! against the CPU reference (docs/algorithm.md, Conformance), per format and view mode, the
+//! background behind each pixel with GL's bottom-left origin, the app's GL state and pending
+//! error kept, and a program that fails to link.
+
+use contrastxr::algorithm::mapping::CameraMapping;
+use contrastxr::algorithm::{Method, Params, ViewMode};
+use contrastxr::gpu::opengl::GlFormat;
+use contrastxr::gpu::opengl::{GlOffline, GlTarget, GlView};
+use contrastxr::gpu::pixel_codec;
+use contrastxr::image::RgbaImage;
+use std::ffi::{c_void, CStr};
+
+const RGBA8: u32 = 0x8058;
+const SRGB8_ALPHA8: u32 = 0x8C43;
+const RGBA16F: u32 = 0x881A;
+const RGB10_A2: u32 = 0x8059;
+const RGBA16: u32 = 0x805B;
+
+fn context() -> GlOffline {
+    GlOffline::new().unwrap_or_else(|e| panic!("OpenGL context: {e}"))
+}
+
+/// A deterministic pseudo-random image (xorshift), with some black and alpha-0 pixels.
+fn noise(width: u32, height: u32, seed: u32) -> RgbaImage {
+    let mut s = seed.max(1);
+    let mut next = move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s
+    };
+    let mut img = RgbaImage::new(width, height, [0, 0, 0, 255]);
+    for p in img.pixels.iter_mut() {
+        let r = next();
+        *p = match r % 10 {
+            0 => [0, 0, 0, 255],
+            1 => [(r >> 8) as u8, (r >> 16) as u8, (r >> 24) as u8, 0],
+            _ => [(r >> 8) as u8, (r >> 16) as u8, (r >> 24) as u8, 255],
+        };
+    }
+    img
+}
+
+/// Pixels where the GL output does not conform to the CPU reference, with the CPU's own
+/// background preparation as the reference's B.
+fn nonconformant(
+    gl: &mut GlOffline,
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    mapping: &CameraMapping,
+    params: &Params,
+) -> Vec<String> {
+    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
+    let out = gl
+        .enhance_mapped(display, camera, mapping, params)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (w, h) = (display.width, display.height);
+    let bg = contrastxr::background::prepare_mapped(camera, w, h, mapping, params);
+    let mut bad = Vec::new();
+    for (i, (d, g)) in display.pixels.iter().zip(&out.pixels).enumerate() {
+        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
+        if !conformant(&trace, *g) {
+            bad.push(format!(
+                "pixel {i}: display {d:?} cpu {:?} gl {g:?}",
+                trace.out
+            ));
+        }
+    }
+    bad
+}
+
+fn check_all_methods(
+    gl: &mut GlOffline,
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    mapping: &CameraMapping,
+) {
+    for method in Method::ALL {
+        for lambda_e in [0.1, 0.4, 1.0] {
+            let params = Params {
+                method,
+                lambda_e,
+                ..Params::default()
+            };
+            let bad = nonconformant(gl, display, camera, mapping, &params);
+            assert!(
+                bad.is_empty(),
+                "{method:?} lambda_e {lambda_e}: {} of {} pixels differ, e.g. {:?}",
+                bad.len(),
+                display.pixels.len(),
+                &bad[..bad.len().min(5)]
+            );
+        }
+    }
+}
+
+#[test]
+fn opengl_matches_cpu_on_random_images() {
+    let mut gl = context();
+    let camera = noise(131, 83, 5);
+    // Width 96: rows 16-byte aligned (the wide access); 97: the narrow one.
+    for width in [96, 97] {
+        let display = noise(width, 61, 21);
+        let mapping = Params::default().camera_mapping();
+        check_all_methods(&mut gl, &display, &camera, &mapping);
+    }
+}
+
+/// A projective mapping (a registered view's homography) over a camera whose top and bottom
+/// halves differ: a pixel sampling the background of the row mirrored from it (GL's rows
+/// counted from the bottom, not turned) takes the other half's colour and fails the check.
+#[test]
+fn the_background_behind_each_pixel_is_the_one_above_or_below_it_as_displayed() {
+    let mut gl = context();
+    let mut camera = RgbaImage::new(90, 60, [230, 40, 30, 255]);
+    for (i, p) in camera.pixels.iter_mut().enumerate() {
+        if i / 90 >= 30 {
+            *p = [30, 60, 230, 255];
+        }
+    }
+    let display = RgbaImage::new(64, 48, [150, 120, 110, 255]);
+    let mapping = CameraMapping {
+        rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
+    };
+    let params = Params::default();
+    let bad = nonconformant(&mut gl, &display, &camera, &mapping, &params);
+    assert!(
+        bad.is_empty(),
+        "{} pixels differ, e.g. {:?}",
+        bad.len(),
+        &bad[..bad.len().min(3)]
+    );
+    // The two halves' backgrounds give the same content different colours.
+    let out = gl
+        .enhance_mapped(&display, &camera, &mapping, &params)
+        .unwrap();
+    let (top, bottom) = (out.pixels[64 * 2 + 32], out.pixels[64 * 45 + 32]);
+    assert_ne!(top, bottom);
+}
+
+fn linear(c: u8) -> f64 {
+    contrastxr::colour::code_to_linear(c)
+}
+
+/// An 8-bit sRGB colour as a format's raw words, the way an app would store it.
+fn encode(format: GlFormat, p: [u8; 4]) -> Vec<u32> {
+    let a = f64::from(p[3]) / 255.0;
+    let bytes = if format.pixel.srgb {
+        p.to_vec()
+    } else {
+        pixel_codec::encode(format.pixel, [linear(p[0]), linear(p[1]), linear(p[2]), a])
+    };
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+/// A pixel of a format as 8-bit sRGB codes in f64 (unrounded) and alpha in [0, 1].
+fn as_srgb(format: GlFormat, words: &[u32]) -> [f64; 4] {
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    let v = pixel_codec::decode(format.pixel, &bytes);
+    let code = |x: f32| {
+        if format.pixel.srgb {
+            f64::from(x) * 255.0
+        } else {
+            let l = f64::from(x).clamp(0.0, 1.0);
+            let s = if l <= 0.0031308 {
+                12.92 * l
+            } else {
+                1.055 * l.powf(1.0 / 2.4) - 0.055
+            };
+            s * 255.0
+        }
+    };
+    [code(v[0]), code(v[1]), code(v[2]), f64::from(v[3])]
+}
+
+/// Every format against the CPU reference (`enhance_linear` on the colour the texture stores,
+/// decoded), for every method: within one sRGB code value, widened by a step of linear 8 or
+/// 10 bits where the format's own rounding of the output is coarser. The reference's trace of
+/// branch thresholds (where f32 may legitimately take the other branch) is made for 8-bit
+/// sRGB input only, so a few pixels in a thousand may differ more.
+#[test]
+fn every_format_matches_cpu_for_every_method() {
+    let mut gl = context();
+    let camera = noise(80, 50, 9);
+    let display = noise(64, 40, 77);
+    let region = (display.width, display.height);
+    let mapping = Params::default().camera_mapping();
+    for method in Method::ALL {
+        let params = Params {
+            method,
+            ..Params::default()
+        };
+        let bg =
+            contrastxr::background::prepare_mapped(&camera, region.0, region.1, &mapping, &params);
+        for internal in [SRGB8_ALPHA8, RGBA8, RGBA16, RGBA16F, RGB10_A2] {
+            let format = GlFormat::of(internal).unwrap();
+            let words = (format.pixel.bytes_per_pixel() / 4) as usize;
+            let raw: Vec<u32> = display
+                .pixels
+                .iter()
+                .flat_map(|p| encode(format, *p))
+                .collect();
+            let got = gl
+                .enhance_raw(&raw, region, internal, &camera, &params)
+                .unwrap();
+            assert_ne!(got, raw, "{method:?} {internal:#x}: nothing changed");
+            let step = match internal {
+                RGBA8 => 1.0 / 255.0,
+                RGB10_A2 => 1.0 / 1023.0,
+                _ => 0.0,
+            };
+            let mut bad = Vec::new();
+            for (i, (g, d)) in got
+                .chunks_exact(words)
+                .zip(raw.chunks_exact(words))
+                .enumerate()
+            {
+                let bytes: Vec<u8> = d.iter().flat_map(|w| w.to_le_bytes()).collect();
+                let input = pixel_codec::decode(format.pixel, &bytes);
+                let lin = |v: f32| {
+                    if format.pixel.srgb {
+                        contrastxr::colour::code_to_linear((v * 255.0).round() as u8)
+                    } else {
+                        f64::from(v)
+                    }
+                };
+                let d_lin = glam::DVec3::new(lin(input[0]), lin(input[1]), lin(input[2]));
+                let want = contrastxr::algorithm::enhance_linear(
+                    d_lin,
+                    f64::from(input[3]),
+                    bg.linear[i],
+                    bg.scaled[i],
+                    &params,
+                )
+                .unwrap_or(d_lin);
+                let g = as_srgb(format, g);
+                let ok = (0..3).all(|c| {
+                    let l = want[c];
+                    let span = (srgb_code(l + step) - srgb_code(l))
+                        .max(srgb_code(l) - srgb_code(l - step));
+                    (g[c] - srgb_code(l)).abs() <= 1.0 + span
+                });
+                if !ok || (g[3] - f64::from(input[3])).abs() > 1e-6 {
+                    bad.push(format!(
+                        "pixel {i}: got {g:?}, want {:?}",
+                        want.to_array().map(srgb_code)
+                    ));
+                }
+            }
+            assert!(
+                bad.len() * 1000 <= 2 * got.len() / words,
+                "{method:?} {internal:#x}: {} pixels differ, e.g. {:?}",
+                bad.len(),
+                &bad[..bad.len().min(4)]
+            );
+        }
+    }
+}
+
+/// A linear value as an sRGB code in f64 (unrounded), clamped to [0, 1] first.
+fn srgb_code(l: f64) -> f64 {
+    let l = l.clamp(0.0, 1.0);
+    let s = if l <= 0.0031308 {
+        12.92 * l
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
+    s * 255.0
+}
+
+fn with_mode(mode: ViewMode) -> Params {
+    Params {
+        mode,
+        ..Params::default()
+    }
+}
+
+#[test]
+fn off_mode_leaves_every_pixel_as_it_was() {
+    let mut gl = context();
+    let display = noise(50, 30, 31);
+    let camera = noise(64, 40, 2);
+    let out = gl
+        .enhance(&display, &camera, &with_mode(ViewMode::Off))
+        .unwrap();
+    assert_eq!(out, display);
+}
+
+#[test]
+fn split_mode_is_original_left_enhanced_right_with_a_white_divider() {
+    let mut gl = context();
+    let (w, h) = (45, 37);
+    let display = noise(w, h, 41);
+    let camera = noise(70, 50, 13);
+    for method in Method::ALL {
+        let enhanced = gl
+            .enhance(
+                &display,
+                &camera,
+                &Params {
+                    method,
+                    ..Params::default()
+                },
+            )
+            .unwrap();
+        let split = gl
+            .enhance(
+                &display,
+                &camera,
+                &Params {
+                    method,
+                    ..with_mode(ViewMode::Split)
+                },
+            )
+            .unwrap();
+        let half = w / 2;
+        let mut right_changed = 0;
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let (d, s) = (display.pixels[i], split.pixels[i]);
+                if x + 1 == half || x == half {
+                    assert_eq!(
+                        s,
+                        [255, 255, 255, d[3]],
+                        "{method:?}: divider at ({x}, {y})"
+                    );
+                } else if x < half {
+                    assert_eq!(s, d, "{method:?}: left half changed at ({x}, {y})");
+                } else {
+                    assert_eq!(
+                        s, enhanced.pixels[i],
+                        "{method:?}: right half at ({x}, {y})"
+                    );
+                    right_changed += usize::from(s != d);
+                }
+            }
+        }
+        assert!(
+            right_changed > 100,
+            "{method:?}: the right half was not enhanced"
+        );
+    }
+}
+
+#[test]
+fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
+    let mut gl = context();
+    let display = noise(60, 40, 51);
+    let camera = noise(80, 50, 17);
+    for method in Method::ALL {
+        let params = Params {
+            method,
+            ..Params::default()
+        };
+        let enhanced = gl.enhance(&display, &camera, &params).unwrap();
+        let heat = gl
+            .enhance(
+                &display,
+                &camera,
+                &Params {
+                    method,
+                    ..with_mode(ViewMode::Heatmap)
+                },
+            )
+            .unwrap();
+        let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+        let mask = contrastxr::evaluate::metric::enhanced_mask(&display, &enhanced, &bg);
+        let (mut marked, mut disagree) = (0, 0);
+        for (i, (d, hm)) in display.pixels.iter().zip(&heat.pixels).enumerate() {
+            let cyan = *hm == [0, 255, 255, d[3]];
+            assert!(
+                cyan || hm == d,
+                "{method:?} pixel {i}: {hm:?} is neither cyan nor the original"
+            );
+            marked += usize::from(cyan);
+            disagree += usize::from(cyan != mask[i]);
+        }
+        assert!(marked > 100, "{method:?}: only {marked} pixels marked");
+        // f32 against f64 may flip a pixel sitting exactly on a criterion threshold.
+        assert!(
+            disagree * 1000 <= display.pixels.len(),
+            "{method:?}: {disagree} pixels disagree"
+        );
+    }
+}
+
+#[test]
+fn background_mode_shows_the_prepared_background_on_every_pixel() {
+    let mut gl = context();
+    let display = noise(48, 27, 61);
+    let camera = noise(90, 60, 19);
+    let params = with_mode(ViewMode::Background);
+    let out = gl.enhance(&display, &camera, &params).unwrap();
+    let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+    for (i, (d, o)) in display.pixels.iter().zip(&out.pixels).enumerate() {
+        let want =
+            contrastxr::colour::linear_to_srgb8(bg.linear[i] * f64::from(params.transmittance));
+        for k in 0..3 {
+            assert!(
+                o[k].abs_diff(want[k]) <= 1,
+                "pixel {i}: {o:?}, CPU background {want:?}"
+            );
+        }
+        assert_eq!(o[3], d[3], "alpha changed");
+    }
+}
+
+#[test]
+fn a_format_it_does_not_handle_is_named_and_left_untouched() {
+    let mut gl = context();
+    let camera = noise(16, 16, 3);
+    let err = gl
+        .enhance_raw(
+            &[0x1234_5678; 64],
+            (8, 8),
+            0x8814,
+            &camera,
+            &Params::default(),
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("0x8814") && err.lines().count() == 1, "{err}");
+}
+
+fn load(gl: &GlOffline, name: &CStr) -> *const c_void {
+    let p = gl.proc_address(name);
+    assert!(!p.is_null(), "{name:?}");
+    p
+}
+
+macro_rules! app_gl {
+    ($($field:ident = $name:literal: fn($($arg:ty),*) $(-> $ret:ty)?;)*) => {
+        /// The GL calls the state test makes as the app, through the offline context's loader.
+        struct AppGl {
+            $($field: unsafe extern "system" fn($($arg),*) $(-> $ret)?,)*
+        }
+
+        fn app_gl(gl: &GlOffline) -> AppGl {
+            AppGl {
+                $($field: {
+                    let p = load(gl, $name);
+                    // SAFETY: the address of the GL function of that name, whose C signature
+                    // is the one declared.
+                    unsafe {
+                        std::mem::transmute::<*const c_void, unsafe extern "system" fn($($arg),*) $(-> $ret)?>(p)
+                    }
+                },)*
+            }
+        }
+    };
+}
+
+app_gl! {
+    get_integerv = c"glGetIntegerv": fn(u32, *mut i32);
+    get_integeri_v = c"glGetIntegeri_v": fn(u32, u32, *mut i32);
+    get_integer64i_v = c"glGetInteger64i_v": fn(u32, u32, *mut i64);
+    is_enabled = c"glIsEnabled": fn(u32) -> u8;
+    enable = c"glEnable": fn(u32);
+    get_error = c"glGetError": fn() -> u32;
+    gen = c"glCreateBuffers": fn(i32, *mut u32);
+    bind_buffer = c"glBindBuffer": fn(u32, u32);
+    bind_buffer_range = c"glBindBufferRange": fn(u32, u32, u32, isize, isize);
+    named_buffer_data = c"glNamedBufferData": fn(u32, isize, *const c_void, u32);
+    create_textures = c"glCreateTextures": fn(u32, i32, *mut u32);
+    texture_storage_2d = c"glTextureStorage2D": fn(u32, i32, u32, i32, i32);
+    active_texture = c"glActiveTexture": fn(u32);
+    bind_texture = c"glBindTexture": fn(u32, u32);
+    create_samplers = c"glCreateSamplers": fn(i32, *mut u32);
+    bind_sampler = c"glBindSampler": fn(u32, u32);
+    bind_image_texture = c"glBindImageTexture": fn(u32, u32, i32, u8, i32, u32, u32);
+    create_shader_programv = c"glCreateShaderProgramv": fn(u32, i32, *const *const i8) -> u32;
+    use_program = c"glUseProgram": fn(u32);
+    create_program_pipelines = c"glCreateProgramPipelines": fn(i32, *mut u32);
+    bind_program_pipeline = c"glBindProgramPipeline": fn(u32);
+    create_framebuffers = c"glCreateFramebuffers": fn(i32, *mut u32);
+    bind_framebuffer = c"glBindFramebuffer": fn(u32, u32);
+    pixel_storei = c"glPixelStorei": fn(u32, i32);
+}
+
+/// Every value of the state the recipe may touch, as the app reads it.
+#[derive(Debug, PartialEq)]
+struct AppState {
+    ints: Vec<(u32, i32)>,
+    indexed: Vec<(u32, u32, i64)>,
+    srgb: bool,
+}
+
+fn read_state(a: &AppGl) -> AppState {
+    let single = [
+        0x8B8D, // CURRENT_PROGRAM
+        0x825A, // PROGRAM_PIPELINE_BINDING
+        0x84E0, // ACTIVE_TEXTURE
+        0x8069, // TEXTURE_BINDING_2D (of the active unit)
+        0x8919, // SAMPLER_BINDING (of the active unit)
+        0x90D3, // SHADER_STORAGE_BUFFER_BINDING
+        0x8A28, // UNIFORM_BUFFER_BINDING
+        0x88ED, // PIXEL_PACK_BUFFER_BINDING
+        0x88EF, // PIXEL_UNPACK_BUFFER_BINDING
+        0x90EF, // DISPATCH_INDIRECT_BUFFER_BINDING
+        0x8CA6, // DRAW_FRAMEBUFFER_BINDING
+        0x8CAA, // READ_FRAMEBUFFER_BINDING
+        0x0D05, 0x0D02, 0x0D03, 0x0D04, 0x806B, 0x806C, 0x0D00, 0x0D01, // PACK_*
+        0x0CF5, 0x0CF2, 0x0CF3, 0x0CF4, 0x806D, 0x806E, 0x0CF0, 0x0CF1, // UNPACK_*
+    ];
+    let mut ints = Vec::new();
+    for unit in [0x84C0 + 5, 0x84C0 + 3] {
+        // SAFETY: a valid texture unit; the app's active unit is put back by the loop's end.
+        unsafe { (a.active_texture)(unit) };
+        for q in [0x8069, 0x8919] {
+            let mut v = 0;
+            // SAFETY: a valid single-valued query.
+            unsafe { (a.get_integerv)(q, &mut v) };
+            ints.push((unit * 0x10000 + q, v));
+        }
+    }
+    for q in single {
+        let mut v = 0;
+        // SAFETY: a valid single-valued query.
+        unsafe { (a.get_integerv)(q, &mut v) };
+        ints.push((q, v));
+    }
+    let mut indexed = Vec::new();
+    for slot in 0..8 {
+        for (binding, start, size) in [(0x90D3, 0x90D4, 0x90D5), (0x8A28, 0x8A29, 0x8A2A)] {
+            let (mut b, mut st, mut sz) = (0, 0i64, 0i64);
+            // SAFETY: indexed queries of bindings below the 4.5 minimums.
+            unsafe {
+                (a.get_integeri_v)(binding, slot, &mut b);
+                (a.get_integer64i_v)(start, slot, &mut st);
+                (a.get_integer64i_v)(size, slot, &mut sz);
+            }
+            indexed.extend([
+                (binding, slot, i64::from(b)),
+                (start, slot, st),
+                (size, slot, sz),
+            ]);
+        }
+        let mut image = 0;
+        // SAFETY: IMAGE_BINDING_NAME of an image unit below the minimum of 8.
+        unsafe { (a.get_integeri_v)(0x8F3A, slot, &mut image) };
+        indexed.push((0x8F3A, slot, i64::from(image)));
+    }
+    AppState {
+        ints,
+        indexed,
+        // SAFETY: FRAMEBUFFER_SRGB is a capability of core contexts.
+        srgb: unsafe { (a.is_enabled)(0x8DB9) } != 0,
+    }
+}
+
+/// Non-default values of every piece of state the recipe touches (and of the image units and
+/// uniform buffers it must not), and a pending GL_INVALID_ENUM: after the call the app reads
+/// every value back unchanged, and the same pending error, and then none.
+#[test]
+fn the_apps_gl_state_and_pending_error_survive_the_call() {
+    let mut gl = context();
+    let a = app_gl(&gl);
+    let camera = noise(64, 40, 7);
+    let display = noise(40, 24, 8);
+    let params = Params::default();
+    gl.set_camera(&camera, &params).unwrap();
+    let bytes: Vec<u8> = display.pixels.iter().flatten().copied().collect();
+    let texture = gl.create_texture(SRGB8_ALPHA8, (40, 24), &bytes).unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, 40, 24),
+        mapping: params.camera_mapping(),
+    };
+    // Build the programs first, so the call below runs the whole recipe.
+    gl.enhance_views(&[view], &params).unwrap();
+    let source = c"#version 450\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
+    // SAFETY: the context is current on this thread; every name passed is made here, every
+    // enum valid for its call (but the glEnable, which raises GL_INVALID_ENUM on purpose).
+    unsafe {
+        let mut buffers = [0u32; 8];
+        (a.gen)(8, buffers.as_mut_ptr());
+        for &b in &buffers {
+            (a.named_buffer_data)(b, 4096, std::ptr::null(), 0x88EA);
+        }
+        (a.bind_buffer_range)(0x90D2, 2, buffers[0], 256, 512);
+        (a.bind_buffer_range)(0x90D2, 3, buffers[1], 0, 1024);
+        (a.bind_buffer_range)(0x8A11, 0, buffers[2], 0, 256);
+        (a.bind_buffer)(0x90D2, buffers[3]);
+        (a.bind_buffer)(0x8A11, buffers[4]);
+        (a.bind_buffer)(0x88EB, buffers[5]);
+        (a.bind_buffer)(0x88EC, buffers[6]);
+        (a.bind_buffer)(0x90EE, buffers[7]);
+        let mut textures = [0u32; 2];
+        (a.create_textures)(0x0DE1, 2, textures.as_mut_ptr());
+        for &t in &textures {
+            (a.texture_storage_2d)(t, 1, 0x8058, 4, 4);
+        }
+        let mut sampler = 0;
+        (a.create_samplers)(1, &mut sampler);
+        (a.active_texture)(0x84C0 + 5);
+        (a.bind_texture)(0x0DE1, textures[0]);
+        (a.bind_sampler)(5, sampler);
+        (a.active_texture)(0x84C0 + 3);
+        (a.bind_texture)(0x0DE1, textures[1]);
+        (a.bind_image_texture)(2, textures[1], 0, 0, 0, 0x88B8, 0x8058);
+        let program = (a.create_shader_programv)(0x91B9, 1, &source.as_ptr());
+        (a.use_program)(program);
+        let mut pipeline = 0;
+        (a.create_program_pipelines)(1, &mut pipeline);
+        (a.bind_program_pipeline)(pipeline);
+        let mut framebuffers = [0u32; 2];
+        (a.create_framebuffers)(2, framebuffers.as_mut_ptr());
+        (a.bind_framebuffer)(0x8CA9, framebuffers[0]);
+        (a.bind_framebuffer)(0x8CA8, framebuffers[1]);
+        (a.enable)(0x8DB9);
+        for (p, v) in [
+            (0x0D05, 8),
+            (0x0D02, 7),
+            (0x0D03, 2),
+            (0x0D04, 3),
+            (0x0CF5, 2),
+            (0x0CF2, 9),
+            (0x0CF3, 1),
+            (0x0CF4, 5),
+            (0x806B, 1),
+            (0x806D, 2),
+            (0x806C, 3),
+            (0x806E, 4),
+        ] {
+            (a.pixel_storei)(p, v);
+        }
+        assert_eq!((a.get_error)(), 0, "the test's own set-up raised an error");
+        (a.enable)(0xFFFF);
+    }
+    let before = read_state(&a);
+    let mut other = params.clone();
+    other.lambda_e = 0.7;
+    gl.set_camera(&noise(64, 40, 99), &other).unwrap();
+    gl.enhance_views(&[view], &other).unwrap();
+    let after = read_state(&a);
+    assert_eq!(after, before, "the app's GL state changed");
+    // SAFETY: glGetError takes no arguments.
+    let (first, second) = unsafe { ((a.get_error)(), (a.get_error)()) };
+    assert_eq!(
+        first, 0x0500,
+        "the app's pending GL_INVALID_ENUM was not kept"
+    );
+    assert_eq!(second, 0, "an error was left behind");
+    // With no error pending, the call raises none.
+    gl.enhance_views(&[view], &params).unwrap();
+    // SAFETY: glGetError takes no arguments.
+    let error = unsafe { (a.get_error)() };
+    assert_eq!(error, 0, "the recipe raised a GL error");
+    let out = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
+    assert_ne!(out, bytes, "the view was not enhanced");
+}
+
+/// Run by `a_program_that_fails_to_link_leaves_the_texture_untouched` in a process of its own
+/// with the fault point armed (it is read once per process) and an empty program cache.
+#[test]
+#[ignore = "run by a_program_that_fails_to_link_leaves_the_texture_untouched"]
+fn link_failure_child() {
+    assert_eq!(
+        std::env::var("CONTRASTXR_FAULT").as_deref(),
+        Ok("gl-program-link")
+    );
+    let mut gl = context();
+    let camera = noise(32, 32, 4);
+    let display = noise(24, 16, 5);
+    let params = Params::default();
+    gl.set_camera(&camera, &params).unwrap();
+    let bytes: Vec<u8> = display.pixels.iter().flatten().copied().collect();
+    let texture = gl.create_texture(SRGB8_ALPHA8, (24, 16), &bytes).unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, 24, 16),
+        mapping: params.camera_mapping(),
+    };
+    let err = gl.enhance_views(&[view], &params).unwrap_err().to_string();
+    assert!(
+        err.contains("did not build") && err.lines().count() == 1,
+        "{err}"
+    );
+    println!("error: {err}");
+    let out = gl.read_texture(texture, SRGB8_ALPHA8, (24, 16)).unwrap();
+    assert_eq!(out, bytes, "the texture changed");
+}
+
+#[test]
+fn a_program_that_fails_to_link_leaves_the_texture_untouched() {
+    let cache = std::env::temp_dir().join(format!("contrastxr-gl-link-{}", std::process::id()));
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "link_failure_child", "--ignored", "--nocapture"])
+        .env("CONTRASTXR_FAULT", "gl-program-link")
+        .env("XDG_CACHE_HOME", &cache)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&cache);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("1 passed"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
