@@ -707,3 +707,41 @@ fn a_program_that_fails_to_link_leaves_the_texture_untouched() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// `contrastxr enhance --engine opengl` runs the OpenGL backend on its offline context and
+/// agrees with the CPU reference within one code value on a sample scene.
+#[test]
+fn cli_opengl_and_cpu_engines_agree_on_a_sample_scene() {
+    let dir = std::env::temp_dir().join(format!("contrastxr-cli-gl-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let samples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
+    let display = samples.join("display-text-swatches.png");
+    let background = samples.join("background-blue-sky.png");
+    let mut outs = Vec::new();
+    for engine in ["opengl", "cpu"] {
+        let out = dir.join(format!("{engine}.png"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+            .args(["enhance", "--engine", engine, "--display"])
+            .arg(&display)
+            .arg("--background")
+            .arg(&background)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{engine}: {stderr}");
+        outs.push(RgbaImage::load_png(&out).unwrap());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let input = RgbaImage::load_png(&display).unwrap();
+    let (gl, cpu) = (&outs[0], &outs[1]);
+    assert_ne!(gl, &input, "the OpenGL engine changed nothing");
+    let worst = gl
+        .pixels
+        .iter()
+        .zip(&cpu.pixels)
+        .flat_map(|(g, c)| (0..4).map(move |k| g[k].abs_diff(c[k])))
+        .max();
+    assert!(worst <= Some(1), "engines differ by {worst:?} code values");
+}

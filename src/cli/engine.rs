@@ -1,6 +1,8 @@
-//! The one place the CLI chooses between the GPU engine and the CPU reference.
+//! The one place the CLI chooses between the GPU engine (Vulkan, or OpenGL on an offline EGL
+//! context) and the CPU reference.
 
 use contrastxr::algorithm::Params;
+use contrastxr::gpu::opengl::GlOffline;
 use contrastxr::gpu::OfflineEngine;
 use contrastxr::image::RgbaImage;
 use contrastxr::reference;
@@ -9,6 +11,8 @@ use contrastxr::reference;
 pub enum Engine {
     Gpu,
     Cpu,
+    /// The OpenGL backend, as the layer runs it for OpenGL apps.
+    OpenGl,
 }
 
 impl Engine {
@@ -16,6 +20,7 @@ impl Engine {
         match name {
             "gpu" => Some(Engine::Gpu),
             "cpu" => Some(Engine::Cpu),
+            "opengl" => Some(Engine::OpenGl),
             _ => None,
         }
     }
@@ -24,6 +29,7 @@ impl Engine {
         match self {
             Engine::Gpu => "gpu",
             Engine::Cpu => "cpu",
+            Engine::OpenGl => "opengl",
         }
     }
 }
@@ -39,6 +45,9 @@ pub fn run(
         Engine::Cpu => Ok(reference::enhance_with_camera(display, camera, params)),
         Engine::Gpu => OfflineEngine::new()
             .and_then(|mut gpu| gpu.enhance(display, camera, params))
+            .map_err(|e| e.to_string()),
+        Engine::OpenGl => GlOffline::new()
+            .and_then(|mut gl| gl.enhance(display, camera, params))
             .map_err(|e| e.to_string()),
     }
 }

@@ -87,7 +87,7 @@ pub fn method_usage() -> String {
 }
 /// The help of [`ENGINE_OPTIONS`], for the commands that run the method.
 pub const ENGINE_USAGE: &str =
-    "  --engine E               gpu|cpu (gpu; cpu is the exact, slower reference)\n";
+    "  --engine E               gpu|cpu|opengl (gpu; cpu is the exact, slower reference; opengl\n                           the layer's OpenGL backend on an offline EGL context)\n";
 
 /// The option [`engine`] reads.
 pub const ENGINE_OPTIONS: &[Opt] = &[Opt::value("--engine", "E")];
@@ -117,8 +117,9 @@ pub fn params(args: &mut Args) -> Result<Params, CliError> {
 pub fn engine(args: &mut Args) -> Result<Engine, CliError> {
     match args.value(&["--engine"])? {
         None => Ok(Engine::Gpu),
-        Some(v) => Engine::parse(&v)
-            .ok_or_else(|| CliError::Failure(format!("--engine must be gpu or cpu, got '{v}'"))),
+        Some(v) => Engine::parse(&v).ok_or_else(|| {
+            CliError::Failure(format!("--engine must be gpu, cpu or opengl, got '{v}'"))
+        }),
     }
 }
 

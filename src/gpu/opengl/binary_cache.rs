@@ -7,7 +7,6 @@
 //! an optimisation.
 
 use super::functions::{self as gl, Gl};
-use super::programs::source_hash;
 use crate::gpu::pipeline_cache;
 use std::collections::HashMap;
 
@@ -22,6 +21,13 @@ pub struct BinaryCache {
     entries: HashMap<u64, (u32, Vec<u8>)>,
     /// Entries were added since the file was read.
     changed: bool,
+}
+
+/// FNV-1a of a program's source (its key in the cache) or of the driver string.
+pub fn source_hash(source: &str) -> u64 {
+    source.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 /// The file's name: "pipelines-gl-" and a hash of the driver string, so the pipeline

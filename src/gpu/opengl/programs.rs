@@ -8,7 +8,7 @@
 //! work is sliced across frames). A linked program's binary (glGetProgramBinary) goes into the
 //! binary cache (binary_cache.rs), from which a later process links it without compiling.
 
-use super::binary_cache::BinaryCache;
+use super::binary_cache::{source_hash, BinaryCache};
 use super::caps::Caps;
 use super::error::GlError;
 use super::functions::{self as gl, Gl};
@@ -45,13 +45,6 @@ pub struct Programs {
     slots: Vec<Slot>,
     parallel: bool,
     cache: BinaryCache,
-}
-
-/// FNV-1a of a module's source: its key in the binary cache.
-pub fn source_hash(source: &str) -> u64 {
-    source.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
 }
 
 fn info_log(g: &Gl, object: u32, program: bool) -> String {
