@@ -745,3 +745,74 @@ fn cli_opengl_and_cpu_engines_agree_on_a_sample_scene() {
         .max();
     assert!(worst <= Some(1), "engines differ by {worst:?} code values");
 }
+
+/// Run by `frames_pass_through_while_programs_build_and_binaries_are_kept` in a process of its
+/// own with an empty cache folder (the program binaries' and Mesa's).
+#[test]
+#[ignore = "run by frames_pass_through_while_programs_build_and_binaries_are_kept"]
+fn compile_child() {
+    use contrastxr::gpu::opengl::Outcome;
+    let camera = noise(32, 32, 4);
+    let display = noise(24, 16, 5);
+    let params = Params::default();
+    let bytes: Vec<u8> = display.pixels.iter().flatten().copied().collect();
+    let first_call = |gl: &mut GlOffline| {
+        gl.set_camera(&camera, &params).unwrap();
+        let texture = gl.create_texture(SRGB8_ALPHA8, (24, 16), &bytes).unwrap();
+        let view = GlView {
+            texture,
+            target: GlTarget::Texture2D,
+            internal_format: SRGB8_ALPHA8,
+            rect: (0, 0, 24, 16),
+            mapping: params.camera_mapping(),
+        };
+        // SAFETY: the offline context is current on this thread; the texture is its own.
+        let outcome = unsafe { gl.engine().enhance(&[view], &params) }.unwrap();
+        let out = gl.read_texture(texture, SRGB8_ALPHA8, (24, 16)).unwrap();
+        (outcome, out, view)
+    };
+    let mut gl = context();
+    let (outcome, out, view) = first_call(&mut gl);
+    assert_eq!(
+        outcome,
+        Outcome::Compiling,
+        "the first call waited for the programs"
+    );
+    assert_eq!(
+        out, bytes,
+        "a frame changed while its programs were building"
+    );
+    gl.enhance_views(&[view], &params).unwrap();
+    drop(gl);
+    let mut gl = context();
+    let (outcome, out, _) = first_call(&mut gl);
+    assert_eq!(outcome, Outcome::Enhanced, "the binaries were not kept");
+    assert_ne!(out, bytes);
+    println!("both calls as expected");
+}
+
+#[test]
+fn frames_pass_through_while_programs_build_and_binaries_are_kept() {
+    let cache = std::env::temp_dir().join(format!("contrastxr-gl-build-{}", std::process::id()));
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "compile_child", "--ignored", "--nocapture"])
+        .env("XDG_CACHE_HOME", &cache)
+        .output()
+        .unwrap();
+    let files: Vec<_> = std::fs::read_dir(cache.join("contrastxr"))
+        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.file_name()).collect())
+        .unwrap_or_default();
+    let _ = std::fs::remove_dir_all(&cache);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("1 passed"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        files
+            .iter()
+            .any(|f| f.to_string_lossy().starts_with("pipelines-gl-")),
+        "no program binary file: {files:?}"
+    );
+}

@@ -3,9 +3,10 @@
 //!
 //! A frame call asks for the programs its views need (`Programs::ready`); those not ready are
 //! started or advanced, and the frame passes through until all are. With
-//! GL_KHR_parallel_shader_compile the driver compiles and links on its own threads and the call
-//! only polls GL_COMPLETION_STATUS; without it, each call compiles and links one program (the
-//! work is sliced across frames). A linked program's binary (glGetProgramBinary) goes into the
+//! GL_KHR_parallel_shader_compile the driver may compile and link on its own threads: the call
+//! then only polls GL_COMPLETION_STATUS, and starts further builds while starting them stays
+//! cheap (START_SLICE). A driver without it, or one that builds inside the calls anyway, builds
+//! one program per call: the work is sliced across frames. A linked program's binary (glGetProgramBinary) goes into the
 //! binary cache (binary_cache.rs), from which a later process links it without compiling.
 
 use super::binary_cache::{source_hash, BinaryCache};
@@ -14,6 +15,26 @@ use super::error::GlError;
 use super::functions::{self as gl, Gl};
 use crate::gpu::push_constants::PushConstants;
 use std::ffi::CString;
+use std::time::{Duration, Instant};
+
+/// How long one call may spend starting builds before it leaves the rest to the next calls:
+/// a driver that compiles inside glCompileShader / glLinkProgram (llvmpipe does, although it
+/// offers GL_KHR_parallel_shader_compile) then builds one program per call.
+const START_SLICE: Duration = Duration::from_millis(2);
+
+/// What one call has started so far.
+struct Budget {
+    since: Instant,
+    started: u32,
+}
+
+impl Budget {
+    /// Whether another build may start in this call: the first always; more only with
+    /// parallel compilation and while starting them has stayed within START_SLICE.
+    fn may_start(&self, parallel: bool) -> bool {
+        self.started == 0 || (parallel && self.since.elapsed() < START_SLICE)
+    }
+}
 
 /// How a Params uniform is set (naga's GLSL type for the PARAMS field).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -97,7 +118,10 @@ impl Programs {
     /// doc: without parallel compilation at most one is built per call). The first that
     /// failed is the error.
     pub fn ready(&mut self, g: &Gl, ids: &[usize]) -> Result<bool, GlError> {
-        let mut budget = 1;
+        let mut budget = Budget {
+            since: Instant::now(),
+            started: 0,
+        };
         let mut all = true;
         for &id in ids {
             self.advance(g, id, &mut budget);
@@ -118,7 +142,7 @@ impl Programs {
         }
     }
 
-    fn advance(&mut self, g: &Gl, id: usize, budget: &mut u32) {
+    fn advance(&mut self, g: &Gl, id: usize, budget: &mut Budget) {
         let (name, source) = GL_MODULES[id];
         let fail = |log: String| {
             Slot::Failed(GlError::Program {
@@ -134,10 +158,10 @@ impl Programs {
                         self.slots[id] = Slot::Ready(p);
                         return;
                     }
-                    if !self.parallel && *budget == 0 {
+                    if !budget.may_start(self.parallel) {
                         return;
                     }
-                    *budget = budget.saturating_sub(1);
+                    budget.started += 1;
                     self.start(g, source)
                 }
                 &Slot::Compiling { shader, program } => {
