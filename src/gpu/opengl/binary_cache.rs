@@ -153,12 +153,15 @@ impl BinaryCache {
         }
     }
 
-    /// Writes the file if entries were added (atomically; see gpu/pipeline_cache.rs).
-    pub fn save(&mut self) {
+    /// Writes the file if entries were added (atomically; see gpu/pipeline_cache.rs), with only
+    /// the entries `current` names (the sources of this build: a changed shader's old binaries
+    /// are dropped, so the file does not grow from build to build).
+    pub fn save(&mut self, current: &dyn Fn(u64) -> bool) {
         if !self.changed {
             return;
         }
         self.changed = false;
+        self.entries.retain(|&hash, _| current(hash));
         let Some(dir) = pipeline_cache::directory() else {
             return;
         };

@@ -258,7 +258,11 @@ impl Programs {
 
     /// Writes the binary cache's file where programs were added (see binary_cache.rs).
     pub fn save_cache(&mut self) {
-        self.cache.save();
+        let current: std::collections::HashSet<u64> = GL_MODULES
+            .iter()
+            .map(|(_, source)| source_hash(source))
+            .collect();
+        self.cache.save(&|hash| current.contains(&hash));
     }
 
     /// Deletes every program (the context current).
