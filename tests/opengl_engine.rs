@@ -816,3 +816,93 @@ fn frames_pass_through_while_programs_build_and_binaries_are_kept() {
         "no program binary file: {files:?}"
     );
 }
+
+/// Bottom-first rows of an image (as GL stores it).
+fn bottom_first(img: &RgbaImage) -> Vec<u8> {
+    let bytes: Vec<u8> = img.pixels.iter().flatten().copied().collect();
+    bytes
+        .chunks(img.width as usize * 4)
+        .rev()
+        .flatten()
+        .copied()
+        .collect()
+}
+
+/// A view that is a part of its texture (an OpenXR imageRect away from the corner, as the
+/// right eye of a side-by-side swapchain) and a layer of an array texture: the region is
+/// enhanced exactly as the same pixels alone, and nothing outside it changes.
+#[test]
+fn a_region_of_a_texture_and_a_layer_of_an_array_are_enhanced_in_place() {
+    let mut gl = context();
+    let camera = noise(70, 50, 12);
+    let view_img = noise(32, 20, 13);
+    let params = Params::default();
+    let mapping = CameraMapping {
+        rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
+    };
+    let alone = gl
+        .enhance_mapped(&view_img, &camera, &mapping, &params)
+        .unwrap();
+    let want = bottom_first(&alone);
+    let (w, h) = (32usize, 20usize);
+    // A 67x27 texture with the view at (35, 5) in GL's coordinates.
+    let (tw, th, x0, y0) = (67usize, 27usize, 35usize, 5usize);
+    let filler = noise(tw as u32, th as u32, 14);
+    let mut texels = bottom_first(&filler);
+    let view_rows = bottom_first(&view_img);
+    for r in 0..h {
+        let dst = ((y0 + r) * tw + x0) * 4;
+        texels[dst..dst + w * 4].copy_from_slice(&view_rows[r * w * 4..(r + 1) * w * 4]);
+    }
+    gl.set_camera(&camera, &params).unwrap();
+    let texture = gl
+        .create_texture(SRGB8_ALPHA8, (tw as u32, th as u32), &texels)
+        .unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (x0 as u32, y0 as u32, w as u32, h as u32),
+        mapping,
+    };
+    gl.enhance_views(&[view], &params).unwrap();
+    let out = gl
+        .read_texture(texture, SRGB8_ALPHA8, (tw as u32, th as u32))
+        .unwrap();
+    for y in 0..th {
+        for x in 0..tw {
+            let at = (y * tw + x) * 4;
+            let inside = (x0..x0 + w).contains(&x) && (y0..y0 + h).contains(&y);
+            let expected = if inside {
+                let k = ((y - y0) * w + (x - x0)) * 4;
+                &want[k..k + 4]
+            } else {
+                &texels[at..at + 4]
+            };
+            assert_eq!(
+                &out[at..at + 4],
+                expected,
+                "texel ({x}, {y}), inside {inside}"
+            );
+        }
+    }
+    // Layer 1 of two.
+    let other = bottom_first(&noise(32, 20, 15));
+    let layers = [other.clone(), view_rows].concat();
+    let array = gl
+        .create_array_texture(SRGB8_ALPHA8, (32, 20), 2, &layers)
+        .unwrap();
+    let view = GlView {
+        texture: array,
+        target: GlTarget::Texture2DArray { layer: 1 },
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, 32, 20),
+        mapping,
+    };
+    gl.enhance_views(&[view], &params).unwrap();
+    let out = gl
+        .read_texture_layers(array, SRGB8_ALPHA8, (32, 20), 2)
+        .unwrap();
+    assert_eq!(&out[..other.len()], &other[..], "layer 0 changed");
+    assert_eq!(&out[other.len()..], &want[..], "layer 1");
+}

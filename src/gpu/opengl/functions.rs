@@ -94,6 +94,7 @@ gl_functions! {
     create_textures = "glCreateTextures": fn(Enum, Sizei, *mut Uint);
     texture_storage_2d = "glTextureStorage2D": fn(Uint, Sizei, Enum, Sizei, Sizei);
     texture_parameteri = "glTextureParameteri": fn(Uint, Enum, Int);
+    texture_storage_3d = "glTextureStorage3D": fn(Uint, Sizei, Enum, Sizei, Sizei, Sizei);
     texture_sub_image_2d = "glTextureSubImage2D": fn(Uint, Int, Int, Int, Sizei, Sizei, Enum, Enum, *const c_void);
     texture_sub_image_3d = "glTextureSubImage3D": fn(Uint, Int, Int, Int, Int, Sizei, Sizei, Sizei, Enum, Enum, *const c_void);
     get_texture_sub_image = "glGetTextureSubImage": fn(Uint, Int, Int, Int, Int, Sizei, Sizei, Sizei, Enum, Enum, Sizei, *mut c_void);

@@ -209,75 +209,113 @@ impl GlOffline {
     pub fn create_texture(
         &mut self,
         internal_format: u32,
+        size: (u32, u32),
+        bytes: &[u8],
+    ) -> Result<u32, GlError> {
+        self.make_texture(internal_format, size, None, bytes)
+    }
+
+    /// A new 2D array texture of `layers` layers, `bytes` holding each layer's rows in turn
+    /// (bottom row first).
+    pub fn create_array_texture(
+        &mut self,
+        internal_format: u32,
+        size: (u32, u32),
+        layers: u32,
+        bytes: &[u8],
+    ) -> Result<u32, GlError> {
+        self.make_texture(internal_format, size, Some(layers), bytes)
+    }
+
+    fn make_texture(
+        &mut self,
+        internal_format: u32,
         (width, height): (u32, u32),
+        layers: Option<u32>,
         bytes: &[u8],
     ) -> Result<u32, GlError> {
         let format = GlFormat::of(internal_format)?;
-        let need = width as usize * height as usize * format.pixel.bytes_per_pixel() as usize;
-        if bytes.len() != need || width == 0 || height == 0 {
+        let depth = layers.unwrap_or(1);
+        let need = width as usize
+            * height as usize
+            * depth as usize
+            * format.pixel.bytes_per_pixel() as usize;
+        if bytes.len() != need || need == 0 {
             return Err(GlError::Input(
                 "texel data does not match the texture's size".into(),
             ));
         }
         let g = self.engine.gl();
         let (fmt, ty) = format.transfer;
+        let (w, h, d) = (width as i32, height as i32, depth as i32);
         let mut texture = 0;
         // SAFETY: this engine's context is current on this thread (GlOffline is not Send); a
         // new texture of the given size, filled from client memory holding exactly its texels
         // (no unpack buffer bound, rows tightly packed with alignment 1).
         unsafe {
-            (g.create_textures)(gl::TEXTURE_2D, 1, &mut texture);
-            (g.texture_storage_2d)(texture, 1, internal_format, width as i32, height as i32);
             (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, 0);
             (g.pixel_storei)(gl::UNPACK_ALIGNMENT, 1);
-            (g.texture_sub_image_2d)(
-                texture,
-                0,
-                0,
-                0,
-                width as i32,
-                height as i32,
-                fmt,
-                ty,
-                bytes.as_ptr().cast(),
-            );
+            let data = bytes.as_ptr().cast();
+            if layers.is_some() {
+                (g.create_textures)(gl::TEXTURE_2D_ARRAY, 1, &mut texture);
+                (g.texture_storage_3d)(texture, 1, internal_format, w, h, d);
+                (g.texture_sub_image_3d)(texture, 0, 0, 0, 0, w, h, d, fmt, ty, data);
+            } else {
+                (g.create_textures)(gl::TEXTURE_2D, 1, &mut texture);
+                (g.texture_storage_2d)(texture, 1, internal_format, w, h);
+                (g.texture_sub_image_2d)(texture, 0, 0, 0, w, h, fmt, ty, data);
+            }
         }
         Ok(texture)
     }
 
-    /// A texture's raw texels, bottom row first.
-    pub fn read_texture(
+    /// A texture's raw texels, bottom row first (every layer in turn of an array texture of
+    /// `layers` layers; 1 for a 2D texture).
+    pub fn read_texture_layers(
         &mut self,
         texture: u32,
         internal_format: u32,
         (width, height): (u32, u32),
+        layers: u32,
     ) -> Result<Vec<u8>, GlError> {
         let format = GlFormat::of(internal_format)?;
-        let mut out =
-            vec![0u8; width as usize * height as usize * format.pixel.bytes_per_pixel() as usize];
+        let texels = width as usize * height as usize * layers as usize;
+        let mut out = vec![0u8; texels * format.pixel.bytes_per_pixel() as usize];
         let g = self.engine.gl();
         let (fmt, ty) = format.transfer;
+        let (w, h, d) = (width as i32, height as i32, layers as i32);
         // SAFETY: the context is current; a texture of this size (the caller's); no pack
         // buffer bound, alignment 1: GL writes exactly out.len() bytes (bufSize says so).
         unsafe {
             (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, 0);
             (g.pixel_storei)(gl::PACK_ALIGNMENT, 1);
+            let len = out.len() as i32;
             (g.get_texture_sub_image)(
                 texture,
                 0,
                 0,
                 0,
                 0,
-                width as i32,
-                height as i32,
-                1,
+                w,
+                h,
+                d,
                 fmt,
                 ty,
-                out.len() as i32,
+                len,
                 out.as_mut_ptr().cast(),
             );
         }
         Ok(out)
+    }
+
+    /// A 2D texture's raw texels, bottom row first.
+    pub fn read_texture(
+        &mut self,
+        texture: u32,
+        internal_format: u32,
+        size: (u32, u32),
+    ) -> Result<Vec<u8>, GlError> {
+        self.read_texture_layers(texture, internal_format, size, 1)
     }
 
     pub fn delete_texture(&mut self, texture: u32) {
