@@ -906,3 +906,81 @@ fn a_region_of_a_texture_and_a_layer_of_an_array_are_enhanced_in_place() {
     assert_eq!(&out[..other.len()], &other[..], "layer 0 changed");
     assert_eq!(&out[other.len()..], &want[..], "layer 1");
 }
+
+/// Run by `a_context_older_than_4_5_is_refused_with_the_reason` with Mesa told to make 4.3
+/// contexts.
+#[test]
+#[ignore = "run by a_context_older_than_4_5_is_refused_with_the_reason"]
+fn old_context_child() {
+    let err = match GlOffline::with_version((4, 3)) {
+        Ok(_) => panic!("an OpenGL 4.3 context was taken"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("OpenGL 4.3, older than 4.5") && err.lines().count() == 1,
+        "{err}"
+    );
+}
+
+/// An OpenGL 4.3 context (compute shaders, but not the 4.5 the programs are written for) is
+/// refused with one line saying why, before the engine makes any GL call past the queries.
+#[test]
+fn a_context_older_than_4_5_is_refused_with_the_reason() {
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "old_context_child", "--ignored", "--nocapture"])
+        .env("MESA_GL_VERSION_OVERRIDE", "4.3")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("1 passed"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The layer finds the entry points through the GL the app loaded (here libEGL, made global
+/// as an app linked against it has it), and the engine runs with them on the current context.
+#[test]
+fn the_entry_points_are_found_through_the_gl_in_the_process() {
+    let mut gl = context();
+    // SAFETY: promotes the already loaded libEGL.so.1 to global symbol lookup (RTLD_NOLOAD:
+    // loads nothing new).
+    let lib = unsafe {
+        libc::dlopen(
+            c"libEGL.so.1".as_ptr(),
+            libc::RTLD_NOW | libc::RTLD_GLOBAL | libc::RTLD_NOLOAD,
+        )
+    };
+    assert!(!lib.is_null());
+    let functions = contrastxr::gpu::opengl::Gl::from_process().unwrap();
+    // SAFETY: the offline context is current on this thread; the functions are its driver's.
+    let mut engine = unsafe { contrastxr::gpu::opengl::GlEngine::new(functions) }.unwrap();
+    let camera = noise(32, 24, 6);
+    let display = noise(16, 8, 7);
+    let params = Params::default();
+    let texels = contrastxr::blurred_texels::BlurredTexels::prepare(
+        &camera,
+        contrastxr::blurred_texels::BlurTaps::of(&params),
+    );
+    let bytes = bottom_first(&display);
+    let texture = gl.create_texture(SRGB8_ALPHA8, (16, 8), &bytes).unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, 16, 8),
+        mapping: params.camera_mapping(),
+    };
+    // SAFETY: as above, and the texture is this context's.
+    unsafe {
+        engine.set_background(&texels).unwrap();
+        while engine.enhance(&[view], &params).unwrap()
+            == contrastxr::gpu::opengl::Outcome::Compiling
+        {}
+        engine.destroy();
+    }
+    let out = gl.read_texture(texture, SRGB8_ALPHA8, (16, 8)).unwrap();
+    let alone = bottom_first(&gl.enhance(&display, &camera, &params).unwrap());
+    assert_eq!(out, alone);
+}

@@ -64,6 +64,12 @@ impl GlOffline {
     /// EGL_MESA_platform_surfaceless; Debian: libegl1, libegl-mesa0, libgl1-mesa-dri), current
     /// on this thread, and the engine on it.
     pub fn new() -> Result<GlOffline, GlError> {
+        Self::with_version((4, 5))
+    }
+
+    /// The same with a core context of another version (a test asks for an older one, which
+    /// the engine must refuse).
+    pub fn with_version((major, minor): (i32, i32)) -> Result<GlOffline, GlError> {
         // SAFETY: dlopen of a library name; the handle is kept for the process (never closed).
         let lib =
             unsafe { libc::dlopen(c"libEGL.so.1".as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
@@ -130,9 +136,9 @@ impl GlOffline {
         }
         let attributes = [
             CONTEXT_MAJOR_VERSION,
-            4,
+            major,
             CONTEXT_MINOR_VERSION,
-            5,
+            minor,
             CONTEXT_OPENGL_PROFILE_MASK,
             CONTEXT_OPENGL_CORE_PROFILE_BIT,
             NONE,
