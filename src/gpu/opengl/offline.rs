@@ -126,9 +126,10 @@ impl GlOffline {
                 std::ptr::null(),
             )
         };
-        let (mut major, mut minor) = (0, 0);
+        let (mut egl_major, mut egl_minor) = (0, 0);
         // SAFETY: a display EGL returned (null is refused by eglInitialize without harm).
-        if display.is_null() || unsafe { initialize(display, &mut major, &mut minor) } == 0 {
+        if display.is_null() || unsafe { initialize(display, &mut egl_major, &mut egl_minor) } == 0
+        {
             return Err(GlError::Context(
                 "EGL's surfaceless platform (EGL_MESA_platform_surfaceless) is not available"
                     .into(),
@@ -155,9 +156,9 @@ impl GlOffline {
             )
         };
         if context.is_null() {
-            return Err(GlError::Context(
-                "EGL made no OpenGL 4.5 core context".into(),
-            ));
+            return Err(GlError::Context(format!(
+                "EGL made no OpenGL {major}.{minor} core context"
+            )));
         }
         // SAFETY: the display and context are valid; no surfaces (surfaceless).
         if unsafe {
