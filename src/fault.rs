@@ -54,7 +54,7 @@ pub const POINTS: [(&str, &str); 14] = [
     ),
     (
         "gl-program-link",
-        "linking an OpenGL program (linked without its shader, so the driver refuses it)",
+        "linking an OpenGL program (linked with a second copy of its shader, so the driver refuses it)",
     ),
     (
         "end-frame",

@@ -177,19 +177,30 @@ impl Programs {
                         }
                         fail(log)
                     } else {
-                        // The fault point links a program without its shader: the driver's
-                        // own link failure, as a broken shader would give it.
-                        let broken = crate::fault::hit("gl-program-link");
-                        // SAFETY: shader and program are ours; the shader compiled.
+                        // The fault point links a second copy of the shader with it: two
+                        // `main`s, the driver's own link failure in any profile, as a broken
+                        // program would give it.
+                        let twin = crate::fault::hit("gl-program-link").then(|| {
+                            let Slot::Compiling { shader, program } = self.start(g, source) else {
+                                unreachable!("start gives a compiling slot")
+                            };
+                            // SAFETY: the spare program is ours and unused.
+                            unsafe { (g.delete_program)(program) };
+                            shader
+                        });
+                        // SAFETY: shader, twin and program are ours; each is attached once.
                         unsafe {
-                            if !broken {
-                                (g.attach_shader)(program, shader);
+                            (g.attach_shader)(program, shader);
+                            if let Some(twin) = twin {
+                                (g.attach_shader)(program, twin);
                             }
                             (g.link_program)(program);
-                            if !broken {
-                                (g.detach_shader)(program, shader);
-                            }
+                            (g.detach_shader)(program, shader);
                             (g.delete_shader)(shader);
+                            if let Some(twin) = twin {
+                                (g.detach_shader)(program, twin);
+                                (g.delete_shader)(twin);
+                            }
                         }
                         Slot::Linking { program }
                     }
