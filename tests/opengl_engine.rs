@@ -984,3 +984,50 @@ fn the_entry_points_are_found_through_the_gl_in_the_process() {
     let alone = bottom_first(&gl.enhance(&display, &camera, &params).unwrap());
     assert_eq!(out, alone);
 }
+
+/// A view the texture cannot hold (a layer of a texture that has none, a region past its
+/// edge) is refused before any transfer: the texture is untouched and no GL error is raised.
+#[test]
+fn a_view_its_texture_cannot_hold_is_refused_without_a_gl_error() {
+    let mut gl = context();
+    // SAFETY: glGetError's address in this context, of its C signature.
+    let get_error = unsafe {
+        std::mem::transmute::<*const c_void, unsafe extern "system" fn() -> u32>(load(
+            &gl,
+            c"glGetError",
+        ))
+    };
+    let params = Params::default();
+    gl.set_camera(&noise(32, 24, 2), &params).unwrap();
+    let bytes = bottom_first(&noise(16, 8, 3));
+    let texture = gl.create_texture(SRGB8_ALPHA8, (16, 8), &bytes).unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, 16, 8),
+        mapping: params.camera_mapping(),
+    };
+    let wrong = [
+        GlView {
+            target: GlTarget::Texture2DArray { layer: 0 },
+            ..view
+        },
+        GlView {
+            rect: (1, 0, 16, 8),
+            ..view
+        },
+        GlView {
+            internal_format: RGBA8,
+            ..view
+        },
+    ];
+    for v in wrong {
+        let err = gl.enhance_views(&[v], &params).unwrap_err().to_string();
+        assert_eq!(err.lines().count(), 1, "{err}");
+        // SAFETY: glGetError takes no arguments.
+        assert_eq!(unsafe { get_error() }, 0, "{v:?} raised a GL error");
+    }
+    let out = gl.read_texture(texture, SRGB8_ALPHA8, (16, 8)).unwrap();
+    assert_eq!(out, bytes);
+}

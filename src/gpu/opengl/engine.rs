@@ -336,10 +336,19 @@ impl GlEngine {
         let height = texture_level_int(g, v.texture, gl::TEXTURE_HEIGHT);
         let depth = texture_level_int(g, v.texture, gl::TEXTURE_DEPTH);
         let internal = texture_level_int(g, v.texture, gl::TEXTURE_INTERNAL_FORMAT) as u32;
-        let layer = match v.target {
-            GlTarget::Texture2D => 0,
-            GlTarget::Texture2DArray { layer } => layer,
+        let (layer, target) = match v.target {
+            GlTarget::Texture2D => (0, gl::TEXTURE_2D),
+            GlTarget::Texture2DArray { layer } => (layer, gl::TEXTURE_2D_ARRAY),
         };
+        let mut actual = 0;
+        // SAFETY: a texture name of this context (the caller's contract); GL_TEXTURE_TARGET
+        // is a valid glGetTextureParameteriv query in 4.5.
+        unsafe { (g.get_texture_parameteriv)(v.texture, gl::TEXTURE_TARGET, &mut actual) };
+        if actual as u32 != target {
+            return Err(GlError::Input(format!(
+                "a view's texture has target {actual:#06x}, not the {target:#06x} the view says"
+            )));
+        }
         let inside = w > 0
             && h > 0
             && u64::from(x) + u64::from(w) <= width.max(0) as u64
@@ -374,11 +383,8 @@ impl GlEngine {
             if slot.pixels != 0 {
                 // SAFETY: ours.
                 unsafe { (g.delete_buffers)(1, &slot.pixels) };
-                *slot = ViewBuffers {
-                    pixels: 0,
-                    pixel_capacity: 0,
-                    ..*slot
-                };
+                slot.pixels = 0;
+                slot.pixel_capacity = 0;
             }
             slot.pixels = new_buffer(g, pixels, "view buffer")?;
             slot.pixel_capacity = pixels;

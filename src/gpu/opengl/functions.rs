@@ -98,6 +98,7 @@ gl_functions! {
     texture_sub_image_2d = "glTextureSubImage2D": fn(Uint, Int, Int, Int, Sizei, Sizei, Enum, Enum, *const c_void);
     texture_sub_image_3d = "glTextureSubImage3D": fn(Uint, Int, Int, Int, Int, Sizei, Sizei, Sizei, Enum, Enum, *const c_void);
     get_texture_sub_image = "glGetTextureSubImage": fn(Uint, Int, Int, Int, Int, Sizei, Sizei, Sizei, Enum, Enum, Sizei, *mut c_void);
+    get_texture_parameteriv = "glGetTextureParameteriv": fn(Uint, Enum, *mut Int);
     get_texture_level_parameteriv = "glGetTextureLevelParameteriv": fn(Uint, Int, Enum, *mut Int);
     delete_textures = "glDeleteTextures": fn(Sizei, *const Uint);
     pixel_storei = "glPixelStorei": fn(Enum, Int);
