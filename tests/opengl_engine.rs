@@ -939,20 +939,12 @@ fn a_context_older_than_4_5_is_refused_with_the_reason() {
     );
 }
 
-/// The layer finds the entry points through the GL the app loaded (here libEGL, made global
-/// as an app linked against it has it), and the engine runs with them on the current context.
+/// The layer finds the entry points through the GL the app loaded (here the offline
+/// context's libEGL, opened privately as SDL opens an app's GL), and the engine runs with them
+/// on the current context.
 #[test]
 fn the_entry_points_are_found_through_the_gl_in_the_process() {
     let mut gl = context();
-    // SAFETY: promotes the already loaded libEGL.so.1 to global symbol lookup (RTLD_NOLOAD:
-    // loads nothing new).
-    let lib = unsafe {
-        libc::dlopen(
-            c"libEGL.so.1".as_ptr(),
-            libc::RTLD_NOW | libc::RTLD_GLOBAL | libc::RTLD_NOLOAD,
-        )
-    };
-    assert!(!lib.is_null());
     let functions = contrastxr::gpu::opengl::Gl::from_process().unwrap();
     // SAFETY: the offline context is current on this thread; the functions are its driver's.
     let mut engine = unsafe { contrastxr::gpu::opengl::GlEngine::new(functions) }.unwrap();

@@ -209,17 +209,33 @@ pub const TEXTURE_TARGET: Enum = 0x1006;
 
 impl Gl {
     /// The entry points of the GL already loaded into the process (the app's): through
-    /// `glXGetProcAddressARB`, else `eglGetProcAddress`, whichever the process has.
+    /// `glXGetProcAddressARB`, else `eglGetProcAddress`, found among the process's global
+    /// symbols or, for an app that opened its GL library privately (SDL does), in libGL,
+    /// libGLX or libEGL if one is loaded (never loading one).
     pub fn from_process() -> Result<Gl, GlError> {
         type GetProc = unsafe extern "C" fn(*const i8) -> *const c_void;
-        let find = |name: &CStr| {
-            // SAFETY: dlsym with RTLD_DEFAULT and a NUL-terminated name only looks a symbol up.
-            let p = unsafe { libc::dlsym(libc::RTLD_DEFAULT, name.as_ptr()) };
+        let in_handle = |handle: *mut c_void, name: &CStr| {
+            // SAFETY: dlsym with RTLD_DEFAULT or a handle dlopen gave, and a NUL-terminated
+            // name, only looks a symbol up.
+            let p = unsafe { libc::dlsym(handle, name.as_ptr()) };
             // SAFETY: both loaders have this C signature.
             (!p.is_null()).then(|| unsafe { std::mem::transmute::<*mut c_void, GetProc>(p) })
         };
-        let get = find(c"glXGetProcAddressARB")
-            .or_else(|| find(c"eglGetProcAddress"))
+        let loaded = |library: &CStr| {
+            // SAFETY: RTLD_NOLOAD returns a handle only to a library already loaded (its
+            // reference count raised, never dropped: the app's GL stays for the process).
+            let h = unsafe { libc::dlopen(library.as_ptr(), libc::RTLD_NOW | libc::RTLD_NOLOAD) };
+            (!h.is_null()).then_some(h)
+        };
+        let get = in_handle(libc::RTLD_DEFAULT, c"glXGetProcAddressARB")
+            .or_else(|| in_handle(libc::RTLD_DEFAULT, c"eglGetProcAddress"))
+            .or_else(|| {
+                [c"libGL.so.1", c"libGLX.so.0"]
+                    .into_iter()
+                    .filter_map(loaded)
+                    .find_map(|h| in_handle(h, c"glXGetProcAddressARB"))
+            })
+            .or_else(|| loaded(c"libEGL.so.1").and_then(|h| in_handle(h, c"eglGetProcAddress")))
             .ok_or(GlError::MissingFunction("glXGetProcAddressARB"))?;
         // SAFETY: the loader takes a NUL-terminated name and returns an address or null.
         Gl::load(&mut |name| unsafe { get(name.as_ptr()) })
