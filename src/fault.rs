@@ -5,13 +5,14 @@
 //!
 //! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
-//! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait` (see [`POINTS`]). This module must not depend on anything else in the crate.
+//! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`
+//! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 13] = [
+pub const POINTS: [(&str, &str); 14] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -50,6 +51,10 @@ pub const POINTS: [(&str, &str); 13] = [
     (
         "swapchain-wait",
         "the fence wait in xrDestroySwapchain fails",
+    ),
+    (
+        "slow-build",
+        "a CPU driver's warm-up compile takes 5 s more (longer than any wait of the session's end)",
     ),
     (
         "end-frame",

@@ -3,6 +3,7 @@
 //! Drop destroys only what this object created.
 
 use super::error::{GpuError, VkResultExt};
+use super::pinned_libraries::PinnedLibraries;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr};
@@ -30,6 +31,8 @@ struct Owned {
     messenger: Option<Messenger>,
     /// The instance is this object's too (false for a device made on someone else's).
     instance: bool,
+    /// For a device made through the app's loader: the libraries it runs in, closed after it.
+    _libraries: Option<PinnedLibraries>,
 }
 
 pub struct GpuDevice {
@@ -221,7 +224,11 @@ impl GpuDevice {
 
     /// Creates an instance and a device of its own (Vulkan 1.1, one compute queue).
     pub fn create(options: &DeviceOptions) -> Result<GpuDevice, GpuError> {
-        let entry = load_entry()?;
+        GpuDevice::create_with(load_entry()?, options)
+    }
+
+    /// Creates an instance and a device of its own through `entry`'s Vulkan loader.
+    fn create_with(entry: ash::Entry, options: &DeviceOptions) -> Result<GpuDevice, GpuError> {
         let instance = create_instance(&entry, options.validation)?;
         let log = options
             .validation
@@ -249,6 +256,7 @@ impl GpuDevice {
                 gpu.owned = Some(Owned {
                     messenger,
                     instance: true,
+                    _libraries: None,
                 });
                 Ok(gpu)
             }
@@ -259,34 +267,25 @@ impl GpuDevice {
         }
     }
 
-    /// A device of its own on `app`'s instance and physical device, with one compute queue.
-    /// No instance is created, so the Vulkan loader neither loads nor unloads a driver; Drop
-    /// destroys only this device. Made and dropped on the app's thread (see docs/layer.md,
-    /// Threads).
+    /// A device of its own beside `app`'s: an instance of its own, made through the app's
+    /// Vulkan loader (never another copy), on a physical device of the same kind, with one
+    /// compute queue. Nothing of it belongs to the app's instance, so it may outlive the app's
+    /// device and instance: a CPU driver's compile in flight on it is left to finish on its own
+    /// at the session's end (gpu/warm_up.rs). Drop destroys the device and the instance.
     pub fn create_beside(app: &GpuDevice) -> Result<GpuDevice, GpuError> {
-        let (instance, physical) = (&app.instance, app.physical);
-        let (device, family) = create_compute_device(instance, physical)?;
-        let allocator = match create_allocator(instance, &device, physical) {
-            Ok(a) => a,
-            Err(e) => {
-                // SAFETY: the device was just created and has no children.
-                unsafe { device.destroy_device(None) };
-                return Err(e);
-            }
+        let options = DeviceOptions {
+            matching: Some(DeviceKind::of(app)),
+            ..DeviceOptions::default()
         };
-        let handles = (
-            app.entry.clone(),
-            instance.clone(),
-            physical,
-            device,
-            allocator,
-        );
-        // SAFETY: the device was created with one queue of `family`.
-        let mut gpu = unsafe { Self::assemble(handles, family, 0) };
-        gpu.owned = Some(Owned {
-            messenger: None,
-            instance: false,
-        });
+        let mut gpu = GpuDevice::create_with(app.entry.clone(), &options)?;
+        let functions = [
+            gpu.entry.static_fn().get_instance_proc_addr as *const c_void,
+            gpu.instance.fp_v1_0().destroy_instance as *const c_void,
+            gpu.device.fp_v1_0().destroy_device as *const c_void,
+        ];
+        if let Some(owned) = gpu.owned.as_mut() {
+            owned._libraries = Some(PinnedLibraries::of(&functions));
+        }
         Ok(gpu)
     }
 

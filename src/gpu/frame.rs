@@ -22,6 +22,13 @@ use std::time::Duration;
 /// How long a session that waits for its pipelines (`pipelines = "wait"`) waits at most.
 const PIPELINE_WAIT: Duration = Duration::from_secs(120);
 
+/// How long a frame call waits for the engine's last work before reusing what it used.
+const IDLE_WAIT_NS: u64 = 5_000_000_000;
+/// How long the engine's end (xrDestroySession, xrDestroyInstance) waits for its last work:
+/// a frame's work takes milliseconds; past this the GPU is taken as hung and the objects are
+/// left alive rather than destroyed under it.
+const END_WAIT_NS: u64 = 250_000_000;
+
 /// Most view regions a session keeps buffers for (2 eyes x a few swapchains and quads).
 const MAX_VIEWS: u32 = 16;
 
@@ -72,8 +79,8 @@ pub struct FrameEngine {
     pub(super) app_views: AppImageViews,
     /// Set once the engine's objects were destroyed (or left alive after a GPU failure).
     torn_down: bool,
-    /// The warm-up device (CPU drivers), dropped here on the app's thread after the pipeline
-    /// thread that uses it has ended.
+    /// The warm-up device (CPU drivers), ended on the app's thread after the pipeline thread
+    /// that uses it has ended ([`WarmUp::end`]).
     warm_up: Option<WarmUpSlot>,
     // Last: dropped after everything above was destroyed in Drop.
     pub gpu: GpuDevice,
@@ -174,7 +181,11 @@ impl FrameEngine {
 
     /// Waits for the previous submission (normally long done) so its buffers can be reused.
     pub(super) fn wait_idle(&mut self) -> Result<(), GpuError> {
-        self.commands.wait(&self.gpu, 5_000_000_000)?;
+        self.wait_idle_within(IDLE_WAIT_NS)
+    }
+
+    fn wait_idle_within(&mut self, timeout_ns: u64) -> Result<(), GpuError> {
+        self.commands.wait(&self.gpu, timeout_ns)?;
         self.ring.finished_through(self.commands.finished_through());
         Ok(())
     }
@@ -404,9 +415,14 @@ impl FrameEngine {
                 call: "vkWaitForFences",
                 result: ash::vk::Result::ERROR_DEVICE_LOST,
             })
-            .and_then(|()| self.wait_idle());
-        // The pipeline thread uses the app's device: it ends before anything is destroyed.
+            .and_then(|()| self.wait_idle_within(END_WAIT_NS));
+        // The pipeline thread uses the app's device: it ends before anything is destroyed. It
+        // stops at once unless it is creating a pipeline on the app's device (a warm-up in
+        // flight is not waited for: see gpu/warm_up.rs).
         self.engine.join_building();
+        if let Some(slot) = self.warm_up.take() {
+            WarmUp::end(slot);
+        }
         if let Err(e) = idle {
             self.gpu.abandon();
             return Err(e);
@@ -423,8 +439,6 @@ impl FrameEngine {
         self.engine.destroy(&self.gpu);
         // Waited for above: this wait cannot fail.
         let _ = self.commands.destroy(&self.gpu);
-        // The pipeline thread that dispatched on it has ended (joined above).
-        drop(self.warm_up.take());
         Ok(())
     }
 }

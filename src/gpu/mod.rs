@@ -27,6 +27,7 @@ pub mod interface;
 pub mod offline;
 mod offline_in_place;
 pub mod overlay;
+mod pinned_libraries;
 pub mod pipeline_cache;
 pub mod pipelines;
 pub mod pixel_codec;

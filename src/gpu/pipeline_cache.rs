@@ -235,7 +235,9 @@ pub fn save(
 
 /// Writes `dir`/`name` whole or not at all: through a temporary file of a random name in the
 /// same folder (created exclusively, never through a link; unique also across PID namespaces),
-/// synced, renamed over the old one, and the folder synced.
+/// renamed over the old one. Not synced: it is written inside an app's xrDestroySession, and a
+/// file the system lost part of in a crash fails its length and checksum at the next load,
+/// which then starts from an empty cache.
 pub fn write_atomically(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
     let fail = |e: std::io::Error| format!("cannot write {}: {e}", dir.join(name).display());
     std::fs::create_dir_all(dir).map_err(fail)?;
@@ -248,9 +250,7 @@ pub fn write_atomically(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), Stri
             .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
             .open(&tmp)?;
         file.write_all(bytes)?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, dir.join(name))?;
-        std::fs::File::open(dir)?.sync_all()
+        std::fs::rename(&tmp, dir.join(name))
     })();
     written.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);

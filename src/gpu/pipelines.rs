@@ -29,8 +29,9 @@ pub use super::shader_ids::{
 };
 
 /// Runs a shader once, on the building thread, before it is built for the engine's device: a
-/// CPU driver compiles at first dispatch (see gpu/warm_up.rs).
-pub type WarmUpHook = Box<dyn FnMut(ShaderId) + Send>;
+/// CPU driver compiles at first dispatch (see gpu/warm_up.rs). Its second argument says when
+/// the session ended: the hook then stops waiting for its own work.
+pub type WarmUpHook = Box<dyn FnMut(ShaderId, &dyn Fn() -> bool) + Send>;
 
 /// Where pipelines are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,7 +97,7 @@ impl Shared {
     fn build(&self, k: usize, warm_up: Option<&mut WarmUpHook>) -> Slot {
         let t = Instant::now();
         if let Some(warm_up) = warm_up {
-            warm_up(ShaderId(k));
+            warm_up(ShaderId(k), &|| self.lock().stop || process_exit::exiting());
         }
         // A session that ends, or a process that exits, may be about to destroy the app's
         // device: nothing more is made on it.

@@ -5,11 +5,14 @@
 //! layer's own (the app's instance and physical device, its own queue): the compile happens
 //! there, and the driver's shader disk cache hands the result to the app's device.
 //!
-//! That device is made and destroyed on the app's thread (at xrCreateSession and
-//! xrDestroySession, calls in which the app waits for the runtime anyway), never on the
-//! building thread, and on the app's instance: no second instance exists, so the Vulkan loader
-//! never loads or unloads a driver behind the app's back. The building thread only records,
-//! submits and waits on the warm-up device's own objects.
+//! That device is made on the app's thread (in a frame call that requests a shader still to be
+//! warmed up), never on the building thread, on an instance of its own made through the app's
+//! Vulkan loader: nothing of it belongs to the app's device or instance. The building thread
+//! only records, submits and waits on the warm-up device's own objects, and stops waiting when
+//! the session ends. At the session's end a compile still in flight is not waited for: the
+//! device is handed to a thread of its own that waits for the compile (the driver cannot stop
+//! it); the device and its instance are then destroyed on an app's thread, at the next
+//! session's warm-up or end (see [`WarmUp::end`]).
 
 use super::commands::Commands;
 use super::device::DeviceKind;
@@ -25,6 +28,7 @@ use crate::algorithm::params::Params;
 use ash::vk;
 use std::collections::HashSet;
 use std::sync::{Arc, Mutex, OnceLock};
+use std::time::{Duration, Instant};
 
 /// The shaders warmed up in this process, per device kind: the driver's disk cache has them,
 /// so later sessions skip them (and make no device of their own at all).
@@ -35,13 +39,26 @@ fn warmed() -> std::sync::MutexGuard<'static, HashSet<(DeviceKind, ShaderId)>> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
+/// Warm-up devices whose last dispatch finished after their session had ended, waiting to be
+/// destroyed on an app's thread (at the next session's warm-up or end).
+fn left_over() -> std::sync::MutexGuard<'static, Vec<WarmUp>> {
+    static LEFT: Mutex<Vec<WarmUp>> = Mutex::new(Vec::new());
+    // Only pushes and takes happen under this lock.
+    LEFT.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 /// Side of the camera frame and view the warm-up dispatches work on.
 const SIZE: (u32, u32) = (8, 8);
 /// How long one warm-up dispatch may take (a compile included).
-const TIMEOUT_NS: u64 = 120_000_000_000;
-/// How long dropping the device waits for work still in flight (none, unless a dispatch
-/// timed out): it runs on the app's thread.
+const TIMEOUT: Duration = Duration::from_secs(120);
+/// The slices the building thread waits for a dispatch in, looking at the session's end.
+const WAIT_SLICE_NS: u64 = 20_000_000;
+/// How long dropping the device waits for work still in flight where no thread can be left
+/// to wait for it (none, unless a dispatch timed out).
 const DROP_WAIT_NS: u64 = 1_000_000_000;
+/// What the `slow-build` fault point adds to a warm-up dispatch: a driver whose compile takes
+/// longer than any wait of the session's end.
+const SLOW_BUILD: Duration = Duration::from_secs(5);
 
 pub struct WarmUp {
     engine: Engine,
@@ -52,6 +69,8 @@ pub struct WarmUp {
     image_ready: bool,
     /// Stand-ins for the app's image of the in-place shaders (GENERAL), by view format.
     storage: Vec<StorageImage>,
+    /// The `slow-build` fault point: the last dispatch counts as running until then.
+    slow_until: Option<Instant>,
     // Last: dropped after everything above was destroyed in Drop.
     gpu: GpuDevice,
 }
@@ -84,9 +103,9 @@ impl WarmUp {
         let slot: WarmUpSlot = Default::default();
         let kind = DeviceKind::of(gpu);
         let shared = slot.clone();
-        let hook: WarmUpHook = Box::new(move |id| {
+        let hook: WarmUpHook = Box::new(move |id, stopped| {
             if let Some(w) = lock(&shared).warm_up.as_mut() {
-                w.once(kind, id);
+                w.once(kind, id, stopped);
             }
         });
         Some((slot, hook))
@@ -116,6 +135,7 @@ impl WarmUp {
         if std::mem::replace(&mut slot.tried, true) {
             return None;
         }
+        WarmUp::destroy_left_over();
         match WarmUp::new(app) {
             Ok(w) => {
                 slot.warm_up = Some(w);
@@ -184,23 +204,25 @@ impl WarmUp {
             view,
             image_ready: false,
             storage: Vec::new(),
+            slow_until: None,
             gpu,
         })
     }
 
-    /// Warms `id` up unless this process already did. Failures are not fatal: the compile
-    /// then happens at first dispatch.
-    pub fn once(&mut self, key: DeviceKind, id: ShaderId) {
+    /// Warms `id` up unless this process already did, waiting for it until `stopped`.
+    /// Failures are not fatal: the compile then happens at first dispatch.
+    pub fn once(&mut self, key: DeviceKind, id: ShaderId, stopped: &dyn Fn() -> bool) {
         if warmed().contains(&(key, id)) {
             return;
         }
-        if self.run(id).is_ok() {
+        if self.run(id, stopped).is_ok() {
             warmed().insert((key, id));
         }
     }
 
-    /// Dispatches one workgroup of the shader and waits for it (its compile).
-    pub fn run(&mut self, id: ShaderId) -> Result<(), GpuError> {
+    /// Dispatches one workgroup of the shader and waits for it (its compile) until it is
+    /// done or `stopped`; a dispatch left running is waited for by [`WarmUp::end`].
+    pub fn run(&mut self, id: ShaderId, stopped: &dyn Fn() -> bool) -> Result<(), GpuError> {
         let pipeline = self.engine.pipelines.get(id)?;
         self.commands.begin(&self.gpu)?;
         let cmd = self.commands.cmd;
@@ -222,7 +244,73 @@ impl WarmUp {
         // A grid of one workgroup.
         self.engine.dispatch(gpu, cmd, pipeline, set, &push, (1, 1));
         self.commands.submit(gpu)?;
-        self.commands.wait(gpu, TIMEOUT_NS)
+        if crate::fault::hit("slow-build") {
+            self.slow_until = Some(Instant::now() + SLOW_BUILD);
+        }
+        let deadline = Instant::now() + TIMEOUT;
+        while !self.finished()? {
+            if stopped() || Instant::now() > deadline {
+                return Err(GpuError::Unsupported("warm-up not finished".into()));
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the last dispatch has finished, after waiting for it one slice at most.
+    fn finished(&mut self) -> Result<bool, GpuError> {
+        if self.slow_until.is_some_and(|t| Instant::now() < t) {
+            std::thread::sleep(Duration::from_nanos(WAIT_SLICE_NS));
+            return Ok(false);
+        }
+        match self.commands.wait(&self.gpu, WAIT_SLICE_NS) {
+            Ok(()) => Ok(true),
+            Err(GpuError::Vulkan {
+                result: vk::Result::TIMEOUT,
+                ..
+            }) => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Destroys, on the caller's thread (an app's), the warm-up devices whose compile finished
+    /// after their session had ended.
+    pub fn destroy_left_over() {
+        let left = std::mem::take(&mut *left_over());
+        drop(left);
+    }
+
+    /// Ends a session's warm-up device, on the app's thread after the building thread has
+    /// ended: dropped here when its last dispatch has finished, else handed to a thread of
+    /// its own that waits for the dispatch (at most [`TIMEOUT`]) and leaves it to be destroyed
+    /// on an app's thread ([`WarmUp::destroy_left_over`]). Returns whether it was left to
+    /// that thread.
+    pub fn end(slot: WarmUpSlot) -> bool {
+        WarmUp::destroy_left_over();
+        let Some(mut warm_up) = lock(&slot).warm_up.take() else {
+            return false;
+        };
+        if warm_up.finished().unwrap_or(true) {
+            return false;
+        }
+        // Counted as work in progress: the process's exit waits for it (gpu/process_exit.rs).
+        let Some(busy) = super::process_exit::Busy::begin() else {
+            return false;
+        };
+        let spawned = std::thread::Builder::new()
+            .name("contrastxr-warm-up-end".into())
+            .spawn(move || {
+                let deadline = Instant::now() + TIMEOUT;
+                while !warm_up.finished().unwrap_or(true) && Instant::now() < deadline {}
+                // Destroyed on an app's thread (never an instance on a thread of the layer's
+                // own). Inside the process's exit, other exit handlers may already have torn
+                // the driver down: it is left to the exit then.
+                match super::process_exit::exiting() {
+                    true => std::mem::forget(warm_up),
+                    false => left_over().push(warm_up),
+                }
+                drop(busy);
+            });
+        spawned.is_ok()
     }
 }
 
@@ -263,7 +351,8 @@ fn record_to_general(gpu: &GpuDevice, cmd: vk::CommandBuffer, image: vk::Image) 
 
 impl Drop for WarmUp {
     fn drop(&mut self) {
-        if self.commands.wait(&self.gpu, DROP_WAIT_NS).is_err() {
+        let slow = self.slow_until.is_some_and(|t| Instant::now() < t);
+        if slow || self.commands.wait(&self.gpu, DROP_WAIT_NS).is_err() {
             // The GPU may still use every object: leave them alive rather than free them.
             self.gpu.abandon();
             return;
