@@ -2,8 +2,8 @@
 //! indicator's timer, and the session's start for the log. One call per frame into gpu/.
 
 use super::indicator::{self, Timer};
+use super::live_settings::Settings;
 use super::log;
-use super::settings::Settings;
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurredTexels, TexelSink};
 use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions};

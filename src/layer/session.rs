@@ -1,15 +1,15 @@
 //! Sessions: read the Vulkan graphics binding at xrCreateSession and set up the session's
 //! processor and background source ([`sources`]); at xrEndFrame enhance the frame's held
-//! images ([`frame`]) and release them before the runtime composes them.
-//! At xrCreateSession the system's `[device."..."]` config table applies ([`device`]).
+//! images ([`end_frame`]) and release them before the runtime composes them.
+//! At xrCreateSession the system's `[device."..."]` config table applies ([`headset_settings`]).
 //! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
 //! a changed background source is reopened on a helper thread while frames pass through.
 
 use super::ffi::{find_in_chain, guard, LayerError};
+use super::live_settings::Settings;
 use super::processor::Processor;
-use super::settings::Settings;
 use super::state::{self, lock, SessionState};
-use super::{blend, device, frame, log, sources, swapchain};
+use super::{blend, end_frame, headset_settings, log, sources, swapchain};
 use crate::gpu::{Engine, GpuDevice, GpuError};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
@@ -38,7 +38,7 @@ pub unsafe extern "system" fn create_session(
         });
         // SAFETY: the runtime accepted info, so its systemId is the app's system.
         let system = unsafe { info.as_ref() }.map(|i| i.system_id);
-        let settings = device::settings_on(instance, &inst, system);
+        let settings = headset_settings::settings_on(instance, &inst, system);
         let processor = match binding {
             // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
             Some(b) => set_up(unsafe { &*b }, &settings),
@@ -197,7 +197,7 @@ fn layer_end_frame(session: xr::Session, s: &Mutex<SessionState>, info: *const x
     // SAFETY: the app's frame end info (null is left for the runtime to reject).
     if let Some(info) = unsafe { info.as_ref() } {
         let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            frame::enhance_frame(&mut s, info)
+            end_frame::enhance_frame(&mut s, info)
         }));
         if done.is_err() {
             log::info(

@@ -10,8 +10,8 @@
 
 use super::dispatch::NextFns;
 use super::image_states::ImageStates;
+use super::live_settings::Settings;
 use super::processor::Processor;
-use super::settings::Settings;
 use crate::gpu::PixelFormat;
 use ash::vk;
 use openxr_sys as xr;

@@ -302,7 +302,7 @@ fn enhance_ahead(
         "the app works ahead of xrEndFrame (a pipelined renderer): its images are enhanced when released, with the view regions it last submitted",
     );
     if let Some(s) = s {
-        super::frame::enhance_ahead(s, sc, swapchain, image);
+        super::end_frame::enhance_ahead(s, sc, swapchain, image);
     }
 }
 

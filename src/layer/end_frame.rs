@@ -2,14 +2,14 @@
 //! configured, quads), with which camera mapping, and their enhancement on the app's queue,
 //! at xrEndFrame or, for an image an app released ahead of its xrEndFrame, at that release.
 
-use super::capture;
+use super::capture_files;
+use super::live_settings::Settings;
 use super::log;
 use super::motion::{self, FrameMotion};
 use super::processor::Processor;
-use super::registration::{self, ViewGeometry};
-use super::settings::Settings;
 use super::sources;
 use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
+use super::view_mappings::{self, ViewGeometry};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::blurred_texels::BlurTaps;
@@ -20,7 +20,7 @@ use crate::gpu::{CapturedView, FrameView, GpuError, ViewKey};
 use openxr_sys as xr;
 
 /// A sub-image a layer names, with its camera mapping when it is a projection view (each
-/// view registered from its field of view and pose, see [`registration`]; None for quads).
+/// view registered from its field of view and pose, see [`view_mappings`]; None for quads).
 struct SubImage {
     sub: xr::SwapchainSubImage,
     mapping: Option<CameraMapping>,
@@ -60,7 +60,7 @@ unsafe fn sub_images(
             let mappings = motion.mappings(settings, &geometry, proj.space);
             for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
                 if enhancing {
-                    registration::log_mapping(settings, k, &mapping, &source);
+                    view_mappings::log_mapping(settings, k, &mapping, &source);
                 }
                 out.push(SubImage {
                     sub: view.sub_image,
@@ -112,7 +112,7 @@ fn work_item(
         // Quads, and whole images before the first xrEndFrame, take the manual mapping.
         mapping: region
             .mapping
-            .unwrap_or_else(|| registration::quad_mapping(settings)),
+            .unwrap_or_else(|| view_mappings::quad_mapping(settings)),
     })
 }
 
@@ -393,7 +393,7 @@ fn write_capture(s: &SessionState, views: &[CapturedView], bg: &crate::image::Rg
     };
     for (k, v) in views.iter().enumerate() {
         let motion = motion::capture_json(s.motion.views.get(k));
-        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings, motion);
+        let written = capture_files::write_view(&c.dir, s.processed, k, v, bg, &s.settings, motion);
         if let Err(e) = written {
             log::once("capture-failed", &format!("capture failed: {e}"));
         }
