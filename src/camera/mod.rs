@@ -10,10 +10,9 @@
 //! [`Frame`]s and a [`SourceStatus`]; what to do with them (preprocess once per new
 //! `sequence`, pass through when `Lost`) is the consumer's business.
 //! Privacy: a camera is open only while its [`Background`] lives, and no frame is written
-//! anywhere except by [`cli::test`] when asked for an output folder.
+//! anywhere except by `contrastxr camera test` when asked for an output folder.
 
 mod background;
-pub mod cli;
 pub mod clock;
 pub mod convert;
 mod error;

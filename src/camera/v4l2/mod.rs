@@ -9,9 +9,11 @@ mod capture_thread;
 mod choose;
 pub mod controls;
 mod devices;
+mod listing;
 pub mod usb;
 
 pub use auto::looks_built_in;
 pub(crate) use capture_thread::spawn;
 pub use choose::{choose_mode, Mode};
 pub use devices::*;
+pub use listing::listing;
