@@ -19,7 +19,6 @@ pub mod installed_files;
 pub mod live_settings;
 pub mod log;
 mod motion;
-mod processor;
 pub mod session;
 mod session_motion;
 mod sources;
