@@ -7,7 +7,7 @@ mod common;
 
 use common::{sandbox, scratch_file, ApiDump, SandboxRun, Validation, XR_CLIENT};
 use contrastxr::algorithm::{conformant, enhance_linear, enhance_srgb8_trace, Method, Params};
-use contrastxr::background::{prepare, PreparedBackground};
+use contrastxr::background_preparation::{prepare, PreparedBackground};
 use contrastxr::image::RgbaImage;
 use glam::DVec3;
 use std::path::{Path, PathBuf};

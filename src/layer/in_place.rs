@@ -18,7 +18,7 @@ pub fn added_usage(
     format: PixelFormat,
     info: &xr::SwapchainCreateInfo,
 ) -> Option<xr::SwapchainUsageFlags> {
-    let gpu = s.processor.as_ref()?.gpu();
+    let gpu = &s.engine.as_ref()?.gpu;
     let wanted = match s.settings.in_place {
         InPlace::On => true,
         InPlace::Off => false,

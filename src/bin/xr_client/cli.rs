@@ -1,8 +1,8 @@
 //! Command-line flags. They are a stable interface: the runtime and layer tests drive the client
 //! with them.
 
-use crate::format::{SwapchainFormat, FORMATS};
 use crate::pattern::Content;
+use crate::swapchain_format::{SwapchainFormat, FORMATS};
 
 pub const USAGE: &str = "\
 usage: contrastxr-xr-client [options]

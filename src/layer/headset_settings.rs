@@ -5,8 +5,8 @@
 
 use super::dispatch::NextFns;
 use super::ffi::c_str;
+use super::live_settings::{self, Settings};
 use super::log;
-use super::settings::{self, Settings};
 use super::state::InstanceState;
 use crate::config::{Resolved, KEYS};
 use openxr_sys as xr;
@@ -59,7 +59,7 @@ pub fn settings_on(
     inst: &InstanceState,
     system: Option<xr::SystemId>,
 ) -> Arc<Settings> {
-    let live = settings::live(instance.into_raw());
+    let live = live_settings::live(instance.into_raw());
     let (Some(live), Some(system)) = (live, system) else {
         return inst.settings.clone();
     };

@@ -4,9 +4,9 @@ use ash::vk::{self, Handle};
 use openxr as xr;
 
 use crate::error::{Context, Result};
-use crate::format::SwapchainFormat;
 use crate::gpu::Gpu;
 use crate::pattern::{texel, Target};
+use crate::swapchain_format::SwapchainFormat;
 use crate::timing::Calls;
 
 /// What one array layer of a swapchain image shows.

@@ -2,25 +2,27 @@
 //! configured, quads), with which camera mapping, and their enhancement on the app's queue,
 //! at xrEndFrame or, for an image an app released ahead of its xrEndFrame, at that release.
 
-use super::capture;
+use super::capture_files;
+use super::indicator;
+use super::live_settings::Settings;
 use super::log;
 use super::motion::{self, FrameMotion};
-use super::processor::Processor;
-use super::registration::{self, ViewGeometry};
-use super::settings::Settings;
 use super::sources;
 use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
+use super::view_mappings::{self, ViewGeometry};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::blurred_texels::BlurTaps;
 use crate::camera;
-use crate::gpu::frame::FrameOptions;
+use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions};
+use crate::gpu::overlay::OverlayPixels;
 use crate::gpu::pipeline_cache::Origin;
 use crate::gpu::{CapturedView, FrameView, GpuError, ViewKey};
 use openxr_sys as xr;
+use std::time::Instant;
 
 /// A sub-image a layer names, with its camera mapping when it is a projection view (each
-/// view registered from its field of view and pose, see [`registration`]; None for quads).
+/// view registered from its field of view and pose, see [`view_mappings`]; None for quads).
 struct SubImage {
     sub: xr::SwapchainSubImage,
     mapping: Option<CameraMapping>,
@@ -60,7 +62,7 @@ unsafe fn sub_images(
             let mappings = motion.mappings(settings, &geometry, proj.space);
             for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
                 if enhancing {
-                    registration::log_mapping(settings, k, &mapping, &source);
+                    view_mappings::log_mapping(settings, k, &mapping, &source);
                 }
                 out.push(SubImage {
                     sub: view.sub_image,
@@ -112,7 +114,7 @@ fn work_item(
         // Quads, and whole images before the first xrEndFrame, take the manual mapping.
         mapping: region
             .mapping
-            .unwrap_or_else(|| registration::quad_mapping(settings)),
+            .unwrap_or_else(|| view_mappings::quad_mapping(settings)),
     })
 }
 
@@ -236,7 +238,7 @@ fn background_frame(s: &mut SessionState) -> Option<camera::Frame> {
     frame
 }
 
-/// The background's identity for the processor: a new camera frame, or new settings (the
+/// The background's identity for the engine: a new camera frame, or new settings (the
 /// background is preprocessed with the settings' blur and FoV mapping), count as new.
 fn background_sequence(frame_sequence: u64, s: &Settings) -> u64 {
     frame_sequence.wrapping_add(s.generation << 40)
@@ -248,7 +250,7 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = s.background.as_ref().and_then(|bg| bg.latest());
     let captured_at = s.frame_in_use.as_ref().map(|f| f.captured_at);
     let mut moving = motion::at_end_frame(s, info.display_time, captured_at);
-    let enhancing = s.processor.is_some();
+    let enhancing = s.engine.is_some();
     // SAFETY: the app's frame end info, valid for this call.
     let subs = unsafe { sub_images(info, &s.settings, &mut moving, enhancing) };
     moving.finish(s);
@@ -264,8 +266,8 @@ const SOURCE_TEXELS: &str =
     "live frames' texels are written into mapped memory on the camera's thread, before the frame call";
 
 /// How a frame's texels, when its source prepared them, reach the views (the log's line).
-fn prepared_texels_path(prepared: bool, processor: &Processor) -> Option<&'static str> {
-    prepared.then_some(match processor.direct_texels() {
+fn prepared_texels_path(prepared: bool, engine: &FrameEngine) -> Option<&'static str> {
+    prepared.then_some(match engine.direct_texels() {
         true => "live frames' texels are written straight into mapped images the views sample",
         false => "live frames' texels reach the views through a staging buffer and an image copy",
     })
@@ -282,7 +284,7 @@ fn guarded_process(
         log::info(
             "internal error while enhancing: passing this session's frames through from now on",
         );
-        s.retire_processor();
+        s.retire_engine();
     }
 }
 
@@ -291,18 +293,18 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
     // Mode off: the app's frames untouched, no GPU work at all.
     if items.is_empty()
         || s.settings.params.mode == ViewMode::Off
-        || s.processor.is_none()
+        || s.engine.is_none()
         || !acts_on(s, blend)
     {
         sources::close_when_idle(s);
         return;
     }
     sources::open_when_needed(s);
-    if let (Some(bg), Some(processor)) = (&s.background, &s.processor) {
+    if let (Some(bg), Some(engine)) = (&s.background, &s.engine) {
         // Live frames come prepared for these settings from the source's thread, which also
         // writes them into the images the views sample once the engine has made them.
         bg.prepare_with(BlurTaps::of(&s.settings.params));
-        bg.deliver_texels_to(processor.texel_sink());
+        bg.deliver_texels_to(engine.texel_sink());
     }
     let Some(frame) = background_frame(s) else {
         return;
@@ -312,16 +314,20 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
         wait_for_pipelines: s.settings.wait_for_pipelines,
     };
     let sequence = background_sequence(frame.sequence, &s.settings);
-    let processor = s.processor.as_mut().expect("checked above");
     let prepared = frame.prepared.as_deref();
-    let background = super::processor::background(&frame.image, prepared, sequence);
-    let done = processor.process(&items, background, &s.settings, options);
-    let texels_path = prepared_texels_path(prepared.is_some(), processor);
-    let from_source = processor.texels_from_source();
+    let background = FrameBackground {
+        image: &frame.image,
+        prepared,
+        sequence,
+    };
+    let done = enhance(s, &items, background, options);
+    let engine = s.engine.as_ref().expect("checked above");
+    let texels_path = prepared_texels_path(prepared.is_some(), engine);
+    let from_source = engine.texels_from_source().0 > 0;
     match done {
         Ok(views) => {
             if s.processed == 0 {
-                log_began(processor);
+                log_began(s.started, engine);
             }
             if options.capture {
                 write_capture(s, &views, &frame.image);
@@ -354,15 +360,41 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
             log::info(&format!(
                 "GPU work failed ({e}): passing this session's frames through from now on"
             ));
-            s.retire_processor();
+            s.retire_engine();
         }
     }
 }
 
+/// Enhances the views with the newest background, and draws the indicator while it shows.
+/// [`GpuError::Pending`] while a pipeline is still being built (frames pass through).
+fn enhance(
+    s: &mut SessionState,
+    views: &[FrameView],
+    background: FrameBackground,
+    options: FrameOptions,
+) -> Result<Vec<CapturedView>, GpuError> {
+    let engine = s.engine.as_mut().expect("checked by the caller");
+    let params = &s.settings.params;
+    engine.pipelines_ready(views, params, options.wait_for_pipelines)?;
+    // The indicator's time starts with the first enhanced frame, not while pipelines build.
+    s.indicator.update(&s.settings, Instant::now());
+    let text = s.indicator.showing(Instant::now()).map(str::to_string);
+    let runs = |region| {
+        text.as_deref()
+            .map_or(Vec::new(), |t| indicator::runs(t, region))
+    };
+    let overlay = text.as_deref().map(|key| OverlayPixels {
+        key,
+        colour: indicator::COLOUR,
+        runs: &runs,
+    });
+    engine.process(views, background, params, overlay.as_ref(), options)
+}
+
 /// The session's start-up in one line: when enhancement began and what the pipelines took.
-fn log_began(processor: &Processor) {
-    let after = processor.started.elapsed().as_secs_f64();
-    let Some(r) = processor.build_report() else {
+fn log_began(started: Instant, engine: &FrameEngine) {
+    let after = started.elapsed().as_secs_f64();
+    let Some(r) = engine.build_report() else {
         return;
     };
     let cache = match &r.cache {
@@ -393,7 +425,7 @@ fn write_capture(s: &SessionState, views: &[CapturedView], bg: &crate::image::Rg
     };
     for (k, v) in views.iter().enumerate() {
         let motion = motion::capture_json(s.motion.views.get(k));
-        let written = capture::write_view(&c.dir, s.processed, k, v, bg, &s.settings, motion);
+        let written = capture_files::write_view(&c.dir, s.processed, k, v, bg, &s.settings, motion);
         if let Err(e) = written {
             log::once("capture-failed", &format!("capture failed: {e}"));
         }

@@ -5,8 +5,8 @@
 //! few 3x3 products per view and frame. Where each view's mapping comes from is logged once
 //! per settings generation.
 
+use super::live_settings::Settings;
 use super::log;
-use super::settings::Settings;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::registration::{head_pose, view_mapping, Fov, Nudge, Pose};
 use crate::config::EYES;

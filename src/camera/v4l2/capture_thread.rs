@@ -5,8 +5,8 @@
 use super::{choose_mode, device_dir, modes, probe};
 use crate::camera::convert::{to_rgba_into, PixelFormat};
 use crate::camera::error::CameraError;
-use crate::camera::frame::{Frame, Shared, SourceStatus};
-use crate::camera::log::log;
+use crate::camera::log_sink::log;
+use crate::camera::mailbox::{Frame, Shared, SourceStatus};
 use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
 use crate::camera::{CaptureConfig, SourceSpec};
