@@ -10,6 +10,8 @@ mod error;
 mod frame_loop;
 mod full_stderr;
 mod gipa;
+mod gl_run;
+mod glx;
 mod gpu;
 mod leftovers;
 mod memory;
@@ -56,6 +58,7 @@ fn main() -> ExitCode {
         views: 2,
         quad: options.quad,
         vk_validation: options.validation,
+        graphics: options.graphics.name().to_string(),
         ..Report::default()
     };
     let mut stats = Stats {
@@ -115,6 +118,9 @@ fn print(report: &Report, options: &Options) {
 
 fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> {
     let entry = load_openxr()?;
+    if options.graphics == cli::Graphics::OpenGl {
+        return gl_run::run(&entry, options, report, stats);
+    }
     let available = entry
         .enumerate_extensions()
         .ctx("xrEnumerateInstanceExtensionProperties")?;

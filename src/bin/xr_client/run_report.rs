@@ -13,6 +13,11 @@ pub struct Report {
     pub frames_submitted: u32,
     pub frames_ended: u32,
     pub reached_focused: bool,
+    /// The session's graphics API: "vulkan" or "opengl".
+    pub graphics: String,
+    /// With --graphics opengl: the context's GL version and renderer.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gl: Option<String>,
     pub format: String,
     pub layout: String,
     pub views: u32,
