@@ -29,6 +29,19 @@ fn lock() -> MutexGuard<'static, Work> {
     work().0.lock().unwrap_or_else(|p| p.into_inner())
 }
 
+/// What the exit runs first, with its deadline: each waits for work of the layer's own still
+/// running in a driver (gpu/warm_up.rs's left-over compiles).
+fn exit_waits() -> MutexGuard<'static, Vec<fn(Instant)>> {
+    static WAITS: Mutex<Vec<fn(Instant)>> = Mutex::new(Vec::new());
+    WAITS.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Has the exit run `wait` (once per call of this) before it waits for the builds.
+pub fn on_exit(wait: fn(Instant)) {
+    watch();
+    exit_waits().push(wait);
+}
+
 /// Registers the exit handler (once per process, on the first pipeline thread).
 pub fn watch() {
     static REGISTERED: Once = Once::new();
@@ -69,8 +82,10 @@ pub fn exiting() -> bool {
 
 extern "C" fn at_exit() {
     let deadline = Instant::now() + EXIT_WAIT;
+    lock().exiting = true;
+    let waits = std::mem::take(&mut *exit_waits());
+    waits.into_iter().for_each(|wait| wait(deadline));
     let mut w = lock();
-    w.exiting = true;
     while w.busy > 0 {
         let left = deadline.saturating_duration_since(Instant::now());
         if left.is_zero() {

@@ -10,9 +10,9 @@
 //! Vulkan loader: nothing of it belongs to the app's device or instance. The building thread
 //! only records, submits and waits on the warm-up device's own objects, and stops waiting when
 //! the session ends. At the session's end a compile still in flight is not waited for: the
-//! device is handed to a thread of its own that waits for the compile (the driver cannot stop
-//! it); the device and its instance are then destroyed on an app's thread, at the next
-//! session's warm-up or end (see [`WarmUp::end`]).
+//! device is left to the driver until the compile (which no driver can stop) has finished, and
+//! then destroyed with its instance on an app's thread, at the next session's warm-up or end
+//! (see [`WarmUp::end`]); the process's exit waits for the compile.
 
 use super::commands::Commands;
 use super::device::DeviceKind;
@@ -27,7 +27,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use ash::vk;
 use std::collections::HashSet;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex, Once, OnceLock};
 use std::time::{Duration, Instant};
 
 /// The shaders warmed up in this process, per device kind: the driver's disk cache has them,
@@ -39,8 +39,9 @@ fn warmed() -> std::sync::MutexGuard<'static, HashSet<(DeviceKind, ShaderId)>> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Warm-up devices whose last dispatch finished after their session had ended, waiting to be
-/// destroyed on an app's thread (at the next session's warm-up or end).
+/// Warm-up devices of ended sessions whose last dispatch (a compile, which no driver can
+/// interrupt) was still running: destroyed on an app's thread once it has finished (at the
+/// next session's warm-up or end), waited for by the process's exit.
 fn left_over() -> std::sync::MutexGuard<'static, Vec<WarmUp>> {
     static LEFT: Mutex<Vec<WarmUp>> = Mutex::new(Vec::new());
     // Only pushes and takes happen under this lock.
@@ -248,7 +249,7 @@ impl WarmUp {
             self.slow_until = Some(Instant::now() + SLOW_BUILD);
         }
         let deadline = Instant::now() + TIMEOUT;
-        while !self.finished()? {
+        while !self.finished_within(WAIT_SLICE_NS)? {
             if stopped() || Instant::now() > deadline {
                 return Err(GpuError::Unsupported("warm-up not finished".into()));
             }
@@ -256,13 +257,13 @@ impl WarmUp {
         Ok(())
     }
 
-    /// Whether the last dispatch has finished, after waiting for it one slice at most.
-    fn finished(&mut self) -> Result<bool, GpuError> {
+    /// Whether the last dispatch has finished, after waiting for it `timeout_ns` at most.
+    fn finished_within(&mut self, timeout_ns: u64) -> Result<bool, GpuError> {
         if self.slow_until.is_some_and(|t| Instant::now() < t) {
-            std::thread::sleep(Duration::from_nanos(WAIT_SLICE_NS));
+            std::thread::sleep(Duration::from_nanos(timeout_ns));
             return Ok(false);
         }
-        match self.commands.wait(&self.gpu, WAIT_SLICE_NS) {
+        match self.commands.wait(&self.gpu, timeout_ns) {
             Ok(()) => Ok(true),
             Err(GpuError::Vulkan {
                 result: vk::Result::TIMEOUT,
@@ -272,46 +273,50 @@ impl WarmUp {
         }
     }
 
-    /// Destroys, on the caller's thread (an app's), the warm-up devices whose compile finished
-    /// after their session had ended.
+    /// Destroys, on the caller's thread (an app's), the left-over warm-up devices whose last
+    /// dispatch has finished.
     pub fn destroy_left_over() {
-        let left = std::mem::take(&mut *left_over());
+        let mut finished = Vec::new();
+        let mut left = left_over();
+        let mut k = 0;
+        while k < left.len() {
+            match left[k].finished_within(0).unwrap_or(true) {
+                true => finished.push(left.swap_remove(k)),
+                false => k += 1,
+            }
+        }
         drop(left);
+        drop(finished);
     }
 
     /// Ends a session's warm-up device, on the app's thread after the building thread has
-    /// ended: dropped here when its last dispatch has finished, else handed to a thread of
-    /// its own that waits for the dispatch (at most [`TIMEOUT`]) and leaves it to be destroyed
-    /// on an app's thread ([`WarmUp::destroy_left_over`]). Returns whether it was left to
-    /// that thread.
+    /// ended: dropped here when its last dispatch has finished, else left in the driver's
+    /// hands until it has ([`WarmUp::destroy_left_over`]; the process's exit waits for it).
+    /// Returns whether it was left.
     pub fn end(slot: WarmUpSlot) -> bool {
         WarmUp::destroy_left_over();
         let Some(mut warm_up) = lock(&slot).warm_up.take() else {
             return false;
         };
-        if warm_up.finished().unwrap_or(true) {
+        if warm_up.finished_within(0).unwrap_or(true) {
             return false;
         }
-        // Counted as work in progress: the process's exit waits for it (gpu/process_exit.rs).
-        let Some(busy) = super::process_exit::Busy::begin() else {
-            return false;
-        };
-        let spawned = std::thread::Builder::new()
-            .name("contrastxr-warm-up-end".into())
-            .spawn(move || {
-                let deadline = Instant::now() + TIMEOUT;
-                while !warm_up.finished().unwrap_or(true) && Instant::now() < deadline {}
-                // Destroyed on an app's thread (never an instance on a thread of the layer's
-                // own). Inside the process's exit, other exit handlers may already have torn
-                // the driver down: it is left to the exit then.
-                match super::process_exit::exiting() {
-                    true => std::mem::forget(warm_up),
-                    false => left_over().push(warm_up),
-                }
-                drop(busy);
-            });
-        spawned.is_ok()
+        static AT_EXIT: Once = Once::new();
+        AT_EXIT.call_once(|| super::process_exit::on_exit(wait_for_left_over));
+        left_over().push(warm_up);
+        true
     }
+}
+
+/// At the process's exit: waits (until `deadline`) for the dispatches of left-over warm-up
+/// devices, so that no compile runs under the driver's static destructors, and leaves the
+/// devices to the exit (other exit handlers may already have torn the driver down).
+fn wait_for_left_over(deadline: Instant) {
+    let mut left = left_over();
+    for w in left.iter_mut() {
+        while !w.finished_within(WAIT_SLICE_NS).unwrap_or(true) && Instant::now() < deadline {}
+    }
+    std::mem::take(&mut *left).into_iter().for_each(std::mem::forget);
 }
 
 impl WarmUp {
