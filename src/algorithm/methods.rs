@@ -1,11 +1,13 @@
-//! The per-pixel methods as one table (src/algorithm/method_table.rs, one entry each): the
-//! `Method` type, each method's entry, and the names derived from them for the settings, the
-//! command line and their help.
+//! The per-pixel methods as one table (src/algorithm/method_table.rs, one entry each): each
+//! method's entry (its CPU reference, shader file, settings and passes), and the names derived
+//! from them for the settings, the command line and their help. The `Method` type itself is
+//! src/algorithm/method.rs.
 
 use glam::DVec3;
 
 use super::constraints::Margin;
-use super::Params;
+use super::method::Method;
+use super::params::Params;
 
 include!("method_table.rs");
 
@@ -71,13 +73,6 @@ macro_rules! define_methods {
         push: [$($push:literal),* $(,)?],
         passes: [$($pass:ident),* $(,)?],
     }),* $(,)?) => {
-        /// Which per-pixel method runs (docs/algorithm.md, Per-pixel optimisation and
-        /// Comparison methods); one variant per entry of method_table.rs.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-        pub enum Method {
-            $(#[doc = $doc] $variant,)*
-        }
-
         /// Every method's entry, in `Method` order.
         pub static ENTRIES: [MethodEntry; Method::ALL.len()] = [$(MethodEntry {
             method: Method::$variant,
@@ -91,10 +86,6 @@ macro_rules! define_methods {
             push: &[$($push),*],
             passes: &[$(Pass::$pass),*],
         }),*];
-
-        impl Method {
-            pub const ALL: [Method; [$($code),*].len()] = [$(Method::$variant),*];
-        }
 
         /// Every method's name, in `Method` order (for the derived texts below).
         const NAMES: [&str; Method::ALL.len()] = [$($name),*];
@@ -114,15 +105,6 @@ impl Method {
     /// Its entry in method_table.rs.
     pub fn entry(self) -> &'static MethodEntry {
         &ENTRIES[self as usize]
-    }
-
-    /// The name used on the command line and in config/JSON.
-    pub fn name(self) -> &'static str {
-        self.entry().name
-    }
-
-    pub fn parse(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
     }
 }
 
