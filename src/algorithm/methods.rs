@@ -30,7 +30,7 @@ impl std::fmt::Debug for Reference {
     }
 }
 
-/// A GPU pass of a method, in the order the recorder runs them (src/gpu/record.rs).
+/// A GPU pass of a method, in the order the recorder runs them (src/gpu/recipe/record.rs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
     /// Lists the tiles with a foreground pixel (`classify`).
@@ -41,7 +41,7 @@ pub enum Pass {
     Enhance,
 }
 
-/// The passes the recorder implements (src/gpu/record.rs runs an entry's `passes` in their
+/// The passes the recorder implements (src/gpu/recipe/record.rs runs an entry's `passes` in their
 /// order; its arms assume this one): every entry's `passes` must be these (a test holds them
 /// to it).
 pub const PER_PIXEL_PASSES: [Pass; 3] = [Pass::Classify, Pass::FinishTiles, Pass::Enhance];
@@ -231,7 +231,11 @@ mod tests {
     #[test]
     fn every_entry_has_the_passes_the_recorder_runs() {
         for e in &ENTRIES {
-            assert_eq!(e.passes, PER_PIXEL_PASSES, "{}: src/gpu/record.rs", e.name);
+            assert_eq!(
+                e.passes, PER_PIXEL_PASSES,
+                "{}: src/gpu/recipe/record.rs",
+                e.name
+            );
         }
     }
 
@@ -254,7 +258,10 @@ mod tests {
     /// PARAMS', and its WGSL reads no push-constant field it does not declare.
     #[test]
     fn every_entry_names_real_settings_and_push_constants() {
-        let fields: Vec<&str> = crate::gpu::interface::PARAMS.iter().map(|p| p.0).collect();
+        let fields: Vec<&str> = crate::gpu::shaders::interface::PARAMS
+            .iter()
+            .map(|p| p.0)
+            .collect();
         for e in &ENTRIES {
             for k in e.settings {
                 assert!(

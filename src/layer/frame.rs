@@ -15,7 +15,7 @@ use crate::algorithm::params::ViewMode;
 use crate::blurred_texels::BlurTaps;
 use crate::camera;
 use crate::gpu::frame::FrameOptions;
-use crate::gpu::pipeline_cache::Origin;
+use crate::gpu::pipelines::Origin;
 use crate::gpu::{CapturedView, FrameView, GpuError, ViewKey};
 use openxr_sys as xr;
 
@@ -98,22 +98,24 @@ fn work_item(
         log::once("bad-rect", "a layer's imageRect/imageArrayIndex lies outside its swapchain: that view passes through");
         return None;
     }
-    Some(FrameView {
-        key: ViewKey {
-            swapchain: swapchain.into_raw(),
-            offset: (r.offset.x, r.offset.y),
-            extent: (r.extent.width as u32, r.extent.height as u32),
-            array_index: region.array_index,
-        },
-        image: vk_image,
+    let key = ViewKey {
+        swapchain: swapchain.into_raw(),
+        offset: (r.offset.x, r.offset.y),
+        extent: (r.extent.width as u32, r.extent.height as u32),
+        array_index: region.array_index,
+    };
+    // Quads, and whole images before the first xrEndFrame, take the manual mapping.
+    let mapping = region
+        .mapping
+        .unwrap_or_else(|| registration::quad_mapping(settings));
+    Some(FrameView::new(
+        key,
+        vk_image,
         format,
-        vk_format: sc.info.vk_format,
-        in_place: sc.info.in_place,
-        // Quads, and whole images before the first xrEndFrame, take the manual mapping.
-        mapping: region
-            .mapping
-            .unwrap_or_else(|| registration::quad_mapping(settings)),
-    })
+        sc.info.vk_format,
+        sc.info.in_place,
+        mapping,
+    ))
 }
 
 /// Each enhanced sub-image's swapchain with its regions in this frame, in submission order.

@@ -1,4 +1,4 @@
-//! A session's enhancement: the GPU engine that does a frame's work (gpu/frame.rs), the
+//! A session's enhancement: the GPU engine that does a frame's work (gpu/frame/frame_engine.rs), the
 //! indicator's timer, and the session's start for the log. One call per frame into gpu/.
 
 use super::indicator::{self, Timer};
@@ -6,9 +6,10 @@ use super::log;
 use super::settings::Settings;
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurredTexels, TexelSink};
+use crate::gpu::frame::OverlayPixels;
 use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions};
-use crate::gpu::overlay::OverlayPixels;
-use crate::gpu::pipelines::{BuildReport, ShaderId};
+use crate::gpu::pipelines::BuildReport;
+use crate::gpu::shaders::shader_ids::ShaderId;
 use crate::gpu::{CapturedView, FrameView, GpuDevice, GpuError};
 use crate::image::RgbaImage;
 use std::sync::Arc;
@@ -57,7 +58,7 @@ impl Processor {
 
     /// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
     /// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device
-    /// is made here when one of them needs it, never on the pipeline thread (gpu/warm_up.rs).
+    /// is made here when one of them needs it, never on the pipeline thread (gpu/pipelines/warm_up.rs).
     pub fn request(&self, ids: &[ShaderId]) {
         let t = Instant::now();
         match self.engine().request(ids) {
@@ -77,7 +78,7 @@ impl Processor {
         self.engine().direct_texels()
     }
 
-    /// Where the session's live source should write its frames' texels (gpu/texel_slots.rs).
+    /// Where the session's live source should write its frames' texels (gpu/texels/texel_slots.rs).
     pub fn texel_sink(&self) -> Option<Arc<dyn TexelSink>> {
         self.engine().texel_sink()
     }

@@ -191,7 +191,7 @@ fn describe(instance: &ash::Instance) -> Result<Vec<(String, bool)>, vk::Result>
         .collect())
 }
 
-/// The Vulkan devices, found the way the engine finds them (`src/gpu/device.rs`): the loader
+/// The Vulkan devices, found the way the engine finds them (`src/gpu/device/gpu_device.rs`): the loader
 /// `libvulkan.so.1` through ash, a Vulkan 1.1 instance, vkEnumeratePhysicalDevices.
 pub fn vulkan() -> Finding {
     const NAME: &str = "vulkan";
