@@ -192,7 +192,11 @@ impl Rig {
         }
         let out = self
             .engine
-            .process(&views, background, &params, None, options);
+            .pipelines_ready(&views, &params, options.wait_for_pipelines)
+            .and_then(|ready| {
+                self.engine
+                    .process(ready, &views, background, &params, None, options)
+            });
         assert!(out.is_ok(), "frame {sequence}: {:?}", out.err());
         *self.sink.lock().unwrap() = self.engine.texel_sink();
     }

@@ -108,7 +108,7 @@ impl Processor {
     ) -> Result<Vec<CapturedView>, GpuError> {
         let params: &Params = &settings.params;
         let engine = self.engine.as_mut().expect("only taken in drop");
-        engine.pipelines_ready(views, params, options.wait_for_pipelines)?;
+        let ready = engine.pipelines_ready(views, params, options.wait_for_pipelines)?;
         // The indicator's time starts with the first enhanced frame, not while pipelines build.
         self.indicator.update(settings, Instant::now());
         let text = self.indicator.showing(Instant::now()).map(str::to_string);
@@ -121,7 +121,7 @@ impl Processor {
             colour: indicator::COLOUR,
             runs: &runs,
         });
-        engine.process(views, background, params, overlay.as_ref(), options)
+        engine.process(ready, views, background, params, overlay.as_ref(), options)
     }
 }
 

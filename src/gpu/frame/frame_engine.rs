@@ -50,6 +50,12 @@ pub struct FrameOptions {
     pub wait_for_pipelines: bool,
 }
 
+/// The pipelines of a frame's views are built: `pipelines_ready` gives it, `process` takes it,
+/// so that a frame checks them once and records nothing before they are.
+#[must_use]
+#[derive(Debug)]
+pub struct PipelinesReady(());
+
 pub struct FrameEngine {
     pub(super) engine: Engine,
     pub(super) commands: Commands,
@@ -139,19 +145,23 @@ impl FrameEngine {
     }
 
     /// Whether the pipelines these items need are built: if not, they are requested and,
-    /// with `wait`, waited for; without it the frame is [`GpuError::Pending`].
+    /// with `wait`, waited for; without it the frame is [`GpuError::Pending`]. A frame's one
+    /// check: `process` takes what it gives.
     pub fn pipelines_ready(
         &self,
         views: &[FrameView],
         params: &Params,
         wait: bool,
-    ) -> Result<(), GpuError> {
+    ) -> Result<PipelinesReady, GpuError> {
         let ids = Engine::shaders_for(params, views.iter().map(FrameView::shape))?;
         // A failed warm-up device only means slower first dispatches.
         let _ = self.prepare_warm_up(&ids);
         match self.engine.ready(&ids)? {
-            true => Ok(()),
-            false if wait => self.engine.wait_for(&ids, PIPELINE_WAIT),
+            true => Ok(PipelinesReady(())),
+            false if wait => self
+                .engine
+                .wait_for(&ids, PIPELINE_WAIT)
+                .map(|()| PipelinesReady(())),
             false => Err(GpuError::Pending),
         }
     }
@@ -294,17 +304,17 @@ impl FrameEngine {
 
     /// Enhances every view's region of the app's images in place, and draws `overlay` over
     /// them. With `capture`, also reads back each region before and after (waiting for the
-    /// GPU). [`GpuError::Pending`], with nothing recorded, while a pipeline it needs is still
-    /// being built (unless `wait_for_pipelines`).
+    /// GPU). `ready` is `pipelines_ready`'s answer for the same views and parameters.
     pub fn process(
         &mut self,
+        ready: PipelinesReady,
         views: &[FrameView],
         background: FrameBackground,
         params: &Params,
         overlay: Option<&OverlayPixels>,
         options: FrameOptions,
     ) -> Result<Vec<CapturedView>, GpuError> {
-        self.pipelines_ready(views, params, options.wait_for_pipelines)?;
+        let PipelinesReady(()) = ready;
         self.request_shared_fetches(views, params, background.image);
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
         // Before the wait: prepared texels may be in, or go into, a slot no submitted frame reads.

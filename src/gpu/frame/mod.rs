@@ -11,6 +11,6 @@ mod prepared_background;
 
 pub use app_views::can_store;
 pub(crate) use app_views::storage_view;
-pub use frame_engine::{FrameBackground, FrameEngine, FrameOptions};
+pub use frame_engine::{FrameBackground, FrameEngine, FrameOptions, PipelinesReady};
 pub use frame_view::{CapturedView, FrameView, ViewKey};
 pub use overlay::{OverlayPixels, Run};
