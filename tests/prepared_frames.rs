@@ -187,8 +187,8 @@ impl Rig {
         };
         let views = [self.view(i, &params)];
         let source = self.path.writer != Writer::Frame;
-        if let (true, true, Some(sink)) = (source, prepared, self.engine.texel_sink()) {
-            sink.offer(&texels);
+        if source && prepared {
+            self.engine.texel_sink().offer(&texels);
         }
         let out = self
             .engine
@@ -198,7 +198,7 @@ impl Rig {
                     .process(ready, &views, background, &params, None, options)
             });
         assert!(out.is_ok(), "frame {sequence}: {:?}", out.err());
-        *self.sink.lock().unwrap() = self.engine.texel_sink();
+        *self.sink.lock().unwrap() = Some(self.engine.texel_sink());
     }
 
     fn finish(mut self) {

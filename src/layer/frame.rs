@@ -302,9 +302,10 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
     sources::open_when_needed(s);
     if let (Some(bg), Some(processor)) = (&s.background, &s.processor) {
         // Live frames come prepared for these settings from the source's thread, which also
-        // writes them into the images the views sample once the engine has made them.
+        // writes them into the images the views sample once the engine has made them. The
+        // engine's sink is one for its life: after the first frame this delivers nothing new.
         bg.prepare_with(BlurTaps::of(&s.settings.params));
-        bg.deliver_texels_to(processor.texel_sink());
+        bg.deliver_texels_to(Some(processor.texel_sink()));
     }
     let Some(frame) = background_frame(s) else {
         return;

@@ -79,7 +79,7 @@ impl Processor {
     }
 
     /// Where the session's live source should write its frames' texels (gpu/texels/texel_slots.rs).
-    pub fn texel_sink(&self) -> Option<Arc<dyn TexelSink>> {
+    pub fn texel_sink(&self) -> Arc<dyn TexelSink> {
         self.engine().texel_sink()
     }
 

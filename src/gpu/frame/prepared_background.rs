@@ -31,9 +31,10 @@ impl FrameEngine {
     }
 
     /// Where a live source should write its frames' texels, on its own thread, for the next
-    /// frames to use without a write of their own: the texel ring, once made (the first frame
-    /// with prepared texels makes it).
-    pub fn texel_sink(&self) -> Option<Arc<dyn TexelSink>> {
+    /// frames to use without a write of their own: one sink for the engine's life, so a source
+    /// is connected to it once. It reaches the texel ring once the ring is made (the first
+    /// frame with prepared texels makes it).
+    pub fn texel_sink(&self) -> Arc<dyn TexelSink> {
         self.ring.sink()
     }
 

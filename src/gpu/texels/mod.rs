@@ -3,6 +3,7 @@
 
 mod mapped_rows;
 mod prepared_staging;
+mod ring_sink;
 mod slot_state;
 mod texel_ring;
 mod texel_slots;

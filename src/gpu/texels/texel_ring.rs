@@ -12,6 +12,7 @@
 
 use super::mapped_rows::MappedRows;
 use super::prepared_staging::new_staging;
+use super::ring_sink::RingSink;
 use super::slot_state::Taken;
 use super::texel_slots::TexelSlots;
 use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
@@ -124,6 +125,9 @@ pub struct TexelRing {
     memory: Vec<SlotMemory>,
     /// What the slots hold and who may write them; shared with the source's thread.
     slots: Option<Arc<TexelSlots>>,
+    /// The source's way in, the same for the ring's life: it reaches `slots` while they are
+    /// open.
+    sink: Arc<RingSink>,
     size: (u32, u32),
     /// The slots are images the views sample (else staging buffers).
     sampled: bool,
@@ -201,10 +205,10 @@ impl TexelRing {
         Ok(true)
     }
 
-    /// Where a live source writes its frames' texels (None before the images are made).
-    pub fn sink(&self) -> Option<Arc<dyn TexelSink>> {
-        let slots = self.slots.clone()?;
-        Some(slots)
+    /// Where a live source writes its frames' texels: one sink for the ring's life, which
+    /// takes them while the slots are made and open.
+    pub fn sink(&self) -> Arc<dyn TexelSink> {
+        self.sink.clone()
     }
 
     /// Submissions up to `n` have finished.
@@ -237,6 +241,7 @@ impl TexelRing {
         }
         let rows = self.memory.iter_mut().map(|m| rows_of(m, size.0)).collect();
         self.slots = Some(Arc::new(TexelSlots::new(size, rows)));
+        self.sink.connect(self.slots.clone());
         self.size = size;
         self.sampled = sampled;
         self.current = 0;
@@ -300,6 +305,7 @@ impl TexelRing {
     pub fn close_to_source(&mut self) {
         self.active = false;
         self.copy = None;
+        self.sink.connect(None);
         if let Some(slots) = &self.slots {
             slots.close();
         }
@@ -308,6 +314,7 @@ impl TexelRing {
     /// Frees the slots' memory, once the source's thread can no longer write it (a write under
     /// way ends first). No submission may still read it.
     pub fn destroy(&mut self, gpu: &GpuDevice) {
+        self.sink.connect(None);
         if let Some(slots) = self.slots.take() {
             slots.close();
         }
