@@ -19,7 +19,7 @@ pub use commands::Commands;
 pub use device_image::DeviceImage;
 pub use error::{GpuError, VkResultExt};
 pub use format::{PixelFormat, PixelLayout};
-pub use gpu_device::{DeviceKind, DeviceOptions, GpuDevice};
+pub use gpu_device::{physical_devices, DeviceKind, DeviceOptions, GpuDevice, PhysicalDeviceInfo};
 pub use image_copy::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
