@@ -487,3 +487,26 @@ fn a_public_handle_field_is_found() {
                 format: vk::Format,\n}\npub fn f(x: vk::Image) {}\n";
     assert_eq!(public_vulkan_fields(text), ["pub image: vk::Image,"]);
 }
+
+/// Inside the GPU engine a file name says one job: no two files of `src/gpu/` share a name
+/// (`mod.rs` aside), so a reader who knows the name knows the file.
+#[test]
+fn gpu_file_names_are_distinct() {
+    let gpu = Path::new(SRC).join("gpu");
+    let mut seen: BTreeMap<String, PathBuf> = BTreeMap::new();
+    let mut twice = Vec::new();
+    for file in src_tree().into_keys().filter(|f| f.starts_with(&gpu)) {
+        let name = file.file_name().unwrap().to_string_lossy().into_owned();
+        if name == "mod.rs" {
+            continue;
+        }
+        if let Some(first) = seen.insert(name, file.clone()) {
+            twice.push(format!("{} and {}", first.display(), file.display()));
+        }
+    }
+    assert!(
+        twice.is_empty(),
+        "same file names in src/gpu/:\n{}",
+        twice.join("\n")
+    );
+}
