@@ -510,3 +510,43 @@ fn gpu_file_names_are_distinct() {
         twice.join("\n")
     );
 }
+
+/// The shader interface (`src/gpu/shaders/`) is every graphics backend's: it names no graphics
+/// API and no other room of the engine.
+#[test]
+fn the_shader_interface_names_no_graphics_api() {
+    let shaders = Path::new(SRC).join("gpu/shaders");
+    let mut found = Vec::new();
+    for (file, text) in src_tree() {
+        if !file.starts_with(&shaders) {
+            continue;
+        }
+        let code = code(&text);
+        let other_room = code
+            .match_indices("crate::gpu::")
+            .any(|(at, m)| !code[at + m.len()..].starts_with("shaders::"));
+        // A path that starts with `word` (not `std::hash::` for `ash::`).
+        let names = |word: &str| {
+            code.match_indices(word).any(|(at, _)| {
+                let before = code[..at].chars().last();
+                !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+            })
+        };
+        for (bad, named) in [
+            ("ash::", names("ash::")),
+            ("vk::", names("vk::")),
+            ("gpu_allocator", names("gpu_allocator")),
+            ("another room of crate::gpu", other_room),
+        ] {
+            if named {
+                let rel = file.strip_prefix(SRC).unwrap().display().to_string();
+                found.push(format!("{rel}: {bad}"));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "the shader interface names:\n{}",
+        found.join("\n")
+    );
+}

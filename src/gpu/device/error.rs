@@ -1,5 +1,6 @@
 //! Errors of the GPU engine. Every message is one sentence a user can act on.
 
+use crate::gpu::shaders::shader_ids::NoShader;
 use ash::vk;
 use std::fmt;
 
@@ -42,6 +43,12 @@ impl fmt::Display for GpuError {
 }
 
 impl std::error::Error for GpuError {}
+
+impl From<NoShader> for GpuError {
+    fn from(e: NoShader) -> Self {
+        GpuError::Unsupported(e.to_string())
+    }
+}
 
 impl From<gpu_allocator::AllocationError> for GpuError {
     fn from(e: gpu_allocator::AllocationError) -> Self {

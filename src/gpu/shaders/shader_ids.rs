@@ -4,7 +4,7 @@
 use super::codes::mode_code;
 use super::modules;
 use crate::algorithm::params::ViewMode;
-use crate::gpu::device::GpuError;
+use std::fmt;
 
 /// One shader of `modules::all()`, by its id: its index there, which build.rs writes with the
 /// list (src/gpu/shaders/modules.rs), so no id here is counted by position.
@@ -16,9 +16,18 @@ pub const FINISH_TILES: ShaderId = ShaderId(modules::ID_FINISH_TILES);
 pub const COPY_PIXELS: ShaderId = ShaderId(modules::ID_COPY_PIXELS);
 pub const COPY_ROWS: ShaderId = ShaderId(modules::ID_COPY_ROWS);
 
-fn unsupported() -> GpuError {
-    GpuError::Unsupported("no shader for this method, mode and format".into())
+/// No shader is built for the asked blur, method, view mode and pixel format. A backend turns
+/// it into its own error (`GpuError::Unsupported` for Vulkan).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NoShader;
+
+impl fmt::Display for NoShader {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("no shader for this method, mode and format")
+    }
 }
+
+impl std::error::Error for NoShader {}
 
 /// Whether a shader works on the camera frame (the background's descriptor set) rather than
 /// on a view.
@@ -27,18 +36,18 @@ pub fn reads_camera(ShaderId(k): ShaderId) -> bool {
 }
 
 /// The background pass for a blur half-width (0..=7).
-pub fn decode_blur(half: u32) -> Result<ShaderId, GpuError> {
+pub fn decode_blur(half: u32) -> Result<ShaderId, NoShader> {
     modules::DECODE_BLUR
         .get(half as usize)
         .map(|&k| ShaderId(k))
-        .ok_or_else(unsupported)
+        .ok_or(NoShader)
 }
 
 /// The `enhance` shader for a method, view mode and pixel format (shader codes), reaching the
 /// pixels by `access` (interface.rs ACCESS_*); `extras` where the achromatic boost or the
 /// luminance cap is on. The general variant: valid for every mapping.
-pub fn enhance(codes: (u32, u32, u32), access: u32, extras: bool) -> Result<ShaderId, GpuError> {
-    enhance_variant(codes, access, extras, false).ok_or_else(unsupported)
+pub fn enhance(codes: (u32, u32, u32), access: u32, extras: bool) -> Result<ShaderId, NoShader> {
+    enhance_variant(codes, access, extras, false).ok_or(NoShader)
 }
 
 /// The shared-fetch variant of `enhance` (valid only where gpu/recipe/shared_fetch.rs says so), where
@@ -67,12 +76,12 @@ fn enhance_variant(
 }
 
 /// The `classify` shader for a pixel format (shader code) and pixel access.
-pub fn classify(format: u32, access: u32) -> Result<ShaderId, GpuError> {
+pub fn classify(format: u32, access: u32) -> Result<ShaderId, NoShader> {
     modules::CLASSIFY_VARIANTS
         .iter()
         .find(|&&(f, a, _)| f == format && a == access)
         .map(|&(_, _, k)| ShaderId(k))
-        .ok_or_else(unsupported)
+        .ok_or(NoShader)
 }
 
 /// The FORMAT code of an in-place variant (it reads and writes `app_image`); None for the
