@@ -1,6 +1,7 @@
-//! The bookkeeping of the frame engine's mapped texel images (gpu/texels/texel_ring.rs), shared with a
+//! The frame engine's mapped texel images (gpu/texels/texel_ring.rs) as slots shared with a
 //! live source's thread, which writes each new frame's texels into one of them before it
-//! publishes the frame (`TexelSink`): the app's frame call then only binds that image. Either
+//! publishes the frame (`TexelSink`): the app's frame call then only binds that image. What
+//! each slot holds is slot_state.rs's; where its texels lie in memory, mapped_rows.rs's. Either
 //! side writes an image only when no submission may still sample it, the frame being recorded
 //! does not sample it, and no other write is under way in it. The engine frees the memory only
 //! after `close`, which waits for a write under way; a closed ring takes no more writes.
