@@ -42,7 +42,7 @@ pub const POINTS: [(&str, &str); 14] = [
     ),
     (
         "warm-up-device",
-        "making a CPU driver's warm-up device (gpu/warm_up.rs)",
+        "making a CPU driver's warm-up device (gpu/pipelines/warm_up.rs)",
     ),
     (
         "device-lost",

@@ -11,11 +11,6 @@ const SRC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/src");
 /// Names every folder may have, each for the same role.
 const SAME_ROLE: &[&str] = &["mod.rs", "error.rs", "main.rs"];
 
-/// Names that a file under `src/gpu/` shares with a file elsewhere while `gpu/` is rearranged
-/// into rooms (`gpu/offline/in_place.rs` beside `layer/in_place.rs`). Empty this list once
-/// `gpu/`'s new layout is merged and named.
-const KNOWN_GPU_CLASHES: &[&str] = &["in_place.rs"];
-
 /// Every .rs file under `dir`.
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).unwrap().flatten() {
@@ -64,14 +59,9 @@ fn no_two_files_under_src_share_a_name_for_different_jobs() {
         }
         by_name.entry(name).or_default().push(file);
     }
-    let gpu = Path::new(SRC).join("gpu");
     let clashes: Vec<String> = by_name
         .iter()
         .filter(|(_, files)| files.len() > 1)
-        .filter(|(name, files)| {
-            !(KNOWN_GPU_CLASHES.contains(&name.as_str())
-                && files.iter().any(|f| f.starts_with(&gpu)))
-        })
         .map(|(name, files)| {
             let paths: Vec<String> = files
                 .iter()

@@ -3,7 +3,7 @@
 
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
-use contrastxr::gpu::pixel_codec::half_from_f32;
+use contrastxr::gpu::device::pixel_codec::half_from_f32;
 use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
 use contrastxr::image::RgbaImage;
 use std::process::Command;
@@ -50,7 +50,7 @@ fn assert_clean(e: &OfflineEngine) {
 fn every_embedded_shader_passes_spirv_val() {
     let dir = std::env::temp_dir().join(format!("contrastxr-spv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for shader in contrastxr::gpu::shaders::all() {
+    for shader in contrastxr::gpu::shaders::modules::all() {
         let path = dir.join(format!("{}.spv", shader.name));
         std::fs::write(&path, shader.bytes()).unwrap();
         let out = Command::new("spirv-val")
@@ -915,7 +915,7 @@ fn shared_and_general(
 
 #[test]
 fn shared_fetches_give_the_general_variants_output_bit_for_bit() {
-    use contrastxr::gpu::shared_fetch::shares_fetches;
+    use contrastxr::gpu::recipe::shares_fetches;
     let mut e = engine();
     let camera = noise(64, 40, 11);
     // 96, 128: 16-byte aligned rows (access_wide.wgsl); 97, 101: not (access_narrow.wgsl),
@@ -1004,7 +1004,7 @@ fn shared_fetches_in_place_match_the_general_variant() {
 /// camera rows, so they take the general variant, and the output conforms.
 #[test]
 fn mappings_the_shared_fetches_cannot_serve_take_the_general_variant() {
-    use contrastxr::gpu::shared_fetch::shares_fetches;
+    use contrastxr::gpu::recipe::shares_fetches;
     let mut e = engine();
     let camera = noise(64, 40, 19);
     let (c, s) = (0.6 * 0.2f64.cos(), 0.6 * 0.2f64.sin());

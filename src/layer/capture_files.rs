@@ -4,7 +4,7 @@
 
 use crate::colour;
 use crate::config::{Settings, Value, KEYS};
-use crate::gpu::pixel_codec;
+use crate::gpu::device::pixel_codec;
 use crate::gpu::CapturedView;
 use crate::gpu::PixelFormat;
 use crate::image::RgbaImage;
@@ -106,7 +106,7 @@ pub fn write_view(
     let mut json = serde_json::json!({
         "frame": frame,
         "view": view,
-        "format": format!("{:?}", item.vk_format),
+        "format": format!("{:?}", item.vk_format()),
         "bytes_per_pixel": item.format.bytes_per_pixel(),
         "srgb": item.format.srgb,
         "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},

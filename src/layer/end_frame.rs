@@ -14,9 +14,8 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::blurred_texels::BlurTaps;
 use crate::camera;
-use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions};
-use crate::gpu::overlay::OverlayPixels;
-use crate::gpu::pipeline_cache::Origin;
+use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions, OverlayPixels};
+use crate::gpu::pipelines::Origin;
 use crate::gpu::{CapturedView, FrameView, GpuError, ViewKey};
 use openxr_sys as xr;
 use std::time::Instant;
@@ -100,22 +99,24 @@ fn work_item(
         log::once("bad-rect", "a layer's imageRect/imageArrayIndex lies outside its swapchain: that view passes through");
         return None;
     }
-    Some(FrameView {
-        key: ViewKey {
-            swapchain: swapchain.into_raw(),
-            offset: (r.offset.x, r.offset.y),
-            extent: (r.extent.width as u32, r.extent.height as u32),
-            array_index: region.array_index,
-        },
-        image: vk_image,
+    let key = ViewKey {
+        swapchain: swapchain.into_raw(),
+        offset: (r.offset.x, r.offset.y),
+        extent: (r.extent.width as u32, r.extent.height as u32),
+        array_index: region.array_index,
+    };
+    // Quads, and whole images before the first xrEndFrame, take the manual mapping.
+    let mapping = region
+        .mapping
+        .unwrap_or_else(|| view_mappings::quad_mapping(settings));
+    Some(FrameView::new(
+        key,
+        vk_image,
         format,
-        vk_format: sc.info.vk_format,
-        in_place: sc.info.in_place,
-        // Quads, and whole images before the first xrEndFrame, take the manual mapping.
-        mapping: region
-            .mapping
-            .unwrap_or_else(|| view_mappings::quad_mapping(settings)),
-    })
+        sc.info.vk_format,
+        sc.info.in_place,
+        mapping,
+    ))
 }
 
 /// Each enhanced sub-image's swapchain with its regions in this frame, in submission order.
@@ -302,9 +303,10 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
     sources::open_when_needed(s);
     if let (Some(bg), Some(engine)) = (&s.background, &s.engine) {
         // Live frames come prepared for these settings from the source's thread, which also
-        // writes them into the images the views sample once the engine has made them.
+        // writes them into the images the views sample once the engine has made them. The
+        // engine's sink is one for its life: after the first frame this delivers nothing new.
         bg.prepare_with(BlurTaps::of(&s.settings.params));
-        bg.deliver_texels_to(engine.texel_sink());
+        bg.deliver_texels_to(Some(engine.texel_sink()));
     }
     let Some(frame) = background_frame(s) else {
         return;
@@ -375,7 +377,7 @@ fn enhance(
 ) -> Result<Vec<CapturedView>, GpuError> {
     let engine = s.engine.as_mut().expect("checked by the caller");
     let params = &s.settings.params;
-    engine.pipelines_ready(views, params, options.wait_for_pipelines)?;
+    let ready = engine.pipelines_ready(views, params, options.wait_for_pipelines)?;
     // The indicator's time starts with the first enhanced frame, not while pipelines build.
     s.indicator.update(&s.settings, Instant::now());
     let text = s.indicator.showing(Instant::now()).map(str::to_string);
@@ -388,7 +390,7 @@ fn enhance(
         colour: indicator::COLOUR,
         runs: &runs,
     });
-    engine.process(views, background, params, overlay.as_ref(), options)
+    engine.process(ready, views, background, params, overlay.as_ref(), options)
 }
 
 /// The session's start-up in one line: when enhancement began and what the pipelines took.

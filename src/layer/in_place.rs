@@ -7,7 +7,7 @@
 use super::ffi::find_in_chain;
 use super::state::SessionState;
 use crate::config::InPlace;
-use crate::gpu::app_views::can_store;
+use crate::gpu::frame::can_store;
 use crate::gpu::PixelFormat;
 use openxr_sys as xr;
 

@@ -14,7 +14,7 @@ use super::indicator::Timer;
 use super::live_settings::Settings;
 use super::log;
 use crate::gpu::frame::FrameEngine;
-use crate::gpu::pipelines::ShaderId;
+use crate::gpu::shaders::shader_ids::ShaderId;
 use crate::gpu::PixelFormat;
 use ash::vk;
 use openxr_sys as xr;
