@@ -8,7 +8,7 @@
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::registration::Nudge;
 use contrastxr::algorithm::Params;
-use contrastxr::background::fov_sharp;
+use contrastxr::background_preparation::fov_sharp;
 use contrastxr::colour;
 use contrastxr::evaluate::font::{draw_text, text_height};
 use contrastxr::evaluate::{perceived, stack_rows};

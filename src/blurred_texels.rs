@@ -1,9 +1,9 @@
 //! The camera frame decoded and blurred in f32, packed exactly as the GPU's `blurred_texels`
 //! image holds it (shaders/background.wgsl; `pack_linear` in shaders/common.wgsl): made on the
 //! CPU by a live background's own thread, so that a frame only copies it into that image
-//! (gpu/prepared_background.rs) instead of running the decode and blur passes. The arithmetic
+//! (gpu/frame/prepared_background.rs) instead of running the decode and blur passes. The arithmetic
 //! follows the passes' (decoded texels rounded to the packing, the same f32 taps summed in the
-//! same order), so both agree to the packing's rounding; src/background.rs is the f64 reference.
+//! same order), so both agree to the packing's rounding; src/background_preparation.rs is the f64 reference.
 
 use crate::algorithm::params::{Params, MAX_BLUR_SIZE};
 use crate::colour;
@@ -12,8 +12,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 /// Bits per linear channel in a packed texel, and its largest code: the shader interface's
-/// (src/gpu/interface.rs), the one definition.
-pub use crate::gpu::interface::{LINEAR_BITS, LINEAR_MAX};
+/// (src/gpu/shaders/interface.rs), the one definition.
+pub use crate::gpu::shaders::interface::{LINEAR_BITS, LINEAR_MAX};
 /// Bytes per texel: two packed texels (the texel and its right neighbour), 8 bytes each.
 pub const TEXEL_BYTES: usize = 16;
 /// Taps at offsets 0..=half for the widest blur.
@@ -54,7 +54,7 @@ pub struct BlurredTexels {
 }
 
 /// Where a live source hands each frame's texels, on its own thread, before it publishes the
-/// frame (camera/frame.rs): the frame engine's mapped images (gpu/texel_slots.rs), so that
+/// frame (camera/mailbox.rs): the frame engine's mapped images (gpu/texels/texel_slots.rs), so that
 /// the app's frame call finds them already written. Never blocks on the consumer.
 pub trait TexelSink: Send + Sync {
     fn offer(&self, texels: &BlurredTexels);
@@ -268,7 +268,7 @@ mod tests {
                 ..Params::default()
             };
             let texels = BlurredTexels::prepare(&camera, BlurTaps::of(&params));
-            let reference = crate::background::blurred_camera(&camera, &params);
+            let reference = crate::background_preparation::blurred_camera(&camera, &params);
             for y in 0..23 {
                 for x in 0..37 {
                     let at = (y * 37 + x) as usize * TEXEL_BYTES;

@@ -5,14 +5,15 @@
 //!
 //! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
-//! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `gl-program-link`
+//! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
+//! `gl-program-link`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 14] = [
+pub const POINTS: [(&str, &str); 15] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -42,7 +43,7 @@ pub const POINTS: [(&str, &str); 14] = [
     ),
     (
         "warm-up-device",
-        "making a CPU driver's warm-up device (gpu/warm_up.rs)",
+        "making a CPU driver's warm-up device (gpu/pipelines/warm_up.rs)",
     ),
     (
         "device-lost",
@@ -51,6 +52,10 @@ pub const POINTS: [(&str, &str); 14] = [
     (
         "swapchain-wait",
         "the fence wait in xrDestroySwapchain fails",
+    ),
+    (
+        "slow-build",
+        "a CPU driver's warm-up compile takes 5 s more (longer than any wait of the session's end)",
     ),
     (
         "gl-program-link",

@@ -8,7 +8,7 @@
 //! Lower modules never import higher ones.
 
 pub mod algorithm;
-pub mod background;
+pub mod background_preparation;
 pub mod blurred_texels;
 pub mod camera;
 pub mod colour;

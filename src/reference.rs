@@ -3,7 +3,7 @@
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::{enhance_srgb8, Params};
-use crate::background::{self, PreparedBackground};
+use crate::background_preparation::{self, PreparedBackground};
 use crate::image::RgbaImage;
 
 /// Enhances every display pixel against an already prepared background of the same size.
@@ -45,6 +45,6 @@ pub fn enhance_with_camera_mapped(
     params: &Params,
 ) -> RgbaImage {
     let (w, h) = (display.width, display.height);
-    let bg = background::prepare_mapped(camera, w, h, mapping, params);
+    let bg = background_preparation::prepare_mapped(camera, w, h, mapping, params);
     enhance_image(display, &bg, params)
 }

@@ -9,8 +9,8 @@
 
 mod common;
 
-use contrastxr::camera::v4l2::usb::UsbId;
-use contrastxr::camera::{cli, parse_source, Background, CaptureConfig, SourceSpec, SourceStatus};
+use contrastxr::camera::v4l2::{self, usb::UsbId};
+use contrastxr::camera::{parse_source, Background, CaptureConfig, SourceSpec, SourceStatus};
 use contrastxr::image::RgbaImage;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -605,9 +605,7 @@ fn camera_test_reports_rate_and_saves_frames() {
 #[test]
 fn camera_list_without_any_device_says_so() {
     let dir = temp_dir("no-device");
-    let mut out = Vec::new();
-    cli::list_in(&dir, &mut out).unwrap();
-    let text = String::from_utf8(out).unwrap();
+    let text = v4l2::listing(&dir);
     assert_eq!(
         text.trim(),
         format!(
@@ -699,9 +697,7 @@ fn child_stable() {
     contrastxr::camera::set_log_sink(Box::new(|m| LOG.lock().unwrap().push(m.to_string())));
     let dir = env("CONTRASTXR_V4L2_DIR");
     let link = format!("{dir}/v4l/by-id/usb-Acme_World_Camera-video-index0");
-    let mut out = Vec::new();
-    cli::list(&mut out).unwrap();
-    let text = String::from_utf8(out).unwrap();
+    let text = listed();
     if std::path::Path::new(&link).exists() {
         assert!(text.contains(&format!("  also {link}\n")), "{text}");
         let spec = parse_source(&format!("v4l2:{link}")).unwrap();
@@ -751,9 +747,7 @@ fn child_controls() {
         ] {
             assert!(log.contains(line), "{line} missing:\n{log}");
         }
-        let mut out = Vec::new();
-        cli::list(&mut out).unwrap();
-        let text = String::from_utf8(out).unwrap();
+        let text = listed();
         assert!(
             text.contains(
                 "  control camera_white_balance 2800..6500K (default 4600, now 5000, fixed)"
@@ -818,10 +812,10 @@ fn child_auto_vanish() {
     println!("{log}\nauto kept its camera");
 }
 
+/// What `contrastxr camera list` prints, read in this process (whose stand-in holds the
+/// state the case set up).
 fn listed() -> String {
-    let mut out = Vec::new();
-    cli::list(&mut out).unwrap();
-    String::from_utf8(out).unwrap()
+    v4l2::listing(&v4l2::device_dir())
 }
 
 /// Another program left the camera fixed: `auto` turns the automatic controls back on while
@@ -1008,9 +1002,7 @@ fn child_silent() {
 }
 
 fn child_list() {
-    let mut out = Vec::new();
-    cli::list(&mut out).unwrap();
-    let text = String::from_utf8(out).unwrap();
+    let text = listed();
     println!("{text}");
     let dir = env("CONTRASTXR_V4L2_DIR");
     assert!(
@@ -1035,9 +1027,25 @@ fn child_list() {
 
 fn child_cli_test() {
     let dir = PathBuf::from(env("CONTRASTXR_V4L2_DIR")).join("saved");
-    let mut out = Vec::new();
-    cli::test(&env("FAKE_V4L2_DEVICE"), 6, Some(&dir), &mut out).unwrap();
-    let text = String::from_utf8(out).unwrap();
+    // The tool itself, in a process of its own (the stand-in is preloaded there too).
+    let out = Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+        .args([
+            "camera",
+            "test",
+            &env("FAKE_V4L2_DEVICE"),
+            "--frames",
+            "6",
+            "-o",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     println!("{text}");
     assert!(text.contains("6 frames of 640x480 at "), "{text}");
     assert!(

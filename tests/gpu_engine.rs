@@ -3,7 +3,7 @@
 
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
-use contrastxr::gpu::pixel_codec::half_from_f32;
+use contrastxr::gpu::device::pixel_codec::half_from_f32;
 use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
 use contrastxr::image::RgbaImage;
 use std::process::Command;
@@ -50,7 +50,7 @@ fn assert_clean(e: &OfflineEngine) {
 fn every_embedded_shader_passes_spirv_val() {
     let dir = std::env::temp_dir().join(format!("contrastxr-spv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for shader in contrastxr::gpu::shaders::all() {
+    for shader in contrastxr::gpu::shaders::modules::all() {
         let path = dir.join(format!("{}.spv", shader.name));
         std::fs::write(&path, shader.bytes()).unwrap();
         let out = Command::new("spirv-val")
@@ -233,7 +233,7 @@ fn nonconformant_mapped(
     use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
     let gpu = e.enhance_mapped(display, camera, mapping, params).unwrap();
     let (w, h) = (display.width, display.height);
-    let bg = contrastxr::background::prepare_mapped(camera, w, h, mapping, params);
+    let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, mapping, params);
     let mut bad = Vec::new();
     for (i, (d, g)) in display.pixels.iter().zip(&gpu.pixels).enumerate() {
         let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
@@ -356,7 +356,7 @@ fn gpu_background_matches_cpu_preparation() {
         },
     ] {
         let gpu = e.prepare_background(&camera, &params).unwrap();
-        let cpu = contrastxr::background::blurred_camera(&camera, &params);
+        let cpu = contrastxr::background_preparation::blurred_camera(&camera, &params);
         assert_eq!((gpu.width, gpu.height), (cpu.width, cpu.height));
         for i in 0..cpu.pixels.len() {
             // Each entry also holds its right neighbour (itself in the last column).
@@ -393,7 +393,7 @@ fn gpu_background_of_a_part_of_the_camera_matches_cpu_preparation() {
             ..Params::default()
         };
         let gpu = e.prepare_background_in(&camera, &params, &rect).unwrap();
-        let cpu = contrastxr::background::blurred_camera(&camera, &params);
+        let cpu = contrastxr::background_preparation::blurred_camera(&camera, &params);
         for y in rect.y..rect.y + rect.height {
             for x in rect.x..rect.x + rect.width {
                 let i = (y * 150 + x) as usize;
@@ -493,8 +493,9 @@ fn sampled_background_matches_cpu_preparation_through_any_mapping() {
         let out = e
             .enhance_raw_mapped(&opaque, (region, format), &camera, &mapping, &params)
             .unwrap();
-        let cpu =
-            contrastxr::background::prepare_mapped(&camera, region.0, region.1, &mapping, &params);
+        let cpu = contrastxr::background_preparation::prepare_mapped(
+            &camera, region.0, region.1, &mapping, &params,
+        );
         let t = f64::from(params.transmittance);
         for (i, want) in cpu.linear.iter().enumerate() {
             let (w0, w1) = (out[2 * i], out[2 * i + 1]);
@@ -650,7 +651,12 @@ fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
         .enhance(&display, &camera, &with_mode(ViewMode::Heatmap))
         .unwrap();
     // The CPU metric (docs/algorithm.md, Evaluation metric; f64) on the GPU's own enhanced output.
-    let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+    let bg = contrastxr::background_preparation::prepare(
+        &camera,
+        display.width,
+        display.height,
+        &params,
+    );
     let mask = contrastxr::evaluate::metric::enhanced_mask(&display, &enhanced, &bg);
     let mut marked = 0;
     let mut disagree = 0;
@@ -679,7 +685,12 @@ fn background_mode_shows_the_prepared_background_on_every_pixel() {
     let camera = noise(90, 60, 19);
     let params = with_mode(ViewMode::Background);
     let out = e.enhance(&display, &camera, &params).unwrap();
-    let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+    let bg = contrastxr::background_preparation::prepare(
+        &camera,
+        display.width,
+        display.height,
+        &params,
+    );
     for (i, (d, o)) in display.pixels.iter().zip(&out.pixels).enumerate() {
         let want =
             contrastxr::colour::linear_to_srgb8(bg.linear[i] * f64::from(params.transmittance));
@@ -904,7 +915,7 @@ fn shared_and_general(
 
 #[test]
 fn shared_fetches_give_the_general_variants_output_bit_for_bit() {
-    use contrastxr::gpu::shared_fetch::shares_fetches;
+    use contrastxr::gpu::recipe::shares_fetches;
     let mut e = engine();
     let camera = noise(64, 40, 11);
     // 96, 128: 16-byte aligned rows (access_wide.wgsl); 97, 101: not (access_narrow.wgsl),
@@ -993,7 +1004,7 @@ fn shared_fetches_in_place_match_the_general_variant() {
 /// camera rows, so they take the general variant, and the output conforms.
 #[test]
 fn mappings_the_shared_fetches_cannot_serve_take_the_general_variant() {
-    use contrastxr::gpu::shared_fetch::shares_fetches;
+    use contrastxr::gpu::recipe::shares_fetches;
     let mut e = engine();
     let camera = noise(64, 40, 19);
     let (c, s) = (0.6 * 0.2f64.cos(), 0.6 * 0.2f64.sin());

@@ -122,6 +122,10 @@ enum Pipelines {
 /// compile, a device teardown or a cache write takes seconds on lavapipe.
 const LONGEST_CALL_MS: f64 = 1000.0;
 
+/// The longest xrDestroySession and xrDestroyInstance may take, in every run: a build or a
+/// warm-up compile in flight included (docs/layer.md, Teardown).
+const TEARDOWN_MS: f64 = 1000.0;
+
 /// Fills the tests' shared shader cache once (a run without faults), so that the `wait` runs
 /// and the runs that need built pipelines start from a cache, as the other tests do.
 fn warm_shared_cache() -> Option<()> {
@@ -164,7 +168,20 @@ fn fault_client(tag: &str, point: &str, mode: Pipelines) -> Option<LayerRun> {
         "{tag}: a frame-loop call took {longest:.1} ms: {}",
         r.report["timing"]["calls"]
     );
+    assert_teardown_bounded(&tag, &r.report);
     Some(r)
+}
+
+/// xrDestroySession and xrDestroyInstance each returned within [`TEARDOWN_MS`].
+fn assert_teardown_bounded(tag: &str, report: &Value) {
+    let teardown = &report["teardown_ms"];
+    for call in ["xrDestroySession", "xrDestroyInstance"] {
+        let ms = teardown[call]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{tag}: {teardown}"));
+        eprintln!("{tag}: {call} {ms:.1} ms");
+        assert!(ms < TEARDOWN_MS, "{tag}: {call} took {ms:.1} ms");
+    }
 }
 
 /// The longest of the client's frame-loop calls (`--timing`).
@@ -306,6 +323,27 @@ fn destroy_calls_reach_the_runtime_after_a_panic() {
             "{lines:#?}"
         );
     }
+}
+
+/// A shader compile that outlasts every wait of the session's end (`slow-build`: each warm-up
+/// compile takes 5 s more) from an empty cache: the session ends after 20 frames while the
+/// first compile runs, xrDestroySession and xrDestroyInstance return within 1 s (the compile
+/// finishes on a thread of its own), the app exits 0 with its frames untouched.
+#[test]
+fn teardown_with_a_build_in_flight_is_bounded() {
+    let tag = "fault-slow-build";
+    let Some(r) = fault_client(tag, "slow-build", Pipelines::Building) else {
+        return;
+    };
+    r.assert_ran(20);
+    assert!(r.modified().is_empty(), "{:?}", r.modified());
+    let reached = r.lines_with("fault point slow-build reached");
+    assert_eq!(
+        reached,
+        ["fault point slow-build reached 1 times"],
+        "{:#?}",
+        r.lines
+    );
 }
 
 /// A CPU driver's warm-up device that cannot be made is tried once per session, not in every

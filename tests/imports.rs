@@ -5,12 +5,30 @@
 //! A module's front door (`mod.rs`, the crate roots) only declares and re-exports its files: a
 //! name taken through it counts as an import of the file that defines it (`super::Thing` with
 //! `pub use file::Thing` in the folder's mod.rs is an import of `file.rs`), so a two-way tie
-//! through the re-exports is a circle too. Test modules (`mod tests`) are left out.
+//! through the re-exports is a circle too; there are 0 such ties. Siblings name each other by
+//! their own modules, not through their folder's re-exports. Test modules (`mod tests`) are
+//! left out.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 const SRC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/src");
+
+/// The files of a source tree and their text (the real `src/`, or one made up by a test).
+type Tree = BTreeMap<PathBuf, String>;
+
+/// Every .rs file of `src/` with its text.
+fn src_tree() -> Tree {
+    let mut files = Vec::new();
+    rust_files(Path::new(SRC), &mut files);
+    files
+        .into_iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(&f).unwrap();
+            (f, text)
+        })
+        .collect()
+}
 
 /// Every .rs file under `dir`.
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -24,14 +42,15 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The module path of a file relative to its crate root, and that root's folder.
-fn module_of(file: &Path) -> (PathBuf, Vec<String>) {
-    let rel = file.strip_prefix(SRC).unwrap();
+/// The module path of a file relative to its crate root, and that root's folder (`src` is the
+/// tree's `src/` folder).
+fn module_of(src: &Path, file: &Path) -> (PathBuf, Vec<String>) {
+    let rel = file.strip_prefix(src).unwrap();
     let mut parts: Vec<String> = rel
         .iter()
         .map(|p| p.to_string_lossy().trim_end_matches(".rs").to_string())
         .collect();
-    let mut root = PathBuf::from(SRC);
+    let mut root = src.to_path_buf();
     // The XR client is a crate of its own, rooted at src/bin/xr_client/main.rs.
     if parts.len() >= 2 && parts[0] == "bin" {
         root = root.join("bin").join(&parts[1]);
@@ -47,10 +66,10 @@ fn module_of(file: &Path) -> (PathBuf, Vec<String>) {
 }
 
 /// The file a module path names: the longest prefix that is a file of its own (not a mod.rs).
-fn resolve(root: &Path, path: &[String]) -> Option<PathBuf> {
+fn resolve(tree: &Tree, root: &Path, path: &[String]) -> Option<PathBuf> {
     (1..=path.len()).rev().find_map(|n| {
         let file = root.join(path[..n].join("/")).with_extension("rs");
-        file.is_file().then_some(file)
+        tree.contains_key(&file).then_some(file)
     })
 }
 
@@ -145,45 +164,74 @@ fn expand(rest: &str) -> Vec<Vec<String>> {
     vec![head]
 }
 
+/// The re-exports of a front door's code (`pub use`, `pub(crate) use`, `pub(super) use`,
+/// `pub(in path) use`): each declaration's text up to its `;`.
+fn re_exports(code: &str) -> Vec<&str> {
+    code.match_indices("pub")
+        .filter_map(|(at, _)| {
+            let rest = &code[at + 3..];
+            let rest = match rest.strip_prefix('(') {
+                Some(r) => &r[r.find(')')? + 1..],
+                None => rest,
+            };
+            let decl = rest.strip_prefix(" use ")?;
+            Some(&decl[..decl.find(';')?])
+        })
+        .collect()
+}
+
 /// The file that defines `path`'s item when `path` names it through a folder's front door
-/// (`super::Thing` where the folder's mod.rs has `pub use file::Thing` or `file::{Thing, ..}`).
-fn through_front_door(root: &Path, path: &[String]) -> Option<PathBuf> {
+/// (`super::Thing` where the folder's mod.rs re-exports `file::Thing` or `file::{Thing, ..}`).
+fn through_front_door(tree: &Tree, root: &Path, path: &[String]) -> Option<PathBuf> {
     (1..path.len()).rev().find_map(|n| {
         let door = root.join(path[..n].join("/")).join("mod.rs");
         let door = if n == 0 { root.join("lib.rs") } else { door };
-        let text = std::fs::read_to_string(&door).ok()?;
+        let text = tree.get(&door)?;
         let item = &path[n];
-        let code = code(&text);
-        code.split("pub use ").skip(1).find_map(|decl| {
-            let decl = &decl[..decl.find(';')?];
+        let code = code(text);
+        re_exports(&code).into_iter().find_map(|decl| {
             expand(decl)
                 .into_iter()
                 .find(|p| p.last() == Some(item))
                 .and_then(|p| {
                     let mut full = path[..n].to_vec();
                     full.extend(p[..p.len() - 1].iter().cloned());
-                    resolve(root, &full)
+                    resolve(tree, root, &full)
                 })
         })
     })
 }
 
-/// Each file's imports of other files, also through a folder's re-exports.
-fn import_graph() -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
-    let mut files = Vec::new();
-    rust_files(Path::new(SRC), &mut files);
+/// Each file's imports of other files, also through a folder's re-exports (`src`: the tree's
+/// `src/` folder).
+fn import_graph(tree: &Tree, src: &Path) -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
     let mut graph = BTreeMap::new();
-    for file in &files {
-        let (root, module) = module_of(file);
-        let text = std::fs::read_to_string(file).unwrap();
-        let targets: BTreeSet<PathBuf> = named_paths(&code(&text), &module)
+    for (file, text) in tree {
+        let (root, module) = module_of(src, file);
+        let targets: BTreeSet<PathBuf> = named_paths(&code(text), &module)
             .iter()
-            .filter_map(|p| resolve(&root, p).or_else(|| through_front_door(&root, p)))
+            .filter_map(|p| resolve(tree, &root, p).or_else(|| through_front_door(tree, &root, p)))
             .filter(|t| t != file)
             .collect();
         graph.insert(file.clone(), targets);
     }
     graph
+}
+
+/// Every circle of `graph`, each as its files (relative to `src`) sorted and joined by " <-> ".
+fn circles(graph: &BTreeMap<PathBuf, BTreeSet<PathBuf>>, src: &Path) -> BTreeSet<String> {
+    let mut found = BTreeSet::new();
+    for file in graph.keys() {
+        if let Some(c) = circle(graph, file) {
+            let mut names: Vec<String> = c
+                .iter()
+                .map(|f| f.strip_prefix(src).unwrap().display().to_string())
+                .collect();
+            names.sort();
+            found.insert(names.join(" <-> "));
+        }
+    }
+    found
 }
 
 /// A circle through `from`, if there is one: the files in order.
@@ -205,44 +253,18 @@ fn circle(graph: &BTreeMap<PathBuf, BTreeSet<PathBuf>>, from: &PathBuf) -> Optio
     None
 }
 
+/// Circles, through a folder's re-exports or not, that `src/` has: none. (There were 0 left
+/// once the last, algorithm/methods.rs <-> algorithm/params.rs, was undone.)
 #[test]
 fn no_file_of_src_imports_itself_through_others() {
-    let graph = import_graph();
+    let tree = src_tree();
+    let graph = import_graph(&tree, Path::new(SRC));
     assert!(graph.len() > 50, "found only {} files", graph.len());
-    let mut circles = BTreeSet::new();
-    for file in graph.keys() {
-        if let Some(c) = circle(&graph, file) {
-            let mut names: Vec<String> = c
-                .iter()
-                .map(|f| f.strip_prefix(SRC).unwrap().display().to_string())
-                .collect();
-            names.sort();
-            circles.insert(names.join(" <-> "));
-        }
-    }
-    circles.retain(|c| !KNOWN_TIES.contains(&c.as_str()));
-    assert!(circles.is_empty(), "import circles:\n{}", {
-        let list: Vec<_> = circles.into_iter().collect();
+    let found = circles(&graph, Path::new(SRC));
+    assert!(found.is_empty(), "import circles:\n{}", {
+        let list: Vec<_> = found.into_iter().collect();
         list.join("\n")
     });
-}
-
-/// Circles that run through a folder's re-exports and are not undone yet: this list may only
-/// shrink. The method table's entries name their CPU references (params.rs's `Params` in
-/// their signatures) while `Params` names the `Method` the table defines.
-const KNOWN_TIES: [&str; 1] = ["algorithm/methods.rs <-> algorithm/params.rs"];
-
-/// Every known tie is still one (a tie undone must leave the list).
-#[test]
-fn the_known_ties_are_still_ties() {
-    let graph = import_graph();
-    for tie in KNOWN_TIES {
-        let first = PathBuf::from(SRC).join(tie.split(" <-> ").next().unwrap());
-        assert!(
-            circle(&graph, &first).is_some(),
-            "{tie} is undone: take it off KNOWN_TIES"
-        );
-    }
 }
 
 /// The check sees a circle when there is one (two files of a made-up module naming each other).
@@ -313,4 +335,218 @@ fn mod_rs_files_only_declare_and_re_export() {
 fn a_definition_in_a_mod_rs_is_found() {
     let text = "//! Doc.\nmod a;\npub use a::B;\n\n/// Doc.\npub fn c() {\n    d();\n}\n";
     assert_eq!(mod_rs_definitions(text), ["pub fn c() {"]);
+}
+
+/// The check sees a two-way tie through a folder's front door: `a.rs` and `b.rs` of a made-up
+/// folder each take the other's item from their `mod.rs`, which only re-exports them.
+#[test]
+fn a_tie_through_a_mod_rs_is_found() {
+    let src = Path::new("/made-up/src");
+    let file = |p: &str, text: &str| (src.join(p), text.to_string());
+    let mut tree = Tree::from([
+        file("lib.rs", "pub mod room;\n"),
+        file(
+            "room/mod.rs",
+            "mod a;\nmod b;\npub use a::A;\npub(crate) use b::B;\n",
+        ),
+        file("room/a.rs", "use super::B;\npub struct A(B);\n"),
+        file(
+            "room/b.rs",
+            "use crate::room::A;\npub struct B;\nfn f(_: A) {}\n",
+        ),
+    ]);
+    let found = circles(&import_graph(&tree, src), src);
+    assert_eq!(
+        found,
+        BTreeSet::from(["room/a.rs <-> room/b.rs".to_string()])
+    );
+    // One way only: no circle.
+    tree.insert(src.join("room/b.rs"), "pub struct B;\n".into());
+    assert!(circles(&import_graph(&tree, src), src).is_empty());
+}
+
+/// Each file that names `path` through its own folder's front door (a sibling's item taken
+/// from the folder's re-exports instead of the sibling's own module), with that path.
+fn through_own_door(tree: &Tree, src: &Path) -> Vec<String> {
+    let mut found = Vec::new();
+    for (file, text) in tree {
+        if file.ends_with("mod.rs") || file.ends_with("lib.rs") || file.ends_with("main.rs") {
+            continue;
+        }
+        let (root, module) = module_of(src, file);
+        let folder = &module[..module.len() - 1];
+        for p in named_paths(&code(text), &module) {
+            let via_door = p.len() == folder.len() + 1 && p.starts_with(folder);
+            if via_door
+                && resolve(tree, &root, &p).is_none()
+                && through_front_door(tree, &root, &p).is_some()
+            {
+                let rel = file.strip_prefix(src).unwrap().display();
+                found.push(format!("{rel}: {}", p.join("::")));
+            }
+        }
+    }
+    found
+}
+
+/// Folders of `src/` whose files still take siblings' items from the folder's re-exports: this
+/// list may only shrink.
+const NOT_YET_BY_OWN_NAMES: [&str; 3] = ["camera/", "cli/", "config/"];
+
+/// Siblings import each other from their own modules, not through their folder's
+/// re-exports, so the picture of who uses whom stays true.
+#[test]
+fn siblings_import_each_other_by_their_own_names() {
+    let found: Vec<String> = through_own_door(&src_tree(), Path::new(SRC))
+        .into_iter()
+        .filter(|f| !NOT_YET_BY_OWN_NAMES.iter().any(|d| f.starts_with(d)))
+        .collect();
+    assert!(
+        found.is_empty(),
+        "files taking a sibling's item from their folder's re-exports:\n{}",
+        found.join("\n")
+    );
+}
+
+/// Every folder still listed takes a sibling through its re-exports (one that stopped must
+/// leave the list).
+#[test]
+fn the_folders_not_yet_by_own_names_still_are() {
+    let found = through_own_door(&src_tree(), Path::new(SRC));
+    for folder in NOT_YET_BY_OWN_NAMES {
+        assert!(
+            found.iter().any(|f| f.starts_with(folder)),
+            "{folder} names its siblings by their own modules: take it off NOT_YET_BY_OWN_NAMES"
+        );
+    }
+}
+
+/// The check can fail: `super::B` in a file whose folder re-exports `b::B` is found.
+#[test]
+fn a_sibling_through_the_front_door_is_found() {
+    let src = Path::new("/made-up/src");
+    let tree = Tree::from([
+        (src.join("lib.rs"), "pub mod room;\n".to_string()),
+        (
+            src.join("room/mod.rs"),
+            "mod a;\nmod b;\npub use b::B;\n".into(),
+        ),
+        (src.join("room/a.rs"), "use super::B;\n".into()),
+        (src.join("room/b.rs"), "pub struct B;\n".into()),
+    ]);
+    assert_eq!(through_own_door(&tree, src), ["room/a.rs: room::B"]);
+}
+
+/// The fields of `text`'s types that are public (`pub`, `pub(crate)`) and of a Vulkan type.
+fn public_vulkan_fields(text: &str) -> Vec<String> {
+    code(text)
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("pub ") || l.starts_with("pub(crate) "))
+        .filter(|l| {
+            let field = l.split_once(' ').map_or("", |(_, rest)| rest);
+            let is_field = field
+                .split_once(':')
+                .is_some_and(|(name, _)| name.chars().all(|c| c.is_alphanumeric() || c == '_'));
+            is_field && field.contains("vk::")
+        })
+        .map(str::to_string)
+        .collect()
+}
+
+/// Raw Vulkan handles stay in the GPU engine's device room: no type elsewhere in `src/gpu/` has
+/// a public field of a `vk::` type (the frame's and the pipelines' keep theirs private, with
+/// accessors).
+#[test]
+fn raw_handles_are_public_only_in_the_device_room() {
+    let gpu = Path::new(SRC).join("gpu");
+    let device = gpu.join("device");
+    let mut found = Vec::new();
+    for (file, text) in src_tree() {
+        if !file.starts_with(&gpu) || file.starts_with(&device) {
+            continue;
+        }
+        for field in public_vulkan_fields(&text) {
+            let rel = file.strip_prefix(SRC).unwrap().display().to_string();
+            found.push(format!("{rel}: {field}"));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "public Vulkan fields outside gpu/device/:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The check can fail: a public handle field is found; a private one, one visible to its room
+/// only (`pub(super)`) and a function's argument are not.
+#[test]
+fn a_public_handle_field_is_found() {
+    let text =
+        "pub struct V {\n    pub image: vk::Image,\n    pub(super) view: vk::ImageView,\n    \
+                format: vk::Format,\n}\npub fn f(x: vk::Image) {}\n";
+    assert_eq!(public_vulkan_fields(text), ["pub image: vk::Image,"]);
+}
+
+/// Inside the GPU engine a file name says one job: no two files of `src/gpu/` share a name
+/// (`mod.rs` aside), so a reader who knows the name knows the file.
+#[test]
+fn gpu_file_names_are_distinct() {
+    let gpu = Path::new(SRC).join("gpu");
+    let mut seen: BTreeMap<String, PathBuf> = BTreeMap::new();
+    let mut twice = Vec::new();
+    for file in src_tree().into_keys().filter(|f| f.starts_with(&gpu)) {
+        let name = file.file_name().unwrap().to_string_lossy().into_owned();
+        if name == "mod.rs" {
+            continue;
+        }
+        if let Some(first) = seen.insert(name, file.clone()) {
+            twice.push(format!("{} and {}", first.display(), file.display()));
+        }
+    }
+    assert!(
+        twice.is_empty(),
+        "same file names in src/gpu/:\n{}",
+        twice.join("\n")
+    );
+}
+
+/// The shader interface (`src/gpu/shaders/`) is every graphics backend's: it names no graphics
+/// API and no other room of the engine.
+#[test]
+fn the_shader_interface_names_no_graphics_api() {
+    let shaders = Path::new(SRC).join("gpu/shaders");
+    let mut found = Vec::new();
+    for (file, text) in src_tree() {
+        if !file.starts_with(&shaders) {
+            continue;
+        }
+        let code = code(&text);
+        let other_room = code
+            .match_indices("crate::gpu::")
+            .any(|(at, m)| !code[at + m.len()..].starts_with("shaders::"));
+        // A path that starts with `word` (not `std::hash::` for `ash::`).
+        let names = |word: &str| {
+            code.match_indices(word).any(|(at, _)| {
+                let before = code[..at].chars().last();
+                !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+            })
+        };
+        for (bad, named) in [
+            ("ash::", names("ash::")),
+            ("vk::", names("vk::")),
+            ("gpu_allocator", names("gpu_allocator")),
+            ("another room of crate::gpu", other_room),
+        ] {
+            if named {
+                let rel = file.strip_prefix(SRC).unwrap().display().to_string();
+                found.push(format!("{rel}: {bad}"));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "the shader interface names:\n{}",
+        found.join("\n")
+    );
 }

@@ -7,7 +7,7 @@ mod common;
 
 use common::{sandbox, scratch_file, ApiDump, SandboxRun, Validation, XR_CLIENT};
 use contrastxr::algorithm::{conformant, enhance_linear, enhance_srgb8_trace, Method, Params};
-use contrastxr::background::{prepare, PreparedBackground};
+use contrastxr::background_preparation::{prepare, PreparedBackground};
 use contrastxr::image::RgbaImage;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -358,7 +358,7 @@ through_the_layer! {
 }
 
 /// Views wide enough for the default mapping to let a group's pixels share their texel reads
-/// (1024 pixels over the 960-wide background: 0.61 texel per pixel, gpu/shared_fetch.rs), in
+/// (1024 pixels over the 960-wide background: 0.61 texel per pixel, gpu/recipe/shared_fetch.rs), in
 /// place and through a copy: frames captured after 30, when the shared-fetch variant, built
 /// behind the frame's pipelines, serves the views (from the third frame in a run on lavapipe),
 /// conform to the CPU reference.

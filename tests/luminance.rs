@@ -137,7 +137,8 @@ fn the_gpu_is_within_one_code_value_of_the_reference() {
             let mapping = p.camera_mapping();
             let gpu = e.enhance_mapped(&display, &camera, &mapping, &p).unwrap();
             let (w, h) = (display.width, display.height);
-            let bg = contrastxr::background::prepare_mapped(&camera, w, h, &mapping, &p);
+            let bg =
+                contrastxr::background_preparation::prepare_mapped(&camera, w, h, &mapping, &p);
             let bad = (display.pixels.iter().zip(&gpu.pixels).enumerate())
                 .filter(|&(i, (d, g))| {
                     let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &p);

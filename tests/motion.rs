@@ -249,6 +249,11 @@ fn run(name: &str, compensation: bool) -> Option<Vec<Seen>> {
                 RgbaImage::load_png(&capture.join(format!("frame-{f}-view-{v}-output.png")))
                     .unwrap();
             assert!(json["space_type"].is_string(), "{json}");
+            if json["camera_time"].is_null() {
+                // Before the source's first frame (delivered world_latency_ms after it was
+                // filmed): a loaded machine may capture a frame or two that early.
+                continue;
+            }
             let camera = &json["camera_pose"];
             assert!(camera.is_object(), "the head was located: {json}");
             let display = json["display_time"].as_i64().unwrap();

@@ -69,3 +69,64 @@ fn hello_xr_with_opengl_runs_through_the_layer_as_without_it() {
     );
     assert!(layer_lines(&bare).is_empty(), "{:#?}", layer_lines(&bare));
 }
+
+/// The project's client with an OpenGL session (`--graphics opengl`: the Xlib binding on a GLX
+/// 4.5 core context) in `format`, its images read back at each next acquire.
+fn client_opengl(format: &str, layer: bool) -> Option<SandboxRun> {
+    let sandbox = sandbox()?;
+    let on = if layer { "1" } else { "0" };
+    let env = [
+        ("CONTRASTXR", on),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let cmd = [
+        common::XR_CLIENT,
+        "--graphics",
+        "opengl",
+        "--json",
+        "--frames",
+        "20",
+        "--size",
+        "64x48",
+        "--check-untouched",
+        "--format",
+        format,
+    ];
+    Some(sandbox.run_x11_for(&cmd, &env, 120))
+}
+
+/// Every colour format Monado offers OpenGL apps, through the client: the session runs to its
+/// end with the layer on as off, every image read back as the app wrote it, and the layer says
+/// in one line that it passes the session through.
+#[test]
+fn the_client_with_opengl_runs_through_the_layer_in_every_format() {
+    let formats = [
+        ("R16G16B16A16_UNORM", "GL_RGBA16"),
+        ("R16G16B16A16_SFLOAT", "GL_RGBA16F"),
+        ("R8G8B8A8_SRGB", "GL_SRGB8_ALPHA8"),
+        ("R8G8B8A8_UNORM", "GL_RGBA8"),
+    ];
+    for (format, gl_name) in formats {
+        for layer in [false, true] {
+            let Some(run) = client_opengl(format, layer) else {
+                return;
+            };
+            run.assert_success();
+            let report = run.client_report();
+            let what = format!("{gl_name}, layer {layer}: {}", run.describe());
+            assert_eq!(report["graphics"], "opengl", "{what}");
+            assert_eq!(report["format"], gl_name, "{what}");
+            assert!(report["frames_checked"].as_u64() >= Some(10), "{what}");
+            assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
+            let lines = layer_lines(&run);
+            if layer {
+                let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+                assert_eq!(passing.len(), 1, "{what}");
+                assert!(passing[0].contains("OpenGL (Xlib)"), "{what}");
+            } else {
+                assert!(!lines.iter().any(|l| l.contains("passing")), "{what}");
+            }
+        }
+    }
+}

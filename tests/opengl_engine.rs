@@ -5,9 +5,9 @@
 
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
+use contrastxr::gpu::device::pixel_codec;
 use contrastxr::gpu::opengl::GlFormat;
 use contrastxr::gpu::opengl::{GlOffline, GlTarget, GlView};
-use contrastxr::gpu::pixel_codec;
 use contrastxr::image::RgbaImage;
 use std::ffi::{c_void, CStr};
 
@@ -56,7 +56,7 @@ fn nonconformant(
         .enhance_mapped(display, camera, mapping, params)
         .unwrap_or_else(|e| panic!("{e}"));
     let (w, h) = (display.width, display.height);
-    let bg = contrastxr::background::prepare_mapped(camera, w, h, mapping, params);
+    let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, mapping, params);
     let mut bad = Vec::new();
     for (i, (d, g)) in display.pixels.iter().zip(&out.pixels).enumerate() {
         let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
@@ -194,8 +194,9 @@ fn every_format_matches_cpu_for_every_method() {
             method,
             ..Params::default()
         };
-        let bg =
-            contrastxr::background::prepare_mapped(&camera, region.0, region.1, &mapping, &params);
+        let bg = contrastxr::background_preparation::prepare_mapped(
+            &camera, region.0, region.1, &mapping, &params,
+        );
         for internal in [SRGB8_ALPHA8, RGBA8, RGBA16, RGBA16F, RGB10_A2] {
             let format = GlFormat::of(internal).unwrap();
             let words = (format.pixel.bytes_per_pixel() / 4) as usize;
@@ -368,7 +369,12 @@ fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
                 },
             )
             .unwrap();
-        let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+        let bg = contrastxr::background_preparation::prepare(
+            &camera,
+            display.width,
+            display.height,
+            &params,
+        );
         let mask = contrastxr::evaluate::metric::enhanced_mask(&display, &enhanced, &bg);
         let (mut marked, mut disagree) = (0, 0);
         for (i, (d, hm)) in display.pixels.iter().zip(&heat.pixels).enumerate() {
@@ -396,7 +402,12 @@ fn background_mode_shows_the_prepared_background_on_every_pixel() {
     let camera = noise(90, 60, 19);
     let params = with_mode(ViewMode::Background);
     let out = gl.enhance(&display, &camera, &params).unwrap();
-    let bg = contrastxr::background::prepare(&camera, display.width, display.height, &params);
+    let bg = contrastxr::background_preparation::prepare(
+        &camera,
+        display.width,
+        display.height,
+        &params,
+    );
     for (i, (d, o)) in display.pixels.iter().zip(&out.pixels).enumerate() {
         let want =
             contrastxr::colour::linear_to_srgb8(bg.linear[i] * f64::from(params.transmittance));

@@ -9,10 +9,10 @@
 use ash::vk;
 use contrastxr::algorithm::Params;
 use contrastxr::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
-use contrastxr::gpu::app_image::AppImage;
-use contrastxr::gpu::buffer::GpuBuffer;
-use contrastxr::gpu::commands::Commands;
-use contrastxr::gpu::image_copy::{
+use contrastxr::gpu::device::Commands;
+use contrastxr::gpu::device::DeviceImage;
+use contrastxr::gpu::device::GpuBuffer;
+use contrastxr::gpu::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use contrastxr::gpu::{
@@ -81,7 +81,7 @@ struct Path {
 /// app leaves them for the runtime, and a frame engine that enhances them.
 struct Rig {
     engine: FrameEngine,
-    images: [AppImage; 2],
+    images: [DeviceImage; 2],
     buffer: GpuBuffer,
     path: Path,
     /// The engine's sink as the busy thread sees it (refreshed after each frame).
@@ -95,7 +95,7 @@ impl Rig {
         engine.set_direct_texels(path.direct);
         let gpu = &engine.gpu;
         let images =
-            [0, 1].map(|_| AppImage::new(gpu, REGION, vk::Format::R8G8B8A8_UNORM).unwrap());
+            [0, 1].map(|_| DeviceImage::new(gpu, REGION, vk::Format::R8G8B8A8_UNORM).unwrap());
         let bytes = u64::from(REGION.0 * REGION.1 * 4);
         let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
         let buffer = GpuBuffer::new(gpu, bytes, usage, MemoryLocation::GpuToCpu, "test").unwrap();
@@ -118,19 +118,15 @@ impl Rig {
     }
 
     fn view(&self, i: usize, params: &Params) -> FrameView {
-        FrameView {
-            key: ViewKey {
-                swapchain: i as u64 + 1,
-                offset: (0, 0),
-                extent: REGION,
-                array_index: 0,
-            },
-            image: self.images[i].raw,
-            format: FORMAT,
-            vk_format: vk::Format::R8G8B8A8_UNORM,
-            in_place: false,
-            mapping: params.camera_mapping(),
-        }
+        let key = ViewKey {
+            swapchain: i as u64 + 1,
+            offset: (0, 0),
+            extent: REGION,
+            array_index: 0,
+        };
+        let raw = self.images[i].raw;
+        let vk_format = vk::Format::R8G8B8A8_UNORM;
+        FrameView::new(key, raw, FORMAT, vk_format, false, params.camera_mapping())
     }
 
     /// Writes `display` into both images.
@@ -165,7 +161,7 @@ impl Rig {
             record_layout_barriers(gpu, cmd, &[region], true);
             record_region_copy(gpu, cmd, &region, &self.buffer, true);
             record_layout_barriers(gpu, cmd, &[region], false);
-            contrastxr::gpu::barrier::barrier(
+            contrastxr::gpu::device::barrier(
                 gpu,
                 cmd,
                 vk::PipelineStageFlags::ALL_COMMANDS,
@@ -191,14 +187,18 @@ impl Rig {
         };
         let views = [self.view(i, &params)];
         let source = self.path.writer != Writer::Frame;
-        if let (true, true, Some(sink)) = (source, prepared, self.engine.texel_sink()) {
-            sink.offer(&texels);
+        if source && prepared {
+            self.engine.texel_sink().offer(&texels);
         }
         let out = self
             .engine
-            .process(&views, background, &params, None, options);
+            .pipelines_ready(&views, &params, options.wait_for_pipelines)
+            .and_then(|ready| {
+                self.engine
+                    .process(ready, &views, background, &params, None, options)
+            });
         assert!(out.is_ok(), "frame {sequence}: {:?}", out.err());
-        *self.sink.lock().unwrap() = self.engine.texel_sink();
+        *self.sink.lock().unwrap() = Some(self.engine.texel_sink());
     }
 
     fn finish(mut self) {

@@ -277,7 +277,7 @@ fn a_scene_point_lands_on_its_display_pixel_in_each_eye() {
             fov_offset: [m.rows[0][2] as f32, m.rows[1][2] as f32],
             ..Params::default()
         };
-        let shown = contrastxr::background::fov_sharp(&camera, dw, dh, &params);
+        let shown = contrastxr::background_preparation::fov_sharp(&camera, dw, dh, &params);
         let brightest = (0..shown.len())
             .max_by(|&a, &b| shown[a].x.total_cmp(&shown[b].x))
             .unwrap();
@@ -349,7 +349,12 @@ fn each_eye_shows_the_camera_through_its_own_mapping() {
         };
         let output = load(v, "output");
         let camera = load(v, "background");
-        let want = contrastxr::background::prepare(&camera, output.width, output.height, &params);
+        let want = contrastxr::background_preparation::prepare(
+            &camera,
+            output.width,
+            output.height,
+            &params,
+        );
         let t = f64::from(params.transmittance);
         let mut worst = 0;
         for (got, linear) in output.pixels.iter().zip(&want.linear) {

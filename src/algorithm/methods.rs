@@ -1,11 +1,13 @@
-//! The per-pixel methods as one table (src/algorithm/method_table.rs, one entry each): the
-//! `Method` type, each method's entry, and the names derived from them for the settings, the
-//! command line and their help.
+//! The per-pixel methods as one table (src/algorithm/method_table.rs, one entry each): each
+//! method's entry (its CPU reference, shader file, settings and passes), and the names derived
+//! from them for the settings, the command line and their help. The `Method` type itself is
+//! src/algorithm/method.rs.
 
 use glam::DVec3;
 
 use super::constraints::Margin;
-use super::Params;
+use super::method::Method;
+use super::params::Params;
 
 include!("method_table.rs");
 
@@ -28,7 +30,7 @@ impl std::fmt::Debug for Reference {
     }
 }
 
-/// A GPU pass of a method, in the order the recorder runs them (src/gpu/record.rs).
+/// A GPU pass of a method, in the order the recorder runs them (src/gpu/recipe/record.rs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
     /// Lists the tiles with a foreground pixel (`classify`).
@@ -39,7 +41,7 @@ pub enum Pass {
     Enhance,
 }
 
-/// The passes the recorder implements (src/gpu/record.rs runs an entry's `passes` in their
+/// The passes the recorder implements (src/gpu/recipe/record.rs runs an entry's `passes` in their
 /// order; its arms assume this one): every entry's `passes` must be these (a test holds them
 /// to it).
 pub const PER_PIXEL_PASSES: [Pass; 3] = [Pass::Classify, Pass::FinishTiles, Pass::Enhance];
@@ -71,13 +73,6 @@ macro_rules! define_methods {
         push: [$($push:literal),* $(,)?],
         passes: [$($pass:ident),* $(,)?],
     }),* $(,)?) => {
-        /// Which per-pixel method runs (docs/algorithm.md, Per-pixel optimisation and
-        /// Comparison methods); one variant per entry of method_table.rs.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-        pub enum Method {
-            $(#[doc = $doc] $variant,)*
-        }
-
         /// Every method's entry, in `Method` order.
         pub static ENTRIES: [MethodEntry; Method::ALL.len()] = [$(MethodEntry {
             method: Method::$variant,
@@ -91,10 +86,6 @@ macro_rules! define_methods {
             push: &[$($push),*],
             passes: &[$(Pass::$pass),*],
         }),*];
-
-        impl Method {
-            pub const ALL: [Method; [$($code),*].len()] = [$(Method::$variant),*];
-        }
 
         /// Every method's name, in `Method` order (for the derived texts below).
         const NAMES: [&str; Method::ALL.len()] = [$($name),*];
@@ -114,15 +105,6 @@ impl Method {
     /// Its entry in method_table.rs.
     pub fn entry(self) -> &'static MethodEntry {
         &ENTRIES[self as usize]
-    }
-
-    /// The name used on the command line and in config/JSON.
-    pub fn name(self) -> &'static str {
-        self.entry().name
-    }
-
-    pub fn parse(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
     }
 }
 
@@ -249,7 +231,11 @@ mod tests {
     #[test]
     fn every_entry_has_the_passes_the_recorder_runs() {
         for e in &ENTRIES {
-            assert_eq!(e.passes, PER_PIXEL_PASSES, "{}: src/gpu/record.rs", e.name);
+            assert_eq!(
+                e.passes, PER_PIXEL_PASSES,
+                "{}: src/gpu/recipe/record.rs",
+                e.name
+            );
         }
     }
 
@@ -272,7 +258,10 @@ mod tests {
     /// PARAMS', and its WGSL reads no push-constant field it does not declare.
     #[test]
     fn every_entry_names_real_settings_and_push_constants() {
-        let fields: Vec<&str> = crate::gpu::interface::PARAMS.iter().map(|p| p.0).collect();
+        let fields: Vec<&str> = crate::gpu::shaders::interface::PARAMS
+            .iter()
+            .map(|p| p.0)
+            .collect();
         for e in &ENTRIES {
             for k in e.settings {
                 assert!(

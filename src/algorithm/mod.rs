@@ -7,6 +7,7 @@
 pub mod conformance;
 mod constraints;
 pub mod mapping;
+pub mod method;
 pub mod methods;
 pub mod params;
 mod pixel;

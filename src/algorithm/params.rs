@@ -1,6 +1,6 @@
 //! The method's settings, shared by the CPU reference, the GPU engine, the CLI and the layer.
 
-pub use super::methods::Method;
+pub use super::method::Method;
 
 /// What the layer shows (docs/control.md, Modes). `Enhance` is the product; the others are for
 /// comparison and calibration while wearing the headset. Comparison methods are `Method`s.

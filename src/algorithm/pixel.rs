@@ -3,11 +3,10 @@
 
 use glam::DVec3;
 
-use super::conformance::PixelTrace;
+use super::conformance::{PixelTrace, NEAR_THRESHOLD};
 use super::methods::Reference;
-use super::params::{SUBTRACTION_K_B, SUBTRACTION_K_V};
+use super::params::{Params, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use super::scaled::enhance_scaled_traced;
-use super::Params;
 use crate::colour;
 
 /// Linear result with the smallest branch margin (scaled units; infinite when no branch ran).
@@ -128,7 +127,7 @@ pub fn enhance_srgb8_trace(
         return unchanged();
     }
     let out = enhance_linear_traced(display_linear, bg_linear, bg_scaled, params);
-    let near_threshold = out.margin < super::NEAR_THRESHOLD;
+    let near_threshold = out.margin < NEAR_THRESHOLD;
     if out.unclipped == display_linear {
         return PixelTrace {
             near_threshold,

@@ -165,6 +165,54 @@ impl Fov {
 }
 
 impl Lens {
+    /// The lens that `[fx, fy, cx, cy, width, height]` (pixels, in the order and conventions of
+    /// OpenCV's calibration: the config's `camera_intrinsics`) describe; None for all six 0,
+    /// which says that none is given.
+    pub fn from_intrinsics(k: [f32; 6]) -> Option<Lens> {
+        if k == [0.0; 6] {
+            return None;
+        }
+        let [fx, fy, cx, cy, width, height] = k.map(f64::from);
+        Some(Lens::Pixels {
+            fx,
+            fy,
+            cx,
+            cy,
+            width,
+            height,
+        })
+    }
+
+    /// Whether the lens can describe a camera: both angles in (0, 180) degrees, or finite
+    /// intrinsics with positive focal lengths and image size.
+    pub fn check(&self) -> Result<(), RegistrationError> {
+        let usable = match *self {
+            Lens::Fov {
+                horizontal,
+                vertical,
+            } => {
+                let ok = |a: f64| a.is_finite() && a > 0.0 && a < std::f64::consts::PI;
+                ok(horizontal) && ok(vertical)
+            }
+            Lens::Pixels {
+                fx,
+                fy,
+                cx,
+                cy,
+                width,
+                height,
+            } => {
+                let all = [fx, fy, cx, cy, width, height];
+                all.iter().all(|x| x.is_finite())
+                    && fx > 0.0
+                    && fy > 0.0
+                    && width > 0.0
+                    && height > 0.0
+            }
+        };
+        usable.then_some(()).ok_or(RegistrationError::BadProfile)
+    }
+
     /// The camera-space ray (z = -1) through camera uv: the inverse of [`Lens::projection`],
     /// beside it so the two read the same conventions (the half texel, y up).
     pub fn ray(&self, u: f64, v: f64) -> DVec3 {
@@ -196,15 +244,12 @@ impl Lens {
     fn projection(&self) -> Result<DMat3, RegistrationError> {
         // u = (fx x / -z + cx + 0.5) / width; v = (fy (-y) / -z + cy + 0.5) / height, with the
         // half pixel because texel centres are at (i + 0.5) / width in uv.
+        self.check()?;
         let (ku, kv, pu, pv) = match *self {
             Lens::Fov {
                 horizontal,
                 vertical,
             } => {
-                let ok = |a: f64| a.is_finite() && a > 0.0 && a < std::f64::consts::PI;
-                if !ok(horizontal) || !ok(vertical) {
-                    return Err(RegistrationError::BadProfile);
-                }
                 let (th, tv) = ((horizontal / 2.0).tan(), (vertical / 2.0).tan());
                 (0.5 / th, 0.5 / tv, 0.5, 0.5)
             }
@@ -215,21 +260,12 @@ impl Lens {
                 cy,
                 width,
                 height,
-            } => {
-                let all = [fx, fy, cx, cy, width, height];
-                if !all.iter().all(|x| x.is_finite()) || fx <= 0.0 || fy <= 0.0 {
-                    return Err(RegistrationError::BadProfile);
-                }
-                if width <= 0.0 || height <= 0.0 {
-                    return Err(RegistrationError::BadProfile);
-                }
-                (
-                    fx / width,
-                    fy / height,
-                    (cx + 0.5) / width,
-                    (cy + 0.5) / height,
-                )
-            }
+            } => (
+                fx / width,
+                fy / height,
+                (cx + 0.5) / width,
+                (cy + 0.5) / height,
+            ),
         };
         // Rows: (ku, 0, -pu), (0, -kv, -pv), (0, 0, -1).
         Ok(DMat3::from_cols(

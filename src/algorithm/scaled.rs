@@ -9,8 +9,7 @@ use super::constraints::{
     Margin,
 };
 use super::methods::Reference;
-use super::params::ACHROMATIC_CHROMA;
-use super::Params;
+use super::params::{Params, ACHROMATIC_CHROMA};
 
 /// P and how close the computation came to a branch flip.
 #[derive(Clone, Copy, Debug)]

@@ -3,7 +3,7 @@
 use crate::blurred_texels::{BlurTaps, TexelSink};
 use crate::camera::error::CameraError;
 use crate::camera::files::{color_frame, image_frame, open_video, play};
-use crate::camera::frame::{Frame, Shared, SourceStatus};
+use crate::camera::mailbox::{Frame, Shared, SourceStatus};
 use crate::camera::{v4l2, CaptureConfig, SourceSpec};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;

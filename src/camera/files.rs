@@ -2,8 +2,8 @@
 //! in a loop at their frame rate, following wall-clock time.
 
 use crate::camera::error::CameraError;
-use crate::camera::frame::{Frame, Shared};
-use crate::camera::log::log;
+use crate::camera::log_sink::log;
+use crate::camera::mailbox::{Frame, Shared};
 use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
 use crate::camera::y4m::Y4m;

@@ -10,16 +10,15 @@
 //! [`Frame`]s and a [`SourceStatus`]; what to do with them (preprocess once per new
 //! `sequence`, pass through when `Lost`) is the consumer's business.
 //! Privacy: a camera is open only while its [`Background`] lives, and no frame is written
-//! anywhere except by [`cli::test`] when asked for an output folder.
+//! anywhere except by `contrastxr camera test` when asked for an output folder.
 
 mod background;
-pub mod cli;
 pub mod clock;
 pub mod convert;
 mod error;
 mod files;
-mod frame;
-mod log;
+mod log_sink;
+mod mailbox;
 mod mjpeg;
 mod pool;
 pub mod rig;
@@ -31,7 +30,7 @@ mod y4m;
 
 pub use background::Background;
 pub use error::CameraError;
-pub use frame::{Frame, SourceStatus};
-pub use log::set_log_sink;
+pub use log_sink::set_log_sink;
+pub use mailbox::{Frame, SourceStatus};
 pub use rig::{HeadPoses, WorldRig};
 pub use source::{parse_source, CameraControls, CaptureConfig, SourceSpec};

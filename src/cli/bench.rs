@@ -4,7 +4,7 @@
 use super::args::Args;
 use super::CliError;
 use contrastxr::algorithm::{Method, Params};
-use contrastxr::gpu::bench::{BenchCase, BenchResult, Content, CAMERA_SIZE};
+use contrastxr::gpu::offline::{BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::{DeviceOptions, OfflineEngine};
 
 const DEFAULT_SIZES: &str = "1268x720,2064x2208,3840x3840";
@@ -28,9 +28,9 @@ pub fn usage() -> String {
          storage usage and enhanced through storage views, no copies; ip/frame: its ratio to\n\
          the frame through copies); with copy, the frame in place is not timed.\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
-        contrastxr::gpu::bench::WARM_UP_RUNS,
-        contrastxr::gpu::bench::CAMERA_SIZE.0,
-        contrastxr::gpu::bench::CAMERA_SIZE.1,
+        contrastxr::gpu::offline::WARM_UP_RUNS,
+        contrastxr::gpu::offline::CAMERA_SIZE.0,
+        contrastxr::gpu::offline::CAMERA_SIZE.1,
     )
 }
 

@@ -2,12 +2,12 @@
 //! over lambda_e; optionally a figure (perceived original | perceived enhanced | cyan map).
 
 use contrastxr::algorithm::Params;
-use contrastxr::background;
+use contrastxr::background_preparation;
 use contrastxr::evaluate::{self as eval, Metrics};
 use contrastxr::image::RgbaImage;
 
 use super::args::parse_list;
-use super::engine::{self, Engine};
+use super::engine_choice::{self, Engine};
 use super::options::{self, method_usage, ENGINE_USAGE};
 use super::{Args, CliError, Opt};
 
@@ -89,7 +89,7 @@ fn enhanced_image(
     params: &Params,
 ) -> Result<RgbaImage, CliError> {
     let Some(path) = path else {
-        return engine::run(inputs.engine, &inputs.display, &inputs.camera, params)
+        return engine_choice::run(inputs.engine, &inputs.display, &inputs.camera, params)
             .map_err(CliError::Failure);
     };
     let img = options::load_path(path, "enhanced")?;
@@ -105,7 +105,7 @@ fn enhanced_image(
 
 fn measure(inputs: &Inputs, enhanced: &RgbaImage, params: &Params) -> Metrics {
     let d = &inputs.display;
-    let bg = background::prepare(&inputs.camera, d.width, d.height, params);
+    let bg = background_preparation::prepare(&inputs.camera, d.width, d.height, params);
     eval::metrics(d, enhanced, &bg)
 }
 

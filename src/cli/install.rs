@@ -8,7 +8,7 @@ pub const OPTIONS: &[Opt] = &[
     Opt::flag("--system"),
     Opt::value("--library", "PATH"),
 ];
-use contrastxr::layer::install::{self, Scope};
+use contrastxr::layer::installed_files::{self, Scope};
 
 pub fn usage() -> String {
     "usage: contrastxr install [--user|--system] [--library PATH]\n\
@@ -42,9 +42,9 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let library = match library {
         Some(p) => std::fs::canonicalize(&p)
             .map_err(|e| CliError::Failure(format!("cannot find the library {p}: {e}")))?,
-        None => install::find_library().map_err(CliError::Failure)?,
+        None => installed_files::find_library().map_err(CliError::Failure)?,
     };
-    let done = install::install(scope, &library).map_err(CliError::Failure)?;
+    let done = installed_files::install(scope, &library).map_err(CliError::Failure)?;
     print(&format!(
         "installed {} (library copied from {} to {}); enable the layer with CONTRASTXR=1\n",
         done.manifest.display(),
@@ -57,7 +57,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 pub fn run_uninstall(args: &mut Args) -> Result<(), CliError> {
     let scope = scope(args)?;
     args.finish()?;
-    match install::uninstall(scope).map_err(CliError::Failure)? {
+    match installed_files::uninstall(scope).map_err(CliError::Failure)? {
         Some(path) => print(&format!("removed {}\n", path.display())),
         None => print("the layer was not installed\n"),
     }

@@ -5,7 +5,7 @@ use contrastxr::config::{self, Key, Settings, Value};
 use contrastxr::image::RgbaImage;
 
 use super::args::Opt;
-use super::engine::Engine;
+use super::engine_choice::Engine;
 use super::{Args, CliError};
 
 /// A setting of the method the offline commands take as an option: its name in

@@ -5,6 +5,7 @@
 use super::settings::{InPlace, Settings};
 use super::value::{Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
+use crate::algorithm::registration::Lens;
 use crate::camera::v4l2::usb::UsbId;
 use std::path::PathBuf;
 
@@ -111,8 +112,7 @@ fn set_camera_fov(s: &mut Settings, v: Value) -> Result<(), String> {
 
 fn set_camera_intrinsics(s: &mut Settings, v: Value) -> Result<(), String> {
     let k: [f32; 6] = numbers(v)?;
-    let [fx, fy, _, _, w, h] = k;
-    if k != [0.0; 6] && !(fx > 0.0 && fy > 0.0 && w > 0.0 && h > 0.0) {
+    if Lens::from_intrinsics(k).is_some_and(|lens| lens.check().is_err()) {
         return Err(format!(
             "{k:?}: fx, fy, width and height must be > 0, or all six 0 for none"
         ));

@@ -173,23 +173,13 @@ impl Registration {
     /// The camera profile, if the config gives the camera's lens.
     pub fn profile(&self) -> Option<CameraProfile> {
         let f = |x: f32| f64::from(x);
-        let lens = if self.camera_intrinsics != [0.0; 6] {
-            let [fx, fy, cx, cy, width, height] = self.camera_intrinsics.map(f);
-            Lens::Pixels {
-                fx,
-                fy,
-                cx,
-                cy,
-                width,
-                height,
-            }
-        } else if self.camera_fov != [0.0, 0.0] {
-            Lens::Fov {
+        let lens = match Lens::from_intrinsics(self.camera_intrinsics) {
+            Some(lens) => lens,
+            None if self.camera_fov != [0.0, 0.0] => Lens::Fov {
                 horizontal: f(self.camera_fov[0]).to_radians(),
                 vertical: f(self.camera_fov[1]).to_radians(),
-            }
-        } else {
-            return None;
+            },
+            None => return None,
         };
         Some(CameraProfile {
             lens,
@@ -240,7 +230,7 @@ impl Settings {
 
     fn describe_profile(&self) -> String {
         let r = &self.registration;
-        if r.camera_intrinsics != [0.0; 6] {
+        if Lens::from_intrinsics(r.camera_intrinsics).is_some() {
             format!("intrinsics{:?}", r.camera_intrinsics)
         } else if r.camera_fov != [0.0, 0.0] {
             format!("fov{:?}", r.camera_fov)

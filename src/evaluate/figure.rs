@@ -5,7 +5,7 @@ use super::font::{draw_text, text_height, text_width};
 use super::metric::{enhanced_mask, metrics};
 use super::perceived::perceived;
 use crate::algorithm::Params;
-use crate::background;
+use crate::background_preparation;
 use crate::colour;
 use crate::image::RgbaImage;
 
@@ -87,7 +87,7 @@ fn panels_row(
     title: Option<&str>,
     layout: Layout,
 ) -> RgbaImage {
-    let bg = background::prepare(camera, display.width, display.height, params);
+    let bg = background_preparation::prepare(camera, display.width, display.height, params);
     let percent = metrics(display, enhanced, &bg).enhanced_percent;
     let mask = enhanced_mask(display, enhanced, &bg);
     let factor = display.width.div_ceil(layout.max_panel_width.max(1)).max(1);

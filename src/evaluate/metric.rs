@@ -4,7 +4,7 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::background::PreparedBackground;
+use crate::background_preparation::PreparedBackground;
 use crate::colour;
 use crate::image::RgbaImage;
 

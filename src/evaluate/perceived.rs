@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use crate::algorithm::Params;
-use crate::background;
+use crate::background_preparation;
 use crate::colour;
 use crate::image::RgbaImage;
 
@@ -12,7 +12,7 @@ use crate::image::RgbaImage;
 /// FoV-mapped like the optimiser's but sharp (not blurred). Black and alpha-0 display pixels
 /// add no light. The result is opaque RGB.
 pub fn perceived(display: &RgbaImage, camera: &RgbaImage, params: &Params) -> RgbaImage {
-    let sharp = background::fov_sharp(camera, display.width, display.height, params);
+    let sharp = background_preparation::fov_sharp(camera, display.width, display.height, params);
     let t = f64::from(params.transmittance);
     let pixels = display
         .pixels

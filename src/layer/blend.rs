@@ -4,10 +4,10 @@
 //! ADDITIVE frames reach the runtime in a mode the runtime supports (OPAQUE where it has it:
 //! black there is no light on an additive display). Everything else is the runtime's answer.
 
-use super::device;
 use super::dispatch::NextFns;
 use super::ffi::{guard, LayerError};
-use super::{log, settings, state};
+use super::headset_settings;
+use super::{live_settings, log, state};
 use openxr_sys as xr;
 use std::collections::HashMap;
 use std::sync::{Mutex, MutexGuard, OnceLock};
@@ -87,10 +87,10 @@ fn runtime_modes(
 /// Whether the settings for `system` (its `[device."..."]` table applied) say the display is
 /// additive.
 fn additive_display(instance: xr::Instance, next: &NextFns, system: xr::SystemId) -> bool {
-    let Some(live) = settings::live(instance.into_raw()) else {
+    let Some(live) = live_settings::live(instance.into_raw()) else {
         return false;
     };
-    match device::system_name(next, instance, system) {
+    match headset_settings::system_name(next, instance, system) {
         Some(name) => live.on_device(&name).additive_display,
         None => live.current().additive_display,
     }

@@ -4,7 +4,7 @@
 
 use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
-use super::settings::{self, Settings};
+use super::live_settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
 use super::{app_spaces, app_vulkan, blend, log, session, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
@@ -178,7 +178,7 @@ fn start_settings(handle: xr::Instance, app: &str) -> Settings {
     let (live, resolved) = Live::start(app, env, Box::new(log::info));
     log::info(&startup_line(&resolved.settings, app));
     log_resolved(&resolved);
-    settings::register_live(handle.into_raw(), live);
+    live_settings::register_live(handle.into_raw(), live);
     resolved.settings
 }
 
@@ -208,7 +208,7 @@ fn register_instance(
                 .insert(handle.into_raw(), Arc::new(state));
         }
         Err(e) => {
-            settings::forget_live(handle.into_raw());
+            live_settings::forget_live(handle.into_raw());
             log::info(&format!("{e}: passing everything through"));
         }
     }
@@ -376,6 +376,6 @@ fn forget_instance(instance: xr::Instance) {
         panic!("fault injected at destroy-bookkeeping (CONTRASTXR_FAULT)");
     }
     state::registry().instances.remove(&instance.into_raw());
-    settings::forget_live(instance.into_raw());
+    live_settings::forget_live(instance.into_raw());
     app_vulkan::forget(instance);
 }

@@ -7,7 +7,7 @@
 use super::ffi::find_in_chain;
 use super::state::SessionState;
 use crate::config::InPlace;
-use crate::gpu::app_views::can_store;
+use crate::gpu::frame::can_store;
 use crate::gpu::PixelFormat;
 use openxr_sys as xr;
 
@@ -18,7 +18,7 @@ pub fn added_usage(
     format: PixelFormat,
     info: &xr::SwapchainCreateInfo,
 ) -> Option<xr::SwapchainUsageFlags> {
-    let gpu = s.processor.as_ref()?.gpu();
+    let gpu = &s.engine.as_ref()?.gpu;
     let wanted = match s.settings.in_place {
         InPlace::On => true,
         InPlace::Off => false,

@@ -6,12 +6,12 @@
 
 use super::app_spaces;
 use super::dispatch::NextFns;
+use super::live_settings::Settings;
 use super::log;
-use super::registration::{self, Source, ViewGeometry};
 pub use super::session_motion::{camera_config, SessionMotion, ViewRecord};
-use super::settings::Settings;
 use super::spaces::{self, Spaces};
 use super::state::SessionState;
+use super::view_mappings::{self, Source, ViewGeometry};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::registration::{view_mapping, Pose};
 use crate::algorithm::reprojection::view_in_world;
@@ -84,7 +84,7 @@ impl FrameMotion {
         views: &[ViewGeometry],
         space: xr::Space,
     ) -> Vec<(CameraMapping, Source)> {
-        let fixed = registration::projection_mappings(settings, views);
+        let fixed = view_mappings::projection_mappings(settings, views);
         let layer = self
             .spaces
             .and_then(|sp| spaces::locate(&self.next, space, sp.local, self.display_time));

@@ -1,15 +1,15 @@
 //! Sessions: read the Vulkan graphics binding at xrCreateSession and set up the session's
-//! processor and background source ([`sources`]); at xrEndFrame enhance the frame's held
-//! images ([`frame`]) and release them before the runtime composes them.
-//! At xrCreateSession the system's `[device."..."]` config table applies ([`device`]).
+//! frame engine and background source ([`sources`]); at xrEndFrame enhance the frame's held
+//! images ([`end_frame`]) and release them before the runtime composes them.
+//! At xrCreateSession the system's `[device."..."]` config table applies ([`headset_settings`]).
 //! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
 //! a changed background source is reopened on a helper thread while frames pass through.
 
 use super::ffi::{find_in_chain, guard, LayerError};
-use super::processor::Processor;
-use super::settings::Settings;
+use super::live_settings::Settings;
 use super::state::{self, lock, SessionState};
-use super::{blend, device, frame, log, sources, swapchain};
+use super::{blend, end_frame, headset_settings, log, sources, swapchain};
+use crate::gpu::frame::FrameEngine;
 use crate::gpu::{Engine, GpuDevice, GpuError};
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
@@ -38,8 +38,9 @@ pub unsafe extern "system" fn create_session(
         });
         // SAFETY: the runtime accepted info, so its systemId is the app's system.
         let system = unsafe { info.as_ref() }.map(|i| i.system_id);
-        let settings = device::settings_on(instance, &inst, system);
-        let processor = match binding {
+        let settings = headset_settings::settings_on(instance, &inst, system);
+        let started = std::time::Instant::now();
+        let engine = match binding {
             // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
             Some(b) => set_up(unsafe { &*b }, &settings),
             None => {
@@ -63,8 +64,10 @@ pub unsafe extern "system" fn create_session(
             instance,
             next: inst.next,
             settings,
-            processor,
+            engine,
             retired: Vec::new(),
+            indicator: Default::default(),
+            started,
             background: None,
             background_requested: false,
             background_delivered: false,
@@ -83,13 +86,14 @@ pub unsafe extern "system" fn create_session(
     })
 }
 
-/// The session's processor on the app's device (its pipelines start building at once). The
-/// background is not opened here: a camera opens only when a frame is to be enhanced.
-fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Processor> {
+/// The session's frame engine on the app's device (its pipelines start building at once, on
+/// its own thread). The background is not opened here: a camera opens only when a frame is to
+/// be enhanced.
+fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<FrameEngine> {
     let raw_instance = vk::Instance::from_raw(b.instance as u64);
     let entry = super::app_vulkan::entry_for(raw_instance).map_err(GpuError::NoLoader);
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
-    // alive until after xrDestroySession, where the processor is dropped first.
+    // alive until after xrDestroySession, where the engine is ended first.
     let gpu = entry.and_then(|entry| unsafe {
         GpuDevice::borrow(
             entry,
@@ -103,8 +107,8 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Proce
     // The background preparation's shaders first: the views' ones need a swapchain's format.
     let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
     let gpu = gpu.and_then(|gpu| gpu.queue_has_compute().map(|_| gpu));
-    let processor = match gpu.and_then(|gpu| Processor::new(gpu, &first)) {
-        Ok(p) => p,
+    let engine = match gpu.and_then(|gpu| FrameEngine::new(gpu, &[])) {
+        Ok(engine) => engine,
         Err(e) => {
             log::info(&format!(
                 "GPU set-up failed ({e}): passing frames through untouched"
@@ -112,12 +116,13 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<Proce
             return None;
         }
     };
+    // Through request_shaders: a warm-up device that cannot be made is said here.
+    state::request_shaders(&engine, &first);
     log::info(&format!(
         "session on Vulkan device {:?}, background {}: enhancing",
-        processor.gpu().name,
-        settings.background
+        engine.gpu.name, settings.background
     ));
-    Some(processor)
+    Some(engine)
 }
 
 /// How long the session's end waits for its background's thread (a camera restoring its
@@ -133,8 +138,7 @@ pub fn forget(session: xr::Session) {
         let mut s = lock(&s);
         // On the app's thread, inside xrDestroySession or xrDestroyInstance: the pipeline
         // threads end and the warm-up devices are destroyed here.
-        s.processor = None;
-        s.retired.clear();
+        s.end_engines();
         // Closes the camera (controls restored) before the app may exit: it is open only
         // while a session runs.
         let closed = s.background.take().map(|bg| bg.close_within(CLOSE_WAIT));
@@ -197,13 +201,13 @@ fn layer_end_frame(session: xr::Session, s: &Mutex<SessionState>, info: *const x
     // SAFETY: the app's frame end info (null is left for the runtime to reject).
     if let Some(info) = unsafe { info.as_ref() } {
         let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            frame::enhance_frame(&mut s, info)
+            end_frame::enhance_frame(&mut s, info)
         }));
         if done.is_err() {
             log::info(
                 "internal error while enhancing: passing this session's frames through from now on",
             );
-            s.retire_processor();
+            s.retire_engine();
         }
     }
     if let Err(e) = crate::fault::check("end-frame") {
@@ -220,7 +224,7 @@ fn recover_end_frame(session: xr::Session, s: &Mutex<SessionState>) {
         "end-frame-panic",
         "internal error in xrEndFrame: passing this session's frames through from now on",
     );
-    lock(s).retire_processor();
+    lock(s).retire_engine();
     let released = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         swapchain::release_held(session)
     }));

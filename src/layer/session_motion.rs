@@ -3,11 +3,11 @@
 //! xrEndFrame is in [`super::motion`].
 
 use super::dispatch::NextFns;
+use super::live_settings::Settings;
 use super::log;
-use super::registration::ViewGeometry;
-use super::settings::Settings;
 use super::spaces::{self, Spaces};
 use super::timespec::Timespec;
+use super::view_mappings::ViewGeometry;
 use crate::algorithm::registration::Pose;
 use crate::camera::{clock, CaptureConfig, HeadPoses, WorldRig};
 use openxr_sys as xr;

@@ -1,8 +1,8 @@
 //! A session's background source: opened at xrCreateSession, reopened on a helper thread when
 //! the config names another (frames pass through meanwhile), closed with the session.
 
+use super::live_settings;
 use super::log;
-use super::settings;
 use super::state::SessionState;
 use crate::camera::{self, Background, CaptureConfig};
 use openxr_sys as xr;
@@ -127,7 +127,7 @@ fn take_reopened(session: xr::Session, s: &mut SessionState) {
 /// Takes newer settings from the config watcher, if any, without waiting.
 pub(super) fn pick_up_settings(session: xr::Session, s: &mut SessionState) {
     take_reopened(session, s);
-    let Some(live) = settings::live(s.instance.into_raw()) else {
+    let Some(live) = live_settings::live(s.instance.into_raw()) else {
         return;
     };
     let Some(newer) = live.newer(s.settings.generation) else {
@@ -136,7 +136,7 @@ pub(super) fn pick_up_settings(session: xr::Session, s: &mut SessionState) {
     let source_changed =
         newer.background != s.settings.background || newer.camera != s.settings.camera;
     // A background not opened yet opens with the new settings when it is first needed.
-    if source_changed && s.processor.is_some() && s.background_requested {
+    if source_changed && s.engine.is_some() && s.background_requested {
         start_reopen(
             session,
             s.background.take(),

@@ -10,13 +10,17 @@
 
 use super::dispatch::NextFns;
 use super::image_states::ImageStates;
-use super::processor::Processor;
-use super::settings::Settings;
+use super::indicator::Timer;
+use super::live_settings::Settings;
+use super::log;
+use crate::gpu::frame::FrameEngine;
+use crate::gpu::shaders::shader_ids::ShaderId;
 use crate::gpu::PixelFormat;
 use ash::vk;
 use openxr_sys as xr;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
+use std::time::Instant;
 
 pub struct InstanceState {
     pub next: NextFns,
@@ -30,11 +34,18 @@ pub struct SessionState {
     pub instance: xr::Instance,
     pub next: NextFns,
     pub settings: Arc<Settings>,
-    /// None: this session passes through (not Vulkan, set-up failed, or an earlier failure).
-    pub processor: Option<Processor>,
-    /// Processors of earlier failures, kept until xrDestroySession: dropping one waits for its
+    /// The GPU engine that does the frame's work, on the app's device (its pipelines build on
+    /// its own thread). None: this session passes through (not Vulkan, set-up failed, or an
+    /// earlier failure).
+    pub engine: Option<FrameEngine>,
+    /// Engines of earlier failures, kept until xrDestroySession: ending one waits for its
     /// pipeline thread, which no frame call may do.
-    pub retired: Vec<Processor>,
+    pub retired: Vec<FrameEngine>,
+    /// When the in-headset indicator shows (set from the first enhanced frame on).
+    pub indicator: Timer,
+    /// When the session started (xrCreateSession), for the log's line on when enhancement
+    /// began.
+    pub started: Instant,
     /// The running background source (camera, video, image): open only while the session's
     /// frames are enhanced (opened at the first frame the layer acts on).
     pub background: Option<crate::camera::Background>,
@@ -60,18 +71,48 @@ pub struct SessionState {
 }
 
 impl SessionState {
-    /// The session passes its frames through from now on. Its processor's pipeline thread is
-    /// told to stop, and the processor is kept until xrDestroySession, so that no call of the
+    /// The session passes its frames through from now on. Its engine's pipeline thread is
+    /// told to stop, and the engine is kept until xrDestroySession, so that no call of the
     /// app waits here for a shader compile, a device teardown or a cache write.
-    pub fn retire_processor(&mut self) {
-        if let Some(p) = self.processor.take() {
-            p.stop_building();
-            self.retired.push(p);
+    pub fn retire_engine(&mut self) {
+        if let Some(engine) = self.engine.take() {
+            engine.stop_building();
+            self.retired.push(engine);
         }
-        // Its mapped images stay valid until it is dropped, but no frame samples them now.
+        // Its mapped images stay valid until it is ended, but no frame samples them now.
         if let Some(bg) = &self.background {
             bg.deliver_texels_to(None);
         }
+    }
+
+    /// Ends the session's engines, the current one first: each waits for its last work and
+    /// its pipeline thread, then destroys what it made. On the app's thread, inside
+    /// xrDestroySession or xrDestroyInstance.
+    pub fn end_engines(&mut self) {
+        for engine in self.engine.take().into_iter().chain(self.retired.drain(..)) {
+            if let Err(e) = engine.finish() {
+                log::info(&format!(
+                    "the GPU did not finish the layer's last work ({e}): its objects are left alive, not destroyed"
+                ));
+            }
+        }
+    }
+}
+
+/// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
+/// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device is
+/// made here when one of them needs it, never on the pipeline thread (gpu/warm_up.rs).
+pub fn request_shaders(engine: &FrameEngine, ids: &[ShaderId]) {
+    let t = Instant::now();
+    match engine.request(ids) {
+        Some(Ok(())) => log::debug(&format!(
+            "warm-up device made on the app's thread in {:.3} s",
+            t.elapsed().as_secs_f64()
+        )),
+        Some(Err(e)) => log::info(&format!(
+            "no warm-up device ({e}): shaders compile at their first dispatch; not tried again in this session"
+        )),
+        None => {}
     }
 }
 

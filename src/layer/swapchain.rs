@@ -62,7 +62,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
             let (next, active) = {
                 let s = lock(&s);
-                (s.next, s.processor.is_some())
+                (s.next, s.engine.is_some())
             };
             // SAFETY: the app's create info (null is left for the runtime to reject).
             let Some(app_info) = (unsafe { info.as_ref() }) else {
@@ -142,15 +142,15 @@ pub(crate) unsafe extern "system" fn create_swapchain(
     )
 }
 
-/// Starts building the shaders that views of this swapchain will need (on the processor's own
+/// Starts building the shaders that views of this swapchain will need (on the engine's own
 /// thread), so they are likely ready by the first xrEndFrame. Views usually span the width.
 fn request_shaders(s: &Mutex<SessionState>, shape: ViewShape) {
     let s = lock(s);
-    let Some(p) = s.processor.as_ref() else {
+    let Some(engine) = s.engine.as_ref() else {
         return;
     };
     if let Ok(ids) = crate::gpu::Engine::shaders_for(&s.settings.params, [shape]) {
-        p.request(&ids);
+        state::request_shaders(engine, &ids);
     }
 }
 
@@ -184,15 +184,15 @@ fn forget(sc: &Arc<Mutex<SwapchainState>>, swapchain: xr::Swapchain) {
         sc.states = ImageStates::default();
         let Some(s) = s else { return };
         let forgotten = s
-            .processor
+            .engine
             .as_mut()
-            .map(|p| p.forget_swapchain(swapchain.into_raw()));
+            .map(|engine| engine.forget_swapchain(swapchain.into_raw()));
         if let Some(Err(e)) = forgotten {
             // Its image views stay alive under handles the runtime may reuse: no more frames.
             log::info(&format!(
                 "xrDestroySwapchain: {e}: passing this session's frames through from now on"
             ));
-            s.retire_processor();
+            s.retire_engine();
         }
     });
     state::registry().swapchains.remove(&swapchain.into_raw());
@@ -302,7 +302,7 @@ fn enhance_ahead(
         "the app works ahead of xrEndFrame (a pipelined renderer): its images are enhanced when released, with the view regions it last submitted",
     );
     if let Some(s) = s {
-        super::frame::enhance_ahead(s, sc, swapchain, image);
+        super::end_frame::enhance_ahead(s, sc, swapchain, image);
     }
 }
 

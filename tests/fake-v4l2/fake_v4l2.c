@@ -22,6 +22,8 @@
  *                           when another program is capturing from the device
  *   FAKE_V4L2_CARD          card name (default "Fake V4L2 camera")
  *   FAKE_V4L2_OPEN_DELAY_MS each open of the device takes this long (a slow USB camera)
+ *   FAKE_V4L2_ABSENT_FOR_MS opening the device fails with ENOENT for this long after start
+ *                           (a camera plugged in after the app started)
  *   FAKE_V4L2_LOG           file to which each open and close of the device is appended, as
  *                           "open MS" / "close MS" lines (MS: wall-clock milliseconds since 1970),
  *                           with "opening MS" where a slow open starts
@@ -83,6 +85,7 @@ static struct {
 	long vanish_after;
 	long return_after_ms;
 	uint64_t busy_until_ns;
+	uint64_t absent_until_ns;
 	long open_delay_ms;
 	const char *log;
 	int no_frames;
@@ -164,6 +167,8 @@ static void parse_config(void)
 	cfg.return_after_ms = e ? atol(e) : 500;
 	e = getenv("FAKE_V4L2_BUSY_FOR_MS");
 	cfg.busy_until_ns = e ? now_ns() + (uint64_t)atol(e) * 1000000ull : 0;
+	e = getenv("FAKE_V4L2_ABSENT_FOR_MS");
+	cfg.absent_until_ns = e ? now_ns() + (uint64_t)atol(e) * 1000000ull : 0;
 	e = getenv("FAKE_V4L2_OPEN_DELAY_MS");
 	cfg.open_delay_ms = e ? atol(e) : 0;
 	cfg.log = getenv("FAKE_V4L2_LOG");
@@ -242,6 +247,8 @@ static uint32_t bytes_per_line(uint32_t f, uint32_t w)
 /* The vanished device comes back (can be opened again) after return_after_ms. */
 static int device_present(void)
 {
+	if (now_ns() < cfg.absent_until_ns)
+		return 0;
 	if (!dev.vanished)
 		return 1;
 	return now_ns() - dev.vanished_at_ns >= (uint64_t)cfg.return_after_ms * 1000000ull;

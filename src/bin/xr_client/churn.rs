@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use ash::vk;
 use openxr as xr;
 
-use crate::format::SwapchainFormat;
+use crate::swapchain_format::SwapchainFormat;
 
 /// Swapchains alive at once: each lives while the next few are made, so a layer's xrEndFrame
 /// finds some of them tracked when one is destroyed.

@@ -1,14 +1,22 @@
 //! Command-line flags. They are a stable interface: the runtime and layer tests drive the client
 //! with them.
 
-use crate::format::{SwapchainFormat, FORMATS};
 use crate::pattern::Content;
+use crate::swapchain_format::{SwapchainFormat, FORMATS};
 
 pub const USAGE: &str = "\
 usage: contrastxr-xr-client [options]
   --format NAME           swapchain format: auto (the runtime's first) or one of
                           R8G8B8A8_SRGB B8G8R8A8_SRGB R8G8B8A8_UNORM B8G8R8A8_UNORM
                           R16G16B16A16_UNORM R16G16B16A16_SFLOAT A2B10G10R10_UNORM
+  --graphics vulkan|opengl
+                          the session's graphics API: Vulkan (XR_KHR_vulkan_enable2, default)
+                          or OpenGL (XR_KHR_opengl_enable, Xlib binding on a GLX 4.5 core
+                          context on $DISPLAY; one array swapchain, the pattern's rows bottom
+                          first; GL formats by the Vulkan name of their layout: R8G8B8A8_SRGB
+                          is GL_SRGB8_ALPHA8, R8G8B8A8_UNORM GL_RGBA8, R16G16B16A16_SFLOAT
+                          GL_RGBA16F, R16G16B16A16_UNORM GL_RGBA16, A2B10G10R10_UNORM
+                          GL_RGB10_A2)
   --layout array|side-by-side
                           one swapchain with arraySize 2, or one wide swapchain (default array)
   --frames N              frames to submit before ending the session (default 60)
@@ -63,6 +71,22 @@ usage: contrastxr-xr-client [options]
   The JSON report holds resident memory and open file descriptors every 50 frames
   (`memory`) and after each session (`sessions`).";
 
+/// The session's graphics API.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Graphics {
+    Vulkan,
+    OpenGl,
+}
+
+impl Graphics {
+    pub fn name(self) -> &'static str {
+        match self {
+            Graphics::Vulkan => "vulkan",
+            Graphics::OpenGl => "opengl",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
     /// One swapchain with arraySize 2; view i is at imageArrayIndex i.
@@ -82,6 +106,7 @@ impl Layout {
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
+    pub graphics: Graphics,
     /// None: the first format the runtime offers that the client knows.
     pub format: Option<SwapchainFormat>,
     pub layout: Layout,
@@ -118,6 +143,7 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Self {
         Options {
+            graphics: Graphics::Vulkan,
             format: None,
             layout: Layout::Array,
             frames: 60,
@@ -168,6 +194,13 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
                     .ok()
                     .filter(|&n| n > 0)
                     .ok_or("--quad-strips needs a count above 0")?
+            }
+            "--graphics" => {
+                options.graphics = match value()?.as_str() {
+                    "vulkan" => Graphics::Vulkan,
+                    "opengl" => Graphics::OpenGl,
+                    _ => return Err("--graphics needs vulkan or opengl".into()),
+                }
             }
             "--validation" => options.validation = true,
             "--list-formats" => options.list_formats = true,

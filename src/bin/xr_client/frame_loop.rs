@@ -8,8 +8,8 @@ use openxr as xr;
 use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::gpu::Gpu;
+use crate::pattern_swapchain::PatternSwapchain;
 use crate::scene::Scene;
-use crate::swapchain::PatternSwapchain;
 use crate::timing::{Calls, Startup};
 
 const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;

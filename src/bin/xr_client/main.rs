@@ -7,18 +7,20 @@
 mod churn;
 mod cli;
 mod error;
-mod format;
 mod frame_loop;
 mod full_stderr;
 mod gipa;
+mod gl_run;
+mod glx;
 mod gpu;
 mod leftovers;
 mod memory;
 mod pattern;
-mod report;
+mod pattern_swapchain;
+mod run_report;
 mod scene;
 mod script;
-mod swapchain;
+mod swapchain_format;
 mod timing;
 mod validation;
 
@@ -29,13 +31,13 @@ use openxr as xr;
 
 use cli::{Layout, Options};
 use error::{fail, Context, Result};
-use format::SwapchainFormat;
 use frame_loop::Stats;
 use gpu::Gpu;
 use pattern::Target;
-use report::Report;
+use pattern_swapchain::{LayerContent, PatternSwapchain};
+use run_report::Report;
 use scene::Scene;
-use swapchain::{LayerContent, PatternSwapchain};
+use swapchain_format::SwapchainFormat;
 
 const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
 
@@ -56,6 +58,7 @@ fn main() -> ExitCode {
         views: 2,
         quad: options.quad,
         vk_validation: options.validation,
+        graphics: options.graphics.name().to_string(),
         ..Report::default()
     };
     let mut stats = Stats {
@@ -79,7 +82,7 @@ fn main() -> ExitCode {
     report.reached_focused = stats.reached_focused;
     if options.timing {
         let run_s = started.elapsed().as_secs_f64();
-        report.timing = Some(report::Timing::new(&stats, run_s));
+        report.timing = Some(run_report::Timing::new(&stats, run_s));
     }
     report.vk_validation_errors = validation::errors();
     report.vk_validation_warnings = validation::warnings();
@@ -115,6 +118,9 @@ fn print(report: &Report, options: &Options) {
 
 fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> {
     let entry = load_openxr()?;
+    if options.graphics == cli::Graphics::OpenGl {
+        return gl_run::run(&entry, options, report, stats);
+    }
     let available = entry
         .enumerate_extensions()
         .ctx("xrEnumerateInstanceExtensionProperties")?;
@@ -172,7 +178,7 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
         report.sessions_run += 1;
         report
             .sessions
-            .push(report::Sample::now(stats.frames_submitted));
+            .push(run_report::Sample::now(stats.frames_submitted));
         if options.list_formats {
             break;
         }

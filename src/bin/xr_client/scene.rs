@@ -4,7 +4,7 @@
 use openxr as xr;
 
 use crate::gpu::Gpu;
-use crate::swapchain::PatternSwapchain;
+use crate::pattern_swapchain::PatternSwapchain;
 
 /// What the frame loop draws with.
 pub struct Scene<'a> {
@@ -15,7 +15,7 @@ pub struct Scene<'a> {
     pub quad: Option<PatternSwapchain>,
     pub view_size: (u32, u32),
     pub blend_mode: xr::EnvironmentBlendMode,
-    pub format: crate::format::SwapchainFormat,
+    pub format: crate::swapchain_format::SwapchainFormat,
     /// With --pipelined: the projection image already acquired and waited for the next frame.
     pub ahead: Option<u32>,
 }

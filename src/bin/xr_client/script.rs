@@ -21,9 +21,9 @@ use openxr as xr;
 use openxr::sys;
 
 use crate::error::{fail, Context, Result};
-use crate::format::SwapchainFormat;
+use crate::pattern_swapchain::{barrier, record_transfer_write};
 use crate::scene::Scene;
-use crate::swapchain::{barrier, record_transfer_write};
+use crate::swapchain_format::SwapchainFormat;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Op {

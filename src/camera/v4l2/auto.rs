@@ -6,7 +6,7 @@
 
 use super::usb::{self, sysfs_root, UsbId};
 use super::{choose_mode, modes, probe, stable_paths, DeviceInfo};
-use crate::camera::log::log;
+use crate::camera::log_sink::log;
 use crate::camera::CaptureConfig;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;

@@ -2,7 +2,7 @@
 //! config gives a value (each change of an automatic control becomes a change of tint), and
 //! listed by `contrastxr camera list`.
 
-use crate::camera::log::log;
+use crate::camera::log_sink::log;
 use crate::camera::source::CameraControls;
 use v4l::control::{Control, Description, Value};
 use v4l::Device;

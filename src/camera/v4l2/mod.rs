@@ -5,13 +5,15 @@
 //! (for unusual setups, and for the tests' stand-in device).
 
 pub mod auto;
-mod capture;
+mod capture_thread;
 mod choose;
 pub mod controls;
 mod devices;
+mod listing;
 pub mod usb;
 
 pub use auto::looks_built_in;
-pub(crate) use capture::spawn;
+pub(crate) use capture_thread::spawn;
 pub use choose::{choose_mode, Mode};
 pub use devices::*;
+pub use listing::listing;

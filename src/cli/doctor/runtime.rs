@@ -1,7 +1,8 @@
 //! The active OpenXR runtime (as the loader finds it) and the Vulkan devices.
 
 use super::finding::{var, Finding};
-use ash::vk;
+use contrastxr::gpu::device::physical_devices;
+use contrastxr::gpu::GpuError;
 use std::path::{Path, PathBuf};
 
 /// Where the loader looks for the active runtime, in its order (`FindXDGConfigFile`):
@@ -155,96 +156,46 @@ pub fn runtime() -> Finding {
 const INSTALL_VULKAN: &str = "install the Vulkan loader and a driver: `sudo apt install \
     libvulkan1 mesa-vulkan-drivers` (or your GPU vendor's Vulkan driver)";
 
-fn device_type(t: vk::PhysicalDeviceType) -> &'static str {
-    match t {
-        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
-        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
-        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
-        vk::PhysicalDeviceType::CPU => "CPU, software",
-        _ => "other",
-    }
-}
-
-/// Each physical device as `#N NAME (TYPE, Vulkan X.Y)`, and whether it is a CPU device.
-fn describe(instance: &ash::Instance) -> Result<Vec<(String, bool)>, vk::Result> {
-    // SAFETY: a valid instance.
-    let physicals = unsafe { instance.enumerate_physical_devices() }?;
-    Ok(physicals
-        .iter()
-        .enumerate()
-        .map(|(i, &p)| {
-            // SAFETY: p was enumerated from this instance.
-            let props = unsafe { instance.get_physical_device_properties(p) };
-            let name = props
-                .device_name_as_c_str()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_else(|_| "unknown device".into());
-            let v = props.api_version;
-            let text = format!(
-                "#{i} {name} ({}, Vulkan {}.{})",
-                device_type(props.device_type),
-                vk::api_version_major(v),
-                vk::api_version_minor(v)
-            );
-            (text, props.device_type == vk::PhysicalDeviceType::CPU)
-        })
-        .collect())
-}
-
-/// The Vulkan devices, found the way the engine finds them (`src/gpu/device.rs`): the loader
-/// `libvulkan.so.1` through ash, a Vulkan 1.1 instance, vkEnumeratePhysicalDevices.
+/// The Vulkan devices, listed by the engine's device room as it finds them (the loader
+/// `libvulkan.so.1`, a Vulkan 1.1 instance, vkEnumeratePhysicalDevices).
 pub fn vulkan() -> Finding {
     const NAME: &str = "vulkan";
-    // SAFETY: loads libvulkan.so.1, whose initialisation has no preconditions.
-    let entry = match unsafe { ash::Entry::load() } {
-        Ok(e) => e,
-        Err(e) => {
+    let devices = match physical_devices() {
+        Ok(d) => d,
+        Err(GpuError::NoLoader(e)) => {
             return Finding::problem(
                 NAME,
                 format!("cannot load the Vulkan loader libvulkan.so.1 ({e})"),
                 INSTALL_VULKAN,
             )
         }
-    };
-    let app = vk::ApplicationInfo::default()
-        .application_name(c"contrastxr doctor")
-        .api_version(vk::API_VERSION_1_1);
-    let info = vk::InstanceCreateInfo::default().application_info(&app);
-    // SAFETY: info and what it points to live until the call returns.
-    let instance = match unsafe { entry.create_instance(&info, None) } {
-        Ok(i) => i,
-        Err(e) => {
-            let why = match e {
-                vk::Result::ERROR_INCOMPATIBLE_DRIVER => "no Vulkan driver is installed".into(),
-                e => format!("vkCreateInstance failed: {e}"),
-            };
-            return Finding::problem(NAME, why, INSTALL_VULKAN);
+        Err(GpuError::NoDevice(_)) => {
+            return Finding::problem(NAME, "no Vulkan driver is installed", INSTALL_VULKAN)
         }
+        // vkCreateInstance or vkEnumeratePhysicalDevices failed: the error names the call.
+        Err(e) => return Finding::problem(NAME, e.to_string(), INSTALL_VULKAN),
     };
-    let devices = describe(&instance);
-    // SAFETY: the instance has no children.
-    unsafe { instance.destroy_instance(None) };
-    match devices {
-        Err(e) => Finding::problem(
+    if devices.is_empty() {
+        return Finding::problem(NAME, "no Vulkan device", INSTALL_VULKAN);
+    }
+    let list: Vec<String> = devices
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            let (major, minor) = d.version;
+            format!("#{i} {} ({}, Vulkan {major}.{minor})", d.name, d.kind)
+        })
+        .collect();
+    let detail = format!("{} device(s): {}", devices.len(), list.join("; "));
+    if devices.iter().all(|d| d.cpu) {
+        Finding::warn(
             NAME,
-            format!("vkEnumeratePhysicalDevices failed: {e}"),
-            INSTALL_VULKAN,
-        ),
-        Ok(d) if d.is_empty() => Finding::problem(NAME, "no Vulkan device", INSTALL_VULKAN),
-        Ok(d) => {
-            let list: Vec<&str> = d.iter().map(|(t, _)| t.as_str()).collect();
-            let detail = format!("{} device(s): {}", d.len(), list.join("; "));
-            if d.iter().all(|(_, cpu)| *cpu) {
-                Finding::warn(
-                    NAME,
-                    detail + "; only a software device, too slow for a headset",
-                    "install your GPU's Vulkan driver (mesa-vulkan-drivers for AMD and Intel, \
-                     the NVIDIA driver for NVIDIA); apps render on their own device",
-                )
-            } else {
-                Finding::ok(NAME, detail)
-            }
-        }
+            detail + "; only a software device, too slow for a headset",
+            "install your GPU's Vulkan driver (mesa-vulkan-drivers for AMD and Intel, \
+             the NVIDIA driver for NVIDIA); apps render on their own device",
+        )
+    } else {
+        Finding::ok(NAME, detail)
     }
 }
 

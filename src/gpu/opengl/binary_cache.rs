@@ -7,7 +7,7 @@
 //! an optimisation.
 
 use super::functions::{self as gl, Gl};
-use crate::gpu::pipeline_cache;
+use crate::gpu::pipelines::pipeline_cache;
 use std::collections::HashMap;
 
 /// The data starts with this, then the driver string's length and bytes, the entry count,

@@ -1,8 +1,8 @@
 //! What the current context offers the backend, read with GL 1.x/3.x queries only (no call
 //! that could raise an error on an older context), before anything else runs.
 
-use super::error::GlError;
 use super::functions::{self as gl, Gl};
+use super::gl_error::GlError;
 use std::ffi::CStr;
 
 /// The context's version and the extensions the backend looks for.

@@ -4,7 +4,7 @@
 //! does not support: `Caps::check` (caps.rs) decides from the context's version and extensions
 //! before any function past GL 1.x is called. The GL constants the backend uses are here too.
 
-use super::error::GlError;
+use super::gl_error::GlError;
 use std::ffi::{c_void, CStr};
 
 pub type Enum = u32;
@@ -132,7 +132,7 @@ pub const COMPLETION_STATUS: Enum = 0x91B1;
 pub const PROGRAM_BINARY_RETRIEVABLE_HINT: Enum = 0x8257;
 pub const PROGRAM_BINARY_LENGTH: Enum = 0x8741;
 
-// State the guard saves (state.rs).
+// State the guard saves (state_guard.rs).
 pub const CURRENT_PROGRAM: Enum = 0x8B8D;
 pub const PROGRAM_PIPELINE_BINDING: Enum = 0x825A;
 pub const ACTIVE_TEXTURE: Enum = 0x84E0;

@@ -4,22 +4,22 @@
 //!
 //! Called on the app's thread with its context current (the layer's xrEndFrame): no GL call is
 //! made on a thread of the layer's own, the app's GL state is put back after each call
-//! (state.rs) and its pending GL error is never read or changed. Frames pass through untouched
-//! while the programs build (programs.rs) and, with a one-sentence reason (error.rs), where the
+//! (state_guard.rs) and its pending GL error is never read or changed. Frames pass through untouched
+//! while the programs build (programs.rs) and, with a one-sentence reason (gl_error.rs), where the
 //! context, a format or a program cannot serve. Raw GL names and constants stay in this folder.
 
 pub mod binary_cache;
 pub mod caps;
-pub mod engine;
-pub mod error;
-pub mod format;
 pub mod functions;
+pub mod gl_engine;
+pub mod gl_error;
+pub mod gl_format;
 pub mod offline;
 pub mod programs;
-pub mod state;
+pub mod state_guard;
 
-pub use engine::{GlEngine, GlTarget, GlView, Outcome};
-pub use error::GlError;
-pub use format::GlFormat;
 pub use functions::Gl;
+pub use gl_engine::{GlEngine, GlTarget, GlView, Outcome};
+pub use gl_error::GlError;
+pub use gl_format::GlFormat;
 pub use offline::GlOffline;

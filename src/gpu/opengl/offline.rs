@@ -3,10 +3,10 @@
 //! needed, OpenGL 4.5 core, current on the thread that made it. Views are textures made here,
 //! their rows stored bottom first as an OpenXR runtime's OpenGL swapchain images are.
 
-use super::engine::{GlEngine, GlTarget, GlView, Outcome};
-use super::error::GlError;
-use super::format::GlFormat;
 use super::functions::{self as gl, Gl};
+use super::gl_engine::{GlEngine, GlTarget, GlView, Outcome};
+use super::gl_error::GlError;
+use super::gl_format::GlFormat;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurTaps, BlurredTexels};

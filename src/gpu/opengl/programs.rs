@@ -11,9 +11,9 @@
 
 use super::binary_cache::{source_hash, BinaryCache};
 use super::caps::Caps;
-use super::error::GlError;
 use super::functions::{self as gl, Gl};
-use crate::gpu::push_constants::PushConstants;
+use super::gl_error::GlError;
+use crate::gpu::shaders::push_constants::PushConstants;
 use std::ffi::CString;
 use std::time::{Duration, Instant};
 
@@ -357,7 +357,7 @@ pub fn enhance(
     access: u32,
     extras: bool,
 ) -> Option<usize> {
-    let background = mode == crate::gpu::interface::MODE_BACKGROUND;
+    let background = mode == crate::gpu::shaders::interface::MODE_BACKGROUND;
     GL_ENHANCE_VARIANTS
         .iter()
         .find(|&&(m, v, f, a, e, s, _)| {

@@ -1,0 +1,123 @@
+//! How the engine reads and writes a display region's raw pixels: the swapchain format's byte
+//! layout and whether its values are sRGB-encoded (OpenXR: *_SRGB formats hold sRGB-encoded
+//! values, UNORM and float formats hold linear light).
+
+use crate::gpu::shaders::interface::{self, FORMAT_SRGB_BIT};
+use ash::vk;
+
+/// Byte layout of one pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PixelLayout {
+    Rgba8,
+    Bgra8,
+    Rgba16Unorm,
+    Rgba16Float,
+    A2b10g10r10,
+}
+
+impl PixelLayout {
+    /// The shaders' LAYOUT_* code (src/gpu/shaders/interface.rs).
+    pub fn shader_code(self) -> u32 {
+        match self {
+            PixelLayout::Rgba8 => interface::LAYOUT_RGBA8,
+            PixelLayout::Bgra8 => interface::LAYOUT_BGRA8,
+            PixelLayout::Rgba16Unorm => interface::LAYOUT_RGBA16_UNORM,
+            PixelLayout::Rgba16Float => interface::LAYOUT_RGBA16_FLOAT,
+            PixelLayout::A2b10g10r10 => interface::LAYOUT_A2B10G10R10,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelFormat {
+    pub layout: PixelLayout,
+    /// True when stored values are sRGB-encoded.
+    pub srgb: bool,
+}
+
+impl PixelFormat {
+    /// 8-bit sRGB RGBA: PNG files and the camera.
+    pub const SRGB8: PixelFormat = PixelFormat {
+        layout: PixelLayout::Rgba8,
+        srgb: true,
+    };
+
+    /// The engine's reading of a Vulkan colour format; None for formats it does not handle
+    /// (depth, compressed, ...), which the layer then leaves untouched.
+    pub fn from_vk(format: vk::Format) -> Option<PixelFormat> {
+        use PixelLayout::*;
+        let (layout, srgb) = match format {
+            vk::Format::R8G8B8A8_SRGB => (Rgba8, true),
+            vk::Format::R8G8B8A8_UNORM => (Rgba8, false),
+            vk::Format::B8G8R8A8_SRGB => (Bgra8, true),
+            vk::Format::B8G8R8A8_UNORM => (Bgra8, false),
+            vk::Format::R16G16B16A16_UNORM => (Rgba16Unorm, false),
+            vk::Format::R16G16B16A16_SFLOAT => (Rgba16Float, false),
+            vk::Format::A2B10G10R10_UNORM_PACK32 => (A2b10g10r10, false),
+            _ => return None,
+        };
+        Some(PixelFormat { layout, srgb })
+    }
+
+    pub fn bytes_per_pixel(self) -> u32 {
+        match self.layout {
+            PixelLayout::Rgba16Unorm | PixelLayout::Rgba16Float => 8,
+            _ => 4,
+        }
+    }
+
+    /// The format whose shader code (`FORMAT`) is `code`.
+    pub fn from_shader_code(code: u32) -> Option<PixelFormat> {
+        use PixelLayout::*;
+        [Rgba8, Bgra8, Rgba16Unorm, Rgba16Float, A2b10g10r10]
+            .into_iter()
+            .flat_map(|layout| [true, false].map(|srgb| PixelFormat { layout, srgb }))
+            .find(|f| f.shader_code() == code)
+    }
+
+    /// The format of the storage view a region of this format is enhanced in place through
+    /// (interface.rs `in_place_texel`: UNORM for the sRGB formats); None where it is not.
+    pub fn in_place_view_format(self) -> Option<vk::Format> {
+        interface::in_place_texel(self.shader_code())?;
+        match self.layout {
+            PixelLayout::Rgba8 => Some(vk::Format::R8G8B8A8_UNORM),
+            PixelLayout::Rgba16Float => Some(vk::Format::R16G16B16A16_SFLOAT),
+            _ => None,
+        }
+    }
+
+    /// The code of the format a shader variant is built for (`FORMAT` in the shaders).
+    pub fn shader_code(self) -> u32 {
+        self.layout.shader_code() | if self.srgb { FORMAT_SRGB_BIT } else { 0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The storage view's Vulkan format is the texel format the shader declares.
+    #[test]
+    fn in_place_view_formats_match_the_shaders_texel_formats() {
+        let formats = [
+            vk::Format::R8G8B8A8_SRGB,
+            vk::Format::R8G8B8A8_UNORM,
+            vk::Format::B8G8R8A8_SRGB,
+            vk::Format::B8G8R8A8_UNORM,
+            vk::Format::R16G16B16A16_UNORM,
+            vk::Format::R16G16B16A16_SFLOAT,
+            vk::Format::A2B10G10R10_UNORM_PACK32,
+        ];
+        for f in formats {
+            let pixel = PixelFormat::from_vk(f).unwrap();
+            let texel = interface::in_place_texel(pixel.shader_code());
+            let expected = match pixel.in_place_view_format() {
+                Some(vk::Format::R8G8B8A8_UNORM) => Some("rgba8unorm"),
+                Some(vk::Format::R16G16B16A16_SFLOAT) => Some("rgba16float"),
+                Some(other) => panic!("{other:?}"),
+                None => None,
+            };
+            assert_eq!(texel, expected, "{f:?}");
+        }
+    }
+}

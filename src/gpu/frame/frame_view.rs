@@ -1,0 +1,83 @@
+//! The unit of a frame's GPU work: one view region of an app's image, the key its buffers are
+//! kept under, and what a capture reads back of it.
+
+use crate::algorithm::mapping::CameraMapping;
+use crate::gpu::device::{ImageRegion, PixelFormat};
+use crate::gpu::recipe::ViewShape;
+use ash::vk;
+
+/// One region of an app's image to enhance.
+#[derive(Clone, Debug)]
+pub struct FrameView {
+    pub key: ViewKey,
+    /// The app's image (its handle stays in the frame room; `region` gives it to a copy).
+    pub(super) image: vk::Image,
+    pub format: PixelFormat,
+    pub(super) vk_format: vk::Format,
+    /// Enhanced in place (the swapchain was made with storage usage for it), else through a
+    /// copy of the region.
+    pub in_place: bool,
+    /// Where this view's display pixels lie in the camera image.
+    pub mapping: CameraMapping,
+}
+
+impl FrameView {
+    /// The view `key` of the app's `image`, whose Vulkan format is `vk_format` (`format` as the
+    /// engine reads it).
+    pub fn new(
+        key: ViewKey,
+        image: vk::Image,
+        format: PixelFormat,
+        vk_format: vk::Format,
+        in_place: bool,
+        mapping: CameraMapping,
+    ) -> FrameView {
+        FrameView {
+            key,
+            image,
+            format,
+            vk_format,
+            in_place,
+            mapping,
+        }
+    }
+
+    /// The app image's Vulkan format (for a capture's description).
+    pub fn vk_format(&self) -> vk::Format {
+        self.vk_format
+    }
+
+    pub fn shape(&self) -> ViewShape {
+        ViewShape {
+            format: self.format,
+            width: self.key.extent.0,
+            in_place: self.in_place,
+        }
+    }
+
+    pub fn region(&self) -> ImageRegion {
+        ImageRegion {
+            image: self.image,
+            array_index: self.key.array_index,
+            offset: self.key.offset,
+            extent: self.key.extent,
+        }
+    }
+}
+
+/// A view region's identity across frames: its swapchain (an opaque handle value), rectangle
+/// and array layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ViewKey {
+    pub swapchain: u64,
+    pub offset: (i32, i32),
+    pub extent: (u32, u32),
+    pub array_index: u32,
+}
+
+/// Raw bytes of one view read back for a capture: before and after the enhancement.
+pub struct CapturedView {
+    pub view: FrameView,
+    pub display: Vec<u8>,
+    pub output: Vec<u8>,
+}

@@ -1,0 +1,16 @@
+//! A frame's whole GPU work in one call (`FrameEngine::process`): the views' copies or in-place
+//! images, the background (uploaded, or texels a source prepared), the passes, the overlays and
+//! the captures, on the app's device and queue.
+
+mod app_views;
+mod frame_engine;
+mod frame_record;
+mod frame_view;
+mod overlay;
+mod prepared_background;
+
+pub use app_views::can_store;
+pub(crate) use app_views::storage_view;
+pub use frame_engine::{FrameBackground, FrameEngine, FrameOptions, PipelinesReady};
+pub use frame_view::{CapturedView, FrameView, ViewKey};
+pub use overlay::{OverlayPixels, Run};

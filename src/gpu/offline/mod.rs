@@ -1,0 +1,12 @@
+//! The engine on a device of its own, for the command line: whole images in and out, in place
+//! or through copies, and the benchmark (`contrastxr bench`).
+
+mod bench;
+mod bench_case;
+mod bench_rig;
+mod in_place_region;
+mod offline_engine;
+
+pub use bench::BenchResult;
+pub use bench_case::{content_pixel, BenchCase, Content, CAMERA_SIZE, WARM_UP_RUNS};
+pub use offline_engine::OfflineEngine;

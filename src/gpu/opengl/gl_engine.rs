@@ -1,0 +1,552 @@
+//! The per-view recipe on the app's GL context, called on the app's thread with its context
+//! current (inside xrEndFrame for the layer, after the app's rendering): the view's region is
+//! copied out of the app's texture into a buffer object (glGetTextureSubImage into a pixel
+//! pack buffer), the passes of the method run on that buffer as the Vulkan copy path runs them
+//! (classify, finish_tiles, enhance over the listed tiles through an indirect dispatch), and
+//! the region is copied back (glTextureSubImage from a pixel unpack buffer). The byte layouts
+//! are the Vulkan copy path's, so the same shaders read them.
+//!
+//! GL's images start at the bottom row: the buffer holds the view's rows bottom first, and the
+//! view's camera mapping is turned to take buffer rows (`rows_from_bottom`), so each pixel
+//! samples the background behind it with no change to the shaders.
+//!
+//! Everything the recipe changes of the app's GL state is put back (state_guard.rs), and it calls no
+//! glGetError (nor anything that would raise an error it would then leave to the app).
+
+use super::caps::Caps;
+use super::functions::{self as gl, Gl};
+use super::gl_error::GlError;
+use super::gl_format::GlFormat;
+use super::programs::{self, Programs};
+use super::state_guard::SavedState;
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::methods::Pass;
+use crate::algorithm::params::{Params, ViewMode};
+use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
+use crate::gpu::shaders::codes::{method_code, mode_code};
+use crate::gpu::shaders::interface::{
+    ACCESS_NARROW, ACCESS_WIDE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
+    CLASSIFY_WORKGROUP, TILE, TILE_LIST_DISPATCH_OFFSET, TILE_LIST_HEADER_WORDS,
+};
+use crate::gpu::shaders::push_constants::PushConstants;
+
+/// Where a view's texels are in the app's texture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GlTarget {
+    Texture2D,
+    /// A layer of a 2D array texture.
+    Texture2DArray {
+        layer: u32,
+    },
+}
+
+/// One view to enhance: a region of one of the app's textures.
+#[derive(Clone, Copy, Debug)]
+pub struct GlView {
+    /// The texture's name in the app's context.
+    pub texture: u32,
+    pub target: GlTarget,
+    /// Its internal format (GL_RGBA8, GL_SRGB8_ALPHA8, GL_RGBA16, GL_RGBA16F, GL_RGB10_A2).
+    pub internal_format: u32,
+    /// The region, in texels, as GL counts them: (x, y) its lower left corner, then width and
+    /// height (an OpenXR imageRect of an OpenGL swapchain as it is).
+    pub rect: (u32, u32, u32, u32),
+    /// Display uv (v from the view's top edge) to camera uv, as the Vulkan path takes it.
+    pub mapping: CameraMapping,
+}
+
+/// What a call did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// The views are enhanced (or, in mode off, left as they are).
+    Enhanced,
+    /// Programs the views need are still being built: the frame passed through untouched.
+    Compiling,
+}
+
+/// The background the views sample: an RGBA32UI texture (the layout of `BlurredTexels`), filled
+/// from a pixel unpack buffer made once per size.
+struct Background {
+    texture: u32,
+    pbo: u32,
+    size: (u32, u32),
+    /// The `BlurredTexels::serial` the texture holds.
+    serial: u64,
+}
+
+/// A view slot's buffers, kept across frames and remade only when a view needs more.
+#[derive(Default)]
+struct ViewBuffers {
+    pixels: u32,
+    pixel_capacity: usize,
+    tiles: u32,
+    tile_capacity: usize,
+}
+
+pub struct GlEngine {
+    gl: Gl,
+    caps: Caps,
+    programs: Programs,
+    background: Option<Background>,
+    views: Vec<ViewBuffers>,
+}
+
+/// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
+/// 1 - v, so camera = M (u, 1 - v', 1) = M F (u, v', 1).
+pub fn rows_from_bottom(m: &CameraMapping) -> CameraMapping {
+    CameraMapping {
+        rows: m.rows.map(|r| [r[0], -r[1], r[1] + r[2]]),
+    }
+}
+
+/// Whether rows of `width` pixels are whole 16-byte groups (the wide access).
+fn rows_aligned(width: u32, bytes_per_pixel: u32) -> bool {
+    (width * bytes_per_pixel) % 16 == 0
+}
+
+fn texture_level_int(g: &Gl, texture: u32, pname: gl::Enum) -> i32 {
+    let mut v = 0;
+    // SAFETY: a texture name of this context (the caller's contract), level 0, a valid pname.
+    unsafe { (g.get_texture_level_parameteriv)(texture, 0, pname, &mut v) };
+    v
+}
+
+fn buffer_size(g: &Gl, buffer: u32) -> i32 {
+    let mut v = 0;
+    // SAFETY: a buffer this engine made; a valid pname.
+    unsafe { (g.get_named_buffer_parameteriv)(buffer, gl::BUFFER_SIZE, &mut v) };
+    v
+}
+
+/// A new buffer object of `bytes` bytes (uninitialised), or the allocation error: GL_BUFFER_SIZE
+/// tells whether the driver made it.
+fn new_buffer(g: &Gl, bytes: usize, what: &'static str) -> Result<u32, GlError> {
+    let mut buffer = 0;
+    // SAFETY: one name into a valid output; data null allocates without copying.
+    unsafe {
+        (g.create_buffers)(1, &mut buffer);
+        (g.named_buffer_data)(buffer, bytes as isize, std::ptr::null(), gl::DYNAMIC_COPY);
+    }
+    if buffer_size(g, buffer) as usize != bytes {
+        // SAFETY: ours.
+        unsafe { (g.delete_buffers)(1, &buffer) };
+        return Err(GlError::Allocation(what));
+    }
+    Ok(buffer)
+}
+
+impl GlEngine {
+    /// An engine on the context current on this thread, or why that context cannot run it.
+    /// Builds nothing yet: the programs are built by the frame calls that need them.
+    ///
+    /// # Safety
+    /// A GL context is current on this thread, `gl` was loaded for it (or a context of the same
+    /// driver), and every later call is made with that same context current.
+    pub unsafe fn new(gl: Gl) -> Result<GlEngine, GlError> {
+        let caps = Caps::check(&gl)?;
+        Ok(GlEngine {
+            programs: Programs::new(&caps),
+            gl,
+            caps,
+            background: None,
+            views: Vec::new(),
+        })
+    }
+
+    /// The context's version and features as the engine read them.
+    pub fn caps(&self) -> &Caps {
+        &self.caps
+    }
+
+    fn check_lost(&self) -> Result<(), GlError> {
+        if self.caps.reset_status {
+            // SAFETY: glGetGraphicsResetStatus exists (GL 4.5 or a robustness extension).
+            if unsafe { (self.gl.get_graphics_reset_status)() } != 0 {
+                return Err(GlError::ContextLost);
+            }
+        }
+        Ok(())
+    }
+
+    /// Makes `texels` the background the views sample: uploaded once (a new frame's texels,
+    /// told apart by their serial, through the pixel unpack buffer), nothing when it holds
+    /// them already. Prepared on the source's thread (crate::blurred_texels); only the upload
+    /// happens here.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn set_background(&mut self, texels: &BlurredTexels) -> Result<(), GlError> {
+        self.check_lost()?;
+        let size = (texels.width, texels.height);
+        if size.0 == 0
+            || size.1 == 0
+            || texels.bytes.len() != size.0 as usize * size.1 as usize * TEXEL_BYTES
+        {
+            return Err(GlError::Input(
+                "the background frame is empty or damaged".into(),
+            ));
+        }
+        if self
+            .background
+            .as_ref()
+            .is_some_and(|b| b.serial == texels.serial && b.size == size)
+        {
+            return Ok(());
+        }
+        if self.background.as_ref().is_some_and(|b| b.size != size) {
+            self.drop_background();
+        }
+        let g = &self.gl;
+        if self.background.is_none() {
+            let pbo = new_buffer(g, texels.bytes.len(), "background upload buffer")?;
+            let mut texture = 0;
+            // SAFETY: a new 2D texture of one level, RGBA32UI (4.2+), the background's size
+            // (checked against GL_TEXTURE_WIDTH below); nearest filtering, so that it is
+            // complete for texelFetch whatever the sampler state.
+            unsafe {
+                (g.create_textures)(gl::TEXTURE_2D, 1, &mut texture);
+                (g.texture_parameteri)(texture, gl::TEXTURE_MIN_FILTER, gl::NEAREST);
+                (g.texture_parameteri)(texture, gl::TEXTURE_MAG_FILTER, gl::NEAREST);
+                (g.texture_storage_2d)(texture, 1, gl::RGBA32UI, size.0 as i32, size.1 as i32);
+            }
+            let made = texture_level_int(g, texture, gl::TEXTURE_WIDTH) == size.0 as i32;
+            if !made {
+                // SAFETY: ours.
+                unsafe {
+                    (g.delete_textures)(1, &texture);
+                    (g.delete_buffers)(1, &pbo);
+                }
+                return Err(GlError::Allocation("background texture"));
+            }
+            self.background = Some(Background {
+                texture,
+                pbo,
+                size,
+                serial: 0,
+            });
+        }
+        let bg = self.background.as_mut().expect("made above");
+        let saved = SavedState::save(g);
+        // SAFETY: the buffer holds exactly the texels' bytes; with it bound as the unpack
+        // buffer (and the pixel store at its defaults) the texture update reads the whole
+        // frame from offset 0.
+        unsafe {
+            (g.named_buffer_sub_data)(
+                bg.pbo,
+                0,
+                texels.bytes.len() as isize,
+                texels.bytes.as_ptr().cast(),
+            );
+            (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, bg.pbo);
+            (g.texture_sub_image_2d)(
+                bg.texture,
+                0,
+                0,
+                0,
+                size.0 as i32,
+                size.1 as i32,
+                gl::RGBA_INTEGER,
+                gl::UNSIGNED_INT,
+                std::ptr::null(),
+            );
+        }
+        saved.restore(g);
+        bg.serial = texels.serial;
+        Ok(())
+    }
+
+    fn drop_background(&mut self) {
+        if let Some(bg) = self.background.take() {
+            // SAFETY: ours; the context is current (every caller's contract).
+            unsafe {
+                (self.gl.delete_textures)(1, &bg.texture);
+                (self.gl.delete_buffers)(1, &bg.pbo);
+            }
+        }
+    }
+
+    /// The programs a view needs: classify, finish_tiles, enhance.
+    fn view_programs(view: &GlView, params: &Params) -> Result<[usize; 3], GlError> {
+        let format = GlFormat::of(view.internal_format)?;
+        let code = format.pixel.shader_code();
+        let access = if rows_aligned(view.rect.2, format.pixel.bytes_per_pixel()) {
+            ACCESS_WIDE
+        } else {
+            ACCESS_NARROW
+        };
+        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
+        let codes = (method_code(params.method), mode_code(params.mode), code);
+        let missing = || GlError::Format(view.internal_format);
+        Ok([
+            programs::classify(code, access).ok_or_else(missing)?,
+            programs::GL_FINISH_TILES,
+            programs::enhance(codes, access, extras).ok_or_else(missing)?,
+        ])
+    }
+
+    /// Enhances `views` against the background set last, on the current context. Passes
+    /// through untouched (Ok(Compiling)) while a program they need is being built, and with
+    /// an error (the app's frame and GL state unchanged) when one failed, the context is
+    /// lost, a format is not one the engine handles or a region lies outside its texture.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread, and every `texture` names a texture of
+    /// it that nothing else writes during the call.
+    pub unsafe fn enhance(
+        &mut self,
+        views: &[GlView],
+        params: &Params,
+    ) -> Result<Outcome, GlError> {
+        self.check_lost()?;
+        params.validate().map_err(GlError::Input)?;
+        if params.mode == ViewMode::Off || views.is_empty() {
+            return Ok(Outcome::Enhanced);
+        }
+        let mut ids = Vec::new();
+        for v in views {
+            ids.extend(Self::view_programs(v, params)?);
+            self.check_view(v)?;
+        }
+        if !self.programs.ready(&self.gl, &ids)? {
+            return Ok(Outcome::Compiling);
+        }
+        let Some(bg_size) = self.background.as_ref().map(|b| b.size) else {
+            return Err(GlError::Input("no background frame was set".into()));
+        };
+        while self.views.len() < views.len() {
+            self.views.push(ViewBuffers::default());
+        }
+        for (k, v) in views.iter().enumerate() {
+            self.ensure_buffers(k, v)?;
+        }
+        let saved = SavedState::save(&self.gl);
+        for (k, v) in views.iter().enumerate() {
+            let programs: [usize; 3] = ids[3 * k..3 * k + 3].try_into().expect("3 ids");
+            self.run_view(k, v, params, bg_size, programs);
+        }
+        saved.restore(&self.gl);
+        Ok(Outcome::Enhanced)
+    }
+
+    /// The view's texture is there with its format, and the region lies inside it.
+    fn check_view(&self, v: &GlView) -> Result<(), GlError> {
+        let g = &self.gl;
+        let (x, y, w, h) = v.rect;
+        let width = texture_level_int(g, v.texture, gl::TEXTURE_WIDTH);
+        let height = texture_level_int(g, v.texture, gl::TEXTURE_HEIGHT);
+        let depth = texture_level_int(g, v.texture, gl::TEXTURE_DEPTH);
+        let internal = texture_level_int(g, v.texture, gl::TEXTURE_INTERNAL_FORMAT) as u32;
+        let (layer, target) = match v.target {
+            GlTarget::Texture2D => (0, gl::TEXTURE_2D),
+            GlTarget::Texture2DArray { layer } => (layer, gl::TEXTURE_2D_ARRAY),
+        };
+        let mut actual = 0;
+        // SAFETY: a texture name of this context (the caller's contract); GL_TEXTURE_TARGET
+        // is a valid glGetTextureParameteriv query in 4.5.
+        unsafe { (g.get_texture_parameteriv)(v.texture, gl::TEXTURE_TARGET, &mut actual) };
+        if actual as u32 != target {
+            return Err(GlError::Input(format!(
+                "a view's texture has target {actual:#06x}, not the {target:#06x} the view says"
+            )));
+        }
+        let inside = w > 0
+            && h > 0
+            && u64::from(x) + u64::from(w) <= width.max(0) as u64
+            && u64::from(y) + u64::from(h) <= height.max(0) as u64
+            && i64::from(layer) < i64::from(depth);
+        if !inside {
+            return Err(GlError::Input(format!(
+                "a view's region {w}x{h} at ({x}, {y}) layer {layer} is not inside its {width}x{height}x{depth} texture"
+            )));
+        }
+        if internal != v.internal_format {
+            return Err(GlError::Input(format!(
+                "a view's texture is {internal:#06x}, not the {:#06x} the view says",
+                v.internal_format
+            )));
+        }
+        Ok(())
+    }
+
+    /// Makes slot `k`'s buffers large enough for the view.
+    fn ensure_buffers(&mut self, k: usize, v: &GlView) -> Result<(), GlError> {
+        let g = &self.gl;
+        let format = GlFormat::of(v.internal_format)?;
+        let (w, h) = (v.rect.2 as usize, v.rect.3 as usize);
+        // 16 bytes beyond the rows: the narrow access reads up to three words past the last
+        // pixel of a group.
+        let pixels = (w * h * format.pixel.bytes_per_pixel() as usize).div_ceil(16) * 16 + 16;
+        let tiles = w.div_ceil(TILE as usize) * h.div_ceil(TILE as usize);
+        let tile_bytes = (TILE_LIST_HEADER_WORDS as usize + tiles) * 4;
+        let slot = &mut self.views[k];
+        if slot.pixel_capacity < pixels {
+            if slot.pixels != 0 {
+                // SAFETY: ours.
+                unsafe { (g.delete_buffers)(1, &slot.pixels) };
+                slot.pixels = 0;
+                slot.pixel_capacity = 0;
+            }
+            slot.pixels = new_buffer(g, pixels, "view buffer")?;
+            slot.pixel_capacity = pixels;
+        }
+        if slot.tile_capacity < tile_bytes {
+            if slot.tiles != 0 {
+                // SAFETY: ours.
+                unsafe { (g.delete_buffers)(1, &slot.tiles) };
+                slot.tiles = 0;
+                slot.tile_capacity = 0;
+            }
+            slot.tiles = new_buffer(g, tile_bytes, "tile list")?;
+            slot.tile_capacity = tile_bytes;
+        }
+        Ok(())
+    }
+
+    /// The recipe for one view (state saved by the caller; every object checked before).
+    fn run_view(
+        &self,
+        k: usize,
+        v: &GlView,
+        params: &Params,
+        bg_size: (u32, u32),
+        ids: [usize; 3],
+    ) {
+        let g = &self.gl;
+        let format = GlFormat::of(v.internal_format).expect("checked");
+        let (fmt, ty) = format.transfer;
+        let (x, y, w, h) = v.rect;
+        let bytes = w as usize * h as usize * format.pixel.bytes_per_pixel() as usize;
+        let buffers = &self.views[k];
+        let layer = match v.target {
+            GlTarget::Texture2D => None,
+            GlTarget::Texture2DArray { layer } => Some(layer),
+        };
+        let mapping = rows_from_bottom(&v.mapping);
+        let push = PushConstants::new(params, bg_size, (w, h), &mapping);
+        let [classify, finish_tiles, enhance] = ids.map(|id| self.programs.get(id));
+        classify.set_params(g, &push);
+        enhance.set_params(g, &push);
+        let bg = self.background.as_ref().expect("checked by the caller");
+        let tiles = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let zero = 0u32;
+        // SAFETY: every object is this engine's or the view's checked texture; the region lies
+        // inside the texture and the buffer holds it (with the pixel store at its defaults,
+        // rows tightly packed from offset 0); bindings are within the 4.3 minimums and put
+        // back by the caller's SavedState.
+        unsafe {
+            (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, buffers.pixels);
+            let z = layer.unwrap_or(0) as i32;
+            (g.get_texture_sub_image)(
+                v.texture,
+                0,
+                x as i32,
+                y as i32,
+                z,
+                w as i32,
+                h as i32,
+                1,
+                fmt,
+                ty,
+                bytes as i32,
+                std::ptr::null_mut(),
+            );
+            (g.named_buffer_sub_data)(buffers.tiles, 0, 4, (&zero as *const u32).cast());
+            let bound = (bytes.div_ceil(16) * 16 + 16) as isize;
+            (g.bind_buffer_range)(
+                gl::SHADER_STORAGE_BUFFER,
+                BINDING_PIXELS,
+                buffers.pixels,
+                0,
+                bound,
+            );
+            (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, BINDING_TILES, buffers.tiles);
+            (g.active_texture)(gl::TEXTURE0 + BINDING_BLURRED_TEXELS);
+            (g.bind_texture)(gl::TEXTURE_2D, bg.texture);
+            (g.bind_sampler)(BINDING_BLURRED_TEXELS, 0);
+            (g.bind_buffer)(gl::DISPATCH_INDIRECT_BUFFER, buffers.tiles);
+            for pass in params.method.entry().passes {
+                match pass {
+                    Pass::Classify => {
+                        (g.use_program)(classify.raw);
+                        (g.dispatch_compute)(
+                            tiles.0.div_ceil(CLASSIFY_WORKGROUP[0]),
+                            tiles.1.div_ceil(CLASSIFY_WORKGROUP[1]),
+                            1,
+                        );
+                        (g.memory_barrier)(gl::SHADER_STORAGE_BARRIER_BIT);
+                    }
+                    Pass::FinishTiles => {
+                        (g.use_program)(finish_tiles.raw);
+                        (g.dispatch_compute)(1, 1, 1);
+                        (g.memory_barrier)(
+                            gl::SHADER_STORAGE_BARRIER_BIT | gl::COMMAND_BARRIER_BIT,
+                        );
+                    }
+                    Pass::Enhance => {
+                        (g.use_program)(enhance.raw);
+                        (g.dispatch_compute_indirect)(TILE_LIST_DISPATCH_OFFSET as isize);
+                        (g.memory_barrier)(gl::SHADER_STORAGE_BARRIER_BIT);
+                    }
+                }
+            }
+            (g.memory_barrier)(
+                gl::PIXEL_BUFFER_BARRIER_BIT
+                    | gl::TEXTURE_UPDATE_BARRIER_BIT
+                    | gl::BUFFER_UPDATE_BARRIER_BIT,
+            );
+            (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, buffers.pixels);
+            match layer {
+                None => (g.texture_sub_image_2d)(
+                    v.texture,
+                    0,
+                    x as i32,
+                    y as i32,
+                    w as i32,
+                    h as i32,
+                    fmt,
+                    ty,
+                    std::ptr::null(),
+                ),
+                Some(z) => (g.texture_sub_image_3d)(
+                    v.texture,
+                    0,
+                    x as i32,
+                    y as i32,
+                    z as i32,
+                    w as i32,
+                    h as i32,
+                    1,
+                    fmt,
+                    ty,
+                    std::ptr::null(),
+                ),
+            }
+        }
+    }
+
+    /// Writes the program binaries built since the last save (see binary_cache.rs).
+    pub fn save_program_cache(&mut self) {
+        self.programs.save_cache();
+    }
+
+    /// Deletes every GL object of the engine and saves the program binaries.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn destroy(&mut self) {
+        self.save_program_cache();
+        self.programs.destroy(&self.gl);
+        self.drop_background();
+        for v in self.views.drain(..) {
+            for b in [v.pixels, v.tiles].into_iter().filter(|&b| b != 0) {
+                // SAFETY: ours; the context is current (the caller's contract).
+                unsafe { (self.gl.delete_buffers)(1, &b) };
+            }
+        }
+    }
+
+    /// The function table (for the offline context's own transfers).
+    pub(super) fn gl(&self) -> &Gl {
+        &self.gl
+    }
+}

@@ -1,0 +1,163 @@
+//! The app's GL state around the backend's calls: everything the recipe changes is read before
+//! it runs and put back after it, so that the app finds exactly the state it left. The error
+//! flag is not among it: the backend never calls glGetError (which would read and clear the
+//! app's pending error) and makes no call that raises one (object status queries tell it what
+//! failed), so whatever error the app had pending is still pending after the call.
+
+use super::functions::{self as gl, Gl};
+use crate::gpu::shaders::interface::{BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES};
+
+/// The indexed shader storage bindings the programs use.
+const STORAGE_SLOTS: [u32; 2] = [BINDING_PIXELS, BINDING_TILES];
+
+/// The pixel store parameters, pack and unpack.
+const PIXEL_STORE: [gl::Enum; 16] = [
+    gl::PACK_SWAP_BYTES,
+    gl::PACK_LSB_FIRST,
+    gl::PACK_ROW_LENGTH,
+    gl::PACK_SKIP_ROWS,
+    gl::PACK_SKIP_PIXELS,
+    gl::PACK_ALIGNMENT,
+    gl::PACK_SKIP_IMAGES,
+    gl::PACK_IMAGE_HEIGHT,
+    gl::UNPACK_SWAP_BYTES,
+    gl::UNPACK_LSB_FIRST,
+    gl::UNPACK_ROW_LENGTH,
+    gl::UNPACK_SKIP_ROWS,
+    gl::UNPACK_SKIP_PIXELS,
+    gl::UNPACK_ALIGNMENT,
+    gl::UNPACK_SKIP_IMAGES,
+    gl::UNPACK_IMAGE_HEIGHT,
+];
+
+/// Their defaults, which the recipe's transfers assume (tightly packed rows).
+const PIXEL_STORE_DEFAULTS: [gl::Int; 16] = [0, 0, 0, 0, 0, 4, 0, 0, 0, 0, 0, 0, 0, 4, 0, 0];
+
+/// One indexed buffer binding: the buffer, its offset and size (0 and 0 for a whole-buffer
+/// binding).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Indexed {
+    buffer: u32,
+    start: i64,
+    size: i64,
+}
+
+/// The state the recipe touches, as the app left it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SavedState {
+    program: i32,
+    pipeline: i32,
+    active_texture: i32,
+    /// The 2D texture and sampler bound to the unit the programs sample on.
+    texture: i32,
+    sampler: i32,
+    storage: [Indexed; 2],
+    storage_generic: i32,
+    pack_buffer: i32,
+    unpack_buffer: i32,
+    indirect_buffer: i32,
+    draw_framebuffer: i32,
+    read_framebuffer: i32,
+    framebuffer_srgb: bool,
+    pixel_store: [i32; 16],
+}
+
+fn int(g: &Gl, name: gl::Enum) -> i32 {
+    let mut v = 0;
+    // SAFETY: a single-valued state query into a valid i32 (the context is 4.3 or later).
+    unsafe { (g.get_integerv)(name, &mut v) };
+    v
+}
+
+/// The texture unit the programs sample the background on (its binding number).
+fn sample_unit() -> gl::Enum {
+    gl::TEXTURE0 + BINDING_BLURRED_TEXELS
+}
+
+impl SavedState {
+    /// Reads the state and sets the pixel store to the defaults the recipe's transfers need.
+    pub fn save(g: &Gl) -> SavedState {
+        let active_texture = int(g, gl::ACTIVE_TEXTURE);
+        // SAFETY: a valid texture unit (binding 5 < GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, at
+        // least 80 in 4.3); put back in `restore`.
+        unsafe { (g.active_texture)(sample_unit()) };
+        let texture = int(g, gl::TEXTURE_BINDING_2D);
+        let sampler = int(g, gl::SAMPLER_BINDING);
+        // SAFETY: the app's own active unit, just read.
+        unsafe { (g.active_texture)(active_texture as u32) };
+        let storage = STORAGE_SLOTS.map(|slot| {
+            let (mut buffer, mut start, mut size) = (0, 0i64, 0i64);
+            // SAFETY: indexed queries of a binding below GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS
+            // (at least 8 in 4.3) into valid outputs.
+            unsafe {
+                (g.get_integeri_v)(gl::SHADER_STORAGE_BUFFER_BINDING, slot, &mut buffer);
+                (g.get_integer64i_v)(gl::SHADER_STORAGE_BUFFER_START, slot, &mut start);
+                (g.get_integer64i_v)(gl::SHADER_STORAGE_BUFFER_SIZE, slot, &mut size);
+            }
+            Indexed {
+                buffer: buffer as u32,
+                start,
+                size,
+            }
+        });
+        let pixel_store = PIXEL_STORE.map(|p| int(g, p));
+        for (p, v) in PIXEL_STORE.iter().zip(PIXEL_STORE_DEFAULTS) {
+            // SAFETY: valid pixel store parameters and values.
+            unsafe { (g.pixel_storei)(*p, v) };
+        }
+        SavedState {
+            program: int(g, gl::CURRENT_PROGRAM),
+            pipeline: int(g, gl::PROGRAM_PIPELINE_BINDING),
+            active_texture,
+            texture,
+            sampler,
+            storage,
+            storage_generic: int(g, gl::SHADER_STORAGE_BUFFER_BINDING),
+            pack_buffer: int(g, gl::PIXEL_PACK_BUFFER_BINDING),
+            unpack_buffer: int(g, gl::PIXEL_UNPACK_BUFFER_BINDING),
+            indirect_buffer: int(g, gl::DISPATCH_INDIRECT_BUFFER_BINDING),
+            draw_framebuffer: int(g, gl::DRAW_FRAMEBUFFER_BINDING),
+            read_framebuffer: int(g, gl::READ_FRAMEBUFFER_BINDING),
+            // SAFETY: GL_FRAMEBUFFER_SRGB is a valid capability in core 3.0+.
+            framebuffer_srgb: unsafe { (g.is_enabled)(gl::FRAMEBUFFER_SRGB) } != 0,
+            pixel_store,
+        }
+    }
+
+    /// Puts every value back. Each was valid when read, and objects the app named stay alive
+    /// across the call, so none of these calls raises an error.
+    pub fn restore(&self, g: &Gl) {
+        // SAFETY: every value was read from this context in `save`; the calls take them back
+        // in the order that leaves the generic bindings last (glBindBufferRange sets both).
+        unsafe {
+            (g.active_texture)(sample_unit());
+            (g.bind_texture)(gl::TEXTURE_2D, self.texture as u32);
+            (g.bind_sampler)(BINDING_BLURRED_TEXELS, self.sampler as u32);
+            (g.active_texture)(self.active_texture as u32);
+            for (slot, b) in STORAGE_SLOTS.iter().zip(&self.storage) {
+                if b.buffer != 0 && b.size > 0 {
+                    let (start, size) = (b.start as isize, b.size as isize);
+                    (g.bind_buffer_range)(gl::SHADER_STORAGE_BUFFER, *slot, b.buffer, start, size);
+                } else {
+                    (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, *slot, b.buffer);
+                }
+            }
+            (g.bind_buffer)(gl::SHADER_STORAGE_BUFFER, self.storage_generic as u32);
+            (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, self.pack_buffer as u32);
+            (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, self.unpack_buffer as u32);
+            (g.bind_buffer)(gl::DISPATCH_INDIRECT_BUFFER, self.indirect_buffer as u32);
+            (g.bind_framebuffer)(gl::DRAW_FRAMEBUFFER, self.draw_framebuffer as u32);
+            (g.bind_framebuffer)(gl::READ_FRAMEBUFFER, self.read_framebuffer as u32);
+            if self.framebuffer_srgb {
+                (g.enable)(gl::FRAMEBUFFER_SRGB);
+            } else {
+                (g.disable)(gl::FRAMEBUFFER_SRGB);
+            }
+            for (p, v) in PIXEL_STORE.iter().zip(self.pixel_store) {
+                (g.pixel_storei)(*p, v);
+            }
+            (g.use_program)(self.program as u32);
+            (g.bind_program_pipeline)(self.pipeline as u32);
+        }
+    }
+}

@@ -1,0 +1,35 @@
+//! Where a slot's texels lie in the mapped memory of its image, and the one write into it.
+
+use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
+use crate::gpu::recipe::CameraRect;
+
+/// Where one image's texels lie in its mapped memory.
+#[derive(Clone, Copy)]
+pub(super) struct MappedRows {
+    pub(super) ptr: *mut u8,
+    pub(super) len: usize,
+    pub(super) offset: usize,
+    pub(super) row_pitch: usize,
+}
+
+// SAFETY: the memory stays mapped until the ring's `close` has returned, and only the holder
+// of the slot's `writing` claim writes it.
+unsafe impl Send for MappedRows {}
+
+impl MappedRows {
+    /// Copies the rows of `rect` from `texels` (16 bytes per texel, rows packed). The caller
+    /// holds the slot's writing claim and no submission samples the image.
+    pub(super) fn write(&self, texels: &BlurredTexels, rect: &CameraRect) {
+        // SAFETY: mapped for `len` bytes until `close` (which waits for this write), and no one
+        // else reads or writes it now (the caller's claim; no submission samples it).
+        let dst = unsafe { std::slice::from_raw_parts_mut(self.ptr, self.len) };
+        let row = texels.width as usize * TEXEL_BYTES;
+        let right = (rect.x + rect.width).min(texels.width) as usize;
+        let span = rect.x as usize * TEXEL_BYTES..right * TEXEL_BYTES;
+        for y in rect.y as usize..(rect.y + rect.height) as usize {
+            let (src, at) = (y * row, self.offset + y * self.row_pitch);
+            dst[at + span.start..at + span.end]
+                .copy_from_slice(&texels.bytes[src + span.start..src + span.end]);
+        }
+    }
+}

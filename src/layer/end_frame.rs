@@ -1,0 +1,435 @@
+//! A frame's work: which sub-images of the app's layers are enhanced (views and, when
+//! configured, quads), with which camera mapping, and their enhancement on the app's queue,
+//! at xrEndFrame or, for an image an app released ahead of its xrEndFrame, at that release.
+
+use super::capture_files;
+use super::indicator;
+use super::live_settings::Settings;
+use super::log;
+use super::motion::{self, FrameMotion};
+use super::sources;
+use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
+use super::view_mappings::{self, ViewGeometry};
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::params::ViewMode;
+use crate::blurred_texels::BlurTaps;
+use crate::camera;
+use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions, OverlayPixels};
+use crate::gpu::pipelines::Origin;
+use crate::gpu::{CapturedView, FrameView, GpuError, ViewKey};
+use openxr_sys as xr;
+use std::time::Instant;
+
+/// A sub-image a layer names, with its camera mapping when it is a projection view (each
+/// view registered from its field of view and pose, see [`view_mappings`]; None for quads).
+struct SubImage {
+    sub: xr::SwapchainSubImage,
+    mapping: Option<CameraMapping>,
+}
+
+/// The sub-images of the frame's layers that the layer enhances. Each view's mapping is logged
+/// (once per settings) when `enhancing`: a session passed through has none to tell.
+///
+/// # Safety
+/// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
+unsafe fn sub_images(
+    info: &xr::FrameEndInfo,
+    settings: &Settings,
+    motion: &mut FrameMotion,
+    enhancing: bool,
+) -> Vec<SubImage> {
+    let mut out = Vec::new();
+    if info.layers.is_null() {
+        return out;
+    }
+    for i in 0..info.layer_count as usize {
+        // SAFETY: layer_count valid pointers (the caller's contract).
+        let layer = unsafe { *info.layers.add(i) };
+        // SAFETY: each non-null entry points to a composition layer struct (the caller's contract).
+        let Some(base) = (unsafe { layer.as_ref() }) else {
+            continue;
+        };
+        if base.ty == xr::StructureType::COMPOSITION_LAYER_PROJECTION {
+            // SAFETY: the type tag says this is a projection layer.
+            let proj = unsafe { &*(layer as *const xr::CompositionLayerProjection) };
+            if proj.views.is_null() {
+                continue;
+            }
+            // SAFETY: view_count valid views.
+            let views = unsafe { std::slice::from_raw_parts(proj.views, proj.view_count as usize) };
+            let geometry: Vec<_> = views.iter().map(ViewGeometry::from_xr).collect();
+            let mappings = motion.mappings(settings, &geometry, proj.space);
+            for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
+                if enhancing {
+                    view_mappings::log_mapping(settings, k, &mapping, &source);
+                }
+                out.push(SubImage {
+                    sub: view.sub_image,
+                    mapping: Some(mapping),
+                });
+            }
+        } else if settings.quad_layers && base.ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
+            // SAFETY: the type tag says this is a quad layer.
+            let sub = unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image };
+            out.push(SubImage { sub, mapping: None });
+        }
+    }
+    out
+}
+
+/// A work item for one view region of image `image` of a swapchain, if the region lies inside it.
+fn work_item(
+    swapchain: xr::Swapchain,
+    sc: &SwapchainState,
+    image: u32,
+    region: &ViewRegion,
+    settings: &Settings,
+) -> Option<FrameView> {
+    let format = sc.info.pixel.filter(|_| sc.info.processable())?;
+    let vk_image = *sc.images.get(image as usize)?;
+    let r = region.rect;
+    let fits = r.offset.x >= 0
+        && r.offset.y >= 0
+        && r.extent.width > 0
+        && r.extent.height > 0
+        && (r.offset.x + r.extent.width) as u32 <= sc.info.width
+        && (r.offset.y + r.extent.height) as u32 <= sc.info.height
+        && region.array_index < sc.info.array_size;
+    if !fits {
+        log::once("bad-rect", "a layer's imageRect/imageArrayIndex lies outside its swapchain: that view passes through");
+        return None;
+    }
+    let key = ViewKey {
+        swapchain: swapchain.into_raw(),
+        offset: (r.offset.x, r.offset.y),
+        extent: (r.extent.width as u32, r.extent.height as u32),
+        array_index: region.array_index,
+    };
+    // Quads, and whole images before the first xrEndFrame, take the manual mapping.
+    let mapping = region
+        .mapping
+        .unwrap_or_else(|| view_mappings::quad_mapping(settings));
+    Some(FrameView::new(
+        key,
+        vk_image,
+        format,
+        sc.info.vk_format,
+        sc.info.in_place,
+        mapping,
+    ))
+}
+
+/// Each enhanced sub-image's swapchain with its regions in this frame, in submission order.
+fn regions_by_swapchain(subs: &[SubImage]) -> Vec<(xr::Swapchain, Vec<ViewRegion>)> {
+    let mut out: Vec<(xr::Swapchain, Vec<ViewRegion>)> = Vec::new();
+    for SubImage { sub, mapping } in subs {
+        let region = ViewRegion {
+            rect: sub.image_rect,
+            array_index: sub.image_array_index,
+            mapping: *mapping,
+        };
+        match out.iter_mut().find(|(h, _)| *h == sub.swapchain) {
+            Some((_, regions)) => regions.push(region),
+            None => out.push((sub.swapchain, vec![region])),
+        }
+    }
+    out
+}
+
+/// Remembers each swapchain's regions for images released ahead of their xrEndFrame, and
+/// returns the work for the images the layer holds now. The caller holds the session's lock.
+fn frame_items(subs: &[SubImage], settings: &Settings) -> Vec<FrameView> {
+    let mut items = Vec::new();
+    for (handle, regions) in regions_by_swapchain(subs) {
+        let Some(sc) = state::swapchain(handle) else {
+            continue;
+        };
+        let mut sc = lock(&sc);
+        if let Some(image) = sc.states.held() {
+            items.extend(
+                regions
+                    .iter()
+                    .filter_map(|r| work_item(handle, &sc, image, r, settings)),
+            );
+        }
+        sc.last_views = regions;
+    }
+    items
+}
+
+/// The regions to enhance an image released ahead of its xrEndFrame with: the swapchain's
+/// last submitted ones; before the session's first xrEndFrame named any, each array layer whole.
+fn regions_ahead(s: &SessionState, sc: &SwapchainState) -> Vec<ViewRegion> {
+    if s.regions_seen {
+        return sc.last_views.clone();
+    }
+    let rect = xr::Rect2Di {
+        offset: xr::Offset2Di { x: 0, y: 0 },
+        extent: xr::Extent2Di {
+            width: sc.info.width as i32,
+            height: sc.info.height as i32,
+        },
+    };
+    (0..sc.info.array_size)
+        .map(|array_index| ViewRegion {
+            rect,
+            array_index,
+            mapping: None,
+        })
+        .collect()
+}
+
+/// Enhances image `image` of a swapchain now, before the app's xrEndFrame for it (a pipelined
+/// app released it and took its next image first). The caller holds the session's lock, then
+/// the swapchain's.
+pub(super) fn enhance_ahead(
+    s: &mut SessionState,
+    sc: &SwapchainState,
+    swapchain: xr::Swapchain,
+    image: u32,
+) {
+    let items: Vec<FrameView> = regions_ahead(s, sc)
+        .iter()
+        .filter_map(|r| work_item(swapchain, sc, image, r, &s.settings))
+        .collect();
+    let blend = s.last_blend_mode;
+    guarded_process(s, items, blend);
+}
+
+/// Whether the layer acts on frames of this blend mode (None: not known yet, before the first
+/// xrEndFrame; only a forced layer acts then).
+fn acts_on(s: &SessionState, mode: Option<xr::EnvironmentBlendMode>) -> bool {
+    if mode == Some(xr::EnvironmentBlendMode::ADDITIVE) || s.settings.force {
+        return true;
+    }
+    let Some(mode) = mode else {
+        return false;
+    };
+    log::once("blend-mode", &format!(
+        "environment blend mode {mode:?} is not ADDITIVE: passing frames through (see-through glasses whose runtime says opaque: set environment_blend_mode = \"additive\")"
+    ));
+    false
+}
+
+fn capturing(s: &SessionState) -> bool {
+    // Frames are numbered by the layer's processed count: capture [skip, skip + frames).
+    s.settings
+        .capture()
+        .is_some_and(|c| s.processed >= c.skip && s.processed < c.skip + c.frames)
+}
+
+/// The newest background frame, or None (logged once: lost after frames came, or not yet).
+fn background_frame(s: &mut SessionState) -> Option<camera::Frame> {
+    // No source at all: why was logged when it failed to open.
+    let bg = s.background.as_ref()?;
+    // The frame this xrEndFrame's mappings were computed for, if any.
+    let frame = s.frame_in_use.clone().or_else(|| bg.latest());
+    let delivered = std::mem::replace(&mut s.background_delivered, frame.is_some());
+    if frame.is_none() && (s.processed > 0 || delivered) {
+        log::once(
+            "background-lost",
+            &format!(
+                "background {} lost: passing frames through untouched until it returns",
+                bg.description()
+            ),
+        );
+    } else if frame.is_none() {
+        log::debug("no background frame yet: passing this frame through");
+    }
+    frame
+}
+
+/// The background's identity for the engine: a new camera frame, or new settings (the
+/// background is preprocessed with the settings' blur and FoV mapping), count as new.
+fn background_sequence(frame_sequence: u64, s: &Settings) -> u64 {
+    frame_sequence.wrapping_add(s.generation << 40)
+}
+
+/// Enhances the held images of this frame and remembers its regions; any failure turns the
+/// session into pass-through.
+pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
+    s.frame_in_use = s.background.as_ref().and_then(|bg| bg.latest());
+    let captured_at = s.frame_in_use.as_ref().map(|f| f.captured_at);
+    let mut moving = motion::at_end_frame(s, info.display_time, captured_at);
+    let enhancing = s.engine.is_some();
+    // SAFETY: the app's frame end info, valid for this call.
+    let subs = unsafe { sub_images(info, &s.settings, &mut moving, enhancing) };
+    moving.finish(s);
+    let items = frame_items(&subs, &s.settings);
+    s.regions_seen |= !subs.is_empty();
+    s.last_blend_mode = Some(info.environment_blend_mode);
+    process(s, items, Some(info.environment_blend_mode));
+    s.frame_in_use = None;
+}
+
+/// The log's line once a frame sampled texels its source's thread wrote into a mapped image.
+const SOURCE_TEXELS: &str =
+    "live frames' texels are written into mapped memory on the camera's thread, before the frame call";
+
+/// How a frame's texels, when its source prepared them, reach the views (the log's line).
+fn prepared_texels_path(prepared: bool, engine: &FrameEngine) -> Option<&'static str> {
+    prepared.then_some(match engine.direct_texels() {
+        true => "live frames' texels are written straight into mapped images the views sample",
+        false => "live frames' texels reach the views through a staging buffer and an image copy",
+    })
+}
+
+/// `process` with panics caught: a panic turns the session into pass-through.
+fn guarded_process(
+    s: &mut SessionState,
+    items: Vec<FrameView>,
+    blend: Option<xr::EnvironmentBlendMode>,
+) {
+    let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(s, items, blend)));
+    if done.is_err() {
+        log::info(
+            "internal error while enhancing: passing this session's frames through from now on",
+        );
+        s.retire_engine();
+    }
+}
+
+/// Enhances `items` in place on the app's queue; any failure turns the session into pass-through.
+fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::EnvironmentBlendMode>) {
+    // Mode off: the app's frames untouched, no GPU work at all.
+    if items.is_empty()
+        || s.settings.params.mode == ViewMode::Off
+        || s.engine.is_none()
+        || !acts_on(s, blend)
+    {
+        sources::close_when_idle(s);
+        return;
+    }
+    sources::open_when_needed(s);
+    if let (Some(bg), Some(engine)) = (&s.background, &s.engine) {
+        // Live frames come prepared for these settings from the source's thread, which also
+        // writes them into the images the views sample once the engine has made them. The
+        // engine's sink is one for its life: after the first frame this delivers nothing new.
+        bg.prepare_with(BlurTaps::of(&s.settings.params));
+        bg.deliver_texels_to(Some(engine.texel_sink()));
+    }
+    let Some(frame) = background_frame(s) else {
+        return;
+    };
+    let options = FrameOptions {
+        capture: capturing(s),
+        wait_for_pipelines: s.settings.wait_for_pipelines,
+    };
+    let sequence = background_sequence(frame.sequence, &s.settings);
+    let prepared = frame.prepared.as_deref();
+    let background = FrameBackground {
+        image: &frame.image,
+        prepared,
+        sequence,
+    };
+    let done = enhance(s, &items, background, options);
+    let engine = s.engine.as_ref().expect("checked above");
+    let texels_path = prepared_texels_path(prepared.is_some(), engine);
+    let from_source = engine.texels_from_source().0 > 0;
+    match done {
+        Ok(views) => {
+            if s.processed == 0 {
+                log_began(s.started, engine);
+            }
+            if options.capture {
+                write_capture(s, &views, &frame.image);
+            }
+            s.processed += 1;
+            log::once(
+                "first-frame",
+                &format!("processing frames ({} views per frame)", items.len()),
+            );
+            if let Some(line) = texels_path {
+                log::once("prepared-texels-path", line);
+            }
+            if from_source {
+                log::once("source-texels", SOURCE_TEXELS);
+            }
+            let in_place = items.iter().filter(|i| i.in_place).count();
+            log::once(
+                "first-frame-path",
+                &format!(
+                    "views enhanced in place: {in_place} of {} (the others through a copy)",
+                    items.len()
+                ),
+            );
+        }
+        Err(GpuError::Pending) => log::once(
+            "pipelines-pending",
+            "building the shader pipelines on the layer's own thread: frames go through untouched until they are ready",
+        ),
+        Err(e) => {
+            log::info(&format!(
+                "GPU work failed ({e}): passing this session's frames through from now on"
+            ));
+            s.retire_engine();
+        }
+    }
+}
+
+/// Enhances the views with the newest background, and draws the indicator while it shows.
+/// [`GpuError::Pending`] while a pipeline is still being built (frames pass through).
+fn enhance(
+    s: &mut SessionState,
+    views: &[FrameView],
+    background: FrameBackground,
+    options: FrameOptions,
+) -> Result<Vec<CapturedView>, GpuError> {
+    let engine = s.engine.as_mut().expect("checked by the caller");
+    let params = &s.settings.params;
+    let ready = engine.pipelines_ready(views, params, options.wait_for_pipelines)?;
+    // The indicator's time starts with the first enhanced frame, not while pipelines build.
+    s.indicator.update(&s.settings, Instant::now());
+    let text = s.indicator.showing(Instant::now()).map(str::to_string);
+    let runs = |region| {
+        text.as_deref()
+            .map_or(Vec::new(), |t| indicator::runs(t, region))
+    };
+    let overlay = text.as_deref().map(|key| OverlayPixels {
+        key,
+        colour: indicator::COLOUR,
+        runs: &runs,
+    });
+    engine.process(ready, views, background, params, overlay.as_ref(), options)
+}
+
+/// The session's start-up in one line: when enhancement began and what the pipelines took.
+fn log_began(started: Instant, engine: &FrameEngine) {
+    let after = started.elapsed().as_secs_f64();
+    let Some(r) = engine.build_report() else {
+        return;
+    };
+    let cache = match &r.cache {
+        Origin::Process => format!(
+            "{} bytes from this process's earlier session",
+            r.cache_bytes
+        ),
+        Origin::File(path) => format!("{} bytes from {}", r.cache_bytes, path.display()),
+        Origin::Empty(None) => "empty".into(),
+        Origin::Empty(Some(why)) => format!("empty ({why})"),
+    };
+    log::info(&format!(
+        "enhancement began {after:.3} s after the session started ({} pipelines built in {:.3} s on the layer's thread; pipeline cache: {cache})",
+        r.built,
+        r.build_time.as_secs_f64()
+    ));
+    let each: Vec<String> = r
+        .builds
+        .iter()
+        .map(|(name, t)| format!("{name} {:.0} ms", t.as_secs_f64() * 1e3))
+        .collect();
+    log::debug(&format!("pipeline builds: {}", each.join(", ")));
+}
+
+fn write_capture(s: &SessionState, views: &[CapturedView], bg: &crate::image::RgbaImage) {
+    let Some(c) = s.settings.capture() else {
+        return;
+    };
+    for (k, v) in views.iter().enumerate() {
+        let motion = motion::capture_json(s.motion.views.get(k));
+        let written = capture_files::write_view(&c.dir, s.processed, k, v, bg, &s.settings, motion);
+        if let Err(e) = written {
+            log::once("capture-failed", &format!("capture failed: {e}"));
+        }
+    }
+}
