@@ -89,18 +89,7 @@ pub fn run(
     }
     let mut extensions = xr::ExtensionSet::default();
     extensions.khr_opengl_enable = true;
-    let app = xr::ApplicationInfo {
-        application_name: "contrastxr-xr-client",
-        application_version: 1,
-        engine_name: "contrastxr",
-        engine_version: 1,
-        api_version: xr::Version::new(1, 0, 0),
-    };
-    let instance = entry
-        .create_instance(&app, &extensions, &[])
-        .ctx("xrCreateInstance")?;
-    let props = instance.properties().ctx("xrGetInstanceProperties")?;
-    report.runtime = format!("{} {}", props.runtime_name, props.runtime_version);
+    let instance = crate::create_instance(entry, &extensions, report)?;
     let system = instance
         .system(xr::FormFactor::HEAD_MOUNTED_DISPLAY)
         .ctx("xrGetSystem")?;

@@ -129,20 +129,9 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     }
     let mut extensions = xr::ExtensionSet::default();
     extensions.khr_vulkan_enable2 = true;
-    let app = xr::ApplicationInfo {
-        application_name: "contrastxr-xr-client",
-        application_version: 1,
-        engine_name: "contrastxr",
-        engine_version: 1,
-        api_version: xr::Version::new(1, 0, 0),
-    };
-    let instance = entry
-        .create_instance(&app, &extensions, &[])
-        .ctx("xrCreateInstance")?;
-    let props = instance.properties().ctx("xrGetInstanceProperties")?;
+    let instance = create_instance(&entry, &extensions, report)?;
     report.timespec_offered = available.khr_convert_timespec_time;
     report.timespec_lookup = timespec_lookup(&entry, &instance);
-    report.runtime = format!("{} {}", props.runtime_name, props.runtime_version);
     if options.provoke_xr_error {
         // Invalid on purpose: an undefined form factor, which core validation must report.
         let _ = instance.system(xr::FormFactor::from_raw(0x7fff_fff0));
@@ -191,6 +180,27 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     drop(instance);
     report.teardown_ms.instance(t.elapsed());
     Ok(())
+}
+
+/// The client's instance with `extensions`; the runtime's name goes to the report.
+fn create_instance(
+    entry: &xr::Entry,
+    extensions: &xr::ExtensionSet,
+    report: &mut Report,
+) -> Result<xr::Instance> {
+    let app = xr::ApplicationInfo {
+        application_name: "contrastxr-xr-client",
+        application_version: 1,
+        engine_name: "contrastxr",
+        engine_version: 1,
+        api_version: xr::Version::new(1, 0, 0),
+    };
+    let instance = entry
+        .create_instance(&app, extensions, &[])
+        .ctx("xrCreateInstance")?;
+    let props = instance.properties().ctx("xrGetInstanceProperties")?;
+    report.runtime = format!("{} {}", props.runtime_name, props.runtime_version);
+    Ok(instance)
 }
 
 /// What every session of the run shares.
