@@ -389,36 +389,16 @@ fn through_own_door(tree: &Tree, src: &Path) -> Vec<String> {
     found
 }
 
-/// Folders of `src/` whose files still take siblings' items from the folder's re-exports: this
-/// list may only shrink.
-const NOT_YET_BY_OWN_NAMES: [&str; 3] = ["camera/", "cli/", "config/"];
-
 /// Siblings import each other from their own modules, not through their folder's
 /// re-exports, so the picture of who uses whom stays true.
 #[test]
 fn siblings_import_each_other_by_their_own_names() {
-    let found: Vec<String> = through_own_door(&src_tree(), Path::new(SRC))
-        .into_iter()
-        .filter(|f| !NOT_YET_BY_OWN_NAMES.iter().any(|d| f.starts_with(d)))
-        .collect();
+    let found = through_own_door(&src_tree(), Path::new(SRC));
     assert!(
         found.is_empty(),
         "files taking a sibling's item from their folder's re-exports:\n{}",
         found.join("\n")
     );
-}
-
-/// Every folder still listed takes a sibling through its re-exports (one that stopped must
-/// leave the list).
-#[test]
-fn the_folders_not_yet_by_own_names_still_are() {
-    let found = through_own_door(&src_tree(), Path::new(SRC));
-    for folder in NOT_YET_BY_OWN_NAMES {
-        assert!(
-            found.iter().any(|f| f.starts_with(folder)),
-            "{folder} names its siblings by their own modules: take it off NOT_YET_BY_OWN_NAMES"
-        );
-    }
 }
 
 /// The check can fail: `super::B` in a file whose folder re-exports `b::B` is found.
