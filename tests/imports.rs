@@ -5,9 +5,10 @@
 //! A module's front door (`mod.rs`, the crate roots) only declares and re-exports its files: a
 //! name taken through it counts as an import of the file that defines it (`super::Thing` with
 //! `pub use file::Thing` in the folder's mod.rs is an import of `file.rs`), so a two-way tie
-//! through the re-exports is a circle too; there are 0 such ties. Siblings name each other by
-//! their own modules, not through their folder's re-exports. Test modules (`mod tests`) are
-//! left out.
+//! through the re-exports is a circle too; there are 0 such ties. A path inside an inline module
+//! (`mod reference { use super::super::pixel::*; }`) is read from that module, as rustc reads
+//! it. Siblings name each other by their own modules, not through their folder's re-exports.
+//! Test modules (`mod tests`) are left out.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -79,27 +80,111 @@ fn code(text: &str) -> String {
         Some(at) => &text[..at],
         None => text,
     };
-    text.lines()
-        .map(|l| l.split("//").next().unwrap_or(""))
-        .collect::<Vec<_>>()
-        .join("\n")
+    // Line comments go; a `//` in a string literal ("https://...") stays.
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < text.len() {
+        if let Some(end) = literal_end(text, i) {
+            out.push_str(&text[i..end]);
+            i = end;
+        } else if text[i..].starts_with("//") {
+            i += text[i..].find('\n').unwrap_or(text.len() - i);
+        } else {
+            let c = text[i..].chars().next().unwrap();
+            out.push(c);
+            i += c.len_utf8();
+        }
+    }
+    out
 }
 
-/// The module paths a file's code names, from `super::`/`crate::` paths and `use` groups.
+/// Where the string or character literal that starts at byte `i` of `code` ends (the byte after
+/// it), if one starts there: `"..."`, `r"..."`, `r#"..."#`, `'{'`, `'\''`; a lifetime (`'a`)
+/// is none.
+fn literal_end(code: &str, i: usize) -> Option<usize> {
+    let rest = &code[i..];
+    if rest.starts_with('"') {
+        let hashes = code[..i].chars().rev().take_while(|&c| c == '#').count();
+        let raw = code[..i - hashes].ends_with('r');
+        let close = format!("\"{}", "#".repeat(hashes));
+        let mut j = 1;
+        while j < rest.len() {
+            if !raw && rest[j..].starts_with('\\') {
+                j += 1 + rest[j + 1..].chars().next().map_or(0, char::len_utf8);
+            } else if rest[j..].starts_with(&close) {
+                return Some(i + j + close.len());
+            } else {
+                j += rest[j..].chars().next().map_or(1, char::len_utf8);
+            }
+        }
+        return Some(code.len());
+    }
+    let mut chars = rest.strip_prefix('\'')?.char_indices();
+    match chars.next()? {
+        (_, '\\') => rest[3..].find('\'').map(|n| i + 3 + n + 1),
+        (_, c) => (chars.next()?.1 == '\'').then(|| i + 1 + c.len_utf8() + 1),
+    }
+}
+
+/// The inline modules (`mod name { .. }`, `pub(super) mod name { .. }`) of a file's code: each
+/// one's name and the span of its body, in bytes. Braces in string and character literals do
+/// not count.
+fn inline_modules(code: &str) -> Vec<(String, std::ops::Range<usize>)> {
+    let mut found = Vec::new();
+    // The open braces: where each opened, and the inline module it opens, if it does.
+    let mut open: Vec<(usize, Option<String>)> = Vec::new();
+    let mut i = 0;
+    while i < code.len() {
+        if let Some(end) = literal_end(code, i) {
+            i = end;
+            continue;
+        }
+        let c = code[i..].chars().next().unwrap();
+        if c == '{' {
+            let head = code[..i].trim_end();
+            let name_at = head
+                .rfind(|c: char| !(c.is_alphanumeric() || c == '_'))
+                .map_or(0, |n| n + 1);
+            let keyword = head[..name_at].trim_end();
+            let is_mod = keyword
+                .strip_suffix("mod")
+                .is_some_and(|s| !s.ends_with(|c: char| c.is_alphanumeric() || c == '_'));
+            let name = (is_mod && name_at < head.len()).then(|| head[name_at..].to_string());
+            open.push((i, name));
+        } else if c == '}' {
+            if let Some((start, Some(name))) = open.pop() {
+                found.push((name, start..i));
+            }
+        }
+        i += c.len_utf8();
+    }
+    found
+}
+
+/// The module paths a file's code names, from `super::`/`crate::` paths and `use` groups. A
+/// path inside an inline module (`mod reference { use super::super::pixel::*; }`) starts
+/// from that module, not from the file's.
 fn named_paths(code: &str, module: &[String]) -> Vec<Vec<String>> {
     let mut out = Vec::new();
     let bytes: Vec<char> = code.chars().collect();
     let text: String = bytes.iter().collect();
+    let inline = inline_modules(&text);
     for start in ["super::", "crate::"] {
         for (at, _) in text.match_indices(start) {
             let before = text[..at].chars().last();
             if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
                 continue;
             }
+            // The module the path is written in: the file's, and the inline ones around it,
+            // outermost first.
+            let mut here = module.to_vec();
+            let mut around: Vec<_> = inline.iter().filter(|(_, s)| s.contains(&at)).collect();
+            around.sort_by_key(|(_, s)| s.start);
+            here.extend(around.into_iter().map(|(name, _)| name.clone()));
             let mut base: Vec<String> = if start == "crate::" {
                 Vec::new()
             } else {
-                module[..module.len().saturating_sub(1)].to_vec()
+                here[..here.len().saturating_sub(1)].to_vec()
             };
             let rest = &text[at + start.len()..];
             let mut rest = rest;
@@ -253,8 +338,9 @@ fn circle(graph: &BTreeMap<PathBuf, BTreeSet<PathBuf>>, from: &PathBuf) -> Optio
     None
 }
 
-/// Circles, through a folder's re-exports or not, that `src/` has: none. (There were 0 left
-/// once the last, algorithm/methods.rs <-> algorithm/params.rs, was undone.)
+/// Circles, through a folder's re-exports or not, that `src/` has: none. (The last ones,
+/// algorithm/methods.rs <-> algorithm/params.rs, then methods.rs <-> pixel.rs and <-> scaled.rs
+/// through methods.rs's inline `mod reference`, were undone.)
 #[test]
 fn no_file_of_src_imports_itself_through_others() {
     let tree = src_tree();
@@ -285,6 +371,47 @@ fn a_circle_is_found() {
     );
     assert!(paths.contains(&vec!["gpu".into(), "engine".into(), "TILE".into()]));
     assert!(paths.contains(&vec!["gpu".into(), "pipelines".into()]));
+}
+
+/// The check follows a path from inside an inline module from that module: `a.rs` of a made-up
+/// folder names `b.rs`'s function only from its `mod inner` (`super::super::b`), and `b.rs`
+/// names `a.rs`'s type back: a circle. (Taken from the file's module, `super::super::b` would
+/// name a `b` beside the folder, and the circle would be missed.)
+#[test]
+fn a_circle_through_an_inline_module_is_found() {
+    let src = Path::new("/made-up/src");
+    let file = |p: &str, text: &str| (src.join(p), text.to_string());
+    let mut tree = Tree::from([
+        file("lib.rs", "pub mod room;\n"),
+        file("room/mod.rs", "pub mod a;\nmod b;\n"),
+        file(
+            "room/a.rs",
+            "pub enum R {\n    F(fn()),\n}\nconst S: &str = \"}\";\nconst C: char = '{';\n\
+             mod inner {\n    pub(super) use super::super::b::*;\n    \
+             fn g<'x>(_: &'x str) {\n        let _ = \"{\";\n    }\n}\n\
+             pub static F: R = R::F(inner::f);\n",
+        ),
+        file(
+            "room/b.rs",
+            "use super::a::R;\npub fn f() {}\nfn g(_: R) {}\n",
+        ),
+    ]);
+    let module = ["room".to_string(), "a".to_string()];
+    let paths = named_paths(&code(&tree[&src.join("room/a.rs")]), &module);
+    assert_eq!(paths, [["room", "b"]]);
+    let found = circles(&import_graph(&tree, src), src);
+    assert_eq!(
+        found,
+        BTreeSet::from(["room/a.rs <-> room/b.rs".to_string()])
+    );
+    // `super::` in an inline module names its file: no import of another file.
+    tree.insert(
+        src.join("room/b.rs"),
+        "pub fn f() {}\nmod fake {\n    use super::f;\n}\n".into(),
+    );
+    assert!(circles(&import_graph(&tree, src), src).is_empty());
+    let b = import_graph(&tree, src)[&src.join("room/b.rs")].clone();
+    assert!(b.is_empty(), "{b:?}");
 }
 
 /// What a `mod.rs` may hold at its top level: module declarations, re-exports and imports (and
@@ -389,36 +516,16 @@ fn through_own_door(tree: &Tree, src: &Path) -> Vec<String> {
     found
 }
 
-/// Folders of `src/` whose files still take siblings' items from the folder's re-exports: this
-/// list may only shrink.
-const NOT_YET_BY_OWN_NAMES: [&str; 3] = ["camera/", "cli/", "config/"];
-
 /// Siblings import each other from their own modules, not through their folder's
 /// re-exports, so the picture of who uses whom stays true.
 #[test]
 fn siblings_import_each_other_by_their_own_names() {
-    let found: Vec<String> = through_own_door(&src_tree(), Path::new(SRC))
-        .into_iter()
-        .filter(|f| !NOT_YET_BY_OWN_NAMES.iter().any(|d| f.starts_with(d)))
-        .collect();
+    let found = through_own_door(&src_tree(), Path::new(SRC));
     assert!(
         found.is_empty(),
         "files taking a sibling's item from their folder's re-exports:\n{}",
         found.join("\n")
     );
-}
-
-/// Every folder still listed takes a sibling through its re-exports (one that stopped must
-/// leave the list).
-#[test]
-fn the_folders_not_yet_by_own_names_still_are() {
-    let found = through_own_door(&src_tree(), Path::new(SRC));
-    for folder in NOT_YET_BY_OWN_NAMES {
-        assert!(
-            found.iter().any(|f| f.starts_with(folder)),
-            "{folder} names its siblings by their own modules: take it off NOT_YET_BY_OWN_NAMES"
-        );
-    }
 }
 
 /// The check can fail: `super::B` in a file whose folder re-exports `b::B` is found.
@@ -454,23 +561,31 @@ fn public_vulkan_fields(text: &str) -> Vec<String> {
         .collect()
 }
 
-/// Raw Vulkan handles stay in the GPU engine's device room: no type elsewhere in `src/gpu/` has
-/// a public field of a `vk::` type (the frame's and the pipelines' keep theirs private, with
-/// accessors).
-#[test]
-fn raw_handles_are_public_only_in_the_device_room() {
-    let gpu = Path::new(SRC).join("gpu");
-    let device = gpu.join("device");
+/// Each public `vk::` field of `tree` outside the device room (`gpu/device/`) and the XR test
+/// client (`bin/`, a crate of its own), as "file: field".
+fn public_handle_fields(tree: &Tree, src: &Path) -> Vec<String> {
+    let device = src.join("gpu/device");
+    let client = src.join("bin");
     let mut found = Vec::new();
-    for (file, text) in src_tree() {
-        if !file.starts_with(&gpu) || file.starts_with(&device) {
+    for (file, text) in tree {
+        if file.starts_with(&device) || file.starts_with(&client) {
             continue;
         }
-        for field in public_vulkan_fields(&text) {
-            let rel = file.strip_prefix(SRC).unwrap().display().to_string();
+        for field in public_vulkan_fields(text) {
+            let rel = file.strip_prefix(src).unwrap().display().to_string();
             found.push(format!("{rel}: {field}"));
         }
     }
+    found
+}
+
+/// Raw Vulkan handles stay in the GPU engine's device room: no type elsewhere in `src/` has a
+/// `pub` or `pub(crate)` field of a `vk::` type (the frame's, the pipelines' and the layer's
+/// swapchains' keep theirs private, with accessors; `pub(super)`, visible to its own folder
+/// only, is allowed). The XR test client (`src/bin/`) is a crate of its own and is left out.
+#[test]
+fn raw_handles_are_public_only_in_the_device_room() {
+    let found = public_handle_fields(&src_tree(), Path::new(SRC));
     assert!(
         found.is_empty(),
         "public Vulkan fields outside gpu/device/:\n{}",
@@ -479,13 +594,29 @@ fn raw_handles_are_public_only_in_the_device_room() {
 }
 
 /// The check can fail: a public handle field is found; a private one, one visible to its room
-/// only (`pub(super)`) and a function's argument are not.
+/// only (`pub(super)`) and a function's argument are not. It looks at every file of `src/` but
+/// the device room's and the XR client's.
 #[test]
 fn a_public_handle_field_is_found() {
     let text =
         "pub struct V {\n    pub image: vk::Image,\n    pub(super) view: vk::ImageView,\n    \
                 format: vk::Format,\n}\npub fn f(x: vk::Image) {}\n";
     assert_eq!(public_vulkan_fields(text), ["pub image: vk::Image,"]);
+    let src = Path::new("/made-up/src");
+    let field = "pub struct S {\n    pub(crate) images: Vec<vk::Image>,\n}\n";
+    let tree = Tree::from([
+        (src.join("layer/state.rs"), field.to_string()),
+        (src.join("gpu/frame/view.rs"), field.into()),
+        (src.join("gpu/device/image.rs"), field.into()),
+        (src.join("bin/xr_client/gpu.rs"), field.into()),
+    ]);
+    assert_eq!(
+        public_handle_fields(&tree, src),
+        [
+            "gpu/frame/view.rs: pub(crate) images: Vec<vk::Image>,",
+            "layer/state.rs: pub(crate) images: Vec<vk::Image>,",
+        ]
+    );
 }
 
 /// Inside the GPU engine a file name says one job: no two files of `src/gpu/` share a name

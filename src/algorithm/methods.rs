@@ -1,34 +1,13 @@
 //! The per-pixel methods as one table (src/algorithm/method_table.rs, one entry each): each
 //! method's entry (its CPU reference, shader file, settings and passes), and the names derived
 //! from them for the settings, the command line and their help. The `Method` type itself is
-//! src/algorithm/method.rs.
+//! src/algorithm/method.rs; the type of an entry's CPU reference, `Reference`, is
+//! src/algorithm/method_reference.rs.
 
-use glam::DVec3;
-
-use super::constraints::Margin;
 use super::method::Method;
-use super::params::Params;
+use super::method_reference::Reference;
 
 include!("method_table.rs");
-
-/// A method's CPU reference (docs/algorithm.md, Per-pixel optimisation and Comparison methods).
-#[derive(Clone, Copy)]
-pub enum Reference {
-    /// P from D, B and the change vector E, in the scaled space (called where E exists:
-    /// |B| > 1e-6). `Margin` records how close each branch condition came to flipping.
-    Scaled(fn(DVec3, DVec3, DVec3, &Params, &mut Margin) -> DVec3),
-    /// The unclipped output from the display and the (unattenuated) background, linear light.
-    Linear(fn(DVec3, DVec3, &Params) -> DVec3),
-}
-
-impl std::fmt::Debug for Reference {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Reference::Scaled(_) => "Scaled",
-            Reference::Linear(_) => "Linear",
-        })
-    }
-}
 
 /// A GPU pass of a method, in the order the recorder runs them (src/gpu/recipe/record.rs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -8,6 +8,7 @@ pub mod conformance;
 mod constraints;
 pub mod mapping;
 pub mod method;
+pub mod method_reference;
 pub mod methods;
 pub mod params;
 mod pixel;

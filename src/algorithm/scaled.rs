@@ -8,7 +8,7 @@ use super::constraints::{
     ab_plane, change_vector, chroma_constraint, jnd_constraint, luminance_constraint, split_chroma,
     Margin,
 };
-use super::methods::Reference;
+use super::method_reference::Reference;
 use super::params::{Params, ACHROMATIC_CHROMA};
 
 /// P and how close the computation came to a branch flip.

@@ -16,7 +16,7 @@ use crate::camera::error::CameraError;
 use crate::camera::log_sink::log;
 use crate::camera::mailbox::{Frame, Shared};
 use crate::camera::rig::WorldRig;
-use crate::camera::CaptureConfig;
+use crate::camera::source::CaptureConfig;
 use crate::image::RgbaImage;
 use std::collections::VecDeque;
 use std::path::Path;

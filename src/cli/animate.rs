@@ -5,9 +5,10 @@
 use contrastxr::evaluate::{self as eval, AnimationFrame};
 use std::path::{Path, PathBuf};
 
+use super::args::Args;
 use super::args::Opt;
+use super::error::CliError;
 use super::options::{self, method_usage};
-use super::{Args, CliError};
 
 pub const OPTIONS: &[Opt] = &[
     Opt::value("--captures", "DIR"),
@@ -69,7 +70,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     std::fs::write(&out, bytes)
         .map_err(|e| CliError::Failure(format!("cannot write {out}: {e}")))?;
     let total: u32 = frames.iter().map(|f| u32::from(f.delay_ms)).sum();
-    super::print(&format!(
+    super::error::print(&format!(
         "animation: {} frames, {:.1} s, {}x{}: {out}\n",
         frames.len(),
         f64::from(total) / 1e3,

@@ -5,7 +5,7 @@
 //! negative numbers work (`--fov-offset -0.1,0.2`), and positionals may be negative too
 //! (`contrastxr set lambda_e -0.1`).
 
-use super::CliError;
+use super::error::CliError;
 use clap::{Arg, ArgAction, ArgMatches};
 
 /// One option a subcommand accepts: `--long` (with an optional `-s`), a flag or taking a value.

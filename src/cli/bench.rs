@@ -2,7 +2,7 @@
 //! display frame and per camera frame, against a plain copy of the same pixels.
 
 use super::args::Args;
-use super::CliError;
+use super::error::CliError;
 use contrastxr::algorithm::{Method, Params};
 use contrastxr::gpu::offline::{BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::{DeviceOptions, OfflineEngine};
@@ -112,7 +112,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     };
     let mut results = Vec::new();
     if !json {
-        super::print(&format!("device: {}\n{}\n", engine.device_name(), header()));
+        super::error::print(&format!("device: {}\n{}\n", engine.device_name(), header()));
     }
     for &region in &sizes {
         for &content in &contents {
@@ -127,13 +127,13 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
                 .bench(&case, &params)
                 .map_err(|e| CliError::Failure(e.to_string()))?;
             if !json {
-                super::print(&row(&r));
+                super::error::print(&row(&r));
             }
             results.push(r);
         }
     }
     if json {
-        super::print(&format!("{}\n", to_json(engine.device_name(), &results)));
+        super::error::print(&format!("{}\n", to_json(engine.device_name(), &results)));
     }
     Ok(())
 }

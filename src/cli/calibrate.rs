@@ -6,7 +6,8 @@
 //! `mode` back as it was at the end. On a terminal it reads single keys (raw mode); otherwise
 //! one or more commands per line, so a script can drive it.
 
-use super::{print, Args, CliError, Opt};
+use super::args::{Args, Opt};
+use super::error::{print, CliError};
 use contrastxr::config::edit::{self, Table};
 use contrastxr::config::{self, Env, Key, Value, EYES};
 use std::io::{BufRead, Read};

@@ -1,7 +1,8 @@
 //! `contrastxr camera list` and `contrastxr camera test DEVICE [--frames N] [-o DIR]`: how a
 //! user checks their camera before putting on the headset.
 
-use super::{Args, CliError, Opt};
+use super::args::{Args, Opt};
+use super::error::CliError;
 use contrastxr::camera::v4l2::{self, device_dir};
 use contrastxr::camera::{parse_source, Background, CaptureConfig, Frame, SourceSpec};
 use std::io::Write;

@@ -1,7 +1,8 @@
 //! `contrastxr completions bash|zsh|fish|elvish|powershell`: the shell completion script for
 //! every subcommand and option, generated from the same declarations the parser uses.
 
-use super::{Args, CliError};
+use super::args::Args;
+use super::error::CliError;
 use clap_complete::Shell;
 
 pub fn usage() -> String {
@@ -32,6 +33,6 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         .ok_or_else(|| CliError::Failure("no command declarations to describe".into()))?;
     let mut script = Vec::new();
     clap_complete::generate(shell, &mut tree, "contrastxr", &mut script);
-    super::print(&String::from_utf8_lossy(&script));
+    super::error::print(&String::from_utf8_lossy(&script));
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! `contrastxr config check [FILE]`, `config print [--app NAME]` and `config path`.
 
-use super::{print, Args, CliError, Opt};
+use super::args::{Args, Opt};
+use super::error::{print, CliError};
 use contrastxr::config::{self, Env, Source, KEYS};
 use std::path::PathBuf;
 

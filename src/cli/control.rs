@@ -1,7 +1,8 @@
 //! `contrastxr toggle` and `contrastxr set`: live control of running apps through the config
 //! file, which every running app's layer watches (a change applies within a second).
 
-use super::{print, Args, CliError, Opt};
+use super::args::{Args, Opt};
+use super::error::{print, CliError};
 
 /// `--app NAME`, also taken by `config`.
 pub const OPTIONS: &[Opt] = &[Opt::value("--app", "NAME")];

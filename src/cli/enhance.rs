@@ -2,8 +2,10 @@
 
 use std::time::Instant;
 
+use super::args::{Args, Opt};
+use super::engine_choice;
+use super::error::CliError;
 use super::options::{self, method_usage, ENGINE_USAGE};
-use super::{engine_choice, Args, CliError, Opt};
 
 pub const OPTIONS: &[Opt] = &[
     Opt::value("--display", "D.png"),
@@ -30,7 +32,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let out = engine_choice::run(engine, &display, &camera, &params).map_err(CliError::Failure)?;
     let seconds = start.elapsed().as_secs_f64();
     options::save_image(&out, &out_path)?;
-    super::print(&format!(
+    super::error::print(&format!(
         "wrote {out_path} ({}x{}, method {}, lambda_e {}, {} engine, {seconds:.3} s)\n",
         out.width,
         out.height,

@@ -7,9 +7,10 @@ use contrastxr::evaluate::{self as eval, Metrics};
 use contrastxr::image::RgbaImage;
 
 use super::args::parse_list;
+use super::args::{Args, Opt};
 use super::engine_choice::{self, Engine};
+use super::error::CliError;
 use super::options::{self, method_usage, ENGINE_USAGE};
-use super::{Args, CliError, Opt};
 
 pub const OPTIONS: &[Opt] = &[
     Opt::value("--display", "D.png"),
@@ -113,12 +114,12 @@ fn run_single(inputs: &Inputs, path: Option<&str>) -> Result<(), CliError> {
     let enhanced = enhanced_image(inputs, path, &inputs.params)?;
     let m = measure(inputs, &enhanced, &inputs.params);
     if inputs.json {
-        super::print(&format!(
+        super::error::print(&format!(
             "{}\n",
             serde_json::to_string_pretty(&m).expect("metrics serialise")
         ));
     } else {
-        super::print(&metrics_text(&m));
+        super::error::print(&metrics_text(&m));
     }
     if let Some(fig) = &inputs.figure {
         let img = if inputs.app_images {
@@ -173,7 +174,7 @@ fn run_sweep(inputs: &Inputs, lambdas: &[f32]) -> Result<(), CliError> {
             ));
         }
     }
-    super::print(&if inputs.json {
+    super::error::print(&if inputs.json {
         sweep_json(&rows)
     } else {
         sweep_table(&rows)

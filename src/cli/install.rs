@@ -1,6 +1,7 @@
 //! `contrastxr install [--user|--system] [--library PATH]` and `contrastxr uninstall`.
 
-use super::{print, Args, CliError, Opt};
+use super::args::{Args, Opt};
+use super::error::{print, CliError};
 
 pub const SCOPE_OPTIONS: &[Opt] = &[Opt::flag("--user"), Opt::flag("--system")];
 pub const OPTIONS: &[Opt] = &[

@@ -1,7 +1,8 @@
 //! `contrastxr log`: the layer's log lines of the last app that loaded it (from the file the
 //! layer writes, `$XDG_STATE_HOME/contrastxr/layer.log`, and its rotated predecessor).
 
-use super::{print, Args, CliError, Opt};
+use super::args::{Args, Opt};
+use super::error::{print, CliError};
 use contrastxr::layer::log;
 
 pub const OPTIONS: &[Opt] = &[Opt::flag("--all"), Opt::flag("--path")];

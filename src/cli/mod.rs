@@ -22,7 +22,4 @@ mod options;
 mod pan;
 mod parse;
 
-pub use args::{Args, Opt};
-pub use command_table::{Subcommand, COMMANDS};
-pub use error::{print, CliError};
 pub use parse::main;

@@ -4,9 +4,10 @@ use contrastxr::algorithm::Params;
 use contrastxr::config::{self, Key, Settings, Value};
 use contrastxr::image::RgbaImage;
 
+use super::args::Args;
 use super::args::Opt;
 use super::engine_choice::Engine;
-use super::{Args, CliError};
+use super::error::CliError;
 
 /// A setting of the method the offline commands take as an option: its name in
 /// [`contrastxr::config::KEYS`] (where its meaning, kind and default come from), the option, and

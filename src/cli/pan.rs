@@ -4,9 +4,10 @@
 use contrastxr::image::RgbaImage;
 use std::path::Path;
 
+use super::args::Args;
 use super::args::Opt;
+use super::error::CliError;
 use super::options;
-use super::{Args, CliError};
 
 pub const OPTIONS: &[Opt] = &[
     Opt::value("--output", "DIR").short('o'),
@@ -69,7 +70,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             &dir.join(format!("frame-{i:04}.png")).to_string_lossy(),
         )?;
     }
-    super::print(&format!(
+    super::error::print(&format!(
         "pan: {frames} frames of {window}x{} in {out} (video:{out})\n",
         strip.height
     ));

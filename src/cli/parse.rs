@@ -3,7 +3,8 @@
 //! turned into the tool's one-sentence form with exit code 2.
 
 use super::args::{positionals_arg, Args};
-use super::{CliError, Subcommand, COMMANDS};
+use super::command_table::{Subcommand, COMMANDS};
+use super::error::CliError;
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 
 fn overview() -> String {
@@ -92,7 +93,7 @@ pub fn main(argv: Vec<String>) -> i32 {
         return 2;
     };
     if first == "help" {
-        super::print(&overview());
+        super::error::print(&overview());
         return 0;
     }
     let name = COMMANDS
@@ -120,7 +121,7 @@ pub fn main(argv: Vec<String>) -> i32 {
 fn parse_error(e: &clap::Error, name: &str) -> i32 {
     match e.kind() {
         ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
-            super::print(&e.render().to_string());
+            super::error::print(&e.render().to_string());
             0
         }
         ErrorKind::InvalidSubcommand => {

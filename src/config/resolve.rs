@@ -62,7 +62,7 @@ impl Resolved {
     }
 
     /// Applies `value` to key `index`, or records why not.
-    fn offer(&mut self, index: usize, value: Result<super::Value, String>, from: Origin) {
+    fn offer(&mut self, index: usize, value: Result<super::value::Value, String>, from: Origin) {
         let key: &Key = &KEYS[index];
         let applied = value.and_then(|v| key.apply(&mut self.settings, v));
         match applied {

@@ -86,7 +86,7 @@ fn work_item(
     settings: &Settings,
 ) -> Option<FrameView> {
     let format = sc.info.pixel.filter(|_| sc.info.processable())?;
-    let vk_image = *sc.images.get(image as usize)?;
+    let vk_image = sc.image(image as usize)?;
     let r = region.rect;
     let fits = r.offset.x >= 0
         && r.offset.y >= 0
@@ -113,7 +113,7 @@ fn work_item(
         key,
         vk_image,
         format,
-        sc.info.vk_format,
+        sc.info.vk_format(),
         sc.info.in_place,
         mapping,
     ))

@@ -129,7 +129,7 @@ pub struct ViewRegion {
 
 #[derive(Clone, Debug)]
 pub struct SwapchainInfo {
-    pub vk_format: vk::Format,
+    vk_format: vk::Format,
     /// None for formats the engine does not handle (and for depth).
     pub pixel: Option<PixelFormat>,
     pub width: u32,
@@ -143,6 +143,30 @@ pub struct SwapchainInfo {
 }
 
 impl SwapchainInfo {
+    /// A swapchain's info from the app's create info (its format and size), the pixel format
+    /// the engine handles it as (None: not handled) and the usage the layer got.
+    pub fn new(
+        app_info: &xr::SwapchainCreateInfo,
+        pixel: Option<PixelFormat>,
+        transfer_usage: bool,
+        in_place: bool,
+    ) -> Self {
+        SwapchainInfo {
+            vk_format: vk::Format::from_raw(app_info.format as i32),
+            pixel,
+            width: app_info.width,
+            height: app_info.height,
+            array_size: app_info.array_size,
+            transfer_usage,
+            in_place,
+        }
+    }
+
+    /// The swapchain's Vulkan format, as the app created it.
+    pub fn vk_format(&self) -> vk::Format {
+        self.vk_format
+    }
+
     /// Whether the layer may touch this swapchain's images at all.
     pub fn processable(&self) -> bool {
         self.pixel.is_some() && self.transfer_usage
@@ -153,12 +177,42 @@ pub struct SwapchainState {
     pub session: xr::Session,
     pub next: NextFns,
     pub info: SwapchainInfo,
-    pub images: Vec<vk::Image>,
+    /// The swapchain's Vulkan images, once the app enumerated them (empty before).
+    images: Vec<vk::Image>,
     /// The images' states as the runtime sees them, and the release the layer holds.
     pub states: ImageStates,
     /// The regions the app's last xrEndFrame named in this swapchain (enhanced layers only):
     /// what an image released ahead of its xrEndFrame is enhanced with.
     pub last_views: Vec<ViewRegion>,
+}
+
+impl SwapchainState {
+    /// A swapchain just created: no images enumerated, none held, no regions named yet.
+    pub fn new(session: xr::Session, next: NextFns, info: SwapchainInfo) -> Self {
+        SwapchainState {
+            session,
+            next,
+            info,
+            images: Vec::new(),
+            states: ImageStates::default(),
+            last_views: Vec::new(),
+        }
+    }
+
+    /// The Vulkan image at `index` of the swapchain, if the app enumerated that many.
+    pub fn image(&self, index: usize) -> Option<vk::Image> {
+        self.images.get(index).copied()
+    }
+
+    /// Whether the app enumerated the swapchain's Vulkan images.
+    pub fn has_images(&self) -> bool {
+        !self.images.is_empty()
+    }
+
+    /// The swapchain's Vulkan images, as the app enumerated them.
+    pub fn set_images(&mut self, images: Vec<vk::Image>) {
+        self.images = images;
+    }
 }
 
 #[derive(Default)]

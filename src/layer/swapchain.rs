@@ -107,22 +107,11 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             }
             // Every swapchain is tracked (with its session's dispatch); only processable ones are touched.
             if result.into_raw() >= 0 {
-                let state = SwapchainState {
+                let state = SwapchainState::new(
                     session,
                     next,
-                    info: SwapchainInfo {
-                        vk_format,
-                        pixel,
-                        width: app_info.width,
-                        height: app_info.height,
-                        array_size: app_info.array_size,
-                        transfer_usage,
-                        in_place,
-                    },
-                    images: Vec::new(),
-                    states: ImageStates::default(),
-                    last_views: Vec::new(),
-                };
+                    SwapchainInfo::new(app_info, pixel, transfer_usage, in_place),
+                );
                 // SAFETY: written by the successful create call.
                 let handle = unsafe { *swapchain };
                 state::registry()
@@ -228,9 +217,10 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
                 if unsafe { (*images).ty } == xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR {
                     let vk_images = images as *const xr::SwapchainImageVulkanKHR;
                     // SAFETY: n Vulkan image structs were written.
-                    lock(&sc).images = (0..n)
+                    let raw = (0..n)
                         .map(|i| unsafe { vk::Image::from_raw((*vk_images.add(i)).image) })
                         .collect();
+                    lock(&sc).set_images(raw);
                 }
             }
             Ok(result)
@@ -379,7 +369,7 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
                 // by the runtime when forwarded).
                 let info_ok =
                     info.is_null() || unsafe { (*info).ty } == xr::SwapchainImageReleaseInfo::TYPE;
-                let holdable = info_ok && sc.info.processable() && !sc.images.is_empty();
+                let holdable = info_ok && sc.info.processable() && sc.has_images();
                 let plan = sc.states.plan_release(holdable);
                 match plan {
                     ReleasePlan::Hold(_) => sc.states.hold(),

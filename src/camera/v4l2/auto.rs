@@ -4,10 +4,11 @@
 //! own, facing the user); the card's name decides only where sysfs says nothing. The choice is
 //! kept by its stable path, so a reopen after a loss takes the same camera, and is said once.
 
+use super::choose::choose_mode;
+use super::devices::{modes, probe, stable_paths, DeviceInfo};
 use super::usb::{self, sysfs_root, UsbId};
-use super::{choose_mode, modes, probe, stable_paths, DeviceInfo};
 use crate::camera::log_sink::log;
-use crate::camera::CaptureConfig;
+use crate::camera::source::CaptureConfig;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -99,7 +100,7 @@ impl Candidate {
 
 /// The capture nodes of `dir` with a mode `cfg` can use, in node order.
 pub fn candidates(dir: &Path, cfg: &CaptureConfig) -> Vec<Candidate> {
-    super::device_nodes(dir)
+    super::devices::device_nodes(dir)
         .into_iter()
         .filter_map(|p| probe(&p).ok())
         .filter(|(_, info)| info.capture)

@@ -2,14 +2,15 @@
 //! RGBA and publishes it; on loss or stall it marks the source down and reopens with backoff.
 //! Readers only ever touch the mailbox in `Shared`, so nothing here can block them.
 
-use super::{choose_mode, device_dir, modes, probe};
+use super::choose::choose_mode;
+use super::devices::{device_dir, modes, probe};
 use crate::camera::convert::{to_rgba_into, PixelFormat};
 use crate::camera::error::CameraError;
 use crate::camera::log_sink::log;
 use crate::camera::mailbox::{Frame, Shared, SourceStatus};
 use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
-use crate::camera::{CaptureConfig, SourceSpec};
+use crate::camera::source::{CaptureConfig, SourceSpec};
 use std::io;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;

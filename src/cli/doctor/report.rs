@@ -1,6 +1,7 @@
 //! The doctor command: runs every check and prints the findings as text or JSON.
 
-use super::super::{print, Args, CliError, Opt};
+use super::super::args::{Args, Opt};
+use super::super::error::{print, CliError};
 use super::finding::{Finding, Status};
 use super::{app, camera, manifest, profile, runtime};
 
