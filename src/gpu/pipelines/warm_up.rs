@@ -292,19 +292,17 @@ impl WarmUp {
     /// Ends a session's warm-up device, on the app's thread after the building thread has
     /// ended: dropped here when its last dispatch has finished, else left in the driver's
     /// hands until it has ([`WarmUp::destroy_left_over`]; the process's exit waits for it).
-    /// Returns whether it was left.
-    pub fn end(slot: WarmUpSlot) -> bool {
+    pub fn end(slot: WarmUpSlot) {
         WarmUp::destroy_left_over();
         let Some(mut warm_up) = lock(&slot).warm_up.take() else {
-            return false;
+            return;
         };
         if warm_up.finished_within(0).unwrap_or(true) {
-            return false;
+            return;
         }
         static AT_EXIT: Once = Once::new();
         AT_EXIT.call_once(|| super::process_exit::on_exit(wait_for_left_over));
         left_over().push(warm_up);
-        true
     }
 }
 
