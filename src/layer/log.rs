@@ -26,6 +26,10 @@ pub const BACKLOG_LINES: usize = 256;
 pub const MAX_BYTES: u64 = 1 << 20;
 /// The file-only line each process writes first: `[pid N] layer loaded into EXE`.
 pub const LOADED: &str = "layer loaded into ";
+/// The line each session writes at xrCreateSession, then the binding's API ("Vulkan",
+/// "OpenGL (Xlib)", "OpenGL (EGL)", ...) and whether the layer enhances it:
+/// `graphics API of this session: OpenGL (Xlib), enhanced` or `..., passed through`.
+pub const GRAPHICS_API: &str = "graphics API of this session: ";
 
 struct Log {
     path: Option<PathBuf>,
