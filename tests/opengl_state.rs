@@ -146,9 +146,15 @@ fn the_check_reports_gl_state_left_changed() {
             let w = c["what"].as_str().unwrap_or("");
             w == item || w.starts_with(&format!("{item}["))
         });
-        assert!(seen, "{item} disturbed but not reported: {others:#?}\n{what}");
+        assert!(
+            seen,
+            "{item} disturbed but not reported: {others:#?}\n{what}"
+        );
     }
     // The pending GL_INVALID_ENUM, read before xrEndFrame: it finds no error.
     let error = others.iter().find(|c| c["what"] == "glGetError").unwrap();
-    assert_eq!((&error["before"], &error["after"]), (&0x0500.into(), &0.into()));
+    assert_eq!(
+        (&error["before"], &error["after"]),
+        (&0x0500.into(), &0.into())
+    );
 }
