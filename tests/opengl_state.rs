@@ -97,7 +97,11 @@ fn the_app_finds_its_gl_state_after_xr_end_frame_with_the_layer_on_as_off() {
             // Monado's own change, seen without the layer: if it ever goes, the docs' note
             // about it (docs/testing.md) goes too.
             if !layer {
-                assert!(swap_frames.len() >= 10, "{what}");
+                assert!(
+                    swap_frames.len() >= 10,
+                    "Monado no longer swaps the app's draw and read drawables in xrEndFrame: \
+                     is_monados_drawable_swap and docs/testing.md can go. {what}"
+                );
             }
         }
     }
