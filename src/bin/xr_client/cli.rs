@@ -70,7 +70,8 @@ usage: contrastxr-xr-client [options]
                           the frames whose pixels changed after the client wrote them
   --check-gl-state        with --graphics opengl: before every xrEndFrame set non-default
                           values of the GL state a layer could touch (current context and
-                          drawables, program and pipeline, active texture, textures, samplers
+                          drawables: every second frame the read drawable is the draw
+                          drawable, the others another pbuffer; program and pipeline, active texture, textures, samplers
                           and image units on units 0 to the layer's highest binding number,
                           generic and indexed buffer bindings, pixel store, framebuffers,
                           GL_FRAMEBUFFER_SRGB and other enables, viewport, scissor box) and

@@ -390,6 +390,9 @@ pub struct GlStateCheck {
     display: *mut c_void,
     context: *mut c_void,
     drawable: u64,
+    /// The read drawable of this check: every second check reads where it draws, as most
+    /// apps do, the others from a pbuffer of their own.
+    read_drawable: u64,
     disturb: Vec<String>,
     /// The frame of the set state, between `before_end_frame` and `after_end_frame`.
     frame: Option<u32>,
@@ -424,6 +427,7 @@ impl GlStateCheck {
             display: gl.display,
             context: gl.context,
             drawable: gl.drawable,
+            read_drawable: 0,
             disturb: disturb.to_vec(),
             frame: None,
             checked: 0,
@@ -452,6 +456,13 @@ impl GlStateCheck {
     /// Sets the state (after the frame's rendering), reads it back, leaves GL_INVALID_ENUM
     /// pending, and disturbs what --disturb-gl-state names. `frame`: frames ended before.
     pub fn before_end_frame(&mut self, frame: u32) -> Result<()> {
+        let o = &self.objects;
+        self.read_drawable = if self.checked % 2 == 0 {
+            o.read
+        } else {
+            o.draw
+        };
+        self.items[READ_DRAWABLE_ITEM].set = vec![self.read_drawable as i64];
         self.set();
         self.gl_error("setting the GL state")?;
         let before = self.read_all();
@@ -501,7 +512,7 @@ impl GlStateCheck {
                 (self.f.make_context_current)(
                     self.display,
                     self.objects.draw,
-                    self.objects.read,
+                    self.read_drawable,
                     self.context,
                 )
             };
@@ -566,7 +577,7 @@ impl GlStateCheck {
         // indices below GL 4.5's minimums, ranges inside the buffers at aligned offsets. The
         // generic buffer bindings come after the indexed ones, which set them too.
         unsafe {
-            (f.make_context_current)(self.display, o.draw, o.read, self.context);
+            (f.make_context_current)(self.display, o.draw, self.read_drawable, self.context);
             (f.use_program)(o.program);
             (f.bind_program_pipeline)(o.pipeline);
             for unit in 0..UNITS {
@@ -659,7 +670,12 @@ impl GlStateCheck {
             unsafe {
                 match name.as_str() {
                     "glXGetCurrentDrawable" => {
-                        (f.make_context_current)(self.display, self.drawable, o.read, self.context);
+                        (f.make_context_current)(
+                            self.display,
+                            self.drawable,
+                            self.read_drawable,
+                            self.context,
+                        );
                     }
                     "glGetError" => {
                         (f.get_error)();
@@ -683,6 +699,7 @@ impl GlStateCheck {
 
 /// The first items: the current context, draw and read drawables.
 const GLX_ITEMS: usize = 3;
+const READ_DRAWABLE_ITEM: usize = 2;
 
 /// Every item, with the value `set` gives it (the GLX_ITEMS first).
 fn items(o: &Objects, context: *mut c_void) -> Vec<Item> {
