@@ -34,6 +34,10 @@ const UNITS: usize = {
 // GL 4.5's smallest GL_MAX_IMAGE_UNITS and GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS.
 const _: () = assert!(UNITS <= 8);
 
+/// The active texture unit the check sets (GL_TEXTURE5).
+const ACTIVE_UNIT: u32 = 5;
+const _: () = assert!((ACTIVE_UNIT as usize) < UNITS);
+
 const NO_ERROR: Enum = 0;
 const INVALID_ENUM: Enum = 0x0500;
 /// Not a capability: glEnable raises GL_INVALID_ENUM, the error the client leaves pending.
@@ -585,7 +589,7 @@ impl GlStateCheck {
                 (f.bind_texture)(TEXTURE_2D, o.textures_2d[unit]);
                 (f.bind_texture)(TEXTURE_2D_ARRAY, o.textures_array[unit]);
             }
-            (f.active_texture)(TEXTURE0 + 5);
+            (f.active_texture)(TEXTURE0 + ACTIVE_UNIT);
             (f.bind_samplers)(0, UNITS as i32, o.samplers.as_ptr());
             for unit in 0..UNITS {
                 (f.bind_image_texture)(
@@ -682,7 +686,7 @@ impl GlStateCheck {
                     }
                     "GL_ACTIVE_TEXTURE" => (f.active_texture)(TEXTURE0),
                     "GL_CURRENT_PROGRAM" => (f.use_program)(0),
-                    "GL_TEXTURE_BINDING_2D" => (f.bind_textures)(5, 1, &o.textures_2d[0]),
+                    "GL_TEXTURE_BINDING_2D" => (f.bind_textures)(ACTIVE_UNIT, 1, &o.textures_2d[0]),
                     "GL_IMAGE_BINDING_NAME" => {
                         (f.bind_image_texture)(0, o.textures_array[1], 1, 1, 1, READ_WRITE, R32UI)
                     }
@@ -738,7 +742,7 @@ fn items(o: &Objects, context: *mut c_void) -> Vec<Item> {
         item(
             "GL_ACTIVE_TEXTURE".into(),
             Query::Integer(ACTIVE_TEXTURE),
-            &name(TEXTURE0 + 5),
+            &name(TEXTURE0 + ACTIVE_UNIT),
         ),
     ];
     for unit in 0..UNITS {
