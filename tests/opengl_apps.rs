@@ -213,3 +213,44 @@ fn without_the_layer_opengl_images_are_untouched() {
     );
     assert_eq!(report["frames_modified"], serde_json::json!([]));
 }
+
+/// What the layer cannot do in an app's GL context (its context current on another thread, a
+/// context older than 4.3, a lost context, a program the driver refuses): the session passes
+/// through, every image exactly as the app wrote it, with one line naming why.
+#[test]
+fn opengl_failures_pass_the_session_through_with_one_line() {
+    let cases = [
+        ("gl-make-current", "could not be made current"),
+        ("gl-old-context", "older than 4.3"),
+        ("gl-context-lost", "context was lost"),
+        ("gl-program-link", "did not build"),
+    ];
+    for (point, why) in cases {
+        // An empty cache: a program loaded from its cached binary is never linked.
+        let cache = capture_dir(&format!("opengl-fault-{point}-cache"));
+        let cache = cache.to_string_lossy().into_owned();
+        let env = [
+            ("CONTRASTXR", "1"),
+            ("CONTRASTXR_FORCE", "1"),
+            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+            ("CONTRASTXR_FAULT", point),
+            ("XDG_CACHE_HOME", cache.as_str()),
+        ];
+        let Some(run) = client_opengl("R8G8B8A8_SRGB", &env, &["--check-untouched"]) else {
+            return;
+        };
+        run.assert_success();
+        let what = format!("{point}: {}", run.describe());
+        let report = run.client_report();
+        assert!(report["frames_checked"].as_u64() >= Some(8), "{what}");
+        assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
+        let lines = layer_lines(&run);
+        let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+        assert_eq!(passing.len(), 1, "{what}");
+        assert!(passing[0].contains(why), "{point}: {passing:?}");
+        assert!(
+            !lines.iter().any(|l| l.contains("processing frames")),
+            "{what}"
+        );
+    }
+}

@@ -91,6 +91,8 @@ pub struct Previous {
     context: *mut c_void,
 }
 
+const NOT_CURRENT: &str = "the app's OpenGL context could not be made current on the thread calling the layer (is it current on another thread?)";
+
 /// Set by the recording handler while the layer's make-current call runs.
 static X_ERROR: AtomicBool = AtomicBool::new(false);
 
@@ -133,7 +135,7 @@ impl GlxContext {
             }
         };
         if forced {
-            return Err("fault injected at gl-make-current (CONTRASTXR_FAULT)".into());
+            return Err(format!("{NOT_CURRENT} (fault injected at gl-make-current)"));
         }
         X_ERROR.store(false, Ordering::SeqCst);
         // SAFETY: the binding's display, drawable and context, which the app keeps alive for
@@ -148,7 +150,7 @@ impl GlxContext {
             made
         };
         if made == 0 || X_ERROR.load(Ordering::SeqCst) {
-            return Err("the app's OpenGL context could not be made current on the thread calling xrEndFrame (is it current on another thread?)".into());
+            return Err(NOT_CURRENT.into());
         }
         Ok(Some(previous))
     }
