@@ -183,35 +183,26 @@ fn opengl_sessions_follow_every_mode() {
     }
     let dir = capture_dir("opengl-mode-off");
     let env = layer_env(&dir, "off");
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", &as_refs(&env), &["--check-untouched"]) else {
-        return;
-    };
+    untouched(&as_refs(&env));
+}
+
+/// The client with `env`, its images read back at each next acquire: every one as the app
+/// wrote it. Returns the run (None without the sandbox).
+fn untouched(env: &[(&str, &str)]) -> Option<SandboxRun> {
+    let run = client_opengl("R8G8B8A8_SRGB", env, &["--check-untouched"])?;
     run.assert_success();
     let report = run.client_report();
-    assert!(
-        report["frames_checked"].as_u64() >= Some(8),
-        "{}",
-        run.describe()
-    );
-    assert_eq!(report["frames_modified"], serde_json::json!([]));
+    let what = run.describe();
+    assert!(report["frames_checked"].as_u64() >= Some(8), "{what}");
+    assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
+    Some(run)
 }
 
 /// With the layer off the client's images are read back exactly as written: the check that
 /// makes the enhanced runs above meaningful sees no change without the layer.
 #[test]
 fn without_the_layer_opengl_images_are_untouched() {
-    let env = [("CONTRASTXR", "0")];
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", &env, &["--check-untouched"]) else {
-        return;
-    };
-    run.assert_success();
-    let report = run.client_report();
-    assert!(
-        report["frames_checked"].as_u64() >= Some(8),
-        "{}",
-        run.describe()
-    );
-    assert_eq!(report["frames_modified"], serde_json::json!([]));
+    untouched(&[("CONTRASTXR", "0")]);
 }
 
 /// What the layer cannot do in an app's GL context (its context current on another thread, a
@@ -236,14 +227,10 @@ fn opengl_failures_pass_the_session_through_with_one_line() {
             ("CONTRASTXR_FAULT", point),
             ("XDG_CACHE_HOME", cache.as_str()),
         ];
-        let Some(run) = client_opengl("R8G8B8A8_SRGB", &env, &["--check-untouched"]) else {
+        let Some(run) = untouched(&env) else {
             return;
         };
-        run.assert_success();
         let what = format!("{point}: {}", run.describe());
-        let report = run.client_report();
-        assert!(report["frames_checked"].as_u64() >= Some(8), "{what}");
-        assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
         let lines = layer_lines(&run);
         let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
         assert_eq!(passing.len(), 1, "{what}");
