@@ -8,6 +8,7 @@ use openxr as xr;
 use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::gpu::Gpu;
+use crate::pattern::Rows;
 use crate::pattern_swapchain::PatternSwapchain;
 use crate::scene::Scene;
 use crate::timing::{Calls, Startup};
@@ -40,11 +41,20 @@ pub struct Stats {
     pub script_ran: bool,
 }
 
-pub fn run(
+/// A session's frames, whatever its graphics API: what [`run`] calls while the session runs.
+pub trait Frames {
+    type Api: xr::Graphics;
+    fn session(&self) -> &xr::Session<Self::Api>;
+    /// Runs --script's ops once, on a swapchain of its own; each op's result.
+    fn script(&mut self, ops: &[crate::script::Op]) -> Result<Vec<String>>;
+    /// One frame: xrWaitFrame, xrBeginFrame, the layers (none with --script), xrEndFrame;
+    /// counts it in `stats`.
+    fn frame(&mut self, options: &Options, stats: &mut Stats) -> Result<()>;
+}
+
+pub fn run<F: Frames>(
     instance: &xr::Instance,
-    scene: &mut Scene<'_>,
-    frame_waiter: &mut xr::FrameWaiter,
-    frame_stream: &mut xr::FrameStream<xr::Vulkan>,
+    frames: &mut F,
     options: &Options,
     stats: &mut Stats,
 ) -> Result<()> {
@@ -58,12 +68,12 @@ pub fn run(
             match event {
                 xr::Event::SessionStateChanged(change) => match change.state() {
                     xr::SessionState::READY => {
-                        scene.session.begin(VIEW_TYPE).ctx("xrBeginSession")?;
+                        frames.session().begin(VIEW_TYPE).ctx("xrBeginSession")?;
                         running = true;
                     }
                     xr::SessionState::FOCUSED => stats.reached_focused = true,
                     xr::SessionState::STOPPING => {
-                        scene.session.end().ctx("xrEndSession")?;
+                        frames.session().end().ctx("xrEndSession")?;
                         running = false;
                     }
                     xr::SessionState::EXITING => return Ok(()),
@@ -90,7 +100,7 @@ pub fn run(
             continue;
         }
         if let (Some(ops), false) = (&options.script, stats.script_ran) {
-            stats.script = crate::script::run(scene, scene.format, ops)?;
+            stats.script = frames.script(ops)?;
             stats.script_ran = true;
         }
         let done = if options.script.is_some() {
@@ -99,11 +109,43 @@ pub fn run(
             stats.frames_submitted - first_frame >= options.frames
         };
         if done && !exit_requested {
-            scene.session.request_exit().ctx("xrRequestExitSession")?;
+            frames
+                .session()
+                .request_exit()
+                .ctx("xrRequestExitSession")?;
             exit_requested = true;
         }
         // Frames go on until STOPPING arrives, as the spec asks after xrRequestExitSession.
-        frame(scene, frame_waiter, frame_stream, options, stats)?;
+        let submitted = stats.frames_submitted;
+        frames.frame(options, stats)?;
+        if stats.frames_submitted != submitted && stats.frames_submitted % 50 == 0 {
+            stats
+                .memory
+                .push(crate::memory::Sample::now(stats.frames_submitted));
+        }
+    }
+}
+
+/// A Vulkan session's frames: the scene and the session's frame calls.
+pub struct VulkanFrames<'s, 'a> {
+    pub scene: &'s mut Scene<'a>,
+    pub waiter: &'s mut xr::FrameWaiter,
+    pub stream: &'s mut xr::FrameStream<xr::Vulkan>,
+}
+
+impl Frames for VulkanFrames<'_, '_> {
+    type Api = xr::Vulkan;
+
+    fn session(&self) -> &xr::Session<xr::Vulkan> {
+        self.scene.session
+    }
+
+    fn script(&mut self, ops: &[crate::script::Op]) -> Result<Vec<String>> {
+        crate::script::run(&*self.scene, ops)
+    }
+
+    fn frame(&mut self, options: &Options, stats: &mut Stats) -> Result<()> {
+        frame(self.scene, self.waiter, self.stream, options, stats)
     }
 }
 
@@ -165,11 +207,6 @@ fn frame(
         time_end_frame(scene.gpu, stats, start, ended)?;
     }
     stats.frames_submitted += 1;
-    if stats.frames_submitted % 50 == 0 {
-        stats
-            .memory
-            .push(crate::memory::Sample::now(stats.frames_submitted));
-    }
     Ok(())
 }
 
@@ -190,31 +227,49 @@ fn projection_views<'a>(
     views: &[xr::View],
     layout: Layout,
 ) -> Vec<xr::CompositionLayerProjectionView<'a, xr::Vulkan>> {
-    let (w, h) = (scene.view_size.0 as i32, scene.view_size.1 as i32);
+    projection_views_on(&scene.projection.handle, views, layout, scene.view_size)
+}
+
+/// The two views of a projection layer on `swapchain`, laid out with `layout`, each view
+/// `view_size`.
+pub fn projection_views_on<'a, G: xr::Graphics>(
+    swapchain: &'a xr::Swapchain<G>,
+    views: &[xr::View],
+    layout: Layout,
+    view_size: (u32, u32),
+) -> Vec<xr::CompositionLayerProjectionView<'a, G>> {
     (0..2)
         .map(|i| {
-            let (index, x) = match layout {
-                Layout::Array => (i as u32, 0),
-                Layout::SideBySide => (0, i * w),
-            };
-            let rect = xr::Rect2Di {
-                offset: xr::Offset2Di { x, y: 0 },
-                extent: xr::Extent2Di {
-                    width: w,
-                    height: h,
-                },
-            };
+            let (index, rect) = view_placement(layout, view_size, i);
             xr::CompositionLayerProjectionView::new()
                 .pose(views[i as usize].pose)
                 .fov(views[i as usize].fov)
                 .sub_image(
                     xr::SwapchainSubImage::new()
-                        .swapchain(&scene.projection.handle)
+                        .swapchain(swapchain)
                         .image_array_index(index)
                         .image_rect(rect),
                 )
         })
         .collect()
+}
+
+/// Where view `i` is in the projection swapchain with `layout`: its array layer and its image
+/// rect (side by side: the i-th half, the whole height, so the same rect whichever end of the
+/// image its rows count from).
+pub fn view_placement(layout: Layout, (w, h): (u32, u32), i: u32) -> (u32, xr::Rect2Di) {
+    let (index, x) = match layout {
+        Layout::Array => (i, 0),
+        Layout::SideBySide => (0, (i * w) as i32),
+    };
+    let rect = xr::Rect2Di {
+        offset: xr::Offset2Di { x, y: 0 },
+        extent: xr::Extent2Di {
+            width: w as i32,
+            height: h as i32,
+        },
+    };
+    (index, rect)
 }
 
 /// Fills the next image of every swapchain and releases them once the GPU is done.
@@ -246,21 +301,36 @@ fn render(scene: &mut Scene<'_>, frame: u32) -> Result<()> {
 fn quad_layer<'a>(
     quad: &'a PatternSwapchain,
     space: &'a xr::Space,
-    (k, n): (u32, u32),
+    strip: (u32, u32),
 ) -> xr::CompositionLayerQuad<'a, xr::Vulkan> {
-    let (top, bottom) = (quad.height * k / n, quad.height * (k + 1) / n);
+    let size = (quad.width, quad.height);
+    quad_layer_on(&quad.handle, size, Rows::TopFirst, space, strip)
+}
+
+/// [`quad_layer`] on `swapchain` of `(width, height)`, whose image rect rows count from the
+/// image's top (`Rows::TopFirst`, Vulkan) or its bottom (`Rows::BottomFirst`, OpenGL): strip 0
+/// is the image's top rows either way.
+pub fn quad_layer_on<'a, G: xr::Graphics>(
+    swapchain: &'a xr::Swapchain<G>,
+    (width, height): (u32, u32),
+    rows: Rows,
+    space: &'a xr::Space,
+    (k, n): (u32, u32),
+) -> xr::CompositionLayerQuad<'a, G> {
+    let (top, bottom) = (height * k / n, height * (k + 1) / n);
+    let y = match rows {
+        Rows::TopFirst => top,
+        Rows::BottomFirst => height - bottom,
+    };
     let rect = xr::Rect2Di {
-        offset: xr::Offset2Di {
-            x: 0,
-            y: top as i32,
-        },
+        offset: xr::Offset2Di { x: 0, y: y as i32 },
         extent: xr::Extent2Di {
-            width: quad.width as i32,
+            width: width as i32,
             height: (bottom - top) as i32,
         },
     };
-    let metres = 0.4 / quad.width as f32;
-    let centre = (top + bottom) as f32 / 2.0 - quad.height as f32 / 2.0;
+    let metres = 0.4 / width as f32;
+    let centre = (top + bottom) as f32 / 2.0 - height as f32 / 2.0;
     let pose = xr::Posef {
         orientation: xr::Quaternionf::IDENTITY,
         position: xr::Vector3f {
@@ -274,7 +344,7 @@ fn quad_layer<'a>(
         .eye_visibility(xr::EyeVisibility::BOTH)
         .sub_image(
             xr::SwapchainSubImage::new()
-                .swapchain(&quad.handle)
+                .swapchain(swapchain)
                 .image_rect(rect),
         )
         .pose(pose)

@@ -34,8 +34,8 @@ use cli::{Layout, Options};
 use error::{fail, Context, Result};
 use frame_loop::Stats;
 use gpu::Gpu;
-use pattern::Target;
-use pattern_swapchain::{LayerContent, PatternSwapchain};
+use pattern::{LayerContent, Target};
+use pattern_swapchain::PatternSwapchain;
 use run_report::Report;
 use scene::Scene;
 use swapchain_format::SwapchainFormat;
@@ -317,7 +317,12 @@ fn run_frames(
     // Only around the frame loop: the runtime's client library logs to stderr too, at
     // xrCreateInstance and at a session's changes.
     let stderr = options.stderr_full.then(full_stderr::install).flatten();
-    let result = frame_loop::run(instance, &mut scene, waiter, stream, options, stats);
+    let mut frames = frame_loop::VulkanFrames {
+        scene: &mut scene,
+        waiter,
+        stream,
+    };
+    let result = frame_loop::run(instance, &mut frames, options, stats);
     stderr.into_iter().for_each(full_stderr::restore);
     stats.calls.absorb(scene.projection.calls(), "");
     if let Some(quad) = &scene.quad {

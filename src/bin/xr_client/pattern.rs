@@ -8,6 +8,8 @@
 
 use std::sync::OnceLock;
 
+use crate::swapchain_format::SwapchainFormat;
+
 /// The panels' colours, sRGB-encoded.
 const PANELS: [[f32; 3]; 12] = [
     [1.0, 0.0, 0.0],
@@ -49,6 +51,53 @@ impl Target {
             Target::Quad => -0.04,
         }
     }
+}
+
+/// What one array layer of a swapchain image shows.
+pub enum LayerContent {
+    /// The whole layer is one target's pattern.
+    Whole(Target),
+    /// The layer is split in two halves side by side: view 0 left, view 1 right.
+    SideBySide,
+}
+
+/// The order of an image's rows in memory: Vulkan's first row is the image's top, OpenGL's
+/// (glTexSubImage, glGetTexImage) its bottom.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rows {
+    TopFirst,
+    BottomFirst,
+}
+
+/// The texels of every layer in `format`, tightly packed, layer after layer, rows in `rows`
+/// order.
+pub fn image_bytes(
+    format: SwapchainFormat,
+    (width, height): (u32, u32),
+    content: &[LayerContent],
+    rows: Rows,
+) -> Vec<u8> {
+    let mut bytes =
+        Vec::with_capacity(format.bytes_per_texel() * (width * height) as usize * content.len());
+    for layer in content {
+        for row in 0..height {
+            let y = match rows {
+                Rows::TopFirst => row,
+                Rows::BottomFirst => height - 1 - row,
+            };
+            for x in 0..width {
+                let colour = match layer {
+                    LayerContent::Whole(target) => texel(*target, x, y, width, height),
+                    LayerContent::SideBySide => {
+                        let half = width / 2;
+                        texel(Target::View(x / half), x % half, y, half, height)
+                    }
+                };
+                format.encode(colour, &mut bytes);
+            }
+        }
+    }
+    bytes
 }
 
 /// What every image shows (`--content`), chosen once at start.

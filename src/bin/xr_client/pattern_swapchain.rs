@@ -5,17 +5,9 @@ use openxr as xr;
 
 use crate::error::{Context, Result};
 use crate::gpu::Gpu;
-use crate::pattern::{texel, Target};
+use crate::pattern::{image_bytes, LayerContent, Rows};
 use crate::swapchain_format::SwapchainFormat;
 use crate::timing::Calls;
-
-/// What one array layer of a swapchain image shows.
-pub enum LayerContent {
-    /// The whole layer is one target's pattern.
-    Whole(Target),
-    /// The layer is split in two halves side by side: view 0 left, view 1 right.
-    SideBySide,
-}
 
 pub struct PatternSwapchain {
     pub handle: xr::Swapchain<xr::Vulkan>,
@@ -79,7 +71,7 @@ impl PatternSwapchain {
         let images = handle
             .enumerate_images()
             .ctx("xrEnumerateSwapchainImages")?;
-        let bytes = pattern_bytes(format, width, height, content);
+        let bytes = image_bytes(format, (width, height), content, Rows::TopFirst);
         let (staging, memory) = create_staging(gpu, &bytes, vk::BufferUsageFlags::TRANSFER_SRC)?;
         let check = if check {
             let (readback, memory) =
@@ -361,32 +353,6 @@ pub fn barrier<'a>(
         .new_layout(new)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-}
-
-/// The texels of every layer, tightly packed, layer after layer, rows top to bottom.
-fn pattern_bytes(
-    format: SwapchainFormat,
-    width: u32,
-    height: u32,
-    content: &[LayerContent],
-) -> Vec<u8> {
-    let mut bytes =
-        Vec::with_capacity(format.bytes_per_texel() * (width * height) as usize * content.len());
-    for layer in content {
-        for y in 0..height {
-            for x in 0..width {
-                let colour = match layer {
-                    LayerContent::Whole(target) => texel(*target, x, y, width, height),
-                    LayerContent::SideBySide => {
-                        let half = width / 2;
-                        texel(Target::View(x / half), x % half, y, half, height)
-                    }
-                };
-                format.encode(colour, &mut bytes);
-            }
-        }
-    }
-    bytes
 }
 
 fn create_staging(

@@ -12,7 +12,8 @@
 //! configuration; the count and modes written are recorded too), `destroy` (xrDestroySwapchain), `create` (a new
 //! swapchain replaces the script's one). The script's swapchain is created before the first op.
 //! After a successful `wait` the client clears the waited image to a colour, so a layer has
-//! content to work on.
+//! content to work on. The calls and their order are the same for every graphics API; what
+//! differs (the swapchain's format and usage, its images, how to clear one) is [`ScriptApi`].
 
 use std::ptr;
 
@@ -23,7 +24,47 @@ use openxr::sys;
 use crate::error::{fail, Context, Result};
 use crate::pattern_swapchain::{barrier, record_transfer_write};
 use crate::scene::Scene;
-use crate::swapchain_format::SwapchainFormat;
+
+/// What a script needs of the session's graphics API.
+pub trait ScriptApi {
+    type Api: xr::Graphics;
+    fn session(&self) -> &xr::Session<Self::Api>;
+    fn space(&self) -> &xr::Space;
+    fn view_size(&self) -> (u32, u32);
+    fn blend_mode(&self) -> xr::EnvironmentBlendMode;
+    /// The script's swapchains' format and usage (two array layers of `view_size`).
+    fn swapchain_format(&self) -> (i64, sys::SwapchainUsageFlags);
+    /// The images of swapchain `raw` (VkImage handles or GL texture names).
+    fn images(&self, raw: sys::Swapchain) -> Result<Vec<u64>>;
+    /// Clears both layers of `image` (acquired and waited by the client) to a colour.
+    fn clear(&self, image: u64) -> Result<()>;
+}
+
+/// The colour [`ScriptApi::clear`] writes.
+pub const CLEAR_COLOUR: [f32; 4] = [0.8, 0.35, 0.2, 1.0];
+
+/// The images of swapchain `raw` by the two-call idiom, as structs like `blank` (the image
+/// struct of the session's graphics API).
+pub fn enumerate_images<S: ScriptApi + ?Sized, T: Copy>(
+    api: &S,
+    raw: sys::Swapchain,
+    blank: T,
+) -> Result<Vec<T>> {
+    let enumerate = api.session().instance().fp().enumerate_swapchain_images;
+    let mut count = 0;
+    // SAFETY: the two-call idiom with a null array first.
+    let r = unsafe { enumerate(raw, 0, &mut count, ptr::null_mut()) };
+    if r != sys::Result::SUCCESS {
+        return fail(format!("xrEnumerateSwapchainImages failed: {r:?}"));
+    }
+    let mut images = vec![blank; count as usize];
+    // SAFETY: `count` image structs of the session's graphics API (the caller's `blank`).
+    let r = unsafe { enumerate(raw, count, &mut count, images.as_mut_ptr().cast()) };
+    if r != sys::Result::SUCCESS {
+        return fail(format!("xrEnumerateSwapchainImages failed: {r:?}"));
+    }
+    Ok(images)
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Op {
@@ -96,34 +137,33 @@ fn op_name(op: Op) -> &'static str {
 /// itself and would destroy the handle a second time).
 struct RawSwapchain {
     raw: sys::Swapchain,
-    images: Vec<vk::Image>,
+    images: Vec<u64>,
     /// Acquired and not yet waited, oldest first; then the waited one (the client's own view).
     acquired: std::collections::VecDeque<u32>,
     destroyed: bool,
 }
 
 /// What a script runs against.
-struct Runner<'s, 'a> {
-    scene: &'s Scene<'a>,
-    format: SwapchainFormat,
+struct Runner<'s, S: ScriptApi + ?Sized> {
+    scene: &'s S,
     swapchain: RawSwapchain,
     display_time: sys::Time,
     results: Vec<String>,
 }
 
-fn fp<'s>(scene: &'s Scene<'_>) -> &'s xr::raw::Instance {
-    scene.session.instance().fp()
+fn fp<S: ScriptApi + ?Sized>(scene: &S) -> &xr::raw::Instance {
+    scene.session().instance().fp()
 }
 
-fn create(scene: &Scene<'_>, format: SwapchainFormat) -> Result<RawSwapchain> {
-    let (width, height) = scene.view_size;
+fn create<S: ScriptApi + ?Sized>(scene: &S) -> Result<RawSwapchain> {
+    let (width, height) = scene.view_size();
+    let (format, usage_flags) = scene.swapchain_format();
     let info = sys::SwapchainCreateInfo {
         ty: sys::SwapchainCreateInfo::TYPE,
         next: ptr::null(),
         create_flags: sys::SwapchainCreateFlags::EMPTY,
-        usage_flags: sys::SwapchainUsageFlags::COLOR_ATTACHMENT
-            | sys::SwapchainUsageFlags::TRANSFER_DST,
-        format: format.vk.as_raw() as i64,
+        usage_flags,
+        format,
         sample_count: 1,
         width,
         height,
@@ -132,45 +172,21 @@ fn create(scene: &Scene<'_>, format: SwapchainFormat) -> Result<RawSwapchain> {
         mip_count: 1,
     };
     let mut raw = sys::Swapchain::NULL;
+    let session = scene.session().as_raw();
     // SAFETY: a valid create info and out pointer for this session.
-    let r = unsafe { (fp(scene).create_swapchain)(scene.session.as_raw(), &info, &mut raw) };
+    let r = unsafe { (fp(scene).create_swapchain)(session, &info, &mut raw) };
     if r != sys::Result::SUCCESS {
         return fail(format!("xrCreateSwapchain (script) failed: {r:?}"));
     }
     Ok(RawSwapchain {
         raw,
-        images: enumerate_images(scene, raw)?,
+        images: scene.images(raw)?,
         acquired: Default::default(),
         destroyed: false,
     })
 }
 
-fn enumerate_images(scene: &Scene<'_>, raw: sys::Swapchain) -> Result<Vec<vk::Image>> {
-    let enumerate = fp(scene).enumerate_swapchain_images;
-    let mut count = 0;
-    // SAFETY: the two-call idiom with a null array first.
-    let r = unsafe { enumerate(raw, 0, &mut count, ptr::null_mut()) };
-    if r != sys::Result::SUCCESS {
-        return fail(format!("xrEnumerateSwapchainImages failed: {r:?}"));
-    }
-    let blank = sys::SwapchainImageVulkanKHR {
-        ty: sys::SwapchainImageVulkanKHR::TYPE,
-        next: ptr::null_mut(),
-        image: 0,
-    };
-    let mut images = vec![blank; count as usize];
-    // SAFETY: `count` Vulkan image structs of the right type.
-    let r = unsafe { enumerate(raw, count, &mut count, images.as_mut_ptr().cast()) };
-    if r != sys::Result::SUCCESS {
-        return fail(format!("xrEnumerateSwapchainImages failed: {r:?}"));
-    }
-    Ok(images
-        .iter()
-        .map(|i| vk::Image::from_raw(i.image))
-        .collect())
-}
-
-impl Runner<'_, '_> {
+impl<S: ScriptApi + ?Sized> Runner<'_, S> {
     fn record(&mut self, op: Op, result: sys::Result, extra: Option<u32>) {
         let extra = extra.map(|i| format!(" {i}")).unwrap_or_default();
         self.results
@@ -201,7 +217,9 @@ impl Runner<'_, '_> {
                 let r = unsafe { (f.wait_swapchain_image)(sc, &info) };
                 if r == sys::Result::SUCCESS {
                     if let Some(&index) = self.swapchain.acquired.front() {
-                        self.clear(index)?;
+                        if let Some(&image) = self.swapchain.images.get(index as usize) {
+                            self.scene.clear(image)?;
+                        }
                     }
                 }
                 self.record(op, r, None);
@@ -240,7 +258,7 @@ impl Runner<'_, '_> {
             }
             Op::Create => {
                 self.drop_swapchain();
-                self.swapchain = create(self.scene, self.format)?;
+                self.swapchain = create(self.scene)?;
                 self.record(op, sys::Result::SUCCESS, None);
             }
         }
@@ -249,7 +267,7 @@ impl Runner<'_, '_> {
 
     fn begin(&mut self) -> Result<()> {
         let f = fp(self.scene);
-        let session = self.scene.session.as_raw();
+        let session = self.scene.session().as_raw();
         let mut state = sys::FrameState {
             ty: sys::FrameState::TYPE,
             next: ptr::null_mut(),
@@ -271,21 +289,21 @@ impl Runner<'_, '_> {
 
     /// xrEndFrame with the projection layer on the script's swapchain, or with no layers.
     fn end(&mut self, with_layer: bool) -> Result<sys::Result> {
-        self.end_in(with_layer, self.scene.blend_mode)
+        self.end_in(with_layer, self.scene.blend_mode())
     }
 
     /// [`Runner::end`] in blend mode `mode`.
     fn end_in(&mut self, with_layer: bool, mode: sys::EnvironmentBlendMode) -> Result<sys::Result> {
         let scene = self.scene;
         let (_, views) = scene
-            .session
+            .session()
             .locate_views(
                 xr::ViewConfigurationType::PRIMARY_STEREO,
                 self.display_time,
-                scene.space,
+                scene.space(),
             )
             .ctx("xrLocateViews")?;
-        let (w, h) = (scene.view_size.0 as i32, scene.view_size.1 as i32);
+        let (w, h) = (scene.view_size().0 as i32, scene.view_size().1 as i32);
         let projection_views: Vec<sys::CompositionLayerProjectionView> = (0..2)
             .map(|i| sys::CompositionLayerProjectionView {
                 ty: sys::CompositionLayerProjectionView::TYPE,
@@ -309,7 +327,7 @@ impl Runner<'_, '_> {
             ty: sys::CompositionLayerProjection::TYPE,
             next: ptr::null(),
             layer_flags: sys::CompositionLayerFlags::EMPTY,
-            space: scene.space.as_raw(),
+            space: scene.space().as_raw(),
             view_count: 2,
             views: projection_views.as_ptr(),
         };
@@ -327,42 +345,7 @@ impl Runner<'_, '_> {
             },
         };
         // SAFETY: every struct above lives until the call returns.
-        Ok(unsafe { (fp(scene).end_frame)(scene.session.as_raw(), &info) })
-    }
-
-    /// Clears both layers of image `index` to a colour, leaving COLOR_ATTACHMENT_OPTIMAL.
-    fn clear(&self, index: u32) -> Result<()> {
-        let Some(&image) = self.swapchain.images.get(index as usize) else {
-            return Ok(());
-        };
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .level_count(1)
-            .layer_count(2);
-        let colour = vk::ClearColorValue {
-            float32: [0.8, 0.35, 0.2, 1.0],
-        };
-        self.scene.gpu.submit_and_wait(|device, cmd| {
-            let to_transfer = barrier(
-                image,
-                range,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            )
-            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
-            record_transfer_write(device, cmd, image, range, to_transfer, || {
-                // SAFETY: `cmd` is recording; the image is acquired and waited by the client.
-                unsafe {
-                    device.cmd_clear_color_image(
-                        cmd,
-                        image,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        &colour,
-                        &[range],
-                    )
-                };
-            });
-        })
+        Ok(unsafe { (fp(scene).end_frame)(scene.session().as_raw(), &info) })
     }
 
     fn drop_swapchain(&mut self) {
@@ -374,12 +357,11 @@ impl Runner<'_, '_> {
     }
 }
 
-/// Runs `ops` on a fresh swapchain of `format`; returns each op's name and XrResult.
-pub fn run(scene: &Scene<'_>, format: SwapchainFormat, ops: &[Op]) -> Result<Vec<String>> {
+/// Runs `ops` on a fresh swapchain; returns each op's name and XrResult.
+pub fn run<S: ScriptApi + ?Sized>(scene: &S, ops: &[Op]) -> Result<Vec<String>> {
     let mut runner = Runner {
         scene,
-        format,
-        swapchain: create(scene, format)?,
+        swapchain: create(scene)?,
         display_time: sys::Time::from_nanos(0),
         results: Vec::new(),
     };
@@ -398,8 +380,8 @@ fn blend_of(op: Op) -> sys::EnvironmentBlendMode {
 
 /// One raw xrEnumerateEnvironmentBlendModes call: its result, the count written and the modes
 /// written (`RESULT n=COUNT [MODE ...]`).
-fn blend_modes(scene: &Scene<'_>, call: BlendCall) -> Result<String> {
-    let instance = scene.session.instance();
+fn blend_modes<S: ScriptApi + ?Sized>(scene: &S, call: BlendCall) -> Result<String> {
+    let instance = scene.session().instance();
     let system = instance
         .system(xr::FormFactor::HEAD_MOUNTED_DISPLAY)
         .ctx("xrGetSystem")?;
@@ -433,4 +415,74 @@ fn blend_modes(scene: &Scene<'_>, call: BlendCall) -> Result<String> {
         .map(|m| format!("{m:?}"))
         .collect();
     Ok(format!("{r:?} n={count} [{}]", written.join(" ")))
+}
+
+/// A Vulkan session's script: swapchains in the session's format, cleared by the client's GPU.
+impl ScriptApi for Scene<'_> {
+    type Api = xr::Vulkan;
+
+    fn session(&self) -> &xr::Session<xr::Vulkan> {
+        self.session
+    }
+
+    fn space(&self) -> &xr::Space {
+        self.space
+    }
+
+    fn view_size(&self) -> (u32, u32) {
+        self.view_size
+    }
+
+    fn blend_mode(&self) -> xr::EnvironmentBlendMode {
+        self.blend_mode
+    }
+
+    fn swapchain_format(&self) -> (i64, sys::SwapchainUsageFlags) {
+        let usage =
+            sys::SwapchainUsageFlags::COLOR_ATTACHMENT | sys::SwapchainUsageFlags::TRANSFER_DST;
+        (self.format.vk.as_raw() as i64, usage)
+    }
+
+    fn images(&self, raw: sys::Swapchain) -> Result<Vec<u64>> {
+        let blank = sys::SwapchainImageVulkanKHR {
+            ty: sys::SwapchainImageVulkanKHR::TYPE,
+            next: ptr::null_mut(),
+            image: 0,
+        };
+        let images = enumerate_images(self, raw, blank)?;
+        Ok(images.iter().map(|i| i.image).collect())
+    }
+
+    /// Clears both layers, leaving COLOR_ATTACHMENT_OPTIMAL.
+    fn clear(&self, image: u64) -> Result<()> {
+        let image = vk::Image::from_raw(image);
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(2);
+        let colour = vk::ClearColorValue {
+            float32: CLEAR_COLOUR,
+        };
+        self.gpu.submit_and_wait(|device, cmd| {
+            let to_transfer = barrier(
+                image,
+                range,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            )
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE);
+            record_transfer_write(device, cmd, image, range, to_transfer, || {
+                // SAFETY: `cmd` is recording; the image is acquired and waited by the client.
+                unsafe {
+                    device.cmd_clear_color_image(
+                        cmd,
+                        image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &colour,
+                        &[range],
+                    )
+                };
+            });
+        })
+    }
 }
