@@ -12,8 +12,8 @@ usage: contrastxr-xr-client [options]
   --graphics vulkan|opengl
                           the session's graphics API: Vulkan (XR_KHR_vulkan_enable2, default)
                           or OpenGL (XR_KHR_opengl_enable, Xlib binding on a GLX 4.5 core
-                          context on $DISPLAY; one array swapchain, the pattern's rows bottom
-                          first; GL formats by the Vulkan name of their layout: R8G8B8A8_SRGB
+                          context on $DISPLAY; the same layouts, quads and scripts, the
+                          pattern's rows and image rects bottom first; GL formats by the Vulkan name of their layout: R8G8B8A8_SRGB
                           is GL_SRGB8_ALPHA8, R8G8B8A8_UNORM GL_RGBA8, R16G16B16A16_SFLOAT
                           GL_RGBA16F, R16G16B16A16_UNORM GL_RGBA16, A2B10G10R10_UNORM
                           GL_RGB10_A2)

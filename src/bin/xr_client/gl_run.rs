@@ -1,17 +1,23 @@
 //! `--graphics opengl`: the run with an OpenGL session (XR_KHR_opengl_enable, the Xlib binding
-//! on a GLX context), as OpenGL apps make one: one array swapchain of two layers, the test
-//! pattern uploaded into each view's layer every frame (rows bottom first: GL's image origin is
-//! the bottom left), and with --check-untouched each image read back at its next acquire.
+//! on a GLX context), as OpenGL apps make one: the projection swapchain in the layout asked for
+//! (an array of two layers, or one texture twice as wide with each view an imageRect half) and
+//! with --quad a quad swapchain, the test pattern uploaded into each every frame (rows bottom
+//! first: GL's image origin is the bottom left), and with --check-untouched each image read back
+//! at its next acquire. The session's life, the views' placement, the quad's geometry and the
+//! scripted calls are the Vulkan path's (frame_loop, script); only the images are GL's here.
 
 use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
-use crate::frame_loop::Stats;
+use crate::frame_loop::{self, projection_views_on, quad_layer_on, Stats};
 use crate::gl_state::GlStateCheck;
-use crate::glx::{self, GlContext};
-use crate::pattern::{self, Target};
+use crate::glx::{self, GlContext, Texture};
+use crate::pattern::{image_bytes, LayerContent, Rows, Target};
 use crate::run_report::Report;
+use crate::script::ScriptApi;
 use crate::swapchain_format::SwapchainFormat;
+use crate::untouched::Untouched;
 use openxr as xr;
+use openxr::sys;
 use std::time::{Duration, Instant};
 
 const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
@@ -79,9 +85,6 @@ pub fn run(
     report: &mut Report,
     stats: &mut Stats,
 ) -> Result<()> {
-    if options.layout != Layout::Array || options.quad {
-        return fail("--graphics opengl supports --layout array without --quad");
-    }
     let available = entry
         .enumerate_extensions()
         .ctx("xrEnumerateInstanceExtensionProperties")?;
@@ -167,54 +170,60 @@ fn run_session(
     }
     let format = choose(options.format, &offered)?;
     report.format = gl_name(format.internal);
-    let size = match options.size {
+    let view_size = match options.size {
         Some(size) => size,
-        None => {
-            let views = instance
-                .enumerate_view_configuration_views(system, VIEW_TYPE)
-                .ctx("xrEnumerateViewConfigurationViews")?;
-            (
-                views[0].recommended_image_rect_width,
-                views[0].recommended_image_rect_height,
-            )
-        }
+        None => crate::recommended_size(instance, system)?,
     };
-    report.view_size = [size.0, size.1];
+    report.view_size = [view_size.0, view_size.1];
     let space = session
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
-    let mut swapchain = session
-        .create_swapchain(&xr::SwapchainCreateInfo {
-            create_flags: xr::SwapchainCreateFlags::EMPTY,
-            usage_flags: xr::SwapchainUsageFlags::COLOR_ATTACHMENT
-                | xr::SwapchainUsageFlags::SAMPLED,
-            format: format.internal,
-            sample_count: 1,
-            width: size.0,
-            height: size.1,
-            face_count: 1,
-            array_size: 2,
-            mip_count: 1,
+    let check = options.check_untouched;
+    let (w, h) = view_size;
+    let projection = match options.layout {
+        Layout::Array => {
+            let views = [
+                LayerContent::Whole(Target::View(0)),
+                LayerContent::Whole(Target::View(1)),
+            ];
+            GlSwapchain::new(&session, &format, (w, h), &views, check)?
+        }
+        Layout::SideBySide => GlSwapchain::new(
+            &session,
+            &format,
+            (2 * w, h),
+            &[LayerContent::SideBySide],
+            check,
+        )?,
+    };
+    let quad = options
+        .quad
+        .then(|| {
+            let content = [LayerContent::Whole(Target::Quad)];
+            GlSwapchain::new(&session, &format, (w / 2, h / 2), &content, check)
         })
-        .ctx("xrCreateSwapchain")?;
-    let images = swapchain
-        .enumerate_images()
-        .ctx("xrEnumerateSwapchainImages")?;
-    let mut views = Views::new(&format, size, images.len(), options.check_untouched);
-    let result = frames(
-        &session,
-        &space,
-        (&mut waiter, &mut stream),
-        &mut swapchain,
-        (gl, &images, &mut views),
-        state,
+        .transpose()?;
+    let mut frames = GlFrames {
+        session: &session,
+        space: &space,
+        waiter: &mut waiter,
+        stream: &mut stream,
+        gl,
+        format: &format,
+        projection,
+        quad,
+        view_size,
         blend_mode,
-        options,
-        stats,
-    );
-    report.frames_checked += views.checked;
-    report.frames_modified.extend(&views.modified);
-    drop(swapchain);
+        state,
+    };
+    let result = frame_loop::run(instance, &mut frames, options, stats);
+    for swapchain in std::iter::once(&frames.projection).chain(frames.quad.as_ref()) {
+        if let Some(log) = &swapchain.check {
+            report.frames_checked += log.checked;
+            report.frames_modified.extend(&log.modified);
+        }
+    }
+    drop(frames);
     std::thread::sleep(Duration::from_millis(options.idle_ms));
     let t = Instant::now();
     drop((space, session, waiter, stream));
@@ -240,217 +249,244 @@ fn choose(wanted: Option<SwapchainFormat>, offered: &[u32]) -> Result<GlFormat> 
     })
 }
 
-/// The pattern of each view (rows bottom first) and, with --check-untouched, what each image
-/// held when it was released.
-struct Views {
-    pattern: [Vec<u8>; 2],
+/// A runtime swapchain whose GL textures the client fills with the test pattern by uploads
+/// (the GL counterpart of pattern_swapchain.rs).
+struct GlSwapchain {
+    handle: xr::Swapchain<xr::OpenGL>,
+    images: Vec<u32>,
+    texture: Texture,
+    /// Every layer's pattern, rows bottom first.
+    pattern: Vec<u8>,
     transfer: (u32, u32),
     texel_bytes: usize,
-    size: (u32, u32),
-    /// Per swapchain image: the frame whose pattern it was released with, if checking.
-    released: Vec<Option<u32>>,
-    check: bool,
-    checked: u32,
-    modified: Vec<u32>,
+    /// With --check-untouched: what became of each image after its release.
+    check: Option<Untouched>,
     scratch: Vec<u8>,
 }
 
-impl Views {
-    fn new(format: &GlFormat, (w, h): (u32, u32), images: usize, check: bool) -> Views {
-        let view = |v: u32| {
-            let mut bytes =
-                Vec::with_capacity((w * h) as usize * format.encoding.bytes_per_texel());
-            // Bottom row first: what the app draws at the top of its view is the last row.
-            for y in (0..h).rev() {
-                for x in 0..w {
-                    format
-                        .encoding
-                        .encode(pattern::texel(Target::View(v), x, y, w, h), &mut bytes);
-                }
-            }
-            bytes
-        };
-        Views {
-            pattern: [view(0), view(1)],
+impl GlSwapchain {
+    fn new(
+        session: &xr::Session<xr::OpenGL>,
+        format: &GlFormat,
+        size: (u32, u32),
+        content: &[LayerContent],
+        check: bool,
+    ) -> Result<GlSwapchain> {
+        let layers = content.len() as u32;
+        let handle = session
+            .create_swapchain(&xr::SwapchainCreateInfo {
+                create_flags: xr::SwapchainCreateFlags::EMPTY,
+                usage_flags: xr::SwapchainUsageFlags::COLOR_ATTACHMENT
+                    | xr::SwapchainUsageFlags::SAMPLED,
+                format: format.internal,
+                sample_count: 1,
+                width: size.0,
+                height: size.1,
+                face_count: 1,
+                array_size: layers,
+                mip_count: 1,
+            })
+            .ctx(&format!(
+                "xrCreateSwapchain ({} {}x{}, arraySize {layers})",
+                gl_name(format.internal),
+                size.0,
+                size.1
+            ))?;
+        let images = handle
+            .enumerate_images()
+            .ctx("xrEnumerateSwapchainImages")?;
+        Ok(GlSwapchain {
+            check: check.then(|| Untouched::new(images.len())),
+            handle,
+            images,
+            texture: Texture {
+                size,
+                layers,
+                array: layers > 1,
+            },
+            pattern: image_bytes(format.encoding, size, content, Rows::BottomFirst),
             transfer: format.transfer,
             texel_bytes: format.encoding.bytes_per_texel(),
-            size: (w, h),
-            released: vec![None; images],
-            check,
-            checked: 0,
-            modified: Vec::new(),
             scratch: Vec::new(),
-        }
+        })
     }
 
-    /// Checks image `index` against what it was released with, then writes this frame's views.
-    fn draw(&mut self, gl: &GlContext, image: u32, index: usize, frame: u32) -> Result<()> {
-        if let (true, Some(was)) = (self.check, self.released[index]) {
-            for layer in 0..2 {
-                gl.read(
-                    image,
-                    layer,
-                    self.size,
-                    self.transfer,
-                    &mut self.scratch,
-                    self.texel_bytes,
-                )?;
-                if self.scratch != self.pattern[layer as usize] && !self.modified.contains(&was) {
-                    self.modified.push(was);
+    /// Acquires and waits for the next image, checks it against what it was released with,
+    /// writes `frame`'s pattern into it and releases it.
+    fn draw(&mut self, gl: &GlContext, frame: u32) -> Result<()> {
+        let index = self.handle.acquire_image().ctx("xrAcquireSwapchainImage")?;
+        self.handle
+            .wait_image(xr::Duration::INFINITE)
+            .ctx("xrWaitSwapchainImage")?;
+        let image = self.images[index as usize];
+        if let Some(log) = &mut self.check {
+            let same = match log.written_before(index) {
+                true => {
+                    let (texture, transfer) = (self.texture, self.transfer);
+                    gl.read(
+                        image,
+                        texture,
+                        transfer,
+                        &mut self.scratch,
+                        self.texel_bytes,
+                    )?;
+                    Some(self.scratch == self.pattern)
                 }
-            }
-            self.checked += 1;
+                false => None,
+            };
+            log.record(index, frame, same);
         }
-        for layer in 0..2 {
-            gl.upload(
-                image,
-                layer,
-                self.size,
-                self.transfer,
-                &self.pattern[layer as usize],
-            )?;
-        }
-        self.released[index] = Some(frame);
-        Ok(())
+        gl.upload(image, self.texture, self.transfer, &self.pattern)?;
+        self.handle.release_image().ctx("xrReleaseSwapchainImage")
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn frames(
-    session: &xr::Session<xr::OpenGL>,
-    space: &xr::Space,
-    (waiter, stream): (&mut xr::FrameWaiter, &mut xr::FrameStream<xr::OpenGL>),
-    swapchain: &mut xr::Swapchain<xr::OpenGL>,
-    (gl, images, views): (&GlContext, &[u32], &mut Views),
-    state: &mut Option<GlStateCheck>,
+/// An OpenGL session's frames, on the thread whose context the session was made with.
+struct GlFrames<'s> {
+    session: &'s xr::Session<xr::OpenGL>,
+    space: &'s xr::Space,
+    waiter: &'s mut xr::FrameWaiter,
+    stream: &'s mut xr::FrameStream<xr::OpenGL>,
+    gl: &'s GlContext,
+    format: &'s GlFormat,
+    projection: GlSwapchain,
+    quad: Option<GlSwapchain>,
+    view_size: (u32, u32),
     blend_mode: xr::EnvironmentBlendMode,
-    options: &Options,
-    stats: &mut Stats,
+    /// With --check-gl-state: the state set right before xrEndFrame, checked right after.
+    state: &'s mut Option<GlStateCheck>,
+}
+
+/// xrEndFrame with `layers`, inside --check-gl-state's set and check.
+fn end_frame(
+    (stream, state): (&mut xr::FrameStream<xr::OpenGL>, &mut Option<GlStateCheck>),
+    (time, mode): (xr::Time, xr::EnvironmentBlendMode),
+    layers: &[&xr::CompositionLayerBase<'_, xr::OpenGL>],
+    frame: u32,
 ) -> Result<()> {
-    let deadline =
-        Instant::now() + Duration::from_secs(30) + Duration::from_millis(200) * options.frames;
-    let first = stats.frames_submitted;
-    let mut events = xr::EventDataBuffer::new();
-    let (mut running, mut exit_requested) = (false, false);
-    let instance = session.instance();
-    loop {
-        while let Some(event) = instance.poll_event(&mut events).ctx("xrPollEvent")? {
-            if let xr::Event::SessionStateChanged(change) = event {
-                match change.state() {
-                    xr::SessionState::READY => {
-                        session.begin(VIEW_TYPE).ctx("xrBeginSession")?;
-                        running = true;
-                    }
-                    xr::SessionState::FOCUSED => stats.reached_focused = true,
-                    xr::SessionState::STOPPING => {
-                        session.end().ctx("xrEndSession")?;
-                        running = false;
-                    }
-                    xr::SessionState::EXITING => return Ok(()),
-                    xr::SessionState::LOSS_PENDING => {
-                        return fail("the runtime reported session loss")
-                    }
-                    _ => {}
-                }
-            }
-        }
-        if Instant::now() > deadline {
-            return fail(format!(
-                "timed out after {} frames",
-                stats.frames_submitted - first
-            ));
-        }
-        if !running {
-            std::thread::sleep(Duration::from_millis(10));
-            continue;
-        }
-        if stats.frames_submitted - first >= options.frames && !exit_requested {
-            session.request_exit().ctx("xrRequestExitSession")?;
-            exit_requested = true;
-        }
+    if let Some(check) = state.as_mut() {
+        check.before_end_frame(frame)?;
+    }
+    stream.end(time, mode, layers).ctx("xrEndFrame")?;
+    if let Some(check) = state.as_mut() {
+        check.after_end_frame()?;
+    }
+    Ok(())
+}
+
+impl frame_loop::Frames for GlFrames<'_> {
+    type Api = xr::OpenGL;
+
+    fn session(&self) -> &xr::Session<xr::OpenGL> {
+        self.session
+    }
+
+    fn script(&mut self, ops: &[crate::script::Op]) -> Result<Vec<String>> {
+        crate::script::run(&*self, ops)
+    }
+
+    fn frame(&mut self, options: &Options, stats: &mut Stats) -> Result<()> {
         let frame_state = stats
             .calls
-            .time("xrWaitFrame", || waiter.wait())
+            .time("xrWaitFrame", || self.waiter.wait())
             .ctx("xrWaitFrame")?;
         stats
             .calls
-            .time("xrBeginFrame", || stream.begin())
+            .time("xrBeginFrame", || self.stream.begin())
             .ctx("xrBeginFrame")?;
         stats.frames_ended += 1;
-        // With --check-gl-state: the state set right before xrEndFrame, checked right after.
-        let frame = stats.frames_ended - 1;
-        if !frame_state.should_render {
-            if let Some(check) = state.as_mut() {
-                check.before_end_frame(frame)?;
-            }
-            stream
-                .end(frame_state.predicted_display_time, blend_mode, &[])
-                .ctx("xrEndFrame")?;
-            if let Some(check) = state.as_mut() {
-                check.after_end_frame()?;
-            }
-            continue;
+        let (time, frame) = (frame_state.predicted_display_time, stats.frames_ended - 1);
+        if !frame_state.should_render || options.script.is_some() {
+            let end = (&mut *self.stream, &mut *self.state);
+            return end_frame(end, (time, self.blend_mode), &[], frame);
         }
-        let (_, located) = session
-            .locate_views(VIEW_TYPE, frame_state.predicted_display_time, space)
+        let (_, located) = self
+            .session
+            .locate_views(VIEW_TYPE, time, self.space)
             .ctx("xrLocateViews")?;
-        let index = swapchain.acquire_image().ctx("xrAcquireSwapchainImage")? as usize;
-        swapchain
-            .wait_image(xr::Duration::INFINITE)
-            .ctx("xrWaitSwapchainImage")?;
-        views.draw(gl, images[index], index, stats.frames_submitted)?;
-        swapchain.release_image().ctx("xrReleaseSwapchainImage")?;
-        let rect = xr::Rect2Di {
-            offset: xr::Offset2Di { x: 0, y: 0 },
-            extent: xr::Extent2Di {
-                width: views.size.0 as i32,
-                height: views.size.1 as i32,
-            },
-        };
-        let projection_views: Vec<_> = (0..2)
-            .map(|v| {
-                xr::CompositionLayerProjectionView::new()
-                    .pose(located[v].pose)
-                    .fov(located[v].fov)
-                    .sub_image(
-                        xr::SwapchainSubImage::new()
-                            .swapchain(swapchain)
-                            .image_array_index(v as u32)
-                            .image_rect(rect),
-                    )
-            })
-            .collect();
+        self.projection.draw(self.gl, stats.frames_submitted)?;
+        if let Some(quad) = &mut self.quad {
+            quad.draw(self.gl, stats.frames_submitted)?;
+        }
+        let (projection, quad) = (&self.projection, self.quad.as_ref());
+        let views =
+            projection_views_on(&projection.handle, &located, options.layout, self.view_size);
         let projection = xr::CompositionLayerProjection::new()
-            .space(space)
-            .views(&projection_views);
-        if let Some(check) = state.as_mut() {
-            check.before_end_frame(frame)?;
-        }
+            .space(self.space)
+            .views(&views);
+        let strips = quad.map_or(Vec::new(), |q| {
+            (0..options.quad_strips)
+                .map(|k| {
+                    let size = q.texture.size;
+                    let strip = (k, options.quad_strips);
+                    quad_layer_on(&q.handle, size, Rows::BottomFirst, self.space, strip)
+                })
+                .collect()
+        });
+        let mut layers: Vec<&xr::CompositionLayerBase<'_, xr::OpenGL>> = vec![&projection];
+        layers.extend(
+            strips
+                .iter()
+                .map(|q| -> &xr::CompositionLayerBase<'_, xr::OpenGL> { q }),
+        );
         let start = Instant::now();
-        stream
-            .end(
-                frame_state.predicted_display_time,
-                blend_mode,
-                &[&projection],
-            )
-            .ctx("xrEndFrame")?;
+        let end = (&mut *self.stream, &mut *self.state);
+        end_frame(end, (time, self.blend_mode), &layers, frame)?;
         let ended = Instant::now();
-        if let Some(check) = state.as_mut() {
-            check.after_end_frame()?;
-        }
-        stats
-            .calls
-            .record("xrEndFrame", (ended - start).as_secs_f64() * 1e3);
-        stats.end_frame_ms.push((ended - start).as_secs_f64() * 1e3);
+        let ms = (ended - start).as_secs_f64() * 1e3;
+        stats.calls.record("xrEndFrame", ms);
+        stats.end_frame_ms.push(ms);
         if options.timing {
             // The GL work still queued after xrEndFrame (Monado finishes its own inside it).
             // SAFETY: glFinish of the current context, loaded by name with its C type.
-            let finish: unsafe extern "C" fn() = unsafe { gl.function(c"glFinish") }?;
+            let finish: unsafe extern "C" fn() = unsafe { self.gl.function(c"glFinish") }?;
             // SAFETY: the context is current on this thread.
             unsafe { finish() };
             stats.drain_ms.push(ended.elapsed().as_secs_f64() * 1e3);
         }
         stats.startup.frame_ended(ended);
         stats.frames_submitted += 1;
+        Ok(())
+    }
+}
+
+/// An OpenGL session's script: swapchains in the session's format, cleared with
+/// glClearTexImage in the client's context.
+impl ScriptApi for GlFrames<'_> {
+    type Api = xr::OpenGL;
+
+    fn session(&self) -> &xr::Session<xr::OpenGL> {
+        self.session
+    }
+
+    fn space(&self) -> &xr::Space {
+        self.space
+    }
+
+    fn view_size(&self) -> (u32, u32) {
+        self.view_size
+    }
+
+    fn blend_mode(&self) -> xr::EnvironmentBlendMode {
+        self.blend_mode
+    }
+
+    fn swapchain_format(&self) -> (i64, sys::SwapchainUsageFlags) {
+        let usage = sys::SwapchainUsageFlags::COLOR_ATTACHMENT | sys::SwapchainUsageFlags::SAMPLED;
+        (i64::from(self.format.internal), usage)
+    }
+
+    fn images(&self, raw: sys::Swapchain) -> Result<Vec<u64>> {
+        let blank = sys::SwapchainImageOpenGLKHR {
+            ty: sys::SwapchainImageOpenGLKHR::TYPE,
+            next: std::ptr::null_mut(),
+            image: 0,
+        };
+        let images = crate::script::enumerate_images(self, raw, blank)?;
+        Ok(images.iter().map(|i| u64::from(i.image)).collect())
+    }
+
+    fn clear(&self, image: u64) -> Result<()> {
+        self.gl.clear(image as u32, crate::script::CLEAR_COLOUR)
     }
 }

@@ -27,6 +27,7 @@ pub const GL_RGBA: u32 = 0x1908;
 pub const GL_UNSIGNED_BYTE: u32 = 0x1401;
 pub const GL_UNSIGNED_SHORT: u32 = 0x1403;
 pub const GL_HALF_FLOAT: u32 = 0x140B;
+const GL_FLOAT: u32 = 0x1406;
 pub const GL_UNSIGNED_INT_2_10_10_10_REV: u32 = 0x8368;
 const GL_UNPACK_ALIGNMENT: u32 = 0x0CF5;
 const GL_PACK_ALIGNMENT: u32 = 0x0D05;
@@ -35,6 +36,15 @@ const GL_RENDERER: u32 = 0x1F01;
 
 /// The attributes of the client's pbuffers: 16x16.
 const PBUFFER_SIZE: [c_int; 5] = [GLX_PBUFFER_WIDTH, 16, GLX_PBUFFER_HEIGHT, 16, 0];
+
+/// The shape of a swapchain's GL texture.
+#[derive(Clone, Copy, Debug)]
+pub struct Texture {
+    pub size: (u32, u32),
+    pub layers: u32,
+    /// GL_TEXTURE_2D_ARRAY (the runtime's texture for arraySize above 1), else GL_TEXTURE_2D.
+    pub array: bool,
+}
 
 /// XVisualInfo's first fields (Xutil.h); only `visualid` is read.
 #[repr(C)]
@@ -49,6 +59,9 @@ type CreateContextAttribs =
 
 /// The GL functions the client calls (through glXGetProcAddressARB).
 struct Gl {
+    texture_sub_image_2d:
+        unsafe extern "C" fn(u32, i32, i32, i32, i32, i32, u32, u32, *const c_void),
+    clear_tex_image: unsafe extern "C" fn(u32, i32, u32, u32, *const c_void),
     texture_sub_image_3d:
         unsafe extern "C" fn(u32, i32, i32, i32, i32, i32, i32, i32, u32, u32, *const c_void),
     get_texture_sub_image:
@@ -200,6 +213,8 @@ impl GlContext {
                 return fail("glXMakeContextCurrent failed");
             }
             let gl = Gl {
+                texture_sub_image_2d: gl_fn(get_proc, c"glTextureSubImage2D")?,
+                clear_tex_image: gl_fn(get_proc, c"glClearTexImage")?,
                 texture_sub_image_3d: gl_fn(get_proc, c"glTextureSubImage3D")?,
                 get_texture_sub_image: gl_fn(get_proc, c"glGetTextureSubImage")?,
                 pixel_store_i: gl_fn(get_proc, c"glPixelStorei")?,
@@ -272,46 +287,70 @@ impl GlContext {
         format!("{}, {}", text(GL_VERSION), text(GL_RENDERER))
     }
 
-    /// Writes `bytes` (rows bottom first, tightly packed) into layer `layer` of texture `image`.
+    /// Writes `bytes` (layer after layer, rows bottom first, tightly packed) into every layer of
+    /// texture `image`: a 2D array texture of `texture.layers`, or with `texture.array` false a
+    /// 2D texture (a swapchain of arraySize 1).
     pub fn upload(
         &self,
         image: u32,
-        layer: u32,
-        (w, h): (u32, u32),
+        texture: Texture,
         (format, ty): (u32, u32),
         bytes: &[u8],
     ) -> Result<()> {
-        // SAFETY: the context is current; `bytes` holds w x h texels of (format, ty) with
-        // alignment 1 (set at creation).
+        let (w, h) = (texture.size.0 as i32, texture.size.1 as i32);
+        // SAFETY: the context is current; `bytes` holds w x h x layers texels of (format, ty)
+        // with alignment 1 (set at creation).
         unsafe {
-            (self.gl.texture_sub_image_3d)(
-                image,
-                0,
-                0,
-                0,
-                layer as i32,
-                w as i32,
-                h as i32,
-                1,
-                format,
-                ty,
-                bytes.as_ptr().cast(),
-            );
+            if texture.array {
+                let layers = texture.layers as i32;
+                (self.gl.texture_sub_image_3d)(
+                    image,
+                    0,
+                    0,
+                    0,
+                    0,
+                    w,
+                    h,
+                    layers,
+                    format,
+                    ty,
+                    bytes.as_ptr().cast(),
+                );
+            } else {
+                (self.gl.texture_sub_image_2d)(
+                    image,
+                    0,
+                    0,
+                    0,
+                    w,
+                    h,
+                    format,
+                    ty,
+                    bytes.as_ptr().cast(),
+                );
+            }
         }
-        self.check("glTextureSubImage3D")
+        self.check(match texture.array {
+            true => "glTextureSubImage3D",
+            false => "glTextureSubImage2D",
+        })
     }
 
-    /// Reads layer `layer` of texture `image` (rows bottom first) into `out` (resized).
+    /// Reads every layer of texture `image` (layer after layer, rows bottom first) into `out`
+    /// (resized).
     pub fn read(
         &self,
         image: u32,
-        layer: u32,
-        (w, h): (u32, u32),
+        texture: Texture,
         (format, ty): (u32, u32),
         out: &mut Vec<u8>,
         texel_bytes: usize,
     ) -> Result<()> {
-        out.resize(w as usize * h as usize * texel_bytes, 0);
+        let (w, h) = texture.size;
+        out.resize(
+            w as usize * h as usize * texture.layers as usize * texel_bytes,
+            0,
+        );
         // SAFETY: the context is current; `out` holds exactly the bytes asked for.
         unsafe {
             (self.gl.get_texture_sub_image)(
@@ -319,10 +358,10 @@ impl GlContext {
                 0,
                 0,
                 0,
-                layer as i32,
+                0,
                 w as i32,
                 h as i32,
-                1,
+                texture.layers as i32,
                 format,
                 ty,
                 out.len() as i32,
@@ -330,6 +369,13 @@ impl GlContext {
             );
         }
         self.check("glGetTextureSubImage")
+    }
+
+    /// Clears every layer of texture `image` to `rgba`.
+    pub fn clear(&self, image: u32, rgba: [f32; 4]) -> Result<()> {
+        // SAFETY: the context is current; four floats for (GL_RGBA, GL_FLOAT).
+        unsafe { (self.gl.clear_tex_image)(image, 0, GL_RGBA, GL_FLOAT, rgba.as_ptr().cast()) };
+        self.check("glClearTexImage")
     }
 
     fn check(&self, call: &str) -> Result<()> {

@@ -23,6 +23,7 @@ mod scene;
 mod script;
 mod swapchain_format;
 mod timing;
+mod untouched;
 mod validation;
 
 use std::process::ExitCode;
@@ -402,7 +403,7 @@ fn format_name(raw: u32) -> String {
         .map_or_else(|| format!("VkFormat({raw})"), |f| f.name.to_string())
 }
 
-fn recommended_size(instance: &xr::Instance, system: xr::SystemId) -> Result<(u32, u32)> {
+pub fn recommended_size(instance: &xr::Instance, system: xr::SystemId) -> Result<(u32, u32)> {
     let views = instance
         .enumerate_view_configuration_views(system, VIEW_TYPE)
         .ctx("xrEnumerateViewConfigurationViews")?;

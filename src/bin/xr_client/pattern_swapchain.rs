@@ -8,6 +8,7 @@ use crate::gpu::Gpu;
 use crate::pattern::{image_bytes, LayerContent, Rows};
 use crate::swapchain_format::SwapchainFormat;
 use crate::timing::Calls;
+use crate::untouched::Untouched;
 
 pub struct PatternSwapchain {
     pub handle: xr::Swapchain<xr::Vulkan>,
@@ -30,9 +31,7 @@ struct Check {
     pattern: Vec<u8>,
     readback: vk::Buffer,
     memory: vk::DeviceMemory,
-    written: Vec<Option<u32>>,
-    checked: u32,
-    modified: Vec<u32>,
+    log: Untouched,
 }
 
 impl PatternSwapchain {
@@ -77,12 +76,10 @@ impl PatternSwapchain {
             let (readback, memory) =
                 create_staging(gpu, &bytes, vk::BufferUsageFlags::TRANSFER_DST)?;
             Some(Check {
-                written: vec![None; images.len()],
+                log: Untouched::new(images.len()),
                 pattern: bytes,
                 readback,
                 memory,
-                checked: 0,
-                modified: Vec::new(),
             })
         } else {
             None
@@ -249,11 +246,7 @@ impl PatternSwapchain {
         index: u32,
         range: vk::ImageSubresourceRange,
     ) -> bool {
-        let Some(check) = self
-            .check
-            .as_ref()
-            .filter(|c| c.written[index as usize].is_some())
-        else {
+        let Some(check) = self.check.as_ref().filter(|c| c.log.written_before(index)) else {
             return false;
         };
         let image = self.images[index as usize];
@@ -296,10 +289,10 @@ impl PatternSwapchain {
         let Some(check) = self.check.as_mut() else {
             return;
         };
-        if let Some(previous) = check.written[index as usize] {
+        let same = check.log.written_before(index).then(|| {
             let len = check.pattern.len();
             // SAFETY: host-coherent memory of `len` bytes, written by a finished submission.
-            let same = unsafe {
+            unsafe {
                 device
                     .map_memory(check.memory, 0, len as u64, vk::MemoryMapFlags::empty())
                     .map(|p| {
@@ -308,20 +301,16 @@ impl PatternSwapchain {
                         same
                     })
                     .unwrap_or(false)
-            };
-            check.checked += 1;
-            if !same {
-                check.modified.push(previous);
             }
-        }
-        check.written[index as usize] = Some(frame);
+        });
+        check.log.record(index, frame, same);
     }
 
     /// (images checked, frames whose image had changed).
     pub fn check_result(&self) -> (u32, Vec<u32>) {
         self.check
             .as_ref()
-            .map_or((0, Vec::new()), |c| (c.checked, c.modified.clone()))
+            .map_or((0, Vec::new()), |c| (c.log.checked, c.log.modified.clone()))
     }
 }
 
