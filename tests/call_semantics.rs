@@ -8,9 +8,10 @@
 
 mod common;
 
+use common::semantics::{
+    self, assert_same_answers, capture_paths, enhanced_frames, script_of, Case,
+};
 use common::{sandbox, scratch_dir, SandboxRun, XR_CLIENT};
-use std::collections::BTreeSet;
-use std::path::Path;
 
 /// Runs `script` with the layer off and on (forced on the simulated OPAQUE display); returns
 /// both runs and the capture folder.
@@ -70,76 +71,21 @@ fn run_both_with(
     Some((off, on, dir))
 }
 
-/// The layer's processed frames, from the capture files' names (`frame-<n>-view-<k>...`).
-fn enhanced_frames(dir: &Path) -> usize {
-    let frames: BTreeSet<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .filter_map(|e| {
-            let name = e.file_name().to_string_lossy().into_owned();
-            name.strip_prefix("frame-")
-                .and_then(|rest| rest.split('-').next())
-                .map(String::from)
-        })
-        .collect();
-    frames.len()
-}
-
-/// The `path` of every captured view (how the layer enhanced it).
-fn capture_paths(dir: &Path) -> Vec<String> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .filter(|e| e.path().extension().is_some_and(|x| x == "json"))
-        .map(|e| {
-            let text = std::fs::read_to_string(e.path()).unwrap();
-            let json: serde_json::Value = serde_json::from_str(&text).unwrap();
-            json["path"].as_str().unwrap_or("?").to_string()
-        })
-        .collect()
-}
-
-fn script_of(run: &SandboxRun) -> Vec<String> {
-    let report = run.client_report();
-    assert_eq!(report["ok"], true, "{}", run.describe());
-    report["script"]
-        .as_array()
-        .unwrap_or_else(|| panic!("no script results: {report}"))
-        .iter()
-        .map(|v| v.as_str().unwrap().to_string())
-        .collect()
-}
-
 /// The case in every variant (VARIANTS): the same answers and enhanced frames on every path.
-fn check_case(tag: &str, script: &str, must_contain: &str, enhanced: usize) {
+fn check_case(tag: &str, case: Case) {
     for variant in VARIANTS {
-        check_case_with(tag, script, (must_contain, enhanced), variant);
+        check_case_with(tag, case, variant);
     }
 }
 
-fn check_case_with(
-    tag: &str,
-    script: &str,
-    (must_contain, enhanced): (&str, usize),
-    variant: Variant,
-) {
-    let Some((off, on, dir)) = run_both(tag, script, variant) else {
+fn check_case_with(tag: &str, case: Case, variant: Variant) {
+    let Some((off, on, dir)) = run_both(tag, case.script, variant) else {
         return;
     };
-    let (bare, layered) = (script_of(&off), script_of(&on));
-    assert_eq!(
-        bare, layered,
-        "{tag}: the layer changed what the calls returned (left: off, right: on)"
-    );
-    assert_eq!(bare.len(), script.split(',').count(), "{tag}: {bare:?}");
-    // The script reached the case it is about (the runtime's answer is the expected one).
-    assert!(
-        bare.iter().any(|r| r.contains(must_contain)),
-        "{tag}: no call answered {must_contain}: {bare:?}"
-    );
+    let bare = assert_same_answers(tag, case, &off, &on);
     assert_eq!(
         enhanced_frames(&dir),
-        enhanced,
+        case.enhanced,
         "{tag}: frames the layer enhanced ({bare:?})\n{}",
         on.stderr
     );
@@ -152,53 +98,32 @@ fn check_case_with(
     }
 }
 
-/// One test per case (they run in parallel). Each: the script, a result it must contain,
-/// and the frames the layer enhances (why, in the comment).
+/// One test per case of tests/common/semantics.rs (they run in parallel).
 macro_rules! cases {
-    ($($name:ident: $script:literal, $contains:literal, $enhanced:literal;)*) => {$(
+    ($($name:ident: $case:ident;)*) => {$(
         #[test]
         fn $name() {
-            check_case(stringify!($name), $script, $contains, $enhanced);
+            check_case(stringify!($name), semantics::$case);
         }
     )*};
 }
 
 cases! {
-    // Nothing acquired: the runtime refuses; nothing to enhance.
-    release_without_acquire: "release", "release ERROR_CALL_ORDER_INVALID", 0;
-    wait_without_acquire: "wait", "wait ERROR_CALL_ORDER_INVALID", 0;
-    // The first release is refused (not waited); the second is held, then dropped with the
-    // swapchain when the script ends (never submitted).
-    release_without_wait: "acquire,release,wait,release", "release ERROR_CALL_ORDER_INVALID", 0;
-    double_wait: "acquire,wait,wait,release", "wait ERROR_CALL_ORDER_INVALID", 0;
-    // The held release goes to the runtime (enhanced) before the second, which it refuses.
-    double_release: "acquire,wait,release,release", "release ERROR_CALL_ORDER_INVALID", 1;
-    // Waiting again after a (held) release: refused with and without the layer.
-    wait_after_release: "acquire,wait,release,wait", "wait ERROR_CALL_ORDER_INVALID", 0;
-    // Monado has 3 images: the 4th acquire is refused. The first two releases come while
-    // later images are acquired (enhanced at once); the last is held and dropped.
-    acquire_past_the_image_count:
-        "acquire,acquire,acquire,acquire,wait,release,wait,release,wait,release",
-        "acquire ERROR_CALL_ORDER_INVALID", 2;
-    release_after_the_next_acquire: "acquire,acquire,wait,release,wait,release", "release SUCCESS", 1;
-    // The held image dies with its swapchain; the new swapchain's frame is enhanced.
-    destroy_with_a_held_image:
-        "begin,acquire,wait,release,destroy,create,acquire,wait,release,end", "destroy SUCCESS", 1;
-    // The discarded frame's held image goes (enhanced) when the next is acquired.
-    release_across_a_discarded_frame:
-        "begin,acquire,wait,release,begin,acquire,wait,release,end", "begin FRAME_DISCARDED", 2;
-    plain_frames: "begin,acquire,wait,release,end,begin,acquire,wait,release,end", "end SUCCESS", 2;
-    // Each next image is acquired and waited before xrEndFrame of the current frame.
-    pipelined_frames:
-        "begin,acquire,wait,release,acquire,wait,end,begin,release,acquire,wait,end,begin,release,end",
-        "end SUCCESS", 3;
-    // A frame ended with the image still acquired: the runtime refuses the layer (not released).
-    end_without_release: "begin,acquire,wait,end,release,end-empty", "end ERROR_", 0;
-    // Without environment_blend_mode the runtime's blend modes stand, in every call form.
-    blend_modes_untouched: "blend-count,blend-short,blend-fill,blend-bad-view", "blend-fill SUCCESS", 0;
-    // The runtime refuses the ADDITIVE frame; the layer had enhanced its released image (it
-    // acts before the runtime answers), and the app gets the runtime's error.
-    additive_frames_refused: "begin,acquire,wait,release,end-additive", "end-additive ERROR_", 1;
+    release_without_acquire: RELEASE_WITHOUT_ACQUIRE;
+    wait_without_acquire: WAIT_WITHOUT_ACQUIRE;
+    release_without_wait: RELEASE_WITHOUT_WAIT;
+    double_wait: DOUBLE_WAIT;
+    double_release: DOUBLE_RELEASE;
+    wait_after_release: WAIT_AFTER_RELEASE;
+    acquire_past_the_image_count: ACQUIRE_PAST_THE_IMAGE_COUNT;
+    release_after_the_next_acquire: RELEASE_AFTER_THE_NEXT_ACQUIRE;
+    destroy_with_a_held_image: DESTROY_WITH_A_HELD_IMAGE;
+    release_across_a_discarded_frame: RELEASE_ACROSS_A_DISCARDED_FRAME;
+    plain_frames: PLAIN_FRAMES;
+    pipelined_frames: PIPELINED_FRAMES;
+    end_without_release: END_WITHOUT_RELEASE;
+    blend_modes_untouched: BLEND_MODES_UNTOUCHED;
+    additive_frames_refused: ADDITIVE_FRAMES_REFUSED;
 }
 
 /// Runs `script` with the layer off and on with `environment_blend_mode = "additive"` (no

@@ -1,0 +1,245 @@
+//! The project's client with OpenGL sessions (`--graphics opengl`) in what its Vulkan path
+//! scripts, through the layer, against the real Monado runtime in the sandbox with its X server
+//! (`xr-sandbox run --x11`): both projection layouts and quad layers enhanced within the CPU
+//! reference (tests/common/capture_check.rs), each view read at its own array layer and image
+//! rect (GL's rects count rows from the bottom), and the call-semantics A/B of
+//! tests/call_semantics.rs: with the layer off and on the scripted calls get the same answers,
+//! and the layer enhances the frames the Vulkan cases expect.
+
+mod common;
+
+use common::capture_check::{captures, check_view, Captured};
+use common::semantics::{self, assert_same_answers, enhanced_frames, Case};
+use common::{layer_lines, sandbox, scratch_dir, SandboxRun, XR_CLIENT};
+use std::path::Path;
+
+/// Each view's size in these runs.
+const VIEW: (u64, u64) = (96, 72);
+
+fn background() -> String {
+    let meadow = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/background-meadow.png");
+    format!("image:{}", meadow.display())
+}
+
+/// The layer's variables for an enhancing run (its programs waited for at the first frame, by
+/// the sandbox's CONTRASTXR_PIPELINES=wait) with `frames` frames captured into `dir` after 3,
+/// against `background`.
+fn layer_env(dir: &Path, background: &str, frames: u32) -> Vec<(String, String)> {
+    [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_BACKGROUND", background),
+        ("CONTRASTXR_CAPTURE_DIR", &dir.to_string_lossy()),
+        ("CONTRASTXR_CAPTURE_SKIP", "3"),
+        ("CONTRASTXR_CAPTURE_FRAMES", &frames.to_string()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v.to_string()))
+    .collect()
+}
+
+fn as_refs(v: &[(String, String)]) -> Vec<(&str, &str)> {
+    v.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+}
+
+/// The client with an OpenGL session of 12 frames in GL_SRGB8_ALPHA8 with `extra` arguments.
+fn client_opengl(env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
+    let sandbox = sandbox()?;
+    let size = format!("{}x{}", VIEW.0, VIEW.1);
+    let mut cmd = vec![
+        XR_CLIENT,
+        "--graphics",
+        "opengl",
+        "--json",
+        "--frames",
+        "12",
+        "--size",
+        &size,
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    cmd.extend_from_slice(extra);
+    Some(sandbox.run_x11_for(&cmd, env, 120))
+}
+
+/// A capture's image rect as (x, y, width, height) and its array layer.
+fn placement(c: &Captured) -> ((u64, u64, u64, u64), u64) {
+    let r = &c.json["rect"];
+    let n = |k: &str| r[k].as_u64().unwrap();
+    let rect = (n("x"), n("y"), n("width"), n("height"));
+    (rect, c.json["image_array_index"].as_u64().unwrap())
+}
+
+/// Runs the client with the layer on and `extra`; asserts it ran, the layer enhanced
+/// `views_per_frame` views per frame in the app's GL context and said nothing of passing
+/// through; returns the captures.
+fn enhanced_run(
+    tag: &str,
+    env: &[(String, String)],
+    extra: &[&str],
+    views: usize,
+) -> Option<Vec<Captured>> {
+    let run = client_opengl(&as_refs(env), extra)?;
+    run.assert_success();
+    let lines = layer_lines(&run);
+    let processing = format!("processing frames ({views} views per frame)");
+    assert!(
+        lines.iter().any(|l| l.contains(&processing)),
+        "{tag}: {lines:#?}"
+    );
+    assert!(
+        !lines.iter().any(|l| l.contains("passing")),
+        "{tag}: {lines:#?}"
+    );
+    let dir = env
+        .iter()
+        .find(|(k, _)| k == "CONTRASTXR_CAPTURE_DIR")
+        .unwrap();
+    Some(captures(Path::new(&dir.1)))
+}
+
+/// Both projection layouts: every view within the CPU reference and visibly changed, each
+/// read at its own place (array: layers 0 and 1, the whole image; side by side: layer 0, the
+/// left and right halves), and the two views' pixels differ (the pattern is shifted per view).
+#[test]
+fn opengl_layouts_are_enhanced_at_their_own_rects() {
+    let (w, h) = VIEW;
+    let layouts = [
+        ("array", [((0, 0, w, h), 0), ((0, 0, w, h), 1)]),
+        ("side-by-side", [((0, 0, w, h), 0), ((w, 0, w, h), 0)]),
+    ];
+    for (layout, places) in layouts {
+        let dir = scratch_dir(&format!("opengl-client-{layout}"));
+        let env = layer_env(&dir, &background(), 2);
+        let extra = ["--layout", layout];
+        let Some(views) = enhanced_run(layout, &env, &extra, 2) else {
+            return;
+        };
+        assert_eq!(views.len(), 4, "{layout}: 2 frames x 2 views");
+        for c in &views {
+            assert_eq!(c.json["graphics"], "opengl", "{layout}");
+            let changed = check_view(c);
+            assert!(
+                changed > 1000,
+                "{layout}: the method changed {changed} pixels"
+            );
+            let view = c.json["view"].as_u64().unwrap() as usize;
+            assert_eq!(placement(c), places[view], "{layout}: view {view}");
+        }
+        assert_ne!(
+            views[0].display, views[1].display,
+            "{layout}: both views read the same pixels"
+        );
+    }
+}
+
+/// Quad layers of an OpenGL session are enhanced with CONTRASTXR_QUAD_LAYERS=1 (as
+/// tests/layer.rs `quad_layers_are_enhanced_when_configured` for Vulkan): the quad within the
+/// CPU reference. Split into two strips (two quad layers on the top and bottom halves of one
+/// image, rects counted from the bottom), each strip's view holds exactly the rows of the whole
+/// quad's view that it shows: the layer reads a GL sub-rect at the rows the app meant.
+#[test]
+fn opengl_quad_layers_are_enhanced_when_configured() {
+    let quad_env = |tag: &str| {
+        let dir = scratch_dir(tag);
+        let mut env = layer_env(&dir, "color:#e0d020", 1);
+        env.push(("CONTRASTXR_QUAD_LAYERS".into(), "1".into()));
+        env
+    };
+    let env = quad_env("opengl-client-quad");
+    let Some(whole) = enhanced_run("quad", &env, &["--quad"], 3) else {
+        return;
+    };
+    assert_eq!(whole.len(), 3, "two projection views and the quad");
+    for c in &whole {
+        assert!(check_view(c) > 100, "view {}", c.json["view"]);
+    }
+    let (qw, qh) = (VIEW.0 / 2, VIEW.1 / 2);
+    let quad = &whole[2];
+    assert_eq!(placement(quad), ((0, 0, qw, qh), 0));
+    let env = quad_env("opengl-client-quad-strips");
+    let extra = ["--quad", "--quad-strips", "2"];
+    let Some(strips) = enhanced_run("quad strips", &env, &extra, 4) else {
+        return;
+    };
+    assert_eq!(strips.len(), 4, "two projection views and two strips");
+    let row_bytes = (qw * quad.json["bytes_per_pixel"].as_u64().unwrap()) as usize;
+    let half = (qh / 2) as usize;
+    // Strip 0 is the image's top half: GL rows qh/2..qh.
+    for (k, strip) in strips[2..].iter().enumerate() {
+        assert!(check_view(strip) > 100, "strip {k}");
+        let y = if k == 0 { qh - qh / 2 } else { 0 };
+        assert_eq!(placement(strip), ((0, y, qw, qh / 2), 0), "strip {k}");
+        // Captures hold rows top first.
+        let rows = &quad.display[k * half * row_bytes..(k + 1) * half * row_bytes];
+        assert!(
+            strip.display == rows,
+            "strip {k} read other rows than the whole quad shows there"
+        );
+    }
+}
+
+/// `case` with OpenGL sessions, layer off and on, in the runtime's first GL format and in
+/// GL_SRGB8_ALPHA8: the same answers, and the frames the Vulkan case expects enhanced, with the
+/// layer working in the app's context (never passing through).
+fn check_case(tag: &str, case: Case) {
+    for format in [None, Some("R8G8B8A8_SRGB")] {
+        let tag = format!("opengl-{tag}-{}", format.unwrap_or("default"));
+        let Some(sandbox) = sandbox() else { return };
+        let mut cmd = vec![
+            XR_CLIENT,
+            "--graphics",
+            "opengl",
+            "--json",
+            "--size",
+            "64x48",
+            "--script",
+            case.script,
+        ];
+        if let Some(format) = format {
+            cmd.extend_from_slice(&["--format", format]);
+        }
+        let off = sandbox.run_x11_for(&cmd, &[("CONTRASTXR", "0")], 120);
+        let dir = scratch_dir(&format!("semantics-{tag}"));
+        let mut env = layer_env(&dir, "color:#e0d020", 1000);
+        env.retain(|(k, _)| k != "CONTRASTXR_CAPTURE_SKIP");
+        let on = sandbox.run_x11_for(&cmd, &as_refs(&env), 120);
+        let answers = assert_same_answers(&tag, case, &off, &on);
+        assert_eq!(
+            enhanced_frames(&dir),
+            case.enhanced,
+            "{tag}: frames the layer enhanced ({answers:?})\n{}",
+            on.stderr
+        );
+        let lines = layer_lines(&on);
+        let api = "graphics API of this session: OpenGL (Xlib), enhanced";
+        assert!(lines.iter().any(|l| l.contains(api)), "{tag}: {lines:#?}");
+        assert!(
+            !lines.iter().any(|l| l.contains("passing")),
+            "{tag}: {lines:#?}"
+        );
+    }
+}
+
+/// One test per case of tests/common/semantics.rs run with OpenGL (they run in parallel).
+macro_rules! cases {
+    ($($name:ident: $case:ident;)*) => {$(
+        #[test]
+        fn $name() {
+            check_case(stringify!($name), semantics::$case);
+        }
+    )*};
+}
+
+cases! {
+    plain_frames: PLAIN_FRAMES;
+    pipelined_frames: PIPELINED_FRAMES;
+    double_release: DOUBLE_RELEASE;
+    destroy_with_a_held_image: DESTROY_WITH_A_HELD_IMAGE;
+    release_across_a_discarded_frame: RELEASE_ACROSS_A_DISCARDED_FRAME;
+    acquire_past_the_image_count: ACQUIRE_PAST_THE_IMAGE_COUNT;
+    release_after_the_next_acquire: RELEASE_AFTER_THE_NEXT_ACQUIRE;
+    end_without_release: END_WITHOUT_RELEASE;
+}
