@@ -4,7 +4,8 @@
 //! reference (tests/common/capture_check.rs), each view read at its own array layer and image
 //! rect (GL's rects count rows from the bottom), and the call-semantics A/B of
 //! tests/call_semantics.rs: with the layer off and on the scripted calls get the same answers,
-//! and the layer enhances the frames the Vulkan cases expect.
+//! and the layer enhances the frames the Vulkan cases expect; and swapchains made and destroyed
+//! between frames (`--churn-formats`).
 
 mod common;
 
@@ -242,4 +243,39 @@ cases! {
     acquire_past_the_image_count: ACQUIRE_PAST_THE_IMAGE_COUNT;
     release_after_the_next_acquire: RELEASE_AFTER_THE_NEXT_ACQUIRE;
     end_without_release: END_WITHOUT_RELEASE;
+}
+
+/// `--churn-formats` with OpenGL: before every frame the client makes a swapchain of the next
+/// format Monado offers OpenGL apps (colour and depth, 32x32 and 1920x1080, on the frame thread,
+/// as the app's context allows) and destroys the oldest; the layer goes on enhancing every frame
+/// and no call fails.
+#[test]
+fn opengl_swapchain_churn_keeps_enhancing() {
+    let dir = scratch_dir("opengl-client-churn");
+    let env = layer_env(&dir, "color:#e0d020", 2);
+    let extra = ["--frames", "40", "--churn-formats"];
+    let Some(run) = client_opengl(&as_refs(&env), &extra) else {
+        return;
+    };
+    run.assert_success();
+    let report = run.client_report();
+    let churned = report["swapchains_churned"].as_u64().unwrap_or(0);
+    assert!(
+        churned >= 30,
+        "{churned} swapchains churned: {}",
+        run.describe()
+    );
+    let lines = layer_lines(&run);
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("processing frames (2 views per frame)")),
+        "{lines:#?}"
+    );
+    assert!(!lines.iter().any(|l| l.contains("passing")), "{lines:#?}");
+    let views = captures(&dir);
+    assert_eq!(views.len(), 4, "{}", run.describe());
+    for c in &views {
+        assert!(check_view(c) > 100);
+    }
 }

@@ -48,6 +48,7 @@ usage: contrastxr-xr-client [options]
   --pipelined             acquire and wait for the next frame's image before xrEndFrame of the
                           current one, as engines with a render thread running ahead do
   --churn-swapchains      create and destroy swapchains on a second thread while frames run
+                          (with --graphics opengl: on the frame thread, one before each frame)
   --churn-formats         with --churn-swapchains: cycle through every format the runtime
                           offers (colour and depth), up to 1920x1080, from the moment the
                           session exists

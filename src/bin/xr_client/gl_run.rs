@@ -6,6 +6,7 @@
 //! at its next acquire. The session's life, the views' placement, the quad's geometry and the
 //! scripted calls are the Vulkan path's (frame_loop, script); only the images are GL's here.
 
+use crate::churn::{self, Churner};
 use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::frame_loop::{self, projection_views_on, quad_layer_on, Stats};
@@ -18,6 +19,7 @@ use crate::swapchain_format::SwapchainFormat;
 use crate::untouched::Untouched;
 use openxr as xr;
 use openxr::sys;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
@@ -203,6 +205,17 @@ fn run_session(
             GlSwapchain::new(&session, &format, (w / 2, h / 2), &content, check)
         })
         .transpose()?;
+    let churn = options.churn_swapchains.then(|| GlChurn {
+        churner: Churner::default(),
+        plan: churn::plan(
+            format.internal,
+            &offered,
+            options.churn_formats,
+            is_gl_depth,
+        ),
+        next: 0,
+        churned: AtomicU32::new(0),
+    });
     let mut frames = GlFrames {
         session: &session,
         space: &space,
@@ -215,8 +228,12 @@ fn run_session(
         view_size,
         blend_mode,
         state,
+        churn,
     };
     let result = frame_loop::run(instance, &mut frames, options, stats);
+    if let Some(churn) = &frames.churn {
+        report.swapchains_churned += churn.churned.load(Ordering::Relaxed);
+    }
     for swapchain in std::iter::once(&frames.projection).chain(frames.quad.as_ref()) {
         if let Some(log) = &swapchain.check {
             report.frames_checked += log.checked;
@@ -355,6 +372,22 @@ struct GlFrames<'s> {
     blend_mode: xr::EnvironmentBlendMode,
     /// With --check-gl-state: the state set right before xrEndFrame, checked right after.
     state: &'s mut Option<GlStateCheck>,
+    /// With --churn-swapchains: the swapchains made and destroyed between frames.
+    churn: Option<GlChurn>,
+}
+
+/// --churn-swapchains in an OpenGL session: one swapchain of the plan made (and the oldest
+/// destroyed) before each frame, on the frame thread (churn.rs says why).
+struct GlChurn {
+    churner: Churner<xr::OpenGL>,
+    plan: Vec<churn::Churn>,
+    next: usize,
+    churned: AtomicU32,
+}
+
+/// Whether a GL internal format is a depth (or depth-stencil) format.
+fn is_gl_depth(format: u32) -> bool {
+    matches!(format, 0x81A5 | 0x81A6 | 0x81A7 | 0x8CAC | 0x88F0 | 0x8CAD)
 }
 
 /// xrEndFrame with `layers`, inside --check-gl-state's set and check.
@@ -386,6 +419,12 @@ impl frame_loop::Frames for GlFrames<'_> {
     }
 
     fn frame(&mut self, options: &Options, stats: &mut Stats) -> Result<()> {
+        if let Some(churn) = &mut self.churn {
+            let c = &churn.plan[churn.next % churn.plan.len()];
+            churn.next += 1;
+            let step = churn.churner.step(self.session, c, &churn.churned);
+            step.map_err(crate::error::ClientError)?;
+        }
         let frame_state = stats
             .calls
             .time("xrWaitFrame", || self.waiter.wait())

@@ -238,7 +238,12 @@ fn run_session(
     }
     let format = choose_format(options.format, &offered)?;
     report.format = format.name.to_string();
-    let churn_plan = churn::plan(format, &offered, options.churn_formats);
+    let churn_plan = churn::plan(
+        format.vk.as_raw() as u32,
+        &offered,
+        options.churn_formats,
+        churn::is_vk_depth,
+    );
     let stop = std::sync::atomic::AtomicBool::new(false);
     let churned = std::sync::atomic::AtomicU32::new(0);
     // The churn thread starts as soon as the session exists: a layer that sets up on threads
