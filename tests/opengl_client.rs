@@ -136,6 +136,26 @@ fn opengl_layouts_are_enhanced_at_their_own_rects() {
     }
 }
 
+/// The client's own check of its GL images (read back at their next acquire): with the layer
+/// off, the side-by-side texture and the quad's are found exactly as written, so the checks
+/// above rest on a client that fills and reads 2D textures right.
+#[test]
+fn without_the_layer_side_by_side_and_quad_images_are_untouched() {
+    let env = [("CONTRASTXR", "0")];
+    let extra = ["--layout", "side-by-side", "--quad", "--check-untouched"];
+    let Some(run) = client_opengl(&env, &extra) else {
+        return;
+    };
+    run.assert_success();
+    let report = run.client_report();
+    // Two swapchains, each image checked from its second acquire on.
+    let checked = report["frames_checked"].as_u64().unwrap_or(0);
+    assert!(checked >= 16, "{checked} checked: {}", run.describe());
+    assert_eq!(report["frames_modified"], serde_json::json!([]));
+    assert_eq!(report["layout"], "side-by-side");
+    assert_eq!(report["quad"], true);
+}
+
 /// Quad layers of an OpenGL session are enhanced with CONTRASTXR_QUAD_LAYERS=1 (as
 /// tests/layer.rs `quad_layers_are_enhanced_when_configured` for Vulkan): the quad within the
 /// CPU reference. Split into two strips (two quad layers on the top and bottom halves of one
