@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::capture_check::{captures, check_view, Captured};
+use common::capture_check::{capture_dir, captures, check_view, sample, Captured};
 use common::{sandbox, scratch_file, ApiDump, SandboxRun, Validation, XR_CLIENT};
 use contrastxr::image::RgbaImage;
 use std::path::{Path, PathBuf};
@@ -19,22 +19,6 @@ const FORMATS: [&str; 6] = [
     "R16G16B16A16_UNORM",
     "R16G16B16A16_SFLOAT",
 ];
-
-fn sample(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("samples")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
-
-/// A fresh, empty capture directory under the target folder (visible inside the sandbox).
-fn capture_dir(tag: &str) -> PathBuf {
-    let dir = scratch_file(&format!("{tag}.capture"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Runs `cmd` with validation (core + Vulkan incl. synchronisation) and the layer's `env`.
 fn run_validated(

@@ -7,25 +7,9 @@
 
 mod common;
 
-use common::capture_check::{captures, check_view};
-use common::{layer_lines, sandbox, scratch_file, ApiDump, SandboxRun};
-use std::path::{Path, PathBuf};
-
-fn sample(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("samples")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
-
-/// A fresh, empty capture directory under the target folder (visible inside the sandbox).
-fn capture_dir(tag: &str) -> PathBuf {
-    let dir = scratch_file(&format!("{tag}.capture"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::capture_check::{capture_dir, captures, check_view, sample};
+use common::{layer_lines, sandbox, ApiDump, SandboxRun};
+use std::path::Path;
 
 /// The layer's variables for an enhancing run with two frames captured into `dir` (no
 /// indicator: the captures are compared with the CPU reference).

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::capture_check::{captures, check_view, Captured};
+use common::capture_check::{captures, check_view, sample, Captured};
 use common::semantics::{self, assert_same_answers, enhanced_frames, Case};
 use common::{layer_lines, sandbox, scratch_dir, SandboxRun, XR_CLIENT};
 use std::path::Path;
@@ -18,8 +18,7 @@ use std::path::Path;
 const VIEW: (u64, u64) = (96, 72);
 
 fn background() -> String {
-    let meadow = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/background-meadow.png");
-    format!("image:{}", meadow.display())
+    format!("image:{}", sample("background-meadow.png"))
 }
 
 /// The layer's variables for an enhancing run (its programs waited for at the first frame, by

@@ -8,6 +8,23 @@ use contrastxr::image::RgbaImage;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
+/// A file of the repository's samples/ folder, as an absolute path.
+pub fn sample(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("samples")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// A fresh, empty capture directory under the target folder (visible inside the sandbox).
+pub fn capture_dir(tag: &str) -> PathBuf {
+    let dir = super::scratch_file(&format!("{tag}.capture"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// One captured view: its metadata and files.
 pub struct Captured {
     pub json: serde_json::Value,
