@@ -90,7 +90,7 @@ impl SessionState {
         for engine in self.engine.take().into_iter().chain(self.retired.drain(..)) {
             if let Err(e) = engine.finish() {
                 log::info(&format!(
-                    "the layer's last work did not finish ({e}): its objects are left alive, not destroyed"
+                    "the GPU did not finish the layer's last work ({e}): its objects are left alive, not destroyed"
                 ));
             }
         }
