@@ -61,6 +61,40 @@ pub fn config(env: &Env) -> Finding {
     )
 }
 
+/// The graphics APIs the layer enhances, in short (the report's header).
+pub const ENHANCED_APIS: &str = "Vulkan, OpenGL";
+
+/// The same, with the bindings: what a passed-through session's finding tells the user.
+const ENHANCED_APIS_IN_FULL: &str = "Vulkan sessions, and OpenGL sessions through \
+    XR_KHR_opengl_enable with the Xlib binding (and with EGL where the runtime offers \
+    XR_MNDX_egl_enable)";
+
+/// The APIs, as the layer's [`log::GRAPHICS_API`] line names them, of sessions it enhances.
+const ENHANCED_SESSION_APIS: [&str; 3] = ["Vulkan", "OpenGL (Xlib)", "OpenGL (EGL)"];
+
+/// A session's graphics API and whether the layer enhanced it, from its log line.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Session<'a> {
+    /// As the layer names it: `Vulkan`, `OpenGL (Xlib)`, `OpenGL (EGL)`, ...
+    pub api: &'a str,
+    pub enhanced: bool,
+}
+
+/// `graphics API of this session: API, enhanced` (or `, passed through`); None for any other
+/// line, and for one whose ending is neither.
+fn session(text: &str) -> Option<Session<'_>> {
+    let (api, state) = text
+        .strip_prefix(log::GRAPHICS_API)?
+        .trim_end()
+        .rsplit_once(", ")?;
+    let enhanced = match state {
+        "enhanced" => true,
+        "passed through" => false,
+        _ => return None,
+    };
+    (!api.is_empty()).then_some(Session { api, enhanced })
+}
+
 /// The log lines of the last app that loaded the layer (`contrastxr log`'s reading).
 pub struct LastApp {
     path: Option<PathBuf>,
@@ -93,7 +127,8 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
         } else if text.contains("background") {
             "check the camera finding and the background setting (`contrastxr camera list`)"
         } else if text.contains("not a Vulkan session") {
-            "the layer works on Vulkan sessions only: choose the app's Vulkan renderer"
+            "choose the app's Vulkan or OpenGL renderer: the layer enhances Vulkan and OpenGL \
+             (Xlib binding; EGL where the runtime offers XR_MNDX_egl_enable) sessions"
         } else {
             LOG
         },
@@ -128,6 +163,14 @@ impl LastApp {
         })
     }
 
+    /// The graphics API of the app's last session, from the layer's [`log::GRAPHICS_API`] line.
+    pub fn session(&self) -> Option<Session<'_>> {
+        self.lines
+            .iter()
+            .rev()
+            .find_map(|l| session(log::parse_line(l)?.text))
+    }
+
     pub fn finding(&self) -> Finding {
         const NAME: &str = "last-app";
         let where_ = self
@@ -149,16 +192,52 @@ impl LastApp {
         };
         let exe = first.text.strip_prefix(log::LOADED).unwrap_or(first.text);
         let app = format!("last app {exe} (pid {}, {})", first.pid, first.time);
+        let mut session = None;
+        match self.session() {
+            Some(Session {
+                api,
+                enhanced: true,
+            }) => session = Some(format!("{api} session, enhanced")),
+            Some(Session {
+                api,
+                enhanced: false,
+            }) => {
+                // An API the layer enhances was passed through for another reason: its log says
+                // which.
+                let fix: String = if ENHANCED_SESSION_APIS.contains(&api) {
+                    "`contrastxr log` shows why the layer passed that session through".into()
+                } else {
+                    "choose the app's Vulkan or OpenGL renderer (OpenGL on X11: GLX, the Xlib \
+                     binding)"
+                        .into()
+                };
+                return Finding::warn(
+                    NAME,
+                    format!(
+                        "{app}, {api} session, passed through untouched: the layer enhances \
+                         {ENHANCED_APIS_IN_FULL}"
+                    ),
+                    fix,
+                );
+            }
+            None => {}
+        }
         let last = self.lines.iter().rev().find_map(|l| {
             let text = log::parse_line(l)?.text;
             verdict(text).map(|v| (text, v))
         });
+        let named = session
+            .as_ref()
+            .map_or(app.clone(), |s| format!("{app}, {s}"));
         match last {
-            Some((text, (true, _))) => Finding::ok(NAME, format!("{app}: {text}")),
-            Some((text, (false, fix))) => Finding::warn(NAME, format!("{app}: {text}"), fix),
+            Some((text, (true, _))) => Finding::ok(NAME, format!("{named}: {text}")),
+            Some((text, (false, fix))) => Finding::warn(NAME, format!("{named}: {text}"), fix),
             None => Finding::warn(
                 NAME,
-                format!("{app} loaded the layer but logged no enhanced frame"),
+                format!(
+                    "{app} loaded the layer but logged no enhanced frame{}",
+                    session.map_or(String::new(), |s| format!(" ({s})"))
+                ),
                 "let the app run until it shows frames; `contrastxr log` shows what it logged",
             ),
         }
@@ -213,5 +292,146 @@ pub fn steam() -> Finding {
                 doc("steam-flatpak.md")
             ),
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::finding::Status;
+    use super::*;
+
+    /// The last app's lines as the layer writes them to its file.
+    fn last_app(lines: &[&str]) -> LastApp {
+        LastApp {
+            path: None,
+            lines: lines.iter().map(|l| l.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn reads_the_sessions_graphics_api_line() {
+        assert_eq!(
+            session("graphics API of this session: OpenGL (Xlib), enhanced"),
+            Some(Session {
+                api: "OpenGL (Xlib)",
+                enhanced: true
+            })
+        );
+        assert_eq!(
+            session("graphics API of this session: OpenGL ES (EGL), passed through"),
+            Some(Session {
+                api: "OpenGL ES (EGL)",
+                enhanced: false
+            })
+        );
+        assert_eq!(
+            session("graphics API of this session: Vulkan, enhanced\n"),
+            Some(Session {
+                api: "Vulkan",
+                enhanced: true
+            })
+        );
+        // Another ending, no API, or another line: nothing.
+        assert_eq!(session("graphics API of this session: Vulkan, maybe"), None);
+        assert_eq!(session("graphics API of this session: , enhanced"), None);
+        assert_eq!(session("graphics API of this session: Vulkan"), None);
+        assert_eq!(
+            session("enhancement began 0.2 s after the session started"),
+            None
+        );
+    }
+
+    #[test]
+    fn the_last_session_of_the_last_app_counts() {
+        let app = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 9] layer loaded into /usr/bin/hello_xr",
+            "2026-01-01T00:00:00.100Z [pid 9] graphics API of this session: Vulkan, enhanced",
+            "2026-01-01T00:00:02.100Z [pid 9] graphics API of this session: OpenGL (Xlib), enhanced",
+            "2026-01-01T00:00:02.400Z [pid 9] enhancement began 0.300 s after the session started",
+        ]);
+        assert_eq!(
+            app.session(),
+            Some(Session {
+                api: "OpenGL (Xlib)",
+                enhanced: true
+            })
+        );
+        let f = app.finding();
+        assert_eq!(f.status, Status::Ok);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/hello_xr (pid 9, 2026-01-01T00:00:00.000Z), OpenGL (Xlib) \
+             session, enhanced: enhancement began 0.300 s after the session started"
+        );
+    }
+
+    #[test]
+    fn an_enhanced_session_without_frames_yet_is_named() {
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 4] layer loaded into /usr/bin/hello_xr",
+            "2026-01-01T00:00:00.100Z [pid 4] graphics API of this session: OpenGL (EGL), enhanced",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Warn);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/hello_xr (pid 4, 2026-01-01T00:00:00.000Z) loaded the layer but \
+             logged no enhanced frame (OpenGL (EGL) session, enhanced)"
+        );
+    }
+
+    #[test]
+    fn a_passed_through_api_gets_the_enhanced_ones() {
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 5] layer loaded into /usr/bin/game",
+            "2026-01-01T00:00:00.100Z [pid 5] graphics API of this session: OpenGL ES (EGL), passed through",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Warn);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/game (pid 5, 2026-01-01T00:00:00.000Z), OpenGL ES (EGL) session, \
+             passed through untouched: the layer enhances Vulkan sessions, and OpenGL sessions \
+             through XR_KHR_opengl_enable with the Xlib binding (and with EGL where the runtime \
+             offers XR_MNDX_egl_enable)"
+        );
+        assert_eq!(
+            f.fix.as_deref(),
+            Some(
+                "choose the app's Vulkan or OpenGL renderer (OpenGL on X11: GLX, the Xlib binding)"
+            )
+        );
+        // An API the layer enhances, passed through all the same: the log says why.
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 6] layer loaded into /usr/bin/game",
+            "2026-01-01T00:00:00.100Z [pid 6] graphics API of this session: OpenGL (Xlib), passed through",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Warn);
+        assert!(
+            f.detail
+                .contains(", OpenGL (Xlib) session, passed through untouched: "),
+            "{}",
+            f.detail
+        );
+        assert_eq!(
+            f.fix.as_deref(),
+            Some("`contrastxr log` shows why the layer passed that session through")
+        );
+    }
+
+    #[test]
+    fn an_app_without_the_line_reads_as_before() {
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 3] layer loaded into /usr/bin/a",
+            "2026-01-01T00:00:00.500Z [pid 3] enhancement began 0.200 s after the session started",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Ok);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/a (pid 3, 2026-01-01T00:00:00.000Z): enhancement began 0.200 s \
+             after the session started"
+        );
     }
 }
