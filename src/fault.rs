@@ -6,14 +6,14 @@
 //! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
-//! `gl-program-link`
+//! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 15] = [
+pub const POINTS: [(&str, &str); 18] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -60,6 +60,18 @@ pub const POINTS: [(&str, &str); 15] = [
     (
         "gl-program-link",
         "linking an OpenGL program (linked with a second copy of its shader, so the driver refuses it)",
+    ),
+    (
+        "gl-make-current",
+        "making the app's OpenGL context current on the frame's thread (as if it were current on another)",
+    ),
+    (
+        "gl-old-context",
+        "reading the app's OpenGL context's version (as if it were OpenGL 3.3, without compute shaders)",
+    ),
+    (
+        "gl-context-lost",
+        "checking the app's OpenGL context before the frame's work (as if it were lost)",
     ),
     (
         "end-frame",

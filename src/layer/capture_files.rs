@@ -2,10 +2,10 @@
 //! background used, for each processed view of the selected frames. How users show that the
 //! layer works, and how the tests see the null compositor's frames.
 
+use super::graphics::CapturedImage;
 use crate::colour;
 use crate::config::{Settings, Value, KEYS};
 use crate::gpu::device::pixel_codec;
-use crate::gpu::CapturedView;
 use crate::gpu::PixelFormat;
 use crate::image::RgbaImage;
 use std::path::Path;
@@ -78,12 +78,22 @@ pub fn prepare_folder(dir: &Path) -> Result<(), String> {
     crate::user_file::folder(dir).map_err(refused)
 }
 
+/// The graphics API a capture came through, as its JSON names it.
+pub struct Api {
+    /// "vulkan" or "opengl".
+    pub graphics: &'static str,
+    /// The swapchain's format by that API's name (`R8G8B8A8_SRGB`, `GL_SRGB8_ALPHA8`).
+    pub format: String,
+}
+
 /// Writes the files of one captured view; errors are returned as one sentence.
+#[allow(clippy::too_many_arguments)]
 pub fn write_view(
     dir: &Path,
     frame: u64,
     view: usize,
-    captured: &CapturedView,
+    captured: &CapturedImage,
+    api: &Api,
     background: &RgbaImage,
     settings: &Settings,
     motion: serde_json::Map<String, serde_json::Value>,
@@ -106,7 +116,8 @@ pub fn write_view(
     let mut json = serde_json::json!({
         "frame": frame,
         "view": view,
-        "format": format!("{:?}", item.vk_format()),
+        "graphics": api.graphics,
+        "format": api.format,
         "bytes_per_pixel": item.format.bytes_per_pixel(),
         "srgb": item.format.srgb,
         "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},

@@ -3,6 +3,7 @@
 //! at xrEndFrame or, for an image an app released ahead of its xrEndFrame, at that release.
 
 use super::capture_files;
+use super::graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
 use super::indicator;
 use super::live_settings::Settings;
 use super::log;
@@ -14,9 +15,8 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::blurred_texels::BlurTaps;
 use crate::camera;
-use crate::gpu::frame::{FrameBackground, FrameEngine, FrameOptions, OverlayPixels};
-use crate::gpu::pipelines::Origin;
-use crate::gpu::{CapturedView, FrameView, GpuError, ViewKey};
+use crate::gpu::frame::{FrameBackground, OverlayPixels};
+use crate::gpu::ViewKey;
 use openxr_sys as xr;
 use std::time::Instant;
 
@@ -84,9 +84,9 @@ fn work_item(
     image: u32,
     region: &ViewRegion,
     settings: &Settings,
-) -> Option<FrameView> {
+) -> Option<ViewImage> {
     let format = sc.info.pixel.filter(|_| sc.info.processable())?;
-    let vk_image = sc.image(image as usize)?;
+    let handle = sc.image(image as usize)?;
     let r = region.rect;
     let fits = r.offset.x >= 0
         && r.offset.y >= 0
@@ -109,14 +109,15 @@ fn work_item(
     let mapping = region
         .mapping
         .unwrap_or_else(|| view_mappings::quad_mapping(settings));
-    Some(FrameView::new(
+    Some(ViewImage {
         key,
-        vk_image,
+        image: handle,
+        api_format: sc.info.api_format,
         format,
-        sc.info.vk_format(),
-        sc.info.in_place,
+        layered: sc.info.array_size > 1,
+        in_place: sc.info.in_place,
         mapping,
-    ))
+    })
 }
 
 /// Each enhanced sub-image's swapchain with its regions in this frame, in submission order.
@@ -138,7 +139,7 @@ fn regions_by_swapchain(subs: &[SubImage]) -> Vec<(xr::Swapchain, Vec<ViewRegion
 
 /// Remembers each swapchain's regions for images released ahead of their xrEndFrame, and
 /// returns the work for the images the layer holds now. The caller holds the session's lock.
-fn frame_items(subs: &[SubImage], settings: &Settings) -> Vec<FrameView> {
+fn frame_items(subs: &[SubImage], settings: &Settings) -> Vec<ViewImage> {
     let mut items = Vec::new();
     for (handle, regions) in regions_by_swapchain(subs) {
         let Some(sc) = state::swapchain(handle) else {
@@ -188,7 +189,7 @@ pub(super) fn enhance_ahead(
     swapchain: xr::Swapchain,
     image: u32,
 ) {
-    let items: Vec<FrameView> = regions_ahead(s, sc)
+    let items: Vec<ViewImage> = regions_ahead(s, sc)
         .iter()
         .filter_map(|r| work_item(swapchain, sc, image, r, &s.settings))
         .collect();
@@ -262,22 +263,10 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = None;
 }
 
-/// The log's line once a frame sampled texels its source's thread wrote into a mapped image.
-const SOURCE_TEXELS: &str =
-    "live frames' texels are written into mapped memory on the camera's thread, before the frame call";
-
-/// How a frame's texels, when its source prepared them, reach the views (the log's line).
-fn prepared_texels_path(prepared: bool, engine: &FrameEngine) -> Option<&'static str> {
-    prepared.then_some(match engine.direct_texels() {
-        true => "live frames' texels are written straight into mapped images the views sample",
-        false => "live frames' texels reach the views through a staging buffer and an image copy",
-    })
-}
-
 /// `process` with panics caught: a panic turns the session into pass-through.
 fn guarded_process(
     s: &mut SessionState,
-    items: Vec<FrameView>,
+    items: Vec<ViewImage>,
     blend: Option<xr::EnvironmentBlendMode>,
 ) {
     let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(s, items, blend)));
@@ -290,7 +279,7 @@ fn guarded_process(
 }
 
 /// Enhances `items` in place on the app's queue; any failure turns the session into pass-through.
-fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::EnvironmentBlendMode>) {
+fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::EnvironmentBlendMode>) {
     // Mode off: the app's frames untouched, no GPU work at all.
     if items.is_empty()
         || s.settings.params.mode == ViewMode::Off
@@ -301,12 +290,11 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
         return;
     }
     sources::open_when_needed(s);
-    if let (Some(bg), Some(engine)) = (&s.background, &s.engine) {
-        // Live frames come prepared for these settings from the source's thread, which also
-        // writes them into the images the views sample once the engine has made them. The
-        // engine's sink is one for its life: after the first frame this delivers nothing new.
+    if let (Some(bg), Some(graphics)) = (&s.background, &s.engine) {
+        // Live frames come prepared for these settings from the source's thread (and, where
+        // the graphics can take them, written straight into what the views sample).
         bg.prepare_with(BlurTaps::of(&s.settings.params));
-        bg.deliver_texels_to(Some(engine.texel_sink()));
+        graphics.take_live_texels(bg);
     }
     let Some(frame) = background_frame(s) else {
         return;
@@ -323,13 +311,12 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
         sequence,
     };
     let done = enhance(s, &items, background, options);
-    let engine = s.engine.as_ref().expect("checked above");
-    let texels_path = prepared_texels_path(prepared.is_some(), engine);
-    let from_source = engine.texels_from_source().0 > 0;
+    let graphics = s.engine.as_ref().expect("checked above");
+    let lines = graphics.frame_lines(&items, prepared.is_some());
     match done {
         Ok(views) => {
             if s.processed == 0 {
-                log_began(s.started, engine);
+                log_began(s.started, graphics.as_ref());
             }
             if options.capture {
                 write_capture(s, &views, &frame.image);
@@ -339,46 +326,41 @@ fn process(s: &mut SessionState, items: Vec<FrameView>, blend: Option<xr::Enviro
                 "first-frame",
                 &format!("processing frames ({} views per frame)", items.len()),
             );
-            if let Some(line) = texels_path {
-                log::once("prepared-texels-path", line);
+            for (key, line) in lines {
+                log::once(key, &line);
             }
-            if from_source {
-                log::once("source-texels", SOURCE_TEXELS);
-            }
-            let in_place = items.iter().filter(|i| i.in_place).count();
-            log::once(
-                "first-frame-path",
-                &format!(
-                    "views enhanced in place: {in_place} of {} (the others through a copy)",
-                    items.len()
-                ),
-            );
         }
-        Err(GpuError::Pending) => log::once(
-            "pipelines-pending",
-            "building the shader pipelines on the layer's own thread: frames go through untouched until they are ready",
-        ),
-        Err(e) => {
+        Err(NotDone::Pending) => log::once("pipelines-pending", graphics.pending_line()),
+        Err(NotDone::Failed(e)) => {
             log::info(&format!(
-                "GPU work failed ({e}): passing this session's frames through from now on"
+                "{e}: passing this session's frames through from now on"
             ));
             s.retire_engine();
         }
     }
 }
 
+/// What a frame asks for besides the enhancement.
+#[derive(Clone, Copy)]
+struct FrameOptions {
+    /// Read each view back before and after.
+    capture: bool,
+    /// Wait for shaders still being built instead of passing the frame through.
+    wait_for_pipelines: bool,
+}
+
 /// Enhances the views with the newest background, and draws the indicator while it shows.
-/// [`GpuError::Pending`] while a pipeline is still being built (frames pass through).
+/// [`NotDone::Pending`] while a shader is still being built (frames pass through).
 fn enhance(
     s: &mut SessionState,
-    views: &[FrameView],
+    views: &[ViewImage],
     background: FrameBackground,
     options: FrameOptions,
-) -> Result<Vec<CapturedView>, GpuError> {
-    let engine = s.engine.as_mut().expect("checked by the caller");
+) -> Result<Vec<CapturedImage>, NotDone> {
+    let graphics = s.engine.as_mut().expect("checked by the caller");
     let params = &s.settings.params;
-    let ready = engine.pipelines_ready(views, params, options.wait_for_pipelines)?;
-    // The indicator's time starts with the first enhanced frame, not while pipelines build.
+    graphics.ready(views, params, options.wait_for_pipelines)?;
+    // The indicator's time starts with the first enhanced frame, not while shaders build.
     s.indicator.update(&s.settings, Instant::now());
     let text = s.indicator.showing(Instant::now()).map(str::to_string);
     let runs = |region| {
@@ -390,44 +372,35 @@ fn enhance(
         colour: indicator::COLOUR,
         runs: &runs,
     });
-    engine.process(ready, views, background, params, overlay.as_ref(), options)
+    graphics.enhance(views, background, params, overlay.as_ref(), options.capture)
 }
 
-/// The session's start-up in one line: when enhancement began and what the pipelines took.
-fn log_began(started: Instant, engine: &FrameEngine) {
+/// The session's start-up in one line: when enhancement began and what its shaders took.
+fn log_began(started: Instant, graphics: &dyn SessionGraphics) {
     let after = started.elapsed().as_secs_f64();
-    let Some(r) = engine.build_report() else {
+    let Some(built) = graphics.build_summary() else {
         return;
     };
-    let cache = match &r.cache {
-        Origin::Process => format!(
-            "{} bytes from this process's earlier session",
-            r.cache_bytes
-        ),
-        Origin::File(path) => format!("{} bytes from {}", r.cache_bytes, path.display()),
-        Origin::Empty(None) => "empty".into(),
-        Origin::Empty(Some(why)) => format!("empty ({why})"),
-    };
     log::info(&format!(
-        "enhancement began {after:.3} s after the session started ({} pipelines built in {:.3} s on the layer's thread; pipeline cache: {cache})",
-        r.built,
-        r.build_time.as_secs_f64()
+        "enhancement began {after:.3} s after the session started ({built})"
     ));
-    let each: Vec<String> = r
-        .builds
-        .iter()
-        .map(|(name, t)| format!("{name} {:.0} ms", t.as_secs_f64() * 1e3))
-        .collect();
-    log::debug(&format!("pipeline builds: {}", each.join(", ")));
 }
 
-fn write_capture(s: &SessionState, views: &[CapturedView], bg: &crate::image::RgbaImage) {
+fn write_capture(s: &SessionState, views: &[CapturedImage], bg: &crate::image::RgbaImage) {
     let Some(c) = s.settings.capture() else {
         return;
     };
     for (k, v) in views.iter().enumerate() {
         let motion = motion::capture_json(s.motion.views.get(k));
-        let written = capture_files::write_view(&c.dir, s.processed, k, v, bg, &s.settings, motion);
+        let Some(graphics) = s.engine.as_ref() else {
+            return;
+        };
+        let api = capture_files::Api {
+            graphics: graphics.graphics(),
+            format: graphics.format_name(v.view.api_format),
+        };
+        let written =
+            capture_files::write_view(&c.dir, s.processed, k, v, &api, bg, &s.settings, motion);
         if let Err(e) = written {
             log::once("capture-failed", &format!("capture failed: {e}"));
         }

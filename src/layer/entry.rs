@@ -4,9 +4,10 @@
 
 use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
+use super::graphics::vulkan::app_vulkan;
 use super::live_settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
-use super::{app_spaces, app_vulkan, blend, log, session, swapchain, timespec};
+use super::{app_spaces, blend, log, session, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};

@@ -4,16 +4,15 @@
 //! failure turns the affected session into pass-through with one log line.
 
 mod app_spaces;
-mod app_vulkan;
 mod blend;
 pub mod capture_files;
 mod dispatch;
 mod end_frame;
 mod entry;
 mod ffi;
+pub mod graphics;
 mod headset_settings;
 mod image_states;
-mod in_place;
 pub mod indicator;
 pub mod installed_files;
 pub mod live_settings;

@@ -1,17 +1,14 @@
-//! Sessions: read the Vulkan graphics binding at xrCreateSession and set up the session's
-//! frame engine and background source ([`sources`]); at xrEndFrame enhance the frame's held
+//! Sessions: read the graphics binding at xrCreateSession and set up the session's graphics
+//! ([`graphics`]: Vulkan or OpenGL) and background source ([`sources`]); at xrEndFrame enhance the frame's held
 //! images ([`end_frame`]) and release them before the runtime composes them.
 //! At xrCreateSession the system's `[device."..."]` config table applies ([`headset_settings`]).
 //! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
 //! a changed background source is reopened on a helper thread while frames pass through.
 
-use super::ffi::{find_in_chain, guard, LayerError};
-use super::live_settings::Settings;
+use super::ffi::{guard, LayerError};
+use super::graphics::{self, Bound};
 use super::state::{self, lock, SessionState};
 use super::{blend, end_frame, headset_settings, log, sources, swapchain};
-use crate::gpu::frame::FrameEngine;
-use crate::gpu::{Engine, GpuDevice, GpuError};
-use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::sync::{Arc, Mutex};
 
@@ -29,30 +26,27 @@ pub unsafe extern "system" fn create_session(
         if result.into_raw() < 0 {
             return Ok(result);
         }
-        // SAFETY: the runtime accepted info, so its next chain is valid.
-        let binding = unsafe { info.as_ref() }.and_then(|i| unsafe {
-            find_in_chain::<xr::GraphicsBindingVulkanKHR>(
-                i.next,
-                xr::StructureType::GRAPHICS_BINDING_VULKAN_KHR,
-            )
-        });
-        // SAFETY: the runtime accepted info, so its systemId is the app's system.
+        // SAFETY: the runtime accepted info, so its system is the app's.
         let system = unsafe { info.as_ref() }.map(|i| i.system_id);
         let settings = headset_settings::settings_on(instance, &inst, system);
         let started = std::time::Instant::now();
-        let engine = match binding {
-            // SAFETY: a Vulkan binding the runtime accepted holds valid handles.
-            Some(b) => set_up(unsafe { &*b }, &settings),
-            None => {
-                // SAFETY: the runtime accepted info, so it and its next chain are valid.
-                let api = unsafe { info.as_ref().and_then(|i| super::ffi::graphics_api(i.next)) };
-                let api = api.unwrap_or("no known graphics binding");
-                log::info(&format!(
-                    "session is not a Vulkan session ({api}): contrastxr enhances Vulkan sessions only; passing its frames through untouched"
-                ));
+        // SAFETY: the runtime accepted info, so it and its next chain are valid.
+        let next_chain = unsafe { info.as_ref() }.map_or(std::ptr::null(), |i| i.next);
+        // SAFETY: as above.
+        let (api, bound) = unsafe { graphics::bind(next_chain, &settings) };
+        let engine = match bound {
+            Bound::Enhanced(graphics) => Some(graphics),
+            Bound::PassThrough(why) => {
+                log::info(&format!("session ({api}): {why}"));
                 None
             }
         };
+        let verdict = if engine.is_some() {
+            "enhanced"
+        } else {
+            "passed through"
+        };
+        log::info(&format!("{}{api}, {verdict}", log::GRAPHICS_API));
         // SAFETY: session was written by the successful create call.
         let handle = unsafe { *session };
         let motion = super::motion::SessionMotion::create(&inst.next, handle, inst.timespec);
@@ -84,45 +78,6 @@ pub unsafe extern "system" fn create_session(
             .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
         Ok(result)
     })
-}
-
-/// The session's frame engine on the app's device (its pipelines start building at once, on
-/// its own thread). The background is not opened here: a camera opens only when a frame is to
-/// be enhanced.
-fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Option<FrameEngine> {
-    let raw_instance = vk::Instance::from_raw(b.instance as u64);
-    let entry = super::app_vulkan::entry_for(raw_instance).map_err(GpuError::NoLoader);
-    // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
-    // alive until after xrDestroySession, where the engine is ended first.
-    let gpu = entry.and_then(|entry| unsafe {
-        GpuDevice::borrow(
-            entry,
-            raw_instance,
-            vk::PhysicalDevice::from_raw(b.physical_device as u64),
-            vk::Device::from_raw(b.device as u64),
-            b.queue_family_index,
-            b.queue_index,
-        )
-    });
-    // The background preparation's shaders first: the views' ones need a swapchain's format.
-    let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
-    let gpu = gpu.and_then(|gpu| gpu.queue_has_compute().map(|_| gpu));
-    let engine = match gpu.and_then(|gpu| FrameEngine::new(gpu, &[])) {
-        Ok(engine) => engine,
-        Err(e) => {
-            log::info(&format!(
-                "GPU set-up failed ({e}): passing frames through untouched"
-            ));
-            return None;
-        }
-    };
-    // Through request_shaders: a warm-up device that cannot be made is said here.
-    state::request_shaders(&engine, &first);
-    log::info(&format!(
-        "session on Vulkan device {:?}, background {}: enhancing",
-        engine.gpu.name, settings.background
-    ));
-    Some(engine)
 }
 
 /// How long the session's end waits for its background's thread (a camera restoring its

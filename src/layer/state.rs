@@ -9,14 +9,12 @@
 //! each other through the layer.
 
 use super::dispatch::NextFns;
+use super::graphics::SessionGraphics;
 use super::image_states::ImageStates;
 use super::indicator::Timer;
 use super::live_settings::Settings;
 use super::log;
-use crate::gpu::frame::FrameEngine;
-use crate::gpu::shaders::shader_ids::ShaderId;
 use crate::gpu::PixelFormat;
-use ash::vk;
 use openxr_sys as xr;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -34,13 +32,13 @@ pub struct SessionState {
     pub instance: xr::Instance,
     pub next: NextFns,
     pub settings: Arc<Settings>,
-    /// The GPU engine that does the frame's work, on the app's device (its pipelines build on
-    /// its own thread). None: this session passes through (not Vulkan, set-up failed, or an
-    /// earlier failure).
-    pub engine: Option<FrameEngine>,
+    /// The session's graphics, which do the frame's work on the app's device or context.
+    /// None: this session passes through (an API the layer does not enhance, set-up failed,
+    /// or an earlier failure).
+    pub engine: Option<Box<dyn SessionGraphics>>,
     /// Engines of earlier failures, kept until xrDestroySession: ending one waits for its
     /// pipeline thread, which no frame call may do.
-    pub retired: Vec<FrameEngine>,
+    pub retired: Vec<Box<dyn SessionGraphics>>,
     /// When the in-headset indicator shows (set from the first enhanced frame on).
     pub indicator: Timer,
     /// When the session started (xrCreateSession), for the log's line on when enhancement
@@ -92,27 +90,10 @@ impl SessionState {
         for engine in self.engine.take().into_iter().chain(self.retired.drain(..)) {
             if let Err(e) = engine.finish() {
                 log::info(&format!(
-                    "the GPU did not finish the layer's last work ({e}): its objects are left alive, not destroyed"
+                    "the layer's last work did not finish ({e}): its objects are left alive, not destroyed"
                 ));
             }
         }
-    }
-}
-
-/// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
-/// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device is
-/// made here when one of them needs it, never on the pipeline thread (gpu/warm_up.rs).
-pub fn request_shaders(engine: &FrameEngine, ids: &[ShaderId]) {
-    let t = Instant::now();
-    match engine.request(ids) {
-        Some(Ok(())) => log::debug(&format!(
-            "warm-up device made on the app's thread in {:.3} s",
-            t.elapsed().as_secs_f64()
-        )),
-        Some(Err(e)) => log::info(&format!(
-            "no warm-up device ({e}): shaders compile at their first dispatch; not tried again in this session"
-        )),
-        None => {}
     }
 }
 
@@ -129,14 +110,15 @@ pub struct ViewRegion {
 
 #[derive(Clone, Debug)]
 pub struct SwapchainInfo {
-    vk_format: vk::Format,
+    /// The format as the app named it (a VkFormat, a GL internal format).
+    pub api_format: i64,
     /// None for formats the engine does not handle (and for depth).
     pub pixel: Option<PixelFormat>,
     pub width: u32,
     pub height: u32,
     pub array_size: u32,
-    /// The layer got the transfer usage it needs to copy regions in and out.
-    pub transfer_usage: bool,
+    /// The swapchain has the usage the session's graphics need to touch its images.
+    pub usage_granted: bool,
     /// The layer also got storage usage (and, for sRGB, mutable format): views of this
     /// swapchain are enhanced in place.
     pub in_place: bool,
@@ -148,28 +130,23 @@ impl SwapchainInfo {
     pub fn new(
         app_info: &xr::SwapchainCreateInfo,
         pixel: Option<PixelFormat>,
-        transfer_usage: bool,
+        usage_granted: bool,
         in_place: bool,
     ) -> Self {
         SwapchainInfo {
-            vk_format: vk::Format::from_raw(app_info.format as i32),
+            api_format: app_info.format,
             pixel,
             width: app_info.width,
             height: app_info.height,
             array_size: app_info.array_size,
-            transfer_usage,
+            usage_granted,
             in_place,
         }
     }
 
-    /// The swapchain's Vulkan format, as the app created it.
-    pub fn vk_format(&self) -> vk::Format {
-        self.vk_format
-    }
-
     /// Whether the layer may touch this swapchain's images at all.
     pub fn processable(&self) -> bool {
-        self.pixel.is_some() && self.transfer_usage
+        self.pixel.is_some() && self.usage_granted
     }
 }
 
@@ -177,8 +154,8 @@ pub struct SwapchainState {
     pub session: xr::Session,
     pub next: NextFns,
     pub info: SwapchainInfo,
-    /// The swapchain's Vulkan images, once the app enumerated them (empty before).
-    images: Vec<vk::Image>,
+    /// The swapchain's images (VkImages, GL texture names), once the app enumerated them.
+    images: Vec<u64>,
     /// The images' states as the runtime sees them, and the release the layer holds.
     pub states: ImageStates,
     /// The regions the app's last xrEndFrame named in this swapchain (enhanced layers only):
@@ -199,18 +176,18 @@ impl SwapchainState {
         }
     }
 
-    /// The Vulkan image at `index` of the swapchain, if the app enumerated that many.
-    pub fn image(&self, index: usize) -> Option<vk::Image> {
+    /// The image at `index` of the swapchain, if the app enumerated that many.
+    pub fn image(&self, index: usize) -> Option<u64> {
         self.images.get(index).copied()
     }
 
-    /// Whether the app enumerated the swapchain's Vulkan images.
+    /// Whether the app enumerated the swapchain's images.
     pub fn has_images(&self) -> bool {
         !self.images.is_empty()
     }
 
-    /// The swapchain's Vulkan images, as the app enumerated them.
-    pub fn set_images(&mut self, images: Vec<vk::Image>) {
+    /// The swapchain's images, as the app enumerated them.
+    pub fn set_images(&mut self, images: Vec<u64>) {
         self.images = images;
     }
 }

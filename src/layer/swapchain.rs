@@ -9,17 +9,11 @@
 
 use super::ffi::{guard, LayerError};
 use super::image_states::{ImageStates, ReleasePlan};
-use super::in_place;
 use super::log;
 use super::state::{self, lock, SessionState, SwapchainInfo, SwapchainState};
-use crate::gpu::{PixelFormat, ViewShape};
-use ash::vk::{self, Handle};
+use crate::gpu::PixelFormat;
 use openxr_sys as xr;
 use std::sync::{Arc, Mutex};
-
-fn transfer() -> xr::SwapchainUsageFlags {
-    xr::SwapchainUsageFlags::TRANSFER_SRC | xr::SwapchainUsageFlags::TRANSFER_DST
-}
 
 fn is_colour(info: &xr::SwapchainCreateInfo) -> bool {
     let usage = info.usage_flags;
@@ -27,13 +21,11 @@ fn is_colour(info: &xr::SwapchainCreateInfo) -> bool {
         && !usage.contains(xr::SwapchainUsageFlags::DEPTH_STENCIL_ATTACHMENT)
 }
 
-/// The pixel format the layer enhances a swapchain's images in; None (the images pass
-/// through) for depth, formats the engine does not handle, and multisampled images (a
-/// multisampled image cannot be copied to a buffer: the runtime resolves it itself).
-fn enhanced_format(info: &xr::SwapchainCreateInfo) -> Option<PixelFormat> {
-    let pixel = PixelFormat::from_vk(vk::Format::from_raw(info.format as i32))?;
+/// Whether a swapchain of this create info may be enhanced at all: single-sampled colour
+/// images (a multisampled image cannot be copied out: the runtime resolves it itself).
+fn enhanceable(info: &xr::SwapchainCreateInfo) -> bool {
     if !is_colour(info) {
-        return None;
+        return false;
     }
     if info.sample_count > 1 {
         log::once(
@@ -43,9 +35,29 @@ fn enhanced_format(info: &xr::SwapchainCreateInfo) -> Option<PixelFormat> {
                 info.sample_count
             ),
         );
-        return None;
+        return false;
     }
-    Some(pixel)
+    true
+}
+
+/// What the session's graphics need of a swapchain: the pixel format its images are enhanced
+/// in (None: they pass through), the usage the layer must have, and usage for in place.
+fn plan(s: &SessionState, info: &xr::SwapchainCreateInfo) -> Option<Plan> {
+    let graphics = s.engine.as_ref()?;
+    let pixel = graphics
+        .pixel_format(info.format)
+        .filter(|_| enhanceable(info))?;
+    Some(Plan {
+        pixel,
+        needed: graphics.needed_usage(),
+        in_place: graphics.in_place_usage(pixel, info, &s.settings),
+    })
+}
+
+struct Plan {
+    pixel: PixelFormat,
+    needed: xr::SwapchainUsageFlags,
+    in_place: Option<xr::SwapchainUsageFlags>,
 }
 
 /// # Safety
@@ -60,44 +72,44 @@ pub(crate) unsafe extern "system" fn create_swapchain(
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
             let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
-            let (next, active) = {
-                let s = lock(&s);
-                (s.next, s.engine.is_some())
-            };
+            let next = lock(&s).next;
             // SAFETY: the app's create info (null is left for the runtime to reject).
             let Some(app_info) = (unsafe { info.as_ref() }) else {
                 // SAFETY: forwarding the app's arguments.
                 return Ok(unsafe { (next.create_swapchain)(session, info, swapchain) });
             };
-            let vk_format = vk::Format::from_raw(app_info.format as i32);
+            let format = app_info.format;
             // Pass-through sessions never have images held or touched.
-            let pixel = enhanced_format(app_info).filter(|_| active);
-            let storage = pixel.and_then(|p| in_place::added_usage(&lock(&s), p, app_info));
-            let mut transfer_usage = app_info.usage_flags.contains(transfer());
+            let plan = plan(&lock(&s), app_info);
+            let pixel = plan.as_ref().map(|p| p.pixel);
+            let needed = plan
+                .as_ref()
+                .map_or(xr::SwapchainUsageFlags::EMPTY, |p| p.needed);
+            let mut usage_granted = app_info.usage_flags.contains(needed);
             let mut in_place = false;
             let mut result = xr::Result::ERROR_RUNTIME_FAILURE;
-            if let Some(extra) = storage {
+            if let Some(extra) = plan.as_ref().and_then(|p| p.in_place) {
                 let mut wanted = *app_info;
-                wanted.usage_flags |= transfer() | extra;
+                wanted.usage_flags |= needed | extra;
                 // SAFETY: the app's create info with more usage bits.
                 result = unsafe { (next.create_swapchain)(session, &wanted, swapchain) };
                 in_place = result.into_raw() >= 0;
-                transfer_usage |= in_place;
+                usage_granted |= in_place;
                 if !in_place {
-                    log::once(&format!("no-storage-{vk_format:?}"), &format!(
-                        "the runtime refused storage usage on {vk_format:?} swapchains ({result:?}): their views are enhanced through a copy"
+                    log::once(&format!("no-storage-{format}"), &format!(
+                        "the runtime refused storage usage on swapchains of format {format} ({result:?}): their views are enhanced through a copy"
                     ));
                 }
             }
-            if active && pixel.is_some() && !transfer_usage {
+            if pixel.is_some() && !usage_granted {
                 let mut wanted = *app_info;
-                wanted.usage_flags |= transfer();
-                // SAFETY: the app's create info with two more usage bits.
+                wanted.usage_flags |= needed;
+                // SAFETY: the app's create info with the usage bits the layer needs.
                 result = unsafe { (next.create_swapchain)(session, &wanted, swapchain) };
-                transfer_usage = result.into_raw() >= 0;
-                if !transfer_usage {
-                    log::once(&format!("no-transfer-{vk_format:?}"), &format!(
-                    "the runtime refused transfer usage on {vk_format:?} swapchains ({result:?}): those pass through"
+                usage_granted = result.into_raw() >= 0;
+                if !usage_granted {
+                    log::once(&format!("no-transfer-{format}"), &format!(
+                    "the runtime refused transfer usage on swapchains of format {format} ({result:?}): those pass through"
                 ));
                 }
             }
@@ -110,20 +122,15 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 let state = SwapchainState::new(
                     session,
                     next,
-                    SwapchainInfo::new(app_info, pixel, transfer_usage, in_place),
+                    SwapchainInfo::new(app_info, pixel, usage_granted, in_place),
                 );
                 // SAFETY: written by the successful create call.
                 let handle = unsafe { *swapchain };
                 state::registry()
                     .swapchains
                     .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
-                if let Some(format) = pixel.filter(|_| transfer_usage) {
-                    let shape = ViewShape {
-                        format,
-                        width: app_info.width,
-                        in_place,
-                    };
-                    request_shaders(&s, shape);
+                if let Some(format) = pixel.filter(|_| usage_granted) {
+                    request_shaders(&s, format, app_info.width, in_place);
                 }
             }
             Ok(result)
@@ -133,13 +140,10 @@ pub(crate) unsafe extern "system" fn create_swapchain(
 
 /// Starts building the shaders that views of this swapchain will need (on the engine's own
 /// thread), so they are likely ready by the first xrEndFrame. Views usually span the width.
-fn request_shaders(s: &Mutex<SessionState>, shape: ViewShape) {
+fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_place: bool) {
     let s = lock(s);
-    let Some(engine) = s.engine.as_ref() else {
-        return;
-    };
-    if let Ok(ids) = crate::gpu::Engine::shaders_for(&s.settings.params, [shape]) {
-        state::request_shaders(engine, &ids);
+    if let Some(graphics) = s.engine.as_ref() {
+        graphics.request_shaders(&s.settings.params, format, width, in_place);
     }
 }
 
@@ -175,7 +179,7 @@ fn forget(sc: &Arc<Mutex<SwapchainState>>, swapchain: xr::Swapchain) {
         let forgotten = s
             .engine
             .as_mut()
-            .map(|engine| engine.forget_swapchain(swapchain.into_raw()));
+            .map(|graphics| graphics.forget_swapchain(swapchain.into_raw()));
         if let Some(Err(e)) = forgotten {
             // Its image views stay alive under handles the runtime may reuse: no more frames.
             log::info(&format!(
@@ -213,15 +217,13 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
             ) {
                 // SAFETY: on success the runtime filled *count structs of the type the app chose.
                 let n = unsafe { *count } as usize;
-                // SAFETY: images is non-null (checked above) and holds at least one struct.
-                if unsafe { (*images).ty } == xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR {
-                    let vk_images = images as *const xr::SwapchainImageVulkanKHR;
-                    // SAFETY: n Vulkan image structs were written.
-                    let raw = (0..n)
-                        .map(|i| unsafe { vk::Image::from_raw((*vk_images.add(i)).image) })
-                        .collect();
-                    lock(&sc).set_images(raw);
-                }
+                with_session(&sc, |s, sc| {
+                    let graphics = s.and_then(|s| s.engine.as_ref());
+                    // SAFETY: n structs of the app's chosen type were written (checked non-null).
+                    if let Some(raw) = graphics.and_then(|g| unsafe { g.images(images, n) }) {
+                        sc.set_images(raw);
+                    }
+                });
             }
             Ok(result)
         },
@@ -400,6 +402,7 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ash::vk;
 
     fn info(
         format: vk::Format,
@@ -422,13 +425,13 @@ mod tests {
     }
 
     #[test]
-    fn only_single_sampled_colour_images_of_known_formats_are_enhanced() {
+    fn only_single_sampled_colour_images_are_enhanced() {
         let colour = xr::SwapchainUsageFlags::COLOR_ATTACHMENT;
         let depth = xr::SwapchainUsageFlags::DEPTH_STENCIL_ATTACHMENT;
         let srgb = vk::Format::R8G8B8A8_SRGB;
-        assert!(enhanced_format(&info(srgb, colour, 1)).is_some());
-        assert!(enhanced_format(&info(srgb, colour, 4)).is_none());
-        assert!(enhanced_format(&info(srgb, depth, 1)).is_none());
-        assert!(enhanced_format(&info(vk::Format::D32_SFLOAT, colour, 1)).is_none());
+        assert!(enhanceable(&info(srgb, colour, 1)));
+        assert!(!enhanceable(&info(srgb, colour, 4)));
+        assert!(!enhanceable(&info(srgb, depth, 1)));
+        assert!(!enhanceable(&info(srgb, colour | depth, 1)));
     }
 }

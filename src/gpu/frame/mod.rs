@@ -13,4 +13,4 @@ pub use app_views::can_store;
 pub(crate) use app_views::storage_view;
 pub use frame_engine::{FrameBackground, FrameEngine, FrameOptions, PipelinesReady};
 pub use frame_view::{CapturedView, FrameView, ViewKey};
-pub use overlay::{OverlayPixels, Run};
+pub use overlay::{encode as overlay_pixel, OverlayPixels, Run};

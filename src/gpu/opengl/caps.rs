@@ -53,7 +53,10 @@ impl Caps {
                 "the context is OpenGL ES ({version_text}), not desktop OpenGL"
             )));
         }
-        let version = parse_version(&version_text).unwrap_or((0, 0));
+        let mut version = parse_version(&version_text).unwrap_or((0, 0));
+        if crate::fault::hit("gl-old-context") {
+            version = (3, 3);
+        }
         if version < (4, 3) {
             return Err(GlError::Unsupported(format!(
                 "the context is OpenGL {}.{}, older than 4.3 (no compute shaders)",

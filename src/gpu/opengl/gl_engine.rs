@@ -89,6 +89,10 @@ pub struct GlEngine {
     programs: Programs,
     background: Option<Background>,
     views: Vec<ViewBuffers>,
+    /// An empty framebuffer object bound while the recipe runs: with the app's window-system
+    /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
+    /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer).
+    framebuffer: u32,
 }
 
 /// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
@@ -150,6 +154,7 @@ impl GlEngine {
             caps,
             background: None,
             views: Vec::new(),
+            framebuffer: 0,
         })
     }
 
@@ -159,6 +164,9 @@ impl GlEngine {
     }
 
     fn check_lost(&self) -> Result<(), GlError> {
+        if crate::fault::hit("gl-context-lost") {
+            return Err(GlError::ContextLost);
+        }
         if self.caps.reset_status {
             // SAFETY: glGetGraphicsResetStatus exists (GL 4.5 or a robustness extension).
             if unsafe { (self.gl.get_graphics_reset_status)() } != 0 {
@@ -284,6 +292,25 @@ impl GlEngine {
         ])
     }
 
+    /// Whether the programs `views` need are built: one more is built (or its parallel build
+    /// checked) per call while not. Errors as `enhance` has them, before anything runs.
+    ///
+    /// # Safety
+    /// As for `enhance`.
+    pub unsafe fn ready(&mut self, views: &[GlView], params: &Params) -> Result<bool, GlError> {
+        self.check_lost()?;
+        params.validate().map_err(GlError::Input)?;
+        if params.mode == ViewMode::Off || views.is_empty() {
+            return Ok(true);
+        }
+        let mut ids = Vec::new();
+        for v in views {
+            ids.extend(Self::view_programs(v, params)?);
+            self.check_view(v)?;
+        }
+        self.programs.ready(&self.gl, &ids)
+    }
+
     /// Enhances `views` against the background set last, on the current context. Passes
     /// through untouched (Ok(Compiling)) while a program they need is being built, and with
     /// an error (the app's frame and GL state unchanged) when one failed, the context is
@@ -297,18 +324,16 @@ impl GlEngine {
         views: &[GlView],
         params: &Params,
     ) -> Result<Outcome, GlError> {
-        self.check_lost()?;
-        params.validate().map_err(GlError::Input)?;
+        // SAFETY: this call's own contract.
+        if !unsafe { self.ready(views, params) }? {
+            return Ok(Outcome::Compiling);
+        }
         if params.mode == ViewMode::Off || views.is_empty() {
             return Ok(Outcome::Enhanced);
         }
         let mut ids = Vec::new();
         for v in views {
             ids.extend(Self::view_programs(v, params)?);
-            self.check_view(v)?;
-        }
-        if !self.programs.ready(&self.gl, &ids)? {
-            return Ok(Outcome::Compiling);
         }
         let Some(bg_size) = self.background.as_ref().map(|b| b.size) else {
             return Err(GlError::Input("no background frame was set".into()));
@@ -319,7 +344,13 @@ impl GlEngine {
         for (k, v) in views.iter().enumerate() {
             self.ensure_buffers(k, v)?;
         }
+        if self.framebuffer == 0 {
+            // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`.
+            unsafe { (self.gl.create_framebuffers)(1, &mut self.framebuffer) };
+        }
         let saved = SavedState::save(&self.gl);
+        // SAFETY: a framebuffer this engine made; the app's bindings are put back by `restore`.
+        unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
         for (k, v) in views.iter().enumerate() {
             let programs: [usize; 3] = ids[3 * k..3 * k + 3].try_into().expect("3 ids");
             self.run_view(k, v, params, bg_size, programs);
@@ -329,7 +360,7 @@ impl GlEngine {
     }
 
     /// The view's texture is there with its format, and the region lies inside it.
-    fn check_view(&self, v: &GlView) -> Result<(), GlError> {
+    pub(super) fn check_view(&self, v: &GlView) -> Result<(), GlError> {
         let g = &self.gl;
         let (x, y, w, h) = v.rect;
         let width = texture_level_int(g, v.texture, gl::TEXTURE_WIDTH);
@@ -537,6 +568,11 @@ impl GlEngine {
         self.save_program_cache();
         self.programs.destroy(&self.gl);
         self.drop_background();
+        if self.framebuffer != 0 {
+            // SAFETY: ours; the context is current (the caller's contract).
+            unsafe { (self.gl.delete_framebuffers)(1, &self.framebuffer) };
+            self.framebuffer = 0;
+        }
         for v in self.views.drain(..) {
             for b in [v.pixels, v.tiles].into_iter().filter(|&b| b != 0) {
                 // SAFETY: ours; the context is current (the caller's contract).

@@ -17,6 +17,7 @@ pub mod gl_format;
 pub mod offline;
 pub mod programs;
 pub mod state_guard;
+mod view_pixels;
 
 pub use functions::Gl;
 pub use gl_engine::{GlEngine, GlTarget, GlView, Outcome};

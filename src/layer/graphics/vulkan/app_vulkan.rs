@@ -3,8 +3,8 @@
 //! VkInstance made, and its session's device functions come from there. Otherwise they come
 //! from the Vulkan loader already loaded in the process; the layer never loads another.
 
-use super::ffi::{guard, LayerError};
-use super::state;
+use crate::layer::ffi::{guard, LayerError};
+use crate::layer::state;
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::collections::HashMap;

@@ -4,22 +4,22 @@
 //! create info again and the views go through a copy. `in_place = "auto"` leaves CPU drivers
 //! on the copy path: there a copy is a memcpy and storage-image access costs more.
 
-use super::ffi::find_in_chain;
-use super::state::SessionState;
 use crate::config::InPlace;
 use crate::gpu::frame::can_store;
-use crate::gpu::PixelFormat;
+use crate::gpu::{GpuDevice, PixelFormat};
+use crate::layer::ffi::find_in_chain;
+use crate::layer::live_settings::Settings;
 use openxr_sys as xr;
 
 /// The usage bits to add for in place on a swapchain of `format`, if the session's settings,
 /// its device and the app's create info allow it.
 pub fn added_usage(
-    s: &SessionState,
+    gpu: &GpuDevice,
+    settings: &Settings,
     format: PixelFormat,
     info: &xr::SwapchainCreateInfo,
 ) -> Option<xr::SwapchainUsageFlags> {
-    let gpu = &s.engine.as_ref()?.gpu;
-    let wanted = match s.settings.in_place {
+    let wanted = match settings.in_place {
         InPlace::On => true,
         InPlace::Off => false,
         InPlace::Auto => !gpu.is_cpu(),

@@ -1,0 +1,141 @@
+//! A view's pixels to and from client memory, outside the recipe: read back for a capture, and
+//! the indicator's lit runs written over an enhanced view. Both with the app's state saved and
+//! put back, no buffer bound to the pixel pack/unpack points and the pixel store at defaults.
+
+use super::functions::{self as gl, Gl};
+use super::gl_engine::{GlEngine, GlTarget, GlView};
+use super::gl_error::GlError;
+use super::gl_format::GlFormat;
+use super::state_guard::SavedState;
+use crate::gpu::frame::Run;
+
+/// The view's region bytes, rows as GL stores them (bottom first), tightly packed.
+///
+/// # Safety
+/// `g`'s context is current and `v` is a checked view of it.
+unsafe fn read(g: &Gl, v: &GlView, format: GlFormat) -> Vec<u8> {
+    let (x, y, w, h) = v.rect;
+    let bpp = format.pixel.bytes_per_pixel() as usize;
+    let mut out = vec![0u8; w as usize * h as usize * bpp];
+    let z = match v.target {
+        GlTarget::Texture2D => 0,
+        GlTarget::Texture2DArray { layer } => layer as i32,
+    };
+    let (fmt, ty) = format.transfer;
+    // SAFETY: the region lies in the texture (checked view); `out` holds it with rows tightly
+    // packed (pixel store at defaults, 4-byte alignment divides every row of 4- and 8-byte
+    // pixels), no pack buffer is bound.
+    unsafe {
+        (g.get_texture_sub_image)(
+            v.texture,
+            0,
+            x as i32,
+            y as i32,
+            z,
+            w as i32,
+            h as i32,
+            1,
+            fmt,
+            ty,
+            out.len() as i32,
+            out.as_mut_ptr().cast(),
+        )
+    };
+    out
+}
+
+/// Writes `pixel` (one pixel's bytes) over each run; run rows count from the view's top.
+///
+/// # Safety
+/// As for `read`.
+unsafe fn draw(g: &Gl, v: &GlView, format: GlFormat, runs: &[Run], pixel: &[u8]) {
+    let (x, y, w, h) = v.rect;
+    let (fmt, ty) = format.transfer;
+    for r in runs.iter().filter(|r| r.y < h && r.x < w) {
+        let len = r.len.min(w - r.x);
+        let row: Vec<u8> = pixel.repeat(len as usize);
+        // GL rows count from the bottom.
+        let gy = (y + h - 1 - r.y) as i32;
+        let gx = (x + r.x) as i32;
+        // SAFETY: the run lies inside the region (clipped above), `row` holds `len` pixels.
+        unsafe {
+            match v.target {
+                GlTarget::Texture2D => (g.texture_sub_image_2d)(
+                    v.texture,
+                    0,
+                    gx,
+                    gy,
+                    len as i32,
+                    1,
+                    fmt,
+                    ty,
+                    row.as_ptr().cast(),
+                ),
+                GlTarget::Texture2DArray { layer } => (g.texture_sub_image_3d)(
+                    v.texture,
+                    0,
+                    gx,
+                    gy,
+                    layer as i32,
+                    len as i32,
+                    1,
+                    1,
+                    fmt,
+                    ty,
+                    row.as_ptr().cast(),
+                ),
+            }
+        }
+    }
+}
+
+/// Runs `f` with the app's state saved, no pixel buffers bound, and puts the state back.
+fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> R {
+    let saved = SavedState::save(g);
+    // SAFETY: unbinding the pixel buffer points (put back by `restore`).
+    unsafe {
+        (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, 0);
+        (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, 0);
+    }
+    let r = f();
+    saved.restore(g);
+    r
+}
+
+impl GlEngine {
+    /// The view's pixels, rows top first (as the view is seen), tightly packed.
+    ///
+    /// # Safety
+    /// The engine's context is current, and `v` names one of its textures (checked here).
+    pub unsafe fn read_view(&self, v: &GlView) -> Result<Vec<u8>, GlError> {
+        self.check_view(v)?;
+        let format = GlFormat::of(v.internal_format)?;
+        let g = self.gl();
+        // SAFETY: the view was checked; the context is current (the caller's contract).
+        let bottom_first = with_client_memory(g, || unsafe { read(g, v, format) });
+        let row = v.rect.2 as usize * format.pixel.bytes_per_pixel() as usize;
+        Ok(bottom_first
+            .chunks_exact(row.max(1))
+            .rev()
+            .flatten()
+            .copied()
+            .collect())
+    }
+
+    /// Writes `pixel` (one pixel in the view's format) over the lit `runs` (rows from the
+    /// view's top).
+    ///
+    /// # Safety
+    /// As for `read_view`.
+    pub unsafe fn draw_runs(&self, v: &GlView, runs: &[Run], pixel: &[u8]) -> Result<(), GlError> {
+        self.check_view(v)?;
+        let format = GlFormat::of(v.internal_format)?;
+        if pixel.len() != format.pixel.bytes_per_pixel() as usize {
+            return Err(GlError::Input("an overlay pixel of the wrong size".into()));
+        }
+        let g = self.gl();
+        // SAFETY: as for `read_view`.
+        with_client_memory(g, || unsafe { draw(g, v, format, runs, pixel) });
+        Ok(())
+    }
+}

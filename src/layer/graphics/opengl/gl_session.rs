@@ -1,0 +1,302 @@
+//! An OpenGL session's graphics: the GL engine, made on the app's context at the first frame
+//! the layer acts on, every call inside that context (made current when it is not), and the
+//! background texels uploaded once per new frame (a frame its source did not prepare, such as
+//! a static one, is prepared here once).
+
+use super::glx_context::GlxContext;
+use crate::algorithm::params::Params;
+use crate::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::gpu::frame::{overlay_pixel, FrameBackground, OverlayPixels};
+use crate::gpu::opengl::{Gl, GlEngine, GlError, GlFormat, GlTarget, GlView, Outcome};
+use crate::gpu::PixelFormat;
+use crate::layer::graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
+use crate::layer::live_settings::Settings;
+use crate::layer::log;
+use openxr_sys as xr;
+use std::time::{Duration, Instant};
+
+/// How long a frame with `wait_for_pipelines` waits for its programs.
+const PROGRAM_WAIT: Duration = Duration::from_secs(60);
+
+pub struct GlSession {
+    api: &'static str,
+    context: GlxContext,
+    /// Made at the first frame the layer acts on, with the app's context current.
+    engine: Option<GlEngine>,
+    /// Texels prepared here for a frame that came without them, by its background sequence.
+    texels: Option<(u64, BlurredTexels)>,
+    /// When the first program build began, and when all were ready.
+    build: (Option<Instant>, Option<Duration>),
+}
+
+// SAFETY: the binding's display and context pointers are used only on the app's threads that
+// call into the layer, under the session's lock, as the runtime uses them.
+unsafe impl Send for GlSession {}
+
+fn failed(e: GlError) -> NotDone {
+    NotDone::Failed(e.to_string())
+}
+
+fn gl_view(v: &ViewImage) -> GlView {
+    let (x, y) = v.key.offset;
+    let (w, h) = v.key.extent;
+    GlView {
+        texture: v.image as u32,
+        target: match v.layered {
+            true => GlTarget::Texture2DArray {
+                layer: v.key.array_index,
+            },
+            false => GlTarget::Texture2D,
+        },
+        internal_format: v.api_format as u32,
+        // An OpenXR imageRect of an OpenGL swapchain counts rows from the bottom, as GL does.
+        rect: (x as u32, y as u32, w, h),
+        mapping: v.mapping,
+    }
+}
+
+impl GlSession {
+    pub fn new(api: &'static str, context: GlxContext) -> GlSession {
+        GlSession {
+            api,
+            context,
+            engine: None,
+            texels: None,
+            build: (None, None),
+        }
+    }
+
+    /// Runs `f` with the app's context current on this thread (and the engine made).
+    fn in_context<R>(
+        &mut self,
+        f: impl FnOnce(&mut GlEngine, &mut Option<(u64, BlurredTexels)>) -> Result<R, NotDone>,
+    ) -> Result<R, NotDone> {
+        let previous = self.context.enter().map_err(NotDone::Failed)?;
+        let engine = match self.engine.take() {
+            Some(engine) => Ok(engine),
+            // SAFETY: the app's context is current on this thread; the engine's later calls
+            // all happen inside `in_context`, with it current again.
+            None => Gl::from_process().and_then(|gl| unsafe { GlEngine::new(gl) }),
+        };
+        let result = match engine {
+            Ok(mut engine) => {
+                if self.build.0.is_none() {
+                    log::info(&format!(
+                        "the app's OpenGL context: {} (OpenGL {}.{})",
+                        engine.caps().driver,
+                        engine.caps().version.0,
+                        engine.caps().version.1
+                    ));
+                    self.build.0 = Some(Instant::now());
+                }
+                let r = f(&mut engine, &mut self.texels);
+                self.engine = Some(engine);
+                r
+            }
+            Err(e) => Err(failed(e)),
+        };
+        self.context.leave(previous);
+        result
+    }
+}
+
+/// The background's texels for this frame: its source's, when made for these settings, else
+/// prepared here once per background sequence.
+fn texels<'a>(
+    background: &'a FrameBackground,
+    prepared_here: &'a mut Option<(u64, BlurredTexels)>,
+    params: &Params,
+) -> &'a BlurredTexels {
+    let size = (background.image.width, background.image.height);
+    if let Some(t) = background.prepared.filter(|t| t.made_for(size, params)) {
+        return t;
+    }
+    if prepared_here.as_ref().map(|(s, _)| *s) != Some(background.sequence) {
+        let t = BlurredTexels::prepare(background.image, BlurTaps::of(params));
+        *prepared_here = Some((background.sequence, t));
+    }
+    &prepared_here.as_ref().expect("set above").1
+}
+
+impl SessionGraphics for GlSession {
+    fn api(&self) -> &'static str {
+        self.api
+    }
+
+    fn graphics(&self) -> &'static str {
+        "opengl"
+    }
+
+    fn pixel_format(&self, api_format: i64) -> Option<PixelFormat> {
+        let internal = u32::try_from(api_format).ok()?;
+        GlFormat::of(internal).ok().map(|f| f.pixel)
+    }
+
+    fn format_name(&self, api_format: i64) -> String {
+        match api_format as u32 {
+            0x8058 => "GL_RGBA8".into(),
+            0x8C43 => "GL_SRGB8_ALPHA8".into(),
+            0x805B => "GL_RGBA16".into(),
+            0x881A => "GL_RGBA16F".into(),
+            0x8059 => "GL_RGB10_A2".into(),
+            other => format!("GL format {other:#06x}"),
+        }
+    }
+
+    fn needed_usage(&self) -> xr::SwapchainUsageFlags {
+        // GL reads and writes a texture without usage flags.
+        xr::SwapchainUsageFlags::EMPTY
+    }
+
+    fn in_place_usage(
+        &self,
+        _: PixelFormat,
+        _: &xr::SwapchainCreateInfo,
+        _: &Settings,
+    ) -> Option<xr::SwapchainUsageFlags> {
+        None
+    }
+
+    unsafe fn images(
+        &self,
+        images: *const xr::SwapchainImageBaseHeader,
+        count: usize,
+    ) -> Option<Vec<u64>> {
+        // SAFETY: images holds at least one struct (the caller's contract).
+        if unsafe { (*images).ty } != xr::StructureType::SWAPCHAIN_IMAGE_OPENGL_KHR {
+            return None;
+        }
+        let gl_images = images as *const xr::SwapchainImageOpenGLKHR;
+        // SAFETY: count OpenGL image structs were written.
+        Some(
+            (0..count)
+                .map(|i| u64::from(unsafe { (*gl_images.add(i)).image }))
+                .collect(),
+        )
+    }
+
+    fn request_shaders(&self, _: &Params, _: PixelFormat, _: u32, _: bool) {
+        // Programs are built inside frame calls, with the app's context current.
+    }
+
+    fn forget_swapchain(&mut self, _: u64) -> Result<(), String> {
+        // The engine keeps buffers per view slot, none per swapchain.
+        Ok(())
+    }
+
+    fn take_live_texels(&self, _: &crate::camera::Background) {
+        // Live texels are uploaded at the frame call (a pixel buffer object per size).
+    }
+
+    fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone> {
+        let views: Vec<GlView> = views.iter().map(gl_view).collect();
+        let since = Instant::now();
+        let ready = self.in_context(|engine, _| loop {
+            // SAFETY: inside `in_context`: the engine's context is current; the views name the
+            // app's swapchain textures, which nothing else writes while the layer holds them.
+            let ready = unsafe { engine.ready(&views, params) }.map_err(failed)?;
+            if ready || !wait || since.elapsed() > PROGRAM_WAIT {
+                return Ok(ready);
+            }
+        })?;
+        if !ready {
+            return Err(NotDone::Pending);
+        }
+        if self.build.1.is_none() {
+            self.build.1 = self.build.0.map(|t| t.elapsed());
+        }
+        Ok(())
+    }
+
+    fn enhance(
+        &mut self,
+        views: &[ViewImage],
+        background: FrameBackground,
+        params: &Params,
+        overlay: Option<&OverlayPixels>,
+        capture: bool,
+    ) -> Result<Vec<CapturedImage>, NotDone> {
+        let gl_views: Vec<GlView> = views.iter().map(gl_view).collect();
+        self.in_context(|engine, prepared_here| {
+            let t = texels(&background, prepared_here, params);
+            // SAFETY: inside `in_context`: the engine's context is current.
+            unsafe { engine.set_background(t) }.map_err(failed)?;
+            let read = |engine: &GlEngine| -> Result<Vec<Vec<u8>>, NotDone> {
+                gl_views
+                    .iter()
+                    // SAFETY: inside `in_context`; the view names a swapchain texture.
+                    .map(|v| unsafe { engine.read_view(v) }.map_err(failed))
+                    .collect()
+            };
+            let before = if capture { read(engine)? } else { Vec::new() };
+            // SAFETY: inside `in_context`; the layer holds the views' images (their release),
+            // so nothing else writes them during the call.
+            match unsafe { engine.enhance(&gl_views, params) }.map_err(failed)? {
+                Outcome::Compiling => return Err(NotDone::Pending),
+                Outcome::Enhanced => {}
+            }
+            if let Some(o) = overlay {
+                for (v, g) in views.iter().zip(&gl_views) {
+                    let runs = (o.runs)(v.key.extent);
+                    let pixel = overlay_pixel(v.format, o.colour);
+                    // SAFETY: as for the enhancement above.
+                    unsafe { engine.draw_runs(g, &runs, &pixel) }.map_err(failed)?;
+                }
+            }
+            if !capture {
+                return Ok(Vec::new());
+            }
+            let after = read(engine)?;
+            Ok(views
+                .iter()
+                .zip(before.into_iter().zip(after))
+                .map(|(v, (display, output))| CapturedImage {
+                    view: v.clone(),
+                    display,
+                    output,
+                })
+                .collect())
+        })
+    }
+
+    fn pending_line(&self) -> &'static str {
+        "building the OpenGL programs, one per frame call on the app's context (or from the program cache): frames go through untouched until they are ready"
+    }
+
+    fn build_summary(&self) -> Option<String> {
+        let took = self.build.1?;
+        Some(format!(
+            "OpenGL programs ready {:.3} s after the first frame call that needed them, built inside frame calls on the app's context",
+            took.as_secs_f64()
+        ))
+    }
+
+    fn frame_lines(&self, _: &[ViewImage], _: bool) -> Vec<(&'static str, String)> {
+        vec![(
+            "first-frame-path",
+            "views enhanced in the app's OpenGL context through a buffer copy of each view".into(),
+        )]
+    }
+
+    fn stop_building(&self) {
+        // Nothing builds outside frame calls.
+    }
+
+    fn finish(mut self: Box<Self>) -> Result<(), String> {
+        let Some(mut engine) = self.engine.take() else {
+            return Ok(());
+        };
+        match self.context.enter() {
+            Ok(previous) => {
+                // SAFETY: the app's context is current on this thread.
+                unsafe { engine.destroy() };
+                self.context.leave(previous);
+                Ok(())
+            }
+            Err(why) => {
+                engine.save_program_cache();
+                Err(format!("{why}: its OpenGL objects are left to the context"))
+            }
+        }
+    }
+}

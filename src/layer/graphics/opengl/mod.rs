@@ -1,0 +1,47 @@
+//! OpenGL sessions (XR_KHR_opengl_enable): the GL engine on the app's own context, made
+//! current around the layer's calls when it is not (glx_context.rs), the app's swapchain
+//! images as GL texture names. No GL call happens on a thread of the layer's own.
+
+mod gl_session;
+mod glx_context;
+
+use super::Bound;
+use crate::layer::live_settings::Settings;
+use gl_session::GlSession;
+use glx_context::GlxContext;
+use openxr_sys as xr;
+
+/// The session's graphics for an OpenGL Xlib binding (None: not one).
+///
+/// # Safety
+/// `base` starts a structure of the type it names, from a chain the runtime accepted.
+pub unsafe fn bind_xlib(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bound> {
+    if base.ty != xr::StructureType::GRAPHICS_BINDING_OPENGL_XLIB_KHR {
+        return None;
+    }
+    // SAFETY: the type tag says this is an Xlib binding (the caller's contract).
+    let b = unsafe { &*(base as *const _ as *const xr::GraphicsBindingOpenGLXlibKHR) };
+    let context = GlxContext::new(b.x_display.cast(), b.glx_drawable, b.glx_context.cast());
+    Some(match context {
+        Ok(context) => {
+            crate::layer::log::info(&format!(
+                "session on the app's OpenGL (Xlib) context, background {}: enhancing (the context is checked at the first frame)",
+                settings.background
+            ));
+            Bound::Enhanced(Box::new(GlSession::new("OpenGL (Xlib)", context)))
+        }
+        Err(why) => Bound::PassThrough(format!("{why}: passing its frames through untouched")),
+    })
+}
+
+/// An EGL binding (XR_MNDX_egl_enable): passed through, said in one line.
+///
+/// # Safety
+/// As for `bind_xlib`.
+pub unsafe fn bind_egl(base: &xr::BaseInStructure, _: &Settings) -> Option<Bound> {
+    (base.ty == xr::StructureType::GRAPHICS_BINDING_EGL_MNDX).then(|| {
+        Bound::PassThrough(
+            "the layer enhances OpenGL sessions with the Xlib binding, not yet EGL ones: passing its frames through untouched".into(),
+        )
+    })
+}

@@ -1,0 +1,280 @@
+//! A Vulkan session's graphics: the frame engine on the app's device (its pipelines build on
+//! the engine's own thread), the app's VkImages, and the in-place path where the runtime
+//! grants storage usage.
+
+use super::{app_vulkan, in_place};
+use crate::algorithm::params::Params;
+use crate::gpu::frame::{
+    FrameBackground, FrameEngine, FrameOptions, OverlayPixels, PipelinesReady,
+};
+use crate::gpu::pipelines::Origin;
+use crate::gpu::shaders::shader_ids::ShaderId;
+use crate::gpu::{Engine, FrameView, GpuDevice, GpuError, PixelFormat, ViewShape};
+use crate::layer::graphics::{Bound, CapturedImage, NotDone, SessionGraphics, ViewImage};
+use crate::layer::live_settings::Settings;
+use crate::layer::log;
+use ash::vk::{self, Handle};
+use openxr_sys as xr;
+use std::time::Instant;
+
+pub struct VulkanSession {
+    engine: FrameEngine,
+    /// The last `ready` answer, taken by the next `enhance`.
+    ready: Option<PipelinesReady>,
+}
+
+/// The session's graphics for a Vulkan binding (None: not one).
+///
+/// # Safety
+/// `base` starts a structure of the type it names, from a chain the runtime accepted.
+pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bound> {
+    if base.ty != xr::StructureType::GRAPHICS_BINDING_VULKAN_KHR {
+        return None;
+    }
+    // SAFETY: the type tag says this is a Vulkan binding (the caller's contract).
+    let b = unsafe { &*(base as *const _ as *const xr::GraphicsBindingVulkanKHR) };
+    Some(match set_up(b, settings) {
+        Ok(engine) => Bound::Enhanced(Box::new(VulkanSession {
+            engine,
+            ready: None,
+        })),
+        Err(e) => Bound::PassThrough(format!(
+            "GPU set-up failed ({e}): passing frames through untouched"
+        )),
+    })
+}
+
+/// The session's frame engine on the app's device (its pipelines start building at once, on
+/// its own thread).
+fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<FrameEngine, GpuError> {
+    let raw_instance = vk::Instance::from_raw(b.instance as u64);
+    let entry = app_vulkan::entry_for(raw_instance).map_err(GpuError::NoLoader)?;
+    // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
+    // alive until after xrDestroySession, where the engine is ended first.
+    let gpu = unsafe {
+        GpuDevice::borrow(
+            entry,
+            raw_instance,
+            vk::PhysicalDevice::from_raw(b.physical_device as u64),
+            vk::Device::from_raw(b.device as u64),
+            b.queue_family_index,
+            b.queue_index,
+        )
+    }?;
+    // The background preparation's shaders first: the views' ones need a swapchain's format.
+    let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
+    gpu.queue_has_compute()?;
+    let engine = FrameEngine::new(gpu, &[])?;
+    // Through request_shaders: a warm-up device that cannot be made is said here.
+    request_shaders(&engine, &first);
+    log::info(&format!(
+        "session on Vulkan device {:?}, background {}: enhancing",
+        engine.gpu.name, settings.background
+    ));
+    Ok(engine)
+}
+
+/// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
+/// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device is
+/// made here when one of them needs it, never on the pipeline thread (gpu/warm_up.rs).
+fn request_shaders(engine: &FrameEngine, ids: &[ShaderId]) {
+    let t = Instant::now();
+    match engine.request(ids) {
+        Some(Ok(())) => log::debug(&format!(
+            "warm-up device made on the app's thread in {:.3} s",
+            t.elapsed().as_secs_f64()
+        )),
+        Some(Err(e)) => log::info(&format!(
+            "no warm-up device ({e}): shaders compile at their first dispatch; not tried again in this session"
+        )),
+        None => {}
+    }
+}
+
+fn frame_view(v: &ViewImage) -> FrameView {
+    FrameView::new(
+        v.key,
+        vk::Image::from_raw(v.image),
+        v.format,
+        vk::Format::from_raw(v.api_format as i32),
+        v.in_place,
+        v.mapping,
+    )
+}
+
+fn not_done(e: GpuError) -> NotDone {
+    match e {
+        GpuError::Pending => NotDone::Pending,
+        e => NotDone::Failed(format!("GPU work failed ({e})")),
+    }
+}
+
+impl SessionGraphics for VulkanSession {
+    fn api(&self) -> &'static str {
+        "Vulkan"
+    }
+
+    fn graphics(&self) -> &'static str {
+        "vulkan"
+    }
+
+    fn pixel_format(&self, api_format: i64) -> Option<PixelFormat> {
+        PixelFormat::from_vk(vk::Format::from_raw(api_format as i32))
+    }
+
+    fn format_name(&self, api_format: i64) -> String {
+        format!("{:?}", vk::Format::from_raw(api_format as i32))
+    }
+
+    fn needed_usage(&self) -> xr::SwapchainUsageFlags {
+        xr::SwapchainUsageFlags::TRANSFER_SRC | xr::SwapchainUsageFlags::TRANSFER_DST
+    }
+
+    fn in_place_usage(
+        &self,
+        format: PixelFormat,
+        info: &xr::SwapchainCreateInfo,
+        settings: &Settings,
+    ) -> Option<xr::SwapchainUsageFlags> {
+        in_place::added_usage(&self.engine.gpu, settings, format, info)
+    }
+
+    unsafe fn images(
+        &self,
+        images: *const xr::SwapchainImageBaseHeader,
+        count: usize,
+    ) -> Option<Vec<u64>> {
+        // SAFETY: images holds at least one struct (the caller's contract).
+        if unsafe { (*images).ty } != xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR {
+            return None;
+        }
+        let vk_images = images as *const xr::SwapchainImageVulkanKHR;
+        // SAFETY: count Vulkan image structs were written.
+        Some(
+            (0..count)
+                .map(|i| unsafe { (*vk_images.add(i)).image })
+                .collect(),
+        )
+    }
+
+    fn request_shaders(&self, params: &Params, format: PixelFormat, width: u32, in_place: bool) {
+        let shape = ViewShape {
+            format,
+            width,
+            in_place,
+        };
+        if let Ok(ids) = Engine::shaders_for(params, [shape]) {
+            request_shaders(&self.engine, &ids);
+        }
+    }
+
+    fn forget_swapchain(&mut self, swapchain: u64) -> Result<(), String> {
+        self.engine
+            .forget_swapchain(swapchain)
+            .map_err(|e| e.to_string())
+    }
+
+    fn take_live_texels(&self, background: &crate::camera::Background) {
+        // The engine's sink is one for its life: after the first frame this delivers nothing new.
+        background.deliver_texels_to(Some(self.engine.texel_sink()));
+    }
+
+    fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone> {
+        let views: Vec<FrameView> = views.iter().map(frame_view).collect();
+        let ready = self.engine.pipelines_ready(&views, params, wait);
+        self.ready = Some(ready.map_err(not_done)?);
+        Ok(())
+    }
+
+    fn enhance(
+        &mut self,
+        views: &[ViewImage],
+        background: FrameBackground,
+        params: &Params,
+        overlay: Option<&OverlayPixels>,
+        capture: bool,
+    ) -> Result<Vec<CapturedImage>, NotDone> {
+        let ready = self.ready.take().ok_or(NotDone::Pending)?;
+        let frame_views: Vec<FrameView> = views.iter().map(frame_view).collect();
+        let options = FrameOptions {
+            capture,
+            wait_for_pipelines: false,
+        };
+        let captured = self
+            .engine
+            .process(ready, &frame_views, background, params, overlay, options)
+            .map_err(not_done)?;
+        Ok(captured
+            .into_iter()
+            .zip(views)
+            .map(|(c, v)| CapturedImage {
+                view: v.clone(),
+                display: c.display,
+                output: c.output,
+            })
+            .collect())
+    }
+
+    fn pending_line(&self) -> &'static str {
+        "building the shader pipelines on the layer's own thread: frames go through untouched until they are ready"
+    }
+
+    fn build_summary(&self) -> Option<String> {
+        let r = self.engine.build_report()?;
+        let cache = match &r.cache {
+            Origin::Process => format!(
+                "{} bytes from this process's earlier session",
+                r.cache_bytes
+            ),
+            Origin::File(path) => format!("{} bytes from {}", r.cache_bytes, path.display()),
+            Origin::Empty(None) => "empty".into(),
+            Origin::Empty(Some(why)) => format!("empty ({why})"),
+        };
+        let each: Vec<String> = r
+            .builds
+            .iter()
+            .map(|(name, t)| format!("{name} {:.0} ms", t.as_secs_f64() * 1e3))
+            .collect();
+        log::debug(&format!("pipeline builds: {}", each.join(", ")));
+        Some(format!(
+            "{} pipelines built in {:.3} s on the layer's thread; pipeline cache: {cache}",
+            r.built,
+            r.build_time.as_secs_f64()
+        ))
+    }
+
+    fn frame_lines(&self, views: &[ViewImage], prepared: bool) -> Vec<(&'static str, String)> {
+        let mut lines = Vec::new();
+        if prepared {
+            let path = match self.engine.direct_texels() {
+                true => {
+                    "live frames' texels are written straight into mapped images the views sample"
+                }
+                false => {
+                    "live frames' texels reach the views through a staging buffer and an image copy"
+                }
+            };
+            lines.push(("prepared-texels-path", path.to_string()));
+        }
+        if self.engine.texels_from_source().0 > 0 {
+            lines.push(("source-texels", "live frames' texels are written into mapped memory on the camera's thread, before the frame call".to_string()));
+        }
+        let in_place = views.iter().filter(|v| v.in_place).count();
+        lines.push((
+            "first-frame-path",
+            format!(
+                "views enhanced in place: {in_place} of {} (the others through a copy)",
+                views.len()
+            ),
+        ));
+        lines
+    }
+
+    fn stop_building(&self) {
+        self.engine.stop_building();
+    }
+
+    fn finish(self: Box<Self>) -> Result<(), String> {
+        self.engine.finish().map_err(|e| e.to_string())
+    }
+}
