@@ -66,11 +66,23 @@ pub const ENHANCED_APIS: &str = "Vulkan, OpenGL";
 
 /// The same, with the bindings: what a passed-through session's finding tells the user.
 const ENHANCED_APIS_IN_FULL: &str = "Vulkan sessions, and OpenGL sessions through \
-    XR_KHR_opengl_enable with the Xlib binding (and with EGL where the runtime offers \
-    XR_MNDX_egl_enable)";
+    XR_KHR_opengl_enable with the Xlib binding (GLX); not yet OpenGL through EGL \
+    (XR_MNDX_egl_enable)";
 
-/// The APIs, as the layer's [`log::GRAPHICS_API`] line names them, of sessions it enhances.
-const ENHANCED_SESSION_APIS: [&str; 3] = ["Vulkan", "OpenGL (Xlib)", "OpenGL (EGL)"];
+/// The APIs, as the layer's [`log::GRAPHICS_API`] line names them, of sessions it enhances
+/// (those of `layer::graphics`' bindings that enhance).
+const ENHANCED_SESSION_APIS: [&str; 2] = ["Vulkan", "OpenGL (Xlib)"];
+
+/// The layer's reason for passing a session of `api` through, from its `session (API): WHY`
+/// line, without the `: passing ... through untouched` every such line ends with.
+fn pass_through_reason<'a>(text: &'a str, api: &str) -> Option<&'a str> {
+    let why = text
+        .strip_prefix("session (")?
+        .strip_prefix(api)?
+        .strip_prefix("): ")?;
+    let why = why.split_once(": passing").map_or(why, |(head, _)| head);
+    (!why.is_empty()).then_some(why)
+}
 
 /// A session's graphics API and whether the layer enhanced it, from its log line.
 #[derive(Debug, PartialEq, Eq)]
@@ -127,8 +139,8 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
         } else if text.contains("background") {
             "check the camera finding and the background setting (`contrastxr camera list`)"
         } else if text.contains("not a Vulkan session") {
-            "choose the app's Vulkan or OpenGL renderer: the layer enhances Vulkan and OpenGL \
-             (Xlib binding; EGL where the runtime offers XR_MNDX_egl_enable) sessions"
+            "choose the app's Vulkan renderer, or its OpenGL one on X11 (GLX): the layer \
+             enhances Vulkan sessions and OpenGL sessions with the Xlib binding"
         } else {
             LOG
         },
@@ -202,20 +214,24 @@ impl LastApp {
                 api,
                 enhanced: false,
             }) => {
+                let why = self
+                    .lines
+                    .iter()
+                    .rev()
+                    .find_map(|l| pass_through_reason(log::parse_line(l)?.text, api));
                 // An API the layer enhances was passed through for another reason: its log says
                 // which.
                 let fix: String = if ENHANCED_SESSION_APIS.contains(&api) {
-                    "`contrastxr log` shows why the layer passed that session through".into()
+                    "`contrastxr log` shows the whole log of that app".into()
                 } else {
-                    "choose the app's Vulkan or OpenGL renderer (OpenGL on X11: GLX, the Xlib \
-                     binding)"
-                        .into()
+                    "choose the app's Vulkan renderer, or its OpenGL one on X11 (GLX)".into()
                 };
                 return Finding::warn(
                     NAME,
                     format!(
-                        "{app}, {api} session, passed through untouched: the layer enhances \
-                         {ENHANCED_APIS_IN_FULL}"
+                        "{app}, {api} session, passed through untouched{}; the layer enhances \
+                         {ENHANCED_APIS_IN_FULL}",
+                        why.map_or(String::new(), |w| format!(" ({w})"))
                     ),
                     fix,
                 );
@@ -369,14 +385,14 @@ mod tests {
     fn an_enhanced_session_without_frames_yet_is_named() {
         let f = last_app(&[
             "2026-01-01T00:00:00.000Z [pid 4] layer loaded into /usr/bin/hello_xr",
-            "2026-01-01T00:00:00.100Z [pid 4] graphics API of this session: OpenGL (EGL), enhanced",
+            "2026-01-01T00:00:00.100Z [pid 4] graphics API of this session: Vulkan, enhanced",
         ])
         .finding();
         assert_eq!(f.status, Status::Warn);
         assert_eq!(
             f.detail,
             "last app /usr/bin/hello_xr (pid 4, 2026-01-01T00:00:00.000Z) loaded the layer but \
-             logged no enhanced frame (OpenGL (EGL) session, enhanced)"
+             logged no enhanced frame (Vulkan session, enhanced)"
         );
     }
 
@@ -391,32 +407,66 @@ mod tests {
         assert_eq!(
             f.detail,
             "last app /usr/bin/game (pid 5, 2026-01-01T00:00:00.000Z), OpenGL ES (EGL) session, \
-             passed through untouched: the layer enhances Vulkan sessions, and OpenGL sessions \
-             through XR_KHR_opengl_enable with the Xlib binding (and with EGL where the runtime \
-             offers XR_MNDX_egl_enable)"
+             passed through untouched; the layer enhances Vulkan sessions, and OpenGL sessions \
+             through XR_KHR_opengl_enable with the Xlib binding (GLX); not yet OpenGL through \
+             EGL (XR_MNDX_egl_enable)"
         );
         assert_eq!(
             f.fix.as_deref(),
-            Some(
-                "choose the app's Vulkan or OpenGL renderer (OpenGL on X11: GLX, the Xlib binding)"
-            )
+            Some("choose the app's Vulkan renderer, or its OpenGL one on X11 (GLX)")
+        );
+        // The layer's reason, when it logged one, in the detail.
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 6] layer loaded into /usr/bin/game",
+            "2026-01-01T00:00:00.090Z [pid 6] session (OpenGL (EGL)): EGL is not yet enhanced: passing its frames through untouched",
+            "2026-01-01T00:00:00.100Z [pid 6] graphics API of this session: OpenGL (EGL), passed through",
+        ])
+        .finding();
+        assert!(
+            f.detail.starts_with(
+                "last app /usr/bin/game (pid 6, 2026-01-01T00:00:00.000Z), OpenGL (EGL) session, \
+                 passed through untouched (EGL is not yet enhanced); the layer enhances Vulkan"
+            ),
+            "{}",
+            f.detail
         );
         // An API the layer enhances, passed through all the same: the log says why.
         let f = last_app(&[
-            "2026-01-01T00:00:00.000Z [pid 6] layer loaded into /usr/bin/game",
-            "2026-01-01T00:00:00.100Z [pid 6] graphics API of this session: OpenGL (Xlib), passed through",
+            "2026-01-01T00:00:00.000Z [pid 7] layer loaded into /usr/bin/game",
+            "2026-01-01T00:00:00.090Z [pid 7] session (OpenGL (Xlib)): no current context: passing its frames through untouched",
+            "2026-01-01T00:00:00.100Z [pid 7] graphics API of this session: OpenGL (Xlib), passed through",
         ])
         .finding();
         assert_eq!(f.status, Status::Warn);
         assert!(
-            f.detail
-                .contains(", OpenGL (Xlib) session, passed through untouched: "),
+            f.detail.contains(
+                ", OpenGL (Xlib) session, passed through untouched (no current context); "
+            ),
             "{}",
             f.detail
         );
         assert_eq!(
             f.fix.as_deref(),
-            Some("`contrastxr log` shows why the layer passed that session through")
+            Some("`contrastxr log` shows the whole log of that app")
+        );
+    }
+
+    #[test]
+    fn reads_the_layers_reason_for_passing_a_session_through() {
+        let line = "session (OpenGL (Xlib)): GLX_ARB_create_context missing: passing its frames \
+                    through untouched";
+        assert_eq!(
+            pass_through_reason(line, "OpenGL (Xlib)"),
+            Some("GLX_ARB_create_context missing")
+        );
+        assert_eq!(pass_through_reason(line, "Vulkan"), None);
+        assert_eq!(
+            pass_through_reason("session (Vulkan): GPU set-up failed (lost)", "Vulkan"),
+            Some("GPU set-up failed (lost)")
+        );
+        assert_eq!(
+            pass_through_reason("enhancement began 0.2 s", "Vulkan"),
+            None
         );
     }
 
