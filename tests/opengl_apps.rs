@@ -1,37 +1,78 @@
 //! OpenGL apps through the layer, against the real Monado runtime in the sandbox with its X
 //! server (`xr-sandbox run --x11`: Xorg's dummy driver, GLX on llvmpipe). The layer enhances
-//! Vulkan sessions only: an OpenGL session runs as it does without the layer, its frames
-//! untouched, and the layer says so in one line (and nothing about views it does not touch).
+//! their views in the app's own GL context: the captures of every colour format Monado offers
+//! OpenGL apps are checked against the CPU reference (tests/common/capture_check.rs) with a
+//! background that differs top to bottom, so a view read with GL's bottom-left origin taken
+//! for a top-left one fails.
 
 mod common;
 
-use common::{layer_lines, sandbox, ApiDump, SandboxRun};
+use common::capture_check::{captures, check_view};
+use common::{layer_lines, sandbox, scratch_file, ApiDump, SandboxRun};
+use std::path::{Path, PathBuf};
 
-/// hello_xr with OpenGL for `seconds` (it exits when its stdin closes), through the layer when
-/// `layer` is true, its OpenXR calls recorded by api_dump below it.
-fn hello_xr_opengl(tag: &str, layer: bool, seconds: u32) -> Option<(SandboxRun, ApiDump)> {
+fn sample(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("samples")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// A fresh, empty capture directory under the target folder (visible inside the sandbox).
+fn capture_dir(tag: &str) -> PathBuf {
+    let dir = scratch_file(&format!("{tag}.capture"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The layer's variables for an enhancing run with two frames captured into `dir` (no
+/// indicator: the captures are compared with the CPU reference).
+fn layer_env(dir: &Path, mode: &str) -> Vec<(String, String)> {
+    [
+        ("CONTRASTXR", "1".to_string()),
+        ("CONTRASTXR_FORCE", "1".into()),
+        ("CONTRASTXR_INDICATOR", "0".into()),
+        ("CONTRASTXR_MODE", mode.into()),
+        (
+            "CONTRASTXR_BACKGROUND",
+            format!("image:{}", sample("background-meadow.png")),
+        ),
+        ("CONTRASTXR_CAPTURE_DIR", dir.to_string_lossy().into_owned()),
+        ("CONTRASTXR_CAPTURE_SKIP", "3".into()),
+        ("CONTRASTXR_CAPTURE_FRAMES", "2".into()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
+fn as_refs(v: &[(String, String)]) -> Vec<(&str, &str)> {
+    v.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+}
+
+/// hello_xr with OpenGL for `seconds` (it exits when its stdin closes), through the layer with
+/// `env`, its OpenXR calls recorded by api_dump below it.
+fn hello_xr_opengl(tag: &str, env: &[(&str, &str)], seconds: u32) -> Option<(SandboxRun, ApiDump)> {
     let sandbox = sandbox()?;
     let dump = ApiDump::new(tag);
-    let mut env = dump.env();
-    env.push(("XR_ENABLE_API_LAYERS", ApiDump::LAYER));
-    if layer {
-        env.extend([
-            ("CONTRASTXR", "1"),
-            ("CONTRASTXR_FORCE", "1"),
-            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
-        ]);
-    }
+    let mut all = dump.env();
+    all.push(("XR_ENABLE_API_LAYERS", ApiDump::LAYER));
+    all.extend_from_slice(env);
     let script = format!("sleep {seconds} | hello_xr -g OpenGL");
-    let run = sandbox.run_x11_for(&["sh", "-c", &script], &env, 120);
+    let run = sandbox.run_x11_for(&["sh", "-c", &script], &all, 120);
     Some((run, dump))
 }
 
 #[test]
-fn hello_xr_with_opengl_runs_through_the_layer_as_without_it() {
-    let Some((bare, bare_dump)) = hello_xr_opengl("opengl-bare", false, 4) else {
+fn hello_xr_with_opengl_is_enhanced() {
+    let Some((bare, bare_dump)) = hello_xr_opengl("opengl-bare", &[], 5) else {
         return;
     };
-    let Some((on, on_dump)) = hello_xr_opengl("opengl-layer", true, 4) else {
+    let dir = capture_dir("opengl-hello-xr");
+    let env = layer_env(&dir, "enhance");
+    let Some((on, on_dump)) = hello_xr_opengl("opengl-layer", &as_refs(&env), 5) else {
         return;
     };
     for (run, name) in [(&bare, "without the layer"), (&on, "with the layer")] {
@@ -43,90 +84,132 @@ fn hello_xr_with_opengl_runs_through_the_layer_as_without_it() {
             run.describe()
         );
     }
-    // 4 s at 20 Hz is 80; start-up and a busy machine take some.
+    // 5 s at 20 Hz is 100; start-up and a busy machine take some.
     let frames = |d: &ApiDump| d.calls("xrEndFrame").len();
     let (bare_frames, on_frames) = (frames(&bare_dump), frames(&on_dump));
-    eprintln!("xrEndFrame calls in 4 s: {bare_frames} without the layer, {on_frames} with it");
-    assert!(
-        (30..=100).contains(&bare_frames),
-        "{bare_frames} without the layer"
-    );
-    assert!(
-        (30..=100).contains(&on_frames),
-        "{on_frames} with the layer"
-    );
+    eprintln!("xrEndFrame calls in 5 s: {bare_frames} without the layer, {on_frames} with it");
+    assert!((40..=120).contains(&bare_frames), "{bare_frames} without");
+    assert!((40..=120).contains(&on_frames), "{on_frames} with");
     let lines = layer_lines(&on);
-    let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
-    assert_eq!(passing.len(), 1, "{lines:#?}");
-    assert!(
-        passing[0].contains("not a Vulkan session (OpenGL (Xlib))"),
-        "{lines:#?}"
-    );
-    // A session passed through has no views to register.
-    assert!(
-        !lines.iter().any(|l| l.contains("camera mapping")),
-        "{lines:#?}"
-    );
+    let api = "graphics API of this session: OpenGL (Xlib), enhanced";
+    assert!(lines.iter().any(|l| l.contains(api)), "{lines:#?}");
+    assert!(!lines.iter().any(|l| l.contains("passing")), "{lines:#?}");
+    let views = captures(&dir);
+    assert_eq!(views.len(), 4, "2 frames x 2 views in {}", dir.display());
+    for c in &views {
+        assert_eq!(c.json["graphics"], "opengl");
+        let changed = check_view(c);
+        assert!(changed > 1000, "the method changed only {changed} pixels");
+    }
     assert!(layer_lines(&bare).is_empty(), "{:#?}", layer_lines(&bare));
 }
 
 /// The project's client with an OpenGL session (`--graphics opengl`: the Xlib binding on a GLX
-/// 4.5 core context) in `format`, its images read back at each next acquire.
-fn client_opengl(format: &str, layer: bool) -> Option<SandboxRun> {
+/// 4.5 core context, one array swapchain) in `format`, through the layer with `env`.
+fn client_opengl(format: &str, env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
     let sandbox = sandbox()?;
-    let on = if layer { "1" } else { "0" };
-    let env = [
-        ("CONTRASTXR", on),
-        ("CONTRASTXR_FORCE", "1"),
-        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
-    ];
-    let cmd = [
+    let mut cmd = vec![
         common::XR_CLIENT,
         "--graphics",
         "opengl",
         "--json",
         "--frames",
-        "20",
+        "12",
         "--size",
-        "64x48",
-        "--check-untouched",
+        "96x72",
         "--format",
         format,
     ];
-    Some(sandbox.run_x11_for(&cmd, &env, 120))
+    cmd.extend_from_slice(extra);
+    Some(sandbox.run_x11_for(&cmd, env, 120))
 }
 
-/// Every colour format Monado offers OpenGL apps, through the client: the session runs to its
-/// end with the layer on as off, every image read back as the app wrote it, and the layer says
-/// in one line that it passes the session through.
+/// The colour formats Monado offers OpenGL apps (no GL_RGB10_A2), by the client's names.
+const FORMATS: [(&str, &str); 4] = [
+    ("R16G16B16A16_UNORM", "GL_RGBA16"),
+    ("R16G16B16A16_SFLOAT", "GL_RGBA16F"),
+    ("R8G8B8A8_SRGB", "GL_SRGB8_ALPHA8"),
+    ("R8G8B8A8_UNORM", "GL_RGBA8"),
+];
+
+/// Every colour format Monado offers OpenGL apps, through the client: both views of the
+/// captured frames within the tolerance of the CPU reference, the method visibly at work.
 #[test]
-fn the_client_with_opengl_runs_through_the_layer_in_every_format() {
-    let formats = [
-        ("R16G16B16A16_UNORM", "GL_RGBA16"),
-        ("R16G16B16A16_SFLOAT", "GL_RGBA16F"),
-        ("R8G8B8A8_SRGB", "GL_SRGB8_ALPHA8"),
-        ("R8G8B8A8_UNORM", "GL_RGBA8"),
-    ];
-    for (format, gl_name) in formats {
-        for layer in [false, true] {
-            let Some(run) = client_opengl(format, layer) else {
-                return;
-            };
-            run.assert_success();
-            let report = run.client_report();
-            let what = format!("{gl_name}, layer {layer}: {}", run.describe());
-            assert_eq!(report["graphics"], "opengl", "{what}");
-            assert_eq!(report["format"], gl_name, "{what}");
-            assert!(report["frames_checked"].as_u64() >= Some(10), "{what}");
-            assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
-            let lines = layer_lines(&run);
-            if layer {
-                let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
-                assert_eq!(passing.len(), 1, "{what}");
-                assert!(passing[0].contains("OpenGL (Xlib)"), "{what}");
-            } else {
-                assert!(!lines.iter().any(|l| l.contains("passing")), "{what}");
-            }
+fn the_client_with_opengl_is_enhanced_in_every_format() {
+    for (format, gl_name) in FORMATS {
+        let dir = capture_dir(&format!("opengl-{gl_name}"));
+        let env = layer_env(&dir, "enhance");
+        let Some(run) = client_opengl(format, &as_refs(&env), &[]) else {
+            return;
+        };
+        run.assert_success();
+        let what = format!("{gl_name}: {}", run.describe());
+        assert_eq!(run.client_report()["format"], gl_name, "{what}");
+        let views = captures(&dir);
+        assert_eq!(views.len(), 4, "{what}");
+        for c in &views {
+            assert_eq!(c.json["graphics"], "opengl", "{what}");
+            assert_eq!(c.json["format"], gl_name, "{what}");
+            let changed = check_view(c);
+            assert!(
+                changed > 1000,
+                "{gl_name}: the method changed {changed} pixels"
+            );
+        }
+        assert_ne!(
+            views[0].json["image_array_index"], views[1].json["image_array_index"],
+            "{what}"
+        );
+    }
+}
+
+/// The other modes reach OpenGL sessions too: each changes the app's views, and mode off
+/// leaves every image as the app wrote it (read back by the client at its next acquire).
+#[test]
+fn opengl_sessions_follow_every_mode() {
+    for mode in ["background", "heatmap", "split"] {
+        let dir = capture_dir(&format!("opengl-mode-{mode}"));
+        let env = layer_env(&dir, mode);
+        let Some(run) = client_opengl("R8G8B8A8_SRGB", &as_refs(&env), &[]) else {
+            return;
+        };
+        run.assert_success();
+        let views = captures(&dir);
+        assert_eq!(views.len(), 4, "{mode}: {}", run.describe());
+        for c in &views {
+            assert_eq!(c.json["params"]["mode"], mode);
+            assert_ne!(c.display, c.output, "{mode}: the view is unchanged");
         }
     }
+    let dir = capture_dir("opengl-mode-off");
+    let env = layer_env(&dir, "off");
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", &as_refs(&env), &["--check-untouched"]) else {
+        return;
+    };
+    run.assert_success();
+    let report = run.client_report();
+    assert!(
+        report["frames_checked"].as_u64() >= Some(8),
+        "{}",
+        run.describe()
+    );
+    assert_eq!(report["frames_modified"], serde_json::json!([]));
+}
+
+/// With the layer off the client's images are read back exactly as written: the check that
+/// makes the enhanced runs above meaningful sees no change without the layer.
+#[test]
+fn without_the_layer_opengl_images_are_untouched() {
+    let env = [("CONTRASTXR", "0")];
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", &env, &["--check-untouched"]) else {
+        return;
+    };
+    run.assert_success();
+    let report = run.client_report();
+    assert!(
+        report["frames_checked"].as_u64() >= Some(8),
+        "{}",
+        run.describe()
+    );
+    assert_eq!(report["frames_modified"], serde_json::json!([]));
 }

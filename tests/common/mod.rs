@@ -10,6 +10,8 @@
 //! - [`ApiDump`] records every OpenXR call of a run (LunarG api_dump) and answers questions on it.
 #![allow(dead_code)] // each test crate uses a different part
 
+pub mod capture_check;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus};

@@ -68,6 +68,23 @@ usage: contrastxr-xr-client [options]
                           that writes to it must not block the app's calls
   --check-untouched       read each swapchain image back when it is acquired again and report
                           the frames whose pixels changed after the client wrote them
+  --check-gl-state        with --graphics opengl: before every xrEndFrame set non-default
+                          values of the GL state a layer could touch (current context and
+                          drawables: every second frame the read drawable is the draw
+                          drawable, the others another pbuffer; program and pipeline, active texture, textures, samplers
+                          and image units on units 0 to the layer's highest binding number,
+                          generic and indexed buffer bindings, pixel store, framebuffers,
+                          GL_FRAMEBUFFER_SRGB and other enables, viewport, scissor box) and
+                          leave GL_INVALID_ENUM pending; after it read all back with glGet*
+                          and report the frames checked (`gl_state_checked`) and every item
+                          that changed (`gl_state_changed`: frame, what, before, after)
+  --disturb-gl-state ITEMS
+                          with --check-gl-state: change these items (comma-separated) after
+                          setting them, as a layer that forgets to restore them would (to test
+                          that the check sees it): glXGetCurrentDrawable glGetError
+                          GL_ACTIVE_TEXTURE GL_CURRENT_PROGRAM GL_TEXTURE_BINDING_2D
+                          GL_IMAGE_BINDING_NAME GL_PIXEL_UNPACK_BUFFER_BINDING
+                          GL_UNPACK_ALIGNMENT GL_DRAW_FRAMEBUFFER_BINDING GL_FRAMEBUFFER_SRGB
   The JSON report holds resident memory and open file descriptors every 50 frames
   (`memory`) and after each session (`sessions`).";
 
@@ -138,6 +155,10 @@ pub struct Options {
     pub instances: u32,
     /// Milliseconds to run on after the last xrDestroyInstance (None: report nothing).
     pub linger_ms: Option<u64>,
+    /// With --graphics opengl: set, and check after, the GL state around every xrEndFrame.
+    pub check_gl_state: bool,
+    /// Items of gl_state::DISTURBABLE the client changes before xrEndFrame (a test of the check).
+    pub disturb_gl_state: Vec<String>,
 }
 
 impl Default for Options {
@@ -170,6 +191,8 @@ impl Default for Options {
             stderr_full: false,
             instances: 1,
             linger_ms: None,
+            check_gl_state: false,
+            disturb_gl_state: Vec::new(),
         }
     }
 }
@@ -222,6 +245,15 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             }
             "--stderr-full" => options.stderr_full = true,
             "--check-untouched" => options.check_untouched = true,
+            "--check-gl-state" => options.check_gl_state = true,
+            "--disturb-gl-state" => {
+                for item in value()?.split(',') {
+                    if !crate::gl_state::DISTURBABLE.contains(&item) {
+                        return Err(format!("--disturb-gl-state: unknown item {item}\n{USAGE}"));
+                    }
+                    options.disturb_gl_state.push(item.to_string());
+                }
+            }
             "--pipelined" => options.pipelined = true,
             "--churn-swapchains" => options.churn_swapchains = true,
             "--churn-formats" => {
@@ -245,6 +277,12 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown argument {other}\n{USAGE}")),
         }
+    }
+    if options.check_gl_state && options.graphics != Graphics::OpenGl {
+        return Err("--check-gl-state needs --graphics opengl".into());
+    }
+    if !options.disturb_gl_state.is_empty() && !options.check_gl_state {
+        return Err("--disturb-gl-state needs --check-gl-state".into());
     }
     Ok(options)
 }
@@ -315,6 +353,12 @@ mod tests {
             (3, Some(1000), 5)
         );
         assert!(o.stderr_full);
+        let o = parse_str(
+            "--graphics opengl --check-gl-state --disturb-gl-state glGetError,GL_ACTIVE_TEXTURE",
+        );
+        let o = o.unwrap();
+        assert!(o.check_gl_state);
+        assert_eq!(o.disturb_gl_state, ["glGetError", "GL_ACTIVE_TEXTURE"]);
     }
 
     #[test]
@@ -332,6 +376,9 @@ mod tests {
             "--instances x",
             "--linger-ms -1",
             "--after-device-ms",
+            "--check-gl-state",
+            "--graphics opengl --disturb-gl-state glGetError",
+            "--graphics opengl --check-gl-state --disturb-gl-state GL_VIEWPORT",
         ] {
             assert!(parse_str(bad).is_err(), "{bad}");
         }

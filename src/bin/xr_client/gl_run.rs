@@ -6,6 +6,7 @@
 use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::frame_loop::Stats;
+use crate::gl_state::GlStateCheck;
 use crate::glx::{self, GlContext};
 use crate::pattern::{self, Target};
 use crate::run_report::Report;
@@ -105,8 +106,19 @@ pub fn run(
         .ctx("xrGetOpenGLGraphicsRequirementsKHR")?;
     let gl = GlContext::new()?;
     report.gl = Some(gl.describe());
+    let mut state = match options.check_gl_state {
+        true => Some(GlStateCheck::new(&gl, &options.disturb_gl_state)?),
+        false => None,
+    };
+    let mut result = Ok(());
     for _ in 0..options.sessions.max(1) {
-        run_session(&instance, system, blend_mode, &gl, options, report, stats)?;
+        let session = (&gl, &mut state);
+        result = run_session(
+            &instance, system, blend_mode, session, options, report, stats,
+        );
+        if result.is_err() {
+            break;
+        }
         report.sessions_run += 1;
         report
             .sessions
@@ -115,6 +127,11 @@ pub fn run(
             break;
         }
     }
+    if let Some(state) = state {
+        report.gl_state_checked = state.checked;
+        report.gl_state_changed = state.changed;
+    }
+    result?;
     let t = Instant::now();
     drop(instance);
     report.teardown_ms.instance(t.elapsed());
@@ -125,7 +142,7 @@ fn run_session(
     instance: &xr::Instance,
     system: xr::SystemId,
     blend_mode: xr::EnvironmentBlendMode,
-    gl: &GlContext,
+    (gl, state): (&GlContext, &mut Option<GlStateCheck>),
     options: &Options,
     report: &mut Report,
     stats: &mut Stats,
@@ -190,6 +207,7 @@ fn run_session(
         (&mut waiter, &mut stream),
         &mut swapchain,
         (gl, &images, &mut views),
+        state,
         blend_mode,
         options,
         stats,
@@ -304,6 +322,7 @@ fn frames(
     (waiter, stream): (&mut xr::FrameWaiter, &mut xr::FrameStream<xr::OpenGL>),
     swapchain: &mut xr::Swapchain<xr::OpenGL>,
     (gl, images, views): (&GlContext, &[u32], &mut Views),
+    state: &mut Option<GlStateCheck>,
     blend_mode: xr::EnvironmentBlendMode,
     options: &Options,
     stats: &mut Stats,
@@ -349,7 +368,7 @@ fn frames(
             session.request_exit().ctx("xrRequestExitSession")?;
             exit_requested = true;
         }
-        let state = stats
+        let frame_state = stats
             .calls
             .time("xrWaitFrame", || waiter.wait())
             .ctx("xrWaitFrame")?;
@@ -358,14 +377,22 @@ fn frames(
             .time("xrBeginFrame", || stream.begin())
             .ctx("xrBeginFrame")?;
         stats.frames_ended += 1;
-        if !state.should_render {
+        // With --check-gl-state: the state set right before xrEndFrame, checked right after.
+        let frame = stats.frames_ended - 1;
+        if !frame_state.should_render {
+            if let Some(check) = state.as_mut() {
+                check.before_end_frame(frame)?;
+            }
             stream
-                .end(state.predicted_display_time, blend_mode, &[])
+                .end(frame_state.predicted_display_time, blend_mode, &[])
                 .ctx("xrEndFrame")?;
+            if let Some(check) = state.as_mut() {
+                check.after_end_frame()?;
+            }
             continue;
         }
         let (_, located) = session
-            .locate_views(VIEW_TYPE, state.predicted_display_time, space)
+            .locate_views(VIEW_TYPE, frame_state.predicted_display_time, space)
             .ctx("xrLocateViews")?;
         let index = swapchain.acquire_image().ctx("xrAcquireSwapchainImage")? as usize;
         swapchain
@@ -396,11 +423,21 @@ fn frames(
         let projection = xr::CompositionLayerProjection::new()
             .space(space)
             .views(&projection_views);
+        if let Some(check) = state.as_mut() {
+            check.before_end_frame(frame)?;
+        }
         let start = Instant::now();
         stream
-            .end(state.predicted_display_time, blend_mode, &[&projection])
+            .end(
+                frame_state.predicted_display_time,
+                blend_mode,
+                &[&projection],
+            )
             .ctx("xrEndFrame")?;
         let ended = Instant::now();
+        if let Some(check) = state.as_mut() {
+            check.after_end_frame()?;
+        }
         stats
             .calls
             .record("xrEndFrame", (ended - start).as_secs_f64() * 1e3);

@@ -33,6 +33,9 @@ const GL_PACK_ALIGNMENT: u32 = 0x0D05;
 const GL_VERSION: u32 = 0x1F02;
 const GL_RENDERER: u32 = 0x1F01;
 
+/// The attributes of the client's pbuffers: 16x16.
+const PBUFFER_SIZE: [c_int; 5] = [GLX_PBUFFER_WIDTH, 16, GLX_PBUFFER_HEIGHT, 16, 0];
+
 /// XVisualInfo's first fields (Xutil.h); only `visualid` is read.
 #[repr(C)]
 struct VisualInfo {
@@ -63,6 +66,8 @@ pub struct GlContext {
     pub drawable: u64,
     pub context: *mut c_void,
     gl: Gl,
+    libgl: *mut c_void,
+    get_proc: GetProc,
 }
 
 /// A library of the system, opened once (never closed: GL drivers do not support it).
@@ -169,8 +174,7 @@ impl GlContext {
                 return fail("the GLX framebuffer configuration has no X visual");
             }
             let visual_id = (*visual).visualid as u32;
-            let size = [GLX_PBUFFER_WIDTH, 16, GLX_PBUFFER_HEIGHT, 16, 0];
-            let drawable = create_pbuffer(display, fb_config, size.as_ptr());
+            let drawable = create_pbuffer(display, fb_config, PBUFFER_SIZE.as_ptr());
             let create_context: CreateContextAttribs =
                 gl_fn(get_proc, c"glXCreateContextAttribsARB")?;
             let version = [
@@ -211,7 +215,44 @@ impl GlContext {
                 drawable,
                 context,
                 gl,
+                libgl,
+                get_proc,
             })
+        }
+    }
+
+    /// A GL function of the context's driver (through glXGetProcAddressARB).
+    ///
+    /// # Safety
+    /// T must be the function's C pointer type.
+    pub unsafe fn function<T: Copy>(&self, name: &CStr) -> Result<T> {
+        // SAFETY: the caller names the function's type.
+        unsafe { gl_fn(self.get_proc, name) }
+    }
+
+    /// A GLX function of libGL.
+    ///
+    /// # Safety
+    /// T must be the function's C pointer type.
+    pub unsafe fn glx_function<T: Copy>(&self, name: &CStr) -> Result<T> {
+        // SAFETY: the caller names the function's type.
+        unsafe { symbol(self.libgl, name) }
+    }
+
+    /// Another 16x16 pbuffer on the context's framebuffer configuration.
+    pub fn pbuffer(&self) -> Result<u64> {
+        // SAFETY: glXCreatePbuffer's type (glx.h); the display and configuration are the
+        // context's own and the attribute list ends with 0.
+        unsafe {
+            let create_pbuffer: unsafe extern "C" fn(
+                *mut c_void,
+                *mut c_void,
+                *const c_int,
+            ) -> u64 = self.glx_function(c"glXCreatePbuffer")?;
+            match create_pbuffer(self.display, self.fb_config, PBUFFER_SIZE.as_ptr()) {
+                0 => fail("glXCreatePbuffer failed"),
+                drawable => Ok(drawable),
+            }
         }
     }
 

@@ -37,6 +37,10 @@ pub struct Report {
     /// With --check-untouched: images read back, and the frames whose image had changed.
     pub frames_checked: u32,
     pub frames_modified: Vec<u32>,
+    /// With --check-gl-state: the xrEndFrame calls around which the GL state was checked, and
+    /// every item one of them changed (empty when all held).
+    pub gl_state_checked: u32,
+    pub gl_state_changed: Vec<crate::gl_state::Change>,
     /// Every 50 submitted frames.
     pub memory: Vec<Sample>,
     /// After each session was destroyed.

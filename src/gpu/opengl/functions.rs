@@ -107,6 +107,7 @@ gl_functions! {
     memory_barrier = "glMemoryBarrier": fn(u32);
     bind_framebuffer = "glBindFramebuffer": fn(Enum, Uint);
     create_framebuffers = "glCreateFramebuffers": fn(Sizei, *mut Uint);
+    named_framebuffer_parameteri = "glNamedFramebufferParameteri": fn(Uint, Enum, Int);
     delete_framebuffers = "glDeleteFramebuffers": fn(Sizei, *const Uint);
     finish = "glFinish": fn();
     get_graphics_reset_status = "glGetGraphicsResetStatus": fn() -> Enum;
@@ -152,6 +153,8 @@ pub const PIXEL_UNPACK_BUFFER_BINDING: Enum = 0x88EF;
 pub const DISPATCH_INDIRECT_BUFFER: Enum = 0x90EE;
 pub const DISPATCH_INDIRECT_BUFFER_BINDING: Enum = 0x90EF;
 pub const FRAMEBUFFER: Enum = 0x8D40;
+pub const FRAMEBUFFER_DEFAULT_WIDTH: Enum = 0x9310;
+pub const FRAMEBUFFER_DEFAULT_HEIGHT: Enum = 0x9311;
 pub const DRAW_FRAMEBUFFER: Enum = 0x8CA9;
 pub const READ_FRAMEBUFFER: Enum = 0x8CA8;
 pub const DRAW_FRAMEBUFFER_BINDING: Enum = 0x8CA6;

@@ -345,8 +345,18 @@ impl GlEngine {
             self.ensure_buffers(k, v)?;
         }
         if self.framebuffer == 0 {
-            // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`.
-            unsafe { (self.gl.create_framebuffers)(1, &mut self.framebuffer) };
+            // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`. A 1x1
+            // default size makes it complete without attachments, so validating it raises no
+            // debug message in the app's callback.
+            unsafe {
+                (self.gl.create_framebuffers)(1, &mut self.framebuffer);
+                for p in [
+                    gl::FRAMEBUFFER_DEFAULT_WIDTH,
+                    gl::FRAMEBUFFER_DEFAULT_HEIGHT,
+                ] {
+                    (self.gl.named_framebuffer_parameteri)(self.framebuffer, p, 1);
+                }
+            }
         }
         let saved = SavedState::save(&self.gl);
         // SAFETY: a framebuffer this engine made; the app's bindings are put back by `restore`.

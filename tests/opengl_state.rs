@@ -1,0 +1,167 @@
+//! The host's GL state is the host's: around every xrEndFrame of an OpenGL session the client
+//! (`--check-gl-state`) sets non-default values of the GL state a layer working in the app's
+//! context could touch and leaves a GL error pending, then reads it all back after the call.
+//! With the layer on, the app must find exactly what it finds without it; and the check must be
+//! able to fail (`--disturb-gl-state`, a layer that forgets to restore).
+
+mod common;
+
+use common::{sandbox, SandboxRun};
+use serde_json::Value;
+
+/// The client with an OpenGL session in `format`, its GL state checked around every
+/// xrEndFrame, through the layer (on and enhancing whatever it can) when `layer` is true;
+/// `disturb`: the items it changes on purpose before xrEndFrame.
+fn client(format: &str, layer: bool, disturb: Option<&str>) -> Option<SandboxRun> {
+    let sandbox = sandbox()?;
+    let on = if layer { "1" } else { "0" };
+    let env = [
+        ("CONTRASTXR", on),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let mut cmd = vec![
+        common::XR_CLIENT,
+        "--graphics",
+        "opengl",
+        "--check-gl-state",
+        "--json",
+        "--frames",
+        "20",
+        "--size",
+        "64x48",
+        "--format",
+        format,
+    ];
+    if let Some(items) = disturb {
+        cmd.extend(["--disturb-gl-state", items]);
+    }
+    Some(sandbox.run_x11_for(&cmd, &env, 120))
+}
+
+/// Monado's OpenGL (Xlib) client compositor saves the app's current drawables swapped (the draw
+/// drawable from glXGetCurrentReadDrawable, the read one from glXGetCurrentDrawable) before it
+/// makes the app's context current on the session's drawable, and restores them so: when the
+/// app's draw and read drawables differ, they have traded places after xrEndFrame, with the
+/// layer as without it (the client's check alternates: every second xrEndFrame it reads where
+/// it draws, and there nothing at all may change). This names that change, and only that one:
+/// both drawables in one frame, each one's value after being the other's before.
+fn is_monados_drawable_swap(change: &Value, all: &[Value]) -> bool {
+    let other = match change["what"].as_str() {
+        Some("glXGetCurrentDrawable") => "glXGetCurrentReadDrawable",
+        Some("glXGetCurrentReadDrawable") => "glXGetCurrentDrawable",
+        _ => return false,
+    };
+    all.iter().any(|c| {
+        c["frame"] == change["frame"]
+            && c["what"] == other
+            && c["before"] == change["after"]
+            && c["after"] == change["before"]
+    })
+}
+
+/// The run's report, the changes it found but Monado's drawable swap, and the frames with the
+/// swap.
+fn changes(run: &SandboxRun) -> (Value, Vec<Value>, Vec<u64>) {
+    run.assert_success();
+    let report = run.client_report();
+    let all = report["gl_state_changed"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no gl_state_changed: {}", run.describe()))
+        .clone();
+    let (swaps, others): (Vec<_>, Vec<_>) = all
+        .iter()
+        .cloned()
+        .partition(|c| is_monados_drawable_swap(c, &all));
+    let mut swap_frames: Vec<_> = swaps.iter().filter_map(|c| c["frame"].as_u64()).collect();
+    swap_frames.dedup();
+    (report, others, swap_frames)
+}
+
+#[test]
+fn the_app_finds_its_gl_state_after_xr_end_frame_with_the_layer_on_as_off() {
+    for format in ["R8G8B8A8_SRGB", "R16G16B16A16_SFLOAT"] {
+        for layer in [false, true] {
+            let Some(run) = client(format, layer, None) else {
+                return;
+            };
+            let (report, others, swap_frames) = changes(&run);
+            let what = format!("{format}, layer {layer}: {}", run.describe());
+            let checked = report["gl_state_checked"].as_u64().unwrap_or(0);
+            eprintln!(
+                "{format}, layer {layer}: {checked} xrEndFrame calls checked, changed: {others:?}, \
+                 Monado's drawable swap in {} of them",
+                swap_frames.len()
+            );
+            assert!(checked >= 10, "{what}");
+            assert_eq!(others, Vec::<Value>::new(), "{what}");
+            // Monado's own change, seen without the layer: if it ever goes, the docs' note
+            // about it (docs/testing.md) goes too.
+            // Every second check the app reads where it draws: Monado's swap cannot show there.
+            assert!(swap_frames.len() as u64 <= checked.div_ceil(2), "{what}");
+            if !layer {
+                assert!(
+                    swap_frames.len() >= 5,
+                    "Monado no longer swaps the app's draw and read drawables in xrEndFrame: \
+                     is_monados_drawable_swap and docs/testing.md can go. {what}"
+                );
+            }
+        }
+    }
+}
+
+/// Every item --disturb-gl-state can change.
+const DISTURBABLE: [&str; 10] = [
+    "glXGetCurrentDrawable",
+    "glGetError",
+    "GL_ACTIVE_TEXTURE",
+    "GL_CURRENT_PROGRAM",
+    "GL_TEXTURE_BINDING_2D",
+    "GL_IMAGE_BINDING_NAME",
+    "GL_PIXEL_UNPACK_BUFFER_BINDING",
+    "GL_UNPACK_ALIGNMENT",
+    "GL_DRAW_FRAMEBUFFER_BINDING",
+    "GL_FRAMEBUFFER_SRGB",
+];
+
+/// The check fails when something is not restored: one item disturbed is reported on every
+/// frame checked, with its values, and nothing else is; each of the others is reported too.
+#[test]
+fn the_check_reports_gl_state_left_changed() {
+    let Some(run) = client("R8G8B8A8_SRGB", true, Some("GL_ACTIVE_TEXTURE")) else {
+        return;
+    };
+    let (report, others, _) = changes(&run);
+    let what = run.describe();
+    let checked = report["gl_state_checked"].as_u64().unwrap_or(0);
+    assert!(checked >= 10, "{what}");
+    assert_eq!(others.len() as u64, checked, "{others:#?}\n{what}");
+    for change in &others {
+        assert_eq!(change["what"], "GL_ACTIVE_TEXTURE", "{what}");
+        // GL_TEXTURE5 set, GL_TEXTURE0 left.
+        assert_eq!(change["before"], 0x84C5, "{what}");
+        assert_eq!(change["after"], 0x84C0, "{what}");
+    }
+
+    let Some(run) = client("R8G8B8A8_SRGB", true, Some(&DISTURBABLE.join(","))) else {
+        return;
+    };
+    let (_, others, _) = changes(&run);
+    let what = run.describe();
+    for item in DISTURBABLE {
+        let seen = others.iter().any(|c| {
+            let w = c["what"].as_str().unwrap_or("");
+            w == item || w.starts_with(&format!("{item}["))
+        });
+        assert!(
+            seen,
+            "{item} disturbed but not reported: {others:#?}\n{what}"
+        );
+    }
+    // The pending GL_INVALID_ENUM, read before xrEndFrame: it finds no error.
+    let error = others.iter().find(|c| c["what"] == "glGetError").unwrap();
+    assert_eq!(
+        (&error["before"], &error["after"]),
+        (&0x0500.into(), &0.into())
+    );
+}
