@@ -183,33 +183,61 @@ fn opengl_sessions_follow_every_mode() {
     }
     let dir = capture_dir("opengl-mode-off");
     let env = layer_env(&dir, "off");
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", &as_refs(&env), &["--check-untouched"]) else {
-        return;
-    };
+    untouched(&as_refs(&env));
+}
+
+/// The client with `env`, its images read back at each next acquire: every one as the app
+/// wrote it. Returns the run (None without the sandbox).
+fn untouched(env: &[(&str, &str)]) -> Option<SandboxRun> {
+    let run = client_opengl("R8G8B8A8_SRGB", env, &["--check-untouched"])?;
     run.assert_success();
     let report = run.client_report();
-    assert!(
-        report["frames_checked"].as_u64() >= Some(8),
-        "{}",
-        run.describe()
-    );
-    assert_eq!(report["frames_modified"], serde_json::json!([]));
+    let what = run.describe();
+    assert!(report["frames_checked"].as_u64() >= Some(8), "{what}");
+    assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
+    Some(run)
 }
 
 /// With the layer off the client's images are read back exactly as written: the check that
 /// makes the enhanced runs above meaningful sees no change without the layer.
 #[test]
 fn without_the_layer_opengl_images_are_untouched() {
-    let env = [("CONTRASTXR", "0")];
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", &env, &["--check-untouched"]) else {
-        return;
-    };
-    run.assert_success();
-    let report = run.client_report();
-    assert!(
-        report["frames_checked"].as_u64() >= Some(8),
-        "{}",
-        run.describe()
-    );
-    assert_eq!(report["frames_modified"], serde_json::json!([]));
+    untouched(&[("CONTRASTXR", "0")]);
+}
+
+/// What the layer cannot do in an app's GL context (its context current on another thread, a
+/// context older than 4.3, a lost context, a program the driver refuses): the session passes
+/// through, every image exactly as the app wrote it, with one line naming why.
+#[test]
+fn opengl_failures_pass_the_session_through_with_one_line() {
+    let cases = [
+        ("gl-make-current", "could not be made current"),
+        ("gl-old-context", "older than 4.3"),
+        ("gl-context-lost", "context was lost"),
+        ("gl-program-link", "did not build"),
+    ];
+    for (point, why) in cases {
+        // An empty cache: a program loaded from its cached binary is never linked.
+        let cache = capture_dir(&format!("opengl-fault-{point}-cache"));
+        let cache = cache.to_string_lossy().into_owned();
+        let env = [
+            ("CONTRASTXR", "1"),
+            ("CONTRASTXR_FORCE", "1"),
+            ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+            ("CONTRASTXR_FAULT", point),
+            ("XDG_CACHE_HOME", cache.as_str()),
+        ];
+        let Some(run) = untouched(&env) else {
+            return;
+        };
+        let what = format!("{point}: {}", run.describe());
+        let lines = layer_lines(&run);
+        let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+        assert_eq!(passing.len(), 1, "{what}");
+        assert!(passing[0].contains(why), "{point}: {passing:?}");
+        assert!(
+            !lines.iter().any(|l| l.contains("processing frames")),
+            "{what}"
+        );
+    }
 }

@@ -19,6 +19,8 @@ fn client(format: &str, layer: bool, disturb: Option<&str>) -> Option<SandboxRun
         ("CONTRASTXR", on),
         ("CONTRASTXR_FORCE", "1"),
         ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        // Every frame enhanced, the first one included (it waits for the programs).
+        ("CONTRASTXR_PIPELINES", "wait"),
     ];
     let mut cmd = vec![
         common::XR_CLIENT,
@@ -94,6 +96,10 @@ fn the_app_finds_its_gl_state_after_xr_end_frame_with_the_layer_on_as_off() {
                 swap_frames.len()
             );
             assert!(checked >= 10, "{what}");
+            let enhanced = common::layer_lines(&run)
+                .iter()
+                .any(|l| l.contains("processing frames (2 views per frame)"));
+            assert_eq!(enhanced, layer, "{what}");
             assert_eq!(others, Vec::<Value>::new(), "{what}");
             // Monado's own change, seen without the layer: if it ever goes, the docs' note
             // about it (docs/testing.md) goes too.

@@ -27,8 +27,9 @@ struct SubImage {
     mapping: Option<CameraMapping>,
 }
 
-/// The sub-images of the frame's layers that the layer enhances. Each view's mapping is logged
-/// (once per settings) when `enhancing`: a session passed through has none to tell.
+/// The sub-images of the frame's layers that the layer enhances, with each projection view's
+/// mapping and where it came from, for the log once the frame is enhanced (a frame passed
+/// through has none to tell).
 ///
 /// # Safety
 /// `info` must be a valid XrFrameEndInfo (its layers and views valid structs).
@@ -36,7 +37,7 @@ unsafe fn sub_images(
     info: &xr::FrameEndInfo,
     settings: &Settings,
     motion: &mut FrameMotion,
-    enhancing: bool,
+    sources: &mut Vec<(usize, CameraMapping, view_mappings::Source)>,
 ) -> Vec<SubImage> {
     let mut out = Vec::new();
     if info.layers.is_null() {
@@ -60,9 +61,7 @@ unsafe fn sub_images(
             let geometry: Vec<_> = views.iter().map(ViewGeometry::from_xr).collect();
             let mappings = motion.mappings(settings, &geometry, proj.space);
             for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
-                if enhancing {
-                    view_mappings::log_mapping(settings, k, &mapping, &source);
-                }
+                sources.push((k, mapping, source));
                 out.push(SubImage {
                     sub: view.sub_image,
                     mapping: Some(mapping),
@@ -252,14 +251,20 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = s.background.as_ref().and_then(|bg| bg.latest());
     let captured_at = s.frame_in_use.as_ref().map(|f| f.captured_at);
     let mut moving = motion::at_end_frame(s, info.display_time, captured_at);
-    let enhancing = s.engine.is_some();
+    let mut sources = Vec::new();
     // SAFETY: the app's frame end info, valid for this call.
-    let subs = unsafe { sub_images(info, &s.settings, &mut moving, enhancing) };
+    let subs = unsafe { sub_images(info, &s.settings, &mut moving, &mut sources) };
     moving.finish(s);
     let items = frame_items(&subs, &s.settings);
     s.regions_seen |= !subs.is_empty();
     s.last_blend_mode = Some(info.environment_blend_mode);
+    let processed = s.processed;
     process(s, items, Some(info.environment_blend_mode));
+    if s.processed > processed {
+        for (k, mapping, source) in &sources {
+            view_mappings::log_mapping(&s.settings, *k, mapping, source);
+        }
+    }
     s.frame_in_use = None;
 }
 

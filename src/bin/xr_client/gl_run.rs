@@ -442,6 +442,14 @@ fn frames(
             .calls
             .record("xrEndFrame", (ended - start).as_secs_f64() * 1e3);
         stats.end_frame_ms.push((ended - start).as_secs_f64() * 1e3);
+        if options.timing {
+            // The GL work still queued after xrEndFrame (Monado finishes its own inside it).
+            // SAFETY: glFinish of the current context, loaded by name with its C type.
+            let finish: unsafe extern "C" fn() = unsafe { gl.function(c"glFinish") }?;
+            // SAFETY: the context is current on this thread.
+            unsafe { finish() };
+            stats.drain_ms.push(ended.elapsed().as_secs_f64() * 1e3);
+        }
         stats.startup.frame_ended(ended);
         stats.frames_submitted += 1;
     }

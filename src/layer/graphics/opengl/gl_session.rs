@@ -3,11 +3,11 @@
 //! background texels uploaded once per new frame (a frame its source did not prepare, such as
 //! a static one, is prepared here once).
 
-use super::glx_context::GlxContext;
+use super::app_context::AppContext;
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::frame::{overlay_pixel, FrameBackground, OverlayPixels};
-use crate::gpu::opengl::{Gl, GlEngine, GlError, GlFormat, GlTarget, GlView, Outcome};
+use crate::gpu::opengl::{GlEngine, GlError, GlFormat, GlTarget, GlView, Outcome};
 use crate::gpu::PixelFormat;
 use crate::layer::graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
 use crate::layer::live_settings::Settings;
@@ -20,7 +20,7 @@ const PROGRAM_WAIT: Duration = Duration::from_secs(60);
 
 pub struct GlSession {
     api: &'static str,
-    context: GlxContext,
+    context: Box<dyn AppContext>,
     /// Made at the first frame the layer acts on, with the app's context current.
     engine: Option<GlEngine>,
     /// Texels prepared here for a frame that came without them, by its background sequence.
@@ -56,7 +56,7 @@ fn gl_view(v: &ViewImage) -> GlView {
 }
 
 impl GlSession {
-    pub fn new(api: &'static str, context: GlxContext) -> GlSession {
+    pub fn new(api: &'static str, context: Box<dyn AppContext>) -> GlSession {
         GlSession {
             api,
             context,
@@ -76,7 +76,10 @@ impl GlSession {
             Some(engine) => Ok(engine),
             // SAFETY: the app's context is current on this thread; the engine's later calls
             // all happen inside `in_context`, with it current again.
-            None => Gl::from_process().and_then(|gl| unsafe { GlEngine::new(gl) }),
+            None => self
+                .context
+                .gl()
+                .and_then(|gl| unsafe { GlEngine::new(gl) }),
         };
         let result = match engine {
             Ok(mut engine) => {

@@ -4,6 +4,8 @@
 //! it, which Xlib's default handler turns into the app's exit, so a handler that only records
 //! the error is in place around the call.
 
+use super::app_context::{AppContext, Previous as AnyPrevious, NOT_CURRENT};
+use crate::gpu::opengl::{Gl, GlError};
 use std::ffi::{c_int, c_void, CStr};
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -84,7 +86,7 @@ pub struct GlxContext {
 }
 
 /// What was current on the thread before the layer made the app's context current.
-pub struct Previous {
+struct Previous {
     display: *mut Display,
     draw: u64,
     read: u64,
@@ -112,10 +114,10 @@ impl GlxContext {
             context,
         })
     }
+}
 
-    /// Makes the app's context current on this thread if it is not: Ok(None) when it already
-    /// was, Ok(Some) with what to put back after, Err when it cannot be made current.
-    pub fn enter(&self) -> Result<Option<Previous>, String> {
+impl AppContext for GlxContext {
+    fn enter(&self) -> Result<Option<AnyPrevious>, String> {
         let g = &self.glx;
         // SAFETY: GLX queries of this thread's current context, valid with none current.
         let current = unsafe { (g.get_current_context)() };
@@ -133,7 +135,7 @@ impl GlxContext {
             }
         };
         if forced {
-            return Err("fault injected at gl-make-current (CONTRASTXR_FAULT)".into());
+            return Err(format!("{NOT_CURRENT} (fault injected at gl-make-current)"));
         }
         X_ERROR.store(false, Ordering::SeqCst);
         // SAFETY: the binding's display, drawable and context, which the app keeps alive for
@@ -148,14 +150,19 @@ impl GlxContext {
             made
         };
         if made == 0 || X_ERROR.load(Ordering::SeqCst) {
-            return Err("the app's OpenGL context could not be made current on the thread calling xrEndFrame (is it current on another thread?)".into());
+            return Err(NOT_CURRENT.into());
         }
-        Ok(Some(previous))
+        Ok(Some(Box::new(previous)))
     }
 
-    /// Puts back what was current before `enter` made the app's context current.
-    pub fn leave(&self, previous: Option<Previous>) {
-        let Some(p) = previous else { return };
+    fn gl(&self) -> Result<Gl, GlError> {
+        Self::load_gl()
+    }
+
+    fn leave(&self, previous: Option<AnyPrevious>) {
+        let Some(p) = previous.and_then(|p| p.downcast::<Previous>().ok()) else {
+            return;
+        };
         let display = if p.display.is_null() {
             self.display
         } else {
@@ -163,5 +170,12 @@ impl GlxContext {
         };
         // SAFETY: what this thread had current a moment ago (or nothing), on its own display.
         unsafe { (self.glx.make_context_current)(display, p.draw, p.read, p.context) };
+    }
+}
+
+impl GlxContext {
+    /// The GL entry points of the process's GL (the app's libGL or libGLX).
+    fn load_gl() -> Result<Gl, GlError> {
+        Gl::from_process()
     }
 }

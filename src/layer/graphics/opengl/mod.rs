@@ -1,12 +1,15 @@
-//! OpenGL sessions (XR_KHR_opengl_enable): the GL engine on the app's own context, made
-//! current around the layer's calls when it is not (glx_context.rs), the app's swapchain
-//! images as GL texture names. No GL call happens on a thread of the layer's own.
+//! OpenGL sessions (XR_KHR_opengl_enable with the Xlib binding, XR_MNDX_egl_enable): the GL
+//! engine on the app's own context, made current around the layer's calls when it is not
+//! (glx_context.rs, egl_context.rs), the app's swapchain images as GL texture names. No GL call happens on a thread of the layer's own.
 
+mod app_context;
+mod egl_context;
 mod gl_session;
 mod glx_context;
 
 use super::Bound;
 use crate::layer::live_settings::Settings;
+use egl_context::EglContext;
 use gl_session::GlSession;
 use glx_context::GlxContext;
 use openxr_sys as xr;
@@ -28,20 +31,30 @@ pub unsafe fn bind_xlib(base: &xr::BaseInStructure, settings: &Settings) -> Opti
                 "session on the app's OpenGL (Xlib) context, background {}: enhancing (the context is checked at the first frame)",
                 settings.background
             ));
-            Bound::Enhanced(Box::new(GlSession::new("OpenGL (Xlib)", context)))
+            Bound::Enhanced(Box::new(GlSession::new("OpenGL (Xlib)", Box::new(context))))
         }
         Err(why) => Bound::PassThrough(format!("{why}: passing its frames through untouched")),
     })
 }
 
-/// An EGL binding (XR_MNDX_egl_enable): passed through, said in one line.
+/// The session's graphics for an EGL binding (XR_MNDX_egl_enable; None: not one).
 ///
 /// # Safety
 /// As for `bind_xlib`.
-pub unsafe fn bind_egl(base: &xr::BaseInStructure, _: &Settings) -> Option<Bound> {
-    (base.ty == xr::StructureType::GRAPHICS_BINDING_EGL_MNDX).then(|| {
-        Bound::PassThrough(
-            "the layer enhances OpenGL sessions with the Xlib binding, not yet EGL ones: passing its frames through untouched".into(),
-        )
+pub unsafe fn bind_egl(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bound> {
+    if base.ty != xr::StructureType::GRAPHICS_BINDING_EGL_MNDX {
+        return None;
+    }
+    // SAFETY: the type tag says this is an EGL binding (the caller's contract).
+    let b = unsafe { &*(base as *const _ as *const xr::GraphicsBindingEGLMNDX) };
+    Some(match EglContext::new(b) {
+        Ok(context) => {
+            crate::layer::log::info(&format!(
+                "session on the app's OpenGL (EGL) context, background {}: enhancing (the context is checked at the first frame)",
+                settings.background
+            ));
+            Bound::Enhanced(Box::new(GlSession::new("OpenGL (EGL)", Box::new(context))))
+        }
+        Err(why) => Bound::PassThrough(format!("{why}: passing its frames through untouched")),
     })
 }

@@ -1,0 +1,22 @@
+//! The app's GL context as the layer reaches it, whichever window-system binding gave it: made
+//! current on the calling thread around the layer's GL calls when it is not, and the GL entry
+//! points for it.
+
+use crate::gpu::opengl::{Gl, GlError};
+
+/// What was current on the thread before the layer made the app's context current, to put
+/// back (the binding's own kind).
+pub type Previous = Box<dyn std::any::Any>;
+
+pub trait AppContext {
+    /// Makes the app's context current on this thread if it is not: Ok(None) when it already
+    /// was, Ok(Some) with what to put back after, Err (a sentence) when it cannot be.
+    fn enter(&self) -> Result<Option<Previous>, String>;
+    /// Puts back what `enter` found current.
+    fn leave(&self, previous: Option<Previous>);
+    /// The GL entry points for the context (with it current).
+    fn gl(&self) -> Result<Gl, GlError>;
+}
+
+/// The message when the app's context cannot be made current here.
+pub const NOT_CURRENT: &str = "the app's OpenGL context could not be made current on the thread calling the layer (is it current on another thread?)";
