@@ -66,12 +66,12 @@ pub const ENHANCED_APIS: &str = "Vulkan, OpenGL";
 
 /// The same, with the bindings: what a passed-through session's finding tells the user.
 const ENHANCED_APIS_IN_FULL: &str = "Vulkan sessions, and OpenGL sessions through \
-    XR_KHR_opengl_enable with the Xlib binding (GLX); not yet OpenGL through EGL \
-    (XR_MNDX_egl_enable)";
+    XR_KHR_opengl_enable with the Xlib binding (GLX), or with EGL where the runtime offers \
+    XR_MNDX_egl_enable";
 
 /// The APIs, as the layer's [`log::GRAPHICS_API`] line names them, of sessions it enhances
 /// (those of `layer::graphics`' bindings that enhance).
-const ENHANCED_SESSION_APIS: [&str; 2] = ["Vulkan", "OpenGL (Xlib)"];
+const ENHANCED_SESSION_APIS: [&str; 3] = ["Vulkan", "OpenGL (Xlib)", "OpenGL (EGL)"];
 
 /// The layer's reason for passing a session of `api` through, from its `session (API): WHY`
 /// line, without the `: passing ... through untouched` every such line ends with.
@@ -139,8 +139,8 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
         } else if text.contains("background") {
             "check the camera finding and the background setting (`contrastxr camera list`)"
         } else if text.contains("not a Vulkan session") {
-            "choose the app's Vulkan renderer, or its OpenGL one on X11 (GLX): the layer \
-             enhances Vulkan sessions and OpenGL sessions with the Xlib binding"
+            "choose the app's Vulkan renderer, or its OpenGL one (GLX, or EGL where the \
+             runtime offers XR_MNDX_egl_enable): the layer enhances those sessions"
         } else {
             LOG
         },
@@ -224,7 +224,9 @@ impl LastApp {
                 let fix: String = if ENHANCED_SESSION_APIS.contains(&api) {
                     "`contrastxr log` shows the whole log of that app".into()
                 } else {
-                    "choose the app's Vulkan renderer, or its OpenGL one on X11 (GLX)".into()
+                    "choose the app's Vulkan renderer, or its OpenGL one (GLX, or EGL where the \
+                     runtime offers XR_MNDX_egl_enable)"
+                        .into()
                 };
                 return Finding::warn(
                     NAME,
@@ -334,9 +336,9 @@ mod tests {
             })
         );
         assert_eq!(
-            session("graphics API of this session: OpenGL ES (EGL), passed through"),
+            session("graphics API of this session: OpenGL (Wayland), passed through"),
             Some(Session {
-                api: "OpenGL ES (EGL)",
+                api: "OpenGL (Wayland)",
                 enhanced: false
             })
         );
@@ -400,32 +402,36 @@ mod tests {
     fn a_passed_through_api_gets_the_enhanced_ones() {
         let f = last_app(&[
             "2026-01-01T00:00:00.000Z [pid 5] layer loaded into /usr/bin/game",
-            "2026-01-01T00:00:00.100Z [pid 5] graphics API of this session: OpenGL ES (EGL), passed through",
+            "2026-01-01T00:00:00.100Z [pid 5] graphics API of this session: OpenGL (XCB), passed through",
         ])
         .finding();
         assert_eq!(f.status, Status::Warn);
         assert_eq!(
             f.detail,
-            "last app /usr/bin/game (pid 5, 2026-01-01T00:00:00.000Z), OpenGL ES (EGL) session, \
+            "last app /usr/bin/game (pid 5, 2026-01-01T00:00:00.000Z), OpenGL (XCB) session, \
              passed through untouched; the layer enhances Vulkan sessions, and OpenGL sessions \
-             through XR_KHR_opengl_enable with the Xlib binding (GLX); not yet OpenGL through \
-             EGL (XR_MNDX_egl_enable)"
+             through XR_KHR_opengl_enable with the Xlib binding (GLX), or with EGL where the \
+             runtime offers XR_MNDX_egl_enable"
         );
         assert_eq!(
             f.fix.as_deref(),
-            Some("choose the app's Vulkan renderer, or its OpenGL one on X11 (GLX)")
+            Some(
+                "choose the app's Vulkan renderer, or its OpenGL one (GLX, or EGL where the \
+                 runtime offers XR_MNDX_egl_enable)"
+            )
         );
         // The layer's reason, when it logged one, in the detail.
         let f = last_app(&[
             "2026-01-01T00:00:00.000Z [pid 6] layer loaded into /usr/bin/game",
-            "2026-01-01T00:00:00.090Z [pid 6] session (OpenGL (EGL)): EGL is not yet enhanced: passing its frames through untouched",
-            "2026-01-01T00:00:00.100Z [pid 6] graphics API of this session: OpenGL (EGL), passed through",
+            "2026-01-01T00:00:00.090Z [pid 6] session (Direct3D): contrastxr enhances Vulkan and OpenGL sessions, not Direct3D: passing its frames through untouched",
+            "2026-01-01T00:00:00.100Z [pid 6] graphics API of this session: Direct3D, passed through",
         ])
         .finding();
         assert!(
             f.detail.starts_with(
-                "last app /usr/bin/game (pid 6, 2026-01-01T00:00:00.000Z), OpenGL (EGL) session, \
-                 passed through untouched (EGL is not yet enhanced); the layer enhances Vulkan"
+                "last app /usr/bin/game (pid 6, 2026-01-01T00:00:00.000Z), Direct3D session, \
+                 passed through untouched (contrastxr enhances Vulkan and OpenGL sessions, not \
+                 Direct3D); the layer enhances Vulkan"
             ),
             "{}",
             f.detail
