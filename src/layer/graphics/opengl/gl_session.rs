@@ -15,6 +15,9 @@ use crate::layer::log;
 use openxr_sys as xr;
 use std::time::{Duration, Instant};
 
+/// A frame call past this long is told in the debug log.
+const SLOW_FRAME: Duration = Duration::from_millis(100);
+
 /// How long a frame with `wait_for_pipelines` waits for its programs.
 const PROGRAM_WAIT: Duration = Duration::from_secs(60);
 
@@ -222,8 +225,10 @@ impl SessionGraphics for GlSession {
         let gl_views: Vec<GlView> = views.iter().map(gl_view).collect();
         self.in_context(|engine, prepared_here| {
             let t = texels(&background, prepared_here, params);
+            let started = Instant::now();
             // SAFETY: inside `in_context`: the engine's context is current.
             unsafe { engine.set_background(t) }.map_err(failed)?;
+            let uploaded = started.elapsed();
             let read = |engine: &GlEngine| -> Result<Vec<Vec<u8>>, NotDone> {
                 gl_views
                     .iter()
@@ -237,6 +242,15 @@ impl SessionGraphics for GlSession {
             match unsafe { engine.enhance(&gl_views, params) }.map_err(failed)? {
                 Outcome::Compiling => return Err(NotDone::Pending),
                 Outcome::Enhanced => {}
+            }
+            let took = started.elapsed();
+            if took > SLOW_FRAME {
+                // A driver that compiles a program's code at its first dispatch does it here.
+                log::debug(&format!(
+                    "an OpenGL frame call took {:.0} ms (background upload {:.0} ms)",
+                    took.as_secs_f64() * 1e3,
+                    uploaded.as_secs_f64() * 1e3
+                ));
             }
             if let Some(o) = overlay {
                 for (v, g) in views.iter().zip(&gl_views) {
