@@ -921,6 +921,27 @@ fn doctor_names_the_last_sessions_graphics_api() {
     assert_eq!(l["status"], "warn", "{l}");
     assert!(text(l, "detail").contains("(OpenGL (Xlib))"), "{l}");
     assert!(text(l, "fix").contains("Vulkan"), "{l}");
+    assert_eq!(
+        report["graphics_apis_enhanced"],
+        serde_json::json!(["Vulkan", "OpenGL"])
+    );
+    // The layer's graphics-API line: the finding names the session's API.
+    write_layer_log(
+        &root,
+        "\
+2026-01-01T00:00:00.000Z [pid 8] layer loaded into /usr/bin/hello_xr
+2026-01-01T00:00:00.300Z [pid 8] graphics API of this session: OpenGL (Xlib), enhanced
+2026-01-01T00:00:00.900Z [pid 8] enhancement began 0.600 s after the session started
+",
+    );
+    let (_, report) = doctor(&root, &[]);
+    let l = finding(&report, "last-app");
+    assert_eq!(l["status"], "ok", "{l}");
+    assert!(
+        text(l, "detail").starts_with("last app /usr/bin/hello_xr (pid 8, ")
+            && text(l, "detail").contains("), OpenGL (Xlib) session, enhanced: enhancement began"),
+        "{l}"
+    );
 }
 
 #[test]

@@ -61,6 +61,52 @@ pub fn config(env: &Env) -> Finding {
     )
 }
 
+/// The graphics APIs the layer enhances, in short (the report's header).
+pub const ENHANCED_APIS: &str = "Vulkan, OpenGL";
+
+/// The same, with the bindings: what a passed-through session's finding tells the user.
+const ENHANCED_APIS_IN_FULL: &str = "Vulkan sessions, and OpenGL sessions through \
+    XR_KHR_opengl_enable with the Xlib binding (GLX), or with EGL where the runtime offers \
+    XR_MNDX_egl_enable";
+
+/// The APIs, as the layer's [`log::GRAPHICS_API`] line names them, of sessions it enhances
+/// (those of `layer::graphics`' bindings that enhance).
+const ENHANCED_SESSION_APIS: [&str; 3] = ["Vulkan", "OpenGL (Xlib)", "OpenGL (EGL)"];
+
+/// The layer's reason for passing a session of `api` through, from its `session (API): WHY`
+/// line, without the `: passing ... through untouched` every such line ends with.
+fn pass_through_reason<'a>(text: &'a str, api: &str) -> Option<&'a str> {
+    let why = text
+        .strip_prefix("session (")?
+        .strip_prefix(api)?
+        .strip_prefix("): ")?;
+    let why = why.split_once(": passing").map_or(why, |(head, _)| head);
+    (!why.is_empty()).then_some(why)
+}
+
+/// A session's graphics API and whether the layer enhanced it, from its log line.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Session<'a> {
+    /// As the layer names it: `Vulkan`, `OpenGL (Xlib)`, `OpenGL (EGL)`, ...
+    pub api: &'a str,
+    pub enhanced: bool,
+}
+
+/// `graphics API of this session: API, enhanced` (or `, passed through`); None for any other
+/// line, and for one whose ending is neither.
+fn session(text: &str) -> Option<Session<'_>> {
+    let (api, state) = text
+        .strip_prefix(log::GRAPHICS_API)?
+        .trim_end()
+        .rsplit_once(", ")?;
+    let enhanced = match state {
+        "enhanced" => true,
+        "passed through" => false,
+        _ => return None,
+    };
+    (!api.is_empty()).then_some(Session { api, enhanced })
+}
+
 /// The log lines of the last app that loaded the layer (`contrastxr log`'s reading).
 pub struct LastApp {
     path: Option<PathBuf>,
@@ -93,7 +139,8 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
         } else if text.contains("background") {
             "check the camera finding and the background setting (`contrastxr camera list`)"
         } else if text.contains("not a Vulkan session") {
-            "the layer works on Vulkan sessions only: choose the app's Vulkan renderer"
+            "choose the app's Vulkan renderer, or its OpenGL one (GLX, or EGL where the \
+             runtime offers XR_MNDX_egl_enable): the layer enhances those sessions"
         } else {
             LOG
         },
@@ -128,6 +175,14 @@ impl LastApp {
         })
     }
 
+    /// The graphics API of the app's last session, from the layer's [`log::GRAPHICS_API`] line.
+    pub fn session(&self) -> Option<Session<'_>> {
+        self.lines
+            .iter()
+            .rev()
+            .find_map(|l| session(log::parse_line(l)?.text))
+    }
+
     pub fn finding(&self) -> Finding {
         const NAME: &str = "last-app";
         let where_ = self
@@ -149,16 +204,58 @@ impl LastApp {
         };
         let exe = first.text.strip_prefix(log::LOADED).unwrap_or(first.text);
         let app = format!("last app {exe} (pid {}, {})", first.pid, first.time);
+        let mut session = None;
+        match self.session() {
+            Some(Session {
+                api,
+                enhanced: true,
+            }) => session = Some(format!("{api} session, enhanced")),
+            Some(Session {
+                api,
+                enhanced: false,
+            }) => {
+                let why = self
+                    .lines
+                    .iter()
+                    .rev()
+                    .find_map(|l| pass_through_reason(log::parse_line(l)?.text, api));
+                // An API the layer enhances was passed through for another reason: its log says
+                // which.
+                let fix: String = if ENHANCED_SESSION_APIS.contains(&api) {
+                    "`contrastxr log` shows the whole log of that app".into()
+                } else {
+                    "choose the app's Vulkan renderer, or its OpenGL one (GLX, or EGL where the \
+                     runtime offers XR_MNDX_egl_enable)"
+                        .into()
+                };
+                return Finding::warn(
+                    NAME,
+                    format!(
+                        "{app}, {api} session, passed through untouched{}; the layer enhances \
+                         {ENHANCED_APIS_IN_FULL}",
+                        why.map_or(String::new(), |w| format!(" ({w})"))
+                    ),
+                    fix,
+                );
+            }
+            None => {}
+        }
         let last = self.lines.iter().rev().find_map(|l| {
             let text = log::parse_line(l)?.text;
             verdict(text).map(|v| (text, v))
         });
+        let named = session
+            .as_ref()
+            .map_or(app.clone(), |s| format!("{app}, {s}"));
         match last {
-            Some((text, (true, _))) => Finding::ok(NAME, format!("{app}: {text}")),
-            Some((text, (false, fix))) => Finding::warn(NAME, format!("{app}: {text}"), fix),
+            Some((text, (true, _))) => Finding::ok(NAME, format!("{named}: {text}")),
+            Some((text, (false, fix))) => Finding::warn(NAME, format!("{named}: {text}"), fix),
             None => Finding::warn(
                 NAME,
-                format!("{app} loaded the layer but logged no enhanced frame"),
+                format!(
+                    "{app} loaded the layer but logged no enhanced frame{}",
+                    session.map_or(String::new(), |s| format!(" ({s})"))
+                ),
                 "let the app run until it shows frames; `contrastxr log` shows what it logged",
             ),
         }
@@ -213,5 +310,184 @@ pub fn steam() -> Finding {
                 doc("steam-flatpak.md")
             ),
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::finding::Status;
+    use super::*;
+
+    /// The last app's lines as the layer writes them to its file.
+    fn last_app(lines: &[&str]) -> LastApp {
+        LastApp {
+            path: None,
+            lines: lines.iter().map(|l| l.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn reads_the_sessions_graphics_api_line() {
+        assert_eq!(
+            session("graphics API of this session: OpenGL (Xlib), enhanced"),
+            Some(Session {
+                api: "OpenGL (Xlib)",
+                enhanced: true
+            })
+        );
+        assert_eq!(
+            session("graphics API of this session: OpenGL (Wayland), passed through"),
+            Some(Session {
+                api: "OpenGL (Wayland)",
+                enhanced: false
+            })
+        );
+        assert_eq!(
+            session("graphics API of this session: Vulkan, enhanced\n"),
+            Some(Session {
+                api: "Vulkan",
+                enhanced: true
+            })
+        );
+        // Another ending, no API, or another line: nothing.
+        assert_eq!(session("graphics API of this session: Vulkan, maybe"), None);
+        assert_eq!(session("graphics API of this session: , enhanced"), None);
+        assert_eq!(session("graphics API of this session: Vulkan"), None);
+        assert_eq!(
+            session("enhancement began 0.2 s after the session started"),
+            None
+        );
+    }
+
+    #[test]
+    fn the_last_session_of_the_last_app_counts() {
+        let app = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 9] layer loaded into /usr/bin/hello_xr",
+            "2026-01-01T00:00:00.100Z [pid 9] graphics API of this session: Vulkan, enhanced",
+            "2026-01-01T00:00:02.100Z [pid 9] graphics API of this session: OpenGL (Xlib), enhanced",
+            "2026-01-01T00:00:02.400Z [pid 9] enhancement began 0.300 s after the session started",
+        ]);
+        assert_eq!(
+            app.session(),
+            Some(Session {
+                api: "OpenGL (Xlib)",
+                enhanced: true
+            })
+        );
+        let f = app.finding();
+        assert_eq!(f.status, Status::Ok);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/hello_xr (pid 9, 2026-01-01T00:00:00.000Z), OpenGL (Xlib) \
+             session, enhanced: enhancement began 0.300 s after the session started"
+        );
+    }
+
+    #[test]
+    fn an_enhanced_session_without_frames_yet_is_named() {
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 4] layer loaded into /usr/bin/hello_xr",
+            "2026-01-01T00:00:00.100Z [pid 4] graphics API of this session: Vulkan, enhanced",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Warn);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/hello_xr (pid 4, 2026-01-01T00:00:00.000Z) loaded the layer but \
+             logged no enhanced frame (Vulkan session, enhanced)"
+        );
+    }
+
+    #[test]
+    fn a_passed_through_api_gets_the_enhanced_ones() {
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 5] layer loaded into /usr/bin/game",
+            "2026-01-01T00:00:00.100Z [pid 5] graphics API of this session: OpenGL (XCB), passed through",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Warn);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/game (pid 5, 2026-01-01T00:00:00.000Z), OpenGL (XCB) session, \
+             passed through untouched; the layer enhances Vulkan sessions, and OpenGL sessions \
+             through XR_KHR_opengl_enable with the Xlib binding (GLX), or with EGL where the \
+             runtime offers XR_MNDX_egl_enable"
+        );
+        assert_eq!(
+            f.fix.as_deref(),
+            Some(
+                "choose the app's Vulkan renderer, or its OpenGL one (GLX, or EGL where the \
+                 runtime offers XR_MNDX_egl_enable)"
+            )
+        );
+        // The layer's reason, when it logged one, in the detail.
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 6] layer loaded into /usr/bin/game",
+            "2026-01-01T00:00:00.090Z [pid 6] session (Direct3D): contrastxr enhances Vulkan and OpenGL sessions, not Direct3D: passing its frames through untouched",
+            "2026-01-01T00:00:00.100Z [pid 6] graphics API of this session: Direct3D, passed through",
+        ])
+        .finding();
+        assert!(
+            f.detail.starts_with(
+                "last app /usr/bin/game (pid 6, 2026-01-01T00:00:00.000Z), Direct3D session, \
+                 passed through untouched (contrastxr enhances Vulkan and OpenGL sessions, not \
+                 Direct3D); the layer enhances Vulkan"
+            ),
+            "{}",
+            f.detail
+        );
+        // An API the layer enhances, passed through all the same: the log says why.
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 7] layer loaded into /usr/bin/game",
+            "2026-01-01T00:00:00.090Z [pid 7] session (OpenGL (Xlib)): no current context: passing its frames through untouched",
+            "2026-01-01T00:00:00.100Z [pid 7] graphics API of this session: OpenGL (Xlib), passed through",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Warn);
+        assert!(
+            f.detail.contains(
+                ", OpenGL (Xlib) session, passed through untouched (no current context); "
+            ),
+            "{}",
+            f.detail
+        );
+        assert_eq!(
+            f.fix.as_deref(),
+            Some("`contrastxr log` shows the whole log of that app")
+        );
+    }
+
+    #[test]
+    fn reads_the_layers_reason_for_passing_a_session_through() {
+        let line = "session (OpenGL (Xlib)): GLX_ARB_create_context missing: passing its frames \
+                    through untouched";
+        assert_eq!(
+            pass_through_reason(line, "OpenGL (Xlib)"),
+            Some("GLX_ARB_create_context missing")
+        );
+        assert_eq!(pass_through_reason(line, "Vulkan"), None);
+        assert_eq!(
+            pass_through_reason("session (Vulkan): GPU set-up failed (lost)", "Vulkan"),
+            Some("GPU set-up failed (lost)")
+        );
+        assert_eq!(
+            pass_through_reason("enhancement began 0.2 s", "Vulkan"),
+            None
+        );
+    }
+
+    #[test]
+    fn an_app_without_the_line_reads_as_before() {
+        let f = last_app(&[
+            "2026-01-01T00:00:00.000Z [pid 3] layer loaded into /usr/bin/a",
+            "2026-01-01T00:00:00.500Z [pid 3] enhancement began 0.200 s after the session started",
+        ])
+        .finding();
+        assert_eq!(f.status, Status::Ok);
+        assert_eq!(
+            f.detail,
+            "last app /usr/bin/a (pid 3, 2026-01-01T00:00:00.000Z): enhancement began 0.200 s \
+             after the session started"
+        );
     }
 }

@@ -10,7 +10,8 @@ pub const OPTIONS: &[Opt] = &[Opt::flag("--json")];
 pub fn usage() -> String {
     "usage: contrastxr doctor [--json]\n\n\
      Checks everything the layer needs and prints one line per finding (ok, warn or problem),\n\
-     with a fix under each that is not ok:\n\
+     with a fix under each that is not ok, after a header naming the graphics APIs the layer\n\
+     enhances (Vulkan, OpenGL):\n\
      \x20 manifest        the OpenXR loader finds the layer's manifest (implicit, or explicit\n\
      \x20                 through XR_API_LAYER_PATH) in its search paths: which file\n\
      \x20 library         the library the manifest names loads and exports\n\
@@ -23,9 +24,10 @@ pub fn usage() -> String {
      \x20 device-profile  the shipped device profile that matched the last app's headset (or\n\
      \x20                 the files searched, when none is found), and whether the camera the\n\
      \x20                 settings name (camera_usb_ids) is connected, before any app ran too\n\
-     \x20 last-app        what the last app that loaded the layer logged: on, or why not\n\
+     \x20 last-app        what the last app that loaded the layer logged: its session's\n\
+     \x20                 graphics API, and the layer on, or why not\n\
      \x20 steam           PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS, which Steam games need\n\
-     --json: one JSON object with every finding (name, status, detail, fix).\n\
+     --json: one JSON object: graphics_apis_enhanced and every finding (name, status, detail, fix).\n\
      Exit status 1 when a finding is a problem, 0 otherwise (warnings included).\n"
         .to_string()
 }
@@ -60,7 +62,10 @@ fn count(findings: &[Finding], status: Status) -> usize {
 }
 
 fn text(findings: &[Finding]) -> String {
-    let mut out = String::from("contrastxr doctor\n");
+    let mut out = format!(
+        "contrastxr doctor\n  graphics APIs enhanced: {}\n",
+        app::ENHANCED_APIS
+    );
     for f in findings {
         out += &format!("  {:<8} {:<15} {}\n", f.status.name(), f.name, f.detail);
         if let Some(fix) = &f.fix {
@@ -91,6 +96,7 @@ fn json(findings: &[Finding]) -> String {
         "ok": count(findings, Status::Problem) == 0,
         "problems": count(findings, Status::Problem),
         "warnings": count(findings, Status::Warn),
+        "graphics_apis_enhanced": app::ENHANCED_APIS.split(", ").collect::<Vec<_>>(),
         "findings": list,
     });
     serde_json::to_string_pretty(&report).expect("JSON of strings") + "\n"
