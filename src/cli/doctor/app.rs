@@ -71,7 +71,7 @@ const ENHANCED_APIS_IN_FULL: &str = "Vulkan sessions, and OpenGL sessions throug
 
 /// The APIs, as the layer's [`log::GRAPHICS_API`] line names them, of sessions it enhances
 /// (those of `layer::graphics`' bindings that enhance).
-const ENHANCED_SESSION_APIS: [&str; 3] = ["Vulkan", "OpenGL (Xlib)", "OpenGL (EGL)"];
+const ENHANCED_SESSION_APIS: [&str; 3] = contrastxr::layer::graphics::ENHANCED_APIS;
 
 /// The layer's reason for passing a session of `api` through, from its `session (API): WHY`
 /// line, without the `: passing ... through untouched` every such line ends with.

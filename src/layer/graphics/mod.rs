@@ -119,6 +119,10 @@ pub enum Bound {
     PassThrough(String),
 }
 
+/// The APIs of the sessions the layer enhances, as its `graphics API of this session:` line
+/// names them (what `contrastxr doctor` reads).
+pub const ENHANCED_APIS: [&str; 3] = ["Vulkan", "OpenGL (Xlib)", "OpenGL (EGL)"];
+
 /// A binding reader: None when the structure is not its API's binding.
 type Bind = unsafe fn(&xr::BaseInStructure, &Settings) -> Option<Bound>;
 
