@@ -24,6 +24,39 @@ fn run(tag: &str, extra: &[(&str, &str)]) -> Option<PathBuf> {
     run_into(tag, &dir, FRAMES, extra).then_some(dir)
 }
 
+/// The same with an OpenGL session (GLX, the sandbox's X server), its first frame waiting for
+/// the layer's programs so that the indicator's first frames are captured.
+fn run_opengl(tag: &str, extra: &[(&str, &str)]) -> Option<PathBuf> {
+    let sandbox = sandbox()?;
+    let dir = scratch_dir(&format!("{tag}.capture"));
+    let dir_s = dir.to_string_lossy().into_owned();
+    let frames = FRAMES.to_string();
+    let mut env = vec![
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_CAPTURE_DIR", dir_s.as_str()),
+        ("CONTRASTXR_CAPTURE_FRAMES", frames.as_str()),
+    ];
+    env.extend_from_slice(extra);
+    let size = format!("{WIDTH}x{HEIGHT}");
+    let cmd = [
+        XR_CLIENT,
+        "--graphics",
+        "opengl",
+        "--json",
+        "--frames",
+        &frames,
+        "--size",
+        &size,
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    sandbox.run_x11_for(&cmd, &env, 300).assert_success();
+    Some(dir)
+}
+
 /// Runs the client for `frames` frames, capturing every frame into `dir`; false without sandbox.
 fn run_into(tag: &str, dir: &Path, frames: usize, extra: &[(&str, &str)]) -> bool {
     let Some(sandbox) = sandbox() else {
@@ -98,12 +131,25 @@ fn differences(a: &[[u8; 4]], b: &[[u8; 4]]) -> Vec<(usize, usize)> {
 
 #[test]
 fn indicator_shows_in_the_first_frames_then_expires_and_can_be_switched_off() {
+    check_indicator("indicator", run);
+}
+
+/// The same in an OpenGL session: drawn in the app's context, rows counted from the top as
+/// the view is seen (GL stores them from the bottom).
+#[test]
+fn the_indicator_shows_in_opengl_sessions_too() {
+    check_indicator("indicator-opengl", run_opengl);
+}
+
+type Runner = fn(&str, &[(&str, &str)]) -> Option<PathBuf>;
+
+fn check_indicator(tag: &str, run: Runner) {
     let seconds = [("CONTRASTXR_INDICATOR_SECONDS", "1")];
-    let Some(on) = run("indicator-on", &seconds) else {
+    let Some(on) = run(&format!("{tag}-on"), &seconds) else {
         return;
     };
     let off = run(
-        "indicator-off",
+        &format!("{tag}-off"),
         &[seconds[0], ("CONTRASTXR_INDICATOR", "0")],
     )
     .expect("the sandbox ran once");
