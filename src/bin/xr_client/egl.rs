@@ -27,6 +27,9 @@ const CONTEXT_OPENGL_PROFILE_MASK: i32 = 0x30FD;
 const CONTEXT_OPENGL_CORE_PROFILE_BIT: i32 = 1;
 const NONE: i32 = 0x3038;
 
+/// The attributes of the client's pbuffers: 16x16.
+const PBUFFER_SIZE: [i32; 5] = [WIDTH, 16, HEIGHT, 16, NONE];
+
 type GetPlatformDisplay = unsafe extern "C" fn(u32, *mut c_void, *const i32) -> *mut c_void;
 type Initialize = unsafe extern "C" fn(*mut c_void, *mut i32, *mut i32) -> u32;
 type BindApi = unsafe extern "C" fn(u32) -> u32;
@@ -90,8 +93,7 @@ pub fn context() -> Result<GlContext> {
         if choose(display, attributes.as_ptr(), &mut config, 1, &mut count) == 0 || count == 0 {
             return fail("no EGL configuration with RGBA8, OpenGL and pbuffers");
         }
-        let size = [WIDTH, 16, HEIGHT, 16, NONE];
-        let surface = create_pbuffer(display, config, size.as_ptr());
+        let surface = create_pbuffer(display, config, PBUFFER_SIZE.as_ptr());
         let version = [
             CONTEXT_MAJOR_VERSION,
             4,
@@ -108,6 +110,21 @@ pub fn context() -> Result<GlContext> {
         if make_current(display, surface, surface, context) == 0 {
             return fail("eglMakeCurrent failed");
         }
-        GlContext::current(GlBinding::Egl, (display, config, context), lib, get_proc)
+        let mut gl = GlContext::current(GlBinding::Egl, (display, config, context), lib, get_proc)?;
+        gl.drawable = surface as u64;
+        Ok(gl)
+    }
+}
+
+/// Another 16x16 pbuffer on `gl`'s EGL configuration, as u64 (--check-gl-state's drawables).
+pub fn pbuffer(gl: &GlContext) -> Result<u64> {
+    // SAFETY: eglCreatePbufferSurface's type (egl.h); the display and configuration are the
+    // context's own and the attribute list ends with EGL_NONE.
+    unsafe {
+        let create: CreatePbufferSurface = gl.glx_function(c"eglCreatePbufferSurface")?;
+        match create(gl.display, gl.fb_config, PBUFFER_SIZE.as_ptr()) {
+            surface if surface.is_null() => fail("eglCreatePbufferSurface failed"),
+            surface => Ok(surface as u64),
+        }
     }
 }

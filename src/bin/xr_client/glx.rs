@@ -83,7 +83,7 @@ pub struct GlContext {
     pub fb_config: *mut c_void,
     /// The X visual (0 with EGL).
     pub visual_id: u32,
-    /// The GLX pbuffer (0 with EGL, whose pbuffer is an EGLSurface the binding does not take).
+    /// The GLX pbuffer, or the EGLSurface of the EGL pbuffer (which the binding does not take).
     pub drawable: u64,
     /// The GLXContext, or the EGLContext.
     pub context: *mut c_void,
@@ -293,7 +293,7 @@ impl GlContext {
         unsafe { gl_fn(self.get_proc, name) }
     }
 
-    /// A GLX function of libGL.
+    /// A GLX function of libGL (or with EGL an EGL function of libEGL).
     ///
     /// # Safety
     /// T must be the function's C pointer type.
@@ -302,8 +302,12 @@ impl GlContext {
         unsafe { symbol(self.libgl, name) }
     }
 
-    /// Another 16x16 pbuffer on the context's framebuffer configuration.
+    /// Another 16x16 pbuffer on the context's framebuffer configuration: a GLX pbuffer, or
+    /// with EGL an EGLSurface (as u64).
     pub fn pbuffer(&self) -> Result<u64> {
+        if self.binding == GlBinding::Egl {
+            return crate::egl::pbuffer(self);
+        }
         // SAFETY: glXCreatePbuffer's type (glx.h); the display and configuration are the
         // context's own and the attribute list ends with 0.
         unsafe {
