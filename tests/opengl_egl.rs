@@ -3,8 +3,10 @@
 //! platform), through the layer, against the real Monado runtime in the sandbox: the layer
 //! enhances the session in the app's EGL context within the CPU reference
 //! (tests/common/capture_check.rs); without the layer the client finds its images as written;
-//! and when the layer cannot make the app's EGL context current the session passes through
-//! with one line, every image as the app wrote it.
+//! the app finds the GL state and EGL current surfaces it set before xrEndFrame after it, with
+//! the layer enhancing as without it (`--check-gl-state`); and when the layer cannot make the
+//! app's EGL context current the session passes through with one line, every image as the app
+//! wrote it.
 
 mod common;
 
@@ -124,4 +126,48 @@ fn egl_context_not_current_passes_the_session_through_with_one_line() {
         !lines.iter().any(|l| l.contains("processing frames")),
         "{what}"
     );
+}
+
+/// `--check-gl-state` on the EGL context (tests/opengl_state.rs does it for GLX; its items' current
+/// drawables are EGL pbuffer surfaces here): with the layer enhancing, as without it, nothing
+/// the app set before xrEndFrame has changed after it (Monado's EGL path does not trade the
+/// draw and read surfaces as its GLX one trades drawables). A disturbed draw surface is seen at
+/// every check, so the check can fail.
+#[test]
+fn the_app_finds_its_egl_gl_state_after_xr_end_frame_with_the_layer_on_as_off() {
+    let on = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let off = [("CONTRASTXR", "0")];
+    for (layer, env) in [(true, &on[..]), (false, &off[..])] {
+        let Some(run) = client_egl(env, &["--check-gl-state"]) else {
+            return;
+        };
+        let report = run.client_report();
+        let what = format!("layer {layer}: {}", run.describe());
+        assert!(report["gl_state_checked"].as_u64() >= Some(10), "{what}");
+        assert_eq!(report["gl_state_changed"], serde_json::json!([]), "{what}");
+        let enhanced = layer_lines(&run)
+            .iter()
+            .any(|l| l.contains("processing frames (2 views per frame)"));
+        assert_eq!(enhanced, layer, "{what}");
+    }
+    let disturb = [
+        "--check-gl-state",
+        "--disturb-gl-state",
+        "glXGetCurrentDrawable",
+    ];
+    let Some(run) = client_egl(&off, &disturb) else {
+        return;
+    };
+    let report = run.client_report();
+    let changed = report["gl_state_changed"].as_array().unwrap();
+    let checked = report["gl_state_checked"].as_u64().unwrap();
+    let draw = "eglGetCurrentSurface(EGL_DRAW)";
+    assert_eq!(changed.len() as u64, checked, "{}", run.describe());
+    assert!(changed.iter().all(|c| c["what"] == draw), "{changed:#?}");
 }
