@@ -17,6 +17,12 @@ usage: contrastxr-xr-client [options]
                           is GL_SRGB8_ALPHA8, R8G8B8A8_UNORM GL_RGBA8, R16G16B16A16_SFLOAT
                           GL_RGBA16F, R16G16B16A16_UNORM GL_RGBA16, A2B10G10R10_UNORM
                           GL_RGB10_A2)
+  --gl-binding xlib|egl   with --graphics opengl: how the session gets the app's context: the
+                          Xlib binding of XR_KHR_opengl_enable on GLX (default), or the EGL
+                          binding of XR_MNDX_egl_enable (the runtime must offer it) on an EGL
+                          4.5 core context of Mesa's surfaceless platform (libEGL.so.1) current
+                          on a 16x16 pbuffer (--check-gl-state's drawables are then EGL
+                          pbuffer surfaces)
   --layout array|side-by-side
                           one swapchain with arraySize 2, or one wide swapchain (default array)
   --frames N              frames to submit before ending the session (default 60)
@@ -82,7 +88,8 @@ usage: contrastxr-xr-client [options]
   --disturb-gl-state ITEMS
                           with --check-gl-state: change these items (comma-separated) after
                           setting them, as a layer that forgets to restore them would (to test
-                          that the check sees it): glXGetCurrentDrawable glGetError
+                          that the check sees it): glXGetCurrentDrawable (with EGL: the
+                          draw surface) glGetError
                           GL_ACTIVE_TEXTURE GL_CURRENT_PROGRAM GL_TEXTURE_BINDING_2D
                           GL_IMAGE_BINDING_NAME GL_PIXEL_UNPACK_BUFFER_BINDING
                           GL_UNPACK_ALIGNMENT GL_DRAW_FRAMEBUFFER_BINDING GL_FRAMEBUFFER_SRGB
@@ -101,6 +108,24 @@ impl Graphics {
         match self {
             Graphics::Vulkan => "vulkan",
             Graphics::OpenGl => "opengl",
+        }
+    }
+}
+
+/// How an OpenGL session gets the app's context.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GlBinding {
+    /// XrGraphicsBindingOpenGLXlibKHR on a GLX context.
+    Xlib,
+    /// XrGraphicsBindingEGLMNDX on an EGL context.
+    Egl,
+}
+
+impl GlBinding {
+    pub fn name(self) -> &'static str {
+        match self {
+            GlBinding::Xlib => "xlib",
+            GlBinding::Egl => "egl",
         }
     }
 }
@@ -125,6 +150,8 @@ impl Layout {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
     pub graphics: Graphics,
+    /// With --graphics opengl: the session's binding.
+    pub gl_binding: GlBinding,
     /// None: the first format the runtime offers that the client knows.
     pub format: Option<SwapchainFormat>,
     pub layout: Layout,
@@ -166,6 +193,7 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             graphics: Graphics::Vulkan,
+            gl_binding: GlBinding::Xlib,
             format: None,
             layout: Layout::Array,
             frames: 60,
@@ -226,6 +254,13 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
                     _ => return Err("--graphics needs vulkan or opengl".into()),
                 }
             }
+            "--gl-binding" => {
+                options.gl_binding = match value()?.as_str() {
+                    "xlib" => GlBinding::Xlib,
+                    "egl" => GlBinding::Egl,
+                    _ => return Err("--gl-binding needs xlib or egl".into()),
+                }
+            }
             "--validation" => options.validation = true,
             "--list-formats" => options.list_formats = true,
             "--json" => options.json = true,
@@ -281,6 +316,9 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
     }
     if options.check_gl_state && options.graphics != Graphics::OpenGl {
         return Err("--check-gl-state needs --graphics opengl".into());
+    }
+    if options.gl_binding == GlBinding::Egl && options.graphics != Graphics::OpenGl {
+        return Err("--gl-binding needs --graphics opengl".into());
     }
     if !options.disturb_gl_state.is_empty() && !options.check_gl_state {
         return Err("--disturb-gl-state needs --check-gl-state".into());
@@ -360,6 +398,9 @@ mod tests {
         let o = o.unwrap();
         assert!(o.check_gl_state);
         assert_eq!(o.disturb_gl_state, ["glGetError", "GL_ACTIVE_TEXTURE"]);
+        assert_eq!(o.gl_binding, GlBinding::Xlib);
+        let o = parse_str("--graphics opengl --gl-binding egl").unwrap();
+        assert_eq!(o.gl_binding, GlBinding::Egl);
     }
 
     #[test]
@@ -380,6 +421,8 @@ mod tests {
             "--check-gl-state",
             "--graphics opengl --disturb-gl-state glGetError",
             "--graphics opengl --check-gl-state --disturb-gl-state GL_VIEWPORT",
+            "--gl-binding egl",
+            "--graphics opengl --gl-binding glx",
         ] {
             assert!(parse_str(bad).is_err(), "{bad}");
         }

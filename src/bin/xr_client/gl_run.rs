@@ -1,5 +1,6 @@
 //! `--graphics opengl`: the run with an OpenGL session (XR_KHR_opengl_enable, the Xlib binding
-//! on a GLX context), as OpenGL apps make one: the projection swapchain in the layout asked for
+//! on a GLX context, or with --gl-binding egl XR_MNDX_egl_enable's binding on an EGL context),
+//! as OpenGL apps make one: the projection swapchain in the layout asked for
 //! (an array of two layers, or one texture twice as wide with each view an imageRect half) and
 //! with --quad a quad swapchain, the test pattern uploaded into each every frame (rows bottom
 //! first: GL's image origin is the bottom left), and with --check-untouched each image read back
@@ -7,7 +8,7 @@
 //! scripted calls are the Vulkan path's (frame_loop, script); only the images are GL's here.
 
 use crate::churn::{self, Churner};
-use crate::cli::{Layout, Options};
+use crate::cli::{GlBinding, Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::frame_loop::{self, projection_views_on, quad_layer_on, Stats};
 use crate::gl_state::GlStateCheck;
@@ -95,6 +96,12 @@ pub fn run(
     }
     let mut extensions = xr::ExtensionSet::default();
     extensions.khr_opengl_enable = true;
+    if options.gl_binding == GlBinding::Egl {
+        if !available.mndx_egl_enable {
+            return fail("the runtime does not offer XR_MNDX_egl_enable (--gl-binding egl)");
+        }
+        extensions.mndx_egl_enable = true;
+    }
     let instance = crate::create_instance(entry, &extensions, report)?;
     let system = instance
         .system(xr::FormFactor::HEAD_MOUNTED_DISPLAY)
@@ -109,8 +116,12 @@ pub fn run(
     instance
         .graphics_requirements::<xr::OpenGL>(system)
         .ctx("xrGetOpenGLGraphicsRequirementsKHR")?;
-    let gl = GlContext::new()?;
+    let gl = match options.gl_binding {
+        GlBinding::Xlib => GlContext::new()?,
+        GlBinding::Egl => crate::egl::context()?,
+    };
     report.gl = Some(gl.describe());
+    report.gl_binding = Some(gl.binding.name().to_string());
     let mut state = match options.check_gl_state {
         true => Some(GlStateCheck::new(&gl, &options.disturb_gl_state)?),
         false => None,
@@ -152,16 +163,7 @@ fn run_session(
     report: &mut Report,
     stats: &mut Stats,
 ) -> Result<()> {
-    let info = xr::opengl::SessionCreateInfo::Xlib {
-        x_display: gl.display.cast(),
-        visualid: gl.visual_id,
-        glx_fb_config: gl.fb_config.cast(),
-        glx_drawable: gl.drawable,
-        glx_context: gl.context.cast(),
-    };
-    // SAFETY: the GLX objects are this thread's current context and outlive the session.
-    let (session, mut waiter, mut stream) =
-        unsafe { instance.create_session::<xr::OpenGL>(system, &info) }.ctx("xrCreateSession")?;
+    let (session, mut waiter, mut stream) = create_session(instance, system, gl)?;
     stats.startup.session_created();
     let offered = session
         .enumerate_swapchain_formats()
@@ -246,6 +248,66 @@ fn run_session(
     drop((space, session, waiter, stream));
     report.teardown_ms.session(t.elapsed());
     result
+}
+
+/// The session on `gl`, through the binding it was made for.
+fn create_session(
+    instance: &xr::Instance,
+    system: xr::SystemId,
+    gl: &GlContext,
+) -> Result<(
+    xr::Session<xr::OpenGL>,
+    xr::FrameWaiter,
+    xr::FrameStream<xr::OpenGL>,
+)> {
+    if gl.binding == GlBinding::Xlib {
+        let info = xr::opengl::SessionCreateInfo::Xlib {
+            x_display: gl.display.cast(),
+            visualid: gl.visual_id,
+            glx_fb_config: gl.fb_config.cast(),
+            glx_drawable: gl.drawable,
+            glx_context: gl.context.cast(),
+        };
+        // SAFETY: the GLX objects are this thread's current context and outlive the session.
+        return unsafe { instance.create_session::<xr::OpenGL>(system, &info) }
+            .ctx("xrCreateSession");
+    }
+    // The openxr crate has no session type for XR_MNDX_egl_enable: xrCreateSession with the
+    // binding chained by hand, the session then used as any OpenGL one (its swapchain images
+    // are XrSwapchainImageOpenGLKHR).
+    let get_proc = gl.get_proc_address();
+    let binding = sys::GraphicsBindingEGLMNDX {
+        ty: sys::GraphicsBindingEGLMNDX::TYPE,
+        next: std::ptr::null(),
+        // SAFETY: eglGetProcAddress has the C type of PFN_xrEglGetProcAddressMNDX (a name in, a
+        // function pointer or null out).
+        get_proc_address: Some(unsafe {
+            std::mem::transmute::<crate::glx::GetProc, sys::platform::EglGetProcAddressMNDX>(
+                get_proc,
+            )
+        }),
+        display: gl.display,
+        config: gl.fb_config,
+        context: gl.context,
+    };
+    let info = sys::SessionCreateInfo {
+        ty: sys::SessionCreateInfo::TYPE,
+        next: (&binding as *const sys::GraphicsBindingEGLMNDX).cast(),
+        create_flags: sys::SessionCreateFlags::EMPTY,
+        system_id: system,
+    };
+    let mut handle = sys::Session::NULL;
+    // SAFETY: a valid create info whose chain lives across the call; the EGL objects are this
+    // thread's current context and outlive the session.
+    let result = unsafe { (instance.fp().create_session)(instance.as_raw(), &info, &mut handle) };
+    if result.into_raw() < 0 {
+        return fail(format!(
+            "xrCreateSession (XrGraphicsBindingEGLMNDX) failed: {result}"
+        ));
+    }
+    // SAFETY: a session of this instance just created with an OpenGL-family binding, owned by
+    // the returned Session, which destroys it.
+    Ok(unsafe { xr::Session::from_raw(instance.clone(), handle, Box::new(())) })
 }
 
 fn choose(wanted: Option<SwapchainFormat>, offered: &[u32]) -> Result<GlFormat> {

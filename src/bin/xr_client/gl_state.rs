@@ -4,13 +4,15 @@
 //! program pipeline, the active texture unit, textures, samplers and image units on unit 0 and
 //! every binding number of the layer's shaders, generic and indexed buffer bindings, the pixel
 //! store, framebuffers, a few enables, viewport and scissor box) and leaves a GL error pending;
-//! after xrEndFrame it reads all of it back, with glGet* and glXGetCurrent* only, and records
+//! after xrEndFrame it reads all of it back, with glGet* and glXGetCurrent* (eglGetCurrent* with
+//! --gl-binding egl, its pbuffers EGL surfaces) only, and records
 //! every item that changed. Then it puts its own defaults back, so that the next frame's
 //! uploads run as without the check.
 //!
 //! `--disturb-gl-state NAMES` changes the named items after they were set and before
 //! xrEndFrame, as a layer that forgets to restore them would: the check must see it.
 
+use crate::cli::GlBinding;
 use crate::error::{fail, Result};
 use crate::glx::GlContext;
 use contrastxr::gpu::shaders::interface::BINDINGS;
@@ -230,10 +232,130 @@ struct Fns {
     create_program_pipelines: Create,
     create_shader_program_v: unsafe extern "C" fn(Enum, i32, *const *const c_char) -> u32,
     get_program_iv: unsafe extern "C" fn(u32, Enum, *mut i32),
-    get_current_context: unsafe extern "C" fn() -> *mut c_void,
-    get_current_drawable: unsafe extern "C" fn() -> u64,
-    get_current_read_drawable: unsafe extern "C" fn() -> u64,
-    make_context_current: unsafe extern "C" fn(*mut c_void, u64, u64, *mut c_void) -> c_int,
+    window_system: WindowSystem,
+}
+
+/// The window-system calls of the check: GLX's, or with --gl-binding egl EGL's (whose draw and
+/// read surfaces stand for GLX's drawables, held as u64 as XIDs are).
+enum WindowSystem {
+    Glx {
+        get_current_context: unsafe extern "C" fn() -> *mut c_void,
+        get_current_drawable: unsafe extern "C" fn() -> u64,
+        get_current_read_drawable: unsafe extern "C" fn() -> u64,
+        make_context_current: unsafe extern "C" fn(*mut c_void, u64, u64, *mut c_void) -> c_int,
+    },
+    Egl {
+        get_current_context: unsafe extern "C" fn() -> *mut c_void,
+        get_current_surface: unsafe extern "C" fn(i32) -> *mut c_void,
+        make_current:
+            unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, *mut c_void) -> u32,
+    },
+}
+
+const EGL_DRAW: i32 = 0x3059;
+const EGL_READ: i32 = 0x305A;
+
+impl WindowSystem {
+    fn load(gl: &GlContext) -> Result<WindowSystem> {
+        // SAFETY: each field's type is the C type of the function named (glx.h, egl.h).
+        unsafe {
+            Ok(match gl.binding {
+                GlBinding::Xlib => WindowSystem::Glx {
+                    get_current_context: gl.glx_function(c"glXGetCurrentContext")?,
+                    get_current_drawable: gl.glx_function(c"glXGetCurrentDrawable")?,
+                    get_current_read_drawable: gl.glx_function(c"glXGetCurrentReadDrawable")?,
+                    make_context_current: gl.glx_function(c"glXMakeContextCurrent")?,
+                },
+                GlBinding::Egl => WindowSystem::Egl {
+                    get_current_context: gl.glx_function(c"eglGetCurrentContext")?,
+                    get_current_surface: gl.glx_function(c"eglGetCurrentSurface")?,
+                    make_current: gl.glx_function(c"eglMakeCurrent")?,
+                },
+            })
+        }
+    }
+
+    /// The names of the current context, draw and read drawable queries (the GLX_ITEMS).
+    fn names(&self) -> [&'static str; GLX_ITEMS] {
+        match self {
+            WindowSystem::Glx { .. } => [
+                "glXGetCurrentContext",
+                "glXGetCurrentDrawable",
+                "glXGetCurrentReadDrawable",
+            ],
+            WindowSystem::Egl { .. } => [
+                "eglGetCurrentContext",
+                "eglGetCurrentSurface(EGL_DRAW)",
+                "eglGetCurrentSurface(EGL_READ)",
+            ],
+        }
+    }
+
+    /// # Safety
+    /// Queries of this thread's current context: always valid.
+    unsafe fn current_context(&self) -> *mut c_void {
+        // SAFETY: as the caller promises.
+        unsafe {
+            match self {
+                WindowSystem::Glx {
+                    get_current_context,
+                    ..
+                }
+                | WindowSystem::Egl {
+                    get_current_context,
+                    ..
+                } => get_current_context(),
+            }
+        }
+    }
+
+    /// # Safety
+    /// As `current_context`.
+    unsafe fn current_drawable(&self, read: bool) -> u64 {
+        // SAFETY: as the caller promises.
+        unsafe {
+            match self {
+                WindowSystem::Glx {
+                    get_current_drawable,
+                    get_current_read_drawable,
+                    ..
+                } => match read {
+                    false => get_current_drawable(),
+                    true => get_current_read_drawable(),
+                },
+                WindowSystem::Egl {
+                    get_current_surface,
+                    ..
+                } => get_current_surface(if read { EGL_READ } else { EGL_DRAW }) as u64,
+            }
+        }
+    }
+
+    /// # Safety
+    /// `display` and `context` the client's, `draw` and `read` drawables (or EGL surfaces) of
+    /// its configuration.
+    unsafe fn make_current(
+        &self,
+        display: *mut c_void,
+        draw: u64,
+        read: u64,
+        context: *mut c_void,
+    ) {
+        // SAFETY: as the caller promises.
+        unsafe {
+            match self {
+                WindowSystem::Glx {
+                    make_context_current,
+                    ..
+                } => {
+                    make_context_current(display, draw, read, context);
+                }
+                WindowSystem::Egl { make_current, .. } => {
+                    make_current(display, draw as *mut c_void, read as *mut c_void, context);
+                }
+            }
+        }
+    }
 }
 
 impl Fns {
@@ -276,10 +398,7 @@ impl Fns {
                 create_program_pipelines: gl.function(c"glCreateProgramPipelines")?,
                 create_shader_program_v: gl.function(c"glCreateShaderProgramv")?,
                 get_program_iv: gl.function(c"glGetProgramiv")?,
-                get_current_context: gl.glx_function(c"glXGetCurrentContext")?,
-                get_current_drawable: gl.glx_function(c"glXGetCurrentDrawable")?,
-                get_current_read_drawable: gl.glx_function(c"glXGetCurrentReadDrawable")?,
-                make_context_current: gl.glx_function(c"glXMakeContextCurrent")?,
+                window_system: WindowSystem::load(gl)?,
             })
         }
     }
@@ -424,7 +543,7 @@ impl GlStateCheck {
         let f = Fns::load(gl)?;
         let objects = Objects::create(&f, gl)?;
         let mut check = GlStateCheck {
-            items: items(&objects, gl.context),
+            items: items(&objects, gl.context, f.window_system.names()),
             f,
             objects,
             defaults: Vec::new(),
@@ -445,7 +564,9 @@ impl GlStateCheck {
             .iter()
             .zip(&check.defaults)
             // The context is the client's one: the check makes it current on other drawables.
-            .filter(|(item, default)| item.set == **default && item.what != "glXGetCurrentContext")
+            .enumerate()
+            .filter(|&(i, (item, default))| item.set == *default && i != CONTEXT_ITEM)
+            .map(|(_, pair)| pair)
             .map(|(item, _)| item.what.as_str())
             .collect();
         if !same.is_empty() {
@@ -509,11 +630,11 @@ impl GlStateCheck {
             note(&item.what, &item.set, &self.read(item));
         }
         // SAFETY: a GLX query of this thread's current context.
-        if unsafe { (self.f.get_current_context)() } != self.context {
+        if unsafe { self.f.window_system.current_context() } != self.context {
             // The rest is the client's context's state: read it there.
             // SAFETY: the client's own display, context and pbuffers.
             unsafe {
-                (self.f.make_context_current)(
+                self.f.window_system.make_current(
                     self.display,
                     self.objects.draw,
                     self.read_drawable,
@@ -567,9 +688,9 @@ impl GlStateCheck {
                 Query::Integer(pname) => (f.get_integer64v)(pname, v.as_mut_ptr()),
                 Query::Indexed(pname, i) => (f.get_integer64i_v)(pname, i, v.as_mut_ptr()),
                 Query::Enabled(cap) => v[0] = (f.is_enabled)(cap) as i64,
-                Query::Context => v[0] = (f.get_current_context)() as i64,
-                Query::Drawable => v[0] = (f.get_current_drawable)() as i64,
-                Query::ReadDrawable => v[0] = (f.get_current_read_drawable)() as i64,
+                Query::Context => v[0] = f.window_system.current_context() as i64,
+                Query::Drawable => v[0] = f.window_system.current_drawable(false) as i64,
+                Query::ReadDrawable => v[0] = f.window_system.current_drawable(true) as i64,
             }
         }
         v[..item.set.len()].to_vec()
@@ -581,7 +702,8 @@ impl GlStateCheck {
         // indices below GL 4.5's minimums, ranges inside the buffers at aligned offsets. The
         // generic buffer bindings come after the indexed ones, which set them too.
         unsafe {
-            (f.make_context_current)(self.display, o.draw, self.read_drawable, self.context);
+            let ws = &f.window_system;
+            ws.make_current(self.display, o.draw, self.read_drawable, self.context);
             (f.use_program)(o.program);
             (f.bind_program_pipeline)(o.pipeline);
             for unit in 0..UNITS {
@@ -637,7 +759,8 @@ impl GlStateCheck {
         // SAFETY: the client's context and pbuffer; unbinding with null name lists (the
         // multi-bind calls) and zero names; valid pixel store values.
         unsafe {
-            (f.make_context_current)(self.display, self.drawable, self.drawable, self.context);
+            let ws = &f.window_system;
+            ws.make_current(self.display, self.drawable, self.drawable, self.context);
             (f.use_program)(0);
             (f.bind_program_pipeline)(0);
             (f.bind_textures)(0, UNITS as i32, none);
@@ -674,7 +797,7 @@ impl GlStateCheck {
             unsafe {
                 match name.as_str() {
                     "glXGetCurrentDrawable" => {
-                        (f.make_context_current)(
+                        f.window_system.make_current(
                             self.display,
                             self.drawable,
                             self.read_drawable,
@@ -703,10 +826,11 @@ impl GlStateCheck {
 
 /// The first items: the current context, draw and read drawables.
 const GLX_ITEMS: usize = 3;
+const CONTEXT_ITEM: usize = 0;
 const READ_DRAWABLE_ITEM: usize = 2;
 
 /// Every item, with the value `set` gives it (the GLX_ITEMS first).
-fn items(o: &Objects, context: *mut c_void) -> Vec<Item> {
+fn items(o: &Objects, context: *mut c_void, names: [&str; GLX_ITEMS]) -> Vec<Item> {
     let item = |what: String, query, set: &[i64]| Item {
         what,
         query,
@@ -714,21 +838,9 @@ fn items(o: &Objects, context: *mut c_void) -> Vec<Item> {
     };
     let name = |n: u32| [n as i64];
     let mut items = vec![
-        item(
-            "glXGetCurrentContext".into(),
-            Query::Context,
-            &[context as i64],
-        ),
-        item(
-            "glXGetCurrentDrawable".into(),
-            Query::Drawable,
-            &[o.draw as i64],
-        ),
-        item(
-            "glXGetCurrentReadDrawable".into(),
-            Query::ReadDrawable,
-            &[o.read as i64],
-        ),
+        item(names[0].into(), Query::Context, &[context as i64]),
+        item(names[1].into(), Query::Drawable, &[o.draw as i64]),
+        item(names[2].into(), Query::ReadDrawable, &[o.read as i64]),
         item(
             "GL_CURRENT_PROGRAM".into(),
             Query::Integer(CURRENT_PROGRAM),

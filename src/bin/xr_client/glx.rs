@@ -1,8 +1,10 @@
 //! `--graphics opengl`: an OpenGL 4.5 core context on the X server in $DISPLAY through GLX, as
 //! OpenGL apps on Linux make one for XR_KHR_opengl_enable's Xlib binding (libX11 and libGL
 //! opened at run time, so the client builds without their development files), and the few GL
-//! calls the client makes.
+//! calls the client makes. With `--gl-binding egl` the context is egl.rs's instead; the GL
+//! calls are the same.
 
+use crate::cli::GlBinding;
 use crate::error::{fail, Result};
 use std::ffi::{c_char, c_int, c_void, CStr};
 
@@ -53,7 +55,7 @@ struct VisualInfo {
     visualid: std::ffi::c_ulong,
 }
 
-type GetProc = unsafe extern "C" fn(*const c_char) -> *mut c_void;
+pub type GetProc = unsafe extern "C" fn(*const c_char) -> *mut c_void;
 type CreateContextAttribs =
     unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, c_int, *const c_int) -> *mut c_void;
 
@@ -73,18 +75,27 @@ struct Gl {
 
 /// A current GL context on a 16x16 pbuffer of its own, and what the session's binding needs.
 pub struct GlContext {
+    /// Which binding the handles below are for: GLX's (Xlib) or EGL's.
+    pub binding: GlBinding,
+    /// The X display, or the EGLDisplay.
     pub display: *mut c_void,
+    /// The GLXFBConfig, or the EGLConfig.
     pub fb_config: *mut c_void,
+    /// The X visual (0 with EGL).
     pub visual_id: u32,
+    /// The GLX pbuffer, or the EGLSurface of the EGL pbuffer (which the binding does not take).
     pub drawable: u64,
+    /// The GLXContext, or the EGLContext.
     pub context: *mut c_void,
     gl: Gl,
+    /// libGL (GLX) or libEGL.
     libgl: *mut c_void,
+    /// glXGetProcAddressARB, or eglGetProcAddress.
     get_proc: GetProc,
 }
 
 /// A library of the system, opened once (never closed: GL drivers do not support it).
-fn open(name: &CStr) -> Result<*mut c_void> {
+pub fn open(name: &CStr) -> Result<*mut c_void> {
     // SAFETY: dlopen with a NUL-terminated name.
     let handle = unsafe { libc::dlopen(name.as_ptr(), libc::RTLD_NOW | libc::RTLD_GLOBAL) };
     if handle.is_null() {
@@ -97,17 +108,20 @@ fn open(name: &CStr) -> Result<*mut c_void> {
 ///
 /// # Safety
 /// T must be the symbol's C function pointer type.
-unsafe fn symbol<T: Copy>(lib: *mut c_void, name: &CStr) -> Result<T> {
+pub unsafe fn symbol<T: Copy>(lib: *mut c_void, name: &CStr) -> Result<T> {
     // SAFETY: a handle from dlopen and a NUL-terminated name.
     let p = unsafe { libc::dlsym(lib, name.as_ptr()) };
     if p.is_null() {
-        return fail(format!("no {} in libGL/libX11", name.to_string_lossy()));
+        return fail(format!(
+            "no {} in libGL/libX11/libEGL",
+            name.to_string_lossy()
+        ));
     }
     // SAFETY: the caller names the symbol's type; function pointers are pointer-sized.
     Ok(unsafe { std::mem::transmute_copy(&p) })
 }
 
-/// A GL function through glXGetProcAddressARB.
+/// A GL function through glXGetProcAddressARB (or eglGetProcAddress).
 ///
 /// # Safety
 /// T must be the function's C pointer type.
@@ -212,6 +226,34 @@ impl GlContext {
             if make_current(display, drawable, drawable, context) == 0 {
                 return fail("glXMakeContextCurrent failed");
             }
+            GlContext::current(
+                GlBinding::Xlib,
+                (display, fb_config, context),
+                libgl,
+                get_proc,
+            )
+            .map(|gl| GlContext {
+                visual_id,
+                drawable,
+                ..gl
+            })
+        }
+    }
+
+    /// The context `handles` (display, configuration, context) of `binding`, current on this
+    /// thread, with the client's GL functions loaded through `get_proc` and its pixel store set.
+    ///
+    /// # Safety
+    /// The context must be current on this thread; `lib` a dlopen handle of its GLX or EGL
+    /// library and `get_proc` that library's glXGetProcAddressARB or eglGetProcAddress.
+    pub unsafe fn current(
+        binding: GlBinding,
+        (display, fb_config, context): (*mut c_void, *mut c_void, *mut c_void),
+        lib: *mut c_void,
+        get_proc: GetProc,
+    ) -> Result<GlContext> {
+        // SAFETY: each function is named with its C type (glcorearb.h); the context is current.
+        unsafe {
             let gl = Gl {
                 texture_sub_image_2d: gl_fn(get_proc, c"glTextureSubImage2D")?,
                 clear_tex_image: gl_fn(get_proc, c"glClearTexImage")?,
@@ -224,19 +266,25 @@ impl GlContext {
             (gl.pixel_store_i)(GL_UNPACK_ALIGNMENT, 1);
             (gl.pixel_store_i)(GL_PACK_ALIGNMENT, 1);
             Ok(GlContext {
+                binding,
                 display,
                 fb_config,
-                visual_id,
-                drawable,
+                visual_id: 0,
+                drawable: 0,
                 context,
                 gl,
-                libgl,
+                libgl: lib,
                 get_proc,
             })
         }
     }
 
-    /// A GL function of the context's driver (through glXGetProcAddressARB).
+    /// The loader of the context's GL functions (glXGetProcAddressARB or eglGetProcAddress).
+    pub fn get_proc_address(&self) -> GetProc {
+        self.get_proc
+    }
+
+    /// A GL function of the context's driver (through glXGetProcAddressARB or eglGetProcAddress).
     ///
     /// # Safety
     /// T must be the function's C pointer type.
@@ -245,7 +293,7 @@ impl GlContext {
         unsafe { gl_fn(self.get_proc, name) }
     }
 
-    /// A GLX function of libGL.
+    /// A GLX function of libGL (or with EGL an EGL function of libEGL).
     ///
     /// # Safety
     /// T must be the function's C pointer type.
@@ -254,8 +302,12 @@ impl GlContext {
         unsafe { symbol(self.libgl, name) }
     }
 
-    /// Another 16x16 pbuffer on the context's framebuffer configuration.
+    /// Another 16x16 pbuffer on the context's framebuffer configuration: a GLX pbuffer, or
+    /// with EGL an EGLSurface (as u64).
     pub fn pbuffer(&self) -> Result<u64> {
+        if self.binding == GlBinding::Egl {
+            return crate::egl::pbuffer(self);
+        }
         // SAFETY: glXCreatePbuffer's type (glx.h); the display and configuration are the
         // context's own and the attribute list ends with 0.
         unsafe {

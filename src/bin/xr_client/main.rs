@@ -6,6 +6,7 @@
 
 mod churn;
 mod cli;
+mod egl;
 mod error;
 mod frame_loop;
 mod full_stderr;

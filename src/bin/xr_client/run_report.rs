@@ -18,6 +18,9 @@ pub struct Report {
     /// With --graphics opengl: the context's GL version and renderer.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gl: Option<String>,
+    /// With --graphics opengl: the session's binding, "xlib" or "egl" (--gl-binding).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gl_binding: Option<String>,
     pub format: String,
     pub layout: String,
     pub views: u32,

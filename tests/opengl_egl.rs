@@ -1,0 +1,173 @@
+//! The project's client with OpenGL sessions on the EGL binding of XR_MNDX_egl_enable
+//! (`--graphics opengl --gl-binding egl`: an EGL 4.5 core context of Mesa's surfaceless
+//! platform), through the layer, against the real Monado runtime in the sandbox: the layer
+//! enhances the session in the app's EGL context within the CPU reference
+//! (tests/common/capture_check.rs); without the layer the client finds its images as written;
+//! the app finds the GL state and EGL current surfaces it set before xrEndFrame after it, with
+//! the layer enhancing as without it (`--check-gl-state`); and when the layer cannot make the
+//! app's EGL context current the session passes through with one line, every image as the app
+//! wrote it.
+
+mod common;
+
+use common::capture_check::{captures, check_view};
+use common::{layer_lines, sandbox, scratch_dir, SandboxRun, XR_CLIENT};
+use std::path::Path;
+
+/// Each view's size in these runs.
+const VIEW: &str = "96x72";
+
+/// The client with an EGL-bound OpenGL session of 12 frames in GL_SRGB8_ALPHA8 with `extra`
+/// arguments (None without the sandbox).
+fn client_egl(env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
+    let sandbox = sandbox()?;
+    let mut cmd = vec![
+        XR_CLIENT,
+        "--graphics",
+        "opengl",
+        "--gl-binding",
+        "egl",
+        "--json",
+        "--frames",
+        "12",
+        "--size",
+        VIEW,
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    cmd.extend_from_slice(extra);
+    let run = sandbox.run_x11_for(&cmd, env, 120);
+    run.assert_success();
+    assert_eq!(
+        run.client_report()["gl_binding"],
+        "egl",
+        "{}",
+        run.describe()
+    );
+    Some(run)
+}
+
+/// The client with `env`, its images read back at each next acquire: every one as the app
+/// wrote it.
+fn untouched(env: &[(&str, &str)]) -> Option<SandboxRun> {
+    let run = client_egl(env, &["--check-untouched"])?;
+    let report = run.client_report();
+    let what = run.describe();
+    assert!(report["frames_checked"].as_u64() >= Some(8), "{what}");
+    assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
+    Some(run)
+}
+
+/// With the layer on, the session on the app's EGL context is enhanced: both views of two
+/// frames within the CPU reference and visibly changed, captured as OpenGL views.
+#[test]
+fn egl_sessions_are_enhanced_within_the_reference() {
+    let dir = scratch_dir("opengl-egl-enhanced");
+    let meadow = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/background-meadow.png");
+    let background = format!("image:{}", meadow.display());
+    let dir_text = dir.to_string_lossy().into_owned();
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_BACKGROUND", background.as_str()),
+        ("CONTRASTXR_CAPTURE_DIR", dir_text.as_str()),
+        ("CONTRASTXR_CAPTURE_SKIP", "3"),
+        ("CONTRASTXR_CAPTURE_FRAMES", "2"),
+    ];
+    let Some(run) = client_egl(&env, &[]) else {
+        return;
+    };
+    let lines = layer_lines(&run);
+    let what = format!("{lines:#?}");
+    let api = "graphics API of this session: OpenGL (EGL), enhanced";
+    assert!(lines.iter().any(|l| l.contains(api)), "{what}");
+    assert!(!lines.iter().any(|l| l.contains("passing")), "{what}");
+    let views = captures(&dir);
+    assert_eq!(views.len(), 4, "2 frames x 2 views: {what}");
+    for c in &views {
+        assert_eq!(c.json["graphics"], "opengl");
+        let changed = check_view(c);
+        assert!(changed > 1000, "the method changed {changed} pixels");
+    }
+}
+
+/// With the layer off the client's EGL images are read back exactly as written: the check the
+/// pass-through case below rests on sees no change without the layer.
+#[test]
+fn without_the_layer_egl_images_are_untouched() {
+    untouched(&[("CONTRASTXR", "0")]);
+}
+
+/// The app's EGL context cannot be made current for the layer (fault point
+/// `gl-make-current`): the session passes through with one line naming why, and every image
+/// is as the app wrote it.
+#[test]
+fn egl_context_not_current_passes_the_session_through_with_one_line() {
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_FAULT", "gl-make-current"),
+    ];
+    let Some(run) = untouched(&env) else {
+        return;
+    };
+    let what = run.describe();
+    let lines = layer_lines(&run);
+    let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+    assert_eq!(passing.len(), 1, "{what}");
+    assert!(
+        passing[0].contains("could not be made current"),
+        "{passing:?}"
+    );
+    assert!(
+        !lines.iter().any(|l| l.contains("processing frames")),
+        "{what}"
+    );
+}
+
+/// `--check-gl-state` on the EGL context (tests/opengl_state.rs does it for GLX; its items' current
+/// drawables are EGL pbuffer surfaces here): with the layer enhancing, as without it, nothing
+/// the app set before xrEndFrame has changed after it (Monado's EGL path does not trade the
+/// draw and read surfaces as its GLX one trades drawables). A disturbed draw surface is seen at
+/// every check, so the check can fail.
+#[test]
+fn the_app_finds_its_egl_gl_state_after_xr_end_frame_with_the_layer_on_as_off() {
+    let on = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let off = [("CONTRASTXR", "0")];
+    for (layer, env) in [(true, &on[..]), (false, &off[..])] {
+        let Some(run) = client_egl(env, &["--check-gl-state"]) else {
+            return;
+        };
+        let report = run.client_report();
+        let what = format!("layer {layer}: {}", run.describe());
+        assert!(report["gl_state_checked"].as_u64() >= Some(10), "{what}");
+        assert_eq!(report["gl_state_changed"], serde_json::json!([]), "{what}");
+        let enhanced = layer_lines(&run)
+            .iter()
+            .any(|l| l.contains("processing frames (2 views per frame)"));
+        assert_eq!(enhanced, layer, "{what}");
+    }
+    let disturb = [
+        "--check-gl-state",
+        "--disturb-gl-state",
+        "glXGetCurrentDrawable",
+    ];
+    let Some(run) = client_egl(&off, &disturb) else {
+        return;
+    };
+    let report = run.client_report();
+    let changed = report["gl_state_changed"].as_array().unwrap();
+    let checked = report["gl_state_checked"].as_u64().unwrap();
+    let draw = "eglGetCurrentSurface(EGL_DRAW)";
+    assert_eq!(changed.len() as u64, checked, "{}", run.describe());
+    assert!(changed.iter().all(|c| c["what"] == draw), "{changed:#?}");
+}
