@@ -8,6 +8,7 @@
 mod common;
 
 use common::capture_check::{capture_dir, captures, check_view, sample};
+use common::pass_through::{assert_one_pass_through_line, assert_untouched};
 use common::{layer_lines, sandbox, ApiDump, SandboxRun};
 use std::path::Path;
 
@@ -175,10 +176,7 @@ fn opengl_sessions_follow_every_mode() {
 fn untouched(env: &[(&str, &str)]) -> Option<SandboxRun> {
     let run = client_opengl("R8G8B8A8_SRGB", env, &["--check-untouched"])?;
     run.assert_success();
-    let report = run.client_report();
-    let what = run.describe();
-    assert!(report["frames_checked"].as_u64() >= Some(8), "{what}");
-    assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
+    assert_untouched(&run);
     Some(run)
 }
 
@@ -214,14 +212,6 @@ fn opengl_failures_pass_the_session_through_with_one_line() {
         let Some(run) = untouched(&env) else {
             return;
         };
-        let what = format!("{point}: {}", run.describe());
-        let lines = layer_lines(&run);
-        let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
-        assert_eq!(passing.len(), 1, "{what}");
-        assert!(passing[0].contains(why), "{point}: {passing:?}");
-        assert!(
-            !lines.iter().any(|l| l.contains("processing frames")),
-            "{what}"
-        );
+        assert_one_pass_through_line(&run, why);
     }
 }

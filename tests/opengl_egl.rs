@@ -10,9 +10,9 @@
 
 mod common;
 
-use common::capture_check::{captures, check_view};
+use common::capture_check::{captures, check_view, sample};
+use common::pass_through::{assert_one_pass_through_line, assert_untouched};
 use common::{layer_lines, sandbox, scratch_dir, SandboxRun, XR_CLIENT};
-use std::path::Path;
 
 /// Each view's size in these runs.
 const VIEW: &str = "96x72";
@@ -51,10 +51,7 @@ fn client_egl(env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
 /// wrote it.
 fn untouched(env: &[(&str, &str)]) -> Option<SandboxRun> {
     let run = client_egl(env, &["--check-untouched"])?;
-    let report = run.client_report();
-    let what = run.describe();
-    assert!(report["frames_checked"].as_u64() >= Some(8), "{what}");
-    assert_eq!(report["frames_modified"], serde_json::json!([]), "{what}");
+    assert_untouched(&run);
     Some(run)
 }
 
@@ -63,8 +60,7 @@ fn untouched(env: &[(&str, &str)]) -> Option<SandboxRun> {
 #[test]
 fn egl_sessions_are_enhanced_within_the_reference() {
     let dir = scratch_dir("opengl-egl-enhanced");
-    let meadow = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/background-meadow.png");
-    let background = format!("image:{}", meadow.display());
+    let background = format!("image:{}", sample("background-meadow.png"));
     let dir_text = dir.to_string_lossy().into_owned();
     let env = [
         ("CONTRASTXR", "1"),
@@ -114,18 +110,7 @@ fn egl_context_not_current_passes_the_session_through_with_one_line() {
     let Some(run) = untouched(&env) else {
         return;
     };
-    let what = run.describe();
-    let lines = layer_lines(&run);
-    let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
-    assert_eq!(passing.len(), 1, "{what}");
-    assert!(
-        passing[0].contains("could not be made current"),
-        "{passing:?}"
-    );
-    assert!(
-        !lines.iter().any(|l| l.contains("processing frames")),
-        "{what}"
-    );
+    assert_one_pass_through_line(&run, "could not be made current");
 }
 
 /// `--check-gl-state` on the EGL context (tests/opengl_state.rs does it for GLX; its items' current
