@@ -29,32 +29,41 @@ fn run(tag: &str, extra: &[(&str, &str)]) -> Option<PathBuf> {
 fn run_opengl(tag: &str, extra: &[(&str, &str)]) -> Option<PathBuf> {
     let sandbox = sandbox()?;
     let dir = scratch_dir(&format!("{tag}.capture"));
-    let dir_s = dir.to_string_lossy().into_owned();
-    let frames = FRAMES.to_string();
-    let mut env = vec![
-        ("CONTRASTXR", "1"),
-        ("CONTRASTXR_FORCE", "1"),
-        ("CONTRASTXR_PIPELINES", "wait"),
-        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
-        ("CONTRASTXR_CAPTURE_DIR", dir_s.as_str()),
-        ("CONTRASTXR_CAPTURE_FRAMES", frames.as_str()),
-    ];
+    let (dir_s, frames) = (dir.to_string_lossy().into_owned(), FRAMES.to_string());
+    let mut env = layer_env(&dir_s, &frames);
+    env.push(("CONTRASTXR_PIPELINES", "wait"));
     env.extend_from_slice(extra);
-    let size = format!("{WIDTH}x{HEIGHT}");
-    let cmd = [
-        XR_CLIENT,
-        "--graphics",
-        "opengl",
-        "--json",
-        "--frames",
-        &frames,
-        "--size",
-        &size,
-        "--format",
-        "R8G8B8A8_SRGB",
-    ];
+    let cmd = client_cmd(&frames, true);
+    let cmd: Vec<&str> = cmd.iter().map(String::as_str).collect();
     sandbox.run_x11_for(&cmd, &env, 300).assert_success();
     Some(dir)
+}
+
+/// The client's command for `frames` frames: a Vulkan session with validation, or with
+/// `opengl` an OpenGL one.
+fn client_cmd(frames: &str, opengl: bool) -> Vec<String> {
+    let size = format!("{WIDTH}x{HEIGHT}");
+    let mut cmd: Vec<String> = [XR_CLIENT, "--json", "--frames", frames, "--size", &size]
+        .into_iter()
+        .chain(["--format", "R8G8B8A8_SRGB"])
+        .map(String::from)
+        .collect();
+    match opengl {
+        true => cmd.extend(["--graphics".into(), "opengl".into()]),
+        false => cmd.push("--validation".into()),
+    }
+    cmd
+}
+
+/// The layer forced on against a flat background, every frame captured into `dir`.
+fn layer_env<'a>(dir: &'a str, frames: &'a str) -> Vec<(&'a str, &'a str)> {
+    vec![
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_CAPTURE_DIR", dir),
+        ("CONTRASTXR_CAPTURE_FRAMES", frames),
+    ]
 }
 
 /// Runs the client for `frames` frames, capturing every frame into `dir`; false without sandbox.
@@ -62,33 +71,15 @@ fn run_into(tag: &str, dir: &Path, frames: usize, extra: &[(&str, &str)]) -> boo
     let Some(sandbox) = sandbox() else {
         return false;
     };
-    let dir_s = dir.to_string_lossy().into_owned();
-    let frames = frames.to_string();
+    let (dir_s, frames) = (dir.to_string_lossy().into_owned(), frames.to_string());
     let validation = Validation::new(tag);
     let mut env = validation.env();
-    env.extend([
-        SYNC_VALIDATION,
-        ("CONTRASTXR", "1"),
-        ("CONTRASTXR_FORCE", "1"),
-        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
-        ("CONTRASTXR_CAPTURE_DIR", dir_s.as_str()),
-        ("CONTRASTXR_CAPTURE_FRAMES", frames.as_str()),
-    ]);
+    env.push(SYNC_VALIDATION);
+    env.extend(layer_env(&dir_s, &frames));
     env.extend_from_slice(extra);
-    let size = format!("{WIDTH}x{HEIGHT}");
-    let cmd = [
-        XR_CLIENT,
-        "--validation",
-        "--json",
-        "--frames",
-        &frames,
-        "--size",
-        &size,
-        "--format",
-        "R8G8B8A8_SRGB",
-    ];
-    let r = sandbox.run(&cmd, &env);
-    r.assert_success();
+    let cmd = client_cmd(&frames, false);
+    let cmd: Vec<&str> = cmd.iter().map(String::as_str).collect();
+    sandbox.run(&cmd, &env).assert_success();
     validation.assert_clean();
     true
 }
