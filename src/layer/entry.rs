@@ -4,7 +4,7 @@
 
 use super::dispatch::NextFns;
 use super::ffi::{c_str, guard, LayerError};
-use super::graphics::vulkan::app_vulkan;
+use super::graphics;
 use super::live_settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
 use super::{app_spaces, blend, log, session, swapchain, timespec};
@@ -228,10 +228,6 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
             "xrDestroyInstance" => {
                 std::mem::transmute::<pfn::DestroyInstance, pfn::VoidFunction>(destroy_instance)
             }
-            "xrCreateVulkanInstanceKHR" => std::mem::transmute::<
-                pfn::CreateVulkanInstanceKHR,
-                pfn::VoidFunction,
-            >(app_vulkan::create_vulkan_instance),
             "xrCreateSession" => std::mem::transmute::<pfn::CreateSession, pfn::VoidFunction>(
                 session::create_session,
             ),
@@ -277,7 +273,7 @@ fn intercepted(name: &str) -> Option<pfn::VoidFunction> {
                 pfn::ReleaseSwapchainImage,
                 pfn::VoidFunction,
             >(swapchain::release_swapchain_image),
-            _ => return None,
+            _ => return graphics::intercepted(name),
         })
     }
 }
@@ -378,5 +374,5 @@ fn forget_instance(instance: xr::Instance) {
     }
     state::registry().instances.remove(&instance.into_raw());
     live_settings::forget_live(instance.into_raw());
-    app_vulkan::forget(instance);
+    graphics::forget_instance(instance);
 }

@@ -82,34 +82,6 @@ pub unsafe fn find_in_chain<T>(
     None
 }
 
-/// The graphics API a session's create-info chain binds, in words ("OpenGL (Xlib)"), for the
-/// line that says why a session is passed through; None when no binding is known.
-///
-/// # Safety
-/// `next` must be null or a valid OpenXR `next` chain (each element an XrBaseInStructure).
-pub unsafe fn graphics_api(mut next: *const std::ffi::c_void) -> Option<&'static str> {
-    use xr::StructureType as T;
-    while !next.is_null() {
-        // SAFETY: the caller guarantees every element starts with XrBaseInStructure.
-        let base = unsafe { &*(next as *const xr::BaseInStructure) };
-        let api = match base.ty {
-            T::GRAPHICS_BINDING_VULKAN_KHR => Some("Vulkan"),
-            T::GRAPHICS_BINDING_OPENGL_XLIB_KHR => Some("OpenGL (Xlib)"),
-            T::GRAPHICS_BINDING_OPENGL_XCB_KHR => Some("OpenGL (XCB)"),
-            T::GRAPHICS_BINDING_OPENGL_WAYLAND_KHR => Some("OpenGL (Wayland)"),
-            T::GRAPHICS_BINDING_EGL_MNDX => Some("OpenGL (EGL)"),
-            T::GRAPHICS_BINDING_OPENGL_ES_ANDROID_KHR => Some("OpenGL ES"),
-            T::GRAPHICS_BINDING_D3D11_KHR | T::GRAPHICS_BINDING_D3D12_KHR => Some("Direct3D"),
-            _ => None,
-        };
-        if api.is_some() {
-            return api;
-        }
-        next = base.next as *const std::ffi::c_void;
-    }
-    None
-}
-
 /// A C string pointer as &str (None if null or not UTF-8).
 ///
 /// # Safety

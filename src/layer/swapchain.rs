@@ -402,19 +402,17 @@ pub(crate) unsafe extern "system" fn release_swapchain_image(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ash::vk;
 
-    fn info(
-        format: vk::Format,
-        usage: xr::SwapchainUsageFlags,
-        samples: u32,
-    ) -> xr::SwapchainCreateInfo {
+    /// GL_SRGB8_ALPHA8: whether a swapchain is enhanceable does not depend on its format.
+    const FORMAT: i64 = 0x8C43;
+
+    fn info(format: i64, usage: xr::SwapchainUsageFlags, samples: u32) -> xr::SwapchainCreateInfo {
         xr::SwapchainCreateInfo {
             ty: xr::SwapchainCreateInfo::TYPE,
             next: std::ptr::null(),
             create_flags: xr::SwapchainCreateFlags::EMPTY,
             usage_flags: usage,
-            format: format.as_raw() as i64,
+            format,
             sample_count: samples,
             width: 64,
             height: 48,
@@ -428,7 +426,7 @@ mod tests {
     fn only_single_sampled_colour_images_are_enhanced() {
         let colour = xr::SwapchainUsageFlags::COLOR_ATTACHMENT;
         let depth = xr::SwapchainUsageFlags::DEPTH_STENCIL_ATTACHMENT;
-        let srgb = vk::Format::R8G8B8A8_SRGB;
+        let srgb = FORMAT;
         assert!(enhanceable(&info(srgb, colour, 1)));
         assert!(!enhanceable(&info(srgb, colour, 4)));
         assert!(!enhanceable(&info(srgb, depth, 1)));
