@@ -1,6 +1,7 @@
 //! Command-line flags. They are a stable interface: the runtime and layer tests drive the client
 //! with them.
 
+use crate::gl_binding::GlBinding;
 use crate::pattern::Content;
 use crate::swapchain_format::{SwapchainFormat, FORMATS};
 
@@ -108,24 +109,6 @@ impl Graphics {
         match self {
             Graphics::Vulkan => "vulkan",
             Graphics::OpenGl => "opengl",
-        }
-    }
-}
-
-/// How an OpenGL session gets the app's context.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GlBinding {
-    /// XrGraphicsBindingOpenGLXlibKHR on a GLX context.
-    Xlib,
-    /// XrGraphicsBindingEGLMNDX on an EGL context.
-    Egl,
-}
-
-impl GlBinding {
-    pub fn name(self) -> &'static str {
-        match self {
-            GlBinding::Xlib => "xlib",
-            GlBinding::Egl => "egl",
         }
     }
 }

@@ -3,8 +3,8 @@
 //! (no window system needed), a configuration that renders OpenGL into pbuffers, the context
 //! current on a 16x16 pbuffer of its own. The GL calls are glx.rs's.
 
-use crate::cli::GlBinding;
 use crate::error::{fail, Result};
+use crate::gl_binding::GlBinding;
 use crate::glx::{self, GetProc, GlContext};
 use std::ffi::c_void;
 

@@ -8,9 +8,10 @@
 //! scripted calls are the Vulkan path's (frame_loop, script); only the images are GL's here.
 
 use crate::churn::{self, Churner};
-use crate::cli::{GlBinding, Layout, Options};
+use crate::cli::{Layout, Options};
 use crate::error::{fail, Context, Result};
 use crate::frame_loop::{self, projection_views_on, quad_layer_on, Stats};
+use crate::gl_binding::GlBinding;
 use crate::gl_state::GlStateCheck;
 use crate::glx::{self, GlContext, Texture};
 use crate::pattern::{image_bytes, LayerContent, Rows, Target};

@@ -12,8 +12,8 @@
 //! `--disturb-gl-state NAMES` changes the named items after they were set and before
 //! xrEndFrame, as a layer that forgets to restore them would: the check must see it.
 
-use crate::cli::GlBinding;
 use crate::error::{fail, Result};
+use crate::gl_binding::GlBinding;
 use crate::glx::GlContext;
 use contrastxr::gpu::shaders::interface::BINDINGS;
 use serde::Serialize;
@@ -488,8 +488,8 @@ impl Objects {
             framebuffers: [framebuffers[0], framebuffers[1]],
             renderbuffer: names(f.create_renderbuffers, 1)[0],
             vertex_array: names(f.create_vertex_arrays, 1)[0],
-            draw: gl.pbuffer()?,
-            read: gl.pbuffer()?,
+            draw: pbuffer(gl)?,
+            read: pbuffer(gl)?,
         };
         if objects.storage_alignment > 256 || objects.uniform_alignment > 256 {
             return fail("--check-gl-state: buffer offset alignments above 256");
@@ -997,4 +997,13 @@ fn items(o: &Objects, context: *mut c_void, names: [&str; GLX_ITEMS]) -> Vec<Ite
         &rect(SCISSOR_SET),
     ));
     items
+}
+
+/// Another 16x16 pbuffer on the context's configuration: a GLX pbuffer, or with EGL an
+/// EGLSurface (as u64).
+fn pbuffer(gl: &GlContext) -> Result<u64> {
+    match gl.binding {
+        GlBinding::Xlib => gl.glx_pbuffer(),
+        GlBinding::Egl => crate::egl::pbuffer(gl),
+    }
 }

@@ -4,8 +4,8 @@
 //! calls the client makes. With `--gl-binding egl` the context is egl.rs's instead; the GL
 //! calls are the same.
 
-use crate::cli::GlBinding;
 use crate::error::{fail, Result};
+use crate::gl_binding::GlBinding;
 use std::ffi::{c_char, c_int, c_void, CStr};
 
 // GLX and GL enums the client uses (glx.h, glext.h).
@@ -302,12 +302,9 @@ impl GlContext {
         unsafe { symbol(self.libgl, name) }
     }
 
-    /// Another 16x16 pbuffer on the context's framebuffer configuration: a GLX pbuffer, or
-    /// with EGL an EGLSurface (as u64).
-    pub fn pbuffer(&self) -> Result<u64> {
-        if self.binding == GlBinding::Egl {
-            return crate::egl::pbuffer(self);
-        }
+    /// Another 16x16 GLX pbuffer on the context's framebuffer configuration (with EGL:
+    /// `egl::pbuffer`).
+    pub fn glx_pbuffer(&self) -> Result<u64> {
         // SAFETY: glXCreatePbuffer's type (glx.h); the display and configuration are the
         // context's own and the attribute list ends with 0.
         unsafe {

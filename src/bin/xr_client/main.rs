@@ -11,6 +11,7 @@ mod error;
 mod frame_loop;
 mod full_stderr;
 mod gipa;
+mod gl_binding;
 mod gl_run;
 mod gl_state;
 mod glx;

@@ -9,7 +9,9 @@ use crate::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::frame::{overlay_pixel, FrameBackground, OverlayPixels};
 use crate::gpu::opengl::{GlEngine, GlError, GlFormat, GlTarget, GlView, Outcome};
 use crate::gpu::PixelFormat;
-use crate::layer::graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
+use crate::layer::graphics::session_graphics::{
+    CapturedImage, NotDone, SessionGraphics, ViewImage,
+};
 use crate::layer::live_settings::Settings;
 use crate::layer::log;
 use openxr_sys as xr;

@@ -97,3 +97,16 @@ fn loaded_loader() -> Option<vk::PFN_vkGetInstanceProcAddr> {
 pub fn forget(instance: xr::Instance) {
     given().retain(|_, (of, _)| *of != instance.into_raw());
 }
+
+/// The layer's xrCreateVulkanInstanceKHR for the loader, by name.
+pub fn intercepted(name: &str) -> Option<xr::pfn::VoidFunction> {
+    (name == "xrCreateVulkanInstanceKHR").then(|| {
+        // SAFETY: the loader calls it through the signature the OpenXR specification gives the
+        // name, which is the one it is declared with.
+        unsafe {
+            std::mem::transmute::<xr::pfn::CreateVulkanInstanceKHR, xr::pfn::VoidFunction>(
+                create_vulkan_instance,
+            )
+        }
+    })
+}

@@ -10,7 +10,9 @@ use crate::gpu::frame::{
 use crate::gpu::pipelines::Origin;
 use crate::gpu::shaders::shader_ids::ShaderId;
 use crate::gpu::{Engine, FrameView, GpuDevice, GpuError, PixelFormat, ViewShape};
-use crate::layer::graphics::{Bound, CapturedImage, NotDone, SessionGraphics, ViewImage};
+use crate::layer::graphics::session_graphics::{
+    Bound, CapturedImage, NotDone, SessionGraphics, ViewImage,
+};
 use crate::layer::live_settings::Settings;
 use crate::layer::log;
 use ash::vk::{self, Handle};

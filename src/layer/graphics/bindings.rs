@@ -1,0 +1,79 @@
+//! The graphics bindings the layer knows: which API a session's create info binds, which of
+//! them it enhances (one reader per API folder in [`BINDINGS`]), and the API-specific OpenXR
+//! functions it intercepts.
+
+use super::session_graphics::Bound;
+use super::{opengl, vulkan};
+use crate::layer::live_settings::Settings;
+use openxr_sys as xr;
+
+/// The APIs of the sessions the layer enhances, as its `graphics API of this session:` line
+/// names them (what `contrastxr doctor` reads).
+pub const ENHANCED_APIS: [&str; 3] = ["Vulkan", "OpenGL (Xlib)", "OpenGL (EGL)"];
+
+/// A binding reader: None when the structure is not its API's binding.
+type Bind = unsafe fn(&xr::BaseInStructure, &Settings) -> Option<Bound>;
+
+/// Every API the layer enhances, by its binding.
+const BINDINGS: [Bind; 3] = [vulkan::bind, opengl::bind_xlib, opengl::bind_egl];
+
+/// The graphics API a session's create-info chain binds, in words ("OpenGL (Xlib)"), for the
+/// line that says why a session is passed through; None when no binding is known.
+///
+/// # Safety
+/// `next` must be null or a valid OpenXR `next` chain (each element an XrBaseInStructure).
+pub unsafe fn api_name(mut next: *const std::ffi::c_void) -> Option<&'static str> {
+    use xr::StructureType as T;
+    while !next.is_null() {
+        // SAFETY: the caller guarantees every element starts with XrBaseInStructure.
+        let base = unsafe { &*(next as *const xr::BaseInStructure) };
+        let api = match base.ty {
+            T::GRAPHICS_BINDING_VULKAN_KHR => Some("Vulkan"),
+            T::GRAPHICS_BINDING_OPENGL_XLIB_KHR => Some("OpenGL (Xlib)"),
+            T::GRAPHICS_BINDING_OPENGL_XCB_KHR => Some("OpenGL (XCB)"),
+            T::GRAPHICS_BINDING_OPENGL_WAYLAND_KHR => Some("OpenGL (Wayland)"),
+            T::GRAPHICS_BINDING_EGL_MNDX => Some("OpenGL (EGL)"),
+            T::GRAPHICS_BINDING_OPENGL_ES_ANDROID_KHR => Some("OpenGL ES"),
+            T::GRAPHICS_BINDING_D3D11_KHR | T::GRAPHICS_BINDING_D3D12_KHR => Some("Direct3D"),
+            _ => None,
+        };
+        if api.is_some() {
+            return api;
+        }
+        next = base.next as *const std::ffi::c_void;
+    }
+    None
+}
+
+/// The API-specific OpenXR functions the layer intercepts (the app's Vulkan instance creation).
+pub fn intercepted(name: &str) -> Option<xr::pfn::VoidFunction> {
+    vulkan::intercepted(name)
+}
+
+/// Forgets what the APIs kept for an instance the app destroys.
+pub fn forget_instance(instance: xr::Instance) {
+    vulkan::app_vulkan::forget(instance);
+}
+
+/// The session's graphics from its create info's `next` chain, with the binding's API name.
+///
+/// # Safety
+/// `next` is the next chain of a session create info the runtime accepted.
+pub unsafe fn bind(next: *const std::ffi::c_void, settings: &Settings) -> (&'static str, Bound) {
+    // SAFETY: the caller's contract.
+    let api = unsafe { api_name(next) }.unwrap_or("no known graphics binding");
+    let mut at = next;
+    while !at.is_null() {
+        // SAFETY: every element of an accepted chain starts with XrBaseInStructure.
+        let base = unsafe { &*(at as *const xr::BaseInStructure) };
+        // SAFETY: each reader casts only a structure of its own type.
+        if let Some(bound) = BINDINGS.iter().find_map(|b| unsafe { b(base, settings) }) {
+            return (api, bound);
+        }
+        at = base.next as *const std::ffi::c_void;
+    }
+    let why = format!(
+        "contrastxr enhances Vulkan and OpenGL sessions, not {api}: passing its frames through untouched"
+    );
+    (api, Bound::PassThrough(why))
+}

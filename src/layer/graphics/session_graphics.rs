@@ -1,0 +1,110 @@
+//! What the layer asks of a session's graphics, whichever API they are ([`SessionGraphics`]),
+//! and what it hands them: a frame's views, and what comes back.
+
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::params::Params;
+use crate::gpu::frame::{FrameBackground, OverlayPixels};
+use crate::gpu::{PixelFormat, ViewKey};
+use crate::layer::live_settings::Settings;
+use openxr_sys as xr;
+
+/// One view region of one of the app's swapchain images, as the layer hands it to the API's
+/// engine.
+#[derive(Clone, Debug)]
+pub struct ViewImage {
+    pub key: ViewKey,
+    /// The API's handle of the image (a VkImage, a GL texture name), as enumerated.
+    pub image: u64,
+    /// The swapchain's format as the app named it (a VkFormat, a GL internal format).
+    pub api_format: i64,
+    pub format: PixelFormat,
+    /// The swapchain has more than one array layer (a GL array texture).
+    pub layered: bool,
+    /// Enhanced in place in the app's image, else through a copy of the region.
+    pub in_place: bool,
+    /// Display uv (v from the view's top edge) to camera uv.
+    pub mapping: CameraMapping,
+}
+
+/// A view read back for a capture: its bytes before and after the enhancement, rows top first
+/// as the view is seen, tightly packed.
+pub struct CapturedImage {
+    pub view: ViewImage,
+    pub display: Vec<u8>,
+    pub output: Vec<u8>,
+}
+
+/// Why a frame was not enhanced.
+#[derive(Debug)]
+pub enum NotDone {
+    /// Shaders the views need are still being built: the frame passes through.
+    Pending,
+    /// The session passes through from now on, for this reason (one sentence).
+    Failed(String),
+}
+
+/// A session's graphics, as the layer uses them.
+pub trait SessionGraphics: Send {
+    /// The binding's name for the log ("Vulkan", "OpenGL (Xlib)").
+    fn api(&self) -> &'static str;
+    /// The API in captures' JSON ("vulkan", "opengl").
+    fn graphics(&self) -> &'static str;
+    /// The pixel format the engine reads a swapchain of `api_format` as (None: not handled).
+    fn pixel_format(&self, api_format: i64) -> Option<PixelFormat>;
+    /// The format's name in captures (`R8G8B8A8_SRGB`, `GL_SRGB8_ALPHA8`).
+    fn format_name(&self, api_format: i64) -> String;
+    /// The usage a swapchain must have for the layer to touch its images.
+    fn needed_usage(&self) -> xr::SwapchainUsageFlags;
+    /// Usage to add so views of a swapchain are enhanced in place (None: through a copy).
+    fn in_place_usage(
+        &self,
+        format: PixelFormat,
+        info: &xr::SwapchainCreateInfo,
+        settings: &Settings,
+    ) -> Option<xr::SwapchainUsageFlags>;
+    /// The image handles of an enumeration the runtime filled (None: not this API's structs).
+    ///
+    /// # Safety
+    /// `images` points to `count` structs of the type its first one names.
+    unsafe fn images(
+        &self,
+        images: *const xr::SwapchainImageBaseHeader,
+        count: usize,
+    ) -> Option<Vec<u64>>;
+    /// Starts building what views of this shape will need, where the API builds ahead.
+    fn request_shaders(&self, params: &Params, format: PixelFormat, width: u32, in_place: bool);
+    /// Drops what the engine keeps for a swapchain the app destroys.
+    fn forget_swapchain(&mut self, swapchain: u64) -> Result<(), String>;
+    /// Connects a live source's prepared texels straight to the engine, where it can take them.
+    fn take_live_texels(&self, background: &crate::camera::Background);
+    /// Whether everything `views` need is built (waited for with `wait`).
+    fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone>;
+    /// Enhances `views` in the app's images (after `ready`), draws `overlay` over them, and with
+    /// `capture` reads each back before and after.
+    fn enhance(
+        &mut self,
+        views: &[ViewImage],
+        background: FrameBackground,
+        params: &Params,
+        overlay: Option<&OverlayPixels>,
+        capture: bool,
+    ) -> Result<Vec<CapturedImage>, NotDone>;
+    /// The log's line while frames pass through because shaders are still being built.
+    fn pending_line(&self) -> &'static str;
+    /// What the shaders took to build, for the log's line on when enhancement began.
+    fn build_summary(&self) -> Option<String>;
+    /// Lines the log says once (by key), checked at each enhanced frame: (key, line).
+    fn frame_lines(&self, views: &[ViewImage], prepared: bool) -> Vec<(&'static str, String)>;
+    /// The session passes through from now on: stop building, without waiting.
+    fn stop_building(&self);
+    /// Ends the engine on the app's thread (xrDestroySession): its last work, its objects.
+    fn finish(self: Box<Self>) -> Result<(), String>;
+}
+
+/// What xrCreateSession's graphics binding gives the layer.
+pub enum Bound {
+    /// The session is enhanced with these graphics.
+    Enhanced(Box<dyn SessionGraphics>),
+    /// The session passes through, and why (one sentence).
+    PassThrough(String),
+}
