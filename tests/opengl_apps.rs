@@ -19,6 +19,8 @@ fn layer_env(dir: &Path, mode: &str) -> Vec<(String, String)> {
         ("CONTRASTXR", "1".to_string()),
         ("CONTRASTXR_FORCE", "1".into()),
         ("CONTRASTXR_INDICATOR", "0".into()),
+        // Every frame enhanced, the first one waiting for the programs (an empty cache).
+        ("CONTRASTXR_PIPELINES", "wait".into()),
         ("CONTRASTXR_MODE", mode.into()),
         (
             "CONTRASTXR_BACKGROUND",
@@ -69,12 +71,14 @@ fn hello_xr_with_opengl_is_enhanced() {
             run.describe()
         );
     }
-    // 5 s at 20 Hz is 100; start-up and a busy machine take some.
+    // 5 s at 20 Hz is 100; start-up and a busy machine take some. With the layer, an empty
+    // shader cache costs seconds of compiling on the app's thread (llvmpipe compiles at link and
+    // at the first dispatch): that is measured in docs/performance.md, not held here.
     let frames = |d: &ApiDump| d.calls("xrEndFrame").len();
     let (bare_frames, on_frames) = (frames(&bare_dump), frames(&on_dump));
     eprintln!("xrEndFrame calls in 5 s: {bare_frames} without the layer, {on_frames} with it");
     assert!((40..=120).contains(&bare_frames), "{bare_frames} without");
-    assert!((40..=120).contains(&on_frames), "{on_frames} with");
+    assert!((10..=120).contains(&on_frames), "{on_frames} with");
     let lines = layer_lines(&on);
     let api = "graphics API of this session: OpenGL (Xlib), enhanced";
     assert!(lines.iter().any(|l| l.contains(api)), "{lines:#?}");
