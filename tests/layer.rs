@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::capture_check::{capture_dir, captures, check_view, sample, Captured};
+use common::capture_check::{capture_dir, captures, check_view, sample, video_dir, Captured};
 use common::{sandbox, scratch_file, ApiDump, SandboxRun, Validation, XR_CLIENT};
 use contrastxr::image::RgbaImage;
 use std::path::{Path, PathBuf};
@@ -442,42 +442,6 @@ fn stacks_with_api_dump_and_core_validation_on_either_side() {
             assert!(check_view(&c) > 1000, "{name}");
         }
     }
-}
-
-/// Writes `n` solid-colour PNG frames (each clearly different) as a `video:` directory.
-fn video_dir(tag: &str, n: usize) -> PathBuf {
-    let dir = capture_dir(&format!("{tag}.video"));
-    let colours = [
-        [230, 210, 30],
-        [40, 90, 220],
-        [200, 40, 40],
-        [40, 200, 80],
-        [240, 240, 240],
-        [120, 60, 160],
-    ];
-    for i in 0..n {
-        let c = colours[i % colours.len()];
-        let mut img = RgbaImage::new(96, 64, [c[0], c[1], c[2], 255]);
-        // A gradient so blur and FoV mapping matter, not just a flat colour.
-        for y in 0..64 {
-            for x in 0..96 {
-                let p = img.get(x, y);
-                img.set(
-                    x,
-                    y,
-                    [
-                        p[0].saturating_sub((x / 2) as u8),
-                        p[1],
-                        p[2].saturating_sub((y / 2) as u8),
-                        255,
-                    ],
-                );
-            }
-        }
-        img.save_png(&dir.join(format!("frame-{i:03}.png")))
-            .unwrap();
-    }
-    dir
 }
 
 #[test]

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::capture_check::{captures, check_view, sample, Captured};
+use common::capture_check::{captures, check_view, sample, video_dir, Captured};
 use common::semantics::{self, assert_same_answers, enhanced_frames, Case};
 use common::{layer_lines, sandbox, scratch_dir, SandboxRun, XR_CLIENT};
 use std::path::Path;
@@ -297,4 +297,57 @@ fn opengl_swapchain_churn_keeps_enhancing() {
     for c in &views {
         assert!(check_view(c) > 100);
     }
+}
+
+/// A live background in an OpenGL session: the source's thread writes each camera frame's
+/// texels into the engine's mapped upload buffer (the layer says so once it has), the frame
+/// call uploads them, and every captured view is within the CPU reference computed from the
+/// background frame it was enhanced against, over several different frames.
+#[test]
+fn opengl_live_background_is_written_on_the_source_thread() {
+    let tag = "opengl-client-video";
+    let dir = scratch_dir(tag);
+    let video = video_dir(tag, 6);
+    let env = layer_env(&dir, &format!("video:{}", video.display()), 12);
+    let Some(sandbox) = sandbox() else {
+        return;
+    };
+    let size = format!("{}x{}", VIEW.0, VIEW.1);
+    let cmd = [
+        XR_CLIENT,
+        "--graphics",
+        "opengl",
+        "--json",
+        "--frames",
+        "24",
+        "--size",
+        &size,
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    let run = sandbox.run_x11_for(&cmd, &as_refs(&env), 180);
+    run.assert_success();
+    let source =
+        "live frames' texels are written into a mapped pixel buffer on the camera's thread";
+    assert!(
+        run.stderr.contains(source),
+        "no {source:?}: {}",
+        run.describe()
+    );
+    let views = captures(&dir);
+    assert_eq!(views.len(), 24, "12 frames x 2 views captured");
+    let mut distinct: Vec<Vec<[u8; 4]>> = Vec::new();
+    for c in &views {
+        assert_eq!(c.json["graphics"], "opengl");
+        assert!(check_view(c) > 100, "the method changed almost nothing");
+        if !distinct.contains(&c.camera.pixels) {
+            distinct.push(c.camera.pixels.clone());
+        }
+    }
+    // The source runs at 30 fps and the null compositor at 20 Hz: 12 frames span ~0.6 s.
+    assert!(
+        distinct.len() >= 3,
+        "only {} distinct background frames in 12 captured frames",
+        distinct.len()
+    );
 }

@@ -25,6 +25,42 @@ pub fn capture_dir(tag: &str) -> PathBuf {
     dir
 }
 
+/// Writes `n` solid-colour PNG frames (each clearly different) as a `video:` directory.
+pub fn video_dir(tag: &str, n: usize) -> PathBuf {
+    let dir = capture_dir(&format!("{tag}.video"));
+    let colours = [
+        [230, 210, 30],
+        [40, 90, 220],
+        [200, 40, 40],
+        [40, 200, 80],
+        [240, 240, 240],
+        [120, 60, 160],
+    ];
+    for i in 0..n {
+        let c = colours[i % colours.len()];
+        let mut img = RgbaImage::new(96, 64, [c[0], c[1], c[2], 255]);
+        // A gradient so blur and FoV mapping matter, not just a flat colour.
+        for y in 0..64 {
+            for x in 0..96 {
+                let p = img.get(x, y);
+                img.set(
+                    x,
+                    y,
+                    [
+                        p[0].saturating_sub((x / 2) as u8),
+                        p[1],
+                        p[2].saturating_sub((y / 2) as u8),
+                        255,
+                    ],
+                );
+            }
+        }
+        img.save_png(&dir.join(format!("frame-{i:03}.png")))
+            .unwrap();
+    }
+    dir
+}
+
 /// One captured view: its metadata and files.
 pub struct Captured {
     pub json: serde_json::Value,

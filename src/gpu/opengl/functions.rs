@@ -12,6 +12,8 @@ pub type Uint = u32;
 pub type Int = i32;
 pub type Sizei = i32;
 pub type IntPtr = isize;
+/// A GLsync: an opaque pointer.
+pub type Sync = *const c_void;
 
 /// Resolves a GL function name (NUL-terminated) to its address; null where there is none.
 pub type ProcLoader<'a> = &'a mut dyn FnMut(&CStr) -> *const c_void;
@@ -86,6 +88,12 @@ gl_functions! {
     create_buffers = "glCreateBuffers": fn(Sizei, *mut Uint);
     named_buffer_data = "glNamedBufferData": fn(Uint, IntPtr, *const c_void, Enum);
     named_buffer_sub_data = "glNamedBufferSubData": fn(Uint, IntPtr, IntPtr, *const c_void);
+    named_buffer_storage = "glNamedBufferStorage": fn(Uint, IntPtr, *const c_void, u32);
+    map_named_buffer_range = "glMapNamedBufferRange": fn(Uint, IntPtr, IntPtr, u32) -> *mut c_void;
+    unmap_named_buffer = "glUnmapNamedBuffer": fn(Uint) -> u8;
+    fence_sync = "glFenceSync": fn(Enum, u32) -> Sync;
+    client_wait_sync = "glClientWaitSync": fn(Sync, u32, u64) -> Enum;
+    delete_sync = "glDeleteSync": fn(Sync);
     get_named_buffer_parameteriv = "glGetNamedBufferParameteriv": fn(Uint, Enum, *mut Int);
     delete_buffers = "glDeleteBuffers": fn(Sizei, *const Uint);
     bind_buffer = "glBindBuffer": fn(Enum, Uint);
@@ -179,6 +187,16 @@ pub const UNPACK_IMAGE_HEIGHT: Enum = 0x806E;
 
 // Buffers and textures.
 pub const DYNAMIC_COPY: Enum = 0x88EA;
+pub const MAP_WRITE_BIT: u32 = 0x0002;
+pub const MAP_PERSISTENT_BIT: u32 = 0x0040;
+pub const MAP_COHERENT_BIT: u32 = 0x0080;
+
+// Fences.
+pub const SYNC_GPU_COMMANDS_COMPLETE: Enum = 0x9117;
+pub const SYNC_FLUSH_COMMANDS_BIT: u32 = 0x0001;
+pub const ALREADY_SIGNALED: Enum = 0x911A;
+pub const CONDITION_SATISFIED: Enum = 0x911C;
+
 pub const BUFFER_SIZE: Enum = 0x8764;
 pub const TEXTURE_2D: Enum = 0x0DE1;
 pub const TEXTURE_2D_ARRAY: Enum = 0x8C1A;

@@ -19,10 +19,11 @@ use super::gl_error::GlError;
 use super::gl_format::GlFormat;
 use super::programs::{self, Programs};
 use super::state_guard::SavedState;
+use super::texel_buffers::TexelBuffers;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::methods::Pass;
 use crate::algorithm::params::{Params, ViewMode};
-use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
+use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use crate::gpu::shaders::codes::{method_code, mode_code};
 use crate::gpu::shaders::interface::{
     ACCESS_NARROW, ACCESS_WIDE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
@@ -65,10 +66,9 @@ pub enum Outcome {
 }
 
 /// The background the views sample: an RGBA32UI texture (the layout of `BlurredTexels`), filled
-/// from a pixel unpack buffer made once per size.
+/// from the mapped upload buffers (texel_buffers.rs).
 struct Background {
     texture: u32,
-    pbo: u32,
     size: (u32, u32),
     /// The `BlurredTexels::serial` the texture holds.
     serial: u64,
@@ -88,6 +88,8 @@ pub struct GlEngine {
     caps: Caps,
     programs: Programs,
     background: Option<Background>,
+    /// Where the background's texels are uploaded from; a live source writes them there.
+    texel_buffers: TexelBuffers,
     views: Vec<ViewBuffers>,
     /// An empty framebuffer object bound while the recipe runs: with the app's window-system
     /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
@@ -153,6 +155,7 @@ impl GlEngine {
             gl,
             caps,
             background: None,
+            texel_buffers: TexelBuffers::default(),
             views: Vec::new(),
             framebuffer: 0,
         })
@@ -176,10 +179,21 @@ impl GlEngine {
         Ok(())
     }
 
+    /// Where a live source writes its frames' texels, on its own thread (memory writes into a
+    /// mapped buffer): one sink for the engine's life.
+    pub fn texel_sink(&self) -> std::sync::Arc<dyn TexelSink> {
+        self.texel_buffers.sink()
+    }
+
+    /// Background uploads of texels the source's thread wrote, and all uploads.
+    pub fn texels_from_source(&self) -> (u64, u64) {
+        self.texel_buffers.texels_from_source()
+    }
+
     /// Makes `texels` the background the views sample: uploaded once (a new frame's texels,
-    /// told apart by their serial, through the pixel unpack buffer), nothing when it holds
-    /// them already. Prepared on the source's thread (crate::blurred_texels); only the upload
-    /// happens here.
+    /// told apart by their serial, from a mapped pixel unpack buffer), nothing when it holds
+    /// them already. Prepared on the source's thread (crate::blurred_texels), which for a live
+    /// source also writes them into that buffer; only the upload happens here.
     ///
     /// # Safety
     /// The engine's context is current on this thread.
@@ -206,7 +220,6 @@ impl GlEngine {
         }
         let g = &self.gl;
         if self.background.is_none() {
-            let pbo = new_buffer(g, texels.bytes.len(), "background upload buffer")?;
             let mut texture = 0;
             // SAFETY: a new 2D texture of one level, RGBA32UI (4.2+), the background's size
             // (checked against GL_TEXTURE_WIDTH below); nearest filtering, so that it is
@@ -220,45 +233,22 @@ impl GlEngine {
             let made = texture_level_int(g, texture, gl::TEXTURE_WIDTH) == size.0 as i32;
             if !made {
                 // SAFETY: ours.
-                unsafe {
-                    (g.delete_textures)(1, &texture);
-                    (g.delete_buffers)(1, &pbo);
-                }
+                unsafe { (g.delete_textures)(1, &texture) };
                 return Err(GlError::Allocation("background texture"));
             }
             self.background = Some(Background {
                 texture,
-                pbo,
                 size,
                 serial: 0,
             });
         }
         let bg = self.background.as_mut().expect("made above");
         let saved = SavedState::save(g);
-        // SAFETY: the buffer holds exactly the texels' bytes; with it bound as the unpack
-        // buffer (and the pixel store at its defaults) the texture update reads the whole
-        // frame from offset 0.
-        unsafe {
-            (g.named_buffer_sub_data)(
-                bg.pbo,
-                0,
-                texels.bytes.len() as isize,
-                texels.bytes.as_ptr().cast(),
-            );
-            (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, bg.pbo);
-            (g.texture_sub_image_2d)(
-                bg.texture,
-                0,
-                0,
-                0,
-                size.0 as i32,
-                size.1 as i32,
-                gl::RGBA_INTEGER,
-                gl::UNSIGNED_INT,
-                std::ptr::null(),
-            );
-        }
+        // SAFETY: the context is current (this call's contract); the texture is the
+        // background's, of the texels' size; the unpack binding is put back by `restore`.
+        let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture) };
         saved.restore(g);
+        uploaded?;
         bg.serial = texels.serial;
         Ok(())
     }
@@ -266,10 +256,7 @@ impl GlEngine {
     fn drop_background(&mut self) {
         if let Some(bg) = self.background.take() {
             // SAFETY: ours; the context is current (every caller's contract).
-            unsafe {
-                (self.gl.delete_textures)(1, &bg.texture);
-                (self.gl.delete_buffers)(1, &bg.pbo);
-            }
+            unsafe { (self.gl.delete_textures)(1, &bg.texture) };
         }
     }
 
@@ -578,6 +565,8 @@ impl GlEngine {
         self.save_program_cache();
         self.programs.destroy(&self.gl);
         self.drop_background();
+        // SAFETY: the context is current (this call's contract).
+        unsafe { self.texel_buffers.destroy(&self.gl) };
         if self.framebuffer != 0 {
             // SAFETY: ours; the context is current (the caller's contract).
             unsafe { (self.gl.delete_framebuffers)(1, &self.framebuffer) };

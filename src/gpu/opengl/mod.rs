@@ -17,6 +17,7 @@ pub mod gl_format;
 pub mod offline;
 pub mod programs;
 pub mod state_guard;
+mod texel_buffers;
 mod view_pixels;
 
 pub use functions::Gl;

@@ -3,9 +3,9 @@
 use crate::blurred_texels::{BlurredTexels, TEXEL_BYTES};
 use crate::gpu::recipe::CameraRect;
 
-/// Where one image's texels lie in its mapped memory.
+/// Where one image's (or buffer's) texels lie in its mapped memory.
 #[derive(Clone, Copy)]
-pub(super) struct MappedRows {
+pub struct MappedRows {
     pub(super) ptr: *mut u8,
     pub(super) len: usize,
     pub(super) offset: usize,
@@ -17,6 +17,17 @@ pub(super) struct MappedRows {
 unsafe impl Send for MappedRows {}
 
 impl MappedRows {
+    /// Rows of `width` texels packed from the start of `len` bytes mapped at `ptr` (a buffer
+    /// laid out as the texels are).
+    pub(crate) fn packed(ptr: *mut u8, len: usize, width: u32) -> MappedRows {
+        MappedRows {
+            ptr,
+            len,
+            offset: 0,
+            row_pitch: width as usize * TEXEL_BYTES,
+        }
+    }
+
     /// Copies the rows of `rect` from `texels` (16 bytes per texel, rows packed). The caller
     /// holds the slot's writing claim and no submission samples the image.
     pub(super) fn write(&self, texels: &BlurredTexels, rect: &CameraRect) {

@@ -16,7 +16,7 @@ pub struct RingSink {
 
 impl RingSink {
     /// Where offers go from now on (None: nowhere).
-    pub(super) fn connect(&self, slots: Option<Arc<TexelSlots>>) {
+    pub(crate) fn connect(&self, slots: Option<Arc<TexelSlots>>) {
         *self.slots.lock().unwrap_or_else(|e| e.into_inner()) = slots;
     }
 }

@@ -21,7 +21,7 @@ pub struct TexelSlots {
 }
 
 impl TexelSlots {
-    pub(super) fn new(size: (u32, u32), rows: Vec<MappedRows>) -> TexelSlots {
+    pub(crate) fn new(size: (u32, u32), rows: Vec<MappedRows>) -> TexelSlots {
         let slots = rows
             .into_iter()
             .map(|rows| Slot {

@@ -1,7 +1,8 @@
 //! An OpenGL session's graphics: the GL engine, made on the app's context at the first frame
 //! the layer acts on, every call inside that context (made current when it is not), and the
-//! background texels uploaded once per new frame (a frame its source did not prepare, such as
-//! a static one, is prepared here once).
+//! background texels uploaded once per new frame: a live source writes them into the engine's
+//! mapped upload buffer on its own thread; a frame its source did not prepare, such as a
+//! static one, is prepared here once.
 
 use super::app_context::AppContext;
 use crate::algorithm::params::Params;
@@ -192,8 +193,12 @@ impl SessionGraphics for GlSession {
         Ok(())
     }
 
-    fn take_live_texels(&self, _: &crate::camera::Background) {
-        // Live texels are uploaded at the frame call (a pixel buffer object per size).
+    fn take_live_texels(&self, background: &crate::camera::Background) {
+        // The engine's sink is one for its life (from the frame after the engine is made): the
+        // source's thread writes each frame's texels into a mapped upload buffer.
+        if let Some(engine) = &self.engine {
+            background.deliver_texels_to(Some(engine.texel_sink()));
+        }
     }
 
     fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone> {
@@ -291,10 +296,19 @@ impl SessionGraphics for GlSession {
     }
 
     fn frame_lines(&self, _: &[ViewImage], _: bool) -> Vec<(&'static str, String)> {
-        vec![(
+        let mut lines = Vec::new();
+        if self
+            .engine
+            .as_ref()
+            .is_some_and(|e| e.texels_from_source().0 > 0)
+        {
+            lines.push(("source-texels", "live frames' texels are written into a mapped pixel buffer on the camera's thread, before the frame call; the frame call uploads them to the background texture".to_string()));
+        }
+        lines.push((
             "first-frame-path",
             "views enhanced in the app's OpenGL context through a buffer copy of each view".into(),
-        )]
+        ));
+        lines
     }
 
     fn stop_building(&self) {
