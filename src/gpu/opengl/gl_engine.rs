@@ -24,6 +24,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::methods::Pass;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
+use crate::gpu::recipe::CameraRect;
 use crate::gpu::shaders::codes::{method_code, mode_code};
 use crate::gpu::shaders::interface::{
     ACCESS_NARROW, ACCESS_WIDE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
@@ -70,8 +71,8 @@ pub enum Outcome {
 struct Background {
     texture: u32,
     size: (u32, u32),
-    /// The `BlurredTexels::serial` the texture holds.
-    serial: u64,
+    /// The `BlurredTexels::serial` the texture holds, and of which texels.
+    holds: Option<(u64, CameraRect)>,
 }
 
 /// A view slot's buffers, kept across frames and remade only when a view needs more.
@@ -198,6 +199,21 @@ impl GlEngine {
     /// # Safety
     /// The engine's context is current on this thread.
     pub unsafe fn set_background(&mut self, texels: &BlurredTexels) -> Result<(), GlError> {
+        // SAFETY: this call's own contract; no mapping: the whole frame.
+        unsafe { self.set_background_for(texels, &[]) }
+    }
+
+    /// As `set_background`, for views at `mappings` (display uv to camera uv, as `GlView`
+    /// has them): only the texels they sample are uploaded (`CameraRect::sampled_by`; all of
+    /// them for no mapping).
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn set_background_for(
+        &mut self,
+        texels: &BlurredTexels,
+        mappings: &[CameraMapping],
+    ) -> Result<(), GlError> {
         self.check_lost()?;
         let size = (texels.width, texels.height);
         if size.0 == 0
@@ -208,11 +224,13 @@ impl GlEngine {
                 "the background frame is empty or damaged".into(),
             ));
         }
-        if self
-            .background
-            .as_ref()
-            .is_some_and(|b| b.serial == texels.serial && b.size == size)
-        {
+        let needed = CameraRect::sampled_by(mappings, size);
+        let held = |b: &Background| {
+            b.size == size
+                && b.holds
+                    .is_some_and(|(n, r)| n == texels.serial && r.contains(&needed))
+        };
+        if self.background.as_ref().is_some_and(held) {
             return Ok(());
         }
         if self.background.as_ref().is_some_and(|b| b.size != size) {
@@ -239,17 +257,17 @@ impl GlEngine {
             self.background = Some(Background {
                 texture,
                 size,
-                serial: 0,
+                holds: None,
             });
         }
         let bg = self.background.as_mut().expect("made above");
         let saved = SavedState::save(g);
         // SAFETY: the context is current (this call's contract); the texture is the
         // background's, of the texels' size; the unpack binding is put back by `restore`.
-        let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture) };
+        let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };
         saved.restore(g);
         uploaded?;
-        bg.serial = texels.serial;
+        bg.holds = Some((texels.serial, needed));
         Ok(())
     }
 

@@ -2,7 +2,8 @@
 //! good (GL 4.4 buffer storage, persistent and coherent), used as gpu/texels' slots. A live
 //! source's thread writes each new frame's texels into a free one before it publishes the
 //! frame, with memory writes only (no GL call on its thread); the frame call then uploads from
-//! that buffer into the texture with one glTextureSubImage2D. Texels that come without the
+//! that buffer into the texture with one glTextureSubImage2D, of the texels the views sample
+//! (as the Vulkan ring, the source writes those of the last frame with a margin). Texels that come without the
 //! source's write (a static background, the first live frame) are written into a free buffer
 //! by the frame call. A fence after each upload tells when its buffer may be written again.
 
@@ -52,9 +53,10 @@ impl TexelBuffers {
         (self.from_source, self.uploads)
     }
 
-    /// Uploads `texels` into `texture` (RGBA32UI, the texels' size) from a buffer holding
-    /// them: the source's, else one written now. The unpack buffer binding is left changed
-    /// (the caller's SavedState puts it back); the pixel store must be at its defaults.
+    /// Uploads `rect` of `texels` into `texture` (RGBA32UI, the texels' size) from a buffer
+    /// holding them: the source's, else one written now. The unpack buffer binding and row
+    /// length are left changed (the caller's SavedState puts them back); the rest of the pixel
+    /// store must be at its defaults.
     ///
     /// # Safety
     /// The engine's context is current on this thread; `texture` is its background texture.
@@ -63,6 +65,7 @@ impl TexelBuffers {
         g: &Gl,
         texels: &BlurredTexels,
         texture: u32,
+        rect: &CameraRect,
     ) -> Result<(), GlError> {
         let size = (texels.width, texels.height);
         if self.size != size || self.slots.is_none() {
@@ -71,30 +74,33 @@ impl TexelBuffers {
         }
         // SAFETY: the caller's contract.
         unsafe { self.retire(g, 0) };
-        let Taken { slot, by_source } = match self.take(texels) {
+        let Taken { slot, by_source } = match self.take(texels, rect) {
             Some(t) => t,
             None => {
                 // Every free buffer may still be read by an upload: wait for the oldest.
                 // SAFETY: the caller's contract.
                 unsafe { self.retire(g, SLOT_WAIT_NS) };
-                self.take(texels)
+                self.take(texels, rect)
                     .ok_or(GlError::Allocation("a free background upload buffer"))?
             }
         };
-        // SAFETY: the buffer holds the whole frame's texels (the slot's write), packed rows
-        // from offset 0; bound as the unpack buffer it is the upload's source.
+        let first = (rect.y as usize * size.0 as usize + rect.x as usize) * TEXEL_BYTES;
+        // SAFETY: the buffer holds `rect` of the texels (the slot's write) in rows of the
+        // frame's width from offset 0, and `rect` lies inside the frame; bound as the unpack
+        // buffer, with that row length, it is the upload's source from `first`.
         unsafe {
             (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, self.buffers[slot]);
+            (g.pixel_storei)(gl::UNPACK_ROW_LENGTH, size.0 as i32);
             (g.texture_sub_image_2d)(
                 texture,
                 0,
-                0,
-                0,
-                size.0 as i32,
-                size.1 as i32,
+                rect.x as i32,
+                rect.y as i32,
+                rect.width as i32,
+                rect.height as i32,
                 gl::RGBA_INTEGER,
                 gl::UNSIGNED_INT,
-                std::ptr::null(),
+                first as *const std::ffi::c_void,
             );
             let fence = (g.fence_sync)(gl::SYNC_GPU_COMMANDS_COMPLETE, 0);
             self.uploads += 1;
@@ -106,14 +112,14 @@ impl TexelBuffers {
         Ok(())
     }
 
-    /// The slot holding `texels` for the next upload: the source's, else one written now.
-    fn take(&self, texels: &BlurredTexels) -> Option<Taken> {
+    /// The slot holding `rect` of `texels` for the next upload: the source's, else one
+    /// written now.
+    fn take(&self, texels: &BlurredTexels, rect: &CameraRect) -> Option<Taken> {
         let slots = self.slots.as_ref()?;
-        let all = CameraRect::full((texels.width, texels.height));
         let next = self.uploads + 1;
         slots
-            .take(texels.serial, &all, next)
-            .or_else(|| slots.write_for_frame(texels, &all, next))
+            .take(texels.serial, rect, next)
+            .or_else(|| slots.write_for_frame(texels, rect, next))
     }
 
     /// Tells the slots which uploads have finished: those whose fences have signalled, waiting

@@ -233,8 +233,9 @@ impl SessionGraphics for GlSession {
         self.in_context(|engine, prepared_here| {
             let t = texels(&background, prepared_here, params);
             let started = Instant::now();
+            let mappings: Vec<_> = gl_views.iter().map(|v| v.mapping).collect();
             // SAFETY: inside `in_context`: the engine's context is current.
-            unsafe { engine.set_background(t) }.map_err(failed)?;
+            unsafe { engine.set_background_for(t, &mappings) }.map_err(failed)?;
             let uploaded = started.elapsed();
             let read = |engine: &GlEngine| -> Result<Vec<Vec<u8>>, NotDone> {
                 gl_views
