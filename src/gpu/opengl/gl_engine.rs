@@ -17,7 +17,9 @@ use super::caps::Caps;
 use super::functions::{self as gl, Gl};
 use super::gl_error::GlError;
 use super::gl_format::GlFormat;
+use super::gl_view::{GlTarget, GlView};
 use super::programs::{self, Programs};
+use super::region::{read_region, write_region};
 use super::state_guard::SavedState;
 use super::texel_buffers::TexelBuffers;
 use crate::algorithm::mapping::CameraMapping;
@@ -31,31 +33,6 @@ use crate::gpu::shaders::interface::{
     CLASSIFY_WORKGROUP, TILE, TILE_LIST_DISPATCH_OFFSET, TILE_LIST_HEADER_WORDS,
 };
 use crate::gpu::shaders::push_constants::PushConstants;
-
-/// Where a view's texels are in the app's texture.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GlTarget {
-    Texture2D,
-    /// A layer of a 2D array texture.
-    Texture2DArray {
-        layer: u32,
-    },
-}
-
-/// One view to enhance: a region of one of the app's textures.
-#[derive(Clone, Copy, Debug)]
-pub struct GlView {
-    /// The texture's name in the app's context.
-    pub texture: u32,
-    pub target: GlTarget,
-    /// Its internal format (GL_RGBA8, GL_SRGB8_ALPHA8, GL_RGBA16, GL_RGBA16F, GL_RGB10_A2).
-    pub internal_format: u32,
-    /// The region, in texels, as GL counts them: (x, y) its lower left corner, then width and
-    /// height (an OpenXR imageRect of an OpenGL swapchain as it is).
-    pub rect: (u32, u32, u32, u32),
-    /// Display uv (v from the view's top edge) to camera uv, as the Vulkan path takes it.
-    pub mapping: CameraMapping,
-}
 
 /// What a call did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -459,14 +436,9 @@ impl GlEngine {
     ) {
         let g = &self.gl;
         let format = GlFormat::of(v.internal_format).expect("checked");
-        let (fmt, ty) = format.transfer;
-        let (x, y, w, h) = v.rect;
+        let (_, _, w, h) = v.rect;
         let bytes = w as usize * h as usize * format.pixel.bytes_per_pixel() as usize;
         let buffers = &self.views[k];
-        let layer = match v.target {
-            GlTarget::Texture2D => None,
-            GlTarget::Texture2DArray { layer } => Some(layer),
-        };
         let mapping = rows_from_bottom(&v.mapping);
         let push = PushConstants::new(params, bg_size, (w, h), &mapping);
         let [classify, finish_tiles, enhance] = ids.map(|id| self.programs.get(id));
@@ -481,21 +453,7 @@ impl GlEngine {
         // back by the caller's SavedState.
         unsafe {
             (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, buffers.pixels);
-            let z = layer.unwrap_or(0) as i32;
-            (g.get_texture_sub_image)(
-                v.texture,
-                0,
-                x as i32,
-                y as i32,
-                z,
-                w as i32,
-                h as i32,
-                1,
-                fmt,
-                ty,
-                bytes as i32,
-                std::ptr::null_mut(),
-            );
+            read_region(g, v, format, v.rect, (std::ptr::null_mut(), bytes));
             (g.named_buffer_sub_data)(buffers.tiles, 0, 4, (&zero as *const u32).cast());
             let bound = (bytes.div_ceil(16) * 16 + 16) as isize;
             (g.bind_buffer_range)(
@@ -541,32 +499,7 @@ impl GlEngine {
                     | gl::BUFFER_UPDATE_BARRIER_BIT,
             );
             (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, buffers.pixels);
-            match layer {
-                None => (g.texture_sub_image_2d)(
-                    v.texture,
-                    0,
-                    x as i32,
-                    y as i32,
-                    w as i32,
-                    h as i32,
-                    fmt,
-                    ty,
-                    std::ptr::null(),
-                ),
-                Some(z) => (g.texture_sub_image_3d)(
-                    v.texture,
-                    0,
-                    x as i32,
-                    y as i32,
-                    z as i32,
-                    w as i32,
-                    h as i32,
-                    1,
-                    fmt,
-                    ty,
-                    std::ptr::null(),
-                ),
-            }
+            write_region(g, v, format, v.rect, std::ptr::null());
         }
     }
 

@@ -14,14 +14,17 @@ pub mod functions;
 pub mod gl_engine;
 pub mod gl_error;
 pub mod gl_format;
+pub mod gl_view;
 pub mod offline;
 pub mod programs;
+mod region;
 pub mod state_guard;
 mod texel_buffers;
 mod view_pixels;
 
 pub use functions::Gl;
-pub use gl_engine::{GlEngine, GlTarget, GlView, Outcome};
+pub use gl_engine::{GlEngine, Outcome};
 pub use gl_error::GlError;
 pub use gl_format::GlFormat;
+pub use gl_view::{GlTarget, GlView};
 pub use offline::GlOffline;

@@ -4,9 +4,10 @@
 //! their rows stored bottom first as an OpenXR runtime's OpenGL swapchain images are.
 
 use super::functions::{self as gl, Gl};
-use super::gl_engine::{GlEngine, GlTarget, GlView, Outcome};
+use super::gl_engine::{GlEngine, Outcome};
 use super::gl_error::GlError;
 use super::gl_format::GlFormat;
+use super::gl_view::{GlTarget, GlView};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurTaps, BlurredTexels};

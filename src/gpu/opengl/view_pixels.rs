@@ -3,89 +3,42 @@
 //! put back, no buffer bound to the pixel pack/unpack points and the pixel store at defaults.
 
 use super::functions::{self as gl, Gl};
-use super::gl_engine::{GlEngine, GlTarget, GlView};
+use super::gl_engine::GlEngine;
 use super::gl_error::GlError;
 use super::gl_format::GlFormat;
+use super::gl_view::GlView;
+use super::region::{read_region, write_region};
 use super::state_guard::SavedState;
 use crate::gpu::frame::Run;
 
 /// The view's region bytes, rows as GL stores them (bottom first), tightly packed.
 ///
 /// # Safety
-/// `g`'s context is current and `v` is a checked view of it.
+/// `g`'s context is current and `v` is a checked view of it; no pack buffer is bound.
 unsafe fn read(g: &Gl, v: &GlView, format: GlFormat) -> Vec<u8> {
-    let (x, y, w, h) = v.rect;
+    let (_, _, w, h) = v.rect;
     let bpp = format.pixel.bytes_per_pixel() as usize;
     let mut out = vec![0u8; w as usize * h as usize * bpp];
-    let z = match v.target {
-        GlTarget::Texture2D => 0,
-        GlTarget::Texture2DArray { layer } => layer as i32,
-    };
-    let (fmt, ty) = format.transfer;
     // SAFETY: the region lies in the texture (checked view); `out` holds it with rows tightly
     // packed (pixel store at defaults, 4-byte alignment divides every row of 4- and 8-byte
-    // pixels), no pack buffer is bound.
-    unsafe {
-        (g.get_texture_sub_image)(
-            v.texture,
-            0,
-            x as i32,
-            y as i32,
-            z,
-            w as i32,
-            h as i32,
-            1,
-            fmt,
-            ty,
-            out.len() as i32,
-            out.as_mut_ptr().cast(),
-        )
-    };
+    // pixels).
+    unsafe { read_region(g, v, format, v.rect, (out.as_mut_ptr().cast(), out.len())) };
     out
 }
 
 /// Writes `pixel` (one pixel's bytes) over each run; run rows count from the view's top.
 ///
 /// # Safety
-/// As for `read`.
+/// As for `read`, with no unpack buffer bound.
 unsafe fn draw(g: &Gl, v: &GlView, format: GlFormat, runs: &[Run], pixel: &[u8]) {
     let (x, y, w, h) = v.rect;
-    let (fmt, ty) = format.transfer;
     for r in runs.iter().filter(|r| r.y < h && r.x < w) {
         let len = r.len.min(w - r.x);
         let row: Vec<u8> = pixel.repeat(len as usize);
         // GL rows count from the bottom.
-        let gy = (y + h - 1 - r.y) as i32;
-        let gx = (x + r.x) as i32;
+        let rect = (x + r.x, y + h - 1 - r.y, len, 1);
         // SAFETY: the run lies inside the region (clipped above), `row` holds `len` pixels.
-        unsafe {
-            match v.target {
-                GlTarget::Texture2D => (g.texture_sub_image_2d)(
-                    v.texture,
-                    0,
-                    gx,
-                    gy,
-                    len as i32,
-                    1,
-                    fmt,
-                    ty,
-                    row.as_ptr().cast(),
-                ),
-                GlTarget::Texture2DArray { layer } => (g.texture_sub_image_3d)(
-                    v.texture,
-                    0,
-                    gx,
-                    gy,
-                    layer as i32,
-                    len as i32,
-                    1,
-                    1,
-                    fmt,
-                    ty,
-                    row.as_ptr().cast(),
-                ),
-            }
-        }
+        unsafe { write_region(g, v, format, rect, row.as_ptr().cast()) };
     }
 }
 
