@@ -219,3 +219,37 @@ fn opengl_failures_pass_the_session_through_with_one_line() {
         assert_one_pass_through_line(&run, why);
     }
 }
+
+/// The layer on but not forced, on the simulated HMD, which offers only OPAQUE: the session is
+/// never enhanced, so the layer never enters the app's context, not even to build its programs
+/// at swapchain creation (which it does for a session it may act on); the images are untouched
+/// and the log says why frames pass.
+#[test]
+fn an_opaque_session_gets_no_programs_built() {
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_LOG", "debug"),
+    ];
+    let Some(run) = untouched(&env) else {
+        return;
+    };
+    let lines = layer_lines(&run);
+    let what = run.describe();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("is not ADDITIVE: passing frames through")),
+        "{what}"
+    );
+    for never in [
+        "the app's OpenGL context:",
+        "OpenGL programs",
+        "processing frames",
+    ] {
+        assert!(
+            !lines.iter().any(|l| l.contains(never)),
+            "{never:?}: {what}"
+        );
+    }
+}

@@ -84,6 +84,26 @@ fn runtime_modes(
     Ok(modes)
 }
 
+/// Whether `session`'s frames may come ADDITIVE: the settings make its display additive, or
+/// the runtime offers ADDITIVE for a stereo or mono view (true for a session unknown here).
+pub fn additive_possible(session: xr::Session, next: &NextFns) -> bool {
+    let known = sessions()
+        .get(&session.into_raw())
+        .map(|p| (p.instance, p.system));
+    let Some((instance, system)) = known else {
+        return true;
+    };
+    if additive_display(instance, next, system) {
+        return true;
+    }
+    [
+        xr::ViewConfigurationType::PRIMARY_STEREO,
+        xr::ViewConfigurationType::PRIMARY_MONO,
+    ]
+    .into_iter()
+    .any(|view| runtime_modes(next, instance, system, view).is_ok_and(|m| m.contains(&ADDITIVE)))
+}
+
 /// Whether the settings for `system` (its `[device."..."]` table applied) say the display is
 /// additive.
 fn additive_display(instance: xr::Instance, next: &NextFns, system: xr::SystemId) -> bool {

@@ -138,12 +138,19 @@ pub(crate) unsafe extern "system" fn create_swapchain(
     )
 }
 
-/// Starts building the shaders that views of this swapchain will need (on the engine's own
-/// thread), so they are likely ready by the first xrEndFrame. Views usually span the width.
+/// Starts building the shaders that views of this swapchain will need (Vulkan: on the
+/// engine's own thread; OpenGL: in the app's context, here), so they are likely ready by the
+/// first xrEndFrame. Views usually span the width.
 fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_place: bool) {
-    let s = lock(s);
-    if let Some(graphics) = s.engine.as_ref() {
-        graphics.request_shaders(&s.settings.params, format, width, in_place);
+    let mut s = lock(s);
+    // A session whose frames can never be ADDITIVE (and the layer not forced on) is never
+    // enhanced: nothing to build for it.
+    if !s.settings.force && !super::blend::additive_possible(s.handle, &s.next) {
+        return;
+    }
+    let params = s.settings.params.clone();
+    if let Some(graphics) = s.engine.as_mut() {
+        graphics.request_shaders(&params, format, width, in_place);
     }
 }
 

@@ -84,7 +84,7 @@ pub fn rows_from_bottom(m: &CameraMapping) -> CameraMapping {
 }
 
 /// Whether rows of `width` pixels are whole 16-byte groups (the wide access).
-fn rows_aligned(width: u32, bytes_per_pixel: u32) -> bool {
+pub(super) fn rows_aligned(width: u32, bytes_per_pixel: u32) -> bool {
     (width * bytes_per_pixel) % 16 == 0
 }
 
@@ -137,6 +137,11 @@ impl GlEngine {
             views: Vec::new(),
             framebuffer: 0,
         })
+    }
+
+    /// Whether a background frame was set.
+    pub(super) fn has_background(&self) -> bool {
+        self.background.is_some()
     }
 
     /// The context's version and features as the engine read them.

@@ -16,6 +16,7 @@ pub mod gl_error;
 pub mod gl_format;
 pub mod gl_view;
 pub mod offline;
+mod program_warm_up;
 pub mod programs;
 mod region;
 pub mod state_guard;

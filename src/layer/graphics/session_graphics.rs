@@ -71,8 +71,9 @@ pub trait SessionGraphics: Send {
         images: *const xr::SwapchainImageBaseHeader,
         count: usize,
     ) -> Option<Vec<u64>>;
-    /// Starts building what views of this shape will need, where the API builds ahead.
-    fn request_shaders(&self, params: &Params, format: PixelFormat, width: u32, in_place: bool);
+    /// Starts building what views of this shape will need, where the API builds ahead (called
+    /// when the app makes a swapchain the layer will enhance).
+    fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, in_place: bool);
     /// Drops what the engine keeps for a swapchain the app destroys.
     fn forget_swapchain(&mut self, swapchain: u64) -> Result<(), String>;
     /// Connects a live source's prepared texels straight to the engine, where it can take them.

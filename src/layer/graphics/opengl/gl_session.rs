@@ -33,6 +33,11 @@ pub struct GlSession {
     texels: Option<(u64, BlurredTexels)>,
     /// When the first program build began, and when all were ready.
     build: (Option<Instant>, Option<Duration>),
+    /// The view shapes (internal format, width, settings) whose programs swapchain creation
+    /// built and ran once.
+    warmed: Vec<(u32, u32, Params)>,
+    /// The time swapchain creation spent building and running them.
+    warm_up_time: Duration,
 }
 
 // SAFETY: the binding's display and context pointers are used only on the app's threads that
@@ -69,6 +74,8 @@ impl GlSession {
             engine: None,
             texels: None,
             build: (None, None),
+            warmed: Vec::new(),
+            warm_up_time: Duration::ZERO,
         }
     }
 
@@ -184,8 +191,34 @@ impl SessionGraphics for GlSession {
         )
     }
 
-    fn request_shaders(&self, _: &Params, _: PixelFormat, _: u32, _: bool) {
-        // Programs are built inside frame calls, with the app's context current.
+    fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, _: bool) {
+        // GL has no thread of the layer's own to build on: the programs are built here, in
+        // the app's context, at a loading-time call; what fails or is left is met again, and
+        // said, by the frame calls.
+        let Some(internal) = GlFormat::ALL
+            .into_iter()
+            .find(|&f| GlFormat::of(f).is_ok_and(|g| g.pixel == format))
+        else {
+            return;
+        };
+        let shape = (internal, width, params.clone());
+        if self.warmed.contains(&shape) {
+            return;
+        }
+        self.warmed.push(shape);
+        let since = Instant::now();
+        let warmed = self.in_context(|engine, _| {
+            // SAFETY: inside `in_context`: the app's context is current on this thread.
+            unsafe { engine.warm_up(internal, width, params, PROGRAM_WAIT) }.map_err(failed)
+        });
+        self.warm_up_time += since.elapsed();
+        if let Ok(true) = warmed {
+            log::debug(&format!(
+                "OpenGL programs for {} views {width} wide built and run once at swapchain creation in {:.3} s",
+                self.format_name(i64::from(internal)),
+                since.elapsed().as_secs_f64()
+            ));
+        }
     }
 
     fn forget_swapchain(&mut self, _: u64) -> Result<(), String> {
@@ -290,8 +323,15 @@ impl SessionGraphics for GlSession {
 
     fn build_summary(&self) -> Option<String> {
         let took = self.build.1?;
+        let how = match self.warm_up_time.is_zero() {
+            true => "built inside frame calls on the app's context".to_string(),
+            false => format!(
+                "built and run once in the app's context as it made its swapchains ({:.3} s of xrCreateSwapchain)",
+                self.warm_up_time.as_secs_f64()
+            ),
+        };
         Some(format!(
-            "OpenGL programs ready {:.3} s after the first frame call that needed them, built inside frame calls on the app's context",
+            "OpenGL programs ready {:.3} s after the layer first used the app's context, {how}",
             took.as_secs_f64()
         ))
     }

@@ -159,7 +159,13 @@ impl SessionGraphics for VulkanSession {
         )
     }
 
-    fn request_shaders(&self, params: &Params, format: PixelFormat, width: u32, in_place: bool) {
+    fn request_shaders(
+        &mut self,
+        params: &Params,
+        format: PixelFormat,
+        width: u32,
+        in_place: bool,
+    ) {
         let shape = ViewShape {
             format,
             width,
