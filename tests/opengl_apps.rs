@@ -9,7 +9,7 @@ mod common;
 
 use common::capture_check::{capture_dir, captures, check_view, sample};
 use common::pass_through::{assert_one_pass_through_line, assert_untouched};
-use common::{layer_lines, sandbox, ApiDump, SandboxRun};
+use common::{gl_client, layer_lines, sandbox, ApiDump, SandboxRun};
 use std::path::Path;
 
 /// The layer's variables for an enhancing run with two frames captured into `dir` (no
@@ -93,24 +93,10 @@ fn hello_xr_with_opengl_is_enhanced() {
     assert!(layer_lines(&bare).is_empty(), "{:#?}", layer_lines(&bare));
 }
 
-/// The project's client with an OpenGL session (`--graphics opengl`: the Xlib binding on a GLX
-/// 4.5 core context, one array swapchain) in `format`, through the layer with `env`.
+/// The project's client with an OpenGL session (one array swapchain) of 12 frames in
+/// `format`, through the layer with `env`.
 fn client_opengl(format: &str, env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
-    let sandbox = sandbox()?;
-    let mut cmd = vec![
-        common::XR_CLIENT,
-        "--graphics",
-        "opengl",
-        "--json",
-        "--frames",
-        "12",
-        "--size",
-        "96x72",
-        "--format",
-        format,
-    ];
-    cmd.extend_from_slice(extra);
-    Some(sandbox.run_x11_for(&cmd, env, 120))
+    gl_client::client_opengl(format, 12, env, extra, 120)
 }
 
 /// The colour formats Monado offers OpenGL apps (no GL_RGB10_A2), by the client's names.

@@ -9,13 +9,16 @@
 
 mod common;
 
-use common::capture_check::{captures, check_view, sample, video_dir, Captured};
+use common::capture_check::{
+    assert_follows_the_video, captures, check_view, sample, video_dir, Captured,
+};
+use common::gl_client::{client_opengl, GL_VIEW};
 use common::semantics::{self, assert_same_answers, enhanced_frames, Case};
-use common::{layer_lines, sandbox, scratch_dir, SandboxRun, XR_CLIENT};
+use common::{layer_lines, sandbox, scratch_dir, XR_CLIENT};
 use std::path::Path;
 
 /// Each view's size in these runs.
-const VIEW: (u64, u64) = (96, 72);
+const VIEW: (u64, u64) = GL_VIEW;
 
 fn background() -> String {
     format!("image:{}", sample("background-meadow.png"))
@@ -44,26 +47,6 @@ fn as_refs(v: &[(String, String)]) -> Vec<(&str, &str)> {
     v.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
 }
 
-/// The client with an OpenGL session of 12 frames in GL_SRGB8_ALPHA8 with `extra` arguments.
-fn client_opengl(env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
-    let sandbox = sandbox()?;
-    let size = format!("{}x{}", VIEW.0, VIEW.1);
-    let mut cmd = vec![
-        XR_CLIENT,
-        "--graphics",
-        "opengl",
-        "--json",
-        "--frames",
-        "12",
-        "--size",
-        &size,
-        "--format",
-        "R8G8B8A8_SRGB",
-    ];
-    cmd.extend_from_slice(extra);
-    Some(sandbox.run_x11_for(&cmd, env, 120))
-}
-
 /// A capture's image rect as (x, y, width, height) and its array layer.
 fn placement(c: &Captured) -> ((u64, u64, u64, u64), u64) {
     let r = &c.json["rect"];
@@ -81,7 +64,7 @@ fn enhanced_run(
     extra: &[&str],
     views: usize,
 ) -> Option<Vec<Captured>> {
-    let run = client_opengl(&as_refs(env), extra)?;
+    let run = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(env), extra, 120)?;
     run.assert_success();
     let lines = layer_lines(&run);
     let processing = format!("processing frames ({views} views per frame)");
@@ -142,7 +125,7 @@ fn opengl_layouts_are_enhanced_at_their_own_rects() {
 fn without_the_layer_side_by_side_and_quad_images_are_untouched() {
     let env = [("CONTRASTXR", "0")];
     let extra = ["--layout", "side-by-side", "--quad", "--check-untouched"];
-    let Some(run) = client_opengl(&env, &extra) else {
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &env, &extra, 120) else {
         return;
     };
     run.assert_success();
@@ -273,7 +256,7 @@ fn opengl_swapchain_churn_keeps_enhancing() {
     let dir = scratch_dir("opengl-client-churn");
     let env = layer_env(&dir, "color:#e0d020", 2);
     let extra = ["--frames", "40", "--churn-formats"];
-    let Some(run) = client_opengl(&as_refs(&env), &extra) else {
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(&env), &extra, 120) else {
         return;
     };
     run.assert_success();
@@ -309,23 +292,9 @@ fn opengl_live_background_is_written_on_the_source_thread() {
     let dir = scratch_dir(tag);
     let video = video_dir(tag, 6);
     let env = layer_env(&dir, &format!("video:{}", video.display()), 12);
-    let Some(sandbox) = sandbox() else {
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 24, &as_refs(&env), &[], 180) else {
         return;
     };
-    let size = format!("{}x{}", VIEW.0, VIEW.1);
-    let cmd = [
-        XR_CLIENT,
-        "--graphics",
-        "opengl",
-        "--json",
-        "--frames",
-        "24",
-        "--size",
-        &size,
-        "--format",
-        "R8G8B8A8_SRGB",
-    ];
-    let run = sandbox.run_x11_for(&cmd, &as_refs(&env), 180);
     run.assert_success();
     let source =
         "live frames' texels are written into a mapped pixel buffer on the camera's thread";
@@ -335,19 +304,8 @@ fn opengl_live_background_is_written_on_the_source_thread() {
         run.describe()
     );
     let views = captures(&dir);
-    assert_eq!(views.len(), 24, "12 frames x 2 views captured");
-    let mut distinct: Vec<Vec<[u8; 4]>> = Vec::new();
     for c in &views {
         assert_eq!(c.json["graphics"], "opengl");
-        assert!(check_view(c) > 100, "the method changed almost nothing");
-        if !distinct.contains(&c.camera.pixels) {
-            distinct.push(c.camera.pixels.clone());
-        }
     }
-    // The source runs at 30 fps and the null compositor at 20 Hz: 12 frames span ~0.6 s.
-    assert!(
-        distinct.len() >= 3,
-        "only {} distinct background frames in 12 captured frames",
-        distinct.len()
-    );
+    assert_follows_the_video(&views);
 }

@@ -61,6 +61,26 @@ pub fn video_dir(tag: &str, n: usize) -> PathBuf {
     dir
 }
 
+/// The captures of a run that enhanced 12 frames of 2 views against a `video_dir` background:
+/// 24 views, each within the CPU reference with the method at work, against at least 3
+/// different background frames (the source runs at 30 fps and the null compositor at 20 Hz:
+/// 12 frames span ~0.6 s).
+pub fn assert_follows_the_video(views: &[Captured]) {
+    assert_eq!(views.len(), 24, "12 frames x 2 views captured");
+    let mut distinct: Vec<&Vec<[u8; 4]>> = Vec::new();
+    for c in views {
+        assert!(check_view(c) > 100, "the method changed almost nothing");
+        if !distinct.contains(&&c.camera.pixels) {
+            distinct.push(&c.camera.pixels);
+        }
+    }
+    assert!(
+        distinct.len() >= 3,
+        "only {} distinct background frames in 12 captured frames",
+        distinct.len()
+    );
+}
+
 /// One captured view: its metadata and files.
 pub struct Captured {
     pub json: serde_json::Value,

@@ -11,6 +11,7 @@
 #![allow(dead_code)] // each test crate uses a different part
 
 pub mod capture_check;
+pub mod gl_client;
 pub mod pass_through;
 pub mod semantics;
 
