@@ -6,14 +6,15 @@
 //! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
-//! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`
+//! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`,
+//! `gl-program-process`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 18] = [
+pub const POINTS: [(&str, &str); 19] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -72,6 +73,10 @@ pub const POINTS: [(&str, &str); 18] = [
     (
         "gl-context-lost",
         "checking the app's OpenGL context before the frame's work (as if it were lost)",
+    ),
+    (
+        "gl-program-process",
+        "starting the process that builds an OpenGL app's programs beside it",
     ),
     (
         "end-frame",

@@ -462,7 +462,8 @@ fn negative_values_reach_the_checks() {
 }
 
 /// `install --user` copies the library to a stable place and the manifest names the copy, so
-/// removing or rebuilding the original does not unload the layer; `uninstall` removes both.
+/// removing or rebuilding the original does not unload the layer; the tool goes beside the
+/// copy; `uninstall` removes them all.
 #[test]
 fn install_user_copies_the_library_and_uninstall_removes_it() {
     let home = scratch("xdg-data");
@@ -493,6 +494,14 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
         std::fs::read_to_string(&profiles).unwrap(),
         shipped.unwrap()
     );
+    // The tool beside the copy, where the layer runs it for OpenGL apps: this very tool.
+    let tool = home.join("contrastxr/contrastxr");
+    assert_eq!(
+        std::fs::read(&tool).unwrap(),
+        std::fs::read(env!("CARGO_BIN_EXE_contrastxr")).unwrap()
+    );
+    let o = Command::new(&tool).arg("--version").output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
     // `cargo clean` removes the original: the installed copy stays as it was.
     std::fs::remove_file(&original).unwrap();
     assert_eq!(
@@ -501,7 +510,7 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
     );
     let o = run(&["uninstall", "--user"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!manifest.exists() && !copy.exists() && !profiles.exists());
+    assert!(!manifest.exists() && !copy.exists() && !profiles.exists() && !tool.exists());
     let o = run(&["uninstall"]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("was not installed"));
 }

@@ -239,3 +239,42 @@ fn an_opaque_session_gets_no_programs_built() {
         );
     }
 }
+
+/// With empty caches the programs are built by a process beside the app (`contrastxr
+/// gl-programs`) while its frames pass through, then linked from the caches in its context;
+/// where that process cannot start they are built in the app's context. Either way the views
+/// are enhanced within the tolerance of the CPU reference.
+#[test]
+fn opengl_programs_are_built_beside_the_app_or_in_its_context() {
+    let cases = [
+        (None, "built beside the app in"),
+        (
+            Some("gl-program-process"),
+            "OpenGL programs built in the app's context: the build process could not start",
+        ),
+    ];
+    for (fault, said) in cases {
+        let tag = fault.unwrap_or("process");
+        let dir = capture_dir(&format!("opengl-beside-{tag}"));
+        let cache = capture_dir(&format!("opengl-beside-{tag}-cache"));
+        let cache = cache.to_string_lossy().into_owned();
+        let mut env = layer_env(&dir, "enhance");
+        env.push(("XDG_CACHE_HOME".into(), cache));
+        env.push(("CONTRASTXR_LOG".into(), "debug".into()));
+        if let Some(point) = fault {
+            env.push(("CONTRASTXR_FAULT".into(), point.into()));
+        }
+        let Some(run) = client_opengl("R8G8B8A8_UNORM", &as_refs(&env), &[]) else {
+            return;
+        };
+        run.assert_success();
+        let lines = layer_lines(&run);
+        let what = format!("{tag}: {lines:#?}");
+        assert!(lines.iter().any(|l| l.contains(said)), "{what}");
+        let views = captures(&dir);
+        assert_eq!(views.len(), 4, "{what}");
+        for c in &views {
+            assert!(check_view(c) > 1000, "{what}");
+        }
+    }
+}

@@ -5,7 +5,7 @@ use super::args::Opt;
 use super::error::CliError;
 use super::{
     animate, bench, calibrate, camera, completions, config, control, doctor, enhance, evaluate,
-    install, log, options, pan,
+    gl_programs, install, log, options, pan,
 };
 
 /// One subcommand of the tool.
@@ -152,6 +152,15 @@ pub const COMMANDS: &[Subcommand] = &[
         run: completions::run,
         options: &[],
         positionals: Some("SHELL"),
+    },
+    Subcommand {
+        name: "gl-programs",
+        summary:
+            "build an OpenGL app's programs into the caches (the layer runs it, beside the app)",
+        usage: gl_programs::usage,
+        run: gl_programs::run,
+        options: &[gl_programs::OPTIONS, options::METHOD_OPTIONS],
+        positionals: None,
     },
     Subcommand {
         name: "calibrate",

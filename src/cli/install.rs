@@ -16,14 +16,16 @@ pub fn usage() -> String {
      \x20      contrastxr uninstall [--user|--system]\n\n\
      Installs the OpenXR layer: copies the layer library (the libcontrastxr.so built with this\n\
      tool, or --library PATH) to a stable place and writes the implicit layer manifest naming\n\
-     that copy, so rebuilding or `cargo clean` does not unload the layer:\n\
+     that copy, so rebuilding or `cargo clean` does not unload the layer. This tool is copied\n\
+     beside the library: the layer runs it to build an OpenGL app's programs beside the app.\n\
+     Where:\n\
      --user (default): $XDG_DATA_HOME/contrastxr/libcontrastxr.so and\n\
      \x20                 $XDG_DATA_HOME/openxr/1/api_layers/implicit.d/contrastxr.json\n\
      \x20                 ($XDG_DATA_HOME defaults to ~/.local/share);\n\
      --system:         /usr/local/lib/contrastxr/libcontrastxr.so and\n\
      \x20                 /etc/xdg/openxr/1/api_layers/implicit.d/contrastxr.json.\n\
      Run it again after rebuilding to update the copy. The layer then loads into OpenXR apps\n\
-     started with CONTRASTXR=1. uninstall removes the manifest and the copy. (The Debian\n\
+     started with CONTRASTXR=1. uninstall removes the manifest and the copies. (The Debian\n\
      package installs the layer system-wide itself; no install step is needed with it.)\n"
         .to_string()
 }
@@ -45,7 +47,10 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .map_err(|e| CliError::Failure(format!("cannot find the library {p}: {e}")))?,
         None => installed_files::find_library().map_err(CliError::Failure)?,
     };
-    let done = installed_files::install(scope, &library).map_err(CliError::Failure)?;
+    // The tool goes beside the library: the layer runs it to build OpenGL apps' programs.
+    let tool = std::env::current_exe().ok();
+    let done =
+        installed_files::install(scope, &library, tool.as_deref()).map_err(CliError::Failure)?;
     print(&format!(
         "installed {} (library copied from {} to {}); enable the layer with CONTRASTXR=1\n",
         done.manifest.display(),

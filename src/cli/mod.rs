@@ -16,6 +16,7 @@ mod engine_choice;
 mod enhance;
 mod error;
 mod evaluate;
+mod gl_programs;
 mod install;
 mod log;
 mod options;

@@ -10,6 +10,9 @@ use std::path::{Path, PathBuf};
 const TEMPLATE: &str = include_str!("../../layer-manifest/contrastxr-implicit.json");
 pub const MANIFEST_NAME: &str = "contrastxr.json";
 const LIBRARY_NAME: &str = "libcontrastxr.so";
+/// The tool's name beside the library copy: the layer runs it to build an OpenGL app's
+/// programs beside the app (layer/graphics/opengl/program_builder.rs).
+const TOOL_NAME: &str = "contrastxr";
 /// Where the Debian package puts the library (its manifest, `layer-manifest/deb/`, names it).
 pub const PACKAGED_LIBRARY: &str = "/usr/lib/contrastxr/libcontrastxr.so";
 
@@ -100,9 +103,9 @@ pub struct Installed {
     pub library: PathBuf,
 }
 
-/// Copies `library` to [`library_copy`], writes the shipped device profiles beside it and the
-/// manifest naming the copy.
-pub fn install(scope: Scope, library: &Path) -> Result<Installed, String> {
+/// Copies `library` to [`library_copy`] and `tool` (the running `contrastxr`) beside it, writes
+/// the shipped device profiles beside it and the manifest naming the copy.
+pub fn install(scope: Scope, library: &Path, tool: Option<&Path>) -> Result<Installed, String> {
     if !library.is_absolute() || !library.is_file() {
         return Err(format!(
             "{} is not an existing absolute library path",
@@ -112,6 +115,12 @@ pub fn install(scope: Scope, library: &Path) -> Result<Installed, String> {
     let copy = library_copy(scope)?;
     if library.canonicalize().ok() != copy.canonicalize().ok() {
         copy_library(library, &copy)?;
+    }
+    if let Some(tool) = tool {
+        let tool_copy = copy.with_file_name(TOOL_NAME);
+        if tool.canonicalize().ok() != tool_copy.canonicalize().ok() {
+            copy_library(tool, &tool_copy)?;
+        }
     }
     // The shipped device profiles beside the library, where the layer looks for them.
     let profiles = copy.with_file_name(crate::config::shipped::FILE_NAME);
@@ -136,12 +145,13 @@ fn remove(path: &Path) -> Result<bool, String> {
     }
 }
 
-/// Removes the manifest and the library copy; Ok(None) when the manifest was not installed.
+/// Removes the manifest, the library copy and the tool beside it; Ok(None) when the manifest was not installed.
 pub fn uninstall(scope: Scope) -> Result<Option<PathBuf>, String> {
     let path = layer_dir(scope)?.join(MANIFEST_NAME);
     let removed = remove(&path)?;
     let copy = library_copy(scope)?;
     remove(&copy.with_file_name(crate::config::shipped::FILE_NAME))?;
+    remove(&copy.with_file_name(TOOL_NAME))?;
     remove(&copy)?;
     Ok(removed.then_some(path))
 }

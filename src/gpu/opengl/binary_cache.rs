@@ -92,25 +92,36 @@ fn unwrap_file(bytes: &[u8]) -> Option<&[u8]> {
     (pipeline_cache::file_bytes(data) == bytes).then_some(data)
 }
 
+/// The entries of the driver's file (none where it is unreadable, damaged or foreign).
+fn read_entries(driver: &str, enabled: bool) -> HashMap<u64, (u32, Vec<u8>)> {
+    let path = pipeline_cache::directory().map(|d| d.join(file_name(driver)));
+    match path
+        .filter(|_| enabled)
+        .map(|p| pipeline_cache::read_file(&p))
+    {
+        Some(Ok(Some(bytes))) => unwrap_file(&bytes)
+            .ok_or_else(|| "damaged (length or checksum wrong)".to_string())
+            .and_then(|data| parse(data, driver))
+            .unwrap_or_default(),
+        _ => HashMap::new(),
+    }
+}
+
 impl BinaryCache {
     /// The driver's file, read now (an unreadable or foreign one counts as empty).
     pub fn load(driver: &str, enabled: bool) -> BinaryCache {
-        let path = pipeline_cache::directory().map(|d| d.join(file_name(driver)));
-        let entries = match path
-            .filter(|_| enabled)
-            .map(|p| pipeline_cache::read_file(&p))
-        {
-            Some(Ok(Some(bytes))) => unwrap_file(&bytes)
-                .ok_or_else(|| "damaged (length or checksum wrong)".to_string())
-                .and_then(|data| parse(data, driver))
-                .unwrap_or_default(),
-            _ => HashMap::new(),
-        };
         BinaryCache {
             driver: driver.to_string(),
             enabled,
-            entries,
+            entries: read_entries(driver, enabled),
             changed: false,
+        }
+    }
+
+    /// Reads the file again, keeping this process's entries where both have one.
+    pub fn reload(&mut self) {
+        for (hash, entry) in read_entries(&self.driver, self.enabled) {
+            self.entries.entry(hash).or_insert(entry);
         }
     }
 

@@ -262,21 +262,51 @@ impl GlEngine {
 
     /// The programs a view needs: classify, finish_tiles, enhance.
     fn view_programs(view: &GlView, params: &Params) -> Result<[usize; 3], GlError> {
-        let format = GlFormat::of(view.internal_format)?;
+        Self::shape_programs(view.internal_format, view.rect.2, params)
+    }
+
+    /// The programs views of `internal_format`, `width` texels wide, need.
+    fn shape_programs(
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+    ) -> Result<[usize; 3], GlError> {
+        let format = GlFormat::of(internal_format)?;
         let code = format.pixel.shader_code();
-        let access = if rows_aligned(view.rect.2, format.pixel.bytes_per_pixel()) {
+        let access = if rows_aligned(width, format.pixel.bytes_per_pixel()) {
             ACCESS_WIDE
         } else {
             ACCESS_NARROW
         };
         let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
         let codes = (method_code(params.method), mode_code(params.mode), code);
-        let missing = || GlError::Format(view.internal_format);
+        let missing = || GlError::Format(internal_format);
         Ok([
             programs::classify(code, access).ok_or_else(missing)?,
             programs::GL_FINISH_TILES,
             programs::enhance(codes, access, extras).ok_or_else(missing)?,
         ])
+    }
+
+    /// Whether the programs views of `internal_format`, `width` texels wide, need for
+    /// `params` are linked, linking those the program binary cache holds (read again first:
+    /// another process may have written it); nothing is compiled.
+    ///
+    /// # Safety
+    /// As for `enhance`.
+    pub unsafe fn ready_from_cache(
+        &mut self,
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+    ) -> Result<bool, GlError> {
+        self.check_lost()?;
+        if params.mode == ViewMode::Off {
+            return Ok(true);
+        }
+        let ids = Self::shape_programs(internal_format, width, params)?;
+        self.programs.reload_cache();
+        self.programs.ready_from_cache(&self.gl, &ids)
     }
 
     /// Whether the programs `views` need are built: one more is built (or its parallel build

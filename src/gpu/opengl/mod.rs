@@ -29,3 +29,4 @@ pub use gl_error::GlError;
 pub use gl_format::GlFormat;
 pub use gl_view::{GlTarget, GlView};
 pub use offline::GlOffline;
+pub use programs::gl_sources_id;

@@ -26,13 +26,15 @@ const START_SLICE: Duration = Duration::from_millis(2);
 struct Budget {
     since: Instant,
     started: u32,
+    /// Whether builds may start at all (else only cached binaries are linked).
+    build: bool,
 }
 
 impl Budget {
     /// Whether another build may start in this call: the first always; more only with
     /// parallel compilation and while starting them has stayed within START_SLICE.
     fn may_start(&self, parallel: bool) -> bool {
-        self.started == 0 || (parallel && self.since.elapsed() < START_SLICE)
+        self.build && (self.started == 0 || (parallel && self.since.elapsed() < START_SLICE))
     }
 }
 
@@ -46,6 +48,14 @@ pub enum GlParam {
 }
 
 include!(concat!(env!("OUT_DIR"), "/gl_shader_table.rs"));
+
+/// One id of every program source of this build: the layer's program builder process
+/// (`contrastxr gl-programs`) refuses to build for a layer whose sources differ.
+pub fn gl_sources_id() -> u64 {
+    GL_MODULES
+        .iter()
+        .fold(0, |id, (_, source)| id.rotate_left(7) ^ source_hash(source))
+}
 
 /// A linked program and its Params uniforms' locations (GL_PARAMS order; -1 for a uniform
 /// the program does not use, which glProgramUniform ignores).
@@ -118,9 +128,20 @@ impl Programs {
     /// doc: without parallel compilation at most one is built per call). The first that
     /// failed is the error.
     pub fn ready(&mut self, g: &Gl, ids: &[usize]) -> Result<bool, GlError> {
+        self.advance_all(g, ids, true)
+    }
+
+    /// Whether every program of `ids` is linked, linking those the binary cache holds and
+    /// starting no build.
+    pub fn ready_from_cache(&mut self, g: &Gl, ids: &[usize]) -> Result<bool, GlError> {
+        self.advance_all(g, ids, false)
+    }
+
+    fn advance_all(&mut self, g: &Gl, ids: &[usize], build: bool) -> Result<bool, GlError> {
         let mut budget = Budget {
             since: Instant::now(),
             started: 0,
+            build,
         };
         let mut all = true;
         for &id in ids {
@@ -265,6 +286,11 @@ impl Programs {
         unsafe { (g.delete_program)(program) };
         self.cache.forget(hash);
         None
+    }
+
+    /// Takes in the binaries another process wrote to the cache's file since it was read.
+    pub fn reload_cache(&mut self) {
+        self.cache.reload();
     }
 
     /// Writes the binary cache's file where programs were added (see binary_cache.rs).

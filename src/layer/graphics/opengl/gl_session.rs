@@ -5,6 +5,7 @@
 //! static one, is prepared here once.
 
 use super::app_context::AppContext;
+use super::program_builder::{Built, ProgramBuilder};
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::frame::{overlay_pixel, FrameBackground, OverlayPixels};
@@ -34,10 +35,17 @@ pub struct GlSession {
     /// When the first program build began, and when all were ready.
     build: (Option<Instant>, Option<Duration>),
     /// The view shapes (internal format, width, settings) whose programs swapchain creation
-    /// built and ran once.
+    /// asked for.
     warmed: Vec<(u32, u32, Params)>,
-    /// The time swapchain creation spent building and running them.
+    /// Builds running beside the app, one per view shape the caches lacked.
+    builders: Vec<ProgramBuilder>,
+    /// The time the builds beside the app took.
+    beside_time: Duration,
+    /// The time swapchain creation spent building (or linking from the caches) and running
+    /// the programs in the app's context.
     warm_up_time: Duration,
+    /// The time frame calls spent on it after a build beside the app ended.
+    after_builds_time: Duration,
 }
 
 // SAFETY: the binding's display and context pointers are used only on the app's threads that
@@ -75,7 +83,10 @@ impl GlSession {
             texels: None,
             build: (None, None),
             warmed: Vec::new(),
+            builders: Vec::new(),
+            beside_time: Duration::ZERO,
             warm_up_time: Duration::ZERO,
+            after_builds_time: Duration::ZERO,
         }
     }
 
@@ -132,6 +143,74 @@ fn texels<'a>(
         *prepared_here = Some((background.sequence, t));
     }
     &prepared_here.as_ref().expect("set above").1
+}
+
+impl GlSession {
+    /// Builds (or links from the caches) and runs once the programs of one view shape; the
+    /// time it took.
+    fn warm_up(&mut self, internal: u32, width: u32, params: &Params, when: &str) -> Duration {
+        let since = Instant::now();
+        let warmed = self.in_context(|engine, _| {
+            // SAFETY: inside `in_context`: the app's context is current on this thread.
+            unsafe { engine.warm_up(internal, width, params, PROGRAM_WAIT) }.map_err(failed)
+        });
+        if let Ok(true) = warmed {
+            log::debug(&format!(
+                "OpenGL programs for {} views {width} wide built and run once {when} in {:.3} s",
+                self.format_name(i64::from(internal)),
+                since.elapsed().as_secs_f64()
+            ));
+        }
+        since.elapsed()
+    }
+
+    /// Err(Pending) while a build beside the app runs (waited for with `wait`); one that
+    /// ended is followed by linking its programs from the caches in the app's context.
+    fn await_builders(&mut self, wait: bool) -> Result<(), NotDone> {
+        loop {
+            let mut i = 0;
+            while i < self.builders.len() {
+                match self.builders[i].poll() {
+                    Built::Running => i += 1,
+                    Built::Ended(outcome) => {
+                        let builder = self.builders.remove(i);
+                        self.builder_ended(builder, outcome);
+                    }
+                }
+            }
+            if self.builders.is_empty() {
+                return Ok(());
+            }
+            if !wait {
+                return Err(NotDone::Pending);
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    fn builder_ended(&mut self, builder: ProgramBuilder, outcome: Result<Duration, String>) {
+        let (internal, width, params) = builder.shape.clone();
+        drop(builder);
+        let when = match outcome {
+            Ok(took) => {
+                self.beside_time += took;
+                log::debug(&format!(
+                    "OpenGL programs for {} views {width} wide built beside the app in {:.3} s",
+                    self.format_name(i64::from(internal)),
+                    took.as_secs_f64()
+                ));
+                "from the caches"
+            }
+            Err(why) => {
+                log::debug(&format!(
+                    "the OpenGL program build beside the app ended without them ({why}): building them in the app's context"
+                ));
+                "in a frame call"
+            }
+        };
+        let took = self.warm_up(internal, width, &params, when);
+        self.after_builds_time += took;
+    }
 }
 
 impl SessionGraphics for GlSession {
@@ -192,9 +271,10 @@ impl SessionGraphics for GlSession {
     }
 
     fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, _: bool) {
-        // GL has no thread of the layer's own to build on: the programs are built here, in
-        // the app's context, at a loading-time call; what fails or is left is met again, and
-        // said, by the frame calls.
+        // Programs the caches hold are linked here, at a loading-time call, in the app's
+        // context; the rest are built by a process beside the app while the frames pass
+        // through, or, where it cannot run, here. What fails is met again, and said, by the
+        // frame calls.
         let Some(internal) = GlFormat::ALL
             .into_iter()
             .find(|&f| GlFormat::of(f).is_ok_and(|g| g.pixel == format))
@@ -206,19 +286,29 @@ impl SessionGraphics for GlSession {
             return;
         }
         self.warmed.push(shape);
-        let since = Instant::now();
-        let warmed = self.in_context(|engine, _| {
+        let cached = self.in_context(|engine, _| {
             // SAFETY: inside `in_context`: the app's context is current on this thread.
-            unsafe { engine.warm_up(internal, width, params, PROGRAM_WAIT) }.map_err(failed)
+            let cached = unsafe { engine.ready_from_cache(internal, width, params) };
+            Ok((cached.map_err(failed)?, engine.caps().driver.clone()))
         });
-        self.warm_up_time += since.elapsed();
-        if let Ok(true) = warmed {
-            log::debug(&format!(
-                "OpenGL programs for {} views {width} wide built and run once at swapchain creation in {:.3} s",
-                self.format_name(i64::from(internal)),
-                since.elapsed().as_secs_f64()
-            ));
+        match cached {
+            Ok((true, _)) => {}
+            Ok((false, driver)) => match ProgramBuilder::start(&driver, internal, width, params) {
+                Ok(builder) => {
+                    log::debug(&format!(
+                        "OpenGL programs for {} views {width} wide: building them in a process beside the app (contrastxr gl-programs)",
+                        self.format_name(i64::from(internal))
+                    ));
+                    return self.builders.push(builder);
+                }
+                Err(why) => log::debug(&format!(
+                    "OpenGL programs built in the app's context: {why}"
+                )),
+            },
+            Err(_) => return,
         }
+        let took = self.warm_up(internal, width, params, "at swapchain creation");
+        self.warm_up_time += took;
     }
 
     fn forget_swapchain(&mut self, _: u64) -> Result<(), String> {
@@ -235,6 +325,7 @@ impl SessionGraphics for GlSession {
     }
 
     fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone> {
+        self.await_builders(wait)?;
         let views: Vec<GlView> = views.iter().map(gl_view).collect();
         let since = Instant::now();
         let ready = self.in_context(|engine, _| loop {
@@ -318,17 +409,33 @@ impl SessionGraphics for GlSession {
     }
 
     fn pending_line(&self) -> &'static str {
+        if !self.builders.is_empty() {
+            return "building the OpenGL programs in a process beside the app (contrastxr gl-programs): frames go through untouched until they are ready";
+        }
         "building the OpenGL programs, one per frame call on the app's context (or from the program cache): frames go through untouched until they are ready"
     }
 
     fn build_summary(&self) -> Option<String> {
         let took = self.build.1?;
-        let how = match self.warm_up_time.is_zero() {
-            true => "built inside frame calls on the app's context".to_string(),
-            false => format!(
+        let seconds = |d: Duration| d.as_secs_f64();
+        let how = if !self.beside_time.is_zero() {
+            format!(
+                "built beside the app in {:.3} s while its frames passed through, then linked from the caches and run once in its context in {:.3} s",
+                seconds(self.beside_time),
+                seconds(self.after_builds_time)
+            )
+        } else if !self.after_builds_time.is_zero() {
+            format!(
+                "built in a frame call on the app's context ({:.3} s) after the build beside the app ended without them",
+                seconds(self.after_builds_time)
+            )
+        } else if !self.warm_up_time.is_zero() {
+            format!(
                 "built and run once in the app's context as it made its swapchains ({:.3} s of xrCreateSwapchain)",
-                self.warm_up_time.as_secs_f64()
-            ),
+                seconds(self.warm_up_time)
+            )
+        } else {
+            "built inside frame calls on the app's context".to_string()
         };
         Some(format!(
             "OpenGL programs ready {:.3} s after the layer first used the app's context, {how}",
@@ -353,10 +460,14 @@ impl SessionGraphics for GlSession {
     }
 
     fn stop_building(&self) {
-        // Nothing builds outside frame calls.
+        for builder in &self.builders {
+            builder.stop();
+        }
     }
 
     fn finish(mut self: Box<Self>) -> Result<(), String> {
+        // Stops and reaps any build still running.
+        self.builders.clear();
         let Some(mut engine) = self.engine.take() else {
             return Ok(());
         };

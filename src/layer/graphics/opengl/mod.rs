@@ -7,5 +7,6 @@ mod egl_context;
 mod gl_bindings;
 mod gl_session;
 mod glx_context;
+mod program_builder;
 
 pub use gl_bindings::{bind_egl, bind_xlib};

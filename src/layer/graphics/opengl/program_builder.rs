@@ -1,0 +1,153 @@
+//! The OpenGL programs built beside the app: `contrastxr gl-programs`, a process of its own with
+//! a GL context of its own, fills the program binary cache and the driver's shader cache while
+//! the app's frames pass through; the app's context then links the programs from the caches in
+//! milliseconds. A driver that compiles inside the GL calls (Mesa's llvmpipe, although it
+//! offers GL_KHR_parallel_shader_compile) would otherwise do it on the app's thread, for a
+//! second or more. No GL call is made on a thread of the layer's own.
+
+use crate::algorithm::params::Params;
+use crate::gpu::opengl::gl_sources_id;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The tool's file name.
+const TOOL: &str = "contrastxr";
+
+/// How long the layer waits for a build before it stops it and builds in the app's context.
+const LIMIT: Duration = Duration::from_secs(60);
+
+/// A build process of one view shape.
+pub struct ProgramBuilder {
+    child: Option<Child>,
+    pub since: Instant,
+    pub shape: (u32, u32, Params),
+}
+
+/// Where a build stands.
+pub enum Built {
+    Running,
+    /// Ended: Ok with the time it took, or why it did not build.
+    Ended(Result<Duration, String>),
+}
+
+/// The layer's library, as the dynamic linker loaded it.
+fn library_path() -> Option<PathBuf> {
+    // SAFETY: Dl_info is plain C data; all-zero is a valid value for dladdr to fill.
+    let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
+    let here = library_path as *const std::ffi::c_void;
+    // SAFETY: dladdr on an address of this library's code, with a valid out pointer.
+    if unsafe { libc::dladdr(here, &mut info) } == 0 || info.dli_fname.is_null() {
+        return None;
+    }
+    // SAFETY: dli_fname is a NUL-terminated path owned by the dynamic linker.
+    let name = unsafe { std::ffi::CStr::from_ptr(info.dli_fname) };
+    let name: &std::ffi::OsStr = std::os::unix::ffi::OsStrExt::from_bytes(name.to_bytes());
+    Some(PathBuf::from(name))
+}
+
+/// The tool that came with the library: beside it (cargo's output folder, `contrastxr install`)
+/// or where the Debian package puts it. Another build of it refuses (its sources id differs).
+pub fn tool() -> Option<PathBuf> {
+    let library = library_path()?.canonicalize().ok()?;
+    let dir = library.parent()?;
+    [dir.join(TOOL), dir.join("../../bin").join(TOOL)]
+        .into_iter()
+        .find(|p| p.is_file())
+}
+
+impl ProgramBuilder {
+    /// Starts building the programs views of `internal_format`, `width` texels wide, need for
+    /// `params`, on `driver` ("vendor | renderer | version" of the app's context).
+    pub fn start(
+        driver: &str,
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+    ) -> Result<ProgramBuilder, String> {
+        if crate::fault::hit("gl-program-process") {
+            return Err("the build process could not start (fault point)".into());
+        }
+        let tool = tool().ok_or("no contrastxr tool beside the layer's library")?;
+        let child = Command::new(&tool)
+            .arg("gl-programs")
+            .args(["--format", &format!("{internal_format:#06x}")])
+            .args(["--width", &width.to_string()])
+            .args(["--mode", params.mode.name()])
+            .args(["--method", params.method.name()])
+            .args(["--achromatic-boost", &params.achromatic_boost.to_string()])
+            .args(["--luminance-cap", &params.luminance_cap.to_string()])
+            .args(["--driver", driver])
+            .args(["--sources", &format!("{:016x}", gl_sources_id())])
+            // The driver's cache and the layer's follow the app's environment; a preloaded
+            // library of the app's (an overlay, a recorder) has no business in the tool.
+            .env_remove("LD_PRELOAD")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| format!("cannot run {}: {e}", tool.display()))?;
+        Ok(ProgramBuilder {
+            child: Some(child),
+            since: Instant::now(),
+            shape: (internal_format, width, params.clone()),
+        })
+    }
+
+    /// Whether the build ended, without waiting; one past LIMIT is stopped.
+    pub fn poll(&mut self) -> Built {
+        let Some(child) = self.child.as_mut() else {
+            return Built::Ended(Err("already ended".into()));
+        };
+        let status = match child.try_wait() {
+            Ok(None) if self.since.elapsed() < LIMIT => return Built::Running,
+            Ok(None) => {
+                self.stop_and_reap();
+                return Built::Ended(Err(format!("it ran past {} s", LIMIT.as_secs())));
+            }
+            Ok(Some(status)) => Ok(status),
+            // An app that reaps every child (SIGCHLD ignored) took its status.
+            Err(e) => Err(format!("its exit status is lost ({e})")),
+        };
+        let child = self.child.take().expect("checked above");
+        Built::Ended(match status {
+            Ok(s) if s.success() => Ok(self.since.elapsed()),
+            Ok(s) => Err(format!("{s}: {}", last_line(child))),
+            Err(e) => Err(e),
+        })
+    }
+
+    /// Stops the build now (the session passes through or ends).
+    pub fn stop(&self) {
+        if let Some(child) = &self.child {
+            // SAFETY: kill on the pid of our own child, not reaped yet (reaping takes `child`),
+            // so the pid names it and no other process.
+            unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGKILL) };
+        }
+    }
+
+    fn stop_and_reap(&mut self) {
+        if let Some(mut child) = self.child.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+impl Drop for ProgramBuilder {
+    fn drop(&mut self) {
+        self.stop_and_reap();
+    }
+}
+
+/// The last non-empty line the tool wrote to stderr (its reason), at most 300 bytes.
+fn last_line(child: Child) -> String {
+    use std::io::Read;
+    let mut text = Vec::new();
+    if let Some(mut err) = child.stderr {
+        let _ = err.by_ref().take(64 * 1024).read_to_end(&mut text);
+    }
+    let text = String::from_utf8_lossy(&text);
+    let line = text.lines().rev().find(|l| !l.trim().is_empty());
+    line.unwrap_or("no message").chars().take(300).collect()
+}
