@@ -844,6 +844,20 @@ fn doctor_after_install_names_the_manifest_and_loads_its_library() {
             library.display()
         )
     );
+    // The tool went beside the library, where the layer runs it for OpenGL apps.
+    let g = finding(&report, "opengl-builder");
+    assert_eq!(g["status"], "ok", "{g}");
+    let tool = root.join("data/contrastxr/contrastxr");
+    assert!(
+        text(g, "detail").starts_with(&tool.display().to_string()),
+        "{g}"
+    );
+    std::fs::remove_file(&tool).unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let g = finding(&report, "opengl-builder");
+    assert_eq!(g["status"], "warn", "{g}");
+    assert!(text(g, "detail").contains("xrCreateSwapchain"), "{g}");
+    assert!(text(g, "fix").contains("install --user"), "{g}");
     // A second implicit manifest (a system-wide install) would load the layer twice.
     let system = root.join("share/openxr/1/api_layers/implicit.d");
     std::fs::create_dir_all(&system).unwrap();

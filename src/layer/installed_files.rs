@@ -46,6 +46,17 @@ pub fn layer_dir(scope: Scope) -> Result<PathBuf, String> {
     }
 }
 
+/// The tool that came with the layer's library at `library`: beside it (cargo's output folder,
+/// `install`'s copy) or where the Debian package puts it (`/usr/bin` for `/usr/lib/contrastxr`).
+/// The layer runs it to build an OpenGL app's programs beside the app.
+pub fn tool_beside(library: &Path) -> Option<PathBuf> {
+    let library = library.canonicalize().ok()?;
+    let dir = library.parent()?;
+    [dir.join(TOOL_NAME), dir.join("../../bin").join(TOOL_NAME)]
+        .into_iter()
+        .find(|p| p.is_file())
+}
+
 /// Where `install` keeps its copy of the library: `$XDG_DATA_HOME/contrastxr/` for the user,
 /// `/usr/local/lib/contrastxr/` for the system.
 pub fn library_copy(scope: Scope) -> Result<PathBuf, String> {

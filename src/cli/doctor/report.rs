@@ -43,9 +43,9 @@ fn findings() -> Vec<Finding> {
         device: last.system(),
     };
     let settings = contrastxr::config::load_for(who, &env).settings;
-    vec![
-        search.manifest_finding(),
-        search.library_finding(),
+    let mut all = vec![search.manifest_finding(), search.library_finding()];
+    all.extend(search.gl_builder_finding());
+    all.extend([
         runtime::runtime(),
         runtime::vulkan(),
         app::config(&env),
@@ -54,7 +54,8 @@ fn findings() -> Vec<Finding> {
         profile::device_profile(&env, last.system()),
         last.finding(),
         app::steam(),
-    ]
+    ]);
+    all
 }
 
 fn count(findings: &[Finding], status: Status) -> usize {

@@ -39,7 +39,7 @@ pub struct GlSession {
     warmed: Vec<(u32, u32, Params)>,
     /// Builds running beside the app, one per view shape the caches lacked.
     builders: Vec<ProgramBuilder>,
-    /// The time the builds beside the app took.
+    /// The time the longest build beside the app took (they run side by side).
     beside_time: Duration,
     /// The time swapchain creation spent building (or linking from the caches) and running
     /// the programs in the app's context.
@@ -193,7 +193,7 @@ impl GlSession {
         drop(builder);
         let when = match outcome {
             Ok(took) => {
-                self.beside_time += took;
+                self.beside_time = self.beside_time.max(took);
                 log::debug(&format!(
                     "OpenGL programs for {} views {width} wide built beside the app in {:.3} s",
                     self.format_name(i64::from(internal)),

@@ -11,9 +11,6 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The tool's file name.
-const TOOL: &str = "contrastxr";
-
 /// How long the layer waits for a build before it stops it and builds in the app's context.
 const LIMIT: Duration = Duration::from_secs(60);
 
@@ -46,14 +43,10 @@ fn library_path() -> Option<PathBuf> {
     Some(PathBuf::from(name))
 }
 
-/// The tool that came with the library: beside it (cargo's output folder, `contrastxr install`)
-/// or where the Debian package puts it. Another build of it refuses (its sources id differs).
-pub fn tool() -> Option<PathBuf> {
-    let library = library_path()?.canonicalize().ok()?;
-    let dir = library.parent()?;
-    [dir.join(TOOL), dir.join("../../bin").join(TOOL)]
-        .into_iter()
-        .find(|p| p.is_file())
+/// The tool that came with the library (installed_files::tool_beside). Another build of it
+/// refuses (its sources id differs).
+fn tool() -> Option<PathBuf> {
+    crate::layer::installed_files::tool_beside(&library_path()?)
 }
 
 impl ProgramBuilder {
