@@ -51,7 +51,10 @@ impl Background {
                 let start = Instant::now();
                 let thread = std::thread::Builder::new()
                     .name("contrastxr-video".into())
-                    .spawn(move || play(frames, fps, start, &thread_shared, smoothing))
+                    .spawn(move || {
+                        super::priority::yield_to_the_app();
+                        play(frames, fps, start, &thread_shared, smoothing)
+                    })
                     .map_err(|e| {
                         CameraError::File(format!("cannot start the video thread: {e}"))
                     })?;

@@ -59,7 +59,10 @@ pub(crate) fn spawn(
     };
     let thread = std::thread::Builder::new()
         .name("contrastxr-world".into())
-        .spawn(move || camera.run(&thread_shared))
+        .spawn(move || {
+            super::priority::yield_to_the_app();
+            camera.run(&thread_shared)
+        })
         .map_err(|e| CameraError::File(format!("cannot start the world thread: {e}")))?;
     Ok((shared, thread, text))
 }

@@ -66,6 +66,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         ));
     }
     lower_priority();
+    close_inherited_files();
     let mut gl = GlOffline::new().map_err(|e| CliError::Failure(e.to_string()))?;
     let own = gl.engine().caps().driver.clone();
     if driver.is_some_and(|d| d != own) {
@@ -82,6 +83,23 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         "built the programs for {format:#06x} views {width} wide on {own}\n"
     ));
     Ok(())
+}
+
+/// Closes the files the app let its child inherit (descriptors without close-on-exec: its
+/// sockets, pipes, device nodes), so that the build holds none of them open.
+fn close_inherited_files() {
+    let Ok(dir) = std::fs::read_dir("/proc/self/fd") else {
+        return;
+    };
+    let fds: Vec<i32> = dir
+        .filter_map(|e| e.ok()?.file_name().to_str()?.parse().ok())
+        .filter(|&fd| fd > 2)
+        .collect();
+    for fd in fds {
+        // SAFETY: nothing of this process uses these descriptors: it opened none yet but the
+        // listing's own, which was closed when the listing was dropped above (EBADF then).
+        unsafe { libc::close(fd) };
+    }
 }
 
 /// The app keeps the CPU first: this build runs beside its frames.

@@ -86,19 +86,22 @@ pub(crate) fn spawn(
     let (thread_shared, cfg) = (shared.clone(), cfg.clone());
     let thread = std::thread::Builder::new()
         .name("contrastxr-camera".into())
-        .spawn(move || match open_session(target.as_ref(), &cfg) {
-            Ok(session) => {
-                let _ = tx.send(Ok(session.description.clone()));
-                run(target, &cfg, &thread_shared, Some(session));
-            }
-            // Busy now, perhaps free in a moment: the source opens, and the thread retries
-            // with growing waits (frames pass through meanwhile).
-            Err(CameraError::Busy(e)) => {
-                let _ = tx.send(Ok(format!("{e}, retrying")));
-                run(target, &cfg, &thread_shared, None);
-            }
-            Err(e) => {
-                let _ = tx.send(Err(e));
+        .spawn(move || {
+            crate::camera::priority::yield_to_the_app();
+            match open_session(target.as_ref(), &cfg) {
+                Ok(session) => {
+                    let _ = tx.send(Ok(session.description.clone()));
+                    run(target, &cfg, &thread_shared, Some(session));
+                }
+                // Busy now, perhaps free in a moment: the source opens, and the thread retries
+                // with growing waits (frames pass through meanwhile).
+                Err(CameraError::Busy(e)) => {
+                    let _ = tx.send(Ok(format!("{e}, retrying")));
+                    run(target, &cfg, &thread_shared, None);
+                }
+                Err(e) => {
+                    let _ = tx.send(Err(e));
+                }
             }
         })
         .map_err(|e| CameraError::Device(format!("cannot start the capture thread: {e}")))?;
