@@ -1265,3 +1265,46 @@ fn y4m_420_and_444_play_with_bt601_colours() {
         check_video(&bg, &expected, 1);
     }
 }
+
+/// The nice value and name of each thread of this process (from /proc/self/task).
+fn threads_nice() -> Vec<(String, i64)> {
+    let mut out = Vec::new();
+    for task in std::fs::read_dir("/proc/self/task").unwrap().flatten() {
+        let dir = task.path();
+        let (Ok(name), Ok(stat)) = (
+            std::fs::read_to_string(dir.join("comm")),
+            std::fs::read_to_string(dir.join("stat")),
+        ) else {
+            continue;
+        };
+        // Fields after the parenthesised name: state is field 3, nice field 19.
+        let after = &stat[stat.rfind(')').unwrap() + 2..];
+        let nice = after.split(' ').nth(16).unwrap().parse().unwrap();
+        out.push((name.trim().to_string(), nice));
+    }
+    out
+}
+
+/// A live source's thread runs below the app's threads (nice 5): where the CPU is short, its
+/// decoding and blurring wait for the app's frame work; this test's own thread stays at 0.
+#[test]
+fn a_live_sources_thread_yields_to_the_app() {
+    let dir = temp_dir("nice-video");
+    for k in 0..2u8 {
+        let frame = RgbaImage::new(8, 6, [k, 9, 9, 255]);
+        frame.save_png(&dir.join(format!("{k}.png"))).unwrap();
+    }
+    let bg = Background::open(&SourceSpec::Video(dir.clone()), &CaptureConfig::default()).unwrap();
+    wait_for_frame(&bg, 0, Duration::from_secs(10)).expect("a frame of the video");
+    let threads = threads_nice();
+    let video: Vec<_> = threads
+        .iter()
+        .filter(|(n, _)| n == "contrastxr-vide")
+        .collect();
+    assert_eq!(video.len(), 1, "{threads:?}");
+    assert_eq!(video[0].1, 5, "{threads:?}");
+    // SAFETY: getpriority of this thread only reads it.
+    let own = unsafe { libc::getpriority(libc::PRIO_PROCESS, libc::gettid() as libc::id_t) };
+    assert_eq!(own, 0);
+    drop(bg);
+}
