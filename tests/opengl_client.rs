@@ -309,3 +309,61 @@ fn opengl_live_background_is_written_on_the_source_thread() {
     }
     assert_follows_the_video(&views);
 }
+
+/// A setting that needs other programs, changed while the app runs (`contrastxr set mode
+/// heatmap` through the config file), has them built beside the app too, with empty caches:
+/// frames pass through meanwhile (no frame call builds them) and the heatmap then reaches the
+/// app's views.
+#[test]
+fn opengl_programs_for_a_changed_mode_are_built_beside_the_app() {
+    if sandbox().is_none() {
+        return;
+    }
+    let dir = scratch_dir("opengl-mode-change");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, "mode = \"enhance\"\n").unwrap();
+    let capture = dir.join("capture");
+    let cache = dir.join("cache");
+    let mut env = layer_env(&capture, "color:#e0d020", 100_000);
+    env.retain(|(k, _)| k != "CONTRASTXR_PIPELINES");
+    for (k, v) in [
+        ("CONTRASTXR_PIPELINES", "background".to_string()),
+        ("CONTRASTXR_CONFIG", config.to_string_lossy().into_owned()),
+        ("XDG_CACHE_HOME", cache.to_string_lossy().into_owned()),
+        ("CONTRASTXR_LOG", "debug".into()),
+    ] {
+        env.push((k.into(), v));
+    }
+    let run = std::thread::scope(|s| {
+        let run = s.spawn(|| client_opengl("R8G8B8A8_SRGB", 300, &as_refs(&env), &[], 240));
+        let first = capture.join("frame-5-view-0.json");
+        let end = std::time::Instant::now() + std::time::Duration::from_secs(120);
+        while !first.exists() && std::time::Instant::now() < end {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        let out = std::process::Command::new(common::CLI)
+            .args(["set", "mode", "heatmap"])
+            .env("CONTRASTXR_CONFIG", &config)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        run.join().unwrap()
+    });
+    let Some(run) = run else { return };
+    run.assert_success();
+    let lines = layer_lines(&run);
+    let builds = lines
+        .iter()
+        .filter(|l| l.contains("building them in a process beside the app"))
+        .count();
+    assert_eq!(builds, 2, "enhance, then heatmap: {lines:#?}");
+    assert!(
+        !lines.iter().any(|l| l.contains("built in frame calls")),
+        "{lines:#?}"
+    );
+    let heatmap = captures(&capture)
+        .into_iter()
+        .filter(|c| c.json["params"]["mode"] == "heatmap")
+        .count();
+    assert!(heatmap > 0, "no heatmap frame captured: {lines:#?}");
+}

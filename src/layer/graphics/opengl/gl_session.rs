@@ -145,7 +145,52 @@ fn texels<'a>(
     &prepared_here.as_ref().expect("set above").1
 }
 
+/// What became of a view shape's programs when the session first met it.
+enum Prepared {
+    /// Met before.
+    Seen,
+    /// The caches held them: linked in the app's context.
+    Cached,
+    /// Their build beside the app started.
+    Building,
+    /// It could not start (why): they are left to the app's context.
+    NoBuilder(String),
+    /// The engine refused the shape (the frame calls say why).
+    Failed,
+}
+
 impl GlSession {
+    /// For a view shape (internal format, width, settings) not met before: links its programs
+    /// from the caches, or starts their build beside the app.
+    fn prepare_shape(&mut self, internal: u32, width: u32, params: &Params) -> Prepared {
+        let shape = (internal, width, params.clone());
+        if self.warmed.contains(&shape) {
+            return Prepared::Seen;
+        }
+        self.warmed.push(shape);
+        let cached = self.in_context(|engine, _| {
+            // SAFETY: inside `in_context`: the app's context is current on this thread.
+            let cached = unsafe { engine.ready_from_cache(internal, width, params) };
+            Ok((cached.map_err(failed)?, engine.caps().driver.clone()))
+        });
+        let driver = match cached {
+            Ok((true, _)) => return Prepared::Cached,
+            Ok((false, driver)) => driver,
+            Err(_) => return Prepared::Failed,
+        };
+        match ProgramBuilder::start(&driver, internal, width, params) {
+            Ok(builder) => {
+                log::debug(&format!(
+                    "OpenGL programs for {} views {width} wide: building them in a process beside the app (contrastxr gl-programs)",
+                    self.format_name(i64::from(internal))
+                ));
+                self.builders.push(builder);
+                Prepared::Building
+            }
+            Err(why) => Prepared::NoBuilder(why),
+        }
+    }
+
     /// Builds (or links from the caches) and runs once the programs of one view shape; the
     /// time it took.
     fn warm_up(&mut self, internal: u32, width: u32, params: &Params, when: &str) -> Duration {
@@ -194,6 +239,11 @@ impl GlSession {
         let when = match outcome {
             Ok(took) => {
                 self.beside_time = self.beside_time.max(took);
+                // Takes in the binaries the build wrote.
+                let _ = self.in_context(|engine, _| {
+                    // SAFETY: inside `in_context`: the app's context is current.
+                    unsafe { engine.ready_from_cache(internal, width, &params) }.map_err(failed)
+                });
                 log::debug(&format!(
                     "OpenGL programs for {} views {width} wide built beside the app in {:.3} s",
                     self.format_name(i64::from(internal)),
@@ -271,41 +321,22 @@ impl SessionGraphics for GlSession {
     }
 
     fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, _: bool) {
-        // Programs the caches hold are linked here, at a loading-time call, in the app's
-        // context; the rest are built by a process beside the app while the frames pass
-        // through, or, where it cannot run, here. What fails is met again, and said, by the
-        // frame calls.
+        // At a loading-time call: programs the caches hold are linked and run once here, in
+        // the app's context; the rest are built by a process beside the app while the frames
+        // pass through, or, where it cannot run, here. What fails is met again, and said, by
+        // the frame calls.
         let Some(internal) = GlFormat::ALL
             .into_iter()
             .find(|&f| GlFormat::of(f).is_ok_and(|g| g.pixel == format))
         else {
             return;
         };
-        let shape = (internal, width, params.clone());
-        if self.warmed.contains(&shape) {
-            return;
-        }
-        self.warmed.push(shape);
-        let cached = self.in_context(|engine, _| {
-            // SAFETY: inside `in_context`: the app's context is current on this thread.
-            let cached = unsafe { engine.ready_from_cache(internal, width, params) };
-            Ok((cached.map_err(failed)?, engine.caps().driver.clone()))
-        });
-        match cached {
-            Ok((true, _)) => {}
-            Ok((false, driver)) => match ProgramBuilder::start(&driver, internal, width, params) {
-                Ok(builder) => {
-                    log::debug(&format!(
-                        "OpenGL programs for {} views {width} wide: building them in a process beside the app (contrastxr gl-programs)",
-                        self.format_name(i64::from(internal))
-                    ));
-                    return self.builders.push(builder);
-                }
-                Err(why) => log::debug(&format!(
-                    "OpenGL programs built in the app's context: {why}"
-                )),
-            },
-            Err(_) => return,
+        match self.prepare_shape(internal, width, params) {
+            Prepared::Cached => {}
+            Prepared::NoBuilder(why) => log::debug(&format!(
+                "OpenGL programs built in the app's context: {why}"
+            )),
+            Prepared::Seen | Prepared::Building | Prepared::Failed => return,
         }
         let took = self.warm_up(internal, width, params, "at swapchain creation");
         self.warm_up_time += took;
@@ -325,6 +356,16 @@ impl SessionGraphics for GlSession {
     }
 
     fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone> {
+        // A shape swapchain creation did not see (another width, changed settings) is built
+        // beside the app too where it can be.
+        for v in views {
+            let (internal, width) = (v.api_format as u32, v.key.extent.0);
+            if let Prepared::NoBuilder(why) = self.prepare_shape(internal, width, params) {
+                log::debug(&format!(
+                    "OpenGL programs built in frame calls on the app's context: {why}"
+                ));
+            }
+        }
         self.await_builders(wait)?;
         let views: Vec<GlView> = views.iter().map(gl_view).collect();
         let since = Instant::now();
