@@ -112,11 +112,20 @@ impl ProgramBuilder {
 
     /// Stops the build now (the session passes through or ends).
     pub fn stop(&self) {
-        if let Some(child) = &self.child {
-            // SAFETY: kill on the pid of our own child, not reaped yet (reaping takes `child`),
-            // so the pid names it and no other process.
-            unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGKILL) };
+        let Some(child) = &self.child else { return };
+        let pid = child.id() as libc::pid_t;
+        // SAFETY: siginfo_t is plain C data; all-zero is a valid value for waitid to fill.
+        let mut info: libc::siginfo_t = unsafe { std::mem::zeroed() };
+        let flags = libc::WEXITED | libc::WNOHANG | libc::WNOWAIT;
+        // SAFETY: waitid with WNOWAIT only looks: it reaps nothing. It fails (ECHILD) where
+        // the app took the child's status (SIGCHLD ignored), whose pid may then name another
+        // process: nothing is signalled then.
+        if unsafe { libc::waitid(libc::P_PID, pid as libc::id_t, &mut info, flags) } != 0 {
+            return;
         }
+        // SAFETY: kill on the pid of our own child, running or not yet reaped, so the pid
+        // names it and no other process.
+        unsafe { libc::kill(pid, libc::SIGKILL) };
     }
 
     fn stop_and_reap(&mut self) {
