@@ -11,15 +11,15 @@
 mod common;
 
 use common::{
-    layer_lines, sandbox, scratch_dir, ApiDump, SandboxRun, Validation, CLI, SYNC_VALIDATION,
-    XR_CLIENT,
+    layer_lines, sandbox, scratch_dir, wait_for, ApiDump, SandboxRun, Validation, CLI,
+    SYNC_VALIDATION, XR_CLIENT,
 };
 use contrastxr::config::{self, Env, Source, KEYS};
 use contrastxr::image::RgbaImage;
 use proptest::prelude::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Duration, SystemTime};
 
 const SIZE: &str = "64x48";
 const APP: &str = "contrastxr-xr-client";
@@ -690,17 +690,6 @@ fn app_table_turns_one_app_off() {
 }
 
 // ---- live control ----
-
-fn wait_for(path: &Path, timeout: Duration) -> bool {
-    let end = Instant::now() + timeout;
-    while Instant::now() < end {
-        if path.exists() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    false
-}
 
 fn cli(config: &Path, args: &[&str]) -> (SystemTime, String) {
     let out = std::process::Command::new(CLI)

@@ -6,9 +6,9 @@
 
 mod common;
 
-use common::{sandbox, scratch_dir, Validation, CLI, SYNC_VALIDATION, XR_CLIENT};
+use common::{sandbox, scratch_dir, wait_for, Validation, CLI, SYNC_VALIDATION, XR_CLIENT};
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const WIDTH: usize = 320;
 const HEIGHT: usize = 240;
@@ -183,17 +183,6 @@ fn check_indicator(tag: &str, run: Runner) {
             diff.len()
         );
     }
-}
-
-fn wait_for(path: &Path, timeout: Duration) -> bool {
-    let end = Instant::now() + timeout;
-    while Instant::now() < end {
-        if path.exists() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    false
 }
 
 #[test]

@@ -337,10 +337,7 @@ fn opengl_programs_for_a_changed_mode_are_built_beside_the_app() {
     let run = std::thread::scope(|s| {
         let run = s.spawn(|| client_opengl("R8G8B8A8_SRGB", 300, &as_refs(&env), &[], 240));
         let first = capture.join("frame-5-view-0.json");
-        let end = std::time::Instant::now() + std::time::Duration::from_secs(120);
-        while !first.exists() && std::time::Instant::now() < end {
-            std::thread::sleep(std::time::Duration::from_millis(50));
-        }
+        common::wait_for(&first, std::time::Duration::from_secs(120));
         let out = std::process::Command::new(common::CLI)
             .args(["set", "mode", "heatmap"])
             .env("CONTRASTXR_CONFIG", &config)

@@ -8,11 +8,11 @@
 
 mod common;
 
-use common::{layer_lines, sandbox, scratch_dir, CLI, XR_CLIENT};
+use common::{layer_lines, sandbox, scratch_dir, wait_for, CLI, XR_CLIENT};
 use serde_json::Value;
 use std::io::Write;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const SYSTEM: &str = "Monado: Simulated HMD";
 
@@ -97,17 +97,6 @@ fn each_eye_is_registered_from_the_device_profile() {
         left[0].contains("the default fov_scale/fov_offset"),
         "{left:#?}"
     );
-}
-
-fn wait_for(path: &Path, timeout: Duration) -> bool {
-    let end = Instant::now() + timeout;
-    while Instant::now() < end {
-        if path.exists() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    false
 }
 
 /// Runs `contrastxr calibrate` on `config`, feeding it `steps` one by one, `pause` apart.

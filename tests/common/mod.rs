@@ -382,6 +382,18 @@ pub fn layer_lines(run: &SandboxRun) -> Vec<String> {
 /// layer itself; this is its documented settings variable).
 pub const SYNC_VALIDATION: (&str, &str) = ("VK_KHRONOS_VALIDATION_VALIDATE_SYNC", "true");
 
+/// Whether `path` exists within `timeout` (polled every 50 ms): a file a running app writes.
+pub fn wait_for(path: &Path, timeout: std::time::Duration) -> bool {
+    let end = std::time::Instant::now() + timeout;
+    while std::time::Instant::now() < end {
+        if path.exists() {
+            return true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    false
+}
+
 /// A fresh scratch folder under the target directory (visible inside the sandbox).
 pub fn scratch_dir(name: &str) -> PathBuf {
     let dir = scratch_file(name);
