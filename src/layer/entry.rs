@@ -63,17 +63,13 @@ pub unsafe extern "system" fn xrNegotiateLoaderApiLayerInterface(
 fn stay_mapped() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        // SAFETY: Dl_info is plain C data; all-zero is a valid value for dladdr to fill.
-        let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
-        let here = stay_mapped as *const std::ffi::c_void;
-        // SAFETY: dladdr on an address of this library's code, with a valid out pointer.
-        if unsafe { libc::dladdr(here, &mut info) } == 0 || info.dli_fname.is_null() {
+        let Some(file) = super::installed_files::library_file() else {
             return log::info("cannot keep the layer's library mapped (dladdr failed)");
-        }
+        };
         let flags = libc::RTLD_NOW | libc::RTLD_NOLOAD | libc::RTLD_NODELETE;
         // SAFETY: RTLD_NOLOAD only promotes this already loaded library (its own name, from
         // dladdr); the handle is kept on purpose: the library is never unloaded.
-        if unsafe { libc::dlopen(info.dli_fname, flags) }.is_null() {
+        if unsafe { libc::dlopen(file.as_ptr(), flags) }.is_null() {
             log::info("cannot keep the layer's library mapped (dlopen RTLD_NODELETE failed)");
         }
     });

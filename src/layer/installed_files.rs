@@ -1,3 +1,4 @@
+//! The layer library's files: where it was loaded from, the tool beside it, and
 //! `contrastxr install` / `uninstall`: a copy of the layer library in a stable place and the
 //! implicit layer manifest naming it, in the XDG OpenXR layer directory. The copy is what keeps
 //! the layer loadable after `cargo clean` or a rebuild of the tree it came from. The template is
@@ -44,6 +45,20 @@ pub fn layer_dir(scope: Scope) -> Result<PathBuf, String> {
         Scope::System => Ok(PathBuf::from("/etc/xdg").join(tail)),
         Scope::User => Ok(data_home()?.join(tail)),
     }
+}
+
+/// The layer's library file, as the dynamic linker loaded it (dladdr of its own code; in the
+/// command-line tool, the tool itself).
+pub(crate) fn library_file() -> Option<std::ffi::CString> {
+    // SAFETY: Dl_info is plain C data; all-zero is a valid value for dladdr to fill.
+    let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
+    let here = library_file as *const std::ffi::c_void;
+    // SAFETY: dladdr on an address of this library's code, with a valid out pointer.
+    if unsafe { libc::dladdr(here, &mut info) } == 0 || info.dli_fname.is_null() {
+        return None;
+    }
+    // SAFETY: dli_fname is a NUL-terminated path owned by the dynamic linker.
+    Some(unsafe { std::ffi::CStr::from_ptr(info.dli_fname) }.to_owned())
 }
 
 /// The tool that came with the layer's library at `library`: beside it (cargo's output folder,

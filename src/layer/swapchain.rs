@@ -139,8 +139,8 @@ pub(crate) unsafe extern "system" fn create_swapchain(
 }
 
 /// Starts building the shaders that views of this swapchain will need (Vulkan: on the
-/// engine's own thread; OpenGL: in the app's context, here), so they are likely ready by the
-/// first xrEndFrame. Views usually span the width.
+/// engine's own thread; OpenGL: linked from the caches here, or built by a process beside the
+/// app), so they are likely ready by the first xrEndFrame. Views usually span the width.
 fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_place: bool) {
     let mut s = lock(s);
     // A session whose frames can never be ADDITIVE (and the layer not forced on) is never

@@ -163,11 +163,12 @@ impl GlSession {
     /// For a view shape (internal format, width, settings) not met before: links its programs
     /// from the caches, or starts their build beside the app.
     fn prepare_shape(&mut self, internal: u32, width: u32, params: &Params) -> Prepared {
-        let shape = (internal, width, params.clone());
-        if self.warmed.contains(&shape) {
+        // Every frame call asks: the settings are cloned only for a shape not met before.
+        let seen = |(i, w, p): &(u32, u32, Params)| (*i, *w) == (internal, width) && p == params;
+        if self.warmed.iter().any(seen) {
             return Prepared::Seen;
         }
-        self.warmed.push(shape);
+        self.warmed.push((internal, width, params.clone()));
         let cached = self.in_context(|engine, _| {
             // SAFETY: inside `in_context`: the app's context is current on this thread.
             let cached = unsafe { engine.ready_from_cache(internal, width, params) };

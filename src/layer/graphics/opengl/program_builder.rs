@@ -28,25 +28,12 @@ pub enum Built {
     Ended(Result<Duration, String>),
 }
 
-/// The layer's library, as the dynamic linker loaded it.
-fn library_path() -> Option<PathBuf> {
-    // SAFETY: Dl_info is plain C data; all-zero is a valid value for dladdr to fill.
-    let mut info: libc::Dl_info = unsafe { std::mem::zeroed() };
-    let here = library_path as *const std::ffi::c_void;
-    // SAFETY: dladdr on an address of this library's code, with a valid out pointer.
-    if unsafe { libc::dladdr(here, &mut info) } == 0 || info.dli_fname.is_null() {
-        return None;
-    }
-    // SAFETY: dli_fname is a NUL-terminated path owned by the dynamic linker.
-    let name = unsafe { std::ffi::CStr::from_ptr(info.dli_fname) };
-    let name: &std::ffi::OsStr = std::os::unix::ffi::OsStrExt::from_bytes(name.to_bytes());
-    Some(PathBuf::from(name))
-}
-
 /// The tool that came with the library (installed_files::tool_beside). Another build of it
 /// refuses (its sources id differs).
 fn tool() -> Option<PathBuf> {
-    crate::layer::installed_files::tool_beside(&library_path()?)
+    let file = crate::layer::installed_files::library_file()?;
+    let path: &std::ffi::OsStr = std::os::unix::ffi::OsStrExt::from_bytes(file.to_bytes());
+    crate::layer::installed_files::tool_beside(std::path::Path::new(path))
 }
 
 impl ProgramBuilder {
