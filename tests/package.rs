@@ -70,20 +70,16 @@ fn assert_no_cli_parser(library: &Path) {
     }
 }
 
-fn sandbox_root_has_contrastxr() -> bool {
-    let dir = std::env::var_os("CONTRASTXR_SANDBOX_DIR").map_or_else(
-        || Path::new(&std::env::var("HOME").unwrap()).join(".cache/contrastxr/xr-sandbox"),
-        PathBuf::from,
-    );
-    let status = std::fs::read_to_string(dir.join("root/var/lib/dpkg/status")).unwrap();
-    status.contains("Package: contrastxr\n") || dir.join("root/usr/bin/contrastxr").exists()
+fn sandbox_root_has_contrastxr(root: &Path) -> bool {
+    let status = std::fs::read_to_string(root.join("var/lib/dpkg/status")).unwrap();
+    status.contains("Package: contrastxr\n") || root.join("usr/bin/contrastxr").exists()
 }
 
 #[test]
 fn deb_installs_in_the_sandbox_and_hello_xr_runs_through_it() {
-    if sandbox().is_none() {
+    let Some(sandbox) = sandbox() else {
         return;
-    }
+    };
     // Without cargo-deb, a plain `cargo test` skips; with the sandbox required (scripts/test, CI),
     // scripts/package installs cargo-deb first (cargo install: minutes, once).
     if !cargo_deb_present() && std::env::var_os("CONTRASTXR_REQUIRE_SANDBOX").is_none() {
@@ -209,5 +205,5 @@ fn deb_installs_in_the_sandbox_and_hello_xr_runs_through_it() {
         .count();
     assert!(changed > 1000, "only {changed} pixels changed");
     // The shared sandbox root did not get the package.
-    assert!(!sandbox_root_has_contrastxr());
+    assert!(!sandbox_root_has_contrastxr(&sandbox.root()));
 }

@@ -124,6 +124,17 @@ fn is_root() -> bool {
 }
 
 impl Sandbox {
+    /// The sandbox's root folder as `scripts/xr-sandbox status` names it ("ready: <root>"): the
+    /// script is the one place that spells the cache layout.
+    pub fn root(&self) -> PathBuf {
+        let o = Command::new(&self.script).arg("status").output().unwrap();
+        let out = String::from_utf8_lossy(&o.stdout);
+        match out.trim().strip_prefix("ready: ") {
+            Some(root) if o.status.success() => PathBuf::from(root),
+            _ => panic!("xr-sandbox status names no ready root: {out}"),
+        }
+    }
+
     /// Runs `cmd` inside the sandbox with a fresh monado-service and returns what it did.
     /// `env` is added to the environment of the script, which passes CONTRASTXR*, XR_*, VK_*,
     /// LP_*, RUST_*, MESA_* variables to the command. Stdin is empty.
