@@ -20,7 +20,13 @@ fn fresh_home(name: &str) -> PathBuf {
 fn preamble(home: &Path, env: &[(&str, &Path)]) -> Output {
     let mut cmd = Command::new(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/test"));
     cmd.arg("--preamble").env("HOME", home);
-    for var in ["XDG_STATE_HOME", "XDG_CONFIG_HOME", "XDG_CACHE_HOME", "SUDO_USER", "SUDO_UID"] {
+    for var in [
+        "XDG_STATE_HOME",
+        "XDG_CONFIG_HOME",
+        "XDG_CACHE_HOME",
+        "SUDO_USER",
+        "SUDO_UID",
+    ] {
         cmd.env_remove(var);
     }
     cmd.envs(env.iter().copied()).output().unwrap()

@@ -349,3 +349,175 @@ fn the_layers_clock_extension_stays_hidden_from_the_app() {
     assert_eq!(seen[0].1, "ERROR_FUNCTION_UNSUPPORTED");
     assert_eq!(seen[0], seen[1], "layer on and off answer alike");
 }
+
+/// The camera's pose on the head in the test below: 2 cm up, 6 cm forward, pitched 10 degrees
+/// down, and its field of view.
+const STILL_PROFILE: &str = "camera_fov = [90, 70]\ncamera_position = [0, 0.02, -0.06]\n\
+                             camera_rotation = [-10, 0, 0]\nscene_distance = 2\n";
+
+/// Where the display point at `uv` of a view shows in the camera (uv), registered here with
+/// plain pinhole math, independently of the layer: the point on the plane `scene_distance` in
+/// front of the view, seen from the camera mounted on `head` (position, orientation [x, y, z, w])
+/// as [`STILL_PROFILE`] says.
+fn registered(view: &Value, head: &([f64; 3], [f64; 4]), uv: [f64; 2]) -> [f64; 2] {
+    let fov = &view["view_fov"];
+    let tan = |k: &str| fov[k].as_f64().unwrap().tan();
+    let tx = tan("angle_left") + uv[0] * (tan("angle_right") - tan("angle_left"));
+    let ty = tan("angle_up") - uv[1] * (tan("angle_up") - tan("angle_down"));
+    let pose = &view["view_pose"];
+    let (position, orientation) = (numbers(&pose["position"]), numbers(&pose["orientation"]));
+    let d = 2.0;
+    let along = rotate(&orientation, [d * tx, d * ty, -d]);
+    let point: [f64; 3] = std::array::from_fn(|i| position[i] + along[i]);
+    let (h, q) = (head.0, head.1);
+    let mount = rotate(&q, [0.0, 0.02, -0.06]);
+    let to: [f64; 3] = std::array::from_fn(|i| point[i] - h[i] - mount[i]);
+    let (s, c) = (-10f64.to_radians().sin(), 10f64.to_radians().cos());
+    let axes = [[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]].map(|a| rotate(&q, a));
+    let [x, y, z] = axes.map(|a| a[0] * to[0] + a[1] * to[1] + a[2] * to[2]);
+    let (half_w, half_h) = (45f64.to_radians().tan(), 35f64.to_radians().tan());
+    [0.5 + x / -z / (2.0 * half_w), 0.5 - y / -z / (2.0 * half_h)]
+}
+
+/// The head of a frame's two views: their mid-point, their orientations' normalised sum.
+fn head_of(views: &[Value; 2]) -> ([f64; 3], [f64; 4]) {
+    let [a, b] = views.each_ref().map(|v| &v["view_pose"]);
+    let (pa, pb) = (numbers(&a["position"]), numbers(&b["position"]));
+    let (qa, qb) = (numbers(&a["orientation"]), numbers(&b["orientation"]));
+    let sign = if (0..4).map(|i| qa[i] * qb[i]).sum::<f64>() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let sum: [f64; 4] = std::array::from_fn(|i| qa[i] + sign * qb[i]);
+    let n = sum.iter().map(|x| x * x).sum::<f64>().sqrt();
+    (
+        std::array::from_fn(|i| (pa[i] + pb[i]) / 2.0),
+        sum.map(|x| x / n),
+    )
+}
+
+/// The largest distance, in pixels of a 640x480 camera, between where `rows` maps display
+/// points and where the independent registration puts them.
+fn mapping_error(rows: &[Vec<f64>], view: &Value, head: &([f64; 3], [f64; 4])) -> f64 {
+    let mut worst = 0f64;
+    for u in [0.1, 0.5, 0.9] {
+        for v in [0.1, 0.5, 0.9] {
+            let m = |r: usize| rows[r][0] * u + rows[r][1] * v + rows[r][2];
+            let got = [m(0) / m(2), m(1) / m(2)];
+            let want = registered(view, head, [u, v]);
+            let px = ((got[0] - want[0]) * 640.0).hypot((got[1] - want[1]) * 480.0);
+            worst = worst.max(px);
+        }
+    }
+    worst
+}
+
+/// A still `image:` background is head-fixed even with a camera profile and motion
+/// compensation on: each view's mapping, logged and used, is the registration of the views
+/// submitted in that very frame, while the simulated head sways; no capture time is recorded.
+#[test]
+fn a_still_image_stays_head_fixed_with_compensation_on() {
+    let Some(sandbox) = sandbox() else {
+        return;
+    };
+    let dir = scratch_dir("motion-still");
+    let config = dir.join("config.toml");
+    std::fs::write(
+        &config,
+        format!("{STILL_PROFILE}motion_compensation = true\n"),
+    )
+    .unwrap();
+    let capture = dir.join("capture");
+    let image = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/background-meadow.png");
+    let background = format!("image:{}", image.display());
+    let (config_s, capture_s) = (config.to_string_lossy(), capture.to_string_lossy());
+    let frames = 240;
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_CONFIG", config_s.as_ref()),
+        ("CONTRASTXR_BACKGROUND", background.as_str()),
+        ("CONTRASTXR_CAPTURE_DIR", capture_s.as_ref()),
+        ("CONTRASTXR_CAPTURE_FRAMES", "240"),
+        // Every frame enhanced from the first, so frame 0 is the one the mapping line logs.
+        ("CONTRASTXR_PIPELINES", "wait"),
+    ];
+    let count = frames.to_string();
+    let cmd = [XR_CLIENT, "--json", "--frames", &count, "--size", "64x48"];
+    let out = sandbox.run_for(&cmd, &env, 240);
+    out.assert_success();
+    let lines = common::layer_lines(&out);
+    let logged: Vec<Vec<Vec<f64>>> = (0..2)
+        .map(|v| {
+            let prefix = format!("view {v} (");
+            let line = lines
+                .iter()
+                .find(|l| l.starts_with(&prefix) && l.contains("camera profile"))
+                .unwrap_or_else(|| panic!("no mapping line for view {v}: {lines:#?}"));
+            let rows = line.split("camera_uv = ").nth(1).unwrap();
+            let rows = rows.trim_end_matches(" (display_uv, 1)");
+            serde_json::from_str(rows).unwrap()
+        })
+        .collect();
+    let mut checked = 0;
+    let (mut first_head, mut moved, mut worst) = (None, 0f64, 0f64);
+    for f in 0..frames {
+        let read = |v: usize| {
+            let path = capture.join(format!("frame-{f}-view-{v}.json"));
+            let text = std::fs::read_to_string(path).ok()?;
+            serde_json::from_str::<Value>(&text).ok()
+        };
+        let (Some(left), Some(right)) = (read(0), read(1)) else {
+            continue;
+        };
+        let views = [left, right];
+        let head = head_of(&views);
+        let start = *first_head.get_or_insert(head.0);
+        moved = moved.max(
+            (0..3)
+                .map(|i| (head.0[i] - start[i]).powi(2))
+                .sum::<f64>()
+                .sqrt(),
+        );
+        for (v, view) in views.iter().enumerate() {
+            assert!(
+                view["camera_time"].is_null(),
+                "a still image has a capture time: {view}"
+            );
+            let rows: Vec<Vec<f64>> =
+                serde_json::from_value(view["camera_mapping"].clone()).unwrap();
+            let error = mapping_error(&rows, view, &head);
+            worst = worst.max(error);
+            assert!(
+                error < 0.5,
+                "frame {f} view {v}: used mapping {error:.2} px off"
+            );
+            if f == 0 {
+                let error = mapping_error(&logged[v], view, &head);
+                assert!(error < 0.5, "view {v}: logged mapping {error:.2} px off");
+            }
+        }
+        checked += 1;
+    }
+    eprintln!(
+        "{checked} frames checked, head moved up to {:.1} mm, worst {worst:.3} px",
+        moved * 1e3
+    );
+    assert!(checked >= frames / 2, "only {checked} frames captured");
+    assert!(
+        capture.join("frame-0-view-0.json").exists(),
+        "frame 0 not captured"
+    );
+    assert!(
+        moved > 0.005,
+        "the head hardly moved ({:.1} mm)",
+        moved * 1e3
+    );
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("still image") && l.contains("head-fixed")),
+        "the log does not say the still background is head-fixed: {lines:#?}"
+    );
+}

@@ -29,7 +29,7 @@ fn static_frame(image: RgbaImage) -> Frame {
     Frame {
         image: Arc::new(image),
         sequence: 1,
-        captured_at: Instant::now(),
+        captured_at: None,
         prepared: None,
     }
 }
@@ -142,7 +142,7 @@ pub(crate) fn play(
                     shared.publish(Frame {
                         image: pool.share(image),
                         sequence: n + 1,
-                        captured_at,
+                        captured_at: Some(captured_at),
                         prepared: None,
                     });
                     failed = false;

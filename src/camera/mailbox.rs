@@ -14,8 +14,10 @@ pub struct Frame {
     /// Starts at 1 and grows with each new frame (it may skip), so a consumer preprocesses once
     /// per new value. Static sources keep the same value for ever.
     pub sequence: u64,
-    /// When the frame was captured (for V4L2, the driver's timestamp mapped to `Instant`).
-    pub captured_at: Instant,
+    /// When the frame was captured (for V4L2, the driver's timestamp mapped to `Instant`); None
+    /// for a still image (`image:`, `color:`), which is no capture of any moment and so stays
+    /// head-fixed.
+    pub captured_at: Option<Instant>,
     /// The frame decoded and blurred with the blur the consumer asked for (`Shared::want`),
     /// made on the producer's thread before the frame is published; None when none was asked.
     pub prepared: Option<Arc<BlurredTexels>>,
@@ -234,7 +236,7 @@ mod tests {
         Frame {
             image: Arc::new(RgbaImage::new(1, 1, [1, 2, 3, 255])),
             sequence: 1,
-            captured_at: Instant::now(),
+            captured_at: Some(Instant::now()),
             prepared: None,
         }
     }

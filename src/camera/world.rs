@@ -99,7 +99,7 @@ impl Camera {
                         shared.publish(Frame {
                             image: Arc::new(self.render(&head)),
                             sequence,
-                            captured_at: instant_of_ns(t),
+                            captured_at: Some(instant_of_ns(t)),
                             prepared: None,
                         });
                     }

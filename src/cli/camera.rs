@@ -111,9 +111,10 @@ fn report(got: &[(Frame, Instant)], out: &mut dyn Write) -> std::io::Result<()> 
     let (Some((first, _)), Some((last, _))) = (got.first(), got.last()) else {
         return writeln!(out, "no frame arrived");
     };
-    let span = last
-        .captured_at
-        .saturating_duration_since(first.captured_at)
+    // A still image was captured at no moment: it counts as captured when seen.
+    let captured = |(f, seen): &(Frame, Instant)| f.captured_at.unwrap_or(*seen);
+    let span = captured(&got[got.len() - 1])
+        .saturating_duration_since(captured(&got[0]))
         .as_secs_f64();
     let rate = if span > 0.0 {
         (got.len() - 1) as f64 / span
@@ -122,7 +123,7 @@ fn report(got: &[(Frame, Instant)], out: &mut dyn Write) -> std::io::Result<()> 
     };
     let latencies: Vec<f64> = got
         .iter()
-        .map(|(f, seen)| seen.saturating_duration_since(f.captured_at).as_secs_f64() * 1000.0)
+        .map(|g| g.1.saturating_duration_since(captured(g)).as_secs_f64() * 1000.0)
         .collect();
     let mean = latencies.iter().sum::<f64>() / latencies.len() as f64;
     let max = latencies.iter().copied().fold(0.0, f64::max);

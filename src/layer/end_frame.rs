@@ -249,7 +249,7 @@ fn background_sequence(frame_sequence: u64, s: &Settings) -> u64 {
 /// session into pass-through.
 pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = s.background.as_ref().and_then(|bg| bg.latest());
-    let captured_at = s.frame_in_use.as_ref().map(|f| f.captured_at);
+    let captured_at = s.frame_in_use.as_ref().and_then(|f| f.captured_at);
     let mut moving = motion::at_end_frame(s, info.display_time, captured_at);
     let mut sources = Vec::new();
     // SAFETY: the app's frame end info, valid for this call.

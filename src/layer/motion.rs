@@ -19,7 +19,7 @@ use crate::camera::clock;
 use openxr_sys as xr;
 use std::time::Instant;
 
-/// A frame older than this is a still image (`image:`, `color:`), not a capture of the moment.
+/// A live frame older than this (a camera that stalled) is no capture of the moment either.
 const STILL_AFTER: std::time::Duration = std::time::Duration::from_secs(5);
 
 /// What one xrEndFrame knows about motion.
@@ -35,7 +35,7 @@ pub struct FrameMotion {
 }
 
 /// Answers the `world:` source, then locates the head at the capture time of the camera frame
-/// about to be used (`captured_at`), corrected by `camera_latency_ms`.
+/// about to be used (`captured_at`, None for a still image), corrected by `camera_latency_ms`.
 pub fn at_end_frame(
     s: &mut SessionState,
     display_time: xr::Time,
@@ -51,7 +51,7 @@ pub fn at_end_frame(
         s.motion.poses.record(t, pose);
     }
     let latency_ns = (f64::from(s.settings.motion.camera_latency_ms) * 1e6) as i64;
-    // A still image's frame is not a capture of the moment: it stays head-fixed.
+    // A still image, or a frame long stalled, is not a capture of the moment: it stays head-fixed.
     let captured_at = captured_at.filter(|t| t.elapsed() < STILL_AFTER);
     let camera_time = captured_at.and_then(|t| {
         s.motion
@@ -62,6 +62,13 @@ pub fn at_end_frame(
         .and_then(|(sp, t)| spaces::locate(&next, sp.view, sp.local, t));
     let compensation =
         s.settings.motion.compensation && s.settings.registration.profile().is_some();
+    let still = s
+        .frame_in_use
+        .as_ref()
+        .is_some_and(|f| f.captured_at.is_none());
+    if compensation && still {
+        log::once("still-head-fixed", "the background is a still image (image: or color:): it stays head-fixed; motion compensation applies to live sources (camera, video, world:)");
+    }
     if compensation && captured_at.is_some() && head.is_none() && spaces.is_some() {
         log::once("head-not-located", "the head could not be located at a camera frame's capture time (tracking lost or time out of range): that frame's background is head-fixed");
     }

@@ -369,7 +369,7 @@ impl Capture {
         Ok(Frame {
             image: self.pool.share(image),
             sequence: self.sequence,
-            captured_at,
+            captured_at: Some(captured_at),
             prepared: None,
         })
     }
