@@ -847,6 +847,12 @@ fn doctor_after_install_names_the_manifest_and_loads_its_library() {
     // The tool went beside the library, where the layer runs it for OpenGL apps.
     let g = finding(&report, "opengl-builder");
     assert_eq!(g["status"], "ok", "{g}");
+    // `doctor --help` lists every finding the report has.
+    let help = String::from_utf8_lossy(&contrastxr(&["doctor", "--help"]).stdout).into_owned();
+    for f in report["findings"].as_array().unwrap() {
+        let name = text(f, "name");
+        assert!(help.contains(&format!("  {name}  ")), "{name}: {help}");
+    }
     let tool = root.join("data/contrastxr/contrastxr");
     assert!(
         text(g, "detail").starts_with(&tool.display().to_string()),
@@ -1042,16 +1048,69 @@ fn doctor_reads_the_last_apps_log_and_the_headsets_profile() {
     assert_eq!(text(d, "detail"), wanted, "{d}");
     // Steam installed: its games need the variable, in their launch options or here.
     assert_eq!(finding(&report, "steam")["status"], "ok");
+    const OPTIONS: &str = "PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS=1 CONTRASTXR=1 %command%";
     std::fs::create_dir_all(root.join(".steam/steam")).unwrap();
+    let (_, report) = doctor(&root, &[]);
+    // No game asks for the layer, and doctor cannot know whether one should: a note.
+    let s = finding(&report, "steam");
+    assert_eq!(s["status"], "ok", "{s}");
+    assert!(text(s, "detail").contains(OPTIONS), "{s}");
+    // A game started with the layer but without the import: a warning, whose fix ends it.
+    let vdf = root.join(".steam/steam/userdata/123/config/localconfig.vdf");
+    std::fs::create_dir_all(vdf.parent().unwrap()).unwrap();
+    // Steam's layout of the file, on fewer lines.
+    let game = |options: &str| {
+        format!(
+            "\"UserLocalConfigStore\" {{ \"Software\" {{ \"Valve\" {{ \"Steam\" {{ \"apps\" {{\n\
+             \t\"620\" {{ \"LaunchOptions\" \"{options}\" }}\n}} }} }} }} }}\n"
+        )
+    };
+    std::fs::write(&vdf, game("CONTRASTXR=1 %command%")).unwrap();
     let (_, report) = doctor(&root, &[]);
     let s = finding(&report, "steam");
     assert_eq!(s["status"], "warn", "{s}");
-    assert!(
-        text(s, "fix").contains("PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS=1 CONTRASTXR=1 %command%"),
-        "{s}"
-    );
+    assert!(text(s, "detail").contains("620"), "{s}");
+    assert!(text(s, "fix").contains(OPTIONS), "{s}");
+    // Launch options set per game, as steam-flatpak.md says: no warning.
+    std::fs::write(&vdf, game(OPTIONS)).unwrap();
+    let (_, report) = doctor(&root, &[]);
+    let s = finding(&report, "steam");
+    assert_eq!(s["status"], "ok", "{s}");
+    assert!(text(s, "detail").contains("game(s) 620 import"), "{s}");
     let (_, report) = doctor(&root, &[("PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS", "1")]);
     assert_eq!(finding(&report, "steam")["status"], "ok");
+}
+
+/// Vulkan with only a software device on a machine without a GPU: the finding says there is
+/// no GPU device, and does not send the user to install the package that supplies the
+/// software one.
+#[test]
+fn doctor_says_when_there_is_no_gpu_device() {
+    let root = fresh_home("doctor-no-gpu");
+    std::fs::create_dir_all(root.join("sys/class")).unwrap();
+    let sys = root.join("sys").to_string_lossy().into_owned();
+    let (_, report) = doctor(&root, &[("CONTRASTXR_SYSFS_ROOT", &sys)]);
+    let v = finding(&report, "vulkan");
+    if v["status"] != "warn" {
+        eprintln!("skipped: this machine's Vulkan has a GPU device or none: {v}");
+        return;
+    }
+    assert!(text(v, "detail").contains("no GPU device"), "{v}");
+    assert!(!text(v, "fix").contains("mesa-vulkan-drivers"), "{v}");
+    // A GPU the kernel drives whose device node this user lacks (a container): that is said.
+    let card = root.join("sys/class/drm/renderD200");
+    std::fs::create_dir_all(card.join("device")).unwrap();
+    std::os::unix::fs::symlink(
+        "../../../bus/pci/drivers/amdgpu",
+        card.join("device/driver"),
+    )
+    .unwrap();
+    let (_, report) = doctor(&root, &[("CONTRASTXR_SYSFS_ROOT", &sys)]);
+    let v = finding(&report, "vulkan");
+    assert!(
+        text(v, "fix").contains("/dev/dri/renderD200 is missing"),
+        "{v}"
+    );
 }
 
 /// After `install --user`, `config print --device` applies the shipped profile of that system,
@@ -1419,6 +1478,36 @@ fn completions_without_a_shell_names_every_shell() {
         "{}",
         stderr(&o)
     );
+    // The tool's command list names every shell a script is printed for.
+    let help = String::from_utf8_lossy(&contrastxr(&["--help"]).stdout).into_owned();
+    let line = help
+        .lines()
+        .find(|l| l.trim_start().starts_with("completions "))
+        .unwrap_or_else(|| panic!("no completions line in {help}"));
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        assert!(
+            contrastxr(&["completions", shell]).status.success(),
+            "{shell}"
+        );
+        assert!(line.contains(shell), "{line}");
+    }
+}
+
+/// The command list says what install and uninstall write and remove.
+#[test]
+fn install_and_uninstall_summaries_say_what_they_do() {
+    let help = String::from_utf8_lossy(&contrastxr(&["--help"]).stdout).into_owned();
+    let line = |name: &str| {
+        help.lines()
+            .find(|l| l.trim_start().starts_with(&format!("{name} ")))
+            .unwrap_or_else(|| panic!("no {name} line in {help}"))
+            .to_string()
+    };
+    assert!(line("install").contains("--system"), "{help}");
+    let uninstall = line("uninstall");
+    for part in ["manifest", "library", "tool"] {
+        assert!(uninstall.contains(part), "{uninstall}");
+    }
 }
 
 /// The help of the commands that run the method: the engine option indented like the others,

@@ -91,7 +91,7 @@ pub const COMMANDS: &[Subcommand] = &[
     },
     Subcommand {
         name: "install",
-        summary: "install the OpenXR layer for this user (enable with CONTRASTXR=1)",
+        summary: "install the OpenXR layer for this user, or all (--system); on with CONTRASTXR=1",
         usage: install::usage,
         run: install::run,
         options: &[install::OPTIONS],
@@ -99,7 +99,7 @@ pub const COMMANDS: &[Subcommand] = &[
     },
     Subcommand {
         name: "uninstall",
-        summary: "remove the OpenXR layer's implicit manifest",
+        summary: "remove what install wrote: the manifest, the library copy and the tool",
         usage: install::usage,
         run: install::run_uninstall,
         options: &[install::SCOPE_OPTIONS],
@@ -147,7 +147,7 @@ pub const COMMANDS: &[Subcommand] = &[
     },
     Subcommand {
         name: "completions",
-        summary: "print a shell completion script: bash, zsh or fish",
+        summary: "print a shell completion script: bash, zsh, fish, elvish or powershell",
         usage: completions::usage,
         run: completions::run,
         options: &[],

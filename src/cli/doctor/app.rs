@@ -1,7 +1,7 @@
-//! The config file and its problems, what the last app that loaded the layer logged about it,
-//! and Steam's pressure-vessel setting.
+//! The config file and its problems, and what the last app that loaded the layer logged about
+//! it.
 
-use super::finding::{doc, var, Finding};
+use super::finding::{doc, Finding};
 use contrastxr::config::{self, Env, Source};
 use contrastxr::layer::log;
 use std::path::{Path, PathBuf};
@@ -259,57 +259,6 @@ impl LastApp {
                 "let the app run until it shows frames; `contrastxr log` shows what it logged",
             ),
         }
-    }
-}
-
-/// Steam's own folders, as installed natively or as a Flatpak.
-fn steam_installed() -> bool {
-    let Some(home) = var("HOME").map(PathBuf::from) else {
-        return false;
-    };
-    let data = var("XDG_DATA_HOME").map_or_else(|| home.join(".local/share"), PathBuf::from);
-    [
-        home.join(".steam/steam"),
-        data.join("Steam"),
-        home.join(".var/app/com.valvesoftware.Steam"),
-    ]
-    .iter()
-    .any(|p| p.exists())
-}
-
-/// `PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS`: without it the Steam Linux Runtime container does
-/// not import the host's OpenXR layers.
-pub fn steam() -> Finding {
-    const NAME: &str = "steam";
-    const VAR: &str = "PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS";
-    const OPTIONS: &str = "PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS=1 CONTRASTXR=1 %command%";
-    match std::env::var(VAR).ok() {
-        Some(v) if v == "1" => Finding::ok(
-            NAME,
-            format!(
-                "{VAR}=1 here: Steam games started from this environment import the host's \
-                 OpenXR layers (each still needs CONTRASTXR=1)"
-            ),
-        ),
-        set if steam_installed() => Finding::warn(
-            NAME,
-            format!(
-                "Steam is installed and {VAR} is {}: Steam games run in a container that does \
-                 not import host OpenXR layers without it",
-                set.map_or("not set here".into(), |v| format!("{v:?}, not 1"))
-            ),
-            format!(
-                "in each game's launch options: {OPTIONS} ({})",
-                doc("steam-flatpak.md")
-            ),
-        ),
-        _ => Finding::ok(
-            NAME,
-            format!(
-                "Steam not found; for Steam games the launch options need {OPTIONS} ({})",
-                doc("steam-flatpak.md")
-            ),
-        ),
     }
 }
 

@@ -13,7 +13,9 @@ mod finding;
 mod library;
 mod manifest;
 mod profile;
+mod render_nodes;
 mod report;
 mod runtime;
+mod steam;
 
 pub use report::{run, usage, OPTIONS};

@@ -3,7 +3,7 @@
 use super::super::args::{Args, Opt};
 use super::super::error::{print, CliError};
 use super::finding::{Finding, Status};
-use super::{app, camera, manifest, profile, runtime};
+use super::{app, camera, manifest, profile, runtime, steam};
 
 pub const OPTIONS: &[Opt] = &[Opt::flag("--json")];
 
@@ -16,6 +16,8 @@ pub fn usage() -> String {
      \x20                 through XR_API_LAYER_PATH) in its search paths: which file\n\
      \x20 library         the library the manifest names loads and exports\n\
      \x20                 xrNegotiateLoaderApiLayerInterface\n\
+     \x20 opengl-builder  the contrastxr tool beside that library, which builds OpenGL apps'\n\
+     \x20                 programs beside them (only when a manifest was found)\n\
      \x20 runtime         the active OpenXR runtime (XR_RUNTIME_JSON or active_runtime.json)\n\
      \x20 vulkan          the Vulkan devices\n\
      \x20 config          the config file and its problems (file, line and key)\n\
@@ -26,7 +28,8 @@ pub fn usage() -> String {
      \x20                 settings name (camera_usb_ids) is connected, before any app ran too\n\
      \x20 last-app        what the last app that loaded the layer logged: its session's\n\
      \x20                 graphics API, and the layer on, or why not\n\
-     \x20 steam           PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS, which Steam games need\n\
+     \x20 steam           PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS, which Steam games need: here,\n\
+     \x20                 or in the games' launch options (Steam's localconfig.vdf)\n\
      --json: one JSON object: graphics_apis_enhanced and every finding (name, status, detail, fix).\n\
      Exit status 1 when a finding is a problem, 0 otherwise (warnings included).\n"
         .to_string()
@@ -53,7 +56,7 @@ fn findings() -> Vec<Finding> {
         camera::profile(&env, last.system()),
         profile::device_profile(&env, last.system()),
         last.finding(),
-        app::steam(),
+        steam::steam(),
     ]);
     all
 }

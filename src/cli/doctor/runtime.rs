@@ -1,6 +1,7 @@
 //! The active OpenXR runtime (as the loader finds it) and the Vulkan devices.
 
 use super::finding::{var, Finding};
+use super::render_nodes;
 use contrastxr::gpu::device::physical_devices;
 use contrastxr::gpu::GpuError;
 use std::path::{Path, PathBuf};
@@ -31,43 +32,57 @@ fn candidates() -> Vec<PathBuf> {
         .collect()
 }
 
-/// `ID` and `VERSION_ID` of /etc/os-release (e.g. `debian`, `12`).
-fn distribution() -> (String, String) {
+/// `ID`, `VERSION_ID` and `ID_LIKE` of /etc/os-release (e.g. `debian`, `12`, ``).
+fn distribution() -> (String, String, String) {
     let text = std::fs::read_to_string("/etc/os-release").unwrap_or_default();
     let field = |name: &str| {
         text.lines()
             .find_map(|l| l.strip_prefix(name)?.strip_prefix('='))
             .map_or(String::new(), |v| v.trim_matches('"').to_string())
     };
-    (field("ID"), field("VERSION_ID"))
+    (field("ID"), field("VERSION_ID"), field("ID_LIKE"))
 }
 
 fn install_runtime() -> String {
-    let (id, version) = distribution();
+    let (id, version, like) = distribution();
+    // A derivative of Ubuntu (Mint, Pop!_OS) has Ubuntu's packages, under its own version.
+    if id != "debian" && id != "ubuntu" && like.split_whitespace().any(|l| l == "ubuntu") {
+        return install_runtime_on("ubuntu", "");
+    }
     install_runtime_on(&id, &version)
 }
 
 /// How to get a runtime on distribution `id` `version`: Debian packages Monado from 13 on (and
-/// in testing, which has no VERSION_ID); Debian 12 has none.
+/// in testing, which has no VERSION_ID); Debian 12 has none. Ubuntu has it in universe from
+/// 22.04 on (the same packaging as Debian's).
 fn install_runtime_on(id: &str, version: &str) -> String {
     const ACTIVE: &str = "make it the active one (its manifest linked as \
         /etc/xdg/openxr/1/active_runtime.json), or point XR_RUNTIME_JSON at its manifest";
-    let major: u32 = version
-        .split('.')
-        .next()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0);
+    const FROM_SOURCE: &str = "build Monado from source \
+        (https://monado.freedesktop.org/getting-started.html) or install your headset's own \
+        runtime";
+    let mut numbers = version.split('.').map(|v| v.parse::<u32>().unwrap_or(0));
+    let major = numbers.next().unwrap_or(0);
+    let minor = numbers.next().unwrap_or(0);
     match id {
         "debian" if major >= 13 || version.is_empty() => {
             "install Monado: `sudo apt install monado-service \
             libopenxr1-monado` (which makes it the active runtime)"
                 .into()
         }
-        "debian" => format!(
-            "Debian {version} packages no OpenXR runtime: build Monado from source \
-             (https://monado.freedesktop.org/getting-started.html) or install your headset's \
-             own runtime, then {ACTIVE}"
-        ),
+        "debian" => {
+            format!("Debian {version} packages no OpenXR runtime: {FROM_SOURCE}, then {ACTIVE}")
+        }
+        "ubuntu" if (major, minor) >= (22, 4) || version.is_empty() => {
+            "install Monado from universe: `sudo apt install monado-service \
+             libopenxr1-monado`; if doctor still finds no active runtime, link its manifest: \
+             `sudo mkdir -p /etc/xdg/openxr/1 && sudo ln -sf \
+             /usr/share/openxr/1/openxr_monado.json /etc/xdg/openxr/1/active_runtime.json`"
+                .into()
+        }
+        "ubuntu" => {
+            format!("Ubuntu {version} packages no OpenXR runtime: {FROM_SOURCE}, then {ACTIVE}")
+        }
         _ => format!("install an OpenXR runtime (e.g. Monado) and {ACTIVE}"),
     }
 }
@@ -188,12 +203,12 @@ pub fn vulkan() -> Finding {
         .collect();
     let detail = format!("{} device(s): {}", devices.len(), list.join("; "));
     if devices.iter().all(|d| d.cpu) {
-        Finding::warn(
-            NAME,
-            detail + "; only a software device, too slow for a headset",
-            "install your GPU's Vulkan driver (mesa-vulkan-drivers for AMD and Intel, \
-             the NVIDIA driver for NVIDIA); apps render on their own device",
-        )
+        let (why, fix) = render_nodes::software_only(
+            &render_nodes::render_nodes(),
+            &render_nodes::vulkan_drivers(),
+            render_nodes::driver_override(),
+        );
+        Finding::warn(NAME, detail + &why, fix)
     } else {
         Finding::ok(NAME, detail)
     }
@@ -216,5 +231,25 @@ mod tests {
         assert!(bookworm.contains("Debian 12 packages no OpenXR runtime"));
         assert!(bookworm.contains("monado.freedesktop.org"));
         assert!(!install_runtime_on("fedora", "41").contains("apt"));
+    }
+
+    /// Ubuntu gets a command (universe has Monado from 22.04 on), not only "install one".
+    #[test]
+    fn ubuntu_gets_a_command() {
+        let apt = "sudo apt install monado-service libopenxr1-monado";
+        for version in ["22.04", "24.04", "25.10", ""] {
+            let fix = install_runtime_on("ubuntu", version);
+            assert!(fix.contains(apt), "{version}: {fix}");
+            assert!(
+                fix.contains("/usr/share/openxr/1/openxr_monado.json"),
+                "{fix}"
+            );
+        }
+        let focal = install_runtime_on("ubuntu", "20.04");
+        assert!(!focal.contains("apt install"), "{focal}");
+        assert!(
+            focal.contains("Ubuntu 20.04 packages no OpenXR runtime"),
+            "{focal}"
+        );
     }
 }
