@@ -31,10 +31,12 @@ usage: contrastxr-xr-client [options]
   --quad-strips N         with --quad: submit the quad's image as N quad layers, one per
                           horizontal strip (N regions of one swapchain in one frame; default 1)
   --size WxH              per-view size (default: the runtime's recommended size)
-  --content panels|typical
+  --content panels|typical|image:PATH
                           what the images show: coloured panels and a ramp (default, 37 %
-                          of each view), or a typical mixed-reality frame (17 %: two UI
-                          panels and a shaded disc, as `contrastxr bench --content typical`)
+                          of each view), a typical mixed-reality frame (17 %: two UI
+                          panels and a shaded disc, as `contrastxr bench --content typical`),
+                          or the PNG at PATH stretched over each view (nearest texel; with
+                          --size of the PNG's size, texel for texel), as an app's frame
   --validation            enable VK_LAYER_KHRONOS_validation; any error fails the run
   --list-formats          print the formats the runtime offers and exit
   --json                  print the final report as one JSON line on stdout
@@ -331,7 +333,13 @@ fn parse_content(name: &str) -> Result<Content, String> {
     match name {
         "panels" => Ok(Content::Panels),
         "typical" => Ok(Content::Typical),
-        _ => Err(format!("unknown content {name}: use panels or typical")),
+        _ => match name.strip_prefix("image:") {
+            Some("") => Err("--content image: needs a PNG's path".into()),
+            Some(path) => Ok(Content::Image(path.into())),
+            None => Err(format!(
+                "unknown content {name}: use panels, typical or image:PATH"
+            )),
+        },
     }
 }
 
@@ -368,6 +376,11 @@ mod tests {
         assert_eq!(o.content, Content::Panels);
         let o = parse_str("--content typical").unwrap();
         assert_eq!(o.content, Content::Typical);
+        let o = parse_str("--content image:samples/display-text-swatches.png").unwrap();
+        assert_eq!(
+            o.content,
+            Content::Image("samples/display-text-swatches.png".into())
+        );
         let o = parse_str("--instances 3 --linger-ms 1000 --after-device-ms 5 --stderr-full");
         let o = o.unwrap();
         assert_eq!(
@@ -395,6 +408,7 @@ mod tests {
             "--size 10",
             "--size 0x5",
             "--content full",
+            "--content image:",
             "--frames",
             "--bogus",
             "--script acquire,jump",

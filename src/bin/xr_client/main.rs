@@ -1,7 +1,8 @@
 //! contrastxr-xr-client: the project's own OpenXR test app. It creates a Vulkan session through
-//! XR_KHR_vulkan_enable2, renders known test patterns (content on black) into the swapchain format
-//! and layout asked for, submits N frames, ends the session cleanly, and exits non-zero on any
-//! OpenXR or Vulkan error (and on any Vulkan validation error with --validation).
+//! XR_KHR_vulkan_enable2, renders known test patterns (content on black), or a PNG (`--content
+//! image:PATH`), into the swapchain format and layout asked for, submits N frames, ends the
+//! session cleanly, and exits non-zero on any OpenXR or Vulkan error (and on any Vulkan
+//! validation error with --validation).
 //! Run it inside the sandbox: `scripts/xr-sandbox run -- target/debug/contrastxr-xr-client`.
 
 mod churn;
@@ -20,6 +21,7 @@ mod leftovers;
 mod memory;
 mod pattern;
 mod pattern_swapchain;
+mod picture;
 mod run_report;
 mod scene;
 mod script;
@@ -55,7 +57,10 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    pattern::set_content(options.content);
+    if let Err(message) = pattern::set_content(&options.content) {
+        eprintln!("{message}");
+        return ExitCode::from(2);
+    }
     let mut report = Report {
         frames_requested: options.frames,
         layout: options.layout.name().to_string(),

@@ -4,10 +4,13 @@
 //! content on black: a 4 x 3 grid of panels (primaries, secondaries, white, greys, pastels) and a
 //! grey ramp, covering about 37 % of the view; the rest is exactly black. Each view is shifted
 //! horizontally by a different amount, so a layer that mixes up views changes the result.
-//! `--content typical` draws a sparser frame instead (see `Content`).
+//! `--content typical` draws a sparser frame instead, `--content image:PATH` a PNG (see
+//! `Content`).
 
+use std::path::PathBuf;
 use std::sync::OnceLock;
 
+use crate::picture::Picture;
 use crate::swapchain_format::SwapchainFormat;
 
 /// The panels' colours, sRGB-encoded.
@@ -101,7 +104,7 @@ pub fn image_bytes(
 }
 
 /// What every image shows (`--content`), chosen once at start.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Content {
     /// The panels and ramp above (about 37 % of each view).
     Panels,
@@ -109,13 +112,30 @@ pub enum Content {
     /// disc as `contrastxr bench`'s typical content (src/gpu/offline/bench.rs, `content_pixel`), drawn
     /// here independently of the library, so end-to-end and GPU figures describe alike frames.
     Typical,
+    /// A PNG (`picture`), stretched over each view (nearest texel), shifted as the pattern is:
+    /// UI panels and text as an app would submit them (`samples/display-*.png`, `scripts/demo`).
+    Image(PathBuf),
 }
 
-static CONTENT: OnceLock<Content> = OnceLock::new();
+/// What `texel` draws: the content chosen, its picture decoded.
+enum Drawn {
+    Panels,
+    Typical,
+    Picture(Picture),
+}
 
-/// Sets what `texel` draws; the first call wins (main calls it once, before any image).
-pub fn set_content(content: Content) {
-    let _ = CONTENT.set(content);
+static DRAWN: OnceLock<Drawn> = OnceLock::new();
+
+/// Sets what `texel` draws, decoding the picture of `Content::Image`; the first call wins (main
+/// calls it once, before any image).
+pub fn set_content(content: &Content) -> Result<(), String> {
+    let drawn = match content {
+        Content::Panels => Drawn::Panels,
+        Content::Typical => Drawn::Typical,
+        Content::Image(path) => Drawn::Picture(Picture::load(path)?),
+    };
+    let _ = DRAWN.set(drawn);
+    Ok(())
 }
 
 /// The colour of texel (x, y) of a `width` x `height` image, as sRGB-encoded RGBA.
@@ -123,8 +143,9 @@ pub fn texel(target: Target, x: u32, y: u32, width: u32, height: u32) -> [f32; 4
     // Sample at the texel centre, in fractions of the image.
     let u = (x as f32 + 0.5) / width as f32 - target.shift();
     let v = (y as f32 + 0.5) / height as f32;
-    let colour = match CONTENT.get() {
-        Some(Content::Typical) => typical_colour(u, v, width, height),
+    let colour = match DRAWN.get() {
+        Some(Drawn::Picture(picture)) => return picture.at(u, v).unwrap_or([0.0, 0.0, 0.0, 1.0]),
+        Some(Drawn::Typical) => typical_colour(u, v, width, height),
         _ => panel_colour(u, v).or_else(|| ramp_grey(u, v)),
     };
     let [r, g, b] = colour.unwrap_or([0.0; 3]);
