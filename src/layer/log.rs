@@ -1,4 +1,5 @@
-//! The layer's log: one startup line, then only changes and warnings, each once. Lines go to
+//! The layer's log: start-up lines (on or off, the config file, every setting with its origin)
+//! and a few per session, then only changes and warnings, each once. Lines go to
 //! stderr and to `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state`), each with
 //! an RFC 3339 UTC timestamp and the process id. The file is capped at [`MAX_BYTES`]: past that
 //! it becomes `layer.log.1` (replacing the previous one) and a new file starts, so two files
