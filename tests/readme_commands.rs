@@ -917,3 +917,21 @@ fn every_config_snippet_is_valid() {
         );
     }
 }
+
+/// docs/control.md's fault-point table names every fault point and pause point of the code.
+#[test]
+fn control_md_lists_every_fault_point() {
+    let text = std::fs::read_to_string(Path::new(REPO).join("docs/control.md")).unwrap();
+    let missing: Vec<&str> = contrastxr::fault::POINTS
+        .iter()
+        .map(|(name, _)| *name)
+        .filter(|name| !text.contains(&format!("| `{name}` |")))
+        .chain(
+            contrastxr::fault::PAUSES
+                .iter()
+                .map(|(name, _)| *name)
+                .filter(|name| !text.contains(&format!("`{name}`"))),
+        )
+        .collect();
+    assert!(missing.is_empty(), "docs/control.md lacks {missing:?}");
+}
