@@ -935,3 +935,46 @@ fn control_md_lists_every_fault_point() {
         .collect();
     assert!(missing.is_empty(), "docs/control.md lacks {missing:?}");
 }
+
+/// The options docs/xr-sandbox.md lists for the XR test client are ones its `--help` names.
+#[test]
+fn the_clients_options_in_xr_sandbox_md_exist() {
+    let text = std::fs::read_to_string(Path::new(REPO).join("docs/xr-sandbox.md")).unwrap();
+    let section = text
+        .split_once("## The XR test client")
+        .expect("xr-sandbox.md describes the client")
+        .1;
+    let section = section.split("\n## ").next().unwrap_or(section);
+    let listed: Vec<&str> = section
+        .lines()
+        .filter_map(|l| l.strip_prefix("    ")?.split_whitespace().next())
+        .filter(|w| w.starts_with("--"))
+        .collect();
+    assert!(listed.len() >= 10, "{listed:?}");
+    let o = Command::new(env!("CARGO_BIN_EXE_contrastxr-xr-client"))
+        .arg("--help")
+        .output()
+        .unwrap();
+    let help =
+        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+    let missing: Vec<&&str> = listed.iter().filter(|o| !mentions(&help, o)).collect();
+    assert!(missing.is_empty(), "the client's --help lacks {missing:?}");
+}
+
+/// docs/xr-sandbox.md names every variable prefix scripts/xr-sandbox passes into the root.
+#[test]
+fn xr_sandbox_md_names_every_variable_passed_in() {
+    let script = std::fs::read_to_string(Path::new(REPO).join("scripts/xr-sandbox")).unwrap();
+    let pattern = script
+        .lines()
+        .find_map(|l| l.strip_prefix("readonly PASS_ENV_RE='^("))
+        .and_then(|l| l.strip_suffix(")'"))
+        .expect("scripts/xr-sandbox has PASS_ENV_RE");
+    let text = std::fs::read_to_string(Path::new(REPO).join("docs/xr-sandbox.md")).unwrap();
+    let missing: Vec<&str> = pattern
+        .split('|')
+        .map(|p| p.trim_end_matches('='))
+        .filter(|p| !text.contains(&format!("`{p}`")))
+        .collect();
+    assert!(missing.is_empty(), "docs/xr-sandbox.md lacks {missing:?}");
+}
