@@ -978,3 +978,46 @@ fn xr_sandbox_md_names_every_variable_passed_in() {
         .collect();
     assert!(missing.is_empty(), "docs/xr-sandbox.md lacks {missing:?}");
 }
+
+/// docs/development.md's source layout names every file and folder of `src/` (lib.rs aside)
+/// and every folder of `src/gpu/` and `src/layer/`.
+#[test]
+fn development_md_names_every_source_folder() {
+    let text = std::fs::read_to_string(Path::new(REPO).join("docs/development.md")).unwrap();
+    let layout = text
+        .split_once("## Source layout")
+        .expect("development.md has a source layout")
+        .1;
+    let names = |dir: &str, folders_only: bool| -> Vec<String> {
+        let mut found: Vec<String> = std::fs::read_dir(Path::new(REPO).join(dir))
+            .unwrap()
+            .flatten()
+            .filter(|e| !folders_only || e.path().is_dir())
+            .map(|e| {
+                let name = e.file_name().to_string_lossy().into_owned();
+                match e.path().is_dir() {
+                    true => format!("{name}/"),
+                    false => name,
+                }
+            })
+            .collect();
+        found.sort();
+        found
+    };
+    let mut missing: Vec<String> = names("src", false)
+        .into_iter()
+        .filter(|n| n != "lib.rs" && !layout.contains(&format!("src/{n}")))
+        .collect();
+    for dir in ["gpu", "layer"] {
+        missing.extend(
+            names(&format!("src/{dir}"), true)
+                .into_iter()
+                .filter(|n| !layout.contains(n.as_str()))
+                .map(|n| format!("src/{dir}/{n}")),
+        );
+    }
+    assert!(
+        missing.is_empty(),
+        "docs/development.md's layout lacks {missing:?}"
+    );
+}
