@@ -106,6 +106,7 @@ fn deb_installs_in_the_sandbox_and_hello_xr_runs_through_it() {
         );
     }
     assert_no_cli_parser(&dir.join("release/libcontrastxr.so"));
+    assert_docs_and_tool_placed(&dir, &deb, &listing);
 
     let capture = dir.join("capture");
     let validation = Validation::new("package");
@@ -206,4 +207,45 @@ fn deb_installs_in_the_sandbox_and_hello_xr_runs_through_it() {
     assert!(changed > 1000, "only {changed} pixels changed");
     // The shared sandbox root did not get the package.
     assert!(!sandbox_root_has_contrastxr(&sandbox.root()));
+}
+
+/// The package ships the README, every document of docs/ and both licences, and puts the tool
+/// where the layer it installs looks for it (`installed_files::tool_beside`: `/usr/bin` for a
+/// library in `/usr/lib/contrastxr`), which builds OpenGL apps' programs beside them.
+fn assert_docs_and_tool_placed(dir: &Path, deb: &Path, listing: &str) {
+    let mut wanted: Vec<String> = ["README.md", "CHANGELOG.md", "LICENSE-MIT", "LICENSE-APACHE"]
+        .iter()
+        .map(|f| format!("./usr/share/doc/contrastxr/{f}"))
+        .collect();
+    for entry in std::fs::read_dir(Path::new(REPO).join("docs"))
+        .unwrap()
+        .flatten()
+    {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        wanted.push(format!("./usr/share/doc/contrastxr/docs/{name}"));
+    }
+    let missing: Vec<&String> = wanted
+        .iter()
+        .filter(|p| !listing.contains(p.as_str()))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "not in the package: {missing:?}\n{listing}"
+    );
+    let unpacked = dir.join("unpacked");
+    let _ = std::fs::remove_dir_all(&unpacked);
+    let o = Command::new("dpkg-deb")
+        .arg("-x")
+        .arg(deb)
+        .arg(&unpacked)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let library = unpacked.join("usr/lib/contrastxr/libcontrastxr.so");
+    let tool = contrastxr::layer::installed_files::tool_beside(&library);
+    assert_eq!(
+        tool.and_then(|t| t.canonicalize().ok()),
+        unpacked.join("usr/bin/contrastxr").canonicalize().ok(),
+        "the layer would not find the packaged tool"
+    );
 }
