@@ -627,11 +627,13 @@ impl Table {
     }
 }
 
-/// Whether the OpenGL backend gets a GLSL variant for this (pixel access, FORMAT code): the
-/// buffer accesses (it copies each view into a buffer object), for every format but the BGRA
-/// ones (OpenGL has no BGRA internal format).
+/// Whether the OpenGL backend gets a GLSL variant for this (pixel access, FORMAT code): every
+/// format but the BGRA ones (OpenGL has no BGRA internal format), through a buffer object
+/// (the buffer accesses) and, for the formats with a storage texel format, in place through
+/// an image unit.
 fn gl_variant(access: u32, format: u32) -> bool {
-    access != ACCESS_IN_PLACE && format & !FORMAT_SRGB_BIT != LAYOUT_BGRA8
+    let in_place_ok = access != ACCESS_IN_PLACE || in_place_texel(format).is_some();
+    in_place_ok && format & !FORMAT_SRGB_BIT != LAYOUT_BGRA8
 }
 
 /// The OpenGL backend's generated table (src/gpu/opengl/programs.rs includes it): every GLSL
