@@ -1087,7 +1087,10 @@ fn in_place_and_through_a_buffer_give_the_same_texels() {
                 paths.push(gl.engine().store_through(&view));
                 gl.enhance_views(&[view], &params).unwrap();
                 let n = layers.unwrap_or(1);
-                outputs.push(gl.read_texture_layers(texture, internal, (tw, th), n).unwrap());
+                outputs.push(
+                    gl.read_texture_layers(texture, internal, (tw, th), n)
+                        .unwrap(),
+                );
                 gl.delete_texture(texture);
             }
             let what = format!("{internal:#x}, layers {layers:?}");
@@ -1109,7 +1112,11 @@ fn in_place_and_through_a_buffer_give_the_same_texels() {
             // Outside the region (and on layer 0 of the array) the texels are the app's.
             let layer_bytes = (tw * th) as usize * bpp;
             let base = if layers.is_some() { layer_bytes } else { 0 };
-            assert_eq!(outputs[1][..base], texels[..base], "{what}: layer 0 changed");
+            assert_eq!(
+                outputs[1][..base],
+                texels[..base],
+                "{what}: layer 0 changed"
+            );
             for y in 0..th as usize {
                 for x in 0..tw as usize {
                     let inside = (7..36).contains(&x) && (3..20).contains(&y);

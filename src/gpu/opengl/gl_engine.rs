@@ -7,7 +7,8 @@
 //!   texture through a GL_RGBA8 texture view of it, which GL allows over immutable storage, the
 //!   kind a runtime imports; the programs apply the sRGB curve themselves). No copy at all.
 //! - through a buffer, for the formats with no storage texel format (RGBA16, RGB10_A2), a
-//!   mutable sRGB texture, or `in_place = off`: the region is copied into a buffer object
+//!   mutable sRGB texture, on a CPU driver unless `in_place = on` (there image load/store
+//!   costs more than the copy, a memcpy), or with `in_place = off`: the region is copied into a buffer object
 //!   (glGetTextureSubImage into a pixel pack buffer), the passes run on it as the Vulkan copy
 //!   path runs them, and it is copied back (glTextureSubImage from a pixel unpack buffer). The
 //!   byte layouts are the Vulkan copy path's, so the same shaders read them.
@@ -89,8 +90,11 @@ pub struct GlEngine {
     /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
     /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer).
     framebuffer: u32,
-    /// Whether views may be enhanced in place (the `in_place` setting, not `off`).
+    /// Whether views may be enhanced in place: by default on a GPU, not on a CPU driver
+    /// (`Caps::software`); the `in_place` setting's `on` and `off` decide otherwise.
     in_place: bool,
+    /// Which of the last enhanced views were stored in place (the others through a buffer).
+    last_in_place: Vec<bool>,
 }
 
 /// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
@@ -148,19 +152,27 @@ impl GlEngine {
         let caps = Caps::check(&gl)?;
         Ok(GlEngine {
             programs: Programs::new(&caps),
+            in_place: !caps.software,
             gl,
             caps,
             background: None,
             texel_buffers: TexelBuffers::default(),
             views: Vec::new(),
             framebuffer: 0,
-            in_place: true,
+            last_in_place: Vec::new(),
         })
     }
 
-    /// Whether views may be enhanced in place (true, the default) or always through a buffer.
+    /// Whether views may be enhanced in place, or always go through a buffer (the default:
+    /// in place on a GPU, through a buffer on a CPU driver).
     pub fn set_in_place(&mut self, allowed: bool) {
         self.in_place = allowed;
+    }
+
+    /// Which views of the last `enhance` call were stored in place (the others went through
+    /// a buffer), in their order.
+    pub fn last_in_place(&self) -> &[bool] {
+        &self.last_in_place
     }
 
     /// How the programs can store into the view's (checked) texture in place, or None when the
@@ -411,9 +423,12 @@ impl GlEngine {
         while self.views.len() < views.len() {
             self.views.push(ViewBuffers::default());
         }
+        self.last_in_place = views
+            .iter()
+            .map(|v| self.store_through(v).is_some())
+            .collect();
         for (k, v) in views.iter().enumerate() {
-            let in_place = self.store_through(v).is_some();
-            self.ensure_buffers(k, v, in_place)?;
+            self.ensure_buffers(k, v, self.last_in_place[k])?;
         }
         if self.framebuffer == 0 {
             // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`. A 1x1
@@ -646,16 +661,7 @@ impl GlEngine {
                 // format of its size class (GL_SRGB8_ALPHA8 -> GL_RGBA8).
                 unsafe {
                     (g.gen_textures)(1, &mut view);
-                    (g.texture_view)(
-                        view,
-                        gl::TEXTURE_2D,
-                        v.texture,
-                        view_format,
-                        0,
-                        1,
-                        layer,
-                        1,
-                    );
+                    (g.texture_view)(view, gl::TEXTURE_2D, v.texture, view_format, 0, 1, layer, 1);
                     (g.bind_image_texture)(
                         BINDING_APP_IMAGE,
                         view,
