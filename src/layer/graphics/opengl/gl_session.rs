@@ -442,6 +442,7 @@ impl SessionGraphics for GlSession {
                 .iter()
                 .zip(before.into_iter().zip(after))
                 .map(|(v, (display, output))| CapturedImage {
+                    path: "copy",
                     view: v.clone(),
                     display,
                     output,
