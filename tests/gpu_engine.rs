@@ -822,6 +822,43 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     assert!((ms("ratio") - ratio).abs() < 1e-9 * ratio);
     // Width 64 x 4 bytes: rows 16-byte aligned, so the stricter floor is measured too.
     assert!((ms("ratio_wide") - ms("enhance_ms") / ms("copy_wide_ms")).abs() < 1e-9 * ratio);
+    // The default (both) leaves the image-copy path out; all times it beside the others.
+    assert!(r["frame_image_copy_ms"].is_null(), "{r}");
+    let o = cli(
+        &[
+            "bench",
+            "--sizes",
+            "64x40",
+            "--views",
+            "1",
+            "--runs",
+            "3",
+            "--content",
+            "full",
+            "--path",
+            "all",
+            "--json",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let r = &v["results"][0];
+    let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
+    for k in [
+        "frame_ms",
+        "frame_in_place_ms",
+        "frame_image_copy_ms",
+        "image_copy_copies_ms",
+    ] {
+        assert!(ms(k) > 0.0, "{k} {}", ms(k));
+    }
+    let over_frame = ms("frame_image_copy_ms") / ms("frame_ms");
+    assert!((ms("image_copy_frame_ratio") - over_frame).abs() < 1e-9 * over_frame);
+    let over_in_place = ms("frame_image_copy_ms") / ms("frame_in_place_ms");
+    assert!((ms("image_copy_in_place_ratio") - over_in_place).abs() < 1e-9 * over_in_place);
+    let bad = cli(&["bench", "--path", "buffer"], &[]);
+    assert_eq!(bad.status.code(), Some(2));
     let bad = cli(&["bench", "--content", "sparse"], &[]);
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("'sparse' is not typical or full"));
@@ -900,7 +937,7 @@ fn in_place_matches_the_copy_path_bit_for_bit() {
 fn mapped_buffers_give_exactly_their_bytes() {
     use contrastxr::gpu::device::GpuBuffer;
     let e = engine();
-    for size in [16u64, 13 * 5 * 4, 13 * 5 * 4 + 2, 1000] {
+    for size in [13u64, 16, 13 * 5 * 4, 13 * 5 * 4 + 2, 1000] {
         let usage = ash::vk::BufferUsageFlags::TRANSFER_DST;
         let location = gpu_allocator::MemoryLocation::GpuToCpu;
         let mut b = GpuBuffer::new(&e.gpu, size, usage, location, "test").unwrap();
