@@ -915,7 +915,6 @@ fn in_place_matches_the_copy_path_bit_for_bit() {
             assert_eq!(in_place, copy, "{vk_format:?} {region:?}");
             // The image-copy path, on the whole image at layer 0.
             let app = AppImage {
-                format: vk_format,
                 size: region,
                 layers: 1,
                 offset: (0, 0),
@@ -923,7 +922,7 @@ fn in_place_matches_the_copy_path_bit_for_bit() {
                 layer: 0,
             };
             let image_copy = e
-                .enhance_raw_image_copy(&raw, app, &camera, &params)
+                .enhance_raw_image_copy(&raw, (vk_format, app), &camera, &params)
                 .unwrap_or_else(|err| panic!("{vk_format:?}: {err}"));
             assert_eq!(image_copy, copy, "{vk_format:?} {region:?}: image copy");
         }
@@ -1020,7 +1019,6 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
                 .unwrap();
             assert_ne!(copy, region, "{vk_format:?} {extent:?}: nothing changed");
             let app = AppImage {
-                format: vk_format,
                 size,
                 layers,
                 offset,
@@ -1028,7 +1026,7 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
                 layer,
             };
             let out = e
-                .enhance_raw_image_copy(&words, app, &camera, &params)
+                .enhance_raw_image_copy(&words, (vk_format, app), &camera, &params)
                 .unwrap_or_else(|err| panic!("{vk_format:?}: {err}"));
             assert_eq!(out.len(), words.len(), "{vk_format:?}");
             let mut expected = words.clone();
@@ -1069,8 +1067,8 @@ fn image_copy_conforms_to_the_cpu_reference() {
         ..image.clone()
     };
     let words = raw_words(PixelFormat::SRGB8, &image);
+    let vk_format = ash::vk::Format::R8G8B8A8_SRGB;
     let app = AppImage {
-        format: ash::vk::Format::R8G8B8A8_SRGB,
         size,
         layers: 2,
         offset: (offset.0 as i32, offset.1 as i32),
@@ -1083,7 +1081,7 @@ fn image_copy_conforms_to_the_cpu_reference() {
             ..Params::default()
         };
         let out = e
-            .enhance_raw_image_copy(&words, app, &camera, &params)
+            .enhance_raw_image_copy(&words, (vk_format, app), &camera, &params)
             .unwrap();
         let mapping = params.camera_mapping();
         let (w, h) = extent;

@@ -20,7 +20,6 @@ use gpu_allocator::MemoryLocation;
 /// An app-like image and where the view's region lies in it.
 #[derive(Clone, Copy, Debug)]
 pub struct AppImage {
-    pub format: vk::Format,
     pub size: (u32, u32),
     pub layers: u32,
     /// The region: its offset, size and array layer.
@@ -52,23 +51,22 @@ fn all_layers(
 }
 
 impl OfflineEngine {
-    /// The image-copy path on `app`: `image_words` is the whole image's raw words (layer after
+    /// The image-copy path on `app`, an image of `vk_format`: `image_words` is the whole image's raw words (layer after
     /// layer, rows tightly packed); the region is enhanced through an image of the engine's
     /// own and the whole image is read back, every layer.
     pub fn enhance_raw_image_copy(
         &mut self,
         image_words: &[u32],
-        app: AppImage,
+        (vk_format, app): (vk::Format, AppImage),
         camera: &RgbaImage,
         params: &Params,
     ) -> Result<Vec<u32>, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
-        let format = PixelFormat::from_vk(app.format)
-            .ok_or_else(|| GpuError::Unsupported(format!("{:?}", app.format)))?;
+        let format = PixelFormat::from_vk(vk_format)
+            .ok_or_else(|| GpuError::Unsupported(format!("{vk_format:?}")))?;
         if copy_path(&self.gpu, format) != ViewPath::ImageCopy {
             return Err(GpuError::Unsupported(format!(
-                "{:?} is not enhanced through an image copy on this device",
-                app.format
+                "{vk_format:?} is not enhanced through an image copy on this device"
             )));
         }
         let (w, h) = app.size;
@@ -82,7 +80,7 @@ impl OfflineEngine {
         let usage = vk::ImageUsageFlags::TRANSFER_SRC
             | vk::ImageUsageFlags::TRANSFER_DST
             | vk::ImageUsageFlags::COLOR_ATTACHMENT;
-        let mut image = DeviceImage::layered(&self.gpu, app.size, app.layers, app.format, usage)?;
+        let mut image = DeviceImage::layered(&self.gpu, app.size, app.layers, vk_format, usage)?;
         let own = StorageImage::for_copies(&self.gpu, app.extent, own_format);
         let mut own = match own {
             Ok(o) => o,
