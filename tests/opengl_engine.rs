@@ -1044,8 +1044,8 @@ fn a_view_its_texture_cannot_hold_is_refused_without_a_gl_error() {
 /// In place (image load/store on the app's texture, through a GL_RGBA8 view for sRGB) and
 /// through a buffer object give the same texels, bit for bit, for every format, a region of a
 /// 2D texture and a layer of an array, under a projective mapping; texels outside the region
-/// and the other layer are untouched. The formats with a storage texel format take the
-/// in-place path by default; the others go through a buffer either way.
+/// and the other layer are untouched. Every format has an in-place path (GL_RGBA16 and
+/// GL_RGB10_A2 through an image unit format of their size).
 #[test]
 fn in_place_and_through_a_buffer_give_the_same_texels() {
     use contrastxr::gpu::opengl::StoreThrough;
@@ -1096,10 +1096,12 @@ fn in_place_and_through_a_buffer_give_the_same_texels() {
             let what = format!("{internal:#x}, layers {layers:?}");
             assert_eq!(paths[0], None, "{what}: in_place off stores in place");
             let expected = match internal {
-                SRGB8_ALPHA8 => Some(StoreThrough::View(RGBA8)),
-                RGBA8 | RGBA16F => Some(StoreThrough::Texture),
-                _ => None,
+                SRGB8_ALPHA8 => StoreThrough::View(RGBA8),
+                RGBA16 => StoreThrough::Texture(0x8D76), // GL_RGBA16UI
+                RGB10_A2 => StoreThrough::Texture(0x8236), // GL_R32UI
+                other => StoreThrough::Texture(other),
             };
+            let expected = Some(expected);
             assert_eq!(paths[1], expected, "{what}: the in-place path");
             assert_ne!(outputs[0], texels, "{what}: nothing changed");
             let bpp = format.pixel.bytes_per_pixel() as usize;

@@ -222,6 +222,9 @@ pub const SRGB8_ALPHA8: Enum = 0x8C43;
 pub const RGBA16: Enum = 0x805B;
 pub const RGBA16F: Enum = 0x881A;
 pub const RGB10_A2: Enum = 0x8059;
+// Image unit formats of the same sizes (GL_RGBA16 and GL_RGB10_A2 are stored through these).
+pub const RGBA16UI: Enum = 0x8D76;
+pub const R32UI: Enum = 0x8236;
 
 // Barriers.
 pub const SHADER_STORAGE_BARRIER_BIT: u32 = 0x2000;

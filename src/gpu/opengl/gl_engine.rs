@@ -3,11 +3,13 @@
 //! method (classify, finish_tiles, enhance over the listed tiles through an indirect dispatch)
 //! run on the view's region in one of two ways:
 //! - in place, as the Vulkan in-place path runs them: the app's texture is bound to an image
-//!   unit and the programs load and store its texels (RGBA8 and RGBA16F directly; an sRGB
-//!   texture through a GL_RGBA8 texture view of it, which GL allows over immutable storage, the
-//!   kind a runtime imports; the programs apply the sRGB curve themselves). No copy at all.
-//! - through a buffer, for the formats with no storage texel format (RGBA16, RGB10_A2), a
-//!   mutable sRGB texture, on a CPU driver unless `in_place = on` (there image load/store
+//!   unit and the programs load and store its texels, in the storage texel format of the same
+//!   size the shaders take (GL_RGBA8, GL_RGBA16F, GL_RGBA16 as GL_RGBA16UI, GL_RGB10_A2 as
+//!   GL_R32UI: image units take any format of the texture's size); an sRGB texture, which no
+//!   image unit takes, through a GL_RGBA8 texture view of it, which GL allows over immutable
+//!   storage, the kind a runtime imports (the programs apply the sRGB curve themselves). No
+//!   copy at all.
+//! - through a buffer, for a mutable sRGB texture, on a CPU driver unless `in_place = on` (there image load/store
 //!   costs more than the copy, a memcpy), or with `in_place = off`: the region is copied into a buffer object
 //!   (glGetTextureSubImage into a pixel pack buffer), the passes run on it as the Vulkan copy
 //!   path runs them, and it is copied back (glTextureSubImage from a pixel unpack buffer). The
@@ -63,10 +65,22 @@ struct Background {
 /// How the programs store into a view's texture in place.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StoreThrough {
-    /// The texture itself, bound to the image unit in its own format.
-    Texture,
+    /// The texture itself, bound to the image unit in this format of its size.
+    Texture(gl::Enum),
     /// A texture view of it in this format (an sRGB texture as GL_RGBA8).
     View(gl::Enum),
+}
+
+/// The image unit format the in-place programs take a texture of `internal` as: the storage
+/// texel format of their variant (interface.rs, `in_place_texel`), of the texture's size.
+fn image_format(internal: u32) -> Option<gl::Enum> {
+    match internal {
+        gl::RGBA8 | gl::SRGB8_ALPHA8 => Some(gl::RGBA8),
+        gl::RGBA16F => Some(gl::RGBA16F),
+        gl::RGBA16 => Some(gl::RGBA16UI),
+        gl::RGB10_A2 => Some(gl::R32UI),
+        _ => None,
+    }
 }
 
 /// A view slot's buffers, kept across frames and remade only when a view needs more.
@@ -182,8 +196,9 @@ impl GlEngine {
         if !self.in_place || in_place_texel(format.pixel.shader_code()).is_none() {
             return None;
         }
+        let unit_format = image_format(v.internal_format)?;
         if !format.pixel.srgb {
-            return Some(StoreThrough::Texture);
+            return Some(StoreThrough::Texture(unit_format));
         }
         let mut immutable = 0;
         // SAFETY: a checked texture of this context; a valid pname (4.2+).
@@ -194,7 +209,7 @@ impl GlEngine {
                 &mut immutable,
             )
         };
-        (immutable != 0).then_some(StoreThrough::View(gl::RGBA8))
+        (immutable != 0).then_some(StoreThrough::View(unit_format))
     }
 
     /// Whether a background frame was set.
@@ -560,7 +575,7 @@ impl GlEngine {
         // back by the caller's SavedState.
         unsafe {
             let view_texture = match through {
-                Some(t) => self.bind_app_image(v, format, t),
+                Some(t) => self.bind_app_image(v, t),
                 None => {
                     (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, buffers.pixels);
                     read_region(g, v, format, v.rect, (std::ptr::null_mut(), bytes));
@@ -631,16 +646,16 @@ impl GlEngine {
     ///
     /// # Safety
     /// The engine's context is current; `v` is checked and `through` is `store_through(v)`.
-    unsafe fn bind_app_image(&self, v: &GlView, format: GlFormat, through: StoreThrough) -> u32 {
+    unsafe fn bind_app_image(&self, v: &GlView, through: StoreThrough) -> u32 {
         let g = &self.gl;
         let layer = match v.target {
             GlTarget::Texture2D => 0,
             GlTarget::Texture2DArray { layer } => layer,
         };
         match through {
-            StoreThrough::Texture => {
-                // SAFETY: a checked texture whose format has a storage texel format (the
-                // image unit's format is the texture's own); one layer, not layered.
+            StoreThrough::Texture(unit_format) => {
+                // SAFETY: a checked texture and an image unit format of its size (GL's
+                // compatibility by size); one layer, not layered.
                 unsafe {
                     (g.bind_image_texture)(
                         BINDING_APP_IMAGE,
@@ -649,7 +664,7 @@ impl GlEngine {
                         0,
                         layer as i32,
                         gl::READ_WRITE,
-                        format.internal,
+                        unit_format,
                     )
                 };
                 0

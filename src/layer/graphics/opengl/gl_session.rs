@@ -458,10 +458,11 @@ impl SessionGraphics for GlSession {
                 .zip(before.into_iter().zip(after))
                 .enumerate()
                 .map(|(k, (v, (display, output)))| CapturedImage {
-                    view: ViewImage {
-                        in_place: stored.get(k).copied().unwrap_or(false),
-                        ..v.clone()
+                    path: match stored.get(k) {
+                        Some(true) => "in-place",
+                        _ => "copy",
                     },
+                    view: v.clone(),
                     display,
                     output,
                 })
@@ -518,7 +519,7 @@ impl SessionGraphics for GlSession {
         lines.push((
             "first-frame-path",
             format!(
-                "views enhanced in the app's OpenGL context: {in_place} of {} in place through an image unit (an sRGB texture through a GL_RGBA8 view), the others through a buffer copy (a format with no storage format, a mutable sRGB texture, a CPU driver unless in_place = on, or in_place = off)",
+                "views enhanced in the app's OpenGL context: {in_place} of {} in place through an image unit (an sRGB texture through a GL_RGBA8 view), the others through a buffer copy (a mutable sRGB texture, a CPU driver unless in_place = on, or in_place = off)",
                 stored.len()
             ),
         ));
