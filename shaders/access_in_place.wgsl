@@ -1,7 +1,9 @@
 // Pixel access straight in the app's image, through a storage view of its layer (`app_image`,
 // declared by build.rs in the variant's texel format): word w of the region's tightly packed
 // layout (the copy path's buffer) is read from and written to the pixel it stands for, so the
-// per-pixel code is the same on both paths. The texel conversions are exact both ways.
+// per-pixel code is the same on both paths. The texel conversions (`texel_words`,
+// `words_texel`, written in front of this file by build.rs for the variant's texel format) are
+// exact both ways.
 
 // The image position of pixel p of the region, and whether p lies in the region.
 fn pixel_position(p: u32) -> vec2<u32> {
@@ -15,11 +17,7 @@ fn in_region(p: u32) -> bool {
 
 // The words of the pixel at image position `at` (the second only for 2-word formats).
 fn load_at(at: vec2<u32>) -> vec2<u32> {
-    let t = textureLoad(app_image, at);
-    if (WORDS == 1u) {
-        return vec2<u32>(pack4x8unorm(t), 0u);
-    }
-    return vec2<u32>(pack2x16float(t.xy), pack2x16float(t.zw));
+    return texel_words(textureLoad(app_image, at));
 }
 
 // Pixel p's words; 0 outside the region.
@@ -34,11 +32,7 @@ fn store_pixel(p: u32, w: vec2<u32>) {
     if (!in_region(p)) {
         return;
     }
-    if (WORDS == 1u) {
-        textureStore(app_image, pixel_position(p), unpack4x8unorm(w.x));
-        return;
-    }
-    textureStore(app_image, pixel_position(p), vec4<f32>(unpack2x16float(w.x), unpack2x16float(w.y)));
+    textureStore(app_image, pixel_position(p), words_texel(w));
 }
 
 // Words w..w+3 of the region (w a multiple of WORDS). Pixels of one row, the usual case, take

@@ -91,6 +91,8 @@ fn check_case_with(tag: &str, case: Case, variant: Variant) {
     );
     let expected = match variant {
         ("on", Some("R8G8B8A8_UNORM")) => "in-place",
+        // Storage refused (sRGB on Monado), or a format the layer does not view in place.
+        ("on", _) => "image-copy",
         _ => "copy",
     };
     for path in capture_paths(&dir) {

@@ -4,6 +4,7 @@
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::device::pixel_codec::half_from_f32;
+use contrastxr::gpu::offline::AppImage;
 use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
 use contrastxr::image::RgbaImage;
 use std::process::Command;
@@ -821,6 +822,43 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     assert!((ms("ratio") - ratio).abs() < 1e-9 * ratio);
     // Width 64 x 4 bytes: rows 16-byte aligned, so the stricter floor is measured too.
     assert!((ms("ratio_wide") - ms("enhance_ms") / ms("copy_wide_ms")).abs() < 1e-9 * ratio);
+    // The default (both) leaves the image-copy path out; all times it beside the others.
+    assert!(r["frame_image_copy_ms"].is_null(), "{r}");
+    let o = cli(
+        &[
+            "bench",
+            "--sizes",
+            "64x40",
+            "--views",
+            "1",
+            "--runs",
+            "3",
+            "--content",
+            "full",
+            "--path",
+            "all",
+            "--json",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let r = &v["results"][0];
+    let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
+    for k in [
+        "frame_ms",
+        "frame_in_place_ms",
+        "frame_image_copy_ms",
+        "image_copy_copies_ms",
+    ] {
+        assert!(ms(k) > 0.0, "{k} {}", ms(k));
+    }
+    let over_frame = ms("frame_image_copy_ms") / ms("frame_ms");
+    assert!((ms("image_copy_frame_ratio") - over_frame).abs() < 1e-9 * over_frame);
+    let over_in_place = ms("frame_image_copy_ms") / ms("frame_in_place_ms");
+    assert!((ms("image_copy_in_place_ratio") - over_in_place).abs() < 1e-9 * over_in_place);
+    let bad = cli(&["bench", "--path", "buffer"], &[]);
+    assert_eq!(bad.status.code(), Some(2));
     let bad = cli(&["bench", "--content", "sparse"], &[]);
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("'sparse' is not typical or full"));
@@ -871,8 +909,192 @@ fn in_place_matches_the_copy_path_bit_for_bit() {
                 .enhance_raw_in_place(&raw, (region, vk_format), &camera, &params)
                 .unwrap_or_else(|err| panic!("{vk_format:?}: {err}"));
             assert_ne!(copy, raw, "{vk_format:?} {region:?}: nothing changed");
+            // Exactly the region's words (the read-back once returned the allocation's
+            // padding too: 68 pixels for 13x5 on a GPU that rounds allocations up).
+            assert_eq!(in_place.len(), raw.len(), "{vk_format:?} {region:?}");
             assert_eq!(in_place, copy, "{vk_format:?} {region:?}");
+            // The image-copy path, on the whole image at layer 0.
+            let app = AppImage {
+                size: region,
+                layers: 1,
+                offset: (0, 0),
+                extent: region,
+                layer: 0,
+            };
+            let image_copy = e
+                .enhance_raw_image_copy(&raw, (vk_format, app), &camera, &params)
+                .unwrap_or_else(|err| panic!("{vk_format:?}: {err}"));
+            assert_eq!(image_copy, copy, "{vk_format:?} {region:?}: image copy");
         }
+    }
+    assert_clean(&e);
+}
+
+/// A host-visible buffer's mapped bytes are exactly those it was made for, whatever the
+/// driver's allocation size (what the read-backs take as the result).
+#[test]
+fn mapped_buffers_give_exactly_their_bytes() {
+    use contrastxr::gpu::device::GpuBuffer;
+    let e = engine();
+    for size in [13u64, 16, 13 * 5 * 4, 13 * 5 * 4 + 2, 1000] {
+        let usage = ash::vk::BufferUsageFlags::TRANSFER_DST;
+        let location = gpu_allocator::MemoryLocation::GpuToCpu;
+        let mut b = GpuBuffer::new(&e.gpu, size, usage, location, "test").unwrap();
+        assert_eq!(b.mapped().map(<[u8]>::len), Some(size as usize), "{size}");
+        b.destroy(&e.gpu);
+    }
+    assert_clean(&e);
+}
+
+/// Every Vulkan format the layer enhances, with the engine's reading of it.
+fn every_format() -> Vec<(ash::vk::Format, PixelFormat)> {
+    use ash::vk::Format as F;
+    [
+        F::R8G8B8A8_SRGB,
+        F::R8G8B8A8_UNORM,
+        F::B8G8R8A8_SRGB,
+        F::B8G8R8A8_UNORM,
+        F::R16G16B16A16_UNORM,
+        F::R16G16B16A16_SFLOAT,
+        F::A2B10G10R10_UNORM_PACK32,
+    ]
+    .into_iter()
+    .map(|f| (f, PixelFormat::from_vk(f).unwrap()))
+    .collect()
+}
+
+/// An image's raw words in `format`, from its 8-bit channels as the format's codes (the
+/// colour's meaning differs between formats; the paths are compared on the same words).
+fn raw_words(format: PixelFormat, image: &RgbaImage) -> Vec<u32> {
+    let w16 = |a: u16, b: u16| u32::from(a) | u32::from(b) << 16;
+    image
+        .pixels
+        .iter()
+        .flat_map(|&[r, g, b, a]| match format.layout {
+            PixelLayout::Rgba8 => vec![u32::from_le_bytes([r, g, b, a])],
+            PixelLayout::Bgra8 => vec![u32::from_le_bytes([b, g, r, a])],
+            PixelLayout::Rgba16Unorm => {
+                let c = |v: u8| u16::from(v) * 257;
+                vec![w16(c(r), c(g)), w16(c(b), c(a))]
+            }
+            PixelLayout::Rgba16Float => {
+                let h = |v: u8| half_from_f32(f32::from(v) / 255.0);
+                vec![w16(h(r), h(g)), w16(h(b), h(a))]
+            }
+            PixelLayout::A2b10g10r10 => {
+                let c = |v: u8| u32::from(v) << 2 | u32::from(v) >> 6;
+                vec![c(r) | c(g) << 10 | c(b) << 20 | (u32::from(a) >> 6) << 30]
+            }
+        })
+        .collect()
+}
+
+/// The image-copy path (the region copied out of an image without storage usage into an
+/// image of the engine's own, enhanced there by the in-place shaders, copied back) gives the
+/// words of the path through a buffer in every format the layer enhances, on a sub-rectangle
+/// of either layer of a 2-layer image, at widths with and without 16-byte aligned rows; every
+/// word outside the region is left as it was.
+#[test]
+fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
+    let mut e = engine();
+    let camera = noise(24, 16, 7);
+    let params = Params::default();
+    for (vk_format, format) in every_format() {
+        let wpp = (format.bytes_per_pixel() / 4) as usize;
+        for (extent, offset, layer) in [((16, 8), (5, 3), 1), ((13, 5), (0, 6), 0)] {
+            let size = (23, 13);
+            let layers = 2;
+            let image = noise(size.0, size.1 * layers, extent.0 * 7 + layer);
+            let words = raw_words(format, &image);
+            // The region's words, rows tightly packed.
+            let at = |x: u32, y: u32, l: u32| ((l * size.1 + y) * size.0 + x) as usize * wpp;
+            let region: Vec<u32> = (0..extent.1)
+                .flat_map(|y| {
+                    let start = at(offset.0 as u32, offset.1 as u32 + y, layer);
+                    words[start..start + extent.0 as usize * wpp].to_vec()
+                })
+                .collect();
+            let copy = e
+                .enhance_raw(&region, extent, format, &camera, &params)
+                .unwrap();
+            assert_ne!(copy, region, "{vk_format:?} {extent:?}: nothing changed");
+            let app = AppImage {
+                size,
+                layers,
+                offset,
+                extent,
+                layer,
+            };
+            let out = e
+                .enhance_raw_image_copy(&words, (vk_format, app), &camera, &params)
+                .unwrap_or_else(|err| panic!("{vk_format:?}: {err}"));
+            assert_eq!(out.len(), words.len(), "{vk_format:?}");
+            let mut expected = words.clone();
+            for y in 0..extent.1 {
+                let start = at(offset.0 as u32, offset.1 as u32 + y, layer);
+                let row = extent.0 as usize * wpp;
+                let from = y as usize * row;
+                expected[start..start + row].copy_from_slice(&copy[from..from + row]);
+            }
+            let differ = differing(&out, &expected);
+            assert_eq!(
+                differ, 0,
+                "{vk_format:?} {extent:?} at {offset:?} layer {layer}"
+            );
+        }
+    }
+    assert_clean(&e);
+}
+
+/// The image-copy path holds the CPU reference's contract (±1 code value, docs/algorithm.md)
+/// for every method, on a region of the second layer of an 8-bit sRGB image.
+#[test]
+fn image_copy_conforms_to_the_cpu_reference() {
+    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
+    let mut e = engine();
+    let camera = noise(131, 83, 5);
+    let (size, extent, offset) = ((70, 40), (61, 29), (6, 9));
+    let image = noise(size.0, size.1 * 2, 77);
+    let display = RgbaImage {
+        width: extent.0,
+        height: extent.1,
+        pixels: (0..extent.1)
+            .flat_map(|y| {
+                let start = ((size.1 + offset.1 + y) * size.0 + offset.0) as usize;
+                image.pixels[start..start + extent.0 as usize].to_vec()
+            })
+            .collect(),
+        ..image.clone()
+    };
+    let words = raw_words(PixelFormat::SRGB8, &image);
+    let vk_format = ash::vk::Format::R8G8B8A8_SRGB;
+    let app = AppImage {
+        size,
+        layers: 2,
+        offset: (offset.0 as i32, offset.1 as i32),
+        extent,
+        layer: 1,
+    };
+    for method in Method::ALL {
+        let params = Params {
+            method,
+            ..Params::default()
+        };
+        let out = e
+            .enhance_raw_image_copy(&words, (vk_format, app), &camera, &params)
+            .unwrap();
+        let mapping = params.camera_mapping();
+        let (w, h) = extent;
+        let bg =
+            contrastxr::background_preparation::prepare_mapped(&camera, w, h, &mapping, &params);
+        let mut bad = 0;
+        for (i, d) in display.pixels.iter().enumerate() {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            let word = out[((size.1 + offset.1 + y) * size.0 + offset.0 + x) as usize];
+            let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &params);
+            bad += usize::from(!conformant(&trace, word.to_le_bytes()));
+        }
+        assert_eq!(bad, 0, "{method:?}: {bad} of {} pixels differ", w * h);
     }
     assert_clean(&e);
 }

@@ -70,11 +70,13 @@ fn as_refs(v: &[(String, String)]) -> Vec<(&str, &str)> {
 
 /// How the layer enhances the views of a swapchain format on Monado with `in_place` (None:
 /// the default, auto): in place where the runtime grants storage usage (its UNORM and float
-/// formats), else through a copy (Monado refuses storage usage on sRGB formats, which have no
-/// storage support on the device); auto keeps lavapipe, a CPU driver, on the copy path.
+/// formats), else through an image of the layer's own (Monado refuses storage usage on sRGB
+/// formats, which have no storage support on the device; the layer views only RGBA8 and RGBA16
+/// float images in place); `off`, and auto on lavapipe (a CPU driver), through a buffer.
 fn expected_path(format: &str, in_place: Option<&str>) -> &'static str {
     match (in_place, format) {
         (Some("on"), "R8G8B8A8_UNORM" | "R16G16B16A16_SFLOAT") => "in-place",
+        (Some("on"), _) => "image-copy",
         _ => "copy",
     }
 }

@@ -108,33 +108,42 @@ const FORMATS: [(&str, &str); 4] = [
 ];
 
 /// Every colour format Monado offers OpenGL apps, through the client: both views of the
-/// captured frames within the tolerance of the CPU reference, the method visibly at work.
+/// captured frames within the tolerance of the CPU reference, the method visibly at work, with
+/// `in_place` at its default (on llvmpipe: through a buffer) and `on` (the formats with a
+/// format stored in place through an image unit, an sRGB texture through a GL_RGBA8 view of the
+/// runtime's immutable texture), as the capture JSON's `path` says.
 #[test]
 fn the_client_with_opengl_is_enhanced_in_every_format() {
-    for (format, gl_name) in FORMATS {
-        let dir = capture_dir(&format!("opengl-{gl_name}"));
-        let env = layer_env(&dir, "enhance");
-        let Some(run) = client_opengl(format, &as_refs(&env), &[]) else {
-            return;
-        };
-        run.assert_success();
-        let what = format!("{gl_name}: {}", run.describe());
-        assert_eq!(run.client_report()["format"], gl_name, "{what}");
-        let views = captures(&dir);
-        assert_eq!(views.len(), 4, "{what}");
-        for c in &views {
-            assert_eq!(c.json["graphics"], "opengl", "{what}");
-            assert_eq!(c.json["format"], gl_name, "{what}");
-            let changed = check_view(c);
-            assert!(
-                changed > 1000,
-                "{gl_name}: the method changed {changed} pixels"
+    for in_place in ["auto", "on"] {
+        for (format, gl_name) in FORMATS {
+            let dir = capture_dir(&format!("opengl-{gl_name}-{in_place}"));
+            let mut env = layer_env(&dir, "enhance");
+            env.push(("CONTRASTXR_IN_PLACE".into(), in_place.into()));
+            let Some(run) = client_opengl(format, &as_refs(&env), &[]) else {
+                return;
+            };
+            run.assert_success();
+            let what = format!("{gl_name}, in_place {in_place}: {}", run.describe());
+            assert_eq!(run.client_report()["format"], gl_name, "{what}");
+            let views = captures(&dir);
+            assert_eq!(views.len(), 4, "{what}");
+            for c in &views {
+                assert_eq!(c.json["graphics"], "opengl", "{what}");
+                assert_eq!(c.json["format"], gl_name, "{what}");
+                if in_place == "on" {
+                    assert_eq!(c.json["path"], "in-place", "{what}");
+                }
+                let changed = check_view(c);
+                assert!(
+                    changed > 1000,
+                    "{gl_name}, in_place {in_place}: the method changed {changed} pixels"
+                );
+            }
+            assert_ne!(
+                views[0].json["image_array_index"], views[1].json["image_array_index"],
+                "{what}"
             );
         }
-        assert_ne!(
-            views[0].json["image_array_index"], views[1].json["image_array_index"],
-            "{what}"
-        );
     }
 }
 

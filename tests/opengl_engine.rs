@@ -551,10 +551,14 @@ fn read_state(a: &AppGl) -> AppState {
                 (size, slot, sz),
             ]);
         }
-        let mut image = 0;
-        // SAFETY: IMAGE_BINDING_NAME of an image unit below the minimum of 8.
-        unsafe { (a.get_integeri_v)(0x8F3A, slot, &mut image) };
-        indexed.push((0x8F3A, slot, i64::from(image)));
+        // IMAGE_BINDING_NAME, _LEVEL, _LAYERED, _LAYER, _ACCESS, _FORMAT: the in-place
+        // programs store through unit 6.
+        for q in [0x8F3A, 0x8F3B, 0x8F3C, 0x8F3D, 0x8F3E, 0x906E] {
+            let mut v = 0;
+            // SAFETY: an indexed query of an image unit below the minimum of 8.
+            unsafe { (a.get_integeri_v)(q, slot, &mut v) };
+            indexed.push((q, slot, i64::from(v)));
+        }
     }
     AppState {
         ints,
@@ -616,6 +620,8 @@ fn the_apps_gl_state_and_pending_error_survive_the_call() {
         (a.active_texture)(0x84C0 + 3);
         (a.bind_texture)(0x0DE1, textures[1]);
         (a.bind_image_texture)(2, textures[1], 0, 0, 0, 0x88B8, 0x8058);
+        // The unit the in-place programs use: write-only, as R32UI.
+        (a.bind_image_texture)(6, textures[0], 0, 0, 0, 0x88B9, 0x8236);
         let program = (a.create_shader_programv)(0x91B9, 1, &source.as_ptr());
         (a.use_program)(program);
         let mut pipeline = 0;
@@ -1033,4 +1039,99 @@ fn a_view_its_texture_cannot_hold_is_refused_without_a_gl_error() {
     }
     let out = gl.read_texture(texture, SRGB8_ALPHA8, (16, 8)).unwrap();
     assert_eq!(out, bytes);
+}
+
+/// In place (image load/store on the app's texture, through a GL_RGBA8 view for sRGB) and
+/// through a buffer object give the same texels, bit for bit, for every format, a region of a
+/// 2D texture and a layer of an array, under a projective mapping; texels outside the region
+/// and the other layer are untouched. Every format has an in-place path (GL_RGBA16 and
+/// GL_RGB10_A2 through an image unit format of their size).
+#[test]
+fn in_place_and_through_a_buffer_give_the_same_texels() {
+    use contrastxr::gpu::opengl::StoreThrough;
+    let mut gl = context();
+    let camera = noise(70, 50, 21);
+    let params = Params::default();
+    gl.set_camera(&camera, &params).unwrap();
+    let mapping = CameraMapping {
+        rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
+    };
+    let (tw, th) = (45u32, 23u32);
+    for internal in [SRGB8_ALPHA8, RGBA8, RGBA16F, RGBA16, RGB10_A2] {
+        let format = GlFormat::of(internal).unwrap();
+        for layers in [None, Some(2u32)] {
+            let texels: Vec<u8> = (0..layers.unwrap_or(1))
+                .flat_map(|l| noise(tw, th, 31 + l).pixels)
+                .flat_map(|p| encode(format, p))
+                .flat_map(u32::to_le_bytes)
+                .collect();
+            let mut outputs = Vec::new();
+            let mut paths = Vec::new();
+            for in_place in [false, true] {
+                gl.engine().set_in_place(in_place);
+                let texture = match layers {
+                    None => gl.create_texture(internal, (tw, th), &texels),
+                    Some(n) => gl.create_array_texture(internal, (tw, th), n, &texels),
+                }
+                .unwrap();
+                let view = GlView {
+                    texture,
+                    target: match layers {
+                        None => GlTarget::Texture2D,
+                        Some(_) => GlTarget::Texture2DArray { layer: 1 },
+                    },
+                    internal_format: internal,
+                    rect: (7, 3, 29, 17),
+                    mapping,
+                };
+                paths.push(gl.engine().store_through(&view));
+                gl.enhance_views(&[view], &params).unwrap();
+                let n = layers.unwrap_or(1);
+                outputs.push(
+                    gl.read_texture_layers(texture, internal, (tw, th), n)
+                        .unwrap(),
+                );
+                gl.delete_texture(texture);
+            }
+            let what = format!("{internal:#x}, layers {layers:?}");
+            assert_eq!(paths[0], None, "{what}: in_place off stores in place");
+            let expected = match internal {
+                SRGB8_ALPHA8 => StoreThrough::View(RGBA8),
+                RGBA16 => StoreThrough::Texture(0x8D76), // GL_RGBA16UI
+                RGB10_A2 => StoreThrough::Texture(0x8236), // GL_R32UI
+                other => StoreThrough::Texture(other),
+            };
+            let expected = Some(expected);
+            assert_eq!(paths[1], expected, "{what}: the in-place path");
+            assert_ne!(outputs[0], texels, "{what}: nothing changed");
+            let bpp = format.pixel.bytes_per_pixel() as usize;
+            let differing = outputs[0]
+                .chunks_exact(bpp)
+                .zip(outputs[1].chunks_exact(bpp))
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(differing, 0, "{what}: texels differ between the paths");
+            // Outside the region (and on layer 0 of the array) the texels are the app's.
+            let layer_bytes = (tw * th) as usize * bpp;
+            let base = if layers.is_some() { layer_bytes } else { 0 };
+            assert_eq!(
+                outputs[1][..base],
+                texels[..base],
+                "{what}: layer 0 changed"
+            );
+            for y in 0..th as usize {
+                for x in 0..tw as usize {
+                    let inside = (7..36).contains(&x) && (3..20).contains(&y);
+                    let at = base + (y * tw as usize + x) * bpp;
+                    if !inside {
+                        assert_eq!(
+                            outputs[1][at..at + bpp],
+                            texels[at..at + bpp],
+                            "{what}: texel ({x}, {y}) outside the region changed"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

@@ -17,7 +17,7 @@ use contrastxr::gpu::device::{
 };
 use contrastxr::gpu::{
     DeviceOptions, FrameBackground, FrameEngine, FrameOptions, FrameView, GpuDevice, OfflineEngine,
-    PixelFormat, PixelLayout, ViewKey,
+    PixelFormat, PixelLayout, ViewKey, ViewPath,
 };
 use contrastxr::image::RgbaImage;
 use gpu_allocator::MemoryLocation;
@@ -126,7 +126,14 @@ impl Rig {
         };
         let raw = self.images[i].raw;
         let vk_format = vk::Format::R8G8B8A8_UNORM;
-        FrameView::new(key, raw, FORMAT, vk_format, false, params.camera_mapping())
+        FrameView::new(
+            key,
+            raw,
+            FORMAT,
+            vk_format,
+            ViewPath::BufferCopy,
+            params.camera_mapping(),
+        )
     }
 
     /// Writes `display` into both images.

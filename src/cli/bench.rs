@@ -23,10 +23,16 @@ pub fn usage() -> String {
          frame, once whatever the views; live = frame + bg, a display frame that also brings\n\
          a new camera frame). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
          with typical content (mostly black: panels and an object) and full frames\n\
-         (--content picks one or both). --path copy|in-place|both (default both): the layer's\n\
-         frame through copies (frame) and in place (in place: the app-like images made with\n\
-         storage usage and enhanced through storage views, no copies; ip/frame: its ratio to\n\
-         the frame through copies); with copy, the frame in place is not timed.\n\
+         (--content picks one or both). --path copy|in-place|both|image-copy|all (default\n\
+         both): the layer's frame through buffer copies (frame, always timed), in place (in\n\
+         place: the app-like images made with storage usage and enhanced through storage\n\
+         views, no copies; ip/frame: its ratio to the frame through buffer copies; with\n\
+         in-place and both) and through the image-copy path (img path ms: each region copied\n\
+         into an image of the layer's own with storage usage, enhanced there by the in-place\n\
+         shaders, copied back, what the layer does for images it may not store to, such as\n\
+         sRGB swapchains without storage usage; its copies alone, ic copies ms; ic/frame and\n\
+         ic/ip: its ratio to the frame through buffer copies and in place; with image-copy\n\
+         and all). all times the three.\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
         contrastxr::gpu::offline::WARM_UP_RUNS,
         contrastxr::gpu::offline::CAMERA_SIZE.0,
@@ -88,12 +94,15 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .map(parse_content)
             .collect::<Result<_, _>>()?,
     };
-    let in_place = match args.value(&["--path"])?.as_deref() {
-        None | Some("both") | Some("in-place") => true,
-        Some("copy") => false,
+    // (in place, image copy); the frame through buffer copies is always timed.
+    let (in_place, image_copy) = match args.value(&["--path"])?.as_deref() {
+        None | Some("both") | Some("in-place") => (true, false),
+        Some("copy") => (false, false),
+        Some("image-copy") => (false, true),
+        Some("all") => (true, true),
         Some(p) => {
             return Err(CliError::Usage(format!(
-                "--path must be copy, in-place or both, got '{p}'"
+                "--path must be copy, in-place, both, image-copy or all, got '{p}'"
             )))
         }
     };
@@ -122,6 +131,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
                 content,
                 runs,
                 in_place,
+                image_copy,
             };
             let r = engine
                 .bench(&case, &params)
@@ -140,7 +150,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6}",
         "size",
         "views",
         "content",
@@ -158,14 +168,18 @@ fn header() -> String {
         "enh Mpx/s",
         "Mpx",
         "in place ms",
-        "ip/frame"
+        "ip/frame",
+        "img path ms",
+        "ic copies ms",
+        "ic/frame",
+        "ic/ip"
     )
 }
 
 fn row(r: &BenchResult) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
@@ -184,6 +198,10 @@ fn row(r: &BenchResult) -> String {
         r.megapixels(),
         optional(r.frame_in_place_ms, 3),
         optional(r.in_place_ratio(), 2),
+        optional(r.frame_image_copy_ms, 3),
+        optional(r.image_copy_copies_ms, 3),
+        optional(r.image_copy_frame_ratio(), 2),
+        optional(r.image_copy_in_place_ratio(), 2),
     )
 }
 
@@ -214,6 +232,10 @@ fn to_json(device: &str, results: &[BenchResult]) -> String {
                 "image_copy_ms": r.image_copy_ms,
                 "frame_in_place_ms": r.frame_in_place_ms,
                 "in_place_ratio": r.in_place_ratio(),
+                "frame_image_copy_ms": r.frame_image_copy_ms,
+                "image_copy_copies_ms": r.image_copy_copies_ms,
+                "image_copy_frame_ratio": r.image_copy_frame_ratio(),
+                "image_copy_in_place_ratio": r.image_copy_in_place_ratio(),
                 "live_frame_ms": r.live_frame_ms(),
                 "live_ratio": r.live_frame_ms() / r.copy_ms,
                 "camera_width": CAMERA_SIZE.0,

@@ -17,6 +17,8 @@ pub mod shaders;
 pub mod texels;
 
 pub use device::{DeviceOptions, GpuDevice, GpuError, PixelFormat, PixelLayout};
-pub use frame::{CapturedView, FrameBackground, FrameEngine, FrameOptions, FrameView, ViewKey};
+pub use frame::{
+    CapturedView, FrameBackground, FrameEngine, FrameOptions, FrameView, ViewKey, ViewPath,
+};
 pub use offline::OfflineEngine;
 pub use recipe::{BackgroundFrame, CameraRect, Engine, Placement, ViewShape, ViewTarget};

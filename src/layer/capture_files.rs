@@ -122,8 +122,9 @@ pub fn write_view(
         "srgb": item.format.srgb,
         "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
         "image_array_index": item.key.array_index,
-        // How the view was enhanced: "in-place" in the app's image, or "copy" (out and back).
-        "path": if item.in_place { "in-place" } else { "copy" },
+        // How the view was enhanced: "in-place" in the app's image, "image-copy" (out into an
+        // image of the layer's own and back), or "copy" (out into a buffer and back).
+        "path": captured.path,
         "camera_mapping": item.mapping.rows,
         "background": settings.background,
         "params": settings_json(settings),

@@ -51,6 +51,8 @@ fn plan(s: &SessionState, info: &xr::SwapchainCreateInfo) -> Option<Plan> {
         pixel,
         needed: graphics.needed_usage(),
         in_place: graphics.in_place_usage(pixel, info, &s.settings),
+        copy_path: graphics.copy_path(pixel, &s.settings),
+        format_name: graphics.format_name(info.format),
     })
 }
 
@@ -58,6 +60,34 @@ struct Plan {
     pixel: PixelFormat,
     needed: xr::SwapchainUsageFlags,
     in_place: Option<xr::SwapchainUsageFlags>,
+    /// The path's name for views not enhanced in place (`SessionGraphics::copy_path`).
+    copy_path: &'static str,
+    format_name: String,
+}
+
+/// The one line per enhanced swapchain: the path its views take and why.
+fn path_line(
+    info: &xr::SwapchainCreateInfo,
+    plan: &Plan,
+    in_place: bool,
+    refused: Option<xr::Result>,
+) -> String {
+    let path = match in_place {
+        true => "in-place",
+        false => plan.copy_path,
+    };
+    let why = match (in_place, refused, plan.in_place.is_some()) {
+        (true, _, _) => "the runtime granted storage usage".to_string(),
+        (false, Some(result), _) => format!("the runtime refused storage usage ({result:?})"),
+        (false, None, false) => {
+            "storage usage not asked for (in_place setting, device or format)".to_string()
+        }
+        (false, None, true) => "storage usage not granted".to_string(),
+    };
+    format!(
+        "swapchain of format {} ({}x{}, {} layer(s)): views enhanced through path {path}; {why}",
+        plan.format_name, info.width, info.height, info.array_size
+    )
 }
 
 /// # Safety
@@ -87,6 +117,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 .map_or(xr::SwapchainUsageFlags::EMPTY, |p| p.needed);
             let mut usage_granted = app_info.usage_flags.contains(needed);
             let mut in_place = false;
+            let mut refused = None;
             let mut result = xr::Result::ERROR_RUNTIME_FAILURE;
             if let Some(extra) = plan.as_ref().and_then(|p| p.in_place) {
                 let mut wanted = *app_info;
@@ -96,8 +127,10 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 in_place = result.into_raw() >= 0;
                 usage_granted |= in_place;
                 if !in_place {
+                    refused = Some(result);
+                    let path = plan.as_ref().map_or("copy", |p| p.copy_path);
                     log::once(&format!("no-storage-{format}"), &format!(
-                        "the runtime refused storage usage on swapchains of format {format} ({result:?}): their views are enhanced through a copy"
+                        "the runtime refused storage usage on swapchains of format {format} ({result:?}): their views are enhanced through a copy (path {path})"
                     ));
                 }
             }
@@ -130,6 +163,9 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                     .swapchains
                     .insert(handle.into_raw(), Arc::new(Mutex::new(state)));
                 if let Some(format) = pixel.filter(|_| usage_granted) {
+                    if let Some(plan) = &plan {
+                        log::info(&path_line(app_info, plan, in_place, refused));
+                    }
                     request_shaders(&s, format, app_info.width, in_place);
                 }
             }

@@ -9,6 +9,9 @@ use gpu_allocator::MemoryLocation;
 pub struct GpuBuffer {
     pub raw: vk::Buffer,
     pub size: u64,
+    /// The bytes asked for (`size` is at least 16): what `mapped` gives, never the
+    /// allocation's padding (a driver may round an allocation up: 272 bytes for 260 on NVIDIA).
+    requested: u64,
     allocation: Option<Allocation>,
 }
 
@@ -20,6 +23,7 @@ impl GpuBuffer {
         location: MemoryLocation,
         name: &str,
     ) -> Result<GpuBuffer, GpuError> {
+        let requested = size;
         let size = size.max(16);
         let info = vk::BufferCreateInfo::default()
             .size(size)
@@ -31,6 +35,7 @@ impl GpuBuffer {
             Ok(allocation) => Ok(GpuBuffer {
                 raw,
                 size,
+                requested,
                 allocation: Some(allocation),
             }),
             Err(e) => {
@@ -75,13 +80,22 @@ impl GpuBuffer {
         Ok(allocation)
     }
 
-    /// The mapped bytes (host-visible buffers only).
+    /// The mapped bytes (host-visible buffers only): exactly the bytes the buffer was made
+    /// for, whatever the allocation's size.
     pub fn mapped(&self) -> Option<&[u8]> {
-        self.allocation.as_ref()?.mapped_slice()
+        let n = self.requested as usize;
+        self.allocation
+            .as_ref()?
+            .mapped_slice()
+            .map(|s| &s[..n.min(s.len())])
     }
 
     pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
-        self.allocation.as_mut()?.mapped_slice_mut()
+        let n = self.requested as usize;
+        self.allocation.as_mut()?.mapped_slice_mut().map(|s| {
+            let len = s.len();
+            &mut s[..n.min(len)]
+        })
     }
 
     /// Copies `data` to the start of a host-visible buffer.

@@ -43,6 +43,21 @@ impl DeviceImage {
         Self::with_flags(gpu, size, format, usage, vk::ImageCreateFlags::empty())
     }
 
+    /// An app-like image of `layers` array layers (a swapchain's), with `usage`.
+    pub fn layered(
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        layers: u32,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self, GpuError> {
+        let info = image_info(size, format, usage)
+            .array_layers(layers)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        Self::create(gpu, &info, MemoryLocation::GpuOnly)
+    }
+
     /// [`DeviceImage::with_usage`] with image create flags (e.g. a mutable format).
     pub fn with_flags(
         gpu: &GpuDevice,

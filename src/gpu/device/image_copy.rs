@@ -149,6 +149,62 @@ pub fn record_region_copy(
     }
 }
 
+/// Copies a region (image in GENERAL) into `own`, an image of the engine's own of a
+/// size-compatible format in GENERAL, at its origin (`to_own`), or back: the raw bytes, as
+/// vkCmdCopyImage copies between size-compatible formats (R8G8B8A8_SRGB into R8G8B8A8_UNORM,
+/// B8G8R8A8 into R8G8B8A8, A2B10G10R10 into R32_UINT, ...). Only the region's rectangle of
+/// its one array layer.
+pub fn record_image_region_copy(
+    gpu: &GpuDevice,
+    cmd: vk::CommandBuffer,
+    region: &ImageRegion,
+    own: vk::Image,
+    to_own: bool,
+) {
+    let layer = |index: u32| {
+        vk::ImageSubresourceLayers::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .base_array_layer(index)
+            .layer_count(1)
+    };
+    let at = vk::Offset3D {
+        x: region.offset.0,
+        y: region.offset.1,
+        z: 0,
+    };
+    let extent = vk::Extent3D {
+        width: region.extent.0,
+        height: region.extent.1,
+        depth: 1,
+    };
+    let (app, origin) = (
+        (layer(region.array_index), at),
+        (layer(0), vk::Offset3D::default()),
+    );
+    let ((src_layer, src_offset), (dst_layer, dst_offset)) = match to_own {
+        true => (app, origin),
+        false => (origin, app),
+    };
+    let copy = [vk::ImageCopy::default()
+        .src_subresource(src_layer)
+        .src_offset(src_offset)
+        .dst_subresource(dst_layer)
+        .dst_offset(dst_offset)
+        .extent(extent)];
+    let (src, dst) = match to_own {
+        true => (region.image, own),
+        false => (own, region.image),
+    };
+    let general = vk::ImageLayout::GENERAL;
+    // SAFETY: cmd is recording; both images are in GENERAL, the region lies inside the app's
+    // image and `own` is at least the region's size, of a size-compatible format (the
+    // caller's contract).
+    unsafe {
+        gpu.device
+            .cmd_copy_image(cmd, src, general, dst, general, &copy)
+    };
+}
+
 /// The layout an image of the engine's own is first used in: from UNDEFINED (its contents
 /// discarded) to `layout`, before the accesses of `stage`. One barrier for all `images`.
 pub fn record_first_layout(

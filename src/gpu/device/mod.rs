@@ -22,6 +22,7 @@ pub use error::{GpuError, VkResultExt};
 pub use format::{PixelFormat, PixelLayout};
 pub use gpu_device::{physical_devices, DeviceKind, DeviceOptions, GpuDevice, PhysicalDeviceInfo};
 pub use image_copy::{
-    record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
+    record_first_layout, record_image_region_copy, record_layout_barriers, record_region_copy,
+    ImageRegion,
 };
 pub(crate) use storage_image::StorageImage;

@@ -1,5 +1,6 @@
-//! A small storage image of the engine's own with its view: what the warm-up binds where an
-//! in-place shader expects the app's image (gpu/pipelines/warm_up.rs).
+//! A storage image of the engine's own with its view: what the warm-up binds where an
+//! in-place shader expects the app's image (gpu/pipelines/warm_up.rs), and what the image-copy
+//! path copies a view's region into and enhances there (gpu/frame/, gpu/offline/).
 
 use super::device_image::DeviceImage;
 use super::error::{GpuError, VkResultExt};
@@ -15,7 +16,32 @@ pub struct StorageImage {
 impl StorageImage {
     /// A `size` image of `format` with storage usage (UNDEFINED layout) and its view.
     pub fn new(gpu: &GpuDevice, size: (u32, u32), format: vk::Format) -> Result<Self, GpuError> {
-        let mut image = DeviceImage::with_usage(gpu, size, format, vk::ImageUsageFlags::STORAGE)?;
+        Self::with_usage(gpu, size, format, vk::ImageUsageFlags::STORAGE)
+    }
+
+    /// A `size` image of `format` that regions of an app's image are copied into and back
+    /// (the image-copy path): storage and transfer usage (UNDEFINED layout), and its view.
+    pub fn for_copies(
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        format: vk::Format,
+    ) -> Result<Self, GpuError> {
+        use vk::ImageUsageFlags as U;
+        Self::with_usage(
+            gpu,
+            size,
+            format,
+            U::STORAGE | U::TRANSFER_SRC | U::TRANSFER_DST,
+        )
+    }
+
+    fn with_usage(
+        gpu: &GpuDevice,
+        size: (u32, u32),
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Self, GpuError> {
+        let mut image = DeviceImage::with_usage(gpu, size, format, usage)?;
         let range = vk::ImageSubresourceRange::default()
             .aspect_mask(vk::ImageAspectFlags::COLOR)
             .level_count(1)

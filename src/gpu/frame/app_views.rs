@@ -2,7 +2,7 @@
 //! layer's first in-place frame, kept while its swapchain lives (the images are the
 //! swapchain's), destroyed with it or with the engine.
 
-use super::frame_view::FrameView;
+use super::frame_view::{FrameView, ViewPath};
 use crate::gpu::device::{GpuDevice, GpuError, PixelFormat, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
@@ -93,4 +93,23 @@ pub fn can_store(gpu: &GpuDevice, format: PixelFormat) -> bool {
     props
         .optimal_tiling_features
         .contains(vk::FormatFeatureFlags::STORAGE_IMAGE)
+}
+
+/// The path of a view whose image the layer may not store to: through an image of the
+/// engine's own (`ViewPath::ImageCopy`) where `gpu` can store to the format's
+/// `image_copy_format`, else through a buffer.
+pub fn copy_path(gpu: &GpuDevice, format: PixelFormat) -> ViewPath {
+    let Some(own) = format.image_copy_format() else {
+        return ViewPath::BufferCopy;
+    };
+    // SAFETY: physical belongs to this instance.
+    let props = unsafe {
+        gpu.instance
+            .get_physical_device_format_properties(gpu.physical, own)
+    };
+    let needed = vk::FormatFeatureFlags::STORAGE_IMAGE;
+    match props.optimal_tiling_features.contains(needed) {
+        true => ViewPath::ImageCopy,
+        false => ViewPath::BufferCopy,
+    }
 }

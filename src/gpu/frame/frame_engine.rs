@@ -5,11 +5,11 @@
 //! release is held until then). Knows nothing of OpenXR.
 
 use super::app_views::AppImageViews;
-use super::frame_view::{CapturedView, FrameView, ViewKey};
+use super::frame_view::{CapturedView, FrameView, ViewKey, ViewPath};
 use super::overlay::{OverlayPixels, Overlays};
 use crate::algorithm::params::Params;
 use crate::blurred_texels::BlurredTexels;
-use crate::gpu::device::{Commands, GpuDevice, GpuError};
+use crate::gpu::device::{Commands, GpuDevice, GpuError, StorageImage};
 use crate::gpu::pipelines::{BuildMode, BuildReport, WarmUp, WarmUpSlot};
 use crate::gpu::recipe::{BackgroundFrame, CameraRect, Engine, Placement, ViewTarget};
 use crate::gpu::shaders::shader_ids::ShaderId;
@@ -37,6 +37,18 @@ pub(super) struct PreparedView {
     pub(super) last_frame: u64,
     /// The image view bound as the view's `blurred_texels`.
     pub(super) texels: vk::ImageView,
+    /// The image-copy path's image (`ViewPath::ImageCopy`): the region is copied into it,
+    /// enhanced there (bound as the view's `app_image`, at its origin) and copied back.
+    pub(super) own: Option<StorageImage>,
+}
+
+impl PreparedView {
+    fn destroy(&mut self, engine: &Engine, gpu: &GpuDevice) {
+        engine.destroy_view(gpu, &mut self.target);
+        if let Some(mut own) = self.own.take() {
+            own.destroy(gpu);
+        }
+    }
 }
 
 /// The background of a frame: the newest camera image, its texels when its source prepared
@@ -238,15 +250,16 @@ impl FrameEngine {
     /// Makes the view of `item` exist, evicting the least recently used view that is not one
     /// of `in_use` (the items of this submission) when the engine holds MAX_VIEWS already.
     fn ensure_view(&mut self, item: &FrameView, in_use: &[FrameView]) -> Result<(), GpuError> {
+        let image_copy = item.path == ViewPath::ImageCopy;
         if self
             .views
             .get(&item.key)
-            .is_some_and(|v| v.target.shape() == item.shape())
+            .is_some_and(|v| v.target.shape() == item.shape() && v.own.is_some() == image_copy)
         {
             return Ok(());
         }
         if let Some(mut old) = self.views.remove(&item.key) {
-            self.engine.destroy_view(&self.gpu, &mut old.target);
+            old.destroy(&self.engine, &self.gpu);
         }
         if self.views.len() as u32 >= MAX_VIEWS {
             self.evict_oldest(in_use);
@@ -256,18 +269,41 @@ impl FrameEngine {
             .as_ref()
             .expect("background is set before views");
         let shape = (item.shape(), item.key.extent.1);
-        let target = self
+        let mut target = self
             .engine
             .create_shaped_view(&self.gpu, shape, bg, Placement::DEVICE)?;
+        let texels = bg.texels_view();
+        let own = match image_copy {
+            true => match self.own_image(item, &target) {
+                Ok(own) => Some(own),
+                Err(e) => {
+                    self.engine.destroy_view(&self.gpu, &mut target);
+                    return Err(e);
+                }
+            },
+            false => None,
+        };
         self.views.insert(
             item.key,
             PreparedView {
                 target,
                 last_frame: self.frame,
-                texels: bg.texels_view(),
+                texels,
+                own,
             },
         );
         Ok(())
+    }
+
+    /// The image-copy path's image for `item`, bound as `target`'s `app_image` (the region
+    /// at its origin).
+    fn own_image(&self, item: &FrameView, target: &ViewTarget) -> Result<StorageImage, GpuError> {
+        let format = item.format.image_copy_format().ok_or_else(|| {
+            GpuError::Unsupported(format!("{:?} has no image-copy format", item.format))
+        })?;
+        let own = StorageImage::for_copies(&self.gpu, item.key.extent, format)?;
+        self.engine.bind_app_image(&self.gpu, target, own.view);
+        Ok(own)
     }
 
     fn evict_oldest(&mut self, in_use: &[FrameView]) {
@@ -278,7 +314,7 @@ impl FrameEngine {
             .min_by_key(|(_, v)| v.last_frame)
             .map(|(k, _)| *k);
         if let Some(mut v) = oldest.and_then(|k| self.views.remove(&k)) {
-            self.engine.destroy_view(&self.gpu, &mut v.target);
+            v.destroy(&self.engine, &self.gpu);
         }
     }
 
@@ -306,7 +342,7 @@ impl FrameEngine {
             .collect();
         for k in keys {
             if let Some(mut v) = self.views.remove(&k) {
-                self.engine.destroy_view(&self.gpu, &mut v.target);
+                v.destroy(&self.engine, &self.gpu);
             }
         }
         self.app_views.forget(&self.gpu, swapchain);
@@ -356,7 +392,7 @@ impl FrameEngine {
         for item in items {
             self.ensure_view(item, items)?;
         }
-        for item in items.iter().filter(|i| i.in_place) {
+        for item in items.iter().filter(|i| i.path == ViewPath::InPlace) {
             self.bind_app_image(item)?;
         }
         self.bind_texels(items);
@@ -438,7 +474,7 @@ impl FrameEngine {
             return Err(e);
         }
         for (_, mut v) in self.views.drain() {
-            self.engine.destroy_view(&self.gpu, &mut v.target);
+            v.destroy(&self.engine, &self.gpu);
         }
         if let Some(mut bg) = self.background.take() {
             bg.destroy(&self.gpu);

@@ -1,14 +1,15 @@
 //! The recipe of a frame's command buffer (gpu/frame/frame_engine.rs): background preparation, layout
-//! barriers, copies out of the app's images, enhancement, overlay, captures, copies back.
+//! barriers, copies out of the app's images (into a buffer, or an image of the engine's own),
+//! enhancement, overlay, captures, copies back.
 
 use super::frame_engine::FrameEngine;
-use super::frame_view::FrameView;
+use super::frame_view::{FrameView, ViewPath};
 use super::overlay::OverlayPixels;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::device::{
-    barrier, record_buffer_copy, record_layout_barriers, record_region_copy, GpuBuffer, GpuError,
-    ImageRegion,
+    barrier, record_buffer_copy, record_first_layout, record_image_region_copy,
+    record_layout_barriers, record_region_copy, GpuBuffer, GpuError, ImageRegion,
 };
 use crate::gpu::recipe::CameraRect;
 use ash::vk;
@@ -25,27 +26,66 @@ impl FrameEngine {
         record_layout_barriers(&self.gpu, self.commands.cmd, &regions, to_general);
     }
 
-    /// Copies the region into its view's buffer or back (views through a copy only).
-    fn copy_region(&self, item: &FrameView, to_buffer: bool) {
-        if item.in_place {
-            return;
-        }
-        let pixels = &self.views[&item.key].target.pixels;
+    /// Copies the region into its view's buffer or image, or back (`out` false; views
+    /// through a copy only).
+    fn copy_region(&self, item: &FrameView, out: bool) {
+        let view = &self.views[&item.key];
         let cmd = self.commands.cmd;
-        record_region_copy(&self.gpu, cmd, &item.region(), pixels, to_buffer);
+        match (item.path, &view.own) {
+            (ViewPath::InPlace, _) => {}
+            (ViewPath::ImageCopy, Some(own)) => {
+                record_image_region_copy(&self.gpu, cmd, &item.region(), own.image.raw, out)
+            }
+            _ => record_region_copy(&self.gpu, cmd, &item.region(), &view.target.pixels, out),
+        }
     }
 
-    /// Copies the view's current pixels (the app's image in place, else the view's buffer)
-    /// into a capture buffer.
+    /// Where the view's pixels are while its passes run, for the images among them: the
+    /// app's image in place, the engine's own image on the image-copy path (the region at
+    /// its origin); None for a view through a buffer.
+    fn work_region(&self, item: &FrameView) -> Option<ImageRegion> {
+        match (item.path, &self.views[&item.key].own) {
+            (ViewPath::InPlace, _) => Some(item.region()),
+            (ViewPath::ImageCopy, Some(own)) => Some(ImageRegion {
+                image: own.image.raw,
+                array_index: 0,
+                offset: (0, 0),
+                extent: item.key.extent,
+            }),
+            _ => None,
+        }
+    }
+
+    /// Copies the view's current pixels (the image its passes run on, else the view's
+    /// buffer) into a capture buffer.
     fn copy_to_capture(&self, item: &FrameView, dst: &GpuBuffer) {
         let cmd = self.commands.cmd;
-        if item.in_place {
-            record_region_copy(&self.gpu, cmd, &item.region(), dst, true);
+        if let Some(region) = self.work_region(item) {
+            record_region_copy(&self.gpu, cmd, &region, dst, true);
             return;
         }
         let src = &self.views[&item.key].target.pixels;
         let region = [vk::BufferCopy::default().size(self.views[&item.key].target.pixel_bytes())];
         record_buffer_copy(&self.gpu, cmd, (src, dst), &region);
+    }
+
+    /// The image-copy path's images to GENERAL (their contents discarded: the copy out
+    /// writes them), before the copies out.
+    fn own_image_barriers(&self, items: &[FrameView]) {
+        let images: Vec<vk::Image> = items
+            .iter()
+            .filter(|i| i.path == ViewPath::ImageCopy)
+            .filter_map(|i| self.views[&i.key].own.as_ref().map(|o| o.image.raw))
+            .collect();
+        if images.is_empty() {
+            return;
+        }
+        let write = (
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_WRITE,
+        );
+        let general = vk::ImageLayout::GENERAL;
+        record_first_layout(&self.gpu, self.commands.cmd, &images, general, write);
     }
 
     pub(super) fn record(
@@ -84,6 +124,7 @@ impl FrameEngine {
         }
         use vk::PipelineStageFlags as S;
         self.image_barriers(items, true);
+        self.own_image_barriers(items);
         items.iter().for_each(|i| self.copy_region(i, true));
         barrier(
             &self.gpu,
@@ -108,9 +149,14 @@ impl FrameEngine {
             )?;
         }
         barrier(&self.gpu, self.commands.cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        let regions: Vec<ImageRegion> = items
+            .iter()
+            .map(|i| self.work_region(i).unwrap_or_else(|| i.region()))
+            .collect();
         let views = items
             .iter()
-            .map(|i| (i.key, &self.views[&i.key].target, i.region()));
+            .zip(regions)
+            .map(|(i, region)| (i.key, &self.views[&i.key].target, region));
         if self
             .overlays
             .record(&self.gpu, self.commands.cmd, overlay, views)?

@@ -14,9 +14,9 @@ pub struct FrameView {
     pub(super) image: vk::Image,
     pub format: PixelFormat,
     pub(super) vk_format: vk::Format,
-    /// Enhanced in place (the swapchain was made with storage usage for it), else through a
-    /// copy of the region.
-    pub in_place: bool,
+    /// How the region is enhanced: in place (the swapchain was made with storage usage for
+    /// it), or through a copy of the region into an image or a buffer of the engine's own.
+    pub path: ViewPath,
     /// Where this view's display pixels lie in the camera image.
     pub mapping: CameraMapping,
 }
@@ -29,7 +29,7 @@ impl FrameView {
         image: vk::Image,
         format: PixelFormat,
         vk_format: vk::Format,
-        in_place: bool,
+        path: ViewPath,
         mapping: CameraMapping,
     ) -> FrameView {
         FrameView {
@@ -37,7 +37,7 @@ impl FrameView {
             image,
             format,
             vk_format,
-            in_place,
+            path,
             mapping,
         }
     }
@@ -51,7 +51,7 @@ impl FrameView {
         ViewShape {
             format: self.format,
             width: self.key.extent.0,
-            in_place: self.in_place,
+            in_place: self.path.runs_in_place_shaders(),
         }
     }
 
@@ -62,6 +62,39 @@ impl FrameView {
             offset: self.key.offset,
             extent: self.key.extent,
         }
+    }
+}
+
+/// How a view's region is enhanced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ViewPath {
+    /// In the app's image, through a storage view of its layer (the swapchain has storage
+    /// usage, and for sRGB a mutable format).
+    InPlace,
+    /// Copied (vkCmdCopyImage, raw bytes) into an image of the engine's own in a
+    /// size-compatible format with storage usage (`PixelFormat::image_copy_format`), enhanced
+    /// there by the in-place shaders, and copied back: for images the layer may not store to.
+    ImageCopy,
+    /// Copied into a buffer of the engine's own, enhanced there and copied back: where the
+    /// device cannot store to the image-copy path's format.
+    BufferCopy,
+}
+
+impl ViewPath {
+    /// Its name in the log and in a capture's JSON (`"path"`): `in-place`, `image-copy`,
+    /// `copy` (the buffer path's name since before the image-copy path).
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewPath::InPlace => "in-place",
+            ViewPath::ImageCopy => "image-copy",
+            ViewPath::BufferCopy => "copy",
+        }
+    }
+
+    /// Whether its passes are the in-place variants (on the app's image or on the engine's
+    /// copy of the region).
+    pub fn runs_in_place_shaders(self) -> bool {
+        self != ViewPath::BufferCopy
     }
 }
 

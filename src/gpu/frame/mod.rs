@@ -9,8 +9,8 @@ mod frame_view;
 mod overlay;
 mod prepared_background;
 
-pub use app_views::can_store;
 pub(crate) use app_views::storage_view;
+pub use app_views::{can_store, copy_path};
 pub use frame_engine::{FrameBackground, FrameEngine, FrameOptions, PipelinesReady};
-pub use frame_view::{CapturedView, FrameView, ViewKey};
+pub use frame_view::{CapturedView, FrameView, ViewKey, ViewPath};
 pub use overlay::{encode as overlay_pixel, OverlayPixels, Run};

@@ -1,6 +1,7 @@
 //! The benchmark behind `contrastxr bench`: GPU time, from timestamp queries, of the plain copy
 //! pass (the floor), the per-frame enhancement, everything the layer records per display frame
-//! (the enhancement with the copies from and to the app's image) and the per-camera-frame
+//! (the enhancement with the copies from and to the app's image: through buffers, in place,
+//! through images of the engine's own) and the per-camera-frame
 //! background preparation, over the same display regions, on the offline engine's device.
 
 use super::bench_case::{BenchCase, WARM_UP_RUNS};
@@ -8,7 +9,8 @@ use super::bench_rig::Rig;
 use super::offline_engine::OfflineEngine;
 use crate::algorithm::params::Params;
 use crate::gpu::device::{
-    barrier, record_layout_barriers, record_region_copy, GpuError, ImageRegion, VkResultExt,
+    barrier, record_first_layout, record_image_region_copy, record_layout_barriers,
+    record_region_copy, GpuError, ImageRegion, VkResultExt,
 };
 use crate::gpu::recipe::{CameraRect, ViewTarget};
 use ash::vk;
@@ -29,6 +31,13 @@ pub struct BenchResult {
     /// The layer's frame in place: layout transitions and the enhancement in the app's
     /// images, no copies (None when not asked for or the device cannot store the format).
     pub frame_in_place_ms: Option<f64>,
+    /// The layer's frame through the image-copy path: layout transitions, the copies of each
+    /// view's region into an image of the engine's own and back (vkCmdCopyImage), and the
+    /// enhancement there by the in-place shaders (None when not asked for or the device cannot
+    /// store the format).
+    pub frame_image_copy_ms: Option<f64>,
+    /// The same without the enhancement: the image-copy path's copies alone.
+    pub image_copy_copies_ms: Option<f64>,
     /// Per camera frame: decode and blur on the camera grid (once, whatever the views).
     pub background_ms: f64,
     /// Fraction of pixels that are foreground (neither black nor alpha 0).
@@ -56,6 +65,16 @@ impl BenchResult {
         self.frame_in_place_ms.map(|f| f / self.frame_ms)
     }
 
+    /// The frame through the image-copy path over the frame in place.
+    pub fn image_copy_in_place_ratio(&self) -> Option<f64> {
+        Some(self.frame_image_copy_ms? / self.frame_in_place_ms?)
+    }
+
+    /// The frame through the image-copy path over the frame through buffer copies.
+    pub fn image_copy_frame_ratio(&self) -> Option<f64> {
+        self.frame_image_copy_ms.map(|f| f / self.frame_ms)
+    }
+
     /// A display frame that also brings a new camera frame (a live camera at or above the
     /// display's rate): the background preparation then the frame, one after the other on the
     /// queue, so the sum of the two medians.
@@ -80,8 +99,10 @@ enum Span {
     Frame,
     ImageCopy,
     FrameInPlace,
+    FrameImageCopy,
+    ImageCopyCopies,
 }
-const SPANS: usize = 7;
+const SPANS: usize = 9;
 const QUERIES: u32 = 2 * SPANS as u32;
 
 impl OfflineEngine {
@@ -96,6 +117,8 @@ impl OfflineEngine {
             staging: None,
             in_place: Vec::new(),
             storage_views: Vec::new(),
+            image_copy: Vec::new(),
+            own_images: Vec::new(),
             queries: vk::QueryPool::null(),
         };
         let result = self.bench_with(&mut rig, case, params);
@@ -133,6 +156,10 @@ impl OfflineEngine {
             image_copy_ms: ms[Span::ImageCopy as usize],
             frame_in_place_ms: (!rig.in_place.is_empty())
                 .then_some(ms[Span::FrameInPlace as usize]),
+            frame_image_copy_ms: (!rig.image_copy.is_empty())
+                .then_some(ms[Span::FrameImageCopy as usize]),
+            image_copy_copies_ms: (!rig.image_copy.is_empty())
+                .then_some(ms[Span::ImageCopyCopies as usize]),
             background_ms: ms[Span::Background as usize],
             foreground,
         })
@@ -185,6 +212,44 @@ impl OfflineEngine {
         let mapping = params.camera_mapping();
         for v in &rig.in_place {
             self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+        }
+        record_layout_barriers(gpu, cmd, regions, false);
+        Ok(())
+    }
+
+    /// What the layer records per display frame through the image-copy path
+    /// (gpu/frame/frame_record.rs's `record` for such views, less the background and captures):
+    /// with `enhance`, the passes between the copies. Nothing without image-copy views.
+    fn record_frame_image_copy(
+        &self,
+        cmd: vk::CommandBuffer,
+        rig: &Rig,
+        regions: &[ImageRegion],
+        params: &Params,
+        enhance: bool,
+    ) -> Result<(), GpuError> {
+        if rig.image_copy.is_empty() {
+            return Ok(());
+        }
+        use vk::PipelineStageFlags as S;
+        let gpu = &self.gpu;
+        record_layout_barriers(gpu, cmd, regions, true);
+        let own: Vec<vk::Image> = rig.own_images.iter().map(|i| i.image.raw).collect();
+        let write = (S::TRANSFER, vk::AccessFlags::TRANSFER_WRITE);
+        record_first_layout(gpu, cmd, &own, vk::ImageLayout::GENERAL, write);
+        for (r, o) in regions.iter().zip(&own) {
+            record_image_region_copy(gpu, cmd, r, *o, true);
+        }
+        barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+        if enhance {
+            let mapping = params.camera_mapping();
+            for v in &rig.image_copy {
+                self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+            }
+            barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        }
+        for (r, o) in regions.iter().zip(&own) {
+            record_image_region_copy(gpu, cmd, r, *o, false);
         }
         record_layout_barriers(gpu, cmd, regions, false);
         Ok(())
@@ -258,6 +323,14 @@ impl OfflineEngine {
             self.restore_images(cmd, rig, &regions);
             timed(Span::FrameInPlace, &mut || {
                 self.record_frame_in_place(cmd, rig, &regions, params)
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            timed(Span::FrameImageCopy, &mut || {
+                self.record_frame_image_copy(cmd, rig, &regions, params, true)
+            })?;
+            timed(Span::ImageCopyCopies, &mut || {
+                self.record_frame_image_copy(cmd, rig, &regions, params, false)
             })
         })?;
         let mut ticks = [0u64; QUERIES as usize];

@@ -38,6 +38,10 @@ pub struct BenchCase {
     /// Also time the layer's frame in place (the app's images with storage usage, enhanced
     /// through storage views), where the device can.
     pub in_place: bool,
+    /// Also time the layer's frame through the image-copy path (each region copied into an
+    /// image of the engine's own with storage usage, enhanced there by the in-place shaders,
+    /// copied back), where the device can store to its format.
+    pub image_copy: bool,
 }
 
 /// One RGBA8 pixel (R in the low byte) of the given content at (x, y) of a w x h region.

@@ -1,14 +1,16 @@
 //! The benchmark's set-up (gpu/offline/bench.rs): per case, the camera frame, the views (through a
-//! copy and, where the device can store the format, in place), the pristine content, the
+//! buffer copy and, where the device can store the format, in place and through an image of the
+//! engine's own), the pristine content, the
 //! app-like images and the timestamp queries; and their release.
 
 use super::bench_case::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE};
 use super::offline_engine::OfflineEngine;
+use crate::gpu::device::StorageImage;
 use crate::gpu::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use crate::gpu::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError, PixelFormat, VkResultExt};
-use crate::gpu::frame::{can_store, storage_view};
+use crate::gpu::frame::{can_store, copy_path, storage_view, ViewPath};
 use crate::gpu::recipe::{BackgroundFrame, Placement, ViewShape, ViewTarget};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -26,6 +28,10 @@ pub(super) struct Rig {
     /// and the device can store the format), and the images' storage views they are bound to.
     pub(super) in_place: Vec<ViewTarget>,
     pub(super) storage_views: Vec<vk::ImageView>,
+    /// Views through the image-copy path (one per app image; empty unless the case asks for
+    /// them and the device can store the format), each bound to its image in `own_images`.
+    pub(super) image_copy: Vec<ViewTarget>,
+    pub(super) own_images: Vec<StorageImage>,
     pub(super) queries: vk::QueryPool,
 }
 
@@ -57,6 +63,33 @@ fn app_image(gpu: &GpuDevice, case: &BenchCase) -> Result<DeviceImage, GpuError>
 }
 
 impl OfflineEngine {
+    /// One view through the image-copy path per app image, bound to an image of its own.
+    fn add_image_copy_views(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<(), GpuError> {
+        let gpu = &self.gpu;
+        let background = rig.background.as_ref().expect("made before");
+        let format = PixelFormat::SRGB8;
+        let own_format = format
+            .image_copy_format()
+            .ok_or_else(|| GpuError::Unsupported("no image-copy format".into()))?;
+        let shape = ViewShape {
+            format,
+            width: case.region.0,
+            in_place: true,
+        };
+        for _ in &rig.images {
+            rig.own_images
+                .push(StorageImage::for_copies(gpu, case.region, own_format)?);
+            let target = (shape, case.region.1);
+            let target =
+                self.engine
+                    .create_shaped_view(gpu, target, background, Placement::DEVICE)?;
+            let own = rig.own_images.last().expect("pushed above");
+            self.engine.bind_app_image(gpu, &target, own.view);
+            rig.image_copy.push(target);
+        }
+        Ok(())
+    }
+
     /// One view in place per app image, bound to a storage view of it.
     fn add_in_place_views(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<(), GpuError> {
         let gpu = &self.gpu;
@@ -137,6 +170,9 @@ impl OfflineEngine {
         if case.in_place && can_store(gpu, PixelFormat::SRGB8) {
             self.add_in_place_views(rig, case)?;
         }
+        if case.image_copy && copy_path(&self.gpu, PixelFormat::SRGB8) == ViewPath::ImageCopy {
+            self.add_image_copy_views(rig, case)?;
+        }
         self.fill_sources(rig, bytes.len() as u64)?;
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
@@ -198,6 +234,10 @@ impl OfflineEngine {
         for mut v in rig.in_place.drain(..) {
             self.engine.destroy_view(gpu, &mut v);
         }
+        for mut v in rig.image_copy.drain(..) {
+            self.engine.destroy_view(gpu, &mut v);
+        }
+        rig.own_images.iter_mut().for_each(|i| i.destroy(gpu));
         for v in rig.storage_views.drain(..) {
             // SAFETY: made by this rig on this device; every submission was waited for.
             unsafe { gpu.device.destroy_image_view(v, None) };

@@ -4,9 +4,11 @@
 mod bench;
 mod bench_case;
 mod bench_rig;
+mod image_copy_path;
 mod in_place_region;
 mod offline_engine;
 
 pub use bench::BenchResult;
 pub use bench_case::{content_pixel, BenchCase, Content, CAMERA_SIZE, WARM_UP_RUNS};
+pub use image_copy_path::AppImage;
 pub use offline_engine::OfflineEngine;

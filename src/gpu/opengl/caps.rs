@@ -17,6 +17,16 @@ pub struct Caps {
     pub program_binaries: bool,
     /// GL_VENDOR, GL_RENDERER and GL_VERSION, which name the program binaries' cache file.
     pub driver: String,
+    /// A driver that renders on the CPU (llvmpipe, softpipe): there a buffer copy is a memcpy
+    /// and image load/store costs more than it saves, so views go through a buffer by default.
+    pub software: bool,
+}
+
+/// Whether GL_RENDERER names a driver that renders on the CPU.
+fn is_software(renderer: &str) -> bool {
+    ["llvmpipe", "softpipe", "swrast", "Software Rasterizer"]
+        .iter()
+        .any(|name| renderer.contains(name))
 }
 
 fn text(gl: &Gl, name: gl::Enum) -> String {
@@ -90,25 +100,33 @@ impl Caps {
         let mut formats = 0;
         // SAFETY: GL 4.1 query into a valid i32.
         unsafe { (gl.get_integerv)(gl::NUM_PROGRAM_BINARY_FORMATS, &mut formats) };
+        let renderer = text(gl, gl::RENDERER);
         Ok(Caps {
             version,
+            software: is_software(&renderer),
             parallel_compile: has("GL_KHR_parallel_shader_compile")
                 || has("GL_ARB_parallel_shader_compile"),
             // Core in 4.5.
             reset_status: true,
             program_binaries: formats > 0,
-            driver: format!(
-                "{} | {} | {version_text}",
-                text(gl, gl::VENDOR),
-                text(gl, gl::RENDERER)
-            ),
+            driver: format!("{} | {renderer} | {version_text}", text(gl, gl::VENDOR)),
         })
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::parse_version;
+    use super::{is_software, parse_version};
+
+    #[test]
+    fn cpu_drivers_are_told_from_gpus() {
+        assert!(is_software("llvmpipe (LLVM 19.1.7, 256 bits)"));
+        assert!(is_software("softpipe"));
+        assert!(!is_software("NVIDIA H200/PCIe/SSE2"));
+        assert!(!is_software(
+            "AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 19.1.7)"
+        ));
+    }
 
     #[test]
     fn versions_are_read_from_the_version_string() {

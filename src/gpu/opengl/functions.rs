@@ -100,6 +100,9 @@ gl_functions! {
     bind_buffer_range = "glBindBufferRange": fn(Enum, Uint, Uint, IntPtr, IntPtr);
     bind_buffer_base = "glBindBufferBase": fn(Enum, Uint, Uint);
     create_textures = "glCreateTextures": fn(Enum, Sizei, *mut Uint);
+    gen_textures = "glGenTextures": fn(Sizei, *mut Uint);
+    texture_view = "glTextureView": fn(Uint, Enum, Uint, Enum, Uint, Uint, Uint, Uint);
+    bind_image_texture = "glBindImageTexture": fn(Uint, Uint, Int, u8, Int, Enum, Enum);
     texture_storage_2d = "glTextureStorage2D": fn(Uint, Sizei, Enum, Sizei, Sizei);
     texture_parameteri = "glTextureParameteri": fn(Uint, Enum, Int);
     texture_storage_3d = "glTextureStorage3D": fn(Uint, Sizei, Enum, Sizei, Sizei, Sizei);
@@ -219,6 +222,9 @@ pub const SRGB8_ALPHA8: Enum = 0x8C43;
 pub const RGBA16: Enum = 0x805B;
 pub const RGBA16F: Enum = 0x881A;
 pub const RGB10_A2: Enum = 0x8059;
+// Image unit formats of the same sizes (GL_RGBA16 and GL_RGB10_A2 are stored through these).
+pub const RGBA16UI: Enum = 0x8D76;
+pub const R32UI: Enum = 0x8236;
 
 // Barriers.
 pub const SHADER_STORAGE_BARRIER_BIT: u32 = 0x2000;
@@ -226,6 +232,18 @@ pub const COMMAND_BARRIER_BIT: u32 = 0x40;
 pub const PIXEL_BUFFER_BARRIER_BIT: u32 = 0x80;
 pub const TEXTURE_UPDATE_BARRIER_BIT: u32 = 0x100;
 pub const BUFFER_UPDATE_BARRIER_BIT: u32 = 0x200;
+pub const SHADER_IMAGE_ACCESS_BARRIER_BIT: u32 = 0x20;
+pub const ALL_BARRIER_BITS: u32 = 0xFFFF_FFFF;
+
+// Image units and texture views (GL 4.2, 4.3).
+pub const TEXTURE_IMMUTABLE_FORMAT: Enum = 0x912F;
+pub const READ_WRITE: Enum = 0x88BA;
+pub const IMAGE_BINDING_NAME: Enum = 0x8F3A;
+pub const IMAGE_BINDING_LEVEL: Enum = 0x8F3B;
+pub const IMAGE_BINDING_LAYERED: Enum = 0x8F3C;
+pub const IMAGE_BINDING_LAYER: Enum = 0x8F3D;
+pub const IMAGE_BINDING_ACCESS: Enum = 0x8F3E;
+pub const IMAGE_BINDING_FORMAT: Enum = 0x906E;
 pub const TEXTURE_HEIGHT: Enum = 0x1001;
 pub const TEXTURE_DEPTH: Enum = 0x8071;
 pub const TEXTURE_INTERNAL_FORMAT: Enum = 0x1003;

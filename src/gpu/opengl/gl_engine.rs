@@ -1,10 +1,19 @@
 //! The per-view recipe on the app's GL context, called on the app's thread with its context
-//! current (inside xrEndFrame for the layer, after the app's rendering): the view's region is
-//! copied out of the app's texture into a buffer object (glGetTextureSubImage into a pixel
-//! pack buffer), the passes of the method run on that buffer as the Vulkan copy path runs them
-//! (classify, finish_tiles, enhance over the listed tiles through an indirect dispatch), and
-//! the region is copied back (glTextureSubImage from a pixel unpack buffer). The byte layouts
-//! are the Vulkan copy path's, so the same shaders read them.
+//! current (inside xrEndFrame for the layer, after the app's rendering). The passes of the
+//! method (classify, finish_tiles, enhance over the listed tiles through an indirect dispatch)
+//! run on the view's region in one of two ways:
+//! - in place, as the Vulkan in-place path runs them: the app's texture is bound to an image
+//!   unit and the programs load and store its texels, in the storage texel format of the same
+//!   size the shaders take (GL_RGBA8, GL_RGBA16F, GL_RGBA16 as GL_RGBA16UI, GL_RGB10_A2 as
+//!   GL_R32UI: image units take any format of the texture's size); an sRGB texture, which no
+//!   image unit takes, through a GL_RGBA8 texture view of it, which GL allows over immutable
+//!   storage, the kind a runtime imports (the programs apply the sRGB curve themselves). No
+//!   copy at all.
+//! - through a buffer, for a mutable sRGB texture, on a CPU driver unless `in_place = on` (there image load/store
+//!   costs more than the copy, a memcpy), or with `in_place = off`: the region is copied into a buffer object
+//!   (glGetTextureSubImage into a pixel pack buffer), the passes run on it as the Vulkan copy
+//!   path runs them, and it is copied back (glTextureSubImage from a pixel unpack buffer). The
+//!   byte layouts are the Vulkan copy path's, so the same shaders read them.
 //!
 //! GL's images start at the bottom row: the buffer holds the view's rows bottom first, and the
 //! view's camera mapping is turned to take buffer rows (`rows_from_bottom`), so each pixel
@@ -29,8 +38,9 @@ use crate::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use crate::gpu::recipe::CameraRect;
 use crate::gpu::shaders::codes::{method_code, mode_code};
 use crate::gpu::shaders::interface::{
-    ACCESS_NARROW, ACCESS_WIDE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
-    CLASSIFY_WORKGROUP, TILE, TILE_LIST_DISPATCH_OFFSET, TILE_LIST_HEADER_WORDS,
+    in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE, BINDING_APP_IMAGE,
+    BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES, CLASSIFY_WORKGROUP, TILE,
+    TILE_LIST_DISPATCH_OFFSET, TILE_LIST_HEADER_WORDS,
 };
 use crate::gpu::shaders::push_constants::PushConstants;
 
@@ -50,6 +60,27 @@ struct Background {
     size: (u32, u32),
     /// The `BlurredTexels::serial` the texture holds, and of which texels.
     holds: Option<(u64, CameraRect)>,
+}
+
+/// How the programs store into a view's texture in place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StoreThrough {
+    /// The texture itself, bound to the image unit in this format of its size.
+    Texture(gl::Enum),
+    /// A texture view of it in this format (an sRGB texture as GL_RGBA8).
+    View(gl::Enum),
+}
+
+/// The image unit format the in-place programs take a texture of `internal` as: the storage
+/// texel format of their variant (interface.rs, `in_place_texel`), of the texture's size.
+fn image_format(internal: u32) -> Option<gl::Enum> {
+    match internal {
+        gl::RGBA8 | gl::SRGB8_ALPHA8 => Some(gl::RGBA8),
+        gl::RGBA16F => Some(gl::RGBA16F),
+        gl::RGBA16 => Some(gl::RGBA16UI),
+        gl::RGB10_A2 => Some(gl::R32UI),
+        _ => None,
+    }
 }
 
 /// A view slot's buffers, kept across frames and remade only when a view needs more.
@@ -73,6 +104,11 @@ pub struct GlEngine {
     /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
     /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer).
     framebuffer: u32,
+    /// Whether views may be enhanced in place: by default on a GPU, not on a CPU driver
+    /// (`Caps::software`); the `in_place` setting's `on` and `off` decide otherwise.
+    in_place: bool,
+    /// Which of the last enhanced views were stored in place (the others through a buffer).
+    last_in_place: Vec<bool>,
 }
 
 /// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
@@ -130,13 +166,50 @@ impl GlEngine {
         let caps = Caps::check(&gl)?;
         Ok(GlEngine {
             programs: Programs::new(&caps),
+            in_place: !caps.software,
             gl,
             caps,
             background: None,
             texel_buffers: TexelBuffers::default(),
             views: Vec::new(),
             framebuffer: 0,
+            last_in_place: Vec::new(),
         })
+    }
+
+    /// Whether views may be enhanced in place, or always go through a buffer (the default:
+    /// in place on a GPU, through a buffer on a CPU driver).
+    pub fn set_in_place(&mut self, allowed: bool) {
+        self.in_place = allowed;
+    }
+
+    /// Which views of the last `enhance` call were stored in place (the others went through
+    /// a buffer), in their order.
+    pub fn last_in_place(&self) -> &[bool] {
+        &self.last_in_place
+    }
+
+    /// How the programs can store into the view's (checked) texture in place, or None when the
+    /// view goes through a buffer.
+    pub fn store_through(&self, v: &GlView) -> Option<StoreThrough> {
+        let format = GlFormat::of(v.internal_format).ok()?;
+        if !self.in_place || in_place_texel(format.pixel.shader_code()).is_none() {
+            return None;
+        }
+        let unit_format = image_format(v.internal_format)?;
+        if !format.pixel.srgb {
+            return Some(StoreThrough::Texture(unit_format));
+        }
+        let mut immutable = 0;
+        // SAFETY: a checked texture of this context; a valid pname (4.2+).
+        unsafe {
+            (self.gl.get_texture_parameteriv)(
+                v.texture,
+                gl::TEXTURE_IMMUTABLE_FORMAT,
+                &mut immutable,
+            )
+        };
+        (immutable != 0).then_some(StoreThrough::View(unit_format))
     }
 
     /// Whether a background frame was set.
@@ -260,20 +333,24 @@ impl GlEngine {
         }
     }
 
-    /// The programs a view needs: classify, finish_tiles, enhance.
-    fn view_programs(view: &GlView, params: &Params) -> Result<[usize; 3], GlError> {
-        Self::shape_programs(view.internal_format, view.rect.2, params)
+    /// The programs a (checked) view needs: classify, finish_tiles, enhance.
+    fn view_programs(&self, view: &GlView, params: &Params) -> Result<[usize; 3], GlError> {
+        let in_place = self.store_through(view).is_some();
+        Self::shape_programs(view.internal_format, view.rect.2, params, in_place)
     }
 
-    /// The programs views of `internal_format`, `width` texels wide, need.
+    /// The programs views of `internal_format`, `width` texels wide, need, in place or not.
     fn shape_programs(
         internal_format: u32,
         width: u32,
         params: &Params,
+        in_place: bool,
     ) -> Result<[usize; 3], GlError> {
         let format = GlFormat::of(internal_format)?;
         let code = format.pixel.shader_code();
-        let access = if rows_aligned(width, format.pixel.bytes_per_pixel()) {
+        let access = if in_place {
+            ACCESS_IN_PLACE
+        } else if rows_aligned(width, format.pixel.bytes_per_pixel()) {
             ACCESS_WIDE
         } else {
             ACCESS_NARROW
@@ -290,7 +367,8 @@ impl GlEngine {
 
     /// Whether the programs views of `internal_format`, `width` texels wide, need for
     /// `params` are linked, linking those the program binary cache holds (read again first:
-    /// another process may have written it); nothing is compiled.
+    /// another process may have written it); nothing is compiled. Views are taken to be of
+    /// immutable textures (a runtime's are), so in place wherever the format allows.
     ///
     /// # Safety
     /// As for `enhance`.
@@ -304,7 +382,9 @@ impl GlEngine {
         if params.mode == ViewMode::Off {
             return Ok(true);
         }
-        let ids = Self::shape_programs(internal_format, width, params)?;
+        let code = GlFormat::of(internal_format)?.pixel.shader_code();
+        let in_place = self.in_place && in_place_texel(code).is_some();
+        let ids = Self::shape_programs(internal_format, width, params, in_place)?;
         self.programs.reload_cache();
         self.programs.ready_from_cache(&self.gl, &ids)
     }
@@ -322,8 +402,8 @@ impl GlEngine {
         }
         let mut ids = Vec::new();
         for v in views {
-            ids.extend(Self::view_programs(v, params)?);
             self.check_view(v)?;
+            ids.extend(self.view_programs(v, params)?);
         }
         self.programs.ready(&self.gl, &ids)
     }
@@ -350,7 +430,7 @@ impl GlEngine {
         }
         let mut ids = Vec::new();
         for v in views {
-            ids.extend(Self::view_programs(v, params)?);
+            ids.extend(self.view_programs(v, params)?);
         }
         let Some(bg_size) = self.background.as_ref().map(|b| b.size) else {
             return Err(GlError::Input("no background frame was set".into()));
@@ -358,8 +438,12 @@ impl GlEngine {
         while self.views.len() < views.len() {
             self.views.push(ViewBuffers::default());
         }
+        self.last_in_place = views
+            .iter()
+            .map(|v| self.store_through(v).is_some())
+            .collect();
         for (k, v) in views.iter().enumerate() {
-            self.ensure_buffers(k, v)?;
+            self.ensure_buffers(k, v, self.last_in_place[k])?;
         }
         if self.framebuffer == 0 {
             // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`. A 1x1
@@ -426,8 +510,8 @@ impl GlEngine {
         Ok(())
     }
 
-    /// Makes slot `k`'s buffers large enough for the view.
-    fn ensure_buffers(&mut self, k: usize, v: &GlView) -> Result<(), GlError> {
+    /// Makes slot `k`'s buffers large enough for the view (no pixel buffer in place).
+    fn ensure_buffers(&mut self, k: usize, v: &GlView, in_place: bool) -> Result<(), GlError> {
         let g = &self.gl;
         let format = GlFormat::of(v.internal_format)?;
         let (w, h) = (v.rect.2 as usize, v.rect.3 as usize);
@@ -437,7 +521,7 @@ impl GlEngine {
         let tiles = w.div_ceil(TILE as usize) * h.div_ceil(TILE as usize);
         let tile_bytes = (TILE_LIST_HEADER_WORDS as usize + tiles) * 4;
         let slot = &mut self.views[k];
-        if slot.pixel_capacity < pixels {
+        if !in_place && slot.pixel_capacity < pixels {
             if slot.pixels != 0 {
                 // SAFETY: ours.
                 unsafe { (g.delete_buffers)(1, &slot.pixels) };
@@ -471,11 +555,14 @@ impl GlEngine {
     ) {
         let g = &self.gl;
         let format = GlFormat::of(v.internal_format).expect("checked");
-        let (_, _, w, h) = v.rect;
+        let (x, y, w, h) = v.rect;
+        let through = self.store_through(v);
         let bytes = w as usize * h as usize * format.pixel.bytes_per_pixel() as usize;
         let buffers = &self.views[k];
         let mapping = rows_from_bottom(&v.mapping);
-        let push = PushConstants::new(params, bg_size, (w, h), &mapping);
+        let mut push = PushConstants::new(params, bg_size, (w, h), &mapping);
+        // 16 bits each (interface.rs, region_origin), as on Vulkan; only in place reads it.
+        push.region_origin = (x & 0xffff) | (y << 16);
         let [classify, finish_tiles, enhance] = ids.map(|id| self.programs.get(id));
         classify.set_params(g, &push);
         enhance.set_params(g, &push);
@@ -487,17 +574,23 @@ impl GlEngine {
         // rows tightly packed from offset 0); bindings are within the 4.3 minimums and put
         // back by the caller's SavedState.
         unsafe {
-            (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, buffers.pixels);
-            read_region(g, v, format, v.rect, (std::ptr::null_mut(), bytes));
+            let view_texture = match through {
+                Some(t) => self.bind_app_image(v, t),
+                None => {
+                    (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, buffers.pixels);
+                    read_region(g, v, format, v.rect, (std::ptr::null_mut(), bytes));
+                    let bound = (bytes.div_ceil(16) * 16 + 16) as isize;
+                    (g.bind_buffer_range)(
+                        gl::SHADER_STORAGE_BUFFER,
+                        BINDING_PIXELS,
+                        buffers.pixels,
+                        0,
+                        bound,
+                    );
+                    0
+                }
+            };
             (g.named_buffer_sub_data)(buffers.tiles, 0, 4, (&zero as *const u32).cast());
-            let bound = (bytes.div_ceil(16) * 16 + 16) as isize;
-            (g.bind_buffer_range)(
-                gl::SHADER_STORAGE_BUFFER,
-                BINDING_PIXELS,
-                buffers.pixels,
-                0,
-                bound,
-            );
             (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, BINDING_TILES, buffers.tiles);
             (g.active_texture)(gl::TEXTURE0 + BINDING_BLURRED_TEXELS);
             (g.bind_texture)(gl::TEXTURE_2D, bg.texture);
@@ -528,6 +621,15 @@ impl GlEngine {
                     }
                 }
             }
+            if through.is_some() {
+                // The stores reach whatever reads the texture next: the app's sampling,
+                // blits, or the runtime's compositor through the memory it imported.
+                (g.memory_barrier)(gl::ALL_BARRIER_BITS);
+                if view_texture != 0 {
+                    (g.delete_textures)(1, &view_texture);
+                }
+                return;
+            }
             (g.memory_barrier)(
                 gl::PIXEL_BUFFER_BARRIER_BIT
                     | gl::TEXTURE_UPDATE_BARRIER_BIT
@@ -535,6 +637,58 @@ impl GlEngine {
             );
             (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, buffers.pixels);
             write_region(g, v, format, v.rect, std::ptr::null());
+        }
+    }
+
+    /// Binds the view's texel layer to the in-place programs' image unit, through a new
+    /// texture view where `through` says so; that view's name (0 for none), for the caller to
+    /// delete once the passes are recorded (GL keeps it alive while they run).
+    ///
+    /// # Safety
+    /// The engine's context is current; `v` is checked and `through` is `store_through(v)`.
+    unsafe fn bind_app_image(&self, v: &GlView, through: StoreThrough) -> u32 {
+        let g = &self.gl;
+        let layer = match v.target {
+            GlTarget::Texture2D => 0,
+            GlTarget::Texture2DArray { layer } => layer,
+        };
+        match through {
+            StoreThrough::Texture(unit_format) => {
+                // SAFETY: a checked texture and an image unit format of its size (GL's
+                // compatibility by size); one layer, not layered.
+                unsafe {
+                    (g.bind_image_texture)(
+                        BINDING_APP_IMAGE,
+                        v.texture,
+                        0,
+                        0,
+                        layer as i32,
+                        gl::READ_WRITE,
+                        unit_format,
+                    )
+                };
+                0
+            }
+            StoreThrough::View(view_format) => {
+                let mut view = 0;
+                // SAFETY: a name from glGenTextures, not yet bound, made a 2D view of one
+                // layer and level 0 of an immutable texture (checked by store_through) in a
+                // format of its size class (GL_SRGB8_ALPHA8 -> GL_RGBA8).
+                unsafe {
+                    (g.gen_textures)(1, &mut view);
+                    (g.texture_view)(view, gl::TEXTURE_2D, v.texture, view_format, 0, 1, layer, 1);
+                    (g.bind_image_texture)(
+                        BINDING_APP_IMAGE,
+                        view,
+                        0,
+                        0,
+                        0,
+                        gl::READ_WRITE,
+                        view_format,
+                    );
+                }
+                view
+            }
         }
     }
 

@@ -24,7 +24,7 @@ mod texel_buffers;
 mod view_pixels;
 
 pub use functions::Gl;
-pub use gl_engine::{GlEngine, Outcome};
+pub use gl_engine::{GlEngine, Outcome, StoreThrough};
 pub use gl_error::GlError;
 pub use gl_format::GlFormat;
 pub use gl_view::{GlTarget, GlView};

@@ -5,7 +5,9 @@
 //! failed), so whatever error the app had pending is still pending after the call.
 
 use super::functions::{self as gl, Gl};
-use crate::gpu::shaders::interface::{BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES};
+use crate::gpu::shaders::interface::{
+    BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
+};
 
 /// The indexed shader storage bindings the programs use.
 const STORAGE_SLOTS: [u32; 2] = [BINDING_PIXELS, BINDING_TILES];
@@ -42,6 +44,48 @@ struct Indexed {
     size: i64,
 }
 
+/// The image unit the in-place programs store through, as glGetIntegeri_v reads it: name,
+/// level, layered, layer, access, format.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct ImageUnit([i32; 6]);
+
+const IMAGE_UNIT_QUERIES: [gl::Enum; 6] = [
+    gl::IMAGE_BINDING_NAME,
+    gl::IMAGE_BINDING_LEVEL,
+    gl::IMAGE_BINDING_LAYERED,
+    gl::IMAGE_BINDING_LAYER,
+    gl::IMAGE_BINDING_ACCESS,
+    gl::IMAGE_BINDING_FORMAT,
+];
+
+impl ImageUnit {
+    fn save(g: &Gl) -> ImageUnit {
+        ImageUnit(IMAGE_UNIT_QUERIES.map(|q| {
+            let mut v = 0;
+            // SAFETY: an indexed query of image unit 6 (< GL_MAX_IMAGE_UNITS, at least 8 in
+            // 4.3) into a valid output.
+            unsafe { (g.get_integeri_v)(q, BINDING_APP_IMAGE, &mut v) };
+            v
+        }))
+    }
+
+    fn restore(&self, g: &Gl) {
+        let [name, level, layered, layer, access, format] = self.0;
+        // SAFETY: values read from this unit in `save` (GL's own defaults when unbound).
+        unsafe {
+            (g.bind_image_texture)(
+                BINDING_APP_IMAGE,
+                name as u32,
+                level,
+                u8::from(layered != 0),
+                layer,
+                access as u32,
+                format as u32,
+            )
+        };
+    }
+}
+
 /// The state the recipe touches, as the app left it.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct SavedState {
@@ -52,6 +96,7 @@ pub struct SavedState {
     texture: i32,
     sampler: i32,
     storage: [Indexed; 2],
+    image_unit: ImageUnit,
     storage_generic: i32,
     pack_buffer: i32,
     unpack_buffer: i32,
@@ -112,6 +157,7 @@ impl SavedState {
             texture,
             sampler,
             storage,
+            image_unit: ImageUnit::save(g),
             storage_generic: int(g, gl::SHADER_STORAGE_BUFFER_BINDING),
             pack_buffer: int(g, gl::PIXEL_PACK_BUFFER_BINDING),
             unpack_buffer: int(g, gl::PIXEL_UNPACK_BUFFER_BINDING),
@@ -143,6 +189,7 @@ impl SavedState {
                 }
             }
             (g.bind_buffer)(gl::SHADER_STORAGE_BUFFER, self.storage_generic as u32);
+            self.image_unit.restore(g);
             (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, self.pack_buffer as u32);
             (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, self.unpack_buffer as u32);
             (g.bind_buffer)(gl::DISPATCH_INDIRECT_BUFFER, self.indirect_buffer as u32);

@@ -328,8 +328,8 @@ impl WarmUp {
         format: u32,
     ) -> Result<vk::ImageView, GpuError> {
         let view_format = PixelFormat::from_shader_code(format)
-            .and_then(PixelFormat::in_place_view_format)
-            .ok_or_else(|| GpuError::Unsupported("no in-place view format".into()))?;
+            .and_then(PixelFormat::image_copy_format)
+            .ok_or_else(|| GpuError::Unsupported("no in-place texel format".into()))?;
         if let Some(s) = self.storage.iter().find(|s| s.format == view_format) {
             return Ok(s.view);
         }

@@ -26,14 +26,22 @@ pub const ACCESS_WIDE: u32 = 1;
 /// The app's image itself, through a storage view `app_image` (shaders/access_in_place.wgsl):
 pub const ACCESS_IN_PLACE: u32 = 2;
 
-/// The storage texel format through which a pixel format (a FORMAT code) is enhanced in place;
-/// None where it is only enhanced through a copy. Only formats every Vulkan device can store
-/// without optional features: an sRGB image is reached through a UNORM view of it (the shader
-/// encodes sRGB itself), so its swapchain needs the mutable-format usage.
+/// The storage texel format through which a pixel format (a FORMAT code) is enhanced in place
+/// (ACCESS_IN_PLACE); None where it is only enhanced through a buffer. Only formats every
+/// Vulkan device can store without optional features, each converting to and from the
+/// format's raw words exactly: an sRGB image is reached through a UNORM view of it (the shader
+/// encodes sRGB itself), so its swapchain needs the mutable-format usage. The app's own images
+/// are enhanced in place in the RGBA8 and RGBA16 float formats only (a view of the image's own
+/// layout); the other formats' texels serve the image-copy path, where the region is copied
+/// (vkCmdCopyImage, raw bytes) into an image of the layer's own in that texel format: BGRA8
+/// as RGBA8 (the words keep their byte order, the shader reads them as BGRA), A2B10G10R10 as
+/// one 32-bit word, RGBA16 UNORM as four 16-bit integers.
 pub const fn in_place_texel(format: u32) -> Option<&'static str> {
     match format & !FORMAT_SRGB_BIT {
-        LAYOUT_RGBA8 => Some("rgba8unorm"),
+        LAYOUT_RGBA8 | LAYOUT_BGRA8 => Some("rgba8unorm"),
         LAYOUT_RGBA16_FLOAT => Some("rgba16float"),
+        LAYOUT_A2B10G10R10 => Some("r32uint"),
+        LAYOUT_RGBA16_UNORM => Some("rgba16uint"),
         _ => None,
     }
 }

@@ -30,6 +30,9 @@ pub struct ViewImage {
 /// as the view is seen, tightly packed.
 pub struct CapturedImage {
     pub view: ViewImage,
+    /// How the view was enhanced (a capture's `"path"`): `in-place` in the app's image,
+    /// `image-copy` (through an image of the layer's own), `copy` (through a buffer).
+    pub path: &'static str,
     pub display: Vec<u8>,
     pub output: Vec<u8>,
 }
@@ -62,6 +65,12 @@ pub trait SessionGraphics: Send {
         info: &xr::SwapchainCreateInfo,
         settings: &Settings,
     ) -> Option<xr::SwapchainUsageFlags>;
+    /// How views of a swapchain of `format` that is not enhanced in place are enhanced, by
+    /// the name of its path (`copy`: through a buffer; `image-copy`: through an image of the
+    /// layer's own), with `settings` as at the swapchain's creation.
+    fn copy_path(&self, _format: PixelFormat, _settings: &Settings) -> &'static str {
+        "copy"
+    }
     /// The image handles of an enumeration the runtime filled (None: not this API's structs).
     ///
     /// # Safety

@@ -8,6 +8,7 @@ use super::app_context::AppContext;
 use super::program_builder::{Built, ProgramBuilder};
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::config::InPlace;
 use crate::gpu::frame::{overlay_pixel, FrameBackground, OverlayPixels};
 use crate::gpu::opengl::{GlEngine, GlError, GlFormat, GlTarget, GlView, Outcome};
 use crate::gpu::PixelFormat;
@@ -17,6 +18,7 @@ use crate::layer::graphics::session_graphics::{
 use crate::layer::live_settings::Settings;
 use crate::layer::log;
 use openxr_sys as xr;
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 /// A frame call past this long is told in the debug log.
@@ -46,6 +48,9 @@ pub struct GlSession {
     warm_up_time: Duration,
     /// The time frame calls spent on it after a build beside the app ended.
     after_builds_time: Duration,
+    /// The `in_place` setting as the last swapchain creation saw it; GL needs no usage flag
+    /// for it, so it is applied to the engine at each frame call.
+    in_place: Cell<InPlace>,
 }
 
 // SAFETY: the binding's display and context pointers are used only on the app's threads that
@@ -87,6 +92,7 @@ impl GlSession {
             beside_time: Duration::ZERO,
             warm_up_time: Duration::ZERO,
             after_builds_time: Duration::ZERO,
+            in_place: Cell::new(InPlace::Auto),
         }
     }
 
@@ -107,6 +113,11 @@ impl GlSession {
         };
         let result = match engine {
             Ok(mut engine) => {
+                match self.in_place.get() {
+                    InPlace::On => engine.set_in_place(true),
+                    InPlace::Off => engine.set_in_place(false),
+                    InPlace::Auto => engine.set_in_place(!engine.caps().software),
+                }
                 if self.build.0.is_none() {
                     log::info(&format!(
                         "the app's OpenGL context: {} (OpenGL {}.{})",
@@ -298,8 +309,11 @@ impl SessionGraphics for GlSession {
         &self,
         _: PixelFormat,
         _: &xr::SwapchainCreateInfo,
-        _: &Settings,
+        settings: &Settings,
     ) -> Option<xr::SwapchainUsageFlags> {
+        // GL stores into a texture without usage flags: whether a view is stored in place is
+        // the engine's choice at each frame (its format, the texture, the driver, this).
+        self.in_place.set(settings.in_place);
         None
     }
 
@@ -438,10 +452,16 @@ impl SessionGraphics for GlSession {
                 return Ok(Vec::new());
             }
             let after = read(engine)?;
+            let stored = engine.last_in_place();
             Ok(views
                 .iter()
                 .zip(before.into_iter().zip(after))
-                .map(|(v, (display, output))| CapturedImage {
+                .enumerate()
+                .map(|(k, (v, (display, output)))| CapturedImage {
+                    path: match stored.get(k) {
+                        Some(true) => "in-place",
+                        _ => "copy",
+                    },
                     view: v.clone(),
                     display,
                     output,
@@ -494,9 +514,14 @@ impl SessionGraphics for GlSession {
         {
             lines.push(("source-texels", "live frames' texels are written into a mapped pixel buffer on the camera's thread, before the frame call; the frame call uploads them to the background texture".to_string()));
         }
+        let stored = self.engine.as_ref().map_or(&[][..], |e| e.last_in_place());
+        let in_place = stored.iter().filter(|&&s| s).count();
         lines.push((
             "first-frame-path",
-            "views enhanced in the app's OpenGL context through a buffer copy of each view".into(),
+            format!(
+                "views enhanced in the app's OpenGL context: {in_place} of {} in place through an image unit (an sRGB texture through a GL_RGBA8 view), the others through a buffer copy (a mutable sRGB texture, a CPU driver unless in_place = on, or in_place = off)",
+                stored.len()
+            ),
         ));
         lines
     }

@@ -1,15 +1,39 @@
 //! Whether a swapchain's views are enhanced in place: the layer asks the runtime for storage
 //! usage (and, for sRGB formats, mutable format, to reach them through a UNORM view) on the
 //! app's colour swapchains, invisibly to the app. A runtime that refuses gets the app's own
-//! create info again and the views go through a copy. `in_place = "auto"` leaves CPU drivers
-//! on the copy path: there a copy is a memcpy and storage-image access costs more.
+//! create info again and the views go through a copy: of the region into an image of the
+//! layer's own that the same shaders enhance (the image-copy path), or into a buffer where the
+//! device cannot store to that image's format. `in_place = "auto"` leaves CPU drivers on the
+//! buffer path: there a copy is a memcpy and storage-image access costs more.
 
 use crate::config::InPlace;
 use crate::gpu::frame::can_store;
-use crate::gpu::{GpuDevice, PixelFormat};
+use crate::gpu::{GpuDevice, PixelFormat, ViewPath};
 use crate::layer::ffi::find_in_chain;
 use crate::layer::live_settings::Settings;
 use openxr_sys as xr;
+
+/// Whether the settings want views enhanced with the in-place shaders on this device: in the
+/// app's image where the runtime grants storage usage, else in an image of the layer's own
+/// (the image-copy path). `in_place = "auto"` leaves CPU drivers on the buffer path, and
+/// `off` every device.
+pub fn wanted(gpu: &GpuDevice, settings: &Settings) -> bool {
+    match settings.in_place {
+        InPlace::On => true,
+        InPlace::Off => false,
+        InPlace::Auto => !gpu.is_cpu(),
+    }
+}
+
+/// The path of the views of a swapchain of `format` that are not enhanced in place: through
+/// an image of the layer's own where the settings want the in-place shaders and the device
+/// can store to the format's image-copy format, else through a buffer.
+pub fn copy_path(gpu: &GpuDevice, settings: &Settings, format: PixelFormat) -> ViewPath {
+    match wanted(gpu, settings) {
+        true => crate::gpu::frame::copy_path(gpu, format),
+        false => ViewPath::BufferCopy,
+    }
+}
 
 /// The usage bits to add for in place on a swapchain of `format`, if the session's settings,
 /// its device and the app's create info allow it.
@@ -19,12 +43,7 @@ pub fn added_usage(
     format: PixelFormat,
     info: &xr::SwapchainCreateInfo,
 ) -> Option<xr::SwapchainUsageFlags> {
-    let wanted = match settings.in_place {
-        InPlace::On => true,
-        InPlace::Off => false,
-        InPlace::Auto => !gpu.is_cpu(),
-    };
-    if !wanted || !can_store(gpu, format) {
+    if !wanted(gpu, settings) || !can_store(gpu, format) {
         return None;
     }
     if !format.srgb {

@@ -5,11 +5,11 @@
 use super::{app_vulkan, in_place};
 use crate::algorithm::params::Params;
 use crate::gpu::frame::{
-    FrameBackground, FrameEngine, FrameOptions, OverlayPixels, PipelinesReady,
+    copy_path, FrameBackground, FrameEngine, FrameOptions, OverlayPixels, PipelinesReady,
 };
 use crate::gpu::pipelines::Origin;
 use crate::gpu::shaders::shader_ids::ShaderId;
-use crate::gpu::{Engine, FrameView, GpuDevice, GpuError, PixelFormat, ViewShape};
+use crate::gpu::{Engine, FrameView, GpuDevice, GpuError, PixelFormat, ViewPath, ViewShape};
 use crate::layer::graphics::session_graphics::{
     Bound, CapturedImage, NotDone, SessionGraphics, ViewImage,
 };
@@ -17,12 +17,17 @@ use crate::layer::live_settings::Settings;
 use crate::layer::log;
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 pub struct VulkanSession {
     engine: FrameEngine,
     /// The last `ready` answer, taken by the next `enhance`.
     ready: Option<PipelinesReady>,
+    /// Whether views not enhanced in place go through an image of the engine's own where
+    /// their format allows it (`in_place::wanted` at the last swapchain's creation), else
+    /// through a buffer.
+    image_copy: AtomicBool,
 }
 
 /// The session's graphics for a Vulkan binding (None: not one).
@@ -37,6 +42,7 @@ pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bo
     let b = unsafe { &*(base as *const _ as *const xr::GraphicsBindingVulkanKHR) };
     Some(match set_up(b, settings) {
         Ok(engine) => Bound::Enhanced(Box::new(VulkanSession {
+            image_copy: AtomicBool::new(in_place::wanted(&engine.gpu, settings)),
             engine,
             ready: None,
         })),
@@ -93,15 +99,27 @@ fn request_shaders(engine: &FrameEngine, ids: &[ShaderId]) {
     }
 }
 
-fn frame_view(v: &ViewImage) -> FrameView {
-    FrameView::new(
-        v.key,
-        vk::Image::from_raw(v.image),
-        v.format,
-        vk::Format::from_raw(v.api_format as i32),
-        v.in_place,
-        v.mapping,
-    )
+impl VulkanSession {
+    /// The path of `v`: in place where its swapchain has storage usage, else through an image
+    /// of the engine's own or a buffer.
+    fn path(&self, v: &ViewImage) -> ViewPath {
+        match (v.in_place, self.image_copy.load(Ordering::Relaxed)) {
+            (true, _) => ViewPath::InPlace,
+            (false, true) => copy_path(&self.engine.gpu, v.format),
+            (false, false) => ViewPath::BufferCopy,
+        }
+    }
+
+    fn frame_view(&self, v: &ViewImage) -> FrameView {
+        FrameView::new(
+            v.key,
+            vk::Image::from_raw(v.image),
+            v.format,
+            vk::Format::from_raw(v.api_format as i32),
+            self.path(v),
+            v.mapping,
+        )
+    }
 }
 
 fn not_done(e: GpuError) -> NotDone {
@@ -138,7 +156,13 @@ impl SessionGraphics for VulkanSession {
         info: &xr::SwapchainCreateInfo,
         settings: &Settings,
     ) -> Option<xr::SwapchainUsageFlags> {
+        let wanted = in_place::wanted(&self.engine.gpu, settings);
+        self.image_copy.store(wanted, Ordering::Relaxed);
         in_place::added_usage(&self.engine.gpu, settings, format, info)
+    }
+
+    fn copy_path(&self, format: PixelFormat, settings: &Settings) -> &'static str {
+        in_place::copy_path(&self.engine.gpu, settings, format).name()
     }
 
     unsafe fn images(
@@ -166,10 +190,12 @@ impl SessionGraphics for VulkanSession {
         width: u32,
         in_place: bool,
     ) {
+        let image_copy = self.image_copy.load(Ordering::Relaxed)
+            && copy_path(&self.engine.gpu, format) == ViewPath::ImageCopy;
         let shape = ViewShape {
             format,
             width,
-            in_place,
+            in_place: in_place || image_copy,
         };
         if let Ok(ids) = Engine::shaders_for(params, [shape]) {
             request_shaders(&self.engine, &ids);
@@ -188,7 +214,7 @@ impl SessionGraphics for VulkanSession {
     }
 
     fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone> {
-        let views: Vec<FrameView> = views.iter().map(frame_view).collect();
+        let views: Vec<FrameView> = views.iter().map(|v| self.frame_view(v)).collect();
         let ready = self.engine.pipelines_ready(&views, params, wait);
         self.ready = Some(ready.map_err(not_done)?);
         Ok(())
@@ -203,7 +229,7 @@ impl SessionGraphics for VulkanSession {
         capture: bool,
     ) -> Result<Vec<CapturedImage>, NotDone> {
         let ready = self.ready.take().ok_or(NotDone::Pending)?;
-        let frame_views: Vec<FrameView> = views.iter().map(frame_view).collect();
+        let frame_views: Vec<FrameView> = views.iter().map(|v| self.frame_view(v)).collect();
         let options = FrameOptions {
             capture,
             wait_for_pipelines: false,
@@ -216,6 +242,7 @@ impl SessionGraphics for VulkanSession {
             .into_iter()
             .zip(views)
             .map(|(c, v)| CapturedImage {
+                path: c.view.path.name(),
                 view: v.clone(),
                 display: c.display,
                 output: c.output,
@@ -267,12 +294,16 @@ impl SessionGraphics for VulkanSession {
         if self.engine.texels_from_source().0 > 0 {
             lines.push(("source-texels", "live frames' texels are written into mapped memory on the camera's thread, before the frame call".to_string()));
         }
-        let in_place = views.iter().filter(|v| v.in_place).count();
+        let paths: Vec<ViewPath> = views.iter().map(|v| self.path(v)).collect();
+        let count = |p: ViewPath| paths.iter().filter(|&&q| q == p).count();
         lines.push((
             "first-frame-path",
             format!(
-                "views enhanced in place: {in_place} of {} (the others through a copy)",
-                views.len()
+                "views enhanced in place: {} of {} (the others through a copy: {} through an image of the layer's own, {} through a buffer)",
+                count(ViewPath::InPlace),
+                views.len(),
+                count(ViewPath::ImageCopy),
+                count(ViewPath::BufferCopy),
             ),
         ));
         lines
