@@ -1135,3 +1135,69 @@ fn in_place_and_through_a_buffer_give_the_same_texels() {
         }
     }
 }
+
+/// `contrastxr bench --engine opengl` reports the OpenGL engine's figures in the Vulkan bench's
+/// JSON: the device names the GL driver, every time is positive, the ratios are the times'
+/// quotients, the frame in place is there (it is the enhancement's figure) and the image-copy
+/// path, which OpenGL has not, is null; a bad engine name is refused.
+#[test]
+fn bench_times_the_opengl_engine() {
+    let bench = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_contrastxr"))
+            .args([
+                "bench", "--sizes", "48x32", "--views", "2", "--runs", "3", "--json",
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = bench(&["--engine", "opengl", "--content", "typical"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert!(
+        v["device"]
+            .as_str()
+            .is_some_and(|d| d.starts_with("OpenGL: ")),
+        "{v}"
+    );
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 1, "{v}");
+    let r = &results[0];
+    assert_eq!(
+        (r["width"].as_u64(), r["views"].as_u64()),
+        (Some(48), Some(2))
+    );
+    assert_eq!(r["content"], "typical");
+    let fg = r["foreground_fraction"].as_f64().unwrap();
+    assert!(fg > 0.05 && fg < 0.5, "{fg}");
+    let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
+    for k in [
+        "copy_ms",
+        "enhance_ms",
+        "frame_ms",
+        "image_copy_ms",
+        "frame_in_place_ms",
+        "background_ms",
+    ] {
+        assert!(ms(k) > 0.0, "{k} {}", ms(k));
+    }
+    assert_eq!(ms("enhance_ms"), ms("frame_in_place_ms"));
+    let ratio = ms("frame_in_place_ms") / ms("frame_ms");
+    assert!((ms("in_place_ratio") - ratio).abs() < 1e-9 * ratio);
+    assert!((ms("frame_ratio") - ms("frame_ms") / ms("copy_ms")).abs() < 1e-9 * ms("frame_ratio"));
+    for k in [
+        "copy_wide_ms",
+        "frame_image_copy_ms",
+        "image_copy_copies_ms",
+    ] {
+        assert!(r[k].is_null(), "{k}: {r}");
+    }
+    let o = bench(&["--engine", "metal"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--engine must be vulkan or opengl"));
+}

@@ -5,14 +5,16 @@ use super::args::Args;
 use super::error::CliError;
 use contrastxr::algorithm::{Method, Params};
 use contrastxr::gpu::offline::{BenchCase, BenchResult, Content, CAMERA_SIZE};
+use contrastxr::gpu::opengl::GlOffline;
 use contrastxr::gpu::{DeviceOptions, OfflineEngine};
 
-const DEFAULT_SIZES: &str = "1268x720,2064x2208,3840x3840";
+const DEFAULT_SIZES: &str = "1268x720,1920x1080,2064x2208,3840x3840";
 
 pub fn usage() -> String {
     format!(
         "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
-         \x20                       [--method NAME] [--content typical,full] [--path P]\n\n\
+         \x20                       [--method NAME] [--content typical,full] [--path P]\n\
+         \x20                       [--engine vulkan|opengl]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
@@ -33,7 +35,13 @@ pub fn usage() -> String {
          sRGB swapchains without storage usage; its copies alone, ic copies ms; ic/frame and\n\
          ic/ip: its ratio to the frame through buffer copies and in place; with image-copy\n\
          and all). all times the three.\n\
-         Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n",
+         Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n\
+         --engine opengl (default vulkan) times the OpenGL engine on an EGL context of its own\n\
+         (GL_TIME_ELAPSED queries; --device and --path do not apply) in the same columns: copy\n\
+         is glCopyImageSubData of the regions (no copy16), frame goes through a buffer object,\n\
+         img copy is that buffer path's copies alone, in place stores through an image unit\n\
+         (enh is the same figure: nothing else runs around the passes), bg is the upload of a\n\
+         camera frame's texels (their blur runs on the source's CPU thread, not timed).\n",
         contrastxr::gpu::offline::WARM_UP_RUNS,
         contrastxr::gpu::offline::CAMERA_SIZE.0,
         contrastxr::gpu::offline::CAMERA_SIZE.1,
@@ -106,8 +114,37 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             )))
         }
     };
+    let opengl = match args.value(&["--engine"])?.as_deref() {
+        None | Some("vulkan") => false,
+        Some("opengl") => true,
+        Some(e) => {
+            return Err(CliError::Usage(format!(
+                "--engine must be vulkan or opengl, got '{e}'"
+            )))
+        }
+    };
     let json = args.flag("--json");
     args.finish()?;
+    let params = Params {
+        method,
+        ..Params::default()
+    };
+    let cases = sizes
+        .iter()
+        .flat_map(|&region| {
+            contents.iter().map(move |&content| BenchCase {
+                region,
+                views,
+                content,
+                runs,
+                in_place,
+                image_copy,
+            })
+        })
+        .collect::<Vec<_>>();
+    if opengl {
+        return run_opengl(&cases, &params, json);
+    }
     let options = DeviceOptions {
         index: device,
         validation: false,
@@ -115,35 +152,44 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     };
     let mut engine =
         OfflineEngine::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
-    let params = Params {
-        method,
-        ..Params::default()
-    };
-    let mut results = Vec::new();
+    let device = engine.device_name().to_string();
+    report(&device, json, &cases, |case| {
+        engine
+            .bench(case, &params)
+            .map_err(|e| CliError::Failure(e.to_string()))
+    })
+}
+
+/// The cases on the OpenGL engine's own EGL context.
+fn run_opengl(cases: &[BenchCase], params: &Params, json: bool) -> Result<(), CliError> {
+    let mut gl = GlOffline::new().map_err(|e| CliError::Failure(e.to_string()))?;
+    let device = format!("OpenGL: {}", gl.engine().caps().driver);
+    report(&device, json, cases, |case| {
+        gl.bench(case, params)
+            .map_err(|e| CliError::Failure(e.to_string()))
+    })
+}
+
+/// Runs every case, printing each row as it comes (or the JSON at the end).
+fn report(
+    device: &str,
+    json: bool,
+    cases: &[BenchCase],
+    mut bench: impl FnMut(&BenchCase) -> Result<BenchResult, CliError>,
+) -> Result<(), CliError> {
     if !json {
-        super::error::print(&format!("device: {}\n{}\n", engine.device_name(), header()));
+        super::error::print(&format!("device: {device}\n{}\n", header()));
     }
-    for &region in &sizes {
-        for &content in &contents {
-            let case = BenchCase {
-                region,
-                views,
-                content,
-                runs,
-                in_place,
-                image_copy,
-            };
-            let r = engine
-                .bench(&case, &params)
-                .map_err(|e| CliError::Failure(e.to_string()))?;
-            if !json {
-                super::error::print(&row(&r));
-            }
-            results.push(r);
+    let mut results = Vec::new();
+    for case in cases {
+        let r = bench(case)?;
+        if !json {
+            super::error::print(&row(&r));
         }
+        results.push(r);
     }
     if json {
-        super::error::print(&format!("{}\n", to_json(engine.device_name(), &results)));
+        super::error::print(&format!("{}\n", to_json(device, &results)));
     }
     Ok(())
 }

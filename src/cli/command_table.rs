@@ -28,7 +28,8 @@ const BENCH_OPTIONS: &[Opt] = &[
     Opt::value("--device", "N"),
     Opt::value("--method", "NAME"),
     Opt::value("--content", "typical,full"),
-    Opt::value("--path", "copy|in-place|both"),
+    Opt::value("--path", "copy|in-place|both|image-copy|all"),
+    Opt::value("--engine", "vulkan|opengl"),
     Opt::flag("--json"),
 ];
 

@@ -73,7 +73,7 @@ pub fn content_pixel(content: Content, x: u32, y: u32, w: u32, h: u32) -> u32 {
 }
 
 /// A smooth camera frame with some texture (what the blur and FoV mapping see).
-pub(super) fn camera_frame(size: (u32, u32)) -> Vec<[u8; 4]> {
+pub fn camera_frame(size: (u32, u32)) -> Vec<[u8; 4]> {
     let mut out = Vec::with_capacity((size.0 * size.1) as usize);
     for y in 0..size.1 {
         for x in 0..size.0 {

@@ -9,6 +9,6 @@ mod in_place_region;
 mod offline_engine;
 
 pub use bench::BenchResult;
-pub use bench_case::{content_pixel, BenchCase, Content, CAMERA_SIZE, WARM_UP_RUNS};
+pub use bench_case::{camera_frame, content_pixel, BenchCase, Content, CAMERA_SIZE, WARM_UP_RUNS};
 pub use image_copy_path::AppImage;
 pub use offline_engine::OfflineEngine;

@@ -101,6 +101,12 @@ gl_functions! {
     bind_buffer_base = "glBindBufferBase": fn(Enum, Uint, Uint);
     create_textures = "glCreateTextures": fn(Enum, Sizei, *mut Uint);
     gen_textures = "glGenTextures": fn(Sizei, *mut Uint);
+    copy_image_sub_data = "glCopyImageSubData": fn(Uint, Enum, Int, Int, Int, Int, Uint, Enum, Int, Int, Int, Int, Sizei, Sizei, Sizei);
+    gen_queries = "glGenQueries": fn(Sizei, *mut Uint);
+    delete_queries = "glDeleteQueries": fn(Sizei, *const Uint);
+    begin_query = "glBeginQuery": fn(Enum, Uint);
+    end_query = "glEndQuery": fn(Enum);
+    get_query_objectui64v = "glGetQueryObjectui64v": fn(Uint, Enum, *mut u64);
     texture_view = "glTextureView": fn(Uint, Enum, Uint, Enum, Uint, Uint, Uint, Uint);
     bind_image_texture = "glBindImageTexture": fn(Uint, Uint, Int, u8, Int, Enum, Enum);
     texture_storage_2d = "glTextureStorage2D": fn(Uint, Sizei, Enum, Sizei, Sizei);
@@ -234,6 +240,10 @@ pub const TEXTURE_UPDATE_BARRIER_BIT: u32 = 0x100;
 pub const BUFFER_UPDATE_BARRIER_BIT: u32 = 0x200;
 pub const SHADER_IMAGE_ACCESS_BARRIER_BIT: u32 = 0x20;
 pub const ALL_BARRIER_BITS: u32 = 0xFFFF_FFFF;
+
+// Timer queries (GL 3.3).
+pub const TIME_ELAPSED: Enum = 0x88BF;
+pub const QUERY_RESULT: Enum = 0x8866;
 
 // Image units and texture views (GL 4.2, 4.3).
 pub const TEXTURE_IMMUTABLE_FORMAT: Enum = 0x912F;

@@ -11,6 +11,7 @@
 pub mod binary_cache;
 pub mod caps;
 pub mod functions;
+mod gl_bench;
 pub mod gl_engine;
 pub mod gl_error;
 pub mod gl_format;
