@@ -659,7 +659,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_IN_PLACE",
         env_negated: false,
         kind: Kind::Text,
-        doc: "on: enhance the app's images in place (storage usage added to its swapchains) where the runtime and the device allow it; off: always through a copy of each view; auto: on, except on CPU drivers (lavapipe), where the copies are cheaper than storage-image access",
+        doc: "on: enhance the app's images in place (Vulkan: storage usage added to its swapchains; OpenGL: through an image unit), and where the runtime refuses storage (Vulkan) through an image of the layer's own, copied image to image; off: always through a buffer copy of each view; auto: on, except on CPU drivers (lavapipe, llvmpipe), where the buffer copies are cheaper than storage-image access",
         set: |s, v| {
             s.in_place = match v {
                 Value::Text(t) => InPlace::parse(&t).ok_or(format!("{t:?} is not auto, on or off"))?,
