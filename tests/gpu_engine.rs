@@ -1135,8 +1135,46 @@ fn shared_and_general(
     (shared, general)
 }
 
+/// The shared fetches' contract with the general variant: the same arithmetic per pixel on the
+/// same texels, so bit for bit where the driver compiles both pipelines' arithmetic alike (a CPU
+/// driver: checked exactly). A GPU compiler may fuse a multiply and an add in one pipeline and
+/// not the other (naga's SPIR-V carries no NoContraction), which moves a value at a rounding
+/// boundary by one step: there, at most one step (8-bit code or half-float unit) in any
+/// channel, on at most 1 in 1000 values. `shared` and `general` are the outputs' channels as
+/// integers.
+fn assert_shared_fetch_contract(e: &OfflineEngine, shared: &[u32], general: &[u32], what: &str) {
+    assert_eq!(shared.len(), general.len(), "{what}");
+    let differ = differing(shared, general);
+    if e.is_cpu() {
+        assert_eq!(differ, 0, "{what}: values differ");
+        return;
+    }
+    let worst = shared
+        .iter()
+        .zip(general)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap_or(0);
+    assert!(worst <= 1, "{what}: values differ by up to {worst}");
+    assert!(
+        differ * 1000 <= shared.len(),
+        "{what}: {differ} of {} values differ",
+        shared.len()
+    );
+}
+
+/// The channels of 8-bit pixels, and of words holding two half floats each (as unsigned 16-bit
+/// integers: for values of one sign, adjacent floats are adjacent integers).
+fn channels(pixels: &[[u8; 4]]) -> Vec<u32> {
+    pixels.iter().flatten().map(|&c| u32::from(c)).collect()
+}
+
+fn halves(words: &[u32]) -> Vec<u32> {
+    words.iter().flat_map(|w| [w & 0xffff, w >> 16]).collect()
+}
+
 #[test]
-fn shared_fetches_give_the_general_variants_output_bit_for_bit() {
+fn shared_fetches_give_the_general_variants_output() {
     use contrastxr::gpu::recipe::shares_fetches;
     let mut e = engine();
     let camera = noise(64, 40, 11);
@@ -1151,8 +1189,8 @@ fn shared_fetches_give_the_general_variants_output_bit_for_bit() {
             );
             let (shared, general) = shared_and_general(&mut e, &display, &camera, &mapping);
             assert_ne!(general, display, "{width} {mapping:?}: nothing changed");
-            let differ = differing(&shared.pixels, &general.pixels);
-            assert_eq!(differ, 0, "{width} {mapping:?}: pixels differ");
+            let (s, g) = (channels(&shared.pixels), channels(&general.pixels));
+            assert_shared_fetch_contract(&e, &s, &g, &format!("{width} {mapping:?}"));
         }
     }
     // The 16-bit float format through the same variant dimension.
@@ -1179,7 +1217,8 @@ fn shared_fetches_give_the_general_variants_output_bit_for_bit() {
         let general = run(&mut e);
         e.set_shared_fetch(true);
         assert_ne!(general, raw);
-        assert_eq!(differing(&shared, &general), 0, "{mapping:?}: words differ");
+        let what = format!("RGBA16F {mapping:?}");
+        assert_shared_fetch_contract(&e, &halves(&shared), &halves(&general), &what);
     }
     assert_clean(&e);
 }
@@ -1217,7 +1256,14 @@ fn shared_fetches_in_place_match_the_general_variant() {
         let general = run(&mut e);
         e.set_shared_fetch(true);
         assert_ne!(general, raw, "{region:?}");
-        assert_eq!(differing(&shared, &general), 0, "{region:?}: pixels differ");
+        let bytes = |w: &[u32]| -> Vec<u32> {
+            w.iter()
+                .flat_map(|x| x.to_le_bytes())
+                .map(u32::from)
+                .collect()
+        };
+        let what = format!("in place {region:?}");
+        assert_shared_fetch_contract(&e, &bytes(&shared), &bytes(&general), &what);
     }
     assert_clean(&e);
 }

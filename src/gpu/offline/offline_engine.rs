@@ -82,6 +82,11 @@ impl OfflineEngine {
         &self.gpu.name
     }
 
+    /// Whether the device is a CPU driver (lavapipe).
+    pub fn is_cpu(&self) -> bool {
+        self.gpu.is_cpu()
+    }
+
     /// Runs `record` in the command buffer, submits it and waits.
     pub(super) fn submit(
         &self,
