@@ -169,6 +169,18 @@ const NOT_RUN: &[(&str, &str)] = &[
     ("contrastxr bench --content full", "minutes"),
     ("contrastxr bench --path both", "minutes"),
     (
+        "contrastxr bench --path all",
+        "minutes; tests/gpu_engine.rs runs it",
+    ),
+    (
+        "contrastxr bench --engine vulkan --path all",
+        "minutes; tests/gpu_engine.rs runs the Vulkan bench",
+    ),
+    (
+        "contrastxr bench --engine opengl",
+        "minutes; tests/opengl_engine.rs runs it",
+    ),
+    (
         "contrastxr bench --sizes 1268x720 --content full --runs 60",
         "minutes",
     ),
