@@ -1201,3 +1201,20 @@ fn bench_times_the_opengl_engine() {
     );
     assert!(String::from_utf8_lossy(&o.stderr).contains("--engine must be vulkan or opengl"));
 }
+
+/// The app's reset status is the app's: a robust context reports a reset once, so the engine
+/// never resolves (let alone calls) glGetGraphicsResetStatus or its ARB/KHR/EXT forms.
+#[test]
+fn the_engine_never_asks_for_the_reset_status() {
+    use contrastxr::gpu::opengl::Gl;
+    let gl = context();
+    let mut asked = Vec::new();
+    let loaded = Gl::load(&mut |name: &CStr| {
+        asked.push(name.to_string_lossy().into_owned());
+        gl.proc_address(name)
+    });
+    assert!(loaded.is_ok(), "the entry points load");
+    assert!(asked.len() > 50, "{asked:?}");
+    let reset: Vec<&String> = asked.iter().filter(|n| n.contains("ResetStatus")).collect();
+    assert!(reset.is_empty(), "the engine resolves {reset:?}");
+}

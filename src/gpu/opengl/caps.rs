@@ -11,8 +11,6 @@ pub struct Caps {
     pub version: (i32, i32),
     /// GL_KHR_parallel_shader_compile (or the ARB one): compile and link without blocking.
     pub parallel_compile: bool,
-    /// glGetGraphicsResetStatus is there (core in 4.5).
-    pub reset_status: bool,
     /// glGetProgramBinary gives something (at least one binary format).
     pub program_binaries: bool,
     /// GL_VENDOR, GL_RENDERER and GL_VERSION, which name the program binaries' cache file.
@@ -106,8 +104,6 @@ impl Caps {
             software: is_software(&renderer),
             parallel_compile: has("GL_KHR_parallel_shader_compile")
                 || has("GL_ARB_parallel_shader_compile"),
-            // Core in 4.5.
-            reset_status: true,
             program_binaries: formats > 0,
             driver: format!("{} | {renderer} | {version_text}", text(gl, gl::VENDOR)),
         })

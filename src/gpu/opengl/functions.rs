@@ -127,7 +127,6 @@ gl_functions! {
     named_framebuffer_parameteri = "glNamedFramebufferParameteri": fn(Uint, Enum, Int);
     delete_framebuffers = "glDeleteFramebuffers": fn(Sizei, *const Uint);
     finish = "glFinish": fn();
-    get_graphics_reset_status = "glGetGraphicsResetStatus": fn() -> Enum;
 }
 
 // Queries.
