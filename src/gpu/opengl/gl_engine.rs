@@ -313,7 +313,7 @@ impl GlEngine {
             });
         }
         let bg = self.background.as_mut().expect("made above");
-        let saved = SavedState::save(g);
+        let saved = SavedState::save(g)?;
         // SAFETY: the context is current (this call's contract); the texture is the
         // background's, of the texels' size; the unpack binding is put back by `restore`.
         let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };
@@ -456,7 +456,7 @@ impl GlEngine {
                 }
             }
         }
-        let saved = SavedState::save(&self.gl);
+        let saved = SavedState::save(&self.gl)?;
         // SAFETY: a framebuffer this engine made; the app's bindings are put back by `restore`.
         unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
         for (k, v) in views.iter().enumerate() {

@@ -57,8 +57,13 @@ pub struct GlSession {
 // call into the layer, under the session's lock, as the runtime uses them.
 unsafe impl Send for GlSession {}
 
+/// A GL error as the layer takes it: an app binding the engine could not put back passes
+/// only this frame through; anything else, the session.
 fn failed(e: GlError) -> NotDone {
-    NotDone::Failed(e.to_string())
+    match e {
+        GlError::Unrestorable(_) => NotDone::Skipped(e.to_string()),
+        e => NotDone::Failed(e.to_string()),
+    }
 }
 
 fn gl_view(v: &ViewImage) -> GlView {
