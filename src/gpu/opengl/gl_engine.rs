@@ -183,6 +183,24 @@ impl GlEngine {
         self.in_place = allowed;
     }
 
+    /// Whether views may be stored in place (the default or `set_in_place`).
+    pub fn in_place(&self) -> bool {
+        self.in_place
+    }
+
+    /// The programs (their ids) views of `internal_format`, `width` texels wide, need for
+    /// `params`, taking the views to be of immutable textures (see `ready_from_cache`).
+    pub fn shape_program_ids(
+        &self,
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+    ) -> Result<[usize; 3], GlError> {
+        let code = GlFormat::of(internal_format)?.pixel.shader_code();
+        let in_place = self.in_place && in_place_texel(code).is_some();
+        Self::shape_programs(internal_format, width, params, in_place)
+    }
+
     /// Which views of the last `enhance` call were stored in place (the others went through
     /// a buffer), in their order.
     pub fn last_in_place(&self) -> &[bool] {
@@ -379,9 +397,7 @@ impl GlEngine {
         if params.mode == ViewMode::Off {
             return Ok(true);
         }
-        let code = GlFormat::of(internal_format)?.pixel.shader_code();
-        let in_place = self.in_place && in_place_texel(code).is_some();
-        let ids = Self::shape_programs(internal_format, width, params, in_place)?;
+        let ids = self.shape_program_ids(internal_format, width, params)?;
         self.programs.reload_cache();
         self.programs.ready_from_cache(&self.gl, &ids)
     }
