@@ -7,14 +7,14 @@
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
 //! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`,
-//! `gl-program-process`
+//! `gl-program-thread`, `gl-program-build`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 19] = [
+pub const POINTS: [(&str, &str); 20] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -75,8 +75,12 @@ pub const POINTS: [(&str, &str); 19] = [
         "checking the app's OpenGL context before the frame's work (as if it were lost)",
     ),
     (
-        "gl-program-process",
-        "starting the process that builds an OpenGL app's programs beside it",
+        "gl-program-thread",
+        "starting the thread that builds an OpenGL app's programs off its threads",
+    ),
+    (
+        "gl-program-build",
+        "the build of an OpenGL app's programs off its threads (it ends without them)",
     ),
     (
         "end-frame",

@@ -249,27 +249,54 @@ fn an_opaque_session_gets_no_programs_built() {
     }
 }
 
-/// With empty caches the programs are built by a process beside the app (`contrastxr
-/// gl-programs`) while its frames pass through, then linked from the caches in its context;
-/// where that process cannot start they are built in the app's context. Either way the views
-/// are enhanced within the tolerance of the CPU reference.
+/// With empty caches the programs are built on a thread of the layer's own, in an OpenGL
+/// context of its own, while the frames pass through, then linked from the caches in the app's
+/// context; where that thread cannot start they are built in the app's context. Either way the
+/// views are enhanced within the tolerance of the CPU reference, and no process is started
+/// from the app: the layer runs from a copy of its library with a `contrastxr` beside it that
+/// would leave a mark if anything ran it (the layer once ran `contrastxr gl-programs` there).
 #[test]
-fn opengl_programs_are_built_beside_the_app_or_in_its_context() {
+fn opengl_programs_are_built_off_the_apps_threads_or_in_its_context() {
     let cases = [
-        (None, "built beside the app in"),
+        (None, "built on a thread of the layer's own in"),
         (
-            Some("gl-program-process"),
-            "OpenGL programs built in the app's context: the build process could not start",
+            Some("gl-program-thread"),
+            "OpenGL programs built in the app's context: the build thread could not start",
         ),
     ];
     for (fault, said) in cases {
-        let tag = fault.unwrap_or("process");
-        let dir = capture_dir(&format!("opengl-beside-{tag}"));
-        let cache = capture_dir(&format!("opengl-beside-{tag}-cache"));
+        let tag = fault.unwrap_or("thread");
+        let dir = capture_dir(&format!("opengl-built-{tag}"));
+        let cache = capture_dir(&format!("opengl-built-{tag}-cache"));
         let cache = cache.to_string_lossy().into_owned();
+        let library = capture_dir(&format!("opengl-built-{tag}-library"));
+        // The library the sandbox would install (scripts/xr-sandbox: <target>/debug).
+        let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(
+            || Path::new(env!("CARGO_MANIFEST_DIR")).join("target"),
+            std::path::PathBuf::from,
+        );
+        let built = target.join("debug/libcontrastxr.so");
+        let Some(_) = sandbox() else {
+            return;
+        };
+        std::fs::copy(&built, library.join("libcontrastxr.so")).unwrap();
+        let mark = library.join("the-tool-ran");
+        let tool = library.join("contrastxr");
+        std::fs::write(
+            &tool,
+            format!("#!/bin/sh\ntouch '{}'\nexit 1\n", mark.display()),
+        )
+        .unwrap();
+        std::fs::set_permissions(&tool, std::os::unix::fs::PermissionsExt::from_mode(0o755))
+            .unwrap();
         let mut env = layer_env(&dir, "enhance");
         env.push(("XDG_CACHE_HOME".into(), cache));
         env.push(("CONTRASTXR_LOG".into(), "debug".into()));
+        let lib = library
+            .join("libcontrastxr.so")
+            .to_string_lossy()
+            .into_owned();
+        env.push(("CONTRASTXR_LAYER_LIB".into(), lib));
         if let Some(point) = fault {
             env.push(("CONTRASTXR_FAULT".into(), point.into()));
         }
@@ -280,10 +307,56 @@ fn opengl_programs_are_built_beside_the_app_or_in_its_context() {
         let lines = layer_lines(&run);
         let what = format!("{tag}: {lines:#?}");
         assert!(lines.iter().any(|l| l.contains(said)), "{what}");
+        assert!(
+            !mark.exists(),
+            "{tag}: the layer ran the tool beside its library"
+        );
         let views = captures(&dir);
         assert_eq!(views.len(), 4, "{what}");
         for c in &views {
             assert!(check_view(c) > 1000, "{what}");
         }
+    }
+}
+
+/// A build off the app's threads that ends without the programs (fault point
+/// `gl-program-build`) stalls no frame call: it is said in one line, and the frame calls build
+/// the programs one per call, frames going through untouched meanwhile; no frame call builds
+/// and runs a whole set (what the layer once did, for up to a minute). The views are then
+/// enhanced as ever.
+#[test]
+fn a_failed_build_leaves_the_programs_to_the_frame_calls_one_at_a_time() {
+    let dir = capture_dir("opengl-build-fails");
+    let cache = capture_dir("opengl-build-fails-cache");
+    let mut env = layer_env(&dir, "enhance");
+    env.retain(|(k, _)| k != "CONTRASTXR_PIPELINES");
+    for (k, v) in [
+        ("CONTRASTXR_PIPELINES", "background"),
+        ("XDG_CACHE_HOME", &*cache.to_string_lossy()),
+        ("CONTRASTXR_LOG", "debug"),
+        ("CONTRASTXR_FAULT", "gl-program-build"),
+    ] {
+        env.push((k.into(), v.into()));
+    }
+    let Some(run) = gl_client::client_opengl("R8G8B8A8_UNORM", 60, &as_refs(&env), &[], 180) else {
+        return;
+    };
+    run.assert_success();
+    let lines = layer_lines(&run);
+    let what = format!("{lines:#?}");
+    let said: Vec<_> = lines
+        .iter()
+        .filter(|l| l.contains("were not built off the app's threads (the build failed"))
+        .collect();
+    assert_eq!(said.len(), 1, "{what}");
+    assert!(said[0].contains("one program per call"), "{what}");
+    assert!(
+        !lines.iter().any(|l| l.contains("run once in a frame call")),
+        "a frame call built a whole set: {what}"
+    );
+    let views = captures(&dir);
+    assert!(!views.is_empty(), "no frame was enhanced: {what}");
+    for c in &views {
+        assert!(check_view(c) > 1000, "{what}");
     }
 }

@@ -311,11 +311,12 @@ fn opengl_live_background_is_written_on_the_source_thread() {
 }
 
 /// A setting that needs other programs, changed while the app runs (`contrastxr set mode
-/// heatmap` through the config file), has them built beside the app too, with empty caches:
+/// heatmap` through the config file), has them built off the app's threads too, with empty
+/// caches:
 /// frames pass through meanwhile (no frame call builds them) and the heatmap then reaches the
 /// app's views.
 #[test]
-fn opengl_programs_for_a_changed_mode_are_built_beside_the_app() {
+fn opengl_programs_for_a_changed_mode_are_built_off_the_apps_threads() {
     if sandbox().is_none() {
         return;
     }
@@ -351,7 +352,7 @@ fn opengl_programs_for_a_changed_mode_are_built_beside_the_app() {
     let lines = layer_lines(&run);
     let builds = lines
         .iter()
-        .filter(|l| l.contains("building them in a process beside the app"))
+        .filter(|l| l.contains("building them on a thread of the layer's own"))
         .count();
     assert_eq!(builds, 2, "enhance, then heatmap: {lines:#?}");
     assert!(

@@ -486,6 +486,7 @@ app_gl! {
     bind_image_texture = c"glBindImageTexture": fn(u32, u32, i32, u8, i32, u32, u32);
     create_shader_programv = c"glCreateShaderProgramv": fn(u32, i32, *const *const i8) -> u32;
     use_program = c"glUseProgram": fn(u32);
+    delete_program = c"glDeleteProgram": fn(u32);
     create_program_pipelines = c"glCreateProgramPipelines": fn(i32, *mut u32);
     bind_program_pipeline = c"glBindProgramPipeline": fn(u32);
     create_framebuffers = c"glCreateFramebuffers": fn(i32, *mut u32);
@@ -1200,4 +1201,77 @@ fn bench_times_the_opengl_engine() {
         String::from_utf8_lossy(&o.stderr)
     );
     assert!(String::from_utf8_lossy(&o.stderr).contains("--engine must be vulkan or opengl"));
+}
+
+/// The app's reset status is the app's: a robust context reports a reset once, so the engine
+/// never resolves (let alone calls) glGetGraphicsResetStatus or its ARB/KHR/EXT forms.
+#[test]
+fn the_engine_never_asks_for_the_reset_status() {
+    use contrastxr::gpu::opengl::Gl;
+    let gl = context();
+    let mut asked = Vec::new();
+    let loaded = Gl::load(&mut |name: &CStr| {
+        asked.push(name.to_string_lossy().into_owned());
+        gl.proc_address(name)
+    });
+    assert!(loaded.is_ok(), "the entry points load");
+    assert!(asked.len() > 50, "{asked:?}");
+    let reset: Vec<&String> = asked.iter().filter(|n| n.contains("ResetStatus")).collect();
+    assert!(reset.is_empty(), "the engine resolves {reset:?}");
+}
+
+/// `glUseProgram(p); glDeleteProgram(p)` before the call (a common pattern: the program lives
+/// on while current): the layer could not make `p` current again once its own programs ran, so
+/// it passes the frame through untouched, changing nothing (the program still current, no
+/// error raised, the texture as it was), and enhances again once the app lets go of it.
+#[test]
+fn a_program_kept_only_by_its_binding_passes_the_frame_through() {
+    use contrastxr::gpu::opengl::GlError;
+    let mut gl = context();
+    let a = app_gl(&gl);
+    let camera = noise(64, 40, 3);
+    let display = noise(40, 24, 4);
+    let params = Params::default();
+    gl.set_camera(&camera, &params).unwrap();
+    let bytes: Vec<u8> = display.pixels.iter().flatten().copied().collect();
+    let texture = gl.create_texture(SRGB8_ALPHA8, (40, 24), &bytes).unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, 40, 24),
+        mapping: params.camera_mapping(),
+    };
+    // The programs built, and a copy of the texture as the app left it.
+    gl.enhance_views(&[view], &params).unwrap();
+    let before = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
+    let source = c"#version 450\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
+    // SAFETY: the context is current on this thread; a program made here.
+    let program = unsafe {
+        let p = (a.create_shader_programv)(0x91B9, 1, &source.as_ptr());
+        (a.use_program)(p);
+        (a.delete_program)(p);
+        assert_eq!((a.get_error)(), 0, "the test's own set-up raised an error");
+        p
+    };
+    let r = gl.enhance_views(&[view], &params);
+    assert!(matches!(r, Err(GlError::Unrestorable(_))), "{r:?}");
+    let mut current = 0;
+    // SAFETY: single-valued queries; glGetError takes no arguments.
+    let error = unsafe {
+        (a.get_integerv)(0x8B8D, &mut current);
+        (a.get_error)()
+    };
+    assert_eq!(
+        current as u32, program,
+        "the app's program is no longer current"
+    );
+    assert_eq!(error, 0, "an error was left in the app's flag");
+    let after = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
+    assert_eq!(after, before, "the frame was not passed through untouched");
+    // SAFETY: as above: the app lets go of its program (GL frees it now).
+    unsafe { (a.use_program)(0) };
+    gl.enhance_views(&[view], &params).unwrap();
+    let again = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
+    assert_ne!(again, before, "frames are not enhanced again");
 }

@@ -21,7 +21,7 @@ mod log_sink;
 mod mailbox;
 mod mjpeg;
 mod pool;
-mod priority;
+pub(crate) mod priority;
 pub mod rig;
 mod smoothing;
 pub mod source;

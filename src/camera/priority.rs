@@ -8,10 +8,15 @@ const SOURCE_NICENESS: i32 = 5;
 
 /// Lowers the calling thread's priority (Linux schedules each thread by its own nice value).
 pub fn yield_to_the_app() {
+    lower_this_thread(SOURCE_NICENESS);
+}
+
+/// Sets the calling thread's nice value to `niceness` (a thread of the layer's own).
+pub fn lower_this_thread(niceness: i32) {
     // SAFETY: gettid has no preconditions; setpriority on this thread's own id only changes
     // its scheduling weight (failure, e.g. under a seccomp filter, leaves it as it was).
     unsafe {
         let tid = libc::gettid();
-        libc::setpriority(libc::PRIO_PROCESS, tid as libc::id_t, SOURCE_NICENESS);
+        libc::setpriority(libc::PRIO_PROCESS, tid as libc::id_t, niceness);
     }
 }

@@ -156,8 +156,7 @@ pub const COMMANDS: &[Subcommand] = &[
     },
     Subcommand {
         name: "gl-programs",
-        summary:
-            "build an OpenGL app's programs into the caches (the layer runs it, beside the app)",
+        summary: "build an OpenGL app's programs into the caches ahead of time",
         usage: gl_programs::usage,
         run: gl_programs::run,
         options: &[gl_programs::OPTIONS, options::METHOD_OPTIONS],

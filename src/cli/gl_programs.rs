@@ -1,8 +1,6 @@
 //! `contrastxr gl-programs`: builds the OpenGL programs an app's views need, in a context of its
-//! own, into the layer's program binary cache and the driver's shader cache. The layer runs it
-//! when an OpenGL app makes a swapchain: a driver that compiles inside the GL calls (Mesa's
-//! llvmpipe) then does it here, not on the app's thread, and the app's context links the
-//! programs from the caches once this ends. It is the layer's tool; a user has no need of it.
+//! own, into the layer's program binary cache and the driver's shader cache, ahead of time (the
+//! layer builds what the caches lack on a thread of its own; it starts no process).
 
 use std::time::Duration;
 
@@ -10,6 +8,7 @@ use super::args::{Args, Opt};
 use super::error::CliError;
 use super::options::{self, method_usage};
 use contrastxr::algorithm::params::ViewMode;
+use contrastxr::gpu::opengl::caps::same_driver;
 use contrastxr::gpu::opengl::{gl_sources_id, GlFormat, GlOffline};
 
 pub const OPTIONS: &[Opt] = &[
@@ -29,10 +28,10 @@ pub fn usage() -> String {
          \x20                             [--sources HEX] [method options]\n\n\
          Builds the OpenGL programs views of one internal format (e.g. 0x8058, GL_RGBA8) and width\n\
          need, on an EGL context of its own, and runs them once, so that the layer's program\n\
-         binary cache and the driver's shader cache hold them. The layer runs this, at a low\n\
-         priority, when an OpenGL app makes a swapchain, and passes the app's frames through\n\
-         until it ends. --driver: the app's \"vendor | renderer | version\"; the tool refuses to\n\
-         build for another driver. --sources: the layer's program sources' id; the tool refuses\n\
+         binary cache and the driver's shader cache hold them before an app needs them (the\n\
+         layer builds what they lack on a thread of its own). --driver: an app's \"vendor |\n\
+         renderer | version\"; the tool refuses to build for another driver (a profile such as\n\
+         \"(Core Profile)\" is no part of it). --sources: the layer's program sources' id; the tool refuses\n\
          when its own differ (another build of contrastxr). --mode: enhance (default), split,\n\
          heatmap, background.\n\n{}",
         method_usage()
@@ -69,7 +68,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     close_inherited_files();
     let mut gl = GlOffline::new().map_err(|e| CliError::Failure(e.to_string()))?;
     let own = gl.engine().caps().driver.clone();
-    if driver.is_some_and(|d| d != own) {
+    if driver.is_some_and(|d| !same_driver(&d, &own)) {
         return Err(CliError::Failure(format!("another driver here: {own}")));
     }
     // SAFETY: the offline context is current on this thread (GlOffline's contract).

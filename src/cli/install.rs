@@ -17,7 +17,7 @@ pub fn usage() -> String {
      Installs the OpenXR layer: copies the layer library (the libcontrastxr.so built with this\n\
      tool, or --library PATH) to a stable place and writes the implicit layer manifest naming\n\
      that copy, so rebuilding or `cargo clean` does not unload the layer. This tool is copied\n\
-     beside the library: the layer runs it to build an OpenGL app's programs beside the app.\n\
+     beside the library (its `gl-programs` fills the OpenGL program caches ahead of time).\n\
      Where:\n\
      --user (default): $XDG_DATA_HOME/contrastxr/libcontrastxr.so and\n\
      \x20                 $XDG_DATA_HOME/openxr/1/api_layers/implicit.d/contrastxr.json\n\

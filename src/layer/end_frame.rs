@@ -336,6 +336,7 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
             }
         }
         Err(NotDone::Pending) => log::once("pipelines-pending", graphics.pending_line()),
+        Err(NotDone::Skipped(why)) => log::once(&format!("skipped: {why}"), &why),
         Err(NotDone::Failed(e)) => {
             log::info(&format!(
                 "{e}: passing this session's frames through from now on"

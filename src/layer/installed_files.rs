@@ -11,8 +11,7 @@ use std::path::{Path, PathBuf};
 const TEMPLATE: &str = include_str!("../../layer-manifest/contrastxr-implicit.json");
 pub const MANIFEST_NAME: &str = "contrastxr.json";
 const LIBRARY_NAME: &str = "libcontrastxr.so";
-/// The tool's name beside the library copy: the layer runs it to build an OpenGL app's
-/// programs beside the app (layer/graphics/opengl/program_builder.rs).
+/// The tool's name beside the library copy (the layer itself never runs it).
 const TOOL_NAME: &str = "contrastxr";
 /// Where the Debian package puts the library (its manifest, `layer-manifest/deb/`, names it).
 pub const PACKAGED_LIBRARY: &str = "/usr/lib/contrastxr/libcontrastxr.so";
@@ -63,7 +62,6 @@ pub(crate) fn library_file() -> Option<std::ffi::CString> {
 
 /// The tool that came with the layer's library at `library`: beside it (cargo's output folder,
 /// `install`'s copy) or where the Debian package puts it (`/usr/bin` for `/usr/lib/contrastxr`).
-/// The layer runs it to build an OpenGL app's programs beside the app.
 pub fn tool_beside(library: &Path) -> Option<PathBuf> {
     let library = library.canonicalize().ok()?;
     let dir = library.parent()?;

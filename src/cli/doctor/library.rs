@@ -2,7 +2,6 @@
 //! the negotiation function the loader calls first.
 
 use super::finding::{tool, Finding};
-use contrastxr::layer::installed_files::tool_beside;
 use std::ffi::{CStr, CString, OsStr};
 use std::os::unix::ffi::OsStrExt;
 use std::path::{Path, PathBuf};
@@ -87,40 +86,6 @@ fn reinstall() -> String {
          (`sudo apt install --reinstall contrastxr`)",
         tool()
     )
-}
-
-/// Whether the tool that builds OpenGL apps' programs beside them is beside `library` (as
-/// written in the manifest at `manifest`).
-pub fn gl_builder_finding(manifest: &Path, library: &str) -> Finding {
-    const NAME: &str = "opengl-builder";
-    let Library::Path(path) = resolve(manifest, library) else {
-        return Finding::warn(
-            NAME,
-            format!("not checked: {library} is looked up by the dynamic linker"),
-            "name the library by its path: `contrastxr install --user`",
-        );
-    };
-    match tool_beside(&path) {
-        Some(t) => Finding::ok(
-            NAME,
-            format!(
-                "{} builds OpenGL apps' programs beside them (`contrastxr gl-programs`)",
-                t.display()
-            ),
-        ),
-        None => Finding::warn(
-            NAME,
-            format!(
-                "no contrastxr tool beside {}: OpenGL apps build the layer's programs in their own \
-                 xrCreateSwapchain (a second or more the first time on a CPU driver)",
-                path.display()
-            ),
-            format!(
-                "`{} install --user` copies the tool beside the library",
-                tool()
-            ),
-        ),
-    }
 }
 
 /// The finding for `library`, as written in the manifest at `manifest`.

@@ -9,7 +9,7 @@
 //! for the active runtime, never for layers, so a manifest there is reported as not seen.
 
 use super::finding::{tool, tool_as_root, var, Finding};
-use super::library::{gl_builder_finding, library_finding};
+use super::library::library_finding;
 use contrastxr::layer::LAYER_NAME;
 use std::path::{Path, PathBuf};
 
@@ -272,12 +272,6 @@ impl Search {
                 tool_as_root()
             ),
         )
-    }
-
-    /// Whether the OpenGL program builder is beside the chosen manifest's library.
-    pub fn gl_builder_finding(&self) -> Option<Finding> {
-        let m = self.chosen()?;
-        Some(gl_builder_finding(&m.path, m.library.as_ref()?))
     }
 
     pub fn library_finding(&self) -> Finding {

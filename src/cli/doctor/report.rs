@@ -16,8 +16,6 @@ pub fn usage() -> String {
      \x20                 through XR_API_LAYER_PATH) in its search paths: which file\n\
      \x20 library         the library the manifest names loads and exports\n\
      \x20                 xrNegotiateLoaderApiLayerInterface\n\
-     \x20 opengl-builder  the contrastxr tool beside that library, which builds OpenGL apps'\n\
-     \x20                 programs beside them (only when a manifest was found)\n\
      \x20 runtime         the active OpenXR runtime (XR_RUNTIME_JSON or active_runtime.json)\n\
      \x20 vulkan          the Vulkan devices\n\
      \x20 config          the config file and its problems (file, line and key)\n\
@@ -47,7 +45,6 @@ fn findings() -> Vec<Finding> {
     };
     let settings = contrastxr::config::load_for(who, &env).settings;
     let mut all = vec![search.manifest_finding(), search.library_finding()];
-    all.extend(search.gl_builder_finding());
     all.extend([
         runtime::runtime(),
         runtime::vulkan(),

@@ -158,20 +158,28 @@ impl BinaryCache {
             )
         };
         bytes.truncate(written.clamp(0, len) as usize);
-        if !bytes.is_empty() {
+        self.keep(hash, format, bytes);
+    }
+
+    /// Keeps a binary (of `format`) under its source's hash, to be written at the next save.
+    pub fn keep(&mut self, hash: u64, format: u32, bytes: Vec<u8>) {
+        if self.enabled && !bytes.is_empty() {
             self.entries.insert(hash, (format, bytes));
             self.changed = true;
         }
     }
 
-    /// Writes the file if entries were added (atomically; see gpu/pipeline_cache.rs), with only
-    /// the entries `current` names (the sources of this build: a changed shader's old binaries
-    /// are dropped, so the file does not grow from build to build).
+    /// Writes the file if entries were added (atomically; see gpu/pipelines/pipeline_cache.rs),
+    /// merged with what the file holds now (another process, or a build thread of this one,
+    /// may have written it since it was read), with only the entries `current` names (the
+    /// sources of this build: a changed shader's old binaries are dropped, so the file does not
+    /// grow from build to build).
     pub fn save(&mut self, current: &dyn Fn(u64) -> bool) {
         if !self.changed {
             return;
         }
         self.changed = false;
+        self.reload();
         self.entries.retain(|&hash, _| current(hash));
         let Some(dir) = pipeline_cache::directory() else {
             return;

@@ -11,15 +11,28 @@ pub struct Caps {
     pub version: (i32, i32),
     /// GL_KHR_parallel_shader_compile (or the ARB one): compile and link without blocking.
     pub parallel_compile: bool,
-    /// glGetGraphicsResetStatus is there (core in 4.5).
-    pub reset_status: bool,
     /// glGetProgramBinary gives something (at least one binary format).
     pub program_binaries: bool,
-    /// GL_VENDOR, GL_RENDERER and GL_VERSION, which name the program binaries' cache file.
+    /// GL_VENDOR, GL_RENDERER and GL_VERSION without its profile ("(Core Profile)"), which
+    /// name the program binaries' cache file: a core context's binaries serve a
+    /// compatibility-profile context of the same driver.
     pub driver: String,
     /// A driver that renders on the CPU (llvmpipe, softpipe): there a buffer copy is a memcpy
     /// and image load/store costs more than it saves, so views go through a buffer by default.
     pub software: bool,
+}
+
+/// GL_VERSION without the context's profile.
+fn without_profile(version: &str) -> String {
+    version
+        .replace(" (Core Profile)", "")
+        .replace(" (Compatibility Profile)", "")
+}
+
+/// Whether two "vendor | renderer | version" strings name the same driver: a context's
+/// profile (core or compatibility) is no part of it.
+pub fn same_driver(a: &str, b: &str) -> bool {
+    without_profile(a) == without_profile(b)
 }
 
 /// Whether GL_RENDERER names a driver that renders on the CPU.
@@ -106,17 +119,31 @@ impl Caps {
             software: is_software(&renderer),
             parallel_compile: has("GL_KHR_parallel_shader_compile")
                 || has("GL_ARB_parallel_shader_compile"),
-            // Core in 4.5.
-            reset_status: true,
             program_binaries: formats > 0,
-            driver: format!("{} | {renderer} | {version_text}", text(gl, gl::VENDOR)),
+            driver: format!(
+                "{} | {renderer} | {}",
+                text(gl, gl::VENDOR),
+                without_profile(&version_text)
+            ),
         })
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{is_software, parse_version};
+    use super::{is_software, parse_version, same_driver};
+
+    #[test]
+    fn a_profile_is_no_part_of_the_driver() {
+        let core = "Mesa | llvmpipe (LLVM 19.1.7, 256 bits) | 4.5 (Core Profile) Mesa 25.0.7";
+        let compat = core.replace("Core", "Compatibility");
+        assert!(same_driver(core, &compat));
+        assert!(!same_driver(core, &core.replace("25.0.7", "25.0.8")));
+        assert!(!same_driver(
+            core,
+            "NVIDIA Corporation | NVIDIA H200 | 4.6.0 NVIDIA 580"
+        ));
+    }
 
     #[test]
     fn cpu_drivers_are_told_from_gpus() {

@@ -70,6 +70,10 @@ gl_functions! {
     detach_shader = "glDetachShader": fn(Uint, Uint);
     link_program = "glLinkProgram": fn(Uint);
     get_programiv = "glGetProgramiv": fn(Uint, Enum, *mut Int);
+    is_texture = "glIsTexture": fn(Uint) -> u8;
+    is_buffer = "glIsBuffer": fn(Uint) -> u8;
+    is_sampler = "glIsSampler": fn(Uint) -> u8;
+    is_program_pipeline = "glIsProgramPipeline": fn(Uint) -> u8;
     get_program_info_log = "glGetProgramInfoLog": fn(Uint, Sizei, *mut Sizei, *mut i8);
     delete_program = "glDeleteProgram": fn(Uint);
     program_parameteri = "glProgramParameteri": fn(Uint, Enum, Int);
@@ -127,7 +131,6 @@ gl_functions! {
     named_framebuffer_parameteri = "glNamedFramebufferParameteri": fn(Uint, Enum, Int);
     delete_framebuffers = "glDeleteFramebuffers": fn(Sizei, *const Uint);
     finish = "glFinish": fn();
-    get_graphics_reset_status = "glGetGraphicsResetStatus": fn() -> Enum;
 }
 
 // Queries.
@@ -240,6 +243,11 @@ pub const TEXTURE_UPDATE_BARRIER_BIT: u32 = 0x100;
 pub const BUFFER_UPDATE_BARRIER_BIT: u32 = 0x200;
 pub const SHADER_IMAGE_ACCESS_BARRIER_BIT: u32 = 0x20;
 pub const ALL_BARRIER_BITS: u32 = 0xFFFF_FFFF;
+
+// Object and transform feedback state the state guard checks.
+pub const DELETE_STATUS: Enum = 0x8B80;
+pub const TRANSFORM_FEEDBACK_ACTIVE: Enum = 0x8E24;
+pub const TRANSFORM_FEEDBACK_PAUSED: Enum = 0x8E23;
 
 // Timer queries (GL 3.3).
 pub const TIME_ELAPSED: Enum = 0x88BF;

@@ -183,6 +183,24 @@ impl GlEngine {
         self.in_place = allowed;
     }
 
+    /// Whether views may be stored in place (the default or `set_in_place`).
+    pub fn in_place(&self) -> bool {
+        self.in_place
+    }
+
+    /// The programs (their ids) views of `internal_format`, `width` texels wide, need for
+    /// `params`, taking the views to be of immutable textures (see `ready_from_cache`).
+    pub fn shape_program_ids(
+        &self,
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+    ) -> Result<[usize; 3], GlError> {
+        let code = GlFormat::of(internal_format)?.pixel.shader_code();
+        let in_place = self.in_place && in_place_texel(code).is_some();
+        Self::shape_programs(internal_format, width, params, in_place)
+    }
+
     /// Which views of the last `enhance` call were stored in place (the others went through
     /// a buffer), in their order.
     pub fn last_in_place(&self) -> &[bool] {
@@ -222,15 +240,12 @@ impl GlEngine {
         &self.caps
     }
 
+    /// The fault point standing for a lost context. The context's reset status is never
+    /// queried: a robust context reports a reset once, and that report is the app's (with it
+    /// the app recreates its context); the layer's calls on a lost context do nothing.
     fn check_lost(&self) -> Result<(), GlError> {
         if crate::fault::hit("gl-context-lost") {
             return Err(GlError::ContextLost);
-        }
-        if self.caps.reset_status {
-            // SAFETY: glGetGraphicsResetStatus exists (GL 4.5 or a robustness extension).
-            if unsafe { (self.gl.get_graphics_reset_status)() } != 0 {
-                return Err(GlError::ContextLost);
-            }
         }
         Ok(())
     }
@@ -316,7 +331,7 @@ impl GlEngine {
             });
         }
         let bg = self.background.as_mut().expect("made above");
-        let saved = SavedState::save(g);
+        let saved = SavedState::save(g)?;
         // SAFETY: the context is current (this call's contract); the texture is the
         // background's, of the texels' size; the unpack binding is put back by `restore`.
         let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };
@@ -382,9 +397,7 @@ impl GlEngine {
         if params.mode == ViewMode::Off {
             return Ok(true);
         }
-        let code = GlFormat::of(internal_format)?.pixel.shader_code();
-        let in_place = self.in_place && in_place_texel(code).is_some();
-        let ids = Self::shape_programs(internal_format, width, params, in_place)?;
+        let ids = self.shape_program_ids(internal_format, width, params)?;
         self.programs.reload_cache();
         self.programs.ready_from_cache(&self.gl, &ids)
     }
@@ -459,7 +472,7 @@ impl GlEngine {
                 }
             }
         }
-        let saved = SavedState::save(&self.gl);
+        let saved = SavedState::save(&self.gl)?;
         // SAFETY: a framebuffer this engine made; the app's bindings are put back by `restore`.
         unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
         for (k, v) in views.iter().enumerate() {

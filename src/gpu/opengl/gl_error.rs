@@ -13,8 +13,11 @@ pub enum GlError {
     Format(u32),
     /// A program failed to compile or link (the driver's log, first line).
     Program { name: String, log: String },
-    /// The context was lost (glGetGraphicsResetStatus).
+    /// The context was lost (the fault point: the layer never queries the reset status).
     ContextLost,
+    /// A binding of the app's the call would change could not be put back (the reason): this
+    /// frame passes through untouched.
+    Unrestorable(&'static str),
     /// The driver did not make a buffer or texture (out of memory).
     Allocation(&'static str),
     /// The offline context could not be made (EGL).
@@ -44,6 +47,10 @@ impl fmt::Display for GlError {
             GlError::Allocation(what) => write!(
                 f,
                 "the OpenGL driver could not make the layer's {what} (out of memory?), so the frame passes through"
+            ),
+            GlError::Unrestorable(why) => write!(
+                f,
+                "{why}, which the layer could not bind back after its work, so frames pass through untouched while it is so"
             ),
             GlError::Context(why) => write!(f, "no offline OpenGL context: {why}"),
             GlError::Input(why) => write!(f, "{why}"),

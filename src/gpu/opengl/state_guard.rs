@@ -2,9 +2,12 @@
 //! it runs and put back after it, so that the app finds exactly the state it left. The error
 //! flag is not among it: the backend never calls glGetError (which would read and clear the
 //! app's pending error) and makes no call that raises one (object status queries tell it what
-//! failed), so whatever error the app had pending is still pending after the call.
+//! failed), so whatever error the app had pending is still pending after the call. A binding
+//! that could not be put back (an object alive only through it, active transform feedback) is
+//! found before anything changes, and the call then does nothing (`GlError::Unrestorable`).
 
 use super::functions::{self as gl, Gl};
+use super::gl_error::GlError;
 use crate::gpu::shaders::interface::{
     BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
 };
@@ -120,8 +123,9 @@ fn sample_unit() -> gl::Enum {
 }
 
 impl SavedState {
-    /// Reads the state and sets the pixel store to the defaults the recipe's transfers need.
-    pub fn save(g: &Gl) -> SavedState {
+    /// Reads the state and sets the pixel store to the defaults the recipe's transfers need;
+    /// or, changing nothing, why a binding could not be put back afterwards.
+    pub fn save(g: &Gl) -> Result<SavedState, GlError> {
         let active_texture = int(g, gl::ACTIVE_TEXTURE);
         // SAFETY: a valid texture unit (binding 5 < GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, at
         // least 80 in 4.3); put back in `restore`.
@@ -146,11 +150,7 @@ impl SavedState {
             }
         });
         let pixel_store = PIXEL_STORE.map(|p| int(g, p));
-        for (p, v) in PIXEL_STORE.iter().zip(PIXEL_STORE_DEFAULTS) {
-            // SAFETY: valid pixel store parameters and values.
-            unsafe { (g.pixel_storei)(*p, v) };
-        }
-        SavedState {
+        let saved = SavedState {
             program: int(g, gl::CURRENT_PROGRAM),
             pipeline: int(g, gl::PROGRAM_PIPELINE_BINDING),
             active_texture,
@@ -167,7 +167,59 @@ impl SavedState {
             // SAFETY: GL_FRAMEBUFFER_SRGB is a valid capability in core 3.0+.
             framebuffer_srgb: unsafe { (g.is_enabled)(gl::FRAMEBUFFER_SRGB) } != 0,
             pixel_store,
+        };
+        if let Some(why) = saved.unrestorable(g) {
+            return Err(GlError::Unrestorable(why));
         }
+        for (p, v) in PIXEL_STORE.iter().zip(PIXEL_STORE_DEFAULTS) {
+            // SAFETY: valid pixel store parameters and values.
+            unsafe { (g.pixel_storei)(*p, v) };
+        }
+        Ok(saved)
+    }
+
+    /// Why a saved binding could not be bound again once the recipe has bound its own, if so:
+    /// an object kept alive only by that binding (a program deleted while current, a texture,
+    /// buffer or sampler deleted through a shared context) would be freed when unbound, and
+    /// binding its name again would raise an error into the app's flag; active transform
+    /// feedback makes glUseProgram itself an error.
+    fn unrestorable(&self, g: &Gl) -> Option<&'static str> {
+        let gone = |name: i32, is: unsafe extern "system" fn(u32) -> u8| {
+            // SAFETY: glIs* take any name and raise no error.
+            name != 0 && unsafe { is(name as u32) } == 0
+        };
+        if self.program != 0 {
+            let mut deleted = 0;
+            // SAFETY: a program name that is current (so it exists); a valid pname.
+            unsafe { (g.get_programiv)(self.program as u32, gl::DELETE_STATUS, &mut deleted) };
+            if deleted != 0 {
+                return Some("the app's current program is deleted (kept alive by its binding)");
+            }
+        }
+        if int(g, gl::TRANSFORM_FEEDBACK_ACTIVE) != 0 && int(g, gl::TRANSFORM_FEEDBACK_PAUSED) == 0
+        {
+            return Some("the app's transform feedback is active");
+        }
+        let textures = [self.texture, self.image_unit.0[0]];
+        if textures.iter().any(|&t| gone(t, g.is_texture)) {
+            return Some("a texture the app has bound is deleted");
+        }
+        let buffers = self.storage.iter().map(|b| b.buffer as i32).chain([
+            self.storage_generic,
+            self.pack_buffer,
+            self.unpack_buffer,
+            self.indirect_buffer,
+        ]);
+        if buffers.into_iter().any(|b| gone(b, g.is_buffer)) {
+            return Some("a buffer the app has bound is deleted");
+        }
+        if gone(self.sampler, g.is_sampler) {
+            return Some("a sampler the app has bound is deleted");
+        }
+        if gone(self.pipeline, g.is_program_pipeline) {
+            return Some("the app's program pipeline is deleted");
+        }
+        None
     }
 
     /// Puts every value back. Each was valid when read, and objects the app named stay alive

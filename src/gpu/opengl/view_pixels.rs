@@ -43,8 +43,8 @@ unsafe fn draw(g: &Gl, v: &GlView, format: GlFormat, runs: &[Run], pixel: &[u8])
 }
 
 /// Runs `f` with the app's state saved, no pixel buffers bound, and puts the state back.
-fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> R {
-    let saved = SavedState::save(g);
+fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> Result<R, GlError> {
+    let saved = SavedState::save(g)?;
     // SAFETY: unbinding the pixel buffer points (put back by `restore`).
     unsafe {
         (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, 0);
@@ -52,7 +52,7 @@ fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> R {
     }
     let r = f();
     saved.restore(g);
-    r
+    Ok(r)
 }
 
 impl GlEngine {
@@ -65,7 +65,7 @@ impl GlEngine {
         let format = GlFormat::of(v.internal_format)?;
         let g = self.gl();
         // SAFETY: the view was checked; the context is current (the caller's contract).
-        let bottom_first = with_client_memory(g, || unsafe { read(g, v, format) });
+        let bottom_first = with_client_memory(g, || unsafe { read(g, v, format) })?;
         let row = v.rect.2 as usize * format.pixel.bytes_per_pixel() as usize;
         Ok(bottom_first
             .chunks_exact(row.max(1))
@@ -88,7 +88,6 @@ impl GlEngine {
         }
         let g = self.gl();
         // SAFETY: as for `read_view`.
-        with_client_memory(g, || unsafe { draw(g, v, format, runs, pixel) });
-        Ok(())
+        with_client_memory(g, || unsafe { draw(g, v, format, runs, pixel) })
     }
 }

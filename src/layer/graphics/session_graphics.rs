@@ -44,6 +44,8 @@ pub enum NotDone {
     Pending,
     /// The session passes through from now on, for this reason (one sentence).
     Failed(String),
+    /// This frame passes through untouched, for this reason (one sentence); the next is tried.
+    Skipped(String),
 }
 
 /// A session's graphics, as the layer uses them.

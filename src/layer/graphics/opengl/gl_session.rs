@@ -39,14 +39,14 @@ pub struct GlSession {
     /// The view shapes (internal format, width, settings) whose programs swapchain creation
     /// asked for.
     warmed: Vec<(u32, u32, Params)>,
-    /// Builds running beside the app, one per view shape the caches lacked.
+    /// Builds running on threads of the layer's own, one per set of programs the caches lacked.
     builders: Vec<ProgramBuilder>,
-    /// The time the longest build beside the app took (they run side by side).
+    /// The time the longest build off the app's threads took (they run side by side).
     beside_time: Duration,
     /// The time swapchain creation spent building (or linking from the caches) and running
     /// the programs in the app's context.
     warm_up_time: Duration,
-    /// The time frame calls spent on it after a build beside the app ended.
+    /// The time frame calls spent on it after a build off the app's threads ended.
     after_builds_time: Duration,
     /// The `in_place` setting as the last swapchain creation saw it; GL needs no usage flag
     /// for it, so it is applied to the engine at each frame call.
@@ -57,8 +57,13 @@ pub struct GlSession {
 // call into the layer, under the session's lock, as the runtime uses them.
 unsafe impl Send for GlSession {}
 
+/// A GL error as the layer takes it: an app binding the engine could not put back passes
+/// only this frame through; anything else, the session.
 fn failed(e: GlError) -> NotDone {
-    NotDone::Failed(e.to_string())
+    match e {
+        GlError::Unrestorable(_) => NotDone::Skipped(e.to_string()),
+        e => NotDone::Failed(e.to_string()),
+    }
 }
 
 fn gl_view(v: &ViewImage) -> GlView {
@@ -162,8 +167,11 @@ enum Prepared {
     Seen,
     /// The caches held them: linked in the app's context.
     Cached,
-    /// Their build beside the app started.
+    /// Their build on a thread of the layer's own started (or one of the same programs runs).
     Building,
+    /// The driver compiles off the calling thread (GL_KHR_parallel_shader_compile on a GPU):
+    /// frame calls start the builds and poll them, never waiting.
+    InContext,
     /// It could not start (why): they are left to the app's context.
     NoBuilder(String),
     /// The engine refused the shape (the frame calls say why).
@@ -172,7 +180,8 @@ enum Prepared {
 
 impl GlSession {
     /// For a view shape (internal format, width, settings) not met before: links its programs
-    /// from the caches, or starts their build beside the app.
+    /// from the caches, or leaves them to a driver that compiles off the calling thread, or
+    /// starts their build on a thread of the layer's own (one build per set of programs).
     fn prepare_shape(&mut self, internal: u32, width: u32, params: &Params) -> Prepared {
         // Every frame call asks: the settings are cloned only for a shape not met before.
         let seen = |(i, w, p): &(u32, u32, Params)| (*i, *w) == (internal, width) && p == params;
@@ -181,19 +190,31 @@ impl GlSession {
         }
         self.warmed.push((internal, width, params.clone()));
         let cached = self.in_context(|engine, _| {
+            let ids = engine
+                .shape_program_ids(internal, width, params)
+                .map_err(failed)?;
             // SAFETY: inside `in_context`: the app's context is current on this thread.
             let cached = unsafe { engine.ready_from_cache(internal, width, params) };
-            Ok((cached.map_err(failed)?, engine.caps().driver.clone()))
+            let caps = engine.caps();
+            let parallel = caps.parallel_compile && !caps.software;
+            let found = (caps.driver.clone(), ids, engine.in_place(), parallel);
+            Ok((cached.map_err(failed)?, found))
         });
-        let driver = match cached {
+        let (driver, ids, in_place, parallel) = match cached {
             Ok((true, _)) => return Prepared::Cached,
-            Ok((false, driver)) => driver,
+            Ok((false, found)) => found,
             Err(_) => return Prepared::Failed,
         };
-        match ProgramBuilder::start(&driver, internal, width, params) {
+        if parallel {
+            return Prepared::InContext;
+        }
+        if self.builders.iter().any(|b| b.ids == ids) {
+            return Prepared::Building;
+        }
+        match ProgramBuilder::start(&driver, (internal, width, in_place), params, ids) {
             Ok(builder) => {
                 log::debug(&format!(
-                    "OpenGL programs for {} views {width} wide: building them in a process beside the app (contrastxr gl-programs)",
+                    "OpenGL programs for {} views {width} wide: building them on a thread of the layer's own, in an OpenGL context of its own",
                     self.format_name(i64::from(internal))
                 ));
                 self.builders.push(builder);
@@ -221,7 +242,7 @@ impl GlSession {
         since.elapsed()
     }
 
-    /// Err(Pending) while a build beside the app runs (waited for with `wait`); one that
+    /// Err(Pending) while a build off the app's threads runs (waited for with `wait`); one that
     /// ended is followed by linking its programs from the caches in the app's context.
     fn await_builders(&mut self, wait: bool) -> Result<(), NotDone> {
         loop {
@@ -245,33 +266,34 @@ impl GlSession {
         }
     }
 
+    /// A build ended: its programs are linked from the binary cache it wrote and run once in
+    /// the app's context (milliseconds). What is not there (the build failed, or the driver
+    /// refused a binary) is left to the frame calls, one program per call, frames passing
+    /// through meanwhile: no frame call compiles a whole set.
     fn builder_ended(&mut self, builder: ProgramBuilder, outcome: Result<Duration, String>) {
         let (internal, width, params) = builder.shape.clone();
         drop(builder);
-        let when = match outcome {
-            Ok(took) => {
-                self.beside_time = self.beside_time.max(took);
-                // Takes in the binaries the build wrote.
-                let _ = self.in_context(|engine, _| {
-                    // SAFETY: inside `in_context`: the app's context is current.
-                    unsafe { engine.ready_from_cache(internal, width, &params) }.map_err(failed)
-                });
-                log::debug(&format!(
-                    "OpenGL programs for {} views {width} wide built beside the app in {:.3} s",
-                    self.format_name(i64::from(internal)),
-                    took.as_secs_f64()
-                ));
-                "from the caches"
-            }
-            Err(why) => {
-                log::debug(&format!(
-                    "the OpenGL program build beside the app ended without them ({why}): building them in the app's context"
-                ));
-                "in a frame call"
-            }
-        };
-        let took = self.warm_up(internal, width, &params, when);
-        self.after_builds_time += took;
+        let name = self.format_name(i64::from(internal));
+        if let Err(why) = outcome {
+            log::info(&format!(
+                "the OpenGL programs for {name} views {width} wide were not built off the app's threads ({why}): frame calls build them, one program per call, and the frames go through untouched until they are ready"
+            ));
+            return;
+        }
+        let took = outcome.unwrap_or_default();
+        self.beside_time = self.beside_time.max(took);
+        let linked = self.in_context(|engine, _| {
+            // SAFETY: inside `in_context`: the app's context is current.
+            unsafe { engine.ready_from_cache(internal, width, &params) }.map_err(failed)
+        });
+        log::debug(&format!(
+            "OpenGL programs for {name} views {width} wide built off the app's threads in {:.3} s",
+            took.as_secs_f64()
+        ));
+        if let Ok(true) = linked {
+            let took = self.warm_up(internal, width, &params, "from the caches");
+            self.after_builds_time += took;
+        }
     }
 }
 
@@ -337,7 +359,7 @@ impl SessionGraphics for GlSession {
 
     fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, _: bool) {
         // At a loading-time call: programs the caches hold are linked and run once here, in
-        // the app's context; the rest are built by a process beside the app while the frames
+        // the app's context; the rest are built on a thread of the layer's own while the frames
         // pass through, or, where it cannot run, here. What fails is met again, and said, by
         // the frame calls.
         let Some(internal) = GlFormat::ALL
@@ -351,7 +373,7 @@ impl SessionGraphics for GlSession {
             Prepared::NoBuilder(why) => log::debug(&format!(
                 "OpenGL programs built in the app's context: {why}"
             )),
-            Prepared::Seen | Prepared::Building | Prepared::Failed => return,
+            Prepared::Seen | Prepared::Building | Prepared::InContext | Prepared::Failed => return,
         }
         let took = self.warm_up(internal, width, params, "at swapchain creation");
         self.warm_up_time += took;
@@ -372,7 +394,7 @@ impl SessionGraphics for GlSession {
 
     fn ready(&mut self, views: &[ViewImage], params: &Params, wait: bool) -> Result<(), NotDone> {
         // A shape swapchain creation did not see (another width, changed settings) is built
-        // beside the app too where it can be.
+        // off the app's threads too where it can be.
         for v in views {
             let (internal, width) = (v.api_format as u32, v.key.extent.0);
             if let Prepared::NoBuilder(why) = self.prepare_shape(internal, width, params) {
@@ -472,9 +494,9 @@ impl SessionGraphics for GlSession {
 
     fn pending_line(&self) -> &'static str {
         if !self.builders.is_empty() {
-            return "building the OpenGL programs in a process beside the app (contrastxr gl-programs): frames go through untouched until they are ready";
+            return "building the OpenGL programs on a thread of the layer's own, in an OpenGL context of its own: frames go through untouched until they are ready";
         }
-        "building the OpenGL programs, one per frame call on the app's context (or from the program cache): frames go through untouched until they are ready"
+        "building the OpenGL programs from the frame calls on the app's context (started and polled where the driver compiles off the calling thread, else one per call, or from the program cache): frames go through untouched until they are ready"
     }
 
     fn build_summary(&self) -> Option<String> {
@@ -482,13 +504,8 @@ impl SessionGraphics for GlSession {
         let seconds = |d: Duration| d.as_secs_f64();
         let how = if !self.beside_time.is_zero() {
             format!(
-                "built beside the app in {:.3} s while its frames passed through, then linked from the caches and run once in its context in {:.3} s",
+                "built on a thread of the layer's own in {:.3} s while its frames passed through, then linked from the caches and run once in its context in {:.3} s",
                 seconds(self.beside_time),
-                seconds(self.after_builds_time)
-            )
-        } else if !self.after_builds_time.is_zero() {
-            format!(
-                "built in a frame call on the app's context ({:.3} s) after the build beside the app ended without them",
                 seconds(self.after_builds_time)
             )
         } else if !self.warm_up_time.is_zero() {
@@ -527,13 +544,12 @@ impl SessionGraphics for GlSession {
     }
 
     fn stop_building(&self) {
-        for builder in &self.builders {
-            builder.stop();
-        }
+        // A build thread cannot be stopped midway (it is inside the driver's compiler): it
+        // ends on its own, and its programs wait in the caches for the next session.
     }
 
     fn finish(mut self: Box<Self>) -> Result<(), String> {
-        // Stops and reaps any build still running.
+        // A build still running goes on alone and ends by itself (its thread is detached).
         self.builders.clear();
         let Some(mut engine) = self.engine.take() else {
             return Ok(());

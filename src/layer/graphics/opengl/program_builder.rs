@@ -1,24 +1,36 @@
-//! The OpenGL programs built beside the app: `contrastxr gl-programs`, a process of its own with
-//! a GL context of its own, fills the program binary cache and the driver's shader cache while
-//! the app's frames pass through; the app's context then links the programs from the caches in
-//! milliseconds. A driver that compiles inside the GL calls (Mesa's llvmpipe, although it
-//! offers GL_KHR_parallel_shader_compile) would otherwise do it on the app's thread, for a
-//! second or more. No GL call is made on a thread of the layer's own.
+//! The OpenGL programs built off the app's threads, for a driver that compiles inside the GL
+//! calls (Mesa's llvmpipe, which offers GL_KHR_parallel_shader_compile but compiles in
+//! glLinkProgram, and a driver without parallel compilation): a thread of the layer's own, at a
+//! low priority, makes an OpenGL context of its own on EGL's surfaceless platform (never shared
+//! with, nor current on, any of the app's contexts), checks that it runs on the app's driver
+//! (vendor, renderer and version; a profile does not matter), builds the programs, runs them
+//! once so that the driver's shader cache holds their machine code, and writes the program
+//! binary cache. The app's context then links them from that cache (glProgramBinary) in
+//! milliseconds, in a frame call. No process is started from the app: a child would stay
+//! inside Steam's container or a Flatpak sandbox, with their libraries, and a setuid host would
+//! run a file found beside a library. A build cannot be stopped midway: a session that ends
+//! first leaves the thread to end on its own.
 
 use crate::algorithm::params::Params;
-use crate::gpu::opengl::gl_sources_id;
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use crate::gpu::opengl::caps::same_driver;
+use crate::gpu::opengl::GlOffline;
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// How long the layer waits for a build before it stops it and builds in the app's context.
+/// How long the layer waits for a build before it goes on without it.
 const LIMIT: Duration = Duration::from_secs(60);
 
-/// A build process of one view shape.
+/// The nice value of a build thread: below the app's threads and its driver's.
+const BUILD_NICENESS: i32 = 10;
+
+/// A build of the programs of one view shape.
 pub struct ProgramBuilder {
-    child: Option<Child>,
+    thread: Option<JoinHandle<Result<(), String>>>,
     pub since: Instant,
     pub shape: (u32, u32, Params),
+    /// The programs it builds (the engine's ids), so that a shape needing the same ones does
+    /// not start another build.
+    pub ids: [usize; 3],
 }
 
 /// Where a build stands.
@@ -28,115 +40,78 @@ pub enum Built {
     Ended(Result<Duration, String>),
 }
 
-/// The tool that came with the library (installed_files::tool_beside). Another build of it
-/// refuses (its sources id differs).
-fn tool() -> Option<PathBuf> {
-    let file = crate::layer::installed_files::library_file()?;
-    let path: &std::ffi::OsStr = std::os::unix::ffi::OsStrExt::from_bytes(file.to_bytes());
-    crate::layer::installed_files::tool_beside(std::path::Path::new(path))
-}
-
 impl ProgramBuilder {
-    /// Starts building the programs views of `internal_format`, `width` texels wide, need for
-    /// `params`, on `driver` ("vendor | renderer | version" of the app's context).
+    /// Starts building the programs `ids` that views of `internal_format`, `width` texels
+    /// wide, need for `params` (stored `in_place` or not), on a thread of the layer's own, for
+    /// the app's `driver`.
     pub fn start(
         driver: &str,
-        internal_format: u32,
-        width: u32,
+        (internal_format, width, in_place): (u32, u32, bool),
         params: &Params,
+        ids: [usize; 3],
     ) -> Result<ProgramBuilder, String> {
-        if crate::fault::hit("gl-program-process") {
-            return Err("the build process could not start (fault point)".into());
+        if crate::fault::hit("gl-program-thread") {
+            return Err("the build thread could not start (fault point)".into());
         }
-        let tool = tool().ok_or("no contrastxr tool beside the layer's library")?;
-        let child = Command::new(&tool)
-            .arg("gl-programs")
-            .args(["--format", &format!("{internal_format:#06x}")])
-            .args(["--width", &width.to_string()])
-            .args(["--mode", params.mode.name()])
-            .args(["--method", params.method.name()])
-            .args(["--achromatic-boost", &params.achromatic_boost.to_string()])
-            .args(["--luminance-cap", &params.luminance_cap.to_string()])
-            .args(["--driver", driver])
-            .args(["--sources", &format!("{:016x}", gl_sources_id())])
-            // The driver's cache and the layer's follow the app's environment; a preloaded
-            // library of the app's (an overlay, a recorder) has no business in the tool.
-            .env_remove("LD_PRELOAD")
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|e| format!("cannot run {}: {e}", tool.display()))?;
+        let (driver, wanted) = (driver.to_string(), params.clone());
+        let thread = std::thread::Builder::new()
+            .name("contrastxr-gl-build".into())
+            .spawn(move || build(&driver, (internal_format, width, in_place), &wanted))
+            .map_err(|e| format!("no build thread: {e}"))?;
         Ok(ProgramBuilder {
-            child: Some(child),
+            thread: Some(thread),
             since: Instant::now(),
             shape: (internal_format, width, params.clone()),
+            ids,
         })
     }
 
-    /// Whether the build ended, without waiting; one past LIMIT is stopped.
+    /// Whether the build ended, without waiting; one past LIMIT is left to end on its own.
     pub fn poll(&mut self) -> Built {
-        let Some(child) = self.child.as_mut() else {
+        let Some(thread) = self.thread.as_ref() else {
             return Built::Ended(Err("already ended".into()));
         };
-        let status = match child.try_wait() {
-            Ok(None) if self.since.elapsed() < LIMIT => return Built::Running,
-            Ok(None) => {
-                self.stop_and_reap();
-                return Built::Ended(Err(format!("it ran past {} s", LIMIT.as_secs())));
+        if !thread.is_finished() {
+            if self.since.elapsed() < LIMIT {
+                return Built::Running;
             }
-            Ok(Some(status)) => Ok(status),
-            // An app that reaps every child (SIGCHLD ignored) took its status.
-            Err(e) => Err(format!("its exit status is lost ({e})")),
-        };
-        let child = self.child.take().expect("checked above");
-        Built::Ended(match status {
-            Ok(s) if s.success() => Ok(self.since.elapsed()),
-            Ok(s) => Err(format!("{s}: {}", last_line(child))),
-            Err(e) => Err(e),
+            self.thread = None;
+            return Built::Ended(Err(format!("it ran past {} s", LIMIT.as_secs())));
+        }
+        let thread = self.thread.take().expect("checked above");
+        // The thread has ended: joining it does not wait.
+        Built::Ended(match thread.join() {
+            Ok(Ok(())) => Ok(self.since.elapsed()),
+            Ok(Err(why)) => Err(why),
+            Err(_) => Err("the build thread panicked".into()),
         })
     }
-
-    /// Stops the build now (the session passes through or ends).
-    pub fn stop(&self) {
-        let Some(child) = &self.child else { return };
-        let pid = child.id() as libc::pid_t;
-        // SAFETY: siginfo_t is plain C data; all-zero is a valid value for waitid to fill.
-        let mut info: libc::siginfo_t = unsafe { std::mem::zeroed() };
-        let flags = libc::WEXITED | libc::WNOHANG | libc::WNOWAIT;
-        // SAFETY: waitid with WNOWAIT only looks: it reaps nothing. It fails (ECHILD) where
-        // the app took the child's status (SIGCHLD ignored), whose pid may then name another
-        // process: nothing is signalled then.
-        if unsafe { libc::waitid(libc::P_PID, pid as libc::id_t, &mut info, flags) } != 0 {
-            return;
-        }
-        // SAFETY: kill on the pid of our own child, running or not yet reaped, so the pid
-        // names it and no other process.
-        unsafe { libc::kill(pid, libc::SIGKILL) };
-    }
-
-    fn stop_and_reap(&mut self) {
-        if let Some(mut child) = self.child.take() {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
-    }
 }
 
-impl Drop for ProgramBuilder {
-    fn drop(&mut self) {
-        self.stop_and_reap();
+/// The build, on its own thread: an offline context, the driver checked, the programs built
+/// and run once, the binaries written.
+fn build(
+    driver: &str,
+    (internal_format, width, in_place): (u32, u32, bool),
+    params: &Params,
+) -> Result<(), String> {
+    crate::camera::priority::lower_this_thread(BUILD_NICENESS);
+    if crate::fault::hit("gl-program-build") {
+        return Err("the build failed (fault point)".into());
     }
-}
-
-/// The last non-empty line the tool wrote to stderr (its reason), at most 300 bytes.
-fn last_line(child: Child) -> String {
-    use std::io::Read;
-    let mut text = Vec::new();
-    if let Some(mut err) = child.stderr {
-        let _ = err.by_ref().take(64 * 1024).read_to_end(&mut text);
+    let mut gl = GlOffline::new().map_err(|e| e.to_string())?;
+    let own = gl.engine().caps().driver.clone();
+    if !same_driver(&own, driver) {
+        return Err(format!("another driver here: {own}"));
     }
-    let text = String::from_utf8_lossy(&text);
-    let line = text.lines().rev().find(|l| !l.trim().is_empty());
-    line.unwrap_or("no message").chars().take(300).collect()
+    gl.engine().set_in_place(in_place);
+    // SAFETY: the offline context is current on this thread (GlOffline's contract), and is
+    // the only context this thread ever makes current.
+    let built = unsafe { gl.engine().warm_up(internal_format, width, params, LIMIT) }
+        .map_err(|e| e.to_string())?;
+    if !built {
+        return Err(format!("not built within {} s", LIMIT.as_secs()));
+    }
+    gl.engine().save_program_cache();
+    Ok(())
 }
