@@ -1,6 +1,6 @@
 //! Linked program binaries (glGetProgramBinary) kept beside the Vulkan pipeline cache: one file
 //! per driver (its GL_VENDOR, GL_RENDERER and GL_VERSION) in the same folder, read and written
-//! as that cache's files are (gpu/pipeline_cache.rs: a regular file of bounded size opened
+//! as that cache's files are (gpu/pipelines/pipeline_cache.rs: a regular file of bounded size opened
 //! without following links, the same length and checksum header, written atomically, other
 //! drivers' files removed when old). A file that is damaged or written for another driver is
 //! ignored and replaced; a binary the driver refuses is compiled again. The cache is only ever
@@ -164,7 +164,7 @@ impl BinaryCache {
         }
     }
 
-    /// Writes the file if entries were added (atomically; see gpu/pipeline_cache.rs), with only
+    /// Writes the file if entries were added (atomically; see gpu/pipelines/pipeline_cache.rs), with only
     /// the entries `current` names (the sources of this build: a changed shader's old binaries
     /// are dropped, so the file does not grow from build to build).
     pub fn save(&mut self, current: &dyn Fn(u64) -> bool) {
