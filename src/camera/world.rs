@@ -5,9 +5,9 @@
 //! over `world_latency_ms` after its capture, stamped with its capture time, as a real camera's
 //! frame would arrive. The panorama is at infinity: only the camera's orientation matters.
 //!
-//! The head's poses come from the consumer through [`HeadPoses`]: this module never knows who
-//! tracks the head. The consumer takes the [`HeadPoses::wanted`] times (CLOCK_MONOTONIC ns),
-//! locates the head at each and [`HeadPoses::record`]s the answer.
+//! The head's poses come from the consumer through [`HeadPoses`](crate::camera::rig::HeadPoses): this module never knows who
+//! tracks the head. The consumer takes the [`HeadPoses::wanted`](crate::camera::rig::HeadPoses::wanted) times (CLOCK_MONOTONIC ns),
+//! locates the head at each and [`HeadPoses::record`](crate::camera::rig::HeadPoses::record)s the answer.
 
 use crate::algorithm::registration::{CameraProfile, Pose};
 use crate::algorithm::reprojection::panorama_uv;

@@ -4,8 +4,9 @@
 //!
 //! Rooms by job, each with its own public surface: `device` (the device and its resources),
 //! `shaders` (the shader interface), `pipelines` (building them), `recipe` (the passes on one
-//! device), `frame` (a frame's work inside an app), `texels` (texels a source prepared) and
-//! `offline` (the command line's engine and benchmark).
+//! device), `frame` (a frame's work inside an app), `texels` (texels a source prepared),
+//! `offline` (the command line's engine and benchmark); and `opengl`, the same passes on an
+//! OpenGL app's context.
 
 pub mod device;
 pub mod frame;

@@ -1,6 +1,6 @@
 //! Sessions: read the graphics binding at xrCreateSession and set up the session's graphics
 //! ([`graphics`]: Vulkan or OpenGL) and background source ([`sources`]); at xrEndFrame enhance the frame's held
-//! images ([`end_frame`]) and release them before the runtime composes them.
+//! images ([`end_frame`](mod@end_frame)) and release them before the runtime composes them.
 //! At xrCreateSession the system's `[device."..."]` config table applies ([`headset_settings`]).
 //! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
 //! a changed background source is reopened on a helper thread while frames pass through.

@@ -1,6 +1,6 @@
 //! Reference spaces: the layer's own VIEW and LOCAL spaces per session (created at
 //! xrCreateSession, destroyed before the app's xrDestroySession is forwarded), locating one
-//! space in another, and the type of each reference space the app creates (for captures).
+//! space in another (the app's own spaces and their types, for captures: app_spaces.rs).
 
 use super::dispatch::NextFns;
 use crate::algorithm::registration::Pose;

@@ -271,7 +271,7 @@ impl GpuDevice {
     /// Vulkan loader (never another copy), on a physical device of the same kind, with one
     /// compute queue. Nothing of it belongs to the app's instance, so it may outlive the app's
     /// device and instance: a CPU driver's compile in flight on it is left to finish on its own
-    /// at the session's end (gpu/warm_up.rs). Drop destroys the device and the instance.
+    /// at the session's end (gpu/pipelines/warm_up.rs). Drop destroys the device and the instance.
     pub fn create_beside(app: &GpuDevice) -> Result<GpuDevice, GpuError> {
         let options = DeviceOptions {
             matching: Some(DeviceKind::of(app)),

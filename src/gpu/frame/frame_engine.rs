@@ -464,7 +464,7 @@ impl FrameEngine {
             .and_then(|()| self.wait_idle_within(END_WAIT_NS));
         // The pipeline thread uses the app's device: it ends before anything is destroyed. It
         // stops at once unless it is creating a pipeline on the app's device (a warm-up in
-        // flight is not waited for: see gpu/warm_up.rs).
+        // flight is not waited for: see gpu/pipelines/warm_up.rs).
         self.engine.join_building();
         if let Some(slot) = self.warm_up.take() {
             WarmUp::end(slot);

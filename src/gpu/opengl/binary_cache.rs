@@ -1,6 +1,6 @@
 //! Linked program binaries (glGetProgramBinary) kept beside the Vulkan pipeline cache: one file
 //! per driver (its GL_VENDOR, GL_RENDERER and GL_VERSION) in the same folder, read and written
-//! as that cache's files are (gpu/pipeline_cache.rs: a regular file of bounded size opened
+//! as that cache's files are (gpu/pipelines/pipeline_cache.rs: a regular file of bounded size opened
 //! without following links, the same length and checksum header, written atomically, other
 //! drivers' files removed when old). A file that is damaged or written for another driver is
 //! ignored and replaced; a binary the driver refuses is compiled again. The cache is only ever

@@ -1,6 +1,7 @@
 //! The GPU engine on the app's OpenGL context: the same compute passes as the Vulkan path,
-//! from the same WGSL (build.rs writes GLSL 430 of the modules this backend runs, checked
-//! against src/gpu/interface.rs as the SPIR-V is), on a copy of each view in a buffer object.
+//! from the same WGSL (build.rs writes GLSL 450 of the modules this backend runs, checked
+//! against src/gpu/shaders/interface.rs as the SPIR-V is), in place through an image unit or
+//! on a copy of each view in a buffer object.
 //!
 //! Called on the app's thread with its context current (the layer's xrEndFrame): no GL call is
 //! made on a thread of the layer's own, the app's GL state is put back after each call

@@ -30,7 +30,7 @@ fn lock() -> MutexGuard<'static, Work> {
 }
 
 /// What the exit runs first, with its deadline: each waits for work of the layer's own still
-/// running in a driver (gpu/warm_up.rs's left-over compiles).
+/// running in a driver (gpu/pipelines/warm_up.rs's left-over compiles).
 fn exit_waits() -> MutexGuard<'static, Vec<fn(Instant)>> {
     static WAITS: Mutex<Vec<fn(Instant)>> = Mutex::new(Vec::new());
     WAITS.lock().unwrap_or_else(|p| p.into_inner())

@@ -84,7 +84,7 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<Frame
 
 /// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
 /// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device is
-/// made here when one of them needs it, never on the pipeline thread (gpu/warm_up.rs).
+/// made here when one of them needs it, never on the pipeline thread (gpu/pipelines/warm_up.rs).
 fn request_shaders(engine: &FrameEngine, ids: &[ShaderId]) {
     let t = Instant::now();
     match engine.request(ids) {

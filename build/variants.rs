@@ -1,0 +1,147 @@
+//! The variants build.rs compiles, as a typed list: every (pixel access, FORMAT code) a
+//! per-pixel pass is built for, and every `enhance` and `classify` variant with its file name.
+//!
+//! The per-pixel `enhance` entry is built once per (method, view mode, pixel format) with all
+//! three as WGSL constants, so each variant holds only its own code: a CPU driver such as
+//! lavapipe runs every branch under an execution mask, so code behind a push-constant branch
+//! costs time even when no pixel takes it (measured: the format as a push constant made a full
+//! frame 1.8x slower). The codes are src/gpu/shaders/interface.rs's. `classify` is built once
+//! per format. The beyond-the-paper extras (achromatic boost, luminance cap) are a fourth such
+//! switch: a variant without them for when both are off, the default.
+
+use crate::interface::*;
+use crate::methods::{paper_code, METHODS};
+
+/// A pixel access (ACCESS_*) and FORMAT code a per-pixel pass is built for.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct PixelAccess {
+    pub access: u32,
+    pub format: u32,
+}
+
+impl PixelAccess {
+    /// The FORMAT code of an in-place variant (it reads and writes `app_image`).
+    pub fn in_place(self) -> Option<u32> {
+        (self.access == ACCESS_IN_PLACE).then_some(self.format)
+    }
+
+    /// Whether the OpenGL backend gets a GLSL variant for it: every format but the BGRA ones
+    /// (OpenGL has no BGRA internal format), through a buffer object (the buffer accesses)
+    /// and, for the formats with a storage texel format, in place through an image unit.
+    pub fn gl(self) -> bool {
+        let in_place_ok = self.access != ACCESS_IN_PLACE || in_place_texel(self.format).is_some();
+        in_place_ok && self.format & !FORMAT_SRGB_BIT != LAYOUT_BGRA8
+    }
+}
+
+/// Every (pixel access, FORMAT code) a per-pixel pass is built for: both buffer accesses for
+/// every format, in place for the formats that have a storage texel format.
+pub fn pixel_accesses() -> Vec<PixelAccess> {
+    let buffers = [ACCESS_WIDE, ACCESS_NARROW]
+        .into_iter()
+        .flat_map(|access| FORMAT_CODES.map(|format| PixelAccess { access, format }));
+    let in_place = FORMAT_CODES
+        .into_iter()
+        .filter(|&f| in_place_texel(f).is_some())
+        .map(|format| PixelAccess {
+            access: ACCESS_IN_PLACE,
+            format,
+        });
+    buffers.chain(in_place).collect()
+}
+
+/// One `enhance` variant.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct Enhance {
+    /// The method's code.
+    pub method: u32,
+    /// The view mode (MODE_*).
+    pub mode: u32,
+    pub pixels: PixelAccess,
+    /// With the beyond-the-paper extras (achromatic boost, luminance cap).
+    pub extras: bool,
+    /// With shared fetches (shaders/sample_shared.wgsl instead of sample_general.wgsl).
+    pub shared: bool,
+}
+
+impl Enhance {
+    /// The SPIR-V (and GLSL) file's name, without its extension.
+    pub fn file(&self) -> String {
+        format!(
+            "enhance_m{}_v{}_f{}_a{}_e{}{}",
+            self.method,
+            self.mode,
+            self.pixels.format,
+            self.pixels.access,
+            u8::from(self.extras),
+            if self.shared { "_s" } else { "" }
+        )
+    }
+
+    /// Whether the OpenGL backend gets it: the general sampling only (the shared fetches are
+    /// a Vulkan-side optimisation).
+    pub fn gl(&self) -> bool {
+        self.pixels.gl() && !self.shared
+    }
+}
+
+/// Every (method, mode, extras, shared fetches) an `enhance` is built for, for one pixel
+/// access. The fifth switch, shared fetches (shaders/sample_shared.wgsl instead of
+/// sample_general.wgsl), has a group's four pixels read their camera texels once, valid only
+/// for some mappings (src/gpu/recipe/shared_fetch.rs): built only for the defaults (the
+/// paper's method in mode enhance, extras off), each variant costing about 40 kB of library.
+fn enhance_of(pixels: PixelAccess) -> Vec<Enhance> {
+    let mut codes: Vec<u32> = METHODS.iter().map(|m| m.code).collect();
+    codes.sort();
+    assert!(
+        codes.windows(2).all(|w| w[0] != w[1]),
+        "src/algorithm/method_table.rs: two methods share a code"
+    );
+    let variant = |method, mode, extras, shared| Enhance {
+        method,
+        mode,
+        pixels,
+        extras,
+        shared,
+    };
+    let mut v: Vec<Enhance> = METHODS
+        .iter()
+        .flat_map(|m| ENHANCE_MODES.iter().map(move |&mode| (m.code, mode)))
+        .flat_map(|(m, mode)| {
+            [
+                variant(m, mode, false, false),
+                variant(m, mode, true, false),
+            ]
+        })
+        .collect();
+    v.push(variant(paper_code(), MODE_BACKGROUND, false, false));
+    v.push(variant(paper_code(), MODE_ENHANCE, false, true));
+    v
+}
+
+/// Every `enhance` variant, in the table's order: by pixel access, then by method, mode,
+/// extras, with the background mode and the shared fetches last.
+pub fn enhance_variants() -> Vec<Enhance> {
+    pixel_accesses().into_iter().flat_map(enhance_of).collect()
+}
+
+/// One `classify` variant (built with the paper's method, mode 0, extras off).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct Classify {
+    pub pixels: PixelAccess,
+}
+
+impl Classify {
+    /// The SPIR-V (and GLSL) file's name, without its extension.
+    pub fn file(&self) -> String {
+        format!("classify_f{}_a{}", self.pixels.format, self.pixels.access)
+    }
+}
+
+/// Every `classify` variant, one per pixel access, in the table's order.
+pub fn classify_variants() -> Vec<Classify> {
+    pixel_accesses()
+        .into_iter()
+        .map(|pixels| Classify { pixels })
+        .collect()
+}
