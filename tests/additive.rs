@@ -60,13 +60,16 @@ fn run(cmd: &[&str], env: &[(String, String)]) -> Option<SandboxRun> {
     Some(sandbox.run(cmd, &refs))
 }
 
-const HELLO_XR_ADDITIVE: &str = "sleep 8 | hello_xr -g Vulkan2 -bm Additive";
-
 #[test]
 fn hello_xr_presents_additive_with_the_key_and_renders_black_around_its_content() {
     let dir = scratch_dir("additive-hello-xr");
     let env = env_with(&dir, &[("CONTRASTXR_ENVIRONMENT_BLEND_MODE", "additive")]);
-    let Some(run) = run(&["bash", "-c", HELLO_XR_ADDITIVE], &env) else {
+    // At least 8 s, then until the two frames are captured (the pipelines may be cold).
+    let script = format!(
+        "{} | hello_xr -g Vulkan2 -bm Additive",
+        common::stdin_until_captured(&dir, 4, 8)
+    );
+    let Some(run) = run(&["bash", "-c", &script], &env) else {
         return;
     };
     run.assert_success();
@@ -103,7 +106,9 @@ fn hello_xr_presents_additive_with_the_key_and_renders_black_around_its_content(
 fn hello_xr_additive_fails_without_the_key() {
     let dir = scratch_dir("additive-hello-xr-off");
     let env = env_with(&dir, &[]);
-    let Some(run) = run(&["bash", "-c", HELLO_XR_ADDITIVE], &env) else {
+    // hello_xr fails at once where ADDITIVE is refused; were it accepted, it would run 8 s.
+    let script = "sleep 8 | hello_xr -g Vulkan2 -bm Additive";
+    let Some(run) = run(&["bash", "-c", script], &env) else {
         return;
     };
     assert!(!run.success(), "ADDITIVE accepted: {}", run.describe());

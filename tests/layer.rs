@@ -359,7 +359,12 @@ fn hello_xr_runs_through_the_layer_for_ten_seconds() {
         &dir,
         &format!("image:{}", sample("background-yellow-wall.png")),
     );
-    let cmd = ["bash", "-c", "sleep 10 | hello_xr -g Vulkan2"];
+    // At least 10 s, then until the two frames are captured (the pipelines may be cold).
+    let script = format!(
+        "{} | hello_xr -g Vulkan2",
+        common::stdin_until_captured(&dir, 4, 10)
+    );
+    let cmd = ["bash", "-c", script.as_str()];
     let Some((run, validation)) = run_validated("layer-hello-xr", &cmd, &as_refs(&env)) else {
         return;
     };

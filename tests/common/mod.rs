@@ -473,3 +473,15 @@ pub fn fake_v4l2(dir: &Path) -> PathBuf {
     assert!(status.success(), "building {} failed", source.display());
     lib
 }
+
+/// The head of a shell pipeline feeding an app that runs until its stdin closes (hello_xr):
+/// open for at least `min_s` seconds, then until `dir` holds `views` captured views
+/// (`frame-N-view-V.json`), at most 180 s. A cold shader cache (a fresh machine's) or a loaded
+/// machine then still gives the frames a test needs, where no fixed wait suits both.
+pub fn stdin_until_captured(dir: &Path, views: usize, min_s: u32) -> String {
+    format!(
+        "(for i in $(seq 900); do [ $i -gt {} ] && [ $(ls '{}'/frame-*-view-*.json 2>/dev/null | wc -l) -ge {views} ] && break; sleep 0.2; done)",
+        min_s * 5,
+        dir.display()
+    )
+}
