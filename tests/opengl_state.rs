@@ -213,3 +213,26 @@ fn a_panic_inside_the_recipe_leaves_the_apps_gl_state_as_it_was() {
         assert!(passing[0].contains(call), "{what}");
     }
 }
+
+/// A context switch that fails (fault point `gl-make-current`: the layer makes the app's
+/// context current on its own drawable, then counts the switch as failed) is undone: the
+/// thread gets back the drawables and context it had, so the app's check finds nothing changed
+/// around xrEndFrame, and the session passes through with one line.
+#[test]
+fn a_failed_context_switch_is_undone() {
+    let fault = [("CONTRASTXR_FAULT", "gl-make-current")];
+    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &fault) else {
+        return;
+    };
+    let (report, others, _) = changes(&run);
+    let what = run.describe();
+    assert!(
+        report["gl_state_checked"].as_u64().unwrap_or(0) >= 10,
+        "{what}"
+    );
+    assert_eq!(others, Vec::<Value>::new(), "{what}");
+    let lines = common::layer_lines(&run);
+    let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+    assert_eq!(passing.len(), 1, "{what}");
+    assert!(passing[0].contains("could not be made current"), "{what}");
+}
