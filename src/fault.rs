@@ -7,14 +7,14 @@
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
 //! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`,
-//! `gl-program-thread`, `gl-program-build`
+//! `gl-program-thread`, `gl-program-build`, `gl-recipe-panic`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 20] = [
+pub const POINTS: [(&str, &str); 21] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -81,6 +81,10 @@ pub const POINTS: [(&str, &str); 20] = [
     (
         "gl-program-build",
         "the build of an OpenGL app's programs off its threads (it ends without them)",
+    ),
+    (
+        "gl-recipe-panic",
+        "a panic inside the OpenGL recipe, with the layer's framebuffer bound in the app's context",
     ),
     (
         "end-frame",

@@ -156,3 +156,24 @@ fn the_app_finds_its_egl_gl_state_after_xr_end_frame_with_the_layer_on_as_off() 
     assert_eq!(changed.len() as u64, checked, "{}", run.describe());
     assert!(changed.iter().all(|c| c["what"] == draw), "{changed:#?}");
 }
+
+/// A switch to the app's EGL context that fails (fault point `gl-make-current`, which counts
+/// the switch as failed after making it) is undone: the thread gets back the surfaces and
+/// context it had, so the app's check finds nothing changed around xrEndFrame.
+#[test]
+fn a_failed_egl_context_switch_is_undone() {
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_FAULT", "gl-make-current"),
+    ];
+    let Some(run) = client_egl(&env, &["--check-gl-state"]) else {
+        return;
+    };
+    let report = run.client_report();
+    let what = run.describe();
+    assert!(report["gl_state_checked"].as_u64() >= Some(10), "{what}");
+    assert_eq!(report["gl_state_changed"], serde_json::json!([]), "{what}");
+    assert_one_pass_through_line(&run, "could not be made current");
+}

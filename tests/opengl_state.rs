@@ -13,15 +13,26 @@ use serde_json::Value;
 /// xrEndFrame, through the layer (on and enhancing whatever it can) when `layer` is true;
 /// `disturb`: the items it changes on purpose before xrEndFrame.
 fn client(format: &str, layer: bool, disturb: Option<&str>) -> Option<SandboxRun> {
+    client_with(format, layer, disturb, &[])
+}
+
+/// `client` with `extra` added to the layer's environment.
+fn client_with(
+    format: &str,
+    layer: bool,
+    disturb: Option<&str>,
+    extra: &[(&str, &str)],
+) -> Option<SandboxRun> {
     let sandbox = sandbox()?;
     let on = if layer { "1" } else { "0" };
-    let env = [
+    let mut env = vec![
         ("CONTRASTXR", on),
         ("CONTRASTXR_FORCE", "1"),
         ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
         // Every frame enhanced, the first one included (it waits for the programs).
         ("CONTRASTXR_PIPELINES", "wait"),
     ];
+    env.extend(extra);
     let mut cmd = vec![
         common::XR_CLIENT,
         "--graphics",
@@ -170,4 +181,58 @@ fn the_check_reports_gl_state_left_changed() {
         (&error["before"], &error["after"]),
         (&0x0500.into(), &0.into())
     );
+}
+
+/// A panic inside the layer's OpenGL work, with its own framebuffer bound in the app's context
+/// (fault point `gl-recipe-panic`), at xrCreateSwapchain (its first run, building the
+/// programs) or in a frame call (`@1`): the app gets its swapchain, still finds its whole GL
+/// state as it left it around every xrEndFrame (the saved state is put back as the panic
+/// unwinds, and the context switch undone), and the session passes through from then on with
+/// one line.
+#[test]
+fn a_panic_inside_the_recipe_leaves_the_apps_gl_state_as_it_was() {
+    for (point, call) in [
+        ("gl-recipe-panic", "at xrCreateSwapchain"),
+        ("gl-recipe-panic@1", "while enhancing"),
+    ] {
+        let fault = [("CONTRASTXR_FAULT", point)];
+        let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &fault) else {
+            return;
+        };
+        let (report, others, _) = changes(&run);
+        let what = format!("{point}: {}", run.describe());
+        assert!(
+            report["gl_state_checked"].as_u64().unwrap_or(0) >= 10,
+            "{what}"
+        );
+        assert_eq!(others, Vec::<Value>::new(), "{what}");
+        let lines = common::layer_lines(&run);
+        let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+        assert_eq!(passing.len(), 1, "{what}");
+        assert!(passing[0].contains("internal error"), "{what}");
+        assert!(passing[0].contains(call), "{what}");
+    }
+}
+
+/// A context switch that fails (fault point `gl-make-current`: the layer makes the app's
+/// context current on its own drawable, then counts the switch as failed) is undone: the
+/// thread gets back the drawables and context it had, so the app's check finds nothing changed
+/// around xrEndFrame, and the session passes through with one line.
+#[test]
+fn a_failed_context_switch_is_undone() {
+    let fault = [("CONTRASTXR_FAULT", "gl-make-current")];
+    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &fault) else {
+        return;
+    };
+    let (report, others, _) = changes(&run);
+    let what = run.describe();
+    assert!(
+        report["gl_state_checked"].as_u64().unwrap_or(0) >= 10,
+        "{what}"
+    );
+    assert_eq!(others, Vec::<Value>::new(), "{what}");
+    let lines = common::layer_lines(&run);
+    let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+    assert_eq!(passing.len(), 1, "{what}");
+    assert!(passing[0].contains("could not be made current"), "{what}");
 }

@@ -175,8 +175,10 @@ pub(crate) unsafe extern "system" fn create_swapchain(
 }
 
 /// Starts building the shaders that views of this swapchain will need (Vulkan: on the
-/// engine's own thread; OpenGL: linked from the caches here, or built by a process beside the
-/// app), so they are likely ready by the first xrEndFrame. Views usually span the width.
+/// engine's own thread; OpenGL: linked from the caches here, or built on a thread of the
+/// layer's own), so they are likely ready by the first xrEndFrame. Views usually span the
+/// width. A panic in it costs the app nothing: its swapchain was made, and the session passes
+/// through from then on.
 fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_place: bool) {
     let mut s = lock(s);
     // A session whose frames can never be ADDITIVE (and the layer not forced on) is never
@@ -185,8 +187,17 @@ fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_
         return;
     }
     let params = s.settings.params.clone();
-    if let Some(graphics) = s.engine.as_mut() {
-        graphics.request_shaders(&params, format, width, in_place);
+    let Some(graphics) = s.engine.as_mut() else {
+        return;
+    };
+    let prepared = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        graphics.request_shaders(&params, format, width, in_place)
+    }));
+    if prepared.is_err() {
+        log::info(
+            "internal error while preparing the shaders at xrCreateSwapchain: passing this session's frames through from now on",
+        );
+        s.retire_engine();
     }
 }
 

@@ -331,11 +331,11 @@ impl GlEngine {
             });
         }
         let bg = self.background.as_mut().expect("made above");
-        let saved = SavedState::save(g)?;
+        let state = SavedState::guard(g)?;
         // SAFETY: the context is current (this call's contract); the texture is the
-        // background's, of the texels' size; the unpack binding is put back by `restore`.
+        // background's, of the texels' size; the unpack binding is put back by the guard.
         let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };
-        saved.restore(g);
+        drop(state);
         uploaded?;
         bg.holds = Some((texels.serial, needed));
         Ok(())
@@ -472,14 +472,17 @@ impl GlEngine {
                 }
             }
         }
-        let saved = SavedState::save(&self.gl)?;
-        // SAFETY: a framebuffer this engine made; the app's bindings are put back by `restore`.
+        let state = SavedState::guard(&self.gl)?;
+        // SAFETY: a framebuffer this engine made; the app's bindings are put back by the guard.
         unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
+        if crate::fault::hit("gl-recipe-panic") {
+            panic!("fault point gl-recipe-panic");
+        }
         for (k, v) in views.iter().enumerate() {
             let programs: [usize; 3] = ids[3 * k..3 * k + 3].try_into().expect("3 ids");
             self.run_view(k, v, params, bg_size, programs);
         }
-        saved.restore(&self.gl);
+        drop(state);
         Ok(Outcome::Enhanced)
     }
 

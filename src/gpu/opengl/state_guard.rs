@@ -89,6 +89,19 @@ impl ImageUnit {
     }
 }
 
+/// The app's state saved, put back when this is dropped: also when the recipe panics between
+/// (the panic is caught at the layer's boundary, and the app finds its state as it left it).
+pub struct StateGuard<'a> {
+    g: &'a Gl,
+    saved: SavedState,
+}
+
+impl Drop for StateGuard<'_> {
+    fn drop(&mut self) {
+        self.saved.restore(self.g);
+    }
+}
+
 /// The state the recipe touches, as the app left it.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct SavedState {
@@ -176,6 +189,14 @@ impl SavedState {
             unsafe { (g.pixel_storei)(*p, v) };
         }
         Ok(saved)
+    }
+
+    /// `save`, restored when the guard is dropped.
+    pub fn guard(g: &Gl) -> Result<StateGuard<'_>, GlError> {
+        Ok(StateGuard {
+            g,
+            saved: SavedState::save(g)?,
+        })
     }
 
     /// Why a saved binding could not be bound again once the recipe has bound its own, if so:

@@ -44,14 +44,14 @@ unsafe fn draw(g: &Gl, v: &GlView, format: GlFormat, runs: &[Run], pixel: &[u8])
 
 /// Runs `f` with the app's state saved, no pixel buffers bound, and puts the state back.
 fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> Result<R, GlError> {
-    let saved = SavedState::save(g)?;
-    // SAFETY: unbinding the pixel buffer points (put back by `restore`).
+    let state = SavedState::guard(g)?;
+    // SAFETY: unbinding the pixel buffer points (put back by the guard).
     unsafe {
         (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, 0);
         (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, 0);
     }
     let r = f();
-    saved.restore(g);
+    drop(state);
     Ok(r)
 }
 

@@ -18,5 +18,30 @@ pub trait AppContext {
     fn gl(&self) -> Result<Gl, GlError>;
 }
 
+/// The app's context entered, left again when this is dropped: also when the layer's work in
+/// it panics (the panic is caught at the layer's boundary, with the app's thread as it was).
+pub struct Entered<'a> {
+    context: &'a dyn AppContext,
+    previous: Option<Option<Previous>>,
+}
+
+impl<'a> Entered<'a> {
+    pub fn enter(context: &'a dyn AppContext) -> Result<Entered<'a>, String> {
+        let previous = context.enter()?;
+        Ok(Entered {
+            context,
+            previous: Some(previous),
+        })
+    }
+}
+
+impl Drop for Entered<'_> {
+    fn drop(&mut self) {
+        if let Some(previous) = self.previous.take() {
+            self.context.leave(previous);
+        }
+    }
+}
+
 /// The message when the app's context cannot be made current here.
 pub const NOT_CURRENT: &str = "the app's OpenGL context could not be made current on the thread calling the layer (is it current on another thread?)";

@@ -97,14 +97,20 @@ impl AppContext for EglContext {
                 context: current,
             }
         };
-        if forced {
-            return Err(format!("{NOT_CURRENT} (fault injected at gl-make-current)"));
-        }
         let none = std::ptr::null_mut();
         // SAFETY: the binding's display and context, alive for the session; no surface.
         let made = unsafe { (e.make_current)(self.display, none, none, self.context) };
-        if made == 0 {
-            return Err(NOT_CURRENT.into());
+        // SAFETY: as above. The fault point fails after the switch.
+        let now = unsafe { (e.get_current_context)() };
+        if made == 0 || now != self.context || forced {
+            // Whatever the failed switch left, this thread gets back what it had.
+            self.leave(Some(Box::new(previous)));
+            let injected = if forced {
+                " (fault injected at gl-make-current)"
+            } else {
+                ""
+            };
+            return Err(format!("{NOT_CURRENT}{injected}"));
         }
         Ok(Some(Box::new(previous)))
     }

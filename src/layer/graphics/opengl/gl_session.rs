@@ -4,7 +4,7 @@
 //! mapped upload buffer on its own thread; a frame its source did not prepare, such as a
 //! static one, is prepared here once.
 
-use super::app_context::AppContext;
+use super::app_context::{AppContext, Entered};
 use super::program_builder::{Built, ProgramBuilder};
 use crate::algorithm::params::Params;
 use crate::blurred_texels::{BlurTaps, BlurredTexels};
@@ -106,7 +106,7 @@ impl GlSession {
         &mut self,
         f: impl FnOnce(&mut GlEngine, &mut Option<(u64, BlurredTexels)>) -> Result<R, NotDone>,
     ) -> Result<R, NotDone> {
-        let previous = self.context.enter().map_err(NotDone::Failed)?;
+        let entered = Entered::enter(&*self.context).map_err(NotDone::Failed)?;
         let engine = match self.engine.take() {
             Some(engine) => Ok(engine),
             // SAFETY: the app's context is current on this thread; the engine's later calls
@@ -138,7 +138,7 @@ impl GlSession {
             }
             Err(e) => Err(failed(e)),
         };
-        self.context.leave(previous);
+        drop(entered);
         result
     }
 }

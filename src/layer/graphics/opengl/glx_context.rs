@@ -7,7 +7,6 @@
 use super::app_context::{AppContext, Previous as AnyPrevious, NOT_CURRENT};
 use crate::gpu::opengl::{Gl, GlError};
 use std::ffi::{c_int, c_void, CStr};
-use std::sync::atomic::{AtomicBool, Ordering};
 
 type Display = c_void;
 type GetCurrentContext = unsafe extern "C" fn() -> *mut c_void;
@@ -93,11 +92,10 @@ struct Previous {
     context: *mut c_void,
 }
 
-/// Set by the recording handler while the layer's make-current call runs.
-static X_ERROR: AtomicBool = AtomicBool::new(false);
-
-unsafe extern "C" fn record_x_error(_: *mut Display, _: *mut c_void) -> c_int {
-    X_ERROR.store(true, Ordering::SeqCst);
+/// The handler while the layer's make-current call runs: an X error of that call (a bad
+/// drawable) would otherwise reach the app's handler, whose default ends the process. Whether
+/// the call worked is read from GLX afterwards.
+unsafe extern "C" fn ignore_x_error(_: *mut Display, _: *mut c_void) -> c_int {
     0
 }
 
@@ -134,23 +132,33 @@ impl AppContext for GlxContext {
                 context: current,
             }
         };
-        if forced {
-            return Err(format!("{NOT_CURRENT} (fault injected at gl-make-current)"));
-        }
-        X_ERROR.store(false, Ordering::SeqCst);
         // SAFETY: the binding's display, drawable and context, which the app keeps alive for
-        // the session; the recording handler is put back to the app's at once, after XSync
-        // has delivered any error of the call.
+        // the session. XSync first delivers the app's own pending errors to its own handler;
+        // the app's handler is put back at once, after XSync has delivered any error of the
+        // call.
         let made = unsafe {
-            let app_handler = (g.set_error_handler)(Some(record_x_error));
+            (g.sync)(self.display, 0);
+            let app_handler = (g.set_error_handler)(Some(ignore_x_error));
             let made =
                 (g.make_context_current)(self.display, self.drawable, self.drawable, self.context);
             (g.sync)(self.display, 0);
             (g.set_error_handler)(app_handler);
             made
         };
-        if made == 0 || X_ERROR.load(Ordering::SeqCst) {
-            return Err(NOT_CURRENT.into());
+        // Whether this thread now has the app's context is what counts (not whether an X error
+        // came meanwhile: it may be another thread's). The fault point fails after the switch.
+        // SAFETY: as above.
+        let now = unsafe { (g.get_current_context)() };
+        if made == 0 || now != self.context || forced {
+            // Whatever the failed switch left (Mesa unbinds the old context before a bind that
+            // fails), this thread gets back what it had.
+            self.leave(Some(Box::new(previous)));
+            let injected = if forced {
+                " (fault injected at gl-make-current)"
+            } else {
+                ""
+            };
+            return Err(format!("{NOT_CURRENT}{injected}"));
         }
         Ok(Some(Box::new(previous)))
     }
