@@ -569,17 +569,11 @@ fn read_state(a: &AppGl) -> AppState {
     }
 }
 
-/// Non-default values of every piece of state the recipe touches (and of the image units and
-/// uniform buffers it must not), and a pending GL_INVALID_ENUM: after the call the app reads
-/// every value back unchanged, and the same pending error, and then none.
-#[test]
-fn the_apps_gl_state_and_pending_error_survive_the_call() {
-    let mut gl = context();
-    let a = app_gl(&gl);
-    let camera = noise(64, 40, 7);
-    let display = noise(40, 24, 8);
-    let params = Params::default();
-    gl.set_camera(&camera, &params).unwrap();
+/// A 40x24 GL_SRGB8_ALPHA8 view of noise (seed `seeds.1`) against a 64x40 camera of noise (seed
+/// `seeds.0`), enhanced once so that its programs are built; the view and its texels as made.
+fn built_srgb_view(gl: &mut GlOffline, seeds: (u32, u32), params: &Params) -> (GlView, Vec<u8>) {
+    gl.set_camera(&noise(64, 40, seeds.0), params).unwrap();
+    let display = noise(40, 24, seeds.1);
     let bytes: Vec<u8> = display.pixels.iter().flatten().copied().collect();
     let texture = gl.create_texture(SRGB8_ALPHA8, (40, 24), &bytes).unwrap();
     let view = GlView {
@@ -589,8 +583,21 @@ fn the_apps_gl_state_and_pending_error_survive_the_call() {
         rect: (0, 0, 40, 24),
         mapping: params.camera_mapping(),
     };
-    // Build the programs first, so the call below runs the whole recipe.
-    gl.enhance_views(&[view], &params).unwrap();
+    gl.enhance_views(&[view], params).unwrap();
+    (view, bytes)
+}
+
+/// Non-default values of every piece of state the recipe touches (and of the image units and
+/// uniform buffers it must not), and a pending GL_INVALID_ENUM: after the call the app reads
+/// every value back unchanged, and the same pending error, and then none.
+#[test]
+fn the_apps_gl_state_and_pending_error_survive_the_call() {
+    let mut gl = context();
+    let a = app_gl(&gl);
+    let params = Params::default();
+    // The programs built first, so the call below runs the whole recipe.
+    let (view, bytes) = built_srgb_view(&mut gl, (7, 8), &params);
+    let texture = view.texture;
     let source = c"#version 450\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
     // SAFETY: the context is current on this thread; every name passed is made here, every
     // enum valid for its call (but the glEnable, which raises GL_INVALID_ENUM on purpose).
@@ -1229,21 +1236,10 @@ fn a_program_kept_only_by_its_binding_passes_the_frame_through() {
     use contrastxr::gpu::opengl::GlError;
     let mut gl = context();
     let a = app_gl(&gl);
-    let camera = noise(64, 40, 3);
-    let display = noise(40, 24, 4);
     let params = Params::default();
-    gl.set_camera(&camera, &params).unwrap();
-    let bytes: Vec<u8> = display.pixels.iter().flatten().copied().collect();
-    let texture = gl.create_texture(SRGB8_ALPHA8, (40, 24), &bytes).unwrap();
-    let view = GlView {
-        texture,
-        target: GlTarget::Texture2D,
-        internal_format: SRGB8_ALPHA8,
-        rect: (0, 0, 40, 24),
-        mapping: params.camera_mapping(),
-    };
     // The programs built, and a copy of the texture as the app left it.
-    gl.enhance_views(&[view], &params).unwrap();
+    let (view, _) = built_srgb_view(&mut gl, (3, 4), &params);
+    let texture = view.texture;
     let before = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
     let source = c"#version 450\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
     // SAFETY: the context is current on this thread; a program made here.

@@ -183,6 +183,38 @@ fn the_check_reports_gl_state_left_changed() {
     );
 }
 
+/// The run with fault point `point` armed: the app's state checked at least 10 times and
+/// found as it left it, and one line saying the session passes through, naming each of `says`.
+/// A run before it fills a cache of its own, so that the programs are linked from it in the
+/// app's context (no build thread meets the fault point first).
+fn kept_and_passed_through(point: &str, says: &[&str]) {
+    let cache = common::scratch_dir(&format!("opengl-state-{point}-cache"));
+    let cache = cache.to_string_lossy().into_owned();
+    let warm = [("XDG_CACHE_HOME", cache.as_str())];
+    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &warm) else {
+        return;
+    };
+    run.assert_success();
+    let fault = [
+        ("XDG_CACHE_HOME", cache.as_str()),
+        ("CONTRASTXR_FAULT", point),
+    ];
+    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &fault) else {
+        return;
+    };
+    let (report, others, _) = changes(&run);
+    let what = format!("{point}: {}", run.describe());
+    let checked = report["gl_state_checked"].as_u64().unwrap_or(0);
+    assert!(checked >= 10, "{what}");
+    assert_eq!(others, Vec::<Value>::new(), "{what}");
+    let lines = common::layer_lines(&run);
+    let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
+    assert_eq!(passing.len(), 1, "{what}");
+    for said in says {
+        assert!(passing[0].contains(said), "{said:?}: {what}");
+    }
+}
+
 /// A panic inside the layer's OpenGL work, with its own framebuffer bound in the app's context
 /// (fault point `gl-recipe-panic`), at xrCreateSwapchain (its first run, building the
 /// programs) or in a frame call (`@1`): the app gets its swapchain, still finds its whole GL
@@ -191,27 +223,11 @@ fn the_check_reports_gl_state_left_changed() {
 /// one line.
 #[test]
 fn a_panic_inside_the_recipe_leaves_the_apps_gl_state_as_it_was() {
-    for (point, call) in [
-        ("gl-recipe-panic", "at xrCreateSwapchain"),
-        ("gl-recipe-panic@1", "while enhancing"),
-    ] {
-        let fault = [("CONTRASTXR_FAULT", point)];
-        let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &fault) else {
-            return;
-        };
-        let (report, others, _) = changes(&run);
-        let what = format!("{point}: {}", run.describe());
-        assert!(
-            report["gl_state_checked"].as_u64().unwrap_or(0) >= 10,
-            "{what}"
-        );
-        assert_eq!(others, Vec::<Value>::new(), "{what}");
-        let lines = common::layer_lines(&run);
-        let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
-        assert_eq!(passing.len(), 1, "{what}");
-        assert!(passing[0].contains("internal error"), "{what}");
-        assert!(passing[0].contains(call), "{what}");
-    }
+    kept_and_passed_through(
+        "gl-recipe-panic",
+        &["internal error", "at xrCreateSwapchain"],
+    );
+    kept_and_passed_through("gl-recipe-panic@1", &["internal error", "while enhancing"]);
 }
 
 /// A context switch that fails (fault point `gl-make-current`: the layer makes the app's
@@ -220,19 +236,5 @@ fn a_panic_inside_the_recipe_leaves_the_apps_gl_state_as_it_was() {
 /// around xrEndFrame, and the session passes through with one line.
 #[test]
 fn a_failed_context_switch_is_undone() {
-    let fault = [("CONTRASTXR_FAULT", "gl-make-current")];
-    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &fault) else {
-        return;
-    };
-    let (report, others, _) = changes(&run);
-    let what = run.describe();
-    assert!(
-        report["gl_state_checked"].as_u64().unwrap_or(0) >= 10,
-        "{what}"
-    );
-    assert_eq!(others, Vec::<Value>::new(), "{what}");
-    let lines = common::layer_lines(&run);
-    let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
-    assert_eq!(passing.len(), 1, "{what}");
-    assert!(passing[0].contains("could not be made current"), "{what}");
+    kept_and_passed_through("gl-make-current", &["could not be made current"]);
 }
