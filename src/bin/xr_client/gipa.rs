@@ -5,9 +5,12 @@
 use ash::vk;
 use std::ffi::c_char;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::OnceLock;
+use std::sync::Mutex;
 
-static LOADER_GIPA: OnceLock<vk::PFN_vkGetInstanceProcAddr> = OnceLock::new();
+/// The loader's function of the instance being made: set at every `counting`, since each of
+/// the client's XrInstances loads libvulkan anew (`--instances`), and the library of an earlier
+/// one may have been unloaded since, and its address range reused by another library.
+static LOADER_GIPA: Mutex<Option<vk::PFN_vkGetInstanceProcAddr>> = Mutex::new(None);
 static CALLS: AtomicU32 = AtomicU32::new(0);
 
 unsafe extern "system" fn counting_gipa(
@@ -15,14 +18,18 @@ unsafe extern "system" fn counting_gipa(
     name: *const c_char,
 ) -> vk::PFN_vkVoidFunction {
     CALLS.fetch_add(1, Ordering::Relaxed);
-    let gipa = LOADER_GIPA.get().expect("set before it is handed out");
+    let gipa = LOADER_GIPA
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .expect("set before it is handed out");
     // SAFETY: the caller's arguments, to the loader's function of the same signature.
     unsafe { gipa(instance, name) }
 }
 
 /// The counting vkGetInstanceProcAddr in front of `entry`'s loader.
 pub fn counting(entry: &ash::Entry) -> vk::PFN_vkGetInstanceProcAddr {
-    LOADER_GIPA.get_or_init(|| entry.static_fn().get_instance_proc_addr);
+    *LOADER_GIPA.lock().unwrap_or_else(|p| p.into_inner()) =
+        Some(entry.static_fn().get_instance_proc_addr);
     counting_gipa
 }
 
