@@ -63,23 +63,39 @@ impl VideoFrames for Y4m {
     }
 }
 
-/// Opens a video: a folder of PNG frames (at `cfg.video_fps`) or a Y4M file (at its own rate).
+/// The slowest and fastest a video plays: a rate outside (a Y4M header's `F1:1e300`, `F0:1`)
+/// is clamped, so the player never divides by nothing nor wakes for nothing.
+pub(crate) const RATES: std::ops::RangeInclusive<f64> = 0.1..=1000.0;
+
+/// `fps` within [`RATES`]; not a number is refused.
+fn playable_rate(fps: f64) -> Result<f64, CameraError> {
+    if fps.is_nan() {
+        return Err(CameraError::File("video frame rate is not a number".into()));
+    }
+    let clamped = fps.clamp(*RATES.start(), *RATES.end());
+    if clamped != fps {
+        log(&format!(
+            "video frame rate {fps} fps is out of {}-{} fps: played at {clamped} fps",
+            RATES.start(),
+            RATES.end()
+        ));
+    }
+    Ok(clamped)
+}
+
+/// Opens a video: a folder of PNG frames (at `cfg.video_fps`) or a Y4M file (at its own rate),
+/// either clamped to [`RATES`].
 pub(crate) fn open_video(
     path: &Path,
     cfg: &CaptureConfig,
 ) -> Result<(Box<dyn VideoFrames>, f64), CameraError> {
     if path.is_dir() {
         let files = numbered_pngs(path)?;
-        let fps = cfg.video_fps;
-        if !(fps > 0.0 && fps.is_finite()) {
-            return Err(CameraError::File(format!(
-                "video frame rate {fps} is not positive"
-            )));
-        }
+        let fps = playable_rate(cfg.video_fps)?;
         Ok((Box::new(PngFolder { files }), fps))
     } else {
         let y4m = Y4m::open(path).map_err(|e| CameraError::File(format!("video:{e}")))?;
-        let fps = y4m.fps;
+        let fps = playable_rate(y4m.fps)?;
         Ok((Box::new(y4m), fps))
     }
 }
