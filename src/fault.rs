@@ -7,14 +7,14 @@
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
 //! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`,
-//! `gl-program-process`
+//! `gl-program-process`, `stalled-file-system`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 19] = [
+pub const POINTS: [(&str, &str); 20] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -77,6 +77,10 @@ pub const POINTS: [(&str, &str); 19] = [
     (
         "gl-program-process",
         "starting the process that builds an OpenGL app's programs beside it",
+    ),
+    (
+        "stalled-file-system",
+        "every look-up or open of a user's file (config, device profiles, backgrounds, capture files) takes 2 s, as on a hung network or FUSE mount",
     ),
     (
         "end-frame",

@@ -743,3 +743,51 @@ fn judge(c: &Case, r: &CaseRun, baseline_kb: u64) -> (Option<f64>, String, Optio
     };
     (line_s, said, problem)
 }
+
+// ---- a stalled file system (a hung network or FUSE mount) ----
+
+/// With every look-up of a user's file stalled 2 s (`CONTRASTXR_FAULT=stalled-file-system`),
+/// starting and stopping the config watcher (xrCreateInstance, xrDestroyInstance: the app's
+/// thread) each return within 300 ms: no stat, read or join there waits for the file system.
+/// Run in a child process of this test binary, where the fault is armed.
+#[test]
+fn a_stalled_file_system_never_holds_the_apps_thread() {
+    const NAME: &str = "a_stalled_file_system_never_holds_the_apps_thread";
+    if std::env::var_os("CONTRASTXR_FAULT").is_none() {
+        let out = Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+            .env("CONTRASTXR_FAULT", "stalled-file-system")
+            .output()
+            .expect("run the child");
+        let text = String::from_utf8_lossy(&out.stderr).into_owned()
+            + &String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{text}");
+        assert!(text.contains("1 passed"), "{text}");
+        return;
+    }
+    let home = scratch_dir("stalled-fs");
+    let config = home.join(".config/contrastxr/config.toml");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    std::fs::write(&config, "lambda_e = 0.3\n").unwrap();
+    let home_s = home.to_string_lossy().into_owned();
+    let env = contrastxr::config::Env::from_pairs([("HOME", home_s.as_str())]);
+    let t = Instant::now();
+    let (live, resolved) = contrastxr::config::Live::start("app", env, Box::new(|_| {}));
+    let started = t.elapsed();
+    eprintln!("started in {started:?}: {:?}", resolved.problems);
+    // The watcher's first look-up (after its 200 ms poll) is under way, stalled.
+    std::thread::sleep(Duration::from_millis(400));
+    let t = Instant::now();
+    live.stop();
+    let stopped = t.elapsed();
+    eprintln!("stopped in {stopped:?}");
+    let bound = Duration::from_millis(300);
+    assert!(started < bound, "Live::start took {started:?}");
+    assert!(stopped < bound, "Live::stop took {stopped:?}");
+    // The stalled read is said as a problem, and the defaults are used.
+    assert!(
+        resolved.problems.iter().any(|p| p.contains("to read")),
+        "{:?}",
+        resolved.problems
+    );
+}
