@@ -130,7 +130,20 @@ impl RgbaImage {
     pub fn save_png(&self, path: &Path) -> Result<(), String> {
         let file = std::fs::File::create(path)
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), self.width, self.height);
+        self.write_png(std::io::BufWriter::new(file))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    }
+
+    /// The image as an 8-bit PNG file's bytes (see [`save_png`](Self::save_png)).
+    pub fn encode_png(&self) -> Result<Vec<u8>, String> {
+        let mut bytes = Vec::new();
+        self.write_png(&mut bytes)
+            .map_err(|e| format!("cannot encode a PNG: {e}"))?;
+        Ok(bytes)
+    }
+
+    fn write_png(&self, out: impl std::io::Write) -> Result<(), png::EncodingError> {
+        let mut encoder = png::Encoder::new(out, self.width, self.height);
         encoder.set_depth(png::BitDepth::Eight);
         let data: Vec<u8> = if self.has_alpha {
             encoder.set_color(png::ColorType::Rgba);
@@ -142,12 +155,9 @@ impl RgbaImage {
                 .flat_map(|p| [p[0], p[1], p[2]])
                 .collect()
         };
-        let mut writer = encoder
-            .write_header()
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        writer
-            .write_image_data(&data)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&data)?;
+        writer.finish()
     }
 }
 

@@ -1315,9 +1315,7 @@ fn a_live_sources_thread_yields_to_the_app() {
 fn out_of_range_frame_rates_are_clamped() {
     let dir = temp_dir("y4m-rates");
     let (w, h) = (4, 2);
-    let frames: Vec<Vec<[u8; 3]>> = (0..3)
-        .map(|k| vec![PALETTE[k]; (w * h) as usize])
-        .collect();
+    let frames: Vec<Vec<[u8; 3]>> = (0..3).map(|k| vec![PALETTE[k]; (w * h) as usize]).collect();
     let plain = dir.join("plain.y4m");
     write_y4m(&plain, w, h, "444", &frames);
     let bytes = std::fs::read(&plain).unwrap();
