@@ -1358,3 +1358,27 @@ fn out_of_range_frame_rates_are_clamped() {
         assert!(bg.description().contains(shown), "{}", bg.description());
     }
 }
+
+/// An `image:` background larger than the camera size is shrunk to it as it loads, and its
+/// texels are prepared there with the blur the consumer asked for: no frame call blurs it.
+#[test]
+fn a_large_image_is_shrunk_to_the_camera_size_and_prepared_as_it_loads() {
+    use contrastxr::algorithm::Params;
+    use contrastxr::blurred_texels::BlurTaps;
+    let dir = temp_dir("image-large");
+    let path = dir.join("large.png");
+    smooth_scene(1200, 900).save_png(&path).unwrap();
+    let params = Params::default();
+    let cfg = CaptureConfig {
+        still_blur: Some(BlurTaps::of(&params)),
+        ..CaptureConfig::default()
+    };
+    let spec = parse_source(&format!("image:{}", path.display())).unwrap();
+    let frame = Background::open(&spec, &cfg).unwrap().latest().unwrap();
+    assert_eq!((frame.image.width, frame.image.height), (640, 480));
+    let prepared = frame.prepared.as_ref().expect("prepared as it loaded");
+    assert!(prepared.made_for((640, 480), &params));
+    // Without a blur asked for, the consumer prepares it; a small image keeps its size.
+    let plain = Background::open(&spec, &CaptureConfig::default()).unwrap();
+    assert!(plain.latest().unwrap().prepared.is_none());
+}

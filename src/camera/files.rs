@@ -1,6 +1,7 @@
 //! File sources: a PNG or JPEG image, a flat colour, and videos (numbered PNG frames or Y4M) played
 //! in a loop at their frame rate, following wall-clock time.
 
+use crate::blurred_texels::BlurredTexels;
 use crate::camera::error::CameraError;
 use crate::camera::log_sink::log;
 use crate::camera::mailbox::{Frame, Shared};
@@ -13,24 +14,38 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-pub(crate) fn image_frame(path: &Path) -> Result<Frame, CameraError> {
-    let image = RgbaImage::load(path).map_err(|e| CameraError::File(format!("image:{e}")))?;
-    Ok(static_frame(image))
+/// The size a still background is used at: the camera size the settings ask for, which the
+/// mapping and the blur work at (a `color:` background's size).
+fn still_size(cfg: &CaptureConfig) -> (u32, u32) {
+    (cfg.width.max(1), cfg.height.max(1))
+}
+
+/// An `image:` background, shrunk as it loads to at most the camera size
+/// (`RgbaImage::load_within`): a 12-megapixel photo then costs what a camera frame does.
+pub(crate) fn image_frame(path: &Path, cfg: &CaptureConfig) -> Result<Frame, CameraError> {
+    let image = RgbaImage::load_within(path, still_size(cfg))
+        .map_err(|e| CameraError::File(format!("image:{e}")))?;
+    Ok(static_frame(image, cfg))
 }
 
 /// A flat colour at the configured camera size, so consumers see one background size.
 pub(crate) fn color_frame([r, g, b]: [u8; 3], cfg: &CaptureConfig) -> Frame {
-    let mut image = RgbaImage::new(cfg.width.max(1), cfg.height.max(1), [r, g, b, 255]);
+    let (w, h) = still_size(cfg);
+    let mut image = RgbaImage::new(w, h, [r, g, b, 255]);
     image.has_alpha = false;
-    static_frame(image)
+    static_frame(image, cfg)
 }
 
-fn static_frame(image: RgbaImage) -> Frame {
+/// A still frame, prepared here (the loading thread) with `cfg.still_blur` when it is set.
+fn static_frame(image: RgbaImage, cfg: &CaptureConfig) -> Frame {
+    let prepared = cfg
+        .still_blur
+        .map(|blur| Arc::new(BlurredTexels::prepare_once(&image, blur)));
     Frame {
         image: Arc::new(image),
         sequence: 1,
         captured_at: None,
-        prepared: None,
+        prepared,
     }
 }
 
