@@ -142,10 +142,23 @@ pub const MAX_FILE_BYTES: u64 = 64 << 20;
 /// Files of other drivers are removed once this old.
 const FOREIGN_MAX_AGE: std::time::Duration = std::time::Duration::from_secs(30 * 24 * 3600);
 
+/// The longest a cache file's read may take: it is made on the app's thread (at
+/// xrCreateSession, and for an OpenGL app inside a frame call), so a cache folder on a stalled
+/// network or FUSE mount must not hold it.
+pub const READ_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// A cache file's bytes; None if there is none. Only a regular file of at most
 /// MAX_FILE_BYTES is read, opened without following links and without blocking (a FIFO or a
-/// device there never hangs or floods the app).
+/// device there never hangs or floods the app), on a helper thread within [`READ_LIMIT`]
+/// (`user_file::within`: a read that takes longer is an error, its thread left to end).
 pub fn read_file(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    let owned = path.to_path_buf();
+    let key = format!("cache {}", path.display());
+    crate::user_file::within(&key, READ_LIMIT, move || read_file_now(&owned))
+}
+
+fn read_file_now(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    crate::user_file::stall();
     let file = match std::fs::OpenOptions::new()
         .read(true)
         .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
@@ -287,6 +300,38 @@ pub fn remove_old_foreign(dir: &Path, keep: &str) {
 
 #[cfg(test)]
 mod tests {
+    /// With the file system stalled (`stalled-file-system`: each look-up 2 s), a cache file's
+    /// read gives up at READ_LIMIT. Run in a child process of this test binary, where the
+    /// fault is armed.
+    #[test]
+    fn a_stalled_cache_read_is_given_up_at_its_bound() {
+        const NAME: &str =
+            "gpu::pipelines::pipeline_cache::tests::a_stalled_cache_read_is_given_up_at_its_bound";
+        if std::env::var_os("CONTRASTXR_FAULT").is_none() {
+            let out = std::process::Command::new(std::env::current_exe().unwrap())
+                .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+                .env("CONTRASTXR_FAULT", "stalled-file-system")
+                .output()
+                .expect("run the child");
+            let text = String::from_utf8_lossy(&out.stdout).into_owned()
+                + &String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "{text}");
+            assert!(text.contains("1 passed"), "{text}");
+            return;
+        }
+        let path = std::env::temp_dir().join(format!("contrastxr-stalled-{}", std::process::id()));
+        std::fs::write(&path, b"cache").unwrap();
+        let t = std::time::Instant::now();
+        let read = super::read_file(&path);
+        let took = t.elapsed();
+        let _ = std::fs::remove_file(&path);
+        assert!(
+            took < std::time::Duration::from_millis(1500),
+            "took {took:?}"
+        );
+        assert_eq!(read.unwrap_err(), "took more than 1000 ms to read");
+    }
+
     use super::*;
 
     fn key() -> DeviceKind {
