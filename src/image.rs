@@ -60,7 +60,8 @@ impl RgbaImage {
     /// [`load`](Self::load), shrunk to at most `most` (width, height) where it is larger: each
     /// side on its own, each pixel the area average of the pixels it covers, in linear light.
     /// A non-interlaced PNG is shrunk row by row as it decodes, so only the file's bytes and
-    /// the shrunk picture are ever held; a JPEG or interlaced PNG is decoded whole first.
+    /// the shrunk picture are ever held; a JPEG (decoded whole, then shrunk from its decoded
+    /// bytes) or an interlaced PNG also holds the decoded picture meanwhile.
     pub fn load_within(path: &Path, most: (u32, u32)) -> Result<RgbaImage, String> {
         let shown = path.display();
         let bytes = user_file::read(path, user_file::IMAGE_BYTES)
@@ -68,8 +69,8 @@ impl RgbaImage {
         if bytes.starts_with(&PNG_SIGNATURE) {
             decode_png_within(&bytes, most).map_err(|why| format!("{shown} {why}"))
         } else if bytes.starts_with(&JPEG_SIGNATURE) {
-            drop(bytes);
-            RgbaImage::load(path).map(|image| image.shrunk(most))
+            decode_jpeg_within(&bytes, most)
+                .map_err(|e| format!("{shown} is not a readable JPEG: {e}"))
         } else {
             Err(format!("{shown} is not a readable PNG or JPEG image"))
         }
@@ -90,28 +91,7 @@ impl RgbaImage {
 
     /// Decodes a baseline or progressive JPEG (colour or grey) to RGB with alpha 255.
     pub fn decode_jpeg(data: &[u8]) -> Result<RgbaImage, String> {
-        // A few bytes can declare a huge picture: the size is checked from the header, before
-        // any allocation (zune's own bound is lifted so that the message is ours).
-        let options = DecoderOptions::default()
-            .jpeg_set_out_colorspace(ColorSpace::RGBA)
-            .set_max_width(usize::MAX)
-            .set_max_height(usize::MAX);
-        let mut decoder = JpegDecoder::new_with_options(ZCursor::new(data), options);
-        decoder
-            .decode_headers()
-            .map_err(|e| format!("it does not decode ({e:?})"))?;
-        let info = decoder.info().ok_or("it has no JPEG header")?;
-        let (width, height) = (u32::from(info.width), u32::from(info.height));
-        user_file::check_dimensions(width, height).map_err(|why| format!("it {why}"))?;
-        let pixels = decoder
-            .decode()
-            .map_err(|e| format!("it does not decode ({e:?})"))?;
-        if pixels.len() != width as usize * height as usize * 4 {
-            return Err(format!(
-                "it decoded to {} bytes for {width}x{height}",
-                pixels.len()
-            ));
-        }
+        let (width, height, pixels) = jpeg_rgba(data)?;
         let pixels = pixels
             .chunks_exact(4)
             .map(|p| [p[0], p[1], p[2], 255])
@@ -190,6 +170,58 @@ impl RgbaImage {
         writer.write_image_data(&data)?;
         writer.finish()
     }
+}
+
+/// A JPEG's size and RGBA bytes (alpha as decoded: the caller sets it). A few bytes can
+/// declare a huge picture: the size is checked from the header, before any allocation (zune's
+/// own bound is lifted so that the message is ours).
+fn jpeg_rgba(data: &[u8]) -> Result<(u32, u32, Vec<u8>), String> {
+    let options = DecoderOptions::default()
+        .jpeg_set_out_colorspace(ColorSpace::RGBA)
+        .set_max_width(usize::MAX)
+        .set_max_height(usize::MAX);
+    let mut decoder = JpegDecoder::new_with_options(ZCursor::new(data), options);
+    decoder
+        .decode_headers()
+        .map_err(|e| format!("it does not decode ({e:?})"))?;
+    let info = decoder.info().ok_or("it has no JPEG header")?;
+    let (width, height) = (u32::from(info.width), u32::from(info.height));
+    user_file::check_dimensions(width, height).map_err(|why| format!("it {why}"))?;
+    let pixels = decoder
+        .decode()
+        .map_err(|e| format!("it does not decode ({e:?})"))?;
+    if pixels.len() != width as usize * height as usize * 4 {
+        return Err(format!(
+            "it decoded to {} bytes for {width}x{height}",
+            pixels.len()
+        ));
+    }
+    Ok((width, height, pixels))
+}
+
+/// A JPEG decoded whole, then shrunk from its decoded bytes (no second copy of the picture).
+fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, String> {
+    let (width, height, pixels) = jpeg_rgba(bytes)?;
+    let mut shrink = Shrink::new((width, height), most, false);
+    if shrink.size() == (width, height) {
+        let pixels = pixels
+            .chunks_exact(4)
+            .map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        return Ok(RgbaImage {
+            width,
+            height,
+            pixels,
+            has_alpha: false,
+        });
+    }
+    let mut row = Vec::with_capacity(width as usize);
+    for line in pixels.chunks_exact(4 * width as usize) {
+        row.clear();
+        row.extend(line.chunks_exact(4).map(|p| [p[0], p[1], p[2], 255]));
+        shrink.row(&row);
+    }
+    Ok(shrink.finish())
 }
 
 /// A PNG decoded row by row into a [`Shrink`]; an interlaced one decoded whole, then shrunk.
@@ -439,6 +471,17 @@ mod tests {
         assert_eq!((streamed.width, streamed.height), (64, 48));
         assert_eq!(streamed, img.clone().shrunk((64, 48)));
         assert_eq!(RgbaImage::load_within(&path, (640, 480)).unwrap(), img);
+        // A JPEG is shrunk from its decoded bytes as its decoded picture would be.
+        let jpeg = dir.join("scene.jpg");
+        let rgb: Vec<u8> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        jpeg_encoder::Encoder::new_file(&jpeg, 90)
+            .unwrap()
+            .encode(&rgb, 301, 207, jpeg_encoder::ColorType::Rgb)
+            .unwrap();
+        let whole = RgbaImage::load(&jpeg).unwrap();
+        let shrunk = RgbaImage::load_within(&jpeg, (64, 48)).unwrap();
+        assert_eq!(shrunk, whole.clone().shrunk((64, 48)));
+        assert_eq!(RgbaImage::load_within(&jpeg, (640, 480)).unwrap(), whole);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
