@@ -173,14 +173,35 @@ pub fn within<T: Send + 'static>(
     limit: Duration,
     work: impl FnOnce() -> Result<T, String> + Send + 'static,
 ) -> Result<T, String> {
+    within_as(key, limit, ("read", "read"), work)
+}
+
+/// [`within`] for a write: its errors say "write" ("took more than 1000 ms to write").
+pub fn within_writing<T: Send + 'static>(
+    key: &str,
+    limit: Duration,
+    work: impl FnOnce() -> Result<T, String> + Send + 'static,
+) -> Result<T, String> {
+    within_as(key, limit, ("write", "written"), work)
+}
+
+/// [`within`], its errors in the words `(verb, participle)`.
+fn within_as<T: Send + 'static>(
+    key: &str,
+    limit: Duration,
+    (verb, participle): (&str, &str),
+    work: impl FnOnce() -> Result<T, String> + Send + 'static,
+) -> Result<T, String> {
     {
         let stuck = stuck();
         if stuck.iter().any(|k| k == key) {
-            return Err("is still being read: an earlier read has not returned".into());
+            return Err(format!(
+                "is still being {participle}: an earlier {verb} has not returned"
+            ));
         }
         if stuck.len() >= MOST_STUCK {
             return Err(format!(
-                "cannot be read now: {MOST_STUCK} earlier reads have not returned"
+                "cannot be {participle} now: {MOST_STUCK} earlier {verb}s have not returned"
             ));
         }
     }
@@ -203,7 +224,7 @@ pub fn within<T: Send + 'static>(
                 let _ = tx.send(result);
             }
         })
-        .map_err(|e| format!("cannot be read (no thread: {e})"))?;
+        .map_err(|e| format!("cannot be {participle} (no thread: {e})"))?;
     let answer = rx.recv_timeout(limit);
     let mut gave_up = given_up.lock().unwrap_or_else(|p| p.into_inner());
     // The answer may have come between the timeout and the lock.
@@ -216,7 +237,7 @@ pub fn within<T: Send + 'static>(
         Err(_) => {
             *gave_up = true;
             stuck().push(key.to_string());
-            Err(format!("took more than {} ms to read", limit.as_millis()))
+            Err(format!("took more than {} ms to {verb}", limit.as_millis()))
         }
     }
 }

@@ -249,7 +249,24 @@ pub fn save(
 /// renamed over the old one. Not synced: it is written inside an app's xrDestroySession, and a
 /// file the system lost part of in a crash fails its length and checksum at the next load,
 /// which then starts from an empty cache.
+///
+/// Made on a helper thread within [`WRITE_LIMIT`] (`user_file::within_writing`): a cache
+/// folder on a stalled network or FUSE mount never holds the caller longer (the app's thread,
+/// or the pipeline thread that xrDestroySession joins); a write that takes longer is an error,
+/// its thread left to finish or fail on its own.
 pub fn write_atomically(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
+    let (dir, name, bytes) = (dir.to_path_buf(), name.to_string(), bytes.to_vec());
+    let key = format!("cache {}", dir.join(&name).display());
+    crate::user_file::within_writing(&key, WRITE_LIMIT, move || {
+        write_atomically_now(&dir, &name, &bytes)
+    })
+}
+
+/// The longest a cache file's write may take (see [`write_atomically`]).
+pub const WRITE_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
+
+fn write_atomically_now(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
+    crate::user_file::stall();
     let fail = |e: std::io::Error| format!("cannot write {}: {e}", dir.join(name).display());
     std::fs::create_dir_all(dir).map_err(fail)?;
     let tmp = dir.join(format!(".{name}.{:016x}.tmp", random_u64()));
@@ -301,7 +318,7 @@ pub fn remove_old_foreign(dir: &Path, keep: &str) {
 #[cfg(test)]
 mod tests {
     /// With the file system stalled (`stalled-file-system`: each look-up 2 s), a cache file's
-    /// read gives up at READ_LIMIT. Run in a child process of this test binary, where the
+    /// read gives up at READ_LIMIT, and its write at WRITE_LIMIT. Run in a child process of this test binary, where the
     /// fault is armed.
     #[test]
     fn a_stalled_cache_read_is_given_up_at_its_bound() {
@@ -330,6 +347,18 @@ mod tests {
             "took {took:?}"
         );
         assert_eq!(read.unwrap_err(), "took more than 1000 ms to read");
+        // A write too.
+        let dir = std::env::temp_dir().join(format!("contrastxr-stalled-w-{}", std::process::id()));
+        let t = std::time::Instant::now();
+        let written = super::write_atomically(&dir, "pipelines-x.bin", b"cache");
+        let took = t.elapsed();
+        assert!(
+            took < std::time::Duration::from_millis(1500),
+            "took {took:?}"
+        );
+        assert_eq!(written.unwrap_err(), "took more than 1000 ms to write");
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     use super::*;
