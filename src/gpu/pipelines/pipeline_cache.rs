@@ -257,13 +257,25 @@ pub fn save(
 pub fn write_atomically(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
     let (dir, name, bytes) = (dir.to_path_buf(), name.to_string(), bytes.to_vec());
     let key = format!("cache {}", dir.join(&name).display());
-    crate::user_file::within_writing(&key, WRITE_LIMIT, move || {
+    let limit =
+        std::time::Duration::from_millis(WRITE_LIMIT_MS.load(std::sync::atomic::Ordering::Relaxed));
+    crate::user_file::within_writing(&key, limit, move || {
         write_atomically_now(&dir, &name, &bytes)
     })
 }
 
-/// The longest a cache file's write may take (see [`write_atomically`]).
+/// The longest a cache file's write may take inside an app (see [`write_atomically`]).
 pub const WRITE_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// The bound in force, in milliseconds: [`WRITE_LIMIT`], or longer in a process of the tool's
+/// own ([`writes_may_wait`]), whose exit would lose a write left to finish.
+static WRITE_LIMIT_MS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1000);
+
+/// For a process of the tool's own (`contrastxr gl-programs`): cache writes may take up to a
+/// minute, since nobody waits on them and its exit would lose one given up on.
+pub fn writes_may_wait() {
+    WRITE_LIMIT_MS.store(60_000, std::sync::atomic::Ordering::Relaxed);
+}
 
 fn write_atomically_now(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
     crate::user_file::stall();
