@@ -7,7 +7,7 @@
 
 use super::capture_files::CaptureJob;
 use super::log;
-use std::sync::mpsc::{channel, Sender};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Condvar, Mutex, MutexGuard, Once, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -19,6 +19,9 @@ pub const INSTANCE_WAIT: Duration = Duration::from_millis(300);
 
 /// The longest the process's exit waits for them.
 pub const EXIT_WAIT: Duration = Duration::from_secs(5);
+
+/// The capture thread ends after this long without a capture to write.
+const IDLE_END: Duration = Duration::from_secs(1);
 
 #[derive(Default)]
 struct Waiting {
@@ -86,7 +89,7 @@ fn start() -> Option<Sender<CaptureJob>> {
     let spawned = std::thread::Builder::new()
         .name("contrastxr-capture".into())
         .spawn(move || {
-            for job in rx {
+            while let Some(job) = next_job(&rx) {
                 let bytes = job.bytes();
                 let written =
                     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job.write()))
@@ -112,6 +115,24 @@ fn start() -> Option<Sender<CaptureJob>> {
                 "capture-thread",
                 &format!("capture failed: no capture thread ({e})"),
             );
+            None
+        }
+    }
+}
+
+/// The next capture to write; None once none has come for [`IDLE_END`], when the thread ends
+/// (the next capture starts another), so that no thread of the layer outlives its use.
+fn next_job(rx: &Receiver<CaptureJob>) -> Option<CaptureJob> {
+    match rx.recv_timeout(IDLE_END) {
+        Ok(job) => Some(job),
+        Err(RecvTimeoutError::Disconnected) => None,
+        Err(RecvTimeoutError::Timeout) => {
+            // Under the senders' lock no capture can be handed over meanwhile.
+            let mut jobs = lock(&writer().jobs);
+            if let Ok(job) = rx.try_recv() {
+                return Some(job);
+            }
+            *jobs = None;
             None
         }
     }
@@ -153,4 +174,49 @@ extern "C" fn at_exit() {
             log::info("exiting with captures not yet written (the capture folder's file system is stalled)");
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::{PixelFormat, PixelLayout};
+    use crate::image::RgbaImage;
+    use std::sync::Arc;
+
+    fn capture_threads() -> usize {
+        std::fs::read_dir("/proc/self/task")
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter_map(|t| std::fs::read_to_string(t.path().join("comm")).ok())
+            .filter(|n| n.trim().starts_with("contrastxr-capt"))
+            .count()
+    }
+
+    /// A capture handed over is written off the caller's thread, `finish` waits for it, and the
+    /// capture thread ends on its own once idle.
+    #[test]
+    fn captures_are_written_by_a_thread_that_ends_when_idle() {
+        let dir = std::env::temp_dir().join(format!("contrastxr-writer-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        write(CaptureJob {
+            dir: dir.clone(),
+            stem: "frame-0-view-0".into(),
+            format: PixelFormat {
+                layout: PixelLayout::Rgba8,
+                srgb: true,
+            },
+            extent: (1, 1),
+            display: vec![1, 2, 3, 255],
+            output: vec![4, 5, 6, 255],
+            background: Arc::new(RgbaImage::new(1, 1, [7, 8, 9, 255])),
+            json: serde_json::json!({"frame": 0}),
+        });
+        assert!(finish(Duration::from_secs(5)));
+        assert!(dir.join("frame-0-view-0.json").is_file());
+        assert_eq!(capture_threads(), 1);
+        std::thread::sleep(IDLE_END + Duration::from_millis(500));
+        assert_eq!(capture_threads(), 0, "the capture thread outlived its use");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
