@@ -92,8 +92,19 @@ fn decode_table() -> [f32; 256] {
 }
 
 impl BlurredTexels {
-    /// Decodes and blurs `camera` with `blur` (separable, clamp-to-edge).
+    /// Decodes and blurs `camera` with `blur` (separable, clamp-to-edge). The horizontal
+    /// pass's rows are kept for the thread's next frame: for a live source's own thread.
     pub fn prepare(camera: &RgbaImage, blur: BlurTaps) -> BlurredTexels {
+        Self::prepare_keeping(camera, blur, true)
+    }
+
+    /// [`prepare`](Self::prepare) for a frame made once (a still background), on any thread:
+    /// nothing is kept for the thread afterwards.
+    pub fn prepare_once(camera: &RgbaImage, blur: BlurTaps) -> BlurredTexels {
+        Self::prepare_keeping(camera, blur, false)
+    }
+
+    fn prepare_keeping(camera: &RgbaImage, blur: BlurTaps, keep: bool) -> BlurredTexels {
         let (w, h) = (camera.width as usize, camera.height as usize);
         if w == 0 || h == 0 || camera.pixels.len() != w * h {
             // Nothing to prepare (the GPU refuses empty frames): no texels, never used.
@@ -105,10 +116,11 @@ impl BlurredTexels {
                 serial: next_serial(),
             };
         }
-        let rows = SCRATCH.with_borrow_mut(|scratch| {
-            horizontal(camera, &blur, scratch);
-            std::mem::take(scratch)
-        });
+        let mut rows = match keep {
+            true => SCRATCH.with_borrow_mut(std::mem::take),
+            false => Vec::new(),
+        };
+        horizontal(camera, &blur, &mut rows);
         let mut bytes = pooled_bytes(w * h * TEXEL_BYTES);
         let mut out = vec![0.0f32; 3 * w];
         let mut packed = vec![0u64; w];
@@ -122,7 +134,9 @@ impl BlurredTexels {
                 entry[8..].copy_from_slice(&packed[(x + 1).min(w - 1)].to_le_bytes());
             }
         }
-        SCRATCH.with_borrow_mut(|scratch| *scratch = rows);
+        if keep {
+            SCRATCH.with_borrow_mut(|scratch| *scratch = rows);
+        }
         BlurredTexels {
             width: camera.width,
             height: camera.height,

@@ -7,14 +7,14 @@
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
 //! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`,
-//! `gl-program-thread`, `gl-program-build`, `gl-recipe-panic`
+//! `gl-program-thread`, `gl-program-build`, `gl-recipe-panic`, `stalled-file-system`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 21] = [
+pub const POINTS: [(&str, &str); 22] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -85,6 +85,10 @@ pub const POINTS: [(&str, &str); 21] = [
     (
         "gl-recipe-panic",
         "a panic inside the OpenGL recipe, with the layer's framebuffer bound in the app's context",
+    ),
+    (
+        "stalled-file-system",
+        "every look-up or open of a user's file (config, device profiles, backgrounds, capture files) takes 2 s, as on a hung network or FUSE mount",
     ),
     (
         "end-frame",

@@ -57,30 +57,41 @@ impl RgbaImage {
         }
     }
 
+    /// [`load`](Self::load), shrunk to at most `most` (width, height) where it is larger: each
+    /// side on its own, each pixel the area average of the pixels it covers, in linear light.
+    /// A non-interlaced PNG is shrunk row by row as it decodes, so only the file's bytes and
+    /// the shrunk picture are ever held; a JPEG (decoded whole, then shrunk from its decoded
+    /// bytes) or an interlaced PNG also holds the decoded picture meanwhile.
+    pub fn load_within(path: &Path, most: (u32, u32)) -> Result<RgbaImage, String> {
+        let shown = path.display();
+        let bytes = user_file::read(path, user_file::IMAGE_BYTES)
+            .map_err(|why| format!("{shown} {why}"))?;
+        if bytes.starts_with(&PNG_SIGNATURE) {
+            decode_png_within(&bytes, most).map_err(|why| format!("{shown} {why}"))
+        } else if bytes.starts_with(&JPEG_SIGNATURE) {
+            decode_jpeg_within(&bytes, most)
+                .map_err(|e| format!("{shown} is not a readable JPEG: {e}"))
+        } else {
+            Err(format!("{shown} is not a readable PNG or JPEG image"))
+        }
+    }
+
+    /// The image shrunk to at most `most` (see [`load_within`](Self::load_within)); itself
+    /// when it is not larger.
+    pub fn shrunk(self, most: (u32, u32)) -> RgbaImage {
+        let mut shrink = Shrink::new((self.width, self.height), most, self.has_alpha);
+        if shrink.size() == (self.width, self.height) {
+            return self;
+        }
+        for row in self.pixels.chunks_exact(self.width as usize) {
+            shrink.row(row);
+        }
+        shrink.finish()
+    }
+
     /// Decodes a baseline or progressive JPEG (colour or grey) to RGB with alpha 255.
     pub fn decode_jpeg(data: &[u8]) -> Result<RgbaImage, String> {
-        // A few bytes can declare a huge picture: the size is checked from the header, before
-        // any allocation (zune's own bound is lifted so that the message is ours).
-        let options = DecoderOptions::default()
-            .jpeg_set_out_colorspace(ColorSpace::RGBA)
-            .set_max_width(usize::MAX)
-            .set_max_height(usize::MAX);
-        let mut decoder = JpegDecoder::new_with_options(ZCursor::new(data), options);
-        decoder
-            .decode_headers()
-            .map_err(|e| format!("it does not decode ({e:?})"))?;
-        let info = decoder.info().ok_or("it has no JPEG header")?;
-        let (width, height) = (u32::from(info.width), u32::from(info.height));
-        user_file::check_dimensions(width, height).map_err(|why| format!("it {why}"))?;
-        let pixels = decoder
-            .decode()
-            .map_err(|e| format!("it does not decode ({e:?})"))?;
-        if pixels.len() != width as usize * height as usize * 4 {
-            return Err(format!(
-                "it decoded to {} bytes for {width}x{height}",
-                pixels.len()
-            ));
-        }
+        let (width, height, pixels) = jpeg_rgba(data)?;
         let pixels = pixels
             .chunks_exact(4)
             .map(|p| [p[0], p[1], p[2], 255])
@@ -130,7 +141,20 @@ impl RgbaImage {
     pub fn save_png(&self, path: &Path) -> Result<(), String> {
         let file = std::fs::File::create(path)
             .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), self.width, self.height);
+        self.write_png(std::io::BufWriter::new(file))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    }
+
+    /// The image as an 8-bit PNG file's bytes (see [`save_png`](Self::save_png)).
+    pub fn encode_png(&self) -> Result<Vec<u8>, String> {
+        let mut bytes = Vec::new();
+        self.write_png(&mut bytes)
+            .map_err(|e| format!("cannot encode a PNG: {e}"))?;
+        Ok(bytes)
+    }
+
+    fn write_png(&self, out: impl std::io::Write) -> Result<(), png::EncodingError> {
+        let mut encoder = png::Encoder::new(out, self.width, self.height);
         encoder.set_depth(png::BitDepth::Eight);
         let data: Vec<u8> = if self.has_alpha {
             encoder.set_color(png::ColorType::Rgba);
@@ -142,12 +166,223 @@ impl RgbaImage {
                 .flat_map(|p| [p[0], p[1], p[2]])
                 .collect()
         };
-        let mut writer = encoder
-            .write_header()
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        writer
-            .write_image_data(&data)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&data)?;
+        writer.finish()
+    }
+}
+
+/// A JPEG's size and RGBA bytes (alpha as decoded: the caller sets it). A few bytes can
+/// declare a huge picture: the size is checked from the header, before any allocation (zune's
+/// own bound is lifted so that the message is ours).
+fn jpeg_rgba(data: &[u8]) -> Result<(u32, u32, Vec<u8>), String> {
+    let options = DecoderOptions::default()
+        .jpeg_set_out_colorspace(ColorSpace::RGBA)
+        .set_max_width(usize::MAX)
+        .set_max_height(usize::MAX);
+    let mut decoder = JpegDecoder::new_with_options(ZCursor::new(data), options);
+    decoder
+        .decode_headers()
+        .map_err(|e| format!("it does not decode ({e:?})"))?;
+    let info = decoder.info().ok_or("it has no JPEG header")?;
+    let (width, height) = (u32::from(info.width), u32::from(info.height));
+    user_file::check_dimensions(width, height).map_err(|why| format!("it {why}"))?;
+    let pixels = decoder
+        .decode()
+        .map_err(|e| format!("it does not decode ({e:?})"))?;
+    if pixels.len() != width as usize * height as usize * 4 {
+        return Err(format!(
+            "it decoded to {} bytes for {width}x{height}",
+            pixels.len()
+        ));
+    }
+    Ok((width, height, pixels))
+}
+
+/// A JPEG decoded whole, then shrunk from its decoded bytes (no second copy of the picture).
+fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, String> {
+    let (width, height, pixels) = jpeg_rgba(bytes)?;
+    let mut shrink = Shrink::new((width, height), most, false);
+    if shrink.size() == (width, height) {
+        let pixels = pixels
+            .chunks_exact(4)
+            .map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        return Ok(RgbaImage {
+            width,
+            height,
+            pixels,
+            has_alpha: false,
+        });
+    }
+    let mut row = Vec::with_capacity(width as usize);
+    for line in pixels.chunks_exact(4 * width as usize) {
+        row.clear();
+        row.extend(line.chunks_exact(4).map(|p| [p[0], p[1], p[2], 255]));
+        shrink.row(&row);
+    }
+    Ok(shrink.finish())
+}
+
+/// A PNG decoded row by row into a [`Shrink`]; an interlaced one decoded whole, then shrunk.
+fn decode_png_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, String> {
+    let unreadable = |e: png::DecodingError| format!("is not a readable PNG: {e}");
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    let header = decoder.read_header_info().map_err(unreadable)?;
+    user_file::check_dimensions(header.width, header.height)?;
+    if header.interlaced {
+        return RgbaImage::decode_png(bytes).map(|image| image.shrunk(most));
+    }
+    let side = u64::from(user_file::MAX_SIDE);
+    let limit = usize::try_from(side * side * 8).unwrap_or(usize::MAX);
+    decoder.set_limits(png::Limits { bytes: limit });
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().map_err(unreadable)?;
+    let (color, _) = reader.output_color_type();
+    let (width, height) = (reader.info().width, reader.info().height);
+    let has_alpha = matches!(color, png::ColorType::Rgba | png::ColorType::GrayscaleAlpha);
+    let mut shrink = Shrink::new((width, height), most, has_alpha);
+    let mut rows = 0;
+    while let Some(row) = reader.next_row().map_err(unreadable)? {
+        let (pixels, _) = rgba_pixels(color, row.data())?;
+        if pixels.len() != width as usize {
+            return Err(format!("has a row of {} pixels, not {width}", pixels.len()));
+        }
+        shrink.row(&pixels);
+        rows += 1;
+    }
+    if rows != height {
+        return Err(format!(
+            "is not a readable PNG: {rows} of its {height} rows"
+        ));
+    }
+    Ok(shrink.finish())
+}
+
+/// Shrinks a picture fed row by row, top first: each side on its own to at most the wanted
+/// size, each output pixel the area average (in linear light, alpha as is) of the input pixels
+/// it covers. Positions are counted in units of 1 / (input size x output size) along each
+/// side, so the weights are exact integers.
+struct Shrink {
+    from: (u32, u32),
+    to: (u32, u32),
+    has_alpha: bool,
+    linear: [f32; 256],
+    /// Input column x's share of output columns: (column, weight) twice, weights in units.
+    columns: Vec<[(u32, u32); 2]>,
+    /// Sums of the output row being made and of the next (an input row may straddle them).
+    sums: [Vec<f32>; 2],
+    /// Input rows taken, output rows made.
+    taken: u32,
+    pixels: Vec<[u8; 4]>,
+    /// The input row, spread over the output columns.
+    spread: Vec<f32>,
+}
+
+/// An input pixel's share of the output pixels along one side: input pixel `i` of `from`
+/// covers units [i * to, (i + 1) * to); output pixel `o` covers [o * from, (o + 1) * from).
+fn share(i: u32, from: u32, to: u32) -> [(u32, u32); 2] {
+    let (a, b) = (
+        u64::from(i) * u64::from(to),
+        u64::from(i + 1) * u64::from(to),
+    );
+    let o = a / u64::from(from);
+    let edge = (o + 1) * u64::from(from);
+    if b <= edge {
+        [(o as u32, (b - a) as u32), (o as u32, 0)]
+    } else {
+        [
+            (o as u32, (edge - a) as u32),
+            (o as u32 + 1, (b - edge) as u32),
+        ]
+    }
+}
+
+impl Shrink {
+    fn new(from: (u32, u32), most: (u32, u32), has_alpha: bool) -> Shrink {
+        let to = (from.0.min(most.0.max(1)), from.1.min(most.1.max(1)));
+        let columns = (0..from.0).map(|x| share(x, from.0, to.0)).collect();
+        Shrink {
+            from,
+            to,
+            has_alpha,
+            linear: std::array::from_fn(|c| crate::colour::code_to_linear(c as u8) as f32),
+            columns,
+            sums: [vec![0.0; 4 * to.0 as usize], vec![0.0; 4 * to.0 as usize]],
+            taken: 0,
+            pixels: Vec::with_capacity(to.0 as usize * to.1 as usize),
+            spread: vec![0.0; 4 * to.0 as usize],
+        }
+    }
+
+    fn size(&self) -> (u32, u32) {
+        self.to
+    }
+
+    /// Takes the next input row (`from.0` pixels).
+    fn row(&mut self, row: &[[u8; 4]]) {
+        if self.taken >= self.from.1 {
+            return;
+        }
+        self.spread.fill(0.0);
+        for (p, shares) in row.iter().zip(&self.columns) {
+            let c = [
+                self.linear[p[0] as usize],
+                self.linear[p[1] as usize],
+                self.linear[p[2] as usize],
+                f32::from(p[3]) / 255.0,
+            ];
+            for &(o, w) in shares.iter().filter(|(_, w)| *w > 0) {
+                let at = 4 * o as usize;
+                for (s, v) in self.spread[at..at + 4].iter_mut().zip(c) {
+                    *s += v * w as f32;
+                }
+            }
+        }
+        let [(first, w0), (_, w1)] = share(self.taken, self.from.1, self.to.1);
+        let made = self.pixels.len() as u32 / self.to.0.max(1);
+        // `first` is the output row being made or, for the first input row of a new one, the
+        // next: the sums in slot 0 are the row being made.
+        debug_assert!(first == made);
+        for (s, v) in self.sums[0].iter_mut().zip(&self.spread) {
+            *s += v * w0 as f32;
+        }
+        for (s, v) in self.sums[1].iter_mut().zip(&self.spread) {
+            *s += v * w1 as f32;
+        }
+        self.taken += 1;
+        // The row being made is complete when this input row reached its lower edge.
+        let end = u64::from(self.taken) * u64::from(self.to.1);
+        if end >= u64::from(first + 1) * u64::from(self.from.1) {
+            self.emit();
+        }
+    }
+
+    /// Writes out the row being made and moves the next one up.
+    fn emit(&mut self) {
+        // Each output pixel covers from.0 x from.1 units of unit weight: the sums' divisor.
+        let area = self.from.0 as f32 * self.from.1 as f32;
+        for px in self.sums[0].chunks_exact(4) {
+            let code = |v: f32| {
+                crate::colour::quantize(crate::colour::srgb_encode(
+                    f64::from(v / area).clamp(0.0, 1.0),
+                ))
+            };
+            let alpha = crate::colour::quantize(f64::from(px[3] / area).clamp(0.0, 1.0));
+            self.pixels
+                .push([code(px[0]), code(px[1]), code(px[2]), alpha]);
+        }
+        self.sums.swap(0, 1);
+        self.sums[1].fill(0.0);
+    }
+
+    fn finish(self) -> RgbaImage {
+        RgbaImage {
+            width: self.to.0,
+            height: self.to.1,
+            pixels: self.pixels,
+            has_alpha: self.has_alpha,
+        }
     }
 }
 
@@ -175,4 +410,78 @@ fn rgba_pixels(color: png::ColorType, data: &[u8]) -> Result<(Vec<[u8; 4]>, bool
         png::ColorType::Grayscale => (data.iter().map(|&g| [g, g, g, 255]).collect(), false),
         png::ColorType::Indexed => return Err("is an unexpanded palette PNG".into()),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(w: u32, h: u32) -> RgbaImage {
+        let mut img = RgbaImage::new(w, h, [0; 4]);
+        img.has_alpha = false;
+        for y in 0..h {
+            for x in 0..w {
+                img.set(
+                    x,
+                    y,
+                    [
+                        (x * 7 % 256) as u8,
+                        (y * 5 % 256) as u8,
+                        ((x + y) % 256) as u8,
+                        255,
+                    ],
+                );
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn shrinking_averages_the_covered_pixels_in_linear_light() {
+        let mut img = RgbaImage::new(4, 2, [0, 0, 0, 255]);
+        for x in [1, 3] {
+            img.set(x, 0, [255, 255, 255, 255]);
+            img.set(x, 1, [255, 255, 255, 255]);
+        }
+        let small = img.shrunk((2, 1));
+        assert_eq!((small.width, small.height), (2, 1));
+        // Half black, half white in linear light: 0.5 linear is code 188.
+        assert_eq!(small.pixels, vec![[188, 188, 188, 255]; 2]);
+        // 3 -> 2 columns: the middle pixel is shared; a flat picture stays flat.
+        let flat = RgbaImage::new(3, 5, [90, 120, 30, 200]).shrunk((2, 2));
+        assert_eq!((flat.width, flat.height), (2, 2));
+        assert!(
+            flat.pixels.iter().all(|p| *p == [90, 120, 30, 200]),
+            "{:?}",
+            flat.pixels
+        );
+        // Not larger than the bound: unchanged.
+        let same = scene(5, 3);
+        assert_eq!(same.clone().shrunk((640, 480)), same);
+    }
+
+    #[test]
+    fn a_png_shrinks_row_by_row_as_it_would_whole() {
+        let dir = std::env::temp_dir().join(format!("contrastxr-image-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("scene.png");
+        let img = scene(301, 207);
+        img.save_png(&path).unwrap();
+        let streamed = RgbaImage::load_within(&path, (64, 48)).unwrap();
+        assert_eq!((streamed.width, streamed.height), (64, 48));
+        assert_eq!(streamed, img.clone().shrunk((64, 48)));
+        assert_eq!(RgbaImage::load_within(&path, (640, 480)).unwrap(), img);
+        // A JPEG is shrunk from its decoded bytes as its decoded picture would be.
+        let jpeg = dir.join("scene.jpg");
+        let rgb: Vec<u8> = img.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]).collect();
+        jpeg_encoder::Encoder::new_file(&jpeg, 90)
+            .unwrap()
+            .encode(&rgb, 301, 207, jpeg_encoder::ColorType::Rgb)
+            .unwrap();
+        let whole = RgbaImage::load(&jpeg).unwrap();
+        let shrunk = RgbaImage::load_within(&jpeg, (64, 48)).unwrap();
+        assert_eq!(shrunk, whole.clone().shrunk((64, 48)));
+        assert_eq!(RgbaImage::load_within(&jpeg, (640, 480)).unwrap(), whole);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

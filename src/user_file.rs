@@ -88,7 +88,7 @@ fn check_file(meta: &Metadata, max_bytes: u64) -> Result<(), String> {
 /// checked before the open (opening a device can have effects) and again on the open file.
 /// The error says why in words that follow the path: "is a FIFO, not a file".
 pub fn open(path: &Path, max_bytes: u64) -> Result<File, String> {
-    let meta = std::fs::metadata(path).map_err(|e| lookup_failure(path, &e))?;
+    let meta = metadata(path).map_err(|e| lookup_failure(path, &e))?;
     check_file(&meta, max_bytes)?;
     let file = std::fs::OpenOptions::new()
         .read(true)
@@ -126,27 +126,119 @@ pub fn read_text(path: &Path) -> Result<String, String> {
 /// when the read returns. For the app's thread, which must never wait long.
 pub fn read_text_within(path: &Path, limit: Duration) -> Result<String, String> {
     let owned = path.to_path_buf();
-    within(limit, move || read_text(&owned))
+    within(&path.to_string_lossy(), limit, move || read_text(&owned))
 }
 
-/// `work`'s answer if it comes within `limit`, run on a thread of its own.
-fn within<T: Send + 'static>(
+/// Whether `path` is a regular file (following links), asked within `limit` as
+/// [`read_text_within`] reads: a look-up that takes longer is an error in words.
+pub fn is_file_within(path: &Path, limit: Duration) -> Result<bool, String> {
+    let owned = path.to_path_buf();
+    let key = format!("stat {}", path.display());
+    within(&key, limit, move || {
+        Ok(metadata(&owned).is_ok_and(|m| m.is_file()))
+    })
+}
+
+/// `std::fs::metadata` through the fault point `stalled-file-system` (a hung network or FUSE
+/// mount: every look-up of a user's file takes 2 s).
+pub fn metadata(path: &Path) -> std::io::Result<Metadata> {
+    stall();
+    std::fs::metadata(path)
+}
+
+/// Sleeps 2 s when the fault point `stalled-file-system` is armed: a file operation on a hung
+/// mount. Called where the layer looks up or opens a user's file.
+pub fn stall() {
+    if crate::fault::hit("stalled-file-system") {
+        std::thread::sleep(Duration::from_secs(2));
+    }
+}
+
+/// The most helper threads left behind by reads that took too long (each still waits for its
+/// file system). A key's later reads are refused at once while its earlier one has not
+/// returned, so a hung mount costs one thread per file, not one per try.
+const MOST_STUCK: usize = 4;
+
+/// Keys whose reader was given up on and has not returned yet.
+fn stuck() -> std::sync::MutexGuard<'static, Vec<String>> {
+    static STUCK: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    STUCK.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// `work`'s answer if it comes within `limit`, run on a thread of its own. `key` names what it
+/// reads: while an earlier read of the same key is still stuck, or [`MOST_STUCK`] are, the read
+/// is refused at once and no thread is started.
+pub fn within<T: Send + 'static>(
+    key: &str,
     limit: Duration,
     work: impl FnOnce() -> Result<T, String> + Send + 'static,
 ) -> Result<T, String> {
+    within_as(key, limit, ("read", "read"), work)
+}
+
+/// [`within`] for a write: its errors say "write" ("took more than 1000 ms to write").
+pub fn within_writing<T: Send + 'static>(
+    key: &str,
+    limit: Duration,
+    work: impl FnOnce() -> Result<T, String> + Send + 'static,
+) -> Result<T, String> {
+    within_as(key, limit, ("write", "written"), work)
+}
+
+/// [`within`], its errors in the words `(verb, participle)`.
+fn within_as<T: Send + 'static>(
+    key: &str,
+    limit: Duration,
+    (verb, participle): (&str, &str),
+    work: impl FnOnce() -> Result<T, String> + Send + 'static,
+) -> Result<T, String> {
+    {
+        let stuck = stuck();
+        if stuck.iter().any(|k| k == key) {
+            return Err(format!(
+                "is still being {participle}: an earlier {verb} has not returned"
+            ));
+        }
+        if stuck.len() >= MOST_STUCK {
+            return Err(format!(
+                "cannot be {participle} now: {MOST_STUCK} earlier {verb}s have not returned"
+            ));
+        }
+    }
+    // Whether the caller gave up on this read; the reader clears its key when it returns.
+    let given_up = std::sync::Arc::new(std::sync::Mutex::new(false));
     let (tx, rx) = std::sync::mpsc::channel();
+    let reader_given_up = given_up.clone();
+    let reader_key = key.to_string();
     let reader = std::thread::Builder::new()
         .name("contrastxr-read".into())
         .spawn(move || {
-            let _ = tx.send(work());
+            let result = work();
+            let given_up = reader_given_up.lock().unwrap_or_else(|p| p.into_inner());
+            if *given_up {
+                let mut stuck = stuck();
+                if let Some(at) = stuck.iter().position(|k| *k == reader_key) {
+                    stuck.swap_remove(at);
+                }
+            } else {
+                let _ = tx.send(result);
+            }
         })
-        .map_err(|e| format!("cannot be read (no thread: {e})"))?;
-    match rx.recv_timeout(limit) {
+        .map_err(|e| format!("cannot be {participle} (no thread: {e})"))?;
+    let answer = rx.recv_timeout(limit);
+    let mut gave_up = given_up.lock().unwrap_or_else(|p| p.into_inner());
+    // The answer may have come between the timeout and the lock.
+    match answer.or_else(|_| rx.try_recv()) {
         Ok(result) => {
+            drop(gave_up);
             let _ = reader.join();
             result
         }
-        Err(_) => Err(format!("took more than {} ms to read", limit.as_millis())),
+        Err(_) => {
+            *gave_up = true;
+            stuck().push(key.to_string());
+            Err(format!("took more than {} ms to {verb}", limit.as_millis()))
+        }
     }
 }
 
@@ -258,11 +350,48 @@ mod tests {
         };
         let start = std::time::Instant::now();
         assert_eq!(
-            within(APP_THREAD_READ, stalled).unwrap_err(),
+            within("stalled", APP_THREAD_READ, stalled).unwrap_err(),
             "took more than 50 ms to read"
         );
         assert!(start.elapsed() < Duration::from_millis(400));
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Reads of a stalled file that time out leave one stuck thread, not one per try, and
+    /// the file is read again once that thread has returned.
+    #[test]
+    fn stalled_reads_leave_one_thread_per_file() {
+        use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+        use std::sync::Arc;
+        let started = Arc::new(AtomicUsize::new(0));
+        let release = Arc::new(AtomicBool::new(false));
+        let stalled = || {
+            let (started, release) = (started.clone(), release.clone());
+            move || {
+                started.fetch_add(1, Ordering::SeqCst);
+                while !release.load(Ordering::SeqCst) {
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+                Ok(7)
+            }
+        };
+        let limit = Duration::from_millis(20);
+        for _ in 0..10 {
+            assert!(within("hung mount/c.toml", limit, stalled()).is_err());
+        }
+        assert_eq!(started.load(Ordering::SeqCst), 1, "one reader per file");
+        release.store(true, Ordering::SeqCst);
+        let deadline = std::time::Instant::now() + Duration::from_secs(5);
+        let again = loop {
+            match within("hung mount/c.toml", Duration::from_secs(5), stalled()) {
+                Ok(v) => break v,
+                Err(_) if std::time::Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(5))
+                }
+                Err(e) => panic!("{e}"),
+            }
+        };
+        assert_eq!(again, 7);
     }
 
     #[test]

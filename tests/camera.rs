@@ -1308,3 +1308,77 @@ fn a_live_sources_thread_yields_to_the_app() {
     assert_eq!(own, 0);
     drop(bg);
 }
+
+/// A frame rate far out of range (a hostile Y4M header, a folder's rate) is clamped to
+/// 0.1-1000 fps: the player neither panics nor spins, and the video plays.
+#[test]
+fn out_of_range_frame_rates_are_clamped() {
+    let dir = temp_dir("y4m-rates");
+    let (w, h) = (4, 2);
+    let frames: Vec<Vec<[u8; 3]>> = (0..3).map(|k| vec![PALETTE[k]; (w * h) as usize]).collect();
+    let plain = dir.join("plain.y4m");
+    write_y4m(&plain, w, h, "444", &frames);
+    let bytes = std::fs::read(&plain).unwrap();
+    for (rate, shown) in [
+        ("F1e300:1", "1000.00 fps"),
+        ("F1:1e300", "0.10 fps"),
+        ("F0:1", "0.10 fps"),
+    ] {
+        let path = dir.join(format!("{rate}.y4m"));
+        let at = bytes.windows(5).position(|w| w == b"F20:1").unwrap();
+        let file = [&bytes[..at], rate.as_bytes(), &bytes[at + 5..]].concat();
+        std::fs::write(&path, file).unwrap();
+        let bg = Background::open(&SourceSpec::Video(path), &CaptureConfig::default())
+            .unwrap_or_else(|e| panic!("{rate}: {e}"));
+        assert!(bg.description().contains(shown), "{}", bg.description());
+        let first = Instant::now();
+        while bg.latest().is_none() && first.elapsed() < Duration::from_secs(2) {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        assert!(bg.latest().is_some(), "{rate}: no frame");
+        if rate == "F1e300:1" {
+            // At 1000 fps the player keeps publishing new frames: its thread lives.
+            let seen = bg.latest().unwrap().sequence;
+            std::thread::sleep(Duration::from_millis(200));
+            assert!(bg.latest().unwrap().sequence > seen + 50, "{rate}: stalled");
+        }
+    }
+    for (fps, shown) in [(1e300, "1000.00 fps"), (0.0, "0.10 fps")] {
+        let folder = dir.join(format!("folder-{fps:e}"));
+        std::fs::create_dir_all(&folder).unwrap();
+        RgbaImage::new(2, 2, [9, 9, 9, 255])
+            .save_png(&folder.join("f1.png"))
+            .unwrap();
+        let cfg = CaptureConfig {
+            video_fps: fps,
+            ..CaptureConfig::default()
+        };
+        let bg = Background::open(&SourceSpec::Video(folder), &cfg)
+            .unwrap_or_else(|e| panic!("folder at {fps}: {e}"));
+        assert!(bg.description().contains(shown), "{}", bg.description());
+    }
+}
+
+/// An `image:` background larger than the camera size is shrunk to it as it loads, and its
+/// texels are prepared there with the blur the consumer asked for: no frame call blurs it.
+#[test]
+fn a_large_image_is_shrunk_to_the_camera_size_and_prepared_as_it_loads() {
+    use contrastxr::algorithm::Params;
+    use contrastxr::blurred_texels::BlurTaps;
+    let dir = temp_dir("image-large");
+    let path = dir.join("large.png");
+    smooth_scene(1200, 900).save_png(&path).unwrap();
+    let params = Params::default();
+    let cfg = CaptureConfig {
+        still_blur: Some(BlurTaps::of(&params)),
+        ..CaptureConfig::default()
+    };
+    let spec = parse_source(&format!("image:{}", path.display())).unwrap();
+    let frame = Background::open(&spec, &cfg).unwrap().latest().unwrap();
+    assert_eq!((frame.image.width, frame.image.height), (640, 480));
+    let prepared = frame.prepared.as_ref().expect("prepared as it loaded");
+    assert!(prepared.made_for((640, 480), &params));
+    // Without a blur asked for, the consumer prepares it; a small image keeps its size.
+    let plain = Background::open(&spec, &CaptureConfig::default()).unwrap();
+    assert!(plain.latest().unwrap().prepared.is_none());
+}

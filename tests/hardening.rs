@@ -1000,3 +1000,41 @@ fn example_config_is_valid_and_complete() {
     );
     assert_eq!(r.settings, config::Settings::default());
 }
+
+/// Captures are written off the app's thread: with every capture file's creation stalled 2 s
+/// (`stalled-file-system`, a hung mount under the capture folder), no frame-loop call nears a
+/// second, the session's end stays bounded, and the exit waits at most 5 s for the captures
+/// still waiting, saying so in one line.
+#[test]
+fn captures_on_a_stalled_file_system_never_hold_a_frame() {
+    let tag = "stalled-captures";
+    warm_shared_cache();
+    let capture = scratch_dir(tag).join("capture");
+    let capture_s = capture.to_string_lossy().into_owned();
+    let env = [
+        ("CONTRASTXR_FAULT", "stalled-file-system"),
+        ("CONTRASTXR_PIPELINES", "background"),
+        ("CONTRASTXR_CAPTURE_DIR", capture_s.as_str()),
+        ("CONTRASTXR_CAPTURE_FRAMES", "2"),
+    ];
+    let args = ["--frames", "60", "--size", SIZE, "--timing"];
+    let Some(r) = client(tag, &no_config(tag), &env, &args) else {
+        return;
+    };
+    r.assert_ran(60);
+    let longest = longest_call_ms(&r.report);
+    eprintln!("{tag}: longest frame-loop call {longest:.1} ms");
+    assert!(
+        longest < LONGEST_CALL_MS,
+        "a frame-loop call took {longest:.1} ms: {}",
+        r.report["timing"]["calls"]
+    );
+    assert_teardown_bounded(tag, &r.report);
+    assert!(
+        !r.lines_with("processing frames").is_empty(),
+        "{:#?}",
+        r.lines
+    );
+    let left = r.lines_with("exiting with captures not yet written");
+    assert_eq!(left.len(), 1, "{:#?}", r.lines);
+}

@@ -743,3 +743,167 @@ fn judge(c: &Case, r: &CaseRun, baseline_kb: u64) -> (Option<f64>, String, Optio
     };
     (line_s, said, problem)
 }
+
+// ---- a stalled file system (a hung network or FUSE mount) ----
+
+/// With every look-up of a user's file stalled 2 s (`CONTRASTXR_FAULT=stalled-file-system`),
+/// starting and stopping the config watcher (xrCreateInstance, xrDestroyInstance: the app's
+/// thread) each return within 300 ms: no stat, read or join there waits for the file system.
+/// Run in a child process of this test binary, where the fault is armed.
+#[test]
+fn a_stalled_file_system_never_holds_the_apps_thread() {
+    const NAME: &str = "a_stalled_file_system_never_holds_the_apps_thread";
+    if std::env::var_os("CONTRASTXR_FAULT").is_none() {
+        let out = Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+            .env("CONTRASTXR_FAULT", "stalled-file-system")
+            .output()
+            .expect("run the child");
+        let text = String::from_utf8_lossy(&out.stderr).into_owned()
+            + &String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{text}");
+        assert!(text.contains("1 passed"), "{text}");
+        return;
+    }
+    let home = scratch_dir("stalled-fs");
+    let config = home.join(".config/contrastxr/config.toml");
+    std::fs::create_dir_all(config.parent().unwrap()).unwrap();
+    std::fs::write(&config, "lambda_e = 0.3\n").unwrap();
+    let home_s = home.to_string_lossy().into_owned();
+    let env = contrastxr::config::Env::from_pairs([("HOME", home_s.as_str())]);
+    let t = Instant::now();
+    let (live, resolved) = contrastxr::config::Live::start("app", env, Box::new(|_| {}));
+    let started = t.elapsed();
+    eprintln!("started in {started:?}: {:?}", resolved.problems);
+    // The watcher's first look-up (after its 200 ms poll) is under way, stalled.
+    std::thread::sleep(Duration::from_millis(400));
+    let t = Instant::now();
+    live.stop();
+    let stopped = t.elapsed();
+    eprintln!("stopped in {stopped:?}");
+    let bound = Duration::from_millis(300);
+    assert!(started < bound, "Live::start took {started:?}");
+    assert!(stopped < bound, "Live::stop took {stopped:?}");
+    // The stalled read is said as a problem, and the defaults are used.
+    assert!(
+        resolved.problems.iter().any(|p| p.contains("to read")),
+        "{:?}",
+        resolved.problems
+    );
+}
+
+// ---- a large `image:` background ----
+
+/// A 4000x3000 picture (12 megapixels) with the texture of a photo: smooth fields and noise, so
+/// that it compresses as one does (about 24 MiB as a PNG), as RGB bytes.
+fn photo_12mp() -> (u32, u32, Vec<u8>) {
+    let (w, h) = (4000u32, 3000u32);
+    let mut data = Vec::with_capacity((w * h * 3) as usize);
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    for y in 0..h {
+        for x in 0..w {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let noise = (seed & 15) as u32;
+            data.push(((x * 200 / w) + noise) as u8);
+            data.push(((y * 180 / h) + noise) as u8);
+            data.push((((x + y) * 100 / (w + h)) + 40 + noise) as u8);
+        }
+    }
+    (w, h, data)
+}
+
+fn photo_png_12mp() -> Vec<u8> {
+    let (w, h, data) = photo_12mp();
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().unwrap();
+    writer.write_image_data(&data).unwrap();
+    writer.finish().unwrap();
+    bytes
+}
+
+fn photo_jpeg_12mp() -> Vec<u8> {
+    let (w, h, data) = photo_12mp();
+    let mut bytes = Vec::new();
+    jpeg_encoder::Encoder::new(&mut bytes, 90)
+        .encode(&data, w as u16, h as u16, jpeg_encoder::ColorType::Rgb)
+        .unwrap();
+    bytes
+}
+
+/// The app's peak resident memory (VmHWM) with a 12-megapixel `image:` background, PNG or
+/// JPEG, is within 100 MB of its peak with a `color:` background, on Vulkan and on OpenGL: the
+/// image is shrunk as it loads to the camera size the background is used at, and prepared
+/// there.
+#[test]
+fn a_12_megapixel_image_background_costs_about_what_a_colour_does() {
+    let Some(sandbox) = sandbox() else { return };
+    let root = scratch_dir("large-image");
+    let photo = root.join("photo.png");
+    std::fs::write(&photo, photo_png_12mp()).unwrap();
+    let jpeg = root.join("photo.jpg");
+    std::fs::write(&jpeg, photo_jpeg_12mp()).unwrap();
+    let config = root.join("base.toml");
+    std::fs::write(&config, "").unwrap();
+    let image = OsString::from(format!("image:{}", photo.display()));
+    let image_jpeg = OsString::from(format!("image:{}", jpeg.display()));
+    let colour = OsString::from("color:#e0d020");
+    let mut cases = Vec::new();
+    for api in ["vulkan", "opengl"] {
+        let kinds = [
+            ("image", &image),
+            ("jpeg", &image_jpeg),
+            ("colour", &colour),
+        ];
+        for (kind, background) in kinds {
+            let dir = root.join(format!("{api}-{kind}"));
+            cases.push((api, kind, dir, background.clone()));
+        }
+    }
+    let mut script = String::from("#!/bin/bash\nrun_case() {\n  local dir=\"$1\"; shift\n  mkdir -p \"$dir/state\"\n  XDG_STATE_HOME=\"$dir/state\" \"$@\" >\"$dir/stdout\" 2>\"$dir/stderr\" </dev/null &\n  local pid=$! hwm=0 k v rest waited=0\n  while kill -0 $pid 2>/dev/null; do\n    while read -r k v rest; do [ \"$k\" = VmHWM: ] && hwm=$v; done <\"/proc/$pid/status\" 2>/dev/null\n    sleep 0.05; waited=$((waited + 1))\n    [ $waited -gt 2400 ] && kill -9 $pid\n  done\n  wait $pid; echo $? >\"$dir/rc\"; echo $hwm >\"$dir/hwm_kb\"\n}\n");
+    for (api, _, dir, background) in &cases {
+        let graphics = match *api {
+            "opengl" => "--graphics opengl --format R8G8B8A8_SRGB",
+            _ => "",
+        };
+        script.push_str(&format!(
+            "run_case {} env CONTRASTXR=1 CONTRASTXR_FORCE=1 CONTRASTXR_INDICATOR=0 \
+             CONTRASTXR_PIPELINES=wait CONTRASTXR_CONFIG={} CONTRASTXR_BACKGROUND={} \
+             {XR_CLIENT} --json --frames 30 --size 96x72 {graphics}\n",
+            bash_word(dir.as_os_str().as_encoded_bytes()),
+            bash_word(config.as_os_str().as_encoded_bytes()),
+            bash_word(background.as_encoded_bytes()),
+        ));
+    }
+    let path = root.join("run.sh");
+    std::fs::write(&path, script).unwrap();
+    sandbox
+        .run_x11_for(&["bash", &path.to_string_lossy()], &[], 1200)
+        .assert_success();
+    let mut peaks = std::collections::HashMap::new();
+    for (api, kind, dir, _) in &cases {
+        let r = read_case(dir);
+        assert_eq!(r.rc, 0, "{api} {kind}: {:?}", r.lines);
+        assert!(r.hwm_kb > 0, "{api} {kind}: no memory reading");
+        assert!(
+            r.lines.iter().any(|l| l.contains("processing frames")),
+            "{api} {kind}: no frame enhanced: {:?}",
+            r.lines
+        );
+        eprintln!("{api} {kind}: peak {:.1} MB", r.hwm_kb as f64 / 1024.0);
+        peaks.insert((*api, *kind), r.hwm_kb as f64 / 1024.0);
+    }
+    for api in ["vulkan", "opengl"] {
+        for kind in ["image", "jpeg"] {
+            let more = peaks[&(api, kind)] - peaks[&(api, "colour")];
+            assert!(
+                more < 100.0,
+                "{api}: the {kind} background's peak is {more:.1} MB above the colour's"
+            );
+        }
+    }
+}

@@ -36,7 +36,7 @@ impl Background {
         crate::fault::check("camera-open").map_err(CameraError::Device)?;
         let (source, description) = match spec {
             SourceSpec::Image(path) => (
-                Source::Static(image_frame(path)?),
+                Source::Static(image_frame(path, cfg)?),
                 format!("image {}", path.display()),
             ),
             SourceSpec::Color(c) => {

@@ -1,6 +1,7 @@
 //! File sources: a PNG or JPEG image, a flat colour, and videos (numbered PNG frames or Y4M) played
 //! in a loop at their frame rate, following wall-clock time.
 
+use crate::blurred_texels::BlurredTexels;
 use crate::camera::error::CameraError;
 use crate::camera::log_sink::log;
 use crate::camera::mailbox::{Frame, Shared};
@@ -13,24 +14,38 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-pub(crate) fn image_frame(path: &Path) -> Result<Frame, CameraError> {
-    let image = RgbaImage::load(path).map_err(|e| CameraError::File(format!("image:{e}")))?;
-    Ok(static_frame(image))
+/// The size a still background is used at: the camera size the settings ask for, which the
+/// mapping and the blur work at (a `color:` background's size).
+fn still_size(cfg: &CaptureConfig) -> (u32, u32) {
+    (cfg.width.max(1), cfg.height.max(1))
+}
+
+/// An `image:` background, shrunk as it loads to at most the camera size
+/// (`RgbaImage::load_within`): a 12-megapixel photo then costs what a camera frame does.
+pub(crate) fn image_frame(path: &Path, cfg: &CaptureConfig) -> Result<Frame, CameraError> {
+    let image = RgbaImage::load_within(path, still_size(cfg))
+        .map_err(|e| CameraError::File(format!("image:{e}")))?;
+    Ok(static_frame(image, cfg))
 }
 
 /// A flat colour at the configured camera size, so consumers see one background size.
 pub(crate) fn color_frame([r, g, b]: [u8; 3], cfg: &CaptureConfig) -> Frame {
-    let mut image = RgbaImage::new(cfg.width.max(1), cfg.height.max(1), [r, g, b, 255]);
+    let (w, h) = still_size(cfg);
+    let mut image = RgbaImage::new(w, h, [r, g, b, 255]);
     image.has_alpha = false;
-    static_frame(image)
+    static_frame(image, cfg)
 }
 
-fn static_frame(image: RgbaImage) -> Frame {
+/// A still frame, prepared here (the loading thread) with `cfg.still_blur` when it is set.
+fn static_frame(image: RgbaImage, cfg: &CaptureConfig) -> Frame {
+    let prepared = cfg
+        .still_blur
+        .map(|blur| Arc::new(BlurredTexels::prepare_once(&image, blur)));
     Frame {
         image: Arc::new(image),
         sequence: 1,
         captured_at: None,
-        prepared: None,
+        prepared,
     }
 }
 
@@ -63,23 +78,39 @@ impl VideoFrames for Y4m {
     }
 }
 
-/// Opens a video: a folder of PNG frames (at `cfg.video_fps`) or a Y4M file (at its own rate).
+/// The slowest and fastest a video plays: a rate outside (a Y4M header's `F1:1e300`, `F0:1`)
+/// is clamped, so the player never divides by nothing nor wakes for nothing.
+pub(crate) const RATES: std::ops::RangeInclusive<f64> = 0.1..=1000.0;
+
+/// `fps` within [`RATES`]; not a number is refused.
+fn playable_rate(fps: f64) -> Result<f64, CameraError> {
+    if fps.is_nan() {
+        return Err(CameraError::File("video frame rate is not a number".into()));
+    }
+    let clamped = fps.clamp(*RATES.start(), *RATES.end());
+    if clamped != fps {
+        log(&format!(
+            "video frame rate {fps} fps is out of {}-{} fps: played at {clamped} fps",
+            RATES.start(),
+            RATES.end()
+        ));
+    }
+    Ok(clamped)
+}
+
+/// Opens a video: a folder of PNG frames (at `cfg.video_fps`) or a Y4M file (at its own rate),
+/// either clamped to [`RATES`].
 pub(crate) fn open_video(
     path: &Path,
     cfg: &CaptureConfig,
 ) -> Result<(Box<dyn VideoFrames>, f64), CameraError> {
     if path.is_dir() {
         let files = numbered_pngs(path)?;
-        let fps = cfg.video_fps;
-        if !(fps > 0.0 && fps.is_finite()) {
-            return Err(CameraError::File(format!(
-                "video frame rate {fps} is not positive"
-            )));
-        }
+        let fps = playable_rate(cfg.video_fps)?;
         Ok((Box::new(PngFolder { files }), fps))
     } else {
         let y4m = Y4m::open(path).map_err(|e| CameraError::File(format!("video:{e}")))?;
-        let fps = y4m.fps;
+        let fps = playable_rate(y4m.fps)?;
         Ok((Box::new(y4m), fps))
     }
 }

@@ -89,6 +89,10 @@ pub struct CaptureConfig {
     /// `world:` source: the simulated camera and the head poses it is carried by (set by the
     /// consumer when it opens the source; None in settings).
     pub world: Option<super::rig::WorldRig>,
+    /// The blur a still background (`image:`, `color:`) is prepared with as it is loaded, on
+    /// the loading thread (set by the consumer when it opens the source; None in settings:
+    /// the consumer prepares it).
+    pub still_blur: Option<crate::blurred_texels::BlurTaps>,
 }
 
 /// Camera settings that otherwise drift (automatic exposure, white balance, gain), each either
@@ -118,6 +122,7 @@ impl Default for CaptureConfig {
             usb_ids: Vec::new(),
             world_latency_ms: 50.0,
             world: None,
+            still_blur: None,
         }
     }
 }

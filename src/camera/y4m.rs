@@ -176,8 +176,9 @@ fn parse_rate(value: &str) -> Result<f64, String> {
         num.parse().map_err(|_| format!("bad frame rate {value}"))?,
         den.parse().map_err(|_| format!("bad frame rate {value}"))?,
     );
-    if num > 0.0 && den > 0.0 {
-        Ok(num / den)
+    // Any rate of non-negative numbers is taken (0, 1e300, inf): the player clamps it.
+    if num >= 0.0 && den > 0.0 {
+        Ok((num / den).min(f64::MAX))
     } else {
         Err(format!("bad frame rate {value}"))
     }

@@ -72,15 +72,31 @@ pub fn user_path(env: &Env) -> Option<PathBuf> {
 }
 
 /// The file to read: `$CONTRASTXR_CONFIG` (even if missing: it was asked for), else the first of
-/// the user and system files that exists; None when there is none.
+/// the user and system files that exists; None when there is none. Each look-up is bounded
+/// (`user_file::APP_THREAD_READ`, the caller may be the app's thread): a file whose look-up
+/// takes longer (a hung mount) is the one found, and its read then says why it is not used.
 pub fn find(env: &Env) -> Option<PathBuf> {
+    let limit = crate::user_file::APP_THREAD_READ;
+    find_by(env, |p| {
+        crate::user_file::is_file_within(p, limit).unwrap_or(true)
+    })
+}
+
+/// [`find`] with look-ups that may wait for the file system: for a thread of the layer's own.
+pub fn find_waiting(env: &Env) -> Option<PathBuf> {
+    find_by(env, |p| {
+        crate::user_file::metadata(p).is_ok_and(|m| m.is_file())
+    })
+}
+
+fn find_by(env: &Env, is_file: impl Fn(&Path) -> bool) -> Option<PathBuf> {
     if let Some(p) = env.non_empty("CONTRASTXR_CONFIG") {
         return Some(PathBuf::from(p));
     }
     [user_path(env), Some(PathBuf::from(SYSTEM_PATH))]
         .into_iter()
         .flatten()
-        .find(|p| p.is_file())
+        .find(|p| is_file(p))
 }
 
 /// The file `contrastxr set` and `toggle` write: the one apps read, except that the system

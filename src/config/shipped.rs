@@ -29,7 +29,11 @@ pub fn find(env: &Env) -> Option<PathBuf> {
     if let Some(p) = env.get("CONTRASTXR_DEVICES").filter(|p| !p.is_empty()) {
         return Some(PathBuf::from(p));
     }
-    searched(env).into_iter().find(|p| p.is_file())
+    // Bounded as `path::find` is: a look-up that stalls finds that file, whose read says why.
+    let limit = crate::user_file::APP_THREAD_READ;
+    searched(env)
+        .into_iter()
+        .find(|p| crate::user_file::is_file_within(p, limit).unwrap_or(true))
 }
 
 /// The files [`find`] tries in turn when `CONTRASTXR_DEVICES` is unset.

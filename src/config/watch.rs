@@ -16,6 +16,9 @@ use std::time::{Duration, SystemTime};
 /// How often the file is checked: a change applies within this plus one frame.
 pub const POLL: Duration = Duration::from_millis(200);
 
+/// The longest [`Live::stop`] waits for the watcher thread.
+pub const STOP_WAIT: Duration = Duration::from_millis(100);
+
 pub type Sink = Box<dyn Fn(&str) + Send + Sync>;
 
 /// The settings of one app, kept current by the watcher thread.
@@ -40,10 +43,11 @@ struct Fingerprint {
     inode: u64,
 }
 
+/// The config file's fingerprint, looked up on the calling thread however long it takes.
 fn fingerprint(env: &Env) -> Option<Fingerprint> {
     use std::os::unix::fs::MetadataExt;
-    let path = path::find(env)?;
-    let meta = std::fs::metadata(&path).ok()?;
+    let path = path::find_waiting(env)?;
+    let meta = crate::user_file::metadata(&path).ok()?;
     Some(Fingerprint {
         modified: meta.modified().ok(),
         len: meta.len(),
@@ -53,7 +57,9 @@ fn fingerprint(env: &Env) -> Option<Fingerprint> {
 }
 
 struct Watcher {
-    seen: Option<Fingerprint>,
+    /// None until known: a look-up that stalled at the start is taken again on the watcher's
+    /// thread, as the file's first version (no reload).
+    seen: Option<Option<Fingerprint>>,
     sink: Sink,
     live: Arc<Live>,
 }
@@ -62,7 +68,14 @@ impl Live {
     /// Resolves the settings for `app` and starts watching the file. Returns the first
     /// resolution for the caller to log.
     pub fn start(app: &str, env: Env, sink: Sink) -> (Arc<Live>, Resolved) {
-        let seen = fingerprint(&env);
+        // Looked up on a helper thread, within the bound of the app's thread's reads.
+        let looked_up = env.clone();
+        let seen = crate::user_file::within(
+            "the config file's fingerprint",
+            crate::user_file::APP_THREAD_READ,
+            move || Ok(fingerprint(&looked_up)),
+        )
+        .ok();
         let resolved = load_for(Who { app, device: None }, &env);
         let live = Arc::new(Live {
             app: app.to_string(),
@@ -154,12 +167,19 @@ impl Live {
         }
     }
 
-    /// Stops the watcher thread and waits for it (at most one reload).
+    /// Stops the watcher thread and waits for it at most [`STOP_WAIT`]: one still waiting for
+    /// the file system (a hung mount) is left to end on its own when its look-up returns.
     pub fn stop(&self) {
         self.stop.store(true, Ordering::Release);
         if let Some(handle) = lock(&self.thread).take() {
             handle.thread().unpark();
-            let _ = handle.join();
+            let waited = std::time::Instant::now();
+            while !handle.is_finished() && waited.elapsed() < STOP_WAIT {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            if handle.is_finished() {
+                let _ = handle.join();
+            }
         }
     }
 
@@ -187,8 +207,12 @@ impl Watcher {
             while !self.live.stop.load(Ordering::Acquire) {
                 std::thread::park_timeout(POLL);
                 let now = fingerprint(&self.live.env);
-                if now != self.seen && !self.live.stop.load(Ordering::Acquire) {
-                    self.seen = now;
+                let Some(seen) = &self.seen else {
+                    self.seen = Some(now);
+                    continue;
+                };
+                if now != *seen && !self.live.stop.load(Ordering::Acquire) {
+                    self.seen = Some(now);
                     self.reload();
                 }
             }

@@ -8,7 +8,8 @@ use crate::config::{Settings, Value, KEYS};
 use crate::gpu::device::pixel_codec;
 use crate::gpu::PixelFormat;
 use crate::image::RgbaImage;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Converts a region's raw pixels to 8-bit sRGB (sRGB formats are copied, linear ones encoded).
 pub fn to_srgb8(format: PixelFormat, raw: &[u8], width: u32, height: u32) -> RgbaImage {
@@ -86,54 +87,124 @@ pub struct Api {
     pub format: String,
 }
 
-/// Writes the files of one captured view; errors are returned as one sentence.
-#[allow(clippy::too_many_arguments)]
-pub fn write_view(
-    dir: &Path,
-    frame: u64,
-    view: usize,
-    captured: &CapturedImage,
-    api: &Api,
-    background: &RgbaImage,
-    settings: &Settings,
-    motion: serde_json::Map<String, serde_json::Value>,
-) -> Result<(), String> {
-    prepare_folder(dir)?;
-    let item = &captured.view;
-    let (w, h) = item.key.extent;
-    let stem = dir.join(format!("frame-{frame}-view-{view}"));
-    let name = |suffix: &str| stem.with_file_name(format!("frame-{frame}-view-{view}{suffix}"));
-    to_srgb8(item.format, &captured.display, w, h).save_png(&name("-display.png"))?;
-    to_srgb8(item.format, &captured.output, w, h).save_png(&name("-output.png"))?;
-    // The exact swapchain bytes too (rows tightly packed): 8-bit PNGs lose linear formats' bits.
-    for (suffix, bytes) in [
-        ("-display.raw", &captured.display),
-        ("-output.raw", &captured.output),
-    ] {
-        std::fs::write(name(suffix), bytes).map_err(|e| format!("cannot write capture: {e}"))?;
+/// One captured view's files, taken on the app's thread and written by the capture thread
+/// (`capture_writer`): the pixels as read back, and the JSON as it was at the frame.
+pub struct CaptureJob {
+    pub dir: PathBuf,
+    /// `frame-N-view-V`, which every file name starts with.
+    pub stem: String,
+    pub format: PixelFormat,
+    pub extent: (u32, u32),
+    pub display: Vec<u8>,
+    pub output: Vec<u8>,
+    pub background: Arc<RgbaImage>,
+    pub json: serde_json::Value,
+}
+
+impl CaptureJob {
+    /// The job of one captured view: its JSON is made here, its files by [`write`](Self::write).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        dir: &Path,
+        frame: u64,
+        view: usize,
+        captured: CapturedImage,
+        api: &Api,
+        background: Arc<RgbaImage>,
+        settings: &Settings,
+        motion: serde_json::Map<String, serde_json::Value>,
+    ) -> CaptureJob {
+        let item = &captured.view;
+        let (w, h) = item.key.extent;
+        let mut json = serde_json::json!({
+            "frame": frame,
+            "view": view,
+            "graphics": api.graphics,
+            "format": api.format,
+            "bytes_per_pixel": item.format.bytes_per_pixel(),
+            "srgb": item.format.srgb,
+            "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
+            "image_array_index": item.key.array_index,
+            // How the view was enhanced: "in-place" in the app's image, "image-copy" (out into an
+            // image of the layer's own and back), or "copy" (out into a buffer and back).
+            "path": captured.path,
+            "camera_mapping": item.mapping.rows,
+            "background": settings.background,
+            "params": settings_json(settings),
+        });
+        if let Some(object) = json.as_object_mut() {
+            object.extend(motion);
+        }
+        CaptureJob {
+            dir: dir.to_path_buf(),
+            stem: format!("frame-{frame}-view-{view}"),
+            format: item.format,
+            extent: (w, h),
+            display: captured.display,
+            output: captured.output,
+            background,
+            json,
+        }
     }
-    background.save_png(&name("-background.png"))?;
-    let mut json = serde_json::json!({
-        "frame": frame,
-        "view": view,
-        "graphics": api.graphics,
-        "format": api.format,
-        "bytes_per_pixel": item.format.bytes_per_pixel(),
-        "srgb": item.format.srgb,
-        "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
-        "image_array_index": item.key.array_index,
-        // How the view was enhanced: "in-place" in the app's image, "image-copy" (out into an
-        // image of the layer's own and back), or "copy" (out into a buffer and back).
-        "path": captured.path,
-        "camera_mapping": item.mapping.rows,
-        "background": settings.background,
-        "params": settings_json(settings),
+
+    /// The memory the job holds until written (the background is shared with the frames).
+    pub fn bytes(&self) -> usize {
+        self.display.len() + self.output.len()
+    }
+
+    /// Writes the view's files, the JSON last (its presence says the others are complete).
+    /// Errors are one sentence.
+    pub fn write(&self) -> Result<(), String> {
+        prepare_folder(&self.dir)?;
+        let (w, h) = self.extent;
+        let file = |suffix: &str, bytes: &[u8]| {
+            create_file(&self.dir, &format!("{}{suffix}", self.stem), bytes)
+        };
+        file(
+            "-display.png",
+            &to_srgb8(self.format, &self.display, w, h).encode_png()?,
+        )?;
+        file(
+            "-output.png",
+            &to_srgb8(self.format, &self.output, w, h).encode_png()?,
+        )?;
+        // The exact swapchain bytes too (rows tightly packed): 8-bit PNGs lose linear formats' bits.
+        file("-display.raw", &self.display)?;
+        file("-output.raw", &self.output)?;
+        file("-background.png", &self.background.encode_png()?)?;
+        let text = serde_json::to_string_pretty(&self.json).expect("plain JSON");
+        file(".json", text.as_bytes())
+    }
+}
+
+/// Writes `name` in `dir` without following a link or blocking, and without writing through
+/// anything already there: the bytes go to a new file (`O_CREAT | O_EXCL | O_NOFOLLOW |
+/// O_NONBLOCK`) named for this process, which is then renamed to `name`. What was at `name`
+/// (an earlier capture, a link planted there, a FIFO) is replaced, never written into; a
+/// folder there, or a name another user holds in a shared folder, fails in words.
+pub fn create_file(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
+    use std::io::Write;
+    use std::os::unix::fs::OpenOptionsExt;
+    crate::user_file::stall();
+    let path = dir.join(name);
+    let fresh = dir.join(format!(".{name}.{}.new", std::process::id()));
+    let failed = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .mode(0o644)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(&fresh)
+        .map_err(failed)?;
+    let written = file.write_all(bytes).and_then(|()| {
+        drop(file);
+        std::fs::rename(&fresh, &path)
     });
-    if let Some(object) = json.as_object_mut() {
-        object.extend(motion);
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&fresh);
+        return Err(failed(e));
     }
-    let text = serde_json::to_string_pretty(&json).expect("plain JSON");
-    std::fs::write(name(".json"), text).map_err(|e| format!("cannot write capture JSON: {e}"))
+    Ok(())
 }
 
 #[cfg(test)]
@@ -158,6 +229,82 @@ mod tests {
         assert_eq!(json["fov_scale"], serde_json::json!([0.65, 0.65]));
         assert_eq!(json["blur_size"], 3);
         assert_eq!(json["blur"], true);
+    }
+
+    fn job(dir: &Path) -> CaptureJob {
+        let f = PixelFormat {
+            layout: PixelLayout::Rgba8,
+            srgb: true,
+        };
+        CaptureJob {
+            dir: dir.to_path_buf(),
+            stem: "frame-0-view-0".into(),
+            format: f,
+            extent: (2, 1),
+            display: vec![1, 2, 3, 255, 4, 5, 6, 255],
+            output: vec![7, 8, 9, 255, 10, 11, 12, 255],
+            background: Arc::new(RgbaImage::new(2, 1, [20, 30, 40, 255])),
+            json: serde_json::json!({"frame": 0}),
+        }
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "contrastxr-capture-files-{name}-{}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// A link planted at a capture's name is replaced, not written through: the file it
+    /// points at keeps its bytes.
+    #[test]
+    fn a_link_at_a_capture_name_is_never_written_through() {
+        let dir = temp_dir("link");
+        let victim = dir.join("victim");
+        std::fs::write(&victim, "keep me").unwrap();
+        for suffix in ["-display.png", "-output.raw", ".json"] {
+            let at = dir.join(format!("frame-0-view-0{suffix}"));
+            std::os::unix::fs::symlink(&victim, at).unwrap();
+        }
+        job(&dir).write().unwrap();
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep me");
+        let json = dir.join("frame-0-view-0.json");
+        assert!(std::fs::symlink_metadata(&json).unwrap().is_file());
+        assert_eq!(
+            std::fs::read_to_string(json).unwrap(),
+            "{\n  \"frame\": 0\n}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A FIFO at a capture's name (nobody reading it) never blocks the write.
+    #[test]
+    fn a_fifo_at_a_capture_name_never_blocks() {
+        let dir = temp_dir("fifo");
+        for suffix in ["-display.png", "-output.raw", "-background.png"] {
+            let c = std::ffi::CString::new(
+                dir.join(format!("frame-0-view-0{suffix}"))
+                    .into_os_string()
+                    .into_encoded_bytes(),
+            )
+            .unwrap();
+            // SAFETY: `c` is a valid NUL-terminated path that outlives the call.
+            assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        let writing = dir.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(job(&writing).write());
+        });
+        let done = rx.recv_timeout(std::time::Duration::from_secs(5));
+        assert!(done.is_ok(), "the write blocked on a FIFO");
+        done.unwrap().unwrap();
+        let png = dir.join("frame-0-view-0-display.png");
+        assert!(std::fs::symlink_metadata(png).unwrap().is_file());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! at xrEndFrame or, for an image an app released ahead of its xrEndFrame, at that release.
 
 use super::capture_files;
+use super::capture_writer;
 use super::graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
 use super::indicator;
 use super::live_settings::Settings;
@@ -17,7 +18,9 @@ use crate::blurred_texels::BlurTaps;
 use crate::camera;
 use crate::gpu::frame::{FrameBackground, OverlayPixels};
 use crate::gpu::ViewKey;
+use crate::image::RgbaImage;
 use openxr_sys as xr;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A sub-image a layer names, with its camera mapping when it is a projection view (each
@@ -324,7 +327,7 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
                 log_began(s.started, graphics.as_ref());
             }
             if options.capture {
-                write_capture(s, &views, &frame.image);
+                write_capture(s, views, &frame.image);
             }
             s.processed += 1;
             log::once(
@@ -392,11 +395,12 @@ fn log_began(started: Instant, graphics: &dyn SessionGraphics) {
     ));
 }
 
-fn write_capture(s: &SessionState, views: &[CapturedImage], bg: &crate::image::RgbaImage) {
+/// Hands the frame's captured views to the capture thread: no file is touched here.
+fn write_capture(s: &SessionState, views: Vec<CapturedImage>, bg: &Arc<RgbaImage>) {
     let Some(c) = s.settings.capture() else {
         return;
     };
-    for (k, v) in views.iter().enumerate() {
+    for (k, v) in views.into_iter().enumerate() {
         let motion = motion::capture_json(s.motion.views.get(k));
         let Some(graphics) = s.engine.as_ref() else {
             return;
@@ -405,10 +409,16 @@ fn write_capture(s: &SessionState, views: &[CapturedImage], bg: &crate::image::R
             graphics: graphics.graphics(),
             format: graphics.format_name(v.view.api_format),
         };
-        let written =
-            capture_files::write_view(&c.dir, s.processed, k, v, &api, bg, &s.settings, motion);
-        if let Err(e) = written {
-            log::once("capture-failed", &format!("capture failed: {e}"));
-        }
+        let job = capture_files::CaptureJob::new(
+            &c.dir,
+            s.processed,
+            k,
+            v,
+            &api,
+            bg.clone(),
+            &s.settings,
+            motion,
+        );
+        capture_writer::write(job);
     }
 }

@@ -339,6 +339,8 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
                 forget_instance(instance);
                 Ok(xr::Result::SUCCESS)
             });
+            // The captures of its frames, written on the capture thread: waited for boundedly.
+            super::capture_writer::finish(super::capture_writer::INSTANCE_WAIT);
             if let Some((name, n)) = crate::fault::reached().filter(|(_, n)| *n > 0) {
                 log::info(&format!("fault point {name} reached {n} times"));
             }

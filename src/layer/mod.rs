@@ -6,6 +6,7 @@
 mod app_spaces;
 mod blend;
 pub mod capture_files;
+mod capture_writer;
 mod dispatch;
 mod end_frame;
 mod entry;

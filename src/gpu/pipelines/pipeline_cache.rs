@@ -142,10 +142,23 @@ pub const MAX_FILE_BYTES: u64 = 64 << 20;
 /// Files of other drivers are removed once this old.
 const FOREIGN_MAX_AGE: std::time::Duration = std::time::Duration::from_secs(30 * 24 * 3600);
 
+/// The longest a cache file's read may take: it is made on the app's thread (at
+/// xrCreateSession, and for an OpenGL app inside a frame call), so a cache folder on a stalled
+/// network or FUSE mount must not hold it.
+pub const READ_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// A cache file's bytes; None if there is none. Only a regular file of at most
 /// MAX_FILE_BYTES is read, opened without following links and without blocking (a FIFO or a
-/// device there never hangs or floods the app).
+/// device there never hangs or floods the app), on a helper thread within [`READ_LIMIT`]
+/// (`user_file::within`: a read that takes longer is an error, its thread left to end).
 pub fn read_file(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    let owned = path.to_path_buf();
+    let key = format!("cache {}", path.display());
+    crate::user_file::within(&key, READ_LIMIT, move || read_file_now(&owned))
+}
+
+fn read_file_now(path: &Path) -> Result<Option<Vec<u8>>, String> {
+    crate::user_file::stall();
     let file = match std::fs::OpenOptions::new()
         .read(true)
         .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
@@ -236,7 +249,37 @@ pub fn save(
 /// renamed over the old one. Not synced: it is written inside an app's xrDestroySession, and a
 /// file the system lost part of in a crash fails its length and checksum at the next load,
 /// which then starts from an empty cache.
+///
+/// Made on a helper thread within [`WRITE_LIMIT`] (`user_file::within_writing`): a cache
+/// folder on a stalled network or FUSE mount never holds the caller longer (the app's thread,
+/// or the pipeline thread that xrDestroySession joins); a write that takes longer is an error,
+/// its thread left to finish or fail on its own.
 pub fn write_atomically(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
+    let (dir, name, bytes) = (dir.to_path_buf(), name.to_string(), bytes.to_vec());
+    let key = format!("cache {}", dir.join(&name).display());
+    let limit =
+        std::time::Duration::from_millis(WRITE_LIMIT_MS.load(std::sync::atomic::Ordering::Relaxed));
+    crate::user_file::within_writing(&key, limit, move || {
+        write_atomically_now(&dir, &name, &bytes)
+    })
+}
+
+/// The longest a cache file's write may take inside an app (see [`write_atomically`]): the
+/// writes happen in xrDestroySession, which returns within 1 s in all.
+pub const WRITE_LIMIT: std::time::Duration = std::time::Duration::from_millis(250);
+
+/// The bound in force, in milliseconds: [`WRITE_LIMIT`], or longer in a process of the tool's
+/// own ([`writes_may_wait`]), whose exit would lose a write left to finish.
+static WRITE_LIMIT_MS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(250);
+
+/// For a process of the tool's own (`contrastxr gl-programs`): cache writes may take up to a
+/// minute, since nobody waits on them and its exit would lose one given up on.
+pub fn writes_may_wait() {
+    WRITE_LIMIT_MS.store(60_000, std::sync::atomic::Ordering::Relaxed);
+}
+
+fn write_atomically_now(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
+    crate::user_file::stall();
     let fail = |e: std::io::Error| format!("cannot write {}: {e}", dir.join(name).display());
     std::fs::create_dir_all(dir).map_err(fail)?;
     let tmp = dir.join(format!(".{name}.{:016x}.tmp", random_u64()));
@@ -287,6 +330,50 @@ pub fn remove_old_foreign(dir: &Path, keep: &str) {
 
 #[cfg(test)]
 mod tests {
+    /// With the file system stalled (`stalled-file-system`: each look-up 2 s), a cache file's
+    /// read gives up at READ_LIMIT, and its write at WRITE_LIMIT. Run in a child process of this test binary, where the
+    /// fault is armed.
+    #[test]
+    fn a_stalled_cache_read_is_given_up_at_its_bound() {
+        const NAME: &str =
+            "gpu::pipelines::pipeline_cache::tests::a_stalled_cache_read_is_given_up_at_its_bound";
+        if std::env::var_os("CONTRASTXR_FAULT").is_none() {
+            let out = std::process::Command::new(std::env::current_exe().unwrap())
+                .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+                .env("CONTRASTXR_FAULT", "stalled-file-system")
+                .output()
+                .expect("run the child");
+            let text = String::from_utf8_lossy(&out.stdout).into_owned()
+                + &String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "{text}");
+            assert!(text.contains("1 passed"), "{text}");
+            return;
+        }
+        let path = std::env::temp_dir().join(format!("contrastxr-stalled-{}", std::process::id()));
+        std::fs::write(&path, b"cache").unwrap();
+        let t = std::time::Instant::now();
+        let read = super::read_file(&path);
+        let took = t.elapsed();
+        let _ = std::fs::remove_file(&path);
+        assert!(
+            took < std::time::Duration::from_millis(1500),
+            "took {took:?}"
+        );
+        assert_eq!(read.unwrap_err(), "took more than 1000 ms to read");
+        // A write too.
+        let dir = std::env::temp_dir().join(format!("contrastxr-stalled-w-{}", std::process::id()));
+        let t = std::time::Instant::now();
+        let written = super::write_atomically(&dir, "pipelines-x.bin", b"cache");
+        let took = t.elapsed();
+        assert!(
+            took < std::time::Duration::from_millis(1500),
+            "took {took:?}"
+        );
+        assert_eq!(written.unwrap_err(), "took more than 250 ms to write");
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     use super::*;
 
     fn key() -> DeviceKind {

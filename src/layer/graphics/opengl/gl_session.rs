@@ -155,7 +155,7 @@ fn texels<'a>(
         return t;
     }
     if prepared_here.as_ref().map(|(s, _)| *s) != Some(background.sequence) {
-        let t = BlurredTexels::prepare(background.image, BlurTaps::of(params));
+        let t = BlurredTexels::prepare_once(background.image, BlurTaps::of(params));
         *prepared_here = Some((background.sequence, t));
     }
     &prepared_here.as_ref().expect("set above").1
