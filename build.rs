@@ -1,11 +1,11 @@
 //! Compiles the WGSL compute shaders in `shaders/` with naga: SPIR-V for Vulkan and GLSL for
-//! OpenGL, written to OUT_DIR with the tables that list them (`src/gpu/shaders/modules.rs` and
-//! `src/gpu/opengl/programs.rs` embed them). No shader compiler runs at run time.
+//! OpenGL, written to OUT_DIR with the tables that list them (`src/gpu/core/modules.rs` and
+//! `src/gpu/opengl/pipelines/programs.rs` embed them). No shader compiler runs at run time.
 //!
 //! Each shader is the stage file prefixed with `shaders/common.wgsl` (WGSL has no #include),
 //! the colour constants generated here, so the shader uses exactly the numbers of
 //! docs/algorithm.md, Colour spaces, and the interface's declarations
-//! (src/gpu/shaders/interface.rs). One module of `build/` per job:
+//! (src/gpu/core/interface.rs). One module of `build/` per job:
 //!
 //! - `methods`: the method table (src/algorithm/method_table.rs) as build.rs sees it;
 //! - `colour`: the colour constants;
@@ -25,7 +25,7 @@ use std::{env, fs, path::PathBuf};
 /// The shader interface, the one definition both sides use (see its opening comment).
 #[allow(dead_code)]
 mod interface {
-    include!("src/gpu/shaders/interface.rs");
+    include!("src/gpu/core/interface.rs");
 }
 #[path = "build/check.rs"]
 mod check;
@@ -62,8 +62,8 @@ fn main() {
     let common = fs::read_to_string("shaders/common.wgsl").expect("shaders/common.wgsl");
     println!("cargo:rerun-if-changed=shaders/common.wgsl");
     println!("cargo:rerun-if-changed=build.rs");
-    println!("cargo:rerun-if-changed=src/gpu/shaders/approx_constants.rs");
-    println!("cargo:rerun-if-changed=src/gpu/shaders/interface.rs");
+    println!("cargo:rerun-if-changed=src/gpu/core/approx_constants.rs");
+    println!("cargo:rerun-if-changed=src/gpu/core/interface.rs");
     println!("cargo:rerun-if-changed=src/algorithm/method_table.rs");
     let prefix = |access_code: u32, format: u32| prefix(&common, access_code, format);
     // Parses, checks and writes `file`.spv; the parsed module, for the GLSL.

@@ -1,5 +1,5 @@
 //! The interface checks: what a parsed shader declares (read from naga's module by
-//! build/parse.rs) against src/gpu/shaders/interface.rs, the bindings, the push-constant
+//! build/parse.rs) against src/gpu/core/interface.rs, the bindings, the push-constant
 //! block's layout, the tile list's header and the entry points' workgroup sizes, and the GLSL's
 //! uniforms and bindings. Each failure fails the build with a message naming both sides.
 
@@ -33,11 +33,11 @@ pub struct Member {
     pub offset: u32,
 }
 
-/// Fails the build where a parsed shader disagrees with src/gpu/shaders/interface.rs: its
+/// Fails the build where a parsed shader disagrees with src/gpu/core/interface.rs: its
 /// bindings, its push-constant block's layout, its tile list's header, or its entry points'
 /// workgroup sizes (each message names both sides).
 pub fn check_interface(name: &str, facts: &ShaderFacts) {
-    let here = format!("{name}.wgsl vs src/gpu/shaders/interface.rs");
+    let here = format!("{name}.wgsl vs src/gpu/core/interface.rs");
     for var in &facts.globals {
         let var_name = &var.name;
         if let Some((group, number, kind)) = var.binding {

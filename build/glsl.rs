@@ -1,6 +1,6 @@
 //! GLSL writing for the OpenGL backend: a parsed shader's entry point as GLSL 4.50 (core) by
 //! naga, every resource at the binding point BINDINGS gives it, checked against
-//! src/gpu/shaders/interface.rs (build/check.rs), written to OUT_DIR as `<file>.glsl`.
+//! src/gpu/core/interface.rs (build/check.rs), written to OUT_DIR as `<file>.glsl`.
 
 use std::{fs, path::Path};
 
@@ -15,12 +15,12 @@ use crate::tables::GlUniform;
 const GLSL_VERSION: u16 = 450;
 
 /// The GLSL of `entry`, with every resource at the binding point BINDINGS gives it, checked
-/// against src/gpu/shaders/interface.rs: every uniform naga made of the push constants is a
+/// against src/gpu/core/interface.rs: every uniform naga made of the push constants is a
 /// PARAMS field (by name, at its PARAMS offset, of its type), and every resource the entry
 /// uses is declared at its binding.
 pub fn glsl(parsed: &Parsed, entry: &str) -> (String, Vec<GlUniform>) {
     let here = format!(
-        "{}.wgsl entry {entry} (GLSL) vs src/gpu/shaders/interface.rs",
+        "{}.wgsl entry {entry} (GLSL) vs src/gpu/core/interface.rs",
         parsed.name
     );
     let binding_map = BINDINGS

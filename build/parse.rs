@@ -5,7 +5,7 @@
 use crate::check::{check_interface, Global, Member, ShaderFacts};
 use crate::interface::BindingKind;
 
-/// A shader parsed, validated and checked against src/gpu/shaders/interface.rs.
+/// A shader parsed, validated and checked against src/gpu/core/interface.rs.
 pub struct Parsed {
     pub name: String,
     pub module: naga::Module,

@@ -1,6 +1,6 @@
-//! The tables build.rs writes to OUT_DIR: `shader_table.rs` (src/gpu/shaders/modules.rs
+//! The tables build.rs writes to OUT_DIR: `shader_table.rs` (src/gpu/core/modules.rs
 //! includes it: every SPIR-V module, the single shaders' ids, each family's variants with
-//! theirs) and `gl_shader_table.rs` (src/gpu/opengl/programs.rs includes it: every GLSL
+//! theirs) and `gl_shader_table.rs` (src/gpu/opengl/pipelines/programs.rs includes it: every GLSL
 //! module, the Params uniforms, the variants). An id is an index in the module list, written
 //! here with the list, never counted by hand.
 
@@ -85,7 +85,7 @@ impl Table {
 
 /// One item of `Params` as naga's GLSL declares it (a uniform, since GLSL outside Vulkan has
 /// no push constants): its uniform name, byte offset in PARAMS and type (a `GlParam` variant
-/// of src/gpu/opengl/programs.rs).
+/// of src/gpu/opengl/pipelines/programs.rs).
 #[derive(Clone, PartialEq, Debug)]
 pub struct GlUniform {
     pub path: String,

@@ -5,7 +5,7 @@
 //! three as WGSL constants, so each variant holds only its own code: a CPU driver such as
 //! lavapipe runs every branch under an execution mask, so code behind a push-constant branch
 //! costs time even when no pixel takes it (measured: the format as a push constant made a full
-//! frame 1.8x slower). The codes are src/gpu/shaders/interface.rs's. `classify` is built once
+//! frame 1.8x slower). The codes are src/gpu/core/interface.rs's. `classify` is built once
 //! per format. The beyond-the-paper extras (achromatic boost, luminance cap) are a fourth such
 //! switch: a variant without them for when both are off, the default.
 
@@ -88,7 +88,7 @@ impl Enhance {
 /// Every (method, mode, extras, shared fetches) an `enhance` is built for, for one pixel
 /// access. The fifth switch, shared fetches (shaders/sample_shared.wgsl instead of
 /// sample_general.wgsl), has a group's four pixels read their camera texels once, valid only
-/// for some mappings (src/gpu/recipe/shared_fetch.rs): built only for the defaults (the
+/// for some mappings (src/gpu/core/shared_fetch.rs): built only for the defaults (the
 /// paper's method in mode enhance, extras off), each variant costing about 40 kB of library.
 fn enhance_of(pixels: PixelAccess) -> Vec<Enhance> {
     let mut codes: Vec<u32> = METHODS.iter().map(|m| m.code).collect();

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Refits the polynomials in src/gpu/shaders/approx_constants.rs (needs numpy; not run by the build).
+"""Refits the polynomials in src/gpu/core/approx_constants.rs (needs numpy; not run by the build).
 
 Least squares at Chebyshev nodes, reweighted towards the minimax error; prints the
 coefficients (lowest power first) and the largest error of an f32 evaluation.

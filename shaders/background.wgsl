@@ -15,7 +15,7 @@
 // reaches; the separate pass costs one store and about one load per texel instead.
 
 // The sRGB decode of 8-bit codes c / 255, exact to f32 rounding: the enhancement's polynomial
-// (srgb_decode, 1.3e-5 relative at most, src/gpu/shaders/approx.rs) refined by one Newton step on
+// (srgb_decode, 1.3e-5 relative at most, src/gpu/core/approx.rs) refined by one Newton step on
 // y^5 = s^12 (y = s^2.4), which squares its error. The exact table of earlier versions cost a
 // memory access per channel (a loop over the SIMD lanes on lavapipe); the polynomial alone is
 // twice as fast here but its error, amplified by Algorithm 1 on some pixels, took 16-bit

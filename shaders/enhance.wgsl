@@ -412,7 +412,7 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
 }
 
 // One invocation per tile: lists the tiles with any foreground pixel, a row of tiles per
-// workgroup (CLASSIFY_WORKGROUP in src/gpu/shaders/interface.rs) so that the list runs in row order.
+// workgroup (CLASSIFY_WORKGROUP in src/gpu/core/interface.rs) so that the list runs in row order.
 @compute @workgroup_size(CLASSIFY_WORKGROUP_X, CLASSIFY_WORKGROUP_Y)
 fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     let rows = (pc.region_size.y + TILE - 1u) / TILE;

@@ -1,5 +1,5 @@
 // The background sampling of `enhance` where the view's mapping allows the four pixels of a
-// group to share their texel reads (src/gpu/recipe/shared_fetch.rs says where; build.rs appends this
+// group to share their texel reads (src/gpu/core/shared_fetch.rs says where; build.rs appends this
 // file instead of sample_general.wgsl for those variants). A separate pipeline, not a branch:
 // a CPU driver would run both paths.
 

@@ -44,7 +44,7 @@ pub const POINTS: [(&str, &str); 22] = [
     ),
     (
         "warm-up-device",
-        "making a CPU driver's warm-up device (gpu/pipelines/warm_up.rs)",
+        "making a CPU driver's warm-up device (gpu/vulkan/frame/warm_up.rs)",
     ),
     (
         "device-lost",

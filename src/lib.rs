@@ -9,7 +9,6 @@
 
 pub mod algorithm;
 pub mod background_preparation;
-pub mod blurred_texels;
 pub mod camera;
 pub mod colour;
 pub mod config;

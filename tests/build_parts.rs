@@ -7,7 +7,7 @@
 #![allow(dead_code)]
 
 mod interface {
-    include!("../src/gpu/shaders/interface.rs");
+    include!("../src/gpu/core/interface.rs");
 }
 #[path = "../build/check.rs"]
 mod check;
@@ -324,7 +324,7 @@ fn check_failure(change: impl FnOnce(&mut ShaderFacts)) -> String {
     failure(move || check::check_interface("enhance", &facts))
 }
 
-const HERE: &str = "enhance.wgsl vs src/gpu/shaders/interface.rs";
+const HERE: &str = "enhance.wgsl vs src/gpu/core/interface.rs";
 
 fn params_members(facts: &mut ShaderFacts) -> &mut (Vec<Member>, u32) {
     let pc = facts.globals.iter_mut().find(|g| g.name == "pc").unwrap();
@@ -445,7 +445,7 @@ fn an_entry_point_out_of_step_with_workgroups_fails_naming_both_sides() {
 
 #[test]
 fn a_glsl_uniform_is_found_in_params_by_name_and_element() {
-    let here = "enhance.wgsl entry enhance (GLSL) vs src/gpu/shaders/interface.rs";
+    let here = "enhance.wgsl entry enhance (GLSL) vs src/gpu/core/interface.rs";
     let (offsets, _) = params_layout();
     let k = |name: &str| PARAMS.iter().position(|(n, _)| *n == name).unwrap();
     // naga appends `_` to a name ending in a digit.
@@ -485,7 +485,7 @@ fn a_glsl_uniform_is_found_in_params_by_name_and_element() {
 
 #[test]
 fn a_used_resource_the_glsl_does_not_declare_fails() {
-    let here = "enhance.wgsl entry enhance (GLSL) vs src/gpu/shaders/interface.rs";
+    let here = "enhance.wgsl entry enhance (GLSL) vs src/gpu/core/interface.rs";
     check::check_gl_binding(here, "layout(std430, binding = 2) buffer", "pixels", 2);
     let m = failure(|| check::check_gl_binding(here, "layout(binding = 3)", "pixels", 2));
     assert_eq!(

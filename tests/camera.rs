@@ -9,7 +9,8 @@
 
 mod common;
 
-use contrastxr::camera::v4l2::{self, usb::UsbId};
+use contrastxr::camera::usb_id::UsbId;
+use contrastxr::camera::v4l2;
 use contrastxr::camera::{parse_source, Background, CaptureConfig, SourceSpec, SourceStatus};
 use contrastxr::image::RgbaImage;
 use std::path::{Path, PathBuf};
@@ -1364,7 +1365,7 @@ fn out_of_range_frame_rates_are_clamped() {
 #[test]
 fn a_large_image_is_shrunk_to_the_camera_size_and_prepared_as_it_loads() {
     use contrastxr::algorithm::Params;
-    use contrastxr::blurred_texels::BlurTaps;
+    use contrastxr::gpu::core::blurred_texels::BlurTaps;
     let dir = temp_dir("image-large");
     let path = dir.join("large.png");
     smooth_scene(1200, 900).save_png(&path).unwrap();

@@ -3,8 +3,9 @@
 
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
-use contrastxr::gpu::device::pixel_codec::half_from_f32;
-use contrastxr::gpu::offline::AppImage;
+use contrastxr::gpu::core::pixel_codec::half_from_f32;
+use contrastxr::gpu::vulkan::offline::AppImage;
+use contrastxr::gpu::vulkan::VkFormat;
 use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
 use contrastxr::image::RgbaImage;
 use std::process::Command;
@@ -51,7 +52,7 @@ fn assert_clean(e: &OfflineEngine) {
 fn every_embedded_shader_passes_spirv_val() {
     let dir = std::env::temp_dir().join(format!("contrastxr-spv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for shader in contrastxr::gpu::shaders::modules::all() {
+    for shader in contrastxr::gpu::core::modules::all() {
         let path = dir.join(format!("{}.spv", shader.name));
         std::fs::write(&path, shader.bytes()).unwrap();
         let out = Command::new("spirv-val")
@@ -415,7 +416,7 @@ fn gpu_background_of_a_part_of_the_camera_matches_cpu_preparation() {
 fn cpu_prepared_texels_match_the_gpu_passes() {
     // What a live source prepares on its thread is what the decode and blur passes make,
     // entry for entry, to the 21-bit packing's rounding (one code).
-    use contrastxr::blurred_texels::{BlurTaps, BlurredTexels, LINEAR_MAX};
+    use contrastxr::gpu::core::blurred_texels::{BlurTaps, BlurredTexels, LINEAR_MAX};
     let mut e = engine();
     // Width 151: rows not a multiple of the passes' 4-texel blocks.
     let camera = noise(151, 90, 9);
@@ -934,7 +935,7 @@ fn in_place_matches_the_copy_path_bit_for_bit() {
 /// driver's allocation size (what the read-backs take as the result).
 #[test]
 fn mapped_buffers_give_exactly_their_bytes() {
-    use contrastxr::gpu::device::GpuBuffer;
+    use contrastxr::gpu::vulkan::device::GpuBuffer;
     let e = engine();
     for size in [13u64, 16, 13 * 5 * 4, 13 * 5 * 4 + 2, 1000] {
         let usage = ash::vk::BufferUsageFlags::TRANSFER_DST;
@@ -1175,7 +1176,7 @@ fn halves(words: &[u32]) -> Vec<u32> {
 
 #[test]
 fn shared_fetches_give_the_general_variants_output() {
-    use contrastxr::gpu::recipe::shares_fetches;
+    use contrastxr::gpu::core::shares_fetches;
     let mut e = engine();
     let camera = noise(64, 40, 11);
     // 96, 128: 16-byte aligned rows (access_wide.wgsl); 97, 101: not (access_narrow.wgsl),
@@ -1272,7 +1273,7 @@ fn shared_fetches_in_place_match_the_general_variant() {
 /// camera rows, so they take the general variant, and the output conforms.
 #[test]
 fn mappings_the_shared_fetches_cannot_serve_take_the_general_variant() {
-    use contrastxr::gpu::recipe::shares_fetches;
+    use contrastxr::gpu::core::shares_fetches;
     let mut e = engine();
     let camera = noise(64, 40, 19);
     let (c, s) = (0.6 * 0.2f64.cos(), 0.6 * 0.2f64.sin());

@@ -168,7 +168,7 @@ through_the_layer! {
 }
 
 /// Views wide enough for the default mapping to let a group's pixels share their texel reads
-/// (1024 pixels over the 960-wide background: 0.61 texel per pixel, gpu/recipe/shared_fetch.rs), in
+/// (1024 pixels over the 960-wide background: 0.61 texel per pixel, gpu/core/shared_fetch.rs), in
 /// place and through a copy: frames captured after 30, when the shared-fetch variant, built
 /// behind the frame's pipelines, serves the views (from the third frame in a run on lavapipe),
 /// conform to the CPU reference.

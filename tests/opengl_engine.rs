@@ -5,7 +5,7 @@
 
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
-use contrastxr::gpu::device::pixel_codec;
+use contrastxr::gpu::core::pixel_codec;
 use contrastxr::gpu::opengl::GlFormat;
 use contrastxr::gpu::opengl::{GlOffline, GlTarget, GlView};
 use contrastxr::image::RgbaImage;
@@ -976,9 +976,9 @@ fn the_entry_points_are_found_through_the_gl_in_the_process() {
     let camera = noise(32, 24, 6);
     let display = noise(16, 8, 7);
     let params = Params::default();
-    let texels = contrastxr::blurred_texels::BlurredTexels::prepare(
+    let texels = contrastxr::gpu::core::blurred_texels::BlurredTexels::prepare(
         &camera,
-        contrastxr::blurred_texels::BlurTaps::of(&params),
+        contrastxr::gpu::core::blurred_texels::BlurTaps::of(&params),
     );
     let bytes = bottom_first(&display);
     let texture = gl.create_texture(SRGB8_ALPHA8, (16, 8), &bytes).unwrap();

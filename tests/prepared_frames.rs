@@ -8,11 +8,11 @@
 
 use ash::vk;
 use contrastxr::algorithm::Params;
-use contrastxr::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
-use contrastxr::gpu::device::Commands;
-use contrastxr::gpu::device::DeviceImage;
-use contrastxr::gpu::device::GpuBuffer;
-use contrastxr::gpu::device::{
+use contrastxr::gpu::core::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
+use contrastxr::gpu::vulkan::device::Commands;
+use contrastxr::gpu::vulkan::device::DeviceImage;
+use contrastxr::gpu::vulkan::device::GpuBuffer;
+use contrastxr::gpu::vulkan::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use contrastxr::gpu::{
@@ -168,7 +168,7 @@ impl Rig {
             record_layout_barriers(gpu, cmd, &[region], true);
             record_region_copy(gpu, cmd, &region, &self.buffer, true);
             record_layout_barriers(gpu, cmd, &[region], false);
-            contrastxr::gpu::device::barrier(
+            contrastxr::gpu::vulkan::device::barrier(
                 gpu,
                 cmd,
                 vk::PipelineStageFlags::ALL_COMMANDS,

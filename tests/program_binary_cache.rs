@@ -2,7 +2,7 @@
 //! thread, the app's context and other processes each write it, and a save merges with what
 //! the file holds by then rather than dropping the others' binaries.
 
-use contrastxr::gpu::opengl::binary_cache::BinaryCache;
+use contrastxr::gpu::opengl::BinaryCache;
 use std::path::Path;
 
 #[test]

@@ -26,8 +26,8 @@
 //   `method_linear(display: Colours, bg: Background) -> Colours` (Linear), see
 //   shaders/enhance.wgsl;
 // - `settings`: the config keys it reads (beyond the shared background preparation);
-// - `push`: the push-constant fields (src/gpu/shaders/interface.rs, PARAMS) its WGSL reads;
-// - `passes`: its GPU passes in order (the recorder, src/gpu/recipe/record.rs, runs these).
+// - `push`: the push-constant fields (src/gpu/core/interface.rs, PARAMS) its WGSL reads;
+// - `passes`: its GPU passes in order (the recorder, src/gpu/vulkan/record/passes.rs, runs these).
 macro_rules! with_methods {
     ($then:ident) => {
         $then! {

@@ -9,7 +9,7 @@ use super::method_reference::Reference;
 
 include!("method_table.rs");
 
-/// A GPU pass of a method, in the order the recorder runs them (src/gpu/recipe/record.rs).
+/// A GPU pass of a method, in the order the recorder runs them (src/gpu/vulkan/record/passes.rs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
     /// Lists the tiles with a foreground pixel (`classify`).
@@ -20,7 +20,7 @@ pub enum Pass {
     Enhance,
 }
 
-/// The passes the recorder implements (src/gpu/recipe/record.rs runs an entry's `passes` in their
+/// The passes the recorder implements (src/gpu/vulkan/record/passes.rs runs an entry's `passes` in their
 /// order; its arms assume this one): every entry's `passes` must be these (a test holds them
 /// to it).
 pub const PER_PIXEL_PASSES: [Pass; 3] = [Pass::Classify, Pass::FinishTiles, Pass::Enhance];
@@ -212,7 +212,7 @@ mod tests {
         for e in &ENTRIES {
             assert_eq!(
                 e.passes, PER_PIXEL_PASSES,
-                "{}: src/gpu/recipe/record.rs",
+                "{}: src/gpu/vulkan/record/passes.rs",
                 e.name
             );
         }
@@ -237,7 +237,7 @@ mod tests {
     /// PARAMS', and its WGSL reads no push-constant field it does not declare.
     #[test]
     fn every_entry_names_real_settings_and_push_constants() {
-        let fields: Vec<&str> = crate::gpu::shaders::interface::PARAMS
+        let fields: Vec<&str> = crate::gpu::core::interface::PARAMS
             .iter()
             .map(|p| p.0)
             .collect();

@@ -1,11 +1,11 @@
 //! The running background source the consumer holds.
 
-use crate::blurred_texels::{BlurTaps, TexelSink};
 use crate::camera::error::CameraError;
 use crate::camera::files::{color_frame, image_frame, open_video, play};
 use crate::camera::mailbox::{Frame, Shared, SourceStatus};
 use crate::camera::source::{CaptureConfig, SourceSpec};
 use crate::camera::v4l2;
+use crate::gpu::core::blurred_texels::{BlurTaps, TexelSink};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::thread::JoinHandle;

@@ -1,7 +1,6 @@
 //! File sources: a PNG or JPEG image, a flat colour, and videos (numbered PNG frames or Y4M) played
 //! in a loop at their frame rate, following wall-clock time.
 
-use crate::blurred_texels::BlurredTexels;
 use crate::camera::error::CameraError;
 use crate::camera::log_sink::log;
 use crate::camera::mailbox::{Frame, Shared};
@@ -9,6 +8,7 @@ use crate::camera::pool::ImagePool;
 use crate::camera::smoothing::Smoother;
 use crate::camera::source::CaptureConfig;
 use crate::camera::y4m::Y4m;
+use crate::gpu::core::blurred_texels::BlurredTexels;
 use crate::image::RgbaImage;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

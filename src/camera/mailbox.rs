@@ -1,6 +1,6 @@
 //! Frames, source status, and the latest-frame mailbox shared with the producer thread.
 
-use crate::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
+use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
 use crate::image::RgbaImage;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, TryLockError};

@@ -25,6 +25,7 @@ pub(crate) mod priority;
 pub mod rig;
 mod smoothing;
 pub mod source;
+pub mod usb_id;
 pub mod v4l2;
 pub mod world;
 mod y4m;

@@ -83,7 +83,7 @@ pub struct CaptureConfig {
     pub controls: CameraControls,
     /// The cameras `v4l2:auto` takes before any other, best first (the headset's own camera,
     /// named by its device profile); empty: none.
-    pub usb_ids: Vec<super::v4l2::usb::UsbId>,
+    pub usb_ids: Vec<super::usb_id::UsbId>,
     /// `world:` source: milliseconds between a frame's capture and its delivery (50).
     pub world_latency_ms: f32,
     /// `world:` source: the simulated camera and the head poses it is carried by (set by the
@@ -92,7 +92,7 @@ pub struct CaptureConfig {
     /// The blur a still background (`image:`, `color:`) is prepared with as it is loaded, on
     /// the loading thread (set by the consumer when it opens the source; None in settings:
     /// the consumer prepares it).
-    pub still_blur: Option<crate::blurred_texels::BlurTaps>,
+    pub still_blur: Option<crate::gpu::core::blurred_texels::BlurTaps>,
 }
 
 /// Camera settings that otherwise drift (automatic exposure, white balance, gain), each either

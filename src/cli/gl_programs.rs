@@ -8,7 +8,7 @@ use super::args::{Args, Opt};
 use super::error::CliError;
 use super::options::{self, method_usage};
 use contrastxr::algorithm::params::ViewMode;
-use contrastxr::gpu::opengl::caps::same_driver;
+use contrastxr::gpu::opengl::device::caps::same_driver;
 use contrastxr::gpu::opengl::{gl_sources_id, GlFormat, GlOffline};
 
 pub const OPTIONS: &[Opt] = &[
@@ -66,7 +66,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     }
     lower_priority();
     close_inherited_files();
-    contrastxr::gpu::pipelines::pipeline_cache::writes_may_wait();
+    contrastxr::gpu::vulkan::pipelines::pipeline_cache::writes_may_wait();
     let mut gl = GlOffline::new().map_err(|e| CliError::Failure(e.to_string()))?;
     let own = gl.engine().caps().driver.clone();
     if driver.is_some_and(|d| !same_driver(&d, &own)) {

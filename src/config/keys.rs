@@ -6,7 +6,7 @@ use super::settings::{InPlace, Settings};
 use super::value::{Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
 use crate::algorithm::registration::Lens;
-use crate::camera::v4l2::usb::UsbId;
+use crate::camera::usb_id::UsbId;
 use std::path::PathBuf;
 
 pub struct Key {

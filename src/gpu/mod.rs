@@ -1,25 +1,20 @@
-//! The GPU engine (ash + gpu-allocator + the SPIR-V built from `shaders/`): background
-//! preparation and per-pixel enhancement, usable offline on its own device and recorded into
-//! someone else's command buffer inside an app. Knows nothing of OpenXR.
+//! The GPU engine: background preparation and per-pixel enhancement from the SPIR-V and GLSL
+//! built from `shaders/`, usable offline on a device of its own and inside an app on the app's
+//! device or context. Knows nothing of OpenXR.
 //!
-//! Rooms by job, each with its own public surface: `device` (the device and its resources),
-//! `shaders` (the shader interface), `pipelines` (building them), `recipe` (the passes on one
-//! device), `frame` (a frame's work inside an app), `texels` (texels a source prepared),
-//! `offline` (the command line's engine and benchmark); and `opengl`, the same passes on an
-//! OpenGL app's context.
+//! Three parts: `core`, what no graphics API owns (the shader interface and ids, pixel formats
+//! and their codec, camera rectangles, the texel slots a source fills, overlay runs, a frame's
+//! inputs); and one folder per backend, `vulkan` and `opengl`, holding the same roles under the
+//! same names: `device`, `pipelines` (OpenGL: programs), `record` (the passes), `frame` (a
+//! frame's work inside an app), `texels` (the background's texels on the device), `offline`
+//! (the command line's engine and benchmark) and `conv` (the API's names for core's types).
 
-pub mod device;
-pub mod frame;
-pub mod offline;
+pub mod core;
 pub mod opengl;
-pub mod pipelines;
-pub mod recipe;
-pub mod shaders;
-pub mod texels;
+pub mod vulkan;
 
-pub use device::{DeviceOptions, GpuDevice, GpuError, PixelFormat, PixelLayout};
-pub use frame::{
-    CapturedView, FrameBackground, FrameEngine, FrameOptions, FrameView, ViewKey, ViewPath,
-};
-pub use offline::OfflineEngine;
-pub use recipe::{BackgroundFrame, CameraRect, Engine, Placement, ViewShape, ViewTarget};
+pub use self::core::{CameraRect, FrameBackground, PixelFormat, PixelLayout};
+pub use vulkan::device::{DeviceOptions, GpuDevice, GpuError};
+pub use vulkan::frame::{CapturedView, FrameEngine, FrameOptions, FrameView, ViewKey, ViewPath};
+pub use vulkan::offline::OfflineEngine;
+pub use vulkan::record::{BackgroundFrame, Engine, Placement, ViewShape, ViewTarget};

@@ -5,7 +5,7 @@
 use super::graphics::CapturedImage;
 use crate::colour;
 use crate::config::{Settings, Value, KEYS};
-use crate::gpu::device::pixel_codec;
+use crate::gpu::core::pixel_codec;
 use crate::gpu::PixelFormat;
 use crate::image::RgbaImage;
 use std::path::{Path, PathBuf};

@@ -3,13 +3,13 @@
 //! each change of settings, so the wearer can tell the layer is on and what it does.
 //!
 //! The text is rendered on the CPU with the figures' bitmap font; its lit pixels, as runs, are
-//! drawn by the GPU engine after the enhancement (gpu/frame/overlay.rs). The app's other pixels are
+//! drawn by the GPU engine after the enhancement (gpu/vulkan/frame/overlay_copies.rs). The app's other pixels are
 //! left as the enhancement made them, and captures show what the runtime gets.
 
 use crate::algorithm::params::{Method, ViewMode};
 use crate::config::Settings;
 use crate::evaluate::font;
-use crate::gpu::frame::Run;
+use crate::gpu::core::Run;
 use crate::image::RgbaImage;
 use std::time::{Duration, Instant};
 

@@ -76,7 +76,9 @@ impl SessionMotion {
 pub fn camera_config(settings: &Settings, motion: &SessionMotion) -> CaptureConfig {
     let mut camera = settings.camera.clone();
     // A still background is prepared as it loads, with the blur in force then.
-    camera.still_blur = Some(crate::blurred_texels::BlurTaps::of(&settings.params));
+    camera.still_blur = Some(crate::gpu::core::blurred_texels::BlurTaps::of(
+        &settings.params,
+    ));
     camera.world = settings.registration.profile().map(|profile| WorldRig {
         profile,
         poses: motion.poses.clone(),

@@ -15,7 +15,7 @@
 use crate::error::{fail, Result};
 use crate::gl_binding::GlBinding;
 use crate::glx::GlContext;
-use contrastxr::gpu::shaders::interface::BINDINGS;
+use contrastxr::gpu::core::interface::BINDINGS;
 use serde::Serialize;
 use std::ffi::{c_char, c_int, c_void};
 

@@ -109,7 +109,7 @@ pub enum Content {
     /// The panels and ramp above (about 37 % of each view).
     Panels,
     /// A typical mixed-reality frame, about 17 % foreground: the same two UI panels and shaded
-    /// disc as `contrastxr bench`'s typical content (src/gpu/offline/bench.rs, `content_pixel`), drawn
+    /// disc as `contrastxr bench`'s typical content (src/gpu/vulkan/offline/bench.rs, `content_pixel`), drawn
     /// here independently of the library, so end-to-end and GPU figures describe alike frames.
     Typical,
     /// A PNG (`picture`), stretched over each view (nearest texel), shifted as the pattern is:

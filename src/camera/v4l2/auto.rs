@@ -6,9 +6,10 @@
 
 use super::choose::choose_mode;
 use super::devices::{modes, probe, stable_paths, DeviceInfo};
-use super::usb::{self, sysfs_root, UsbId};
+use super::usb::{self, sysfs_root};
 use crate::camera::log_sink::log;
 use crate::camera::source::CaptureConfig;
+use crate::camera::usb_id::UsbId;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 

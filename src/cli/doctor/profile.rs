@@ -3,6 +3,7 @@
 //! (`camera_usb_ids`) is connected, whether or not an app has run.
 
 use super::finding::{tool, tool_as_root, Finding, Status};
+use contrastxr::camera::usb_id::UsbId;
 use contrastxr::camera::v4l2::{device_dir, usb};
 use contrastxr::config::{file, load_for, shipped, Env, Who, KEYS};
 
@@ -33,7 +34,7 @@ fn with_camera(env: &Env, system: Option<&str>, found: Finding) -> Finding {
     }
     let index = KEYS.iter().position(|k| k.name == "camera_usb_ids");
     let origin = index.map_or(String::new(), |i| format!(" ({})", r.origins[i]));
-    let named = format!("camera_usb_ids = {:?}{origin}", usb::UsbId::list_text(ids));
+    let named = format!("camera_usb_ids = {:?}{origin}", UsbId::list_text(ids));
     let here: Vec<String> = usb::usb_video_nodes(&usb::sysfs_root())
         .into_iter()
         .filter(|(_, id)| ids.contains(id))
@@ -50,7 +51,7 @@ fn with_camera(env: &Env, system: Option<&str>, found: Finding) -> Finding {
     let fix = format!(
         "connect the headset's camera (`lsusb` lists it as {}); until then v4l2:auto takes \
          another camera, if any",
-        usb::UsbId::list_text(ids).replace(',', " or ")
+        UsbId::list_text(ids).replace(',', " or ")
     );
     Finding {
         status: found.status.max(Status::Warn),

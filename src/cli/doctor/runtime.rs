@@ -2,7 +2,7 @@
 
 use super::finding::{var, Finding};
 use super::render_nodes;
-use contrastxr::gpu::device::physical_devices;
+use contrastxr::gpu::vulkan::device::physical_devices;
 use contrastxr::gpu::GpuError;
 use std::path::{Path, PathBuf};
 

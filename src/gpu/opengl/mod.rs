@@ -1,34 +1,27 @@
-//! The GPU engine on the app's OpenGL context: the same compute passes as the Vulkan path,
-//! from the same WGSL (build.rs writes GLSL 450 of the modules this backend runs, checked
-//! against src/gpu/shaders/interface.rs as the SPIR-V is), in place through an image unit or
-//! on a copy of each view in a buffer object.
+//! The OpenGL backend: the same compute passes as the Vulkan backend, from the same WGSL
+//! (build.rs writes GLSL 450 of the modules this backend runs, checked against
+//! src/gpu/core/interface.rs as the SPIR-V is), on the app's context, in place through an image
+//! unit or on a copy of each view in a buffer object. The same roles as `vulkan/`: `device` (the
+//! functions, the context's capabilities, errors), `pipelines` (the programs, their binary cache
+//! and background builds), `frame` (a frame's work: `GlEngine`, the app's state kept), `texels`,
+//! `offline` (a context of its own for the command line and the benchmark) and `conv`.
 //!
 //! Called on the app's thread with its context current (the layer's xrEndFrame): no GL call is
-//! made on a thread of the layer's own, the app's GL state is put back after each call
-//! (state_guard.rs) and its pending GL error is never read or changed. Frames pass through untouched
-//! while the programs build (programs.rs) and, with a one-sentence reason (gl_error.rs), where the
-//! context, a format or a program cannot serve. Raw GL names and constants stay in this folder.
+//! made on a thread of the layer's own but in a context of its own, the app's GL state is put
+//! back after each call (frame/state_guard.rs) and its pending GL error is never read or
+//! changed. Frames pass through untouched while the programs build (pipelines/programs.rs) and,
+//! with a one-sentence reason (device/error.rs), where the context, a format or a program cannot
+//! serve. Raw GL names and constants stay in this folder.
 
-pub mod binary_cache;
-pub mod caps;
-pub mod functions;
-mod gl_bench;
-pub mod gl_engine;
-pub mod gl_error;
-pub mod gl_format;
-pub mod gl_view;
+pub mod conv;
+pub mod device;
+pub mod frame;
 pub mod offline;
-mod program_warm_up;
-pub mod programs;
-mod region;
-pub mod state_guard;
-mod texel_buffers;
-mod view_pixels;
+pub mod pipelines;
+mod texels;
 
-pub use functions::Gl;
-pub use gl_engine::{GlEngine, Outcome, StoreThrough};
-pub use gl_error::GlError;
-pub use gl_format::GlFormat;
-pub use gl_view::{GlTarget, GlView};
+pub use conv::GlFormat;
+pub use device::{Gl, GlError};
+pub use frame::{GlEngine, GlTarget, GlView, Outcome, StoreThrough};
 pub use offline::GlOffline;
-pub use programs::gl_sources_id;
+pub use pipelines::{gl_sources_id, BinaryCache};

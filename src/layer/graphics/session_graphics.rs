@@ -3,7 +3,7 @@
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
-use crate::gpu::frame::{FrameBackground, OverlayPixels};
+use crate::gpu::core::{FrameBackground, OverlayPixels};
 use crate::gpu::{PixelFormat, ViewKey};
 use crate::layer::live_settings::Settings;
 use openxr_sys as xr;

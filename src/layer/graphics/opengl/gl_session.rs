@@ -7,9 +7,9 @@
 use super::app_context::{AppContext, Entered};
 use super::program_builder::{Built, ProgramBuilder};
 use crate::algorithm::params::Params;
-use crate::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::config::InPlace;
-use crate::gpu::frame::{overlay_pixel, FrameBackground, OverlayPixels};
+use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::gpu::core::{overlay_pixel, FrameBackground, OverlayPixels};
 use crate::gpu::opengl::{GlEngine, GlError, GlFormat, GlTarget, GlView, Outcome};
 use crate::gpu::PixelFormat;
 use crate::layer::graphics::session_graphics::{

@@ -12,7 +12,7 @@
 //! first leaves the thread to end on its own.
 
 use crate::algorithm::params::Params;
-use crate::gpu::opengl::caps::same_driver;
+use crate::gpu::opengl::device::caps::same_driver;
 use crate::gpu::opengl::GlOffline;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};

@@ -7,7 +7,7 @@
 //! buffer path: there a copy is a memcpy and storage-image access costs more.
 
 use crate::config::InPlace;
-use crate::gpu::frame::can_store;
+use crate::gpu::vulkan::frame::can_store;
 use crate::gpu::{GpuDevice, PixelFormat, ViewPath};
 use crate::layer::ffi::find_in_chain;
 use crate::layer::live_settings::Settings;
@@ -30,7 +30,7 @@ pub fn wanted(gpu: &GpuDevice, settings: &Settings) -> bool {
 /// can store to the format's image-copy format, else through a buffer.
 pub fn copy_path(gpu: &GpuDevice, settings: &Settings, format: PixelFormat) -> ViewPath {
     match wanted(gpu, settings) {
-        true => crate::gpu::frame::copy_path(gpu, format),
+        true => crate::gpu::vulkan::frame::copy_path(gpu, format),
         false => ViewPath::BufferCopy,
     }
 }

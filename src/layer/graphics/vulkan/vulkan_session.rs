@@ -4,11 +4,11 @@
 
 use super::{app_vulkan, in_place};
 use crate::algorithm::params::Params;
-use crate::gpu::frame::{
-    copy_path, FrameBackground, FrameEngine, FrameOptions, OverlayPixels, PipelinesReady,
-};
-use crate::gpu::pipelines::Origin;
-use crate::gpu::shaders::shader_ids::ShaderId;
+use crate::gpu::core::shader_ids::ShaderId;
+use crate::gpu::core::{FrameBackground, OverlayPixels};
+use crate::gpu::vulkan::conv::VkFormat;
+use crate::gpu::vulkan::frame::{copy_path, FrameEngine, FrameOptions, PipelinesReady};
+use crate::gpu::vulkan::pipelines::Origin;
 use crate::gpu::{Engine, FrameView, GpuDevice, GpuError, PixelFormat, ViewPath, ViewShape};
 use crate::layer::graphics::session_graphics::{
     Bound, CapturedImage, NotDone, SessionGraphics, ViewImage,
@@ -84,7 +84,7 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<Frame
 
 /// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
 /// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device is
-/// made here when one of them needs it, never on the pipeline thread (gpu/pipelines/warm_up.rs).
+/// made here when one of them needs it, never on the pipeline thread (gpu/vulkan/frame/warm_up.rs).
 fn request_shaders(engine: &FrameEngine, ids: &[ShaderId]) {
     let t = Instant::now();
     match engine.request(ids) {

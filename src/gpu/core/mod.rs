@@ -1,0 +1,28 @@
+//! What every graphics backend shares and no graphics API owns: the shader interface (bindings,
+//! push constants, codes, tile and workgroup sizes, in `interface`), the settings' codes, the
+//! push-constant block, the shaders' ids and the embedded modules build.rs compiles, pixel
+//! formats and their codec, the camera rectangle a frame samples, the texel slots a source
+//! fills, overlay runs and a frame's background. Nothing here calls a graphics API (a test
+//! holds it).
+
+#[cfg(test)]
+mod approx;
+pub mod blurred_texels;
+mod camera_rect;
+pub mod codes;
+mod frame_input;
+pub mod interface;
+pub mod modules;
+mod overlay;
+pub mod pixel_codec;
+mod pixel_format;
+pub mod push_constants;
+pub mod shader_ids;
+mod shared_fetch;
+pub(crate) mod texels;
+
+pub use camera_rect::CameraRect;
+pub use frame_input::FrameBackground;
+pub use overlay::{encode as overlay_pixel, OverlayPixels, Run};
+pub use pixel_format::{PixelFormat, PixelLayout};
+pub use shared_fetch::shares_fetches;

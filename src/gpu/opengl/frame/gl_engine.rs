@@ -1,0 +1,743 @@
+//! The per-view recipe on the app's GL context, called on the app's thread with its context
+//! current (inside xrEndFrame for the layer, after the app's rendering). The passes of the
+//! method (classify, finish_tiles, enhance over the listed tiles through an indirect dispatch)
+//! run on the view's region in one of two ways:
+//! - in place, as the Vulkan in-place path runs them: the app's texture is bound to an image
+//!   unit and the programs load and store its texels, in the storage texel format of the same
+//!   size the shaders take (GL_RGBA8, GL_RGBA16F, GL_RGBA16 as GL_RGBA16UI, GL_RGB10_A2 as
+//!   GL_R32UI: image units take any format of the texture's size); an sRGB texture, which no
+//!   image unit takes, through a GL_RGBA8 texture view of it, which GL allows over immutable
+//!   storage, the kind a runtime imports (the programs apply the sRGB curve themselves). No
+//!   copy at all.
+//! - through a buffer, for a mutable sRGB texture, on a CPU driver unless `in_place = on` (there image load/store
+//!   costs more than the copy, a memcpy), or with `in_place = off`: the region is copied into a buffer object
+//!   (glGetTextureSubImage into a pixel pack buffer), the passes run on it as the Vulkan copy
+//!   path runs them, and it is copied back (glTextureSubImage from a pixel unpack buffer). The
+//!   byte layouts are the Vulkan copy path's, so the same shaders read them.
+//!
+//! GL's images start at the bottom row: the buffer holds the view's rows bottom first, and the
+//! view's camera mapping is turned to take buffer rows (`rows_from_bottom`), so each pixel
+//! samples the background behind it with no change to the shaders.
+//!
+//! Everything the recipe changes of the app's GL state is put back (state_guard.rs), and it calls no
+//! glGetError (nor anything that would raise an error it would then leave to the app).
+
+use super::gl_view::{GlTarget, GlView};
+use super::region::{read_region, write_region};
+use super::state_guard::SavedState;
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::methods::Pass;
+use crate::algorithm::params::{Params, ViewMode};
+use crate::gpu::core::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
+use crate::gpu::core::codes::{method_code, mode_code};
+use crate::gpu::core::interface::{
+    in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE, BINDING_APP_IMAGE,
+    BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES, CLASSIFY_WORKGROUP, TILE,
+    TILE_LIST_DISPATCH_OFFSET, TILE_LIST_HEADER_WORDS,
+};
+use crate::gpu::core::push_constants::PushConstants;
+use crate::gpu::core::CameraRect;
+use crate::gpu::opengl::conv::GlFormat;
+use crate::gpu::opengl::device::caps::Caps;
+use crate::gpu::opengl::device::functions::{self as gl, Gl};
+use crate::gpu::opengl::device::GlError;
+use crate::gpu::opengl::pipelines::{self, Programs};
+use crate::gpu::opengl::texels::TexelBuffers;
+
+/// What a call did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// The views are enhanced (or, in mode off, left as they are).
+    Enhanced,
+    /// Programs the views need are still being built: the frame passed through untouched.
+    Compiling,
+}
+
+/// The background the views sample: an RGBA32UI texture (the layout of `BlurredTexels`), filled
+/// from the mapped upload buffers (texel_buffers.rs).
+struct Background {
+    texture: u32,
+    size: (u32, u32),
+    /// The `BlurredTexels::serial` the texture holds, and of which texels.
+    holds: Option<(u64, CameraRect)>,
+}
+
+/// How the programs store into a view's texture in place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StoreThrough {
+    /// The texture itself, bound to the image unit in this format of its size.
+    Texture(gl::Enum),
+    /// A texture view of it in this format (an sRGB texture as GL_RGBA8).
+    View(gl::Enum),
+}
+
+/// The image unit format the in-place programs take a texture of `internal` as: the storage
+/// texel format of their variant (interface.rs, `in_place_texel`), of the texture's size.
+fn image_format(internal: u32) -> Option<gl::Enum> {
+    match internal {
+        gl::RGBA8 | gl::SRGB8_ALPHA8 => Some(gl::RGBA8),
+        gl::RGBA16F => Some(gl::RGBA16F),
+        gl::RGBA16 => Some(gl::RGBA16UI),
+        gl::RGB10_A2 => Some(gl::R32UI),
+        _ => None,
+    }
+}
+
+/// A view slot's buffers, kept across frames and remade only when a view needs more.
+#[derive(Default)]
+struct ViewBuffers {
+    pixels: u32,
+    pixel_capacity: usize,
+    tiles: u32,
+    tile_capacity: usize,
+}
+
+pub struct GlEngine {
+    gl: Gl,
+    caps: Caps,
+    programs: Programs,
+    background: Option<Background>,
+    /// Where the background's texels are uploaded from; a live source writes them there.
+    texel_buffers: TexelBuffers,
+    views: Vec<ViewBuffers>,
+    /// An empty framebuffer object bound while the recipe runs: with the app's window-system
+    /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
+    /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer).
+    framebuffer: u32,
+    /// Whether views may be enhanced in place: by default on a GPU, not on a CPU driver
+    /// (`Caps::software`); the `in_place` setting's `on` and `off` decide otherwise.
+    in_place: bool,
+    /// Which of the last enhanced views were stored in place (the others through a buffer).
+    last_in_place: Vec<bool>,
+}
+
+/// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
+/// 1 - v, so camera = M (u, 1 - v', 1) = M F (u, v', 1).
+pub fn rows_from_bottom(m: &CameraMapping) -> CameraMapping {
+    CameraMapping {
+        rows: m.rows.map(|r| [r[0], -r[1], r[1] + r[2]]),
+    }
+}
+
+/// Whether rows of `width` pixels are whole 16-byte groups (the wide access).
+pub(in crate::gpu::opengl) fn rows_aligned(width: u32, bytes_per_pixel: u32) -> bool {
+    (width * bytes_per_pixel) % 16 == 0
+}
+
+fn texture_level_int(g: &Gl, texture: u32, pname: gl::Enum) -> i32 {
+    let mut v = 0;
+    // SAFETY: a texture name of this context (the caller's contract), level 0, a valid pname.
+    unsafe { (g.get_texture_level_parameteriv)(texture, 0, pname, &mut v) };
+    v
+}
+
+fn buffer_size(g: &Gl, buffer: u32) -> i32 {
+    let mut v = 0;
+    // SAFETY: a buffer this engine made; a valid pname.
+    unsafe { (g.get_named_buffer_parameteriv)(buffer, gl::BUFFER_SIZE, &mut v) };
+    v
+}
+
+/// A new buffer object of `bytes` bytes (uninitialised), or the allocation error: GL_BUFFER_SIZE
+/// tells whether the driver made it.
+fn new_buffer(g: &Gl, bytes: usize, what: &'static str) -> Result<u32, GlError> {
+    let mut buffer = 0;
+    // SAFETY: one name into a valid output; data null allocates without copying.
+    unsafe {
+        (g.create_buffers)(1, &mut buffer);
+        (g.named_buffer_data)(buffer, bytes as isize, std::ptr::null(), gl::DYNAMIC_COPY);
+    }
+    if buffer_size(g, buffer) as usize != bytes {
+        // SAFETY: ours.
+        unsafe { (g.delete_buffers)(1, &buffer) };
+        return Err(GlError::Allocation(what));
+    }
+    Ok(buffer)
+}
+
+impl GlEngine {
+    /// An engine on the context current on this thread, or why that context cannot run it.
+    /// Builds nothing yet: the programs are built by the frame calls that need them.
+    ///
+    /// # Safety
+    /// A GL context is current on this thread, `gl` was loaded for it (or a context of the same
+    /// driver), and every later call is made with that same context current.
+    pub unsafe fn new(gl: Gl) -> Result<GlEngine, GlError> {
+        let caps = Caps::check(&gl)?;
+        Ok(GlEngine {
+            programs: Programs::new(&caps),
+            in_place: !caps.software,
+            gl,
+            caps,
+            background: None,
+            texel_buffers: TexelBuffers::default(),
+            views: Vec::new(),
+            framebuffer: 0,
+            last_in_place: Vec::new(),
+        })
+    }
+
+    /// Whether views may be enhanced in place, or always go through a buffer (the default:
+    /// in place on a GPU, through a buffer on a CPU driver).
+    pub fn set_in_place(&mut self, allowed: bool) {
+        self.in_place = allowed;
+    }
+
+    /// Whether views may be stored in place (the default or `set_in_place`).
+    pub fn in_place(&self) -> bool {
+        self.in_place
+    }
+
+    /// The programs (their ids) views of `internal_format`, `width` texels wide, need for
+    /// `params`, taking the views to be of immutable textures (see `ready_from_cache`).
+    pub fn shape_program_ids(
+        &self,
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+    ) -> Result<[usize; 3], GlError> {
+        let code = GlFormat::of(internal_format)?.pixel.shader_code();
+        let in_place = self.in_place && in_place_texel(code).is_some();
+        Self::shape_programs(internal_format, width, params, in_place)
+    }
+
+    /// Which views of the last `enhance` call were stored in place (the others went through
+    /// a buffer), in their order.
+    pub fn last_in_place(&self) -> &[bool] {
+        &self.last_in_place
+    }
+
+    /// How the programs can store into the view's (checked) texture in place, or None when the
+    /// view goes through a buffer.
+    pub fn store_through(&self, v: &GlView) -> Option<StoreThrough> {
+        let format = GlFormat::of(v.internal_format).ok()?;
+        if !self.in_place || in_place_texel(format.pixel.shader_code()).is_none() {
+            return None;
+        }
+        let unit_format = image_format(v.internal_format)?;
+        if !format.pixel.srgb {
+            return Some(StoreThrough::Texture(unit_format));
+        }
+        let mut immutable = 0;
+        // SAFETY: a checked texture of this context; a valid pname (4.2+).
+        unsafe {
+            (self.gl.get_texture_parameteriv)(
+                v.texture,
+                gl::TEXTURE_IMMUTABLE_FORMAT,
+                &mut immutable,
+            )
+        };
+        (immutable != 0).then_some(StoreThrough::View(unit_format))
+    }
+
+    /// Whether a background frame was set.
+    pub(in crate::gpu::opengl) fn has_background(&self) -> bool {
+        self.background.is_some()
+    }
+
+    /// The context's version and features as the engine read them.
+    pub fn caps(&self) -> &Caps {
+        &self.caps
+    }
+
+    /// The fault point standing for a lost context. The context's reset status is never
+    /// queried: a robust context reports a reset once, and that report is the app's (with it
+    /// the app recreates its context); the layer's calls on a lost context do nothing.
+    fn check_lost(&self) -> Result<(), GlError> {
+        if crate::fault::hit("gl-context-lost") {
+            return Err(GlError::ContextLost);
+        }
+        Ok(())
+    }
+
+    /// Where a live source writes its frames' texels, on its own thread (memory writes into a
+    /// mapped buffer): one sink for the engine's life.
+    pub fn texel_sink(&self) -> std::sync::Arc<dyn TexelSink> {
+        self.texel_buffers.sink()
+    }
+
+    /// Background uploads of texels the source's thread wrote, and all uploads.
+    pub fn texels_from_source(&self) -> (u64, u64) {
+        self.texel_buffers.texels_from_source()
+    }
+
+    /// Makes `texels` the background the views sample: uploaded once (a new frame's texels,
+    /// told apart by their serial, from a mapped pixel unpack buffer), nothing when it holds
+    /// them already. Prepared on the source's thread (crate::gpu::core::blurred_texels), which for a live
+    /// source also writes them into that buffer; only the upload happens here.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn set_background(&mut self, texels: &BlurredTexels) -> Result<(), GlError> {
+        // SAFETY: this call's own contract; no mapping: the whole frame.
+        unsafe { self.set_background_for(texels, &[]) }
+    }
+
+    /// As `set_background`, for views at `mappings` (display uv to camera uv, as `GlView`
+    /// has them): only the texels they sample are uploaded (`CameraRect::sampled_by`; all of
+    /// them for no mapping).
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn set_background_for(
+        &mut self,
+        texels: &BlurredTexels,
+        mappings: &[CameraMapping],
+    ) -> Result<(), GlError> {
+        self.check_lost()?;
+        let size = (texels.width, texels.height);
+        if size.0 == 0
+            || size.1 == 0
+            || texels.bytes.len() != size.0 as usize * size.1 as usize * TEXEL_BYTES
+        {
+            return Err(GlError::Input(
+                "the background frame is empty or damaged".into(),
+            ));
+        }
+        let needed = CameraRect::sampled_by(mappings, size);
+        let held = |b: &Background| {
+            b.size == size
+                && b.holds
+                    .is_some_and(|(n, r)| n == texels.serial && r.contains(&needed))
+        };
+        if self.background.as_ref().is_some_and(held) {
+            return Ok(());
+        }
+        if self.background.as_ref().is_some_and(|b| b.size != size) {
+            self.drop_background();
+        }
+        let g = &self.gl;
+        if self.background.is_none() {
+            let mut texture = 0;
+            // SAFETY: a new 2D texture of one level, RGBA32UI (4.2+), the background's size
+            // (checked against GL_TEXTURE_WIDTH below); nearest filtering, so that it is
+            // complete for texelFetch whatever the sampler state.
+            unsafe {
+                (g.create_textures)(gl::TEXTURE_2D, 1, &mut texture);
+                (g.texture_parameteri)(texture, gl::TEXTURE_MIN_FILTER, gl::NEAREST);
+                (g.texture_parameteri)(texture, gl::TEXTURE_MAG_FILTER, gl::NEAREST);
+                (g.texture_storage_2d)(texture, 1, gl::RGBA32UI, size.0 as i32, size.1 as i32);
+            }
+            let made = texture_level_int(g, texture, gl::TEXTURE_WIDTH) == size.0 as i32;
+            if !made {
+                // SAFETY: ours.
+                unsafe { (g.delete_textures)(1, &texture) };
+                return Err(GlError::Allocation("background texture"));
+            }
+            self.background = Some(Background {
+                texture,
+                size,
+                holds: None,
+            });
+        }
+        let bg = self.background.as_mut().expect("made above");
+        let state = SavedState::guard(g)?;
+        // SAFETY: the context is current (this call's contract); the texture is the
+        // background's, of the texels' size; the unpack binding is put back by the guard.
+        let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };
+        drop(state);
+        uploaded?;
+        bg.holds = Some((texels.serial, needed));
+        Ok(())
+    }
+
+    fn drop_background(&mut self) {
+        if let Some(bg) = self.background.take() {
+            // SAFETY: ours; the context is current (every caller's contract).
+            unsafe { (self.gl.delete_textures)(1, &bg.texture) };
+        }
+    }
+
+    /// The programs a (checked) view needs: classify, finish_tiles, enhance.
+    fn view_programs(&self, view: &GlView, params: &Params) -> Result<[usize; 3], GlError> {
+        let in_place = self.store_through(view).is_some();
+        Self::shape_programs(view.internal_format, view.rect.2, params, in_place)
+    }
+
+    /// The programs views of `internal_format`, `width` texels wide, need, in place or not.
+    fn shape_programs(
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+        in_place: bool,
+    ) -> Result<[usize; 3], GlError> {
+        let format = GlFormat::of(internal_format)?;
+        let code = format.pixel.shader_code();
+        let access = if in_place {
+            ACCESS_IN_PLACE
+        } else if rows_aligned(width, format.pixel.bytes_per_pixel()) {
+            ACCESS_WIDE
+        } else {
+            ACCESS_NARROW
+        };
+        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
+        let codes = (method_code(params.method), mode_code(params.mode), code);
+        let missing = || GlError::Format(internal_format);
+        Ok([
+            pipelines::classify(code, access).ok_or_else(missing)?,
+            pipelines::GL_FINISH_TILES,
+            pipelines::enhance(codes, access, extras).ok_or_else(missing)?,
+        ])
+    }
+
+    /// Whether the programs views of `internal_format`, `width` texels wide, need for
+    /// `params` are linked, linking those the program binary cache holds (read again first:
+    /// another process may have written it); nothing is compiled. Views are taken to be of
+    /// immutable textures (a runtime's are), so in place wherever the format allows.
+    ///
+    /// # Safety
+    /// As for `enhance`.
+    pub unsafe fn ready_from_cache(
+        &mut self,
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+    ) -> Result<bool, GlError> {
+        self.check_lost()?;
+        if params.mode == ViewMode::Off {
+            return Ok(true);
+        }
+        let ids = self.shape_program_ids(internal_format, width, params)?;
+        self.programs.reload_cache();
+        self.programs.ready_from_cache(&self.gl, &ids)
+    }
+
+    /// Whether the programs `views` need are built: one more is built (or its parallel build
+    /// checked) per call while not. Errors as `enhance` has them, before anything runs.
+    ///
+    /// # Safety
+    /// As for `enhance`.
+    pub unsafe fn ready(&mut self, views: &[GlView], params: &Params) -> Result<bool, GlError> {
+        self.check_lost()?;
+        params.validate().map_err(GlError::Input)?;
+        if params.mode == ViewMode::Off || views.is_empty() {
+            return Ok(true);
+        }
+        let mut ids = Vec::new();
+        for v in views {
+            self.check_view(v)?;
+            ids.extend(self.view_programs(v, params)?);
+        }
+        self.programs.ready(&self.gl, &ids)
+    }
+
+    /// Enhances `views` against the background set last, on the current context. Passes
+    /// through untouched (Ok(Compiling)) while a program they need is being built, and with
+    /// an error (the app's frame and GL state unchanged) when one failed, the context is
+    /// lost, a format is not one the engine handles or a region lies outside its texture.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread, and every `texture` names a texture of
+    /// it that nothing else writes during the call.
+    pub unsafe fn enhance(
+        &mut self,
+        views: &[GlView],
+        params: &Params,
+    ) -> Result<Outcome, GlError> {
+        // SAFETY: this call's own contract.
+        if !unsafe { self.ready(views, params) }? {
+            return Ok(Outcome::Compiling);
+        }
+        if params.mode == ViewMode::Off || views.is_empty() {
+            return Ok(Outcome::Enhanced);
+        }
+        let mut ids = Vec::new();
+        for v in views {
+            ids.extend(self.view_programs(v, params)?);
+        }
+        let Some(bg_size) = self.background.as_ref().map(|b| b.size) else {
+            return Err(GlError::Input("no background frame was set".into()));
+        };
+        while self.views.len() < views.len() {
+            self.views.push(ViewBuffers::default());
+        }
+        self.last_in_place = views
+            .iter()
+            .map(|v| self.store_through(v).is_some())
+            .collect();
+        for (k, v) in views.iter().enumerate() {
+            self.ensure_buffers(k, v, self.last_in_place[k])?;
+        }
+        if self.framebuffer == 0 {
+            // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`. A 1x1
+            // default size makes it complete without attachments, so validating it raises no
+            // debug message in the app's callback.
+            unsafe {
+                (self.gl.create_framebuffers)(1, &mut self.framebuffer);
+                for p in [
+                    gl::FRAMEBUFFER_DEFAULT_WIDTH,
+                    gl::FRAMEBUFFER_DEFAULT_HEIGHT,
+                ] {
+                    (self.gl.named_framebuffer_parameteri)(self.framebuffer, p, 1);
+                }
+            }
+        }
+        let state = SavedState::guard(&self.gl)?;
+        // SAFETY: a framebuffer this engine made; the app's bindings are put back by the guard.
+        unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
+        if crate::fault::hit("gl-recipe-panic") {
+            panic!("fault point gl-recipe-panic");
+        }
+        for (k, v) in views.iter().enumerate() {
+            let programs: [usize; 3] = ids[3 * k..3 * k + 3].try_into().expect("3 ids");
+            self.run_view(k, v, params, bg_size, programs);
+        }
+        drop(state);
+        Ok(Outcome::Enhanced)
+    }
+
+    /// The view's texture is there with its format, and the region lies inside it.
+    pub(in crate::gpu::opengl) fn check_view(&self, v: &GlView) -> Result<(), GlError> {
+        let g = &self.gl;
+        let (x, y, w, h) = v.rect;
+        let width = texture_level_int(g, v.texture, gl::TEXTURE_WIDTH);
+        let height = texture_level_int(g, v.texture, gl::TEXTURE_HEIGHT);
+        let depth = texture_level_int(g, v.texture, gl::TEXTURE_DEPTH);
+        let internal = texture_level_int(g, v.texture, gl::TEXTURE_INTERNAL_FORMAT) as u32;
+        let (layer, target) = match v.target {
+            GlTarget::Texture2D => (0, gl::TEXTURE_2D),
+            GlTarget::Texture2DArray { layer } => (layer, gl::TEXTURE_2D_ARRAY),
+        };
+        let mut actual = 0;
+        // SAFETY: a texture name of this context (the caller's contract); GL_TEXTURE_TARGET
+        // is a valid glGetTextureParameteriv query in 4.5.
+        unsafe { (g.get_texture_parameteriv)(v.texture, gl::TEXTURE_TARGET, &mut actual) };
+        if actual as u32 != target {
+            return Err(GlError::Input(format!(
+                "a view's texture has target {actual:#06x}, not the {target:#06x} the view says"
+            )));
+        }
+        let inside = w > 0
+            && h > 0
+            && u64::from(x) + u64::from(w) <= width.max(0) as u64
+            && u64::from(y) + u64::from(h) <= height.max(0) as u64
+            && i64::from(layer) < i64::from(depth);
+        if !inside {
+            return Err(GlError::Input(format!(
+                "a view's region {w}x{h} at ({x}, {y}) layer {layer} is not inside its {width}x{height}x{depth} texture"
+            )));
+        }
+        if internal != v.internal_format {
+            return Err(GlError::Input(format!(
+                "a view's texture is {internal:#06x}, not the {:#06x} the view says",
+                v.internal_format
+            )));
+        }
+        Ok(())
+    }
+
+    /// Makes slot `k`'s buffers large enough for the view (no pixel buffer in place).
+    fn ensure_buffers(&mut self, k: usize, v: &GlView, in_place: bool) -> Result<(), GlError> {
+        let g = &self.gl;
+        let format = GlFormat::of(v.internal_format)?;
+        let (w, h) = (v.rect.2 as usize, v.rect.3 as usize);
+        // 16 bytes beyond the rows: the narrow access reads up to three words past the last
+        // pixel of a group.
+        let pixels = (w * h * format.pixel.bytes_per_pixel() as usize).div_ceil(16) * 16 + 16;
+        let tiles = w.div_ceil(TILE as usize) * h.div_ceil(TILE as usize);
+        let tile_bytes = (TILE_LIST_HEADER_WORDS as usize + tiles) * 4;
+        let slot = &mut self.views[k];
+        if !in_place && slot.pixel_capacity < pixels {
+            if slot.pixels != 0 {
+                // SAFETY: ours.
+                unsafe { (g.delete_buffers)(1, &slot.pixels) };
+                slot.pixels = 0;
+                slot.pixel_capacity = 0;
+            }
+            slot.pixels = new_buffer(g, pixels, "view buffer")?;
+            slot.pixel_capacity = pixels;
+        }
+        if slot.tile_capacity < tile_bytes {
+            if slot.tiles != 0 {
+                // SAFETY: ours.
+                unsafe { (g.delete_buffers)(1, &slot.tiles) };
+                slot.tiles = 0;
+                slot.tile_capacity = 0;
+            }
+            slot.tiles = new_buffer(g, tile_bytes, "tile list")?;
+            slot.tile_capacity = tile_bytes;
+        }
+        Ok(())
+    }
+
+    /// The recipe for one view (state saved by the caller; every object checked before).
+    fn run_view(
+        &self,
+        k: usize,
+        v: &GlView,
+        params: &Params,
+        bg_size: (u32, u32),
+        ids: [usize; 3],
+    ) {
+        let g = &self.gl;
+        let format = GlFormat::of(v.internal_format).expect("checked");
+        let (x, y, w, h) = v.rect;
+        let through = self.store_through(v);
+        let bytes = w as usize * h as usize * format.pixel.bytes_per_pixel() as usize;
+        let buffers = &self.views[k];
+        let mapping = rows_from_bottom(&v.mapping);
+        let mut push = PushConstants::new(params, bg_size, (w, h), &mapping);
+        // 16 bits each (interface.rs, region_origin), as on Vulkan; only in place reads it.
+        push.region_origin = (x & 0xffff) | (y << 16);
+        let [classify, finish_tiles, enhance] = ids.map(|id| self.programs.get(id));
+        classify.set_params(g, &push);
+        enhance.set_params(g, &push);
+        let bg = self.background.as_ref().expect("checked by the caller");
+        let tiles = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let zero = 0u32;
+        // SAFETY: every object is this engine's or the view's checked texture; the region lies
+        // inside the texture and the buffer holds it (with the pixel store at its defaults,
+        // rows tightly packed from offset 0); bindings are within the 4.3 minimums and put
+        // back by the caller's SavedState.
+        unsafe {
+            let view_texture = match through {
+                Some(t) => self.bind_app_image(v, t),
+                None => {
+                    (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, buffers.pixels);
+                    read_region(g, v, format, v.rect, (std::ptr::null_mut(), bytes));
+                    let bound = (bytes.div_ceil(16) * 16 + 16) as isize;
+                    (g.bind_buffer_range)(
+                        gl::SHADER_STORAGE_BUFFER,
+                        BINDING_PIXELS,
+                        buffers.pixels,
+                        0,
+                        bound,
+                    );
+                    0
+                }
+            };
+            (g.named_buffer_sub_data)(buffers.tiles, 0, 4, (&zero as *const u32).cast());
+            (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, BINDING_TILES, buffers.tiles);
+            (g.active_texture)(gl::TEXTURE0 + BINDING_BLURRED_TEXELS);
+            (g.bind_texture)(gl::TEXTURE_2D, bg.texture);
+            (g.bind_sampler)(BINDING_BLURRED_TEXELS, 0);
+            (g.bind_buffer)(gl::DISPATCH_INDIRECT_BUFFER, buffers.tiles);
+            for pass in params.method.entry().passes {
+                match pass {
+                    Pass::Classify => {
+                        (g.use_program)(classify.raw);
+                        (g.dispatch_compute)(
+                            tiles.0.div_ceil(CLASSIFY_WORKGROUP[0]),
+                            tiles.1.div_ceil(CLASSIFY_WORKGROUP[1]),
+                            1,
+                        );
+                        (g.memory_barrier)(gl::SHADER_STORAGE_BARRIER_BIT);
+                    }
+                    Pass::FinishTiles => {
+                        (g.use_program)(finish_tiles.raw);
+                        (g.dispatch_compute)(1, 1, 1);
+                        (g.memory_barrier)(
+                            gl::SHADER_STORAGE_BARRIER_BIT | gl::COMMAND_BARRIER_BIT,
+                        );
+                    }
+                    Pass::Enhance => {
+                        (g.use_program)(enhance.raw);
+                        (g.dispatch_compute_indirect)(TILE_LIST_DISPATCH_OFFSET as isize);
+                        (g.memory_barrier)(gl::SHADER_STORAGE_BARRIER_BIT);
+                    }
+                }
+            }
+            if through.is_some() {
+                // The stores reach whatever reads the texture next: the app's sampling,
+                // blits, or the runtime's compositor through the memory it imported.
+                (g.memory_barrier)(gl::ALL_BARRIER_BITS);
+                if view_texture != 0 {
+                    (g.delete_textures)(1, &view_texture);
+                }
+                return;
+            }
+            (g.memory_barrier)(
+                gl::PIXEL_BUFFER_BARRIER_BIT
+                    | gl::TEXTURE_UPDATE_BARRIER_BIT
+                    | gl::BUFFER_UPDATE_BARRIER_BIT,
+            );
+            (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, buffers.pixels);
+            write_region(g, v, format, v.rect, std::ptr::null());
+        }
+    }
+
+    /// Binds the view's texel layer to the in-place programs' image unit, through a new
+    /// texture view where `through` says so; that view's name (0 for none), for the caller to
+    /// delete once the passes are recorded (GL keeps it alive while they run).
+    ///
+    /// # Safety
+    /// The engine's context is current; `v` is checked and `through` is `store_through(v)`.
+    unsafe fn bind_app_image(&self, v: &GlView, through: StoreThrough) -> u32 {
+        let g = &self.gl;
+        let layer = match v.target {
+            GlTarget::Texture2D => 0,
+            GlTarget::Texture2DArray { layer } => layer,
+        };
+        match through {
+            StoreThrough::Texture(unit_format) => {
+                // SAFETY: a checked texture and an image unit format of its size (GL's
+                // compatibility by size); one layer, not layered.
+                unsafe {
+                    (g.bind_image_texture)(
+                        BINDING_APP_IMAGE,
+                        v.texture,
+                        0,
+                        0,
+                        layer as i32,
+                        gl::READ_WRITE,
+                        unit_format,
+                    )
+                };
+                0
+            }
+            StoreThrough::View(view_format) => {
+                let mut view = 0;
+                // SAFETY: a name from glGenTextures, not yet bound, made a 2D view of one
+                // layer and level 0 of an immutable texture (checked by store_through) in a
+                // format of its size class (GL_SRGB8_ALPHA8 -> GL_RGBA8).
+                unsafe {
+                    (g.gen_textures)(1, &mut view);
+                    (g.texture_view)(view, gl::TEXTURE_2D, v.texture, view_format, 0, 1, layer, 1);
+                    (g.bind_image_texture)(
+                        BINDING_APP_IMAGE,
+                        view,
+                        0,
+                        0,
+                        0,
+                        gl::READ_WRITE,
+                        view_format,
+                    );
+                }
+                view
+            }
+        }
+    }
+
+    /// Writes the program binaries built since the last save (see binary_cache.rs).
+    pub fn save_program_cache(&mut self) {
+        self.programs.save_cache();
+    }
+
+    /// Deletes every GL object of the engine and saves the program binaries.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn destroy(&mut self) {
+        self.save_program_cache();
+        self.programs.destroy(&self.gl);
+        self.drop_background();
+        // SAFETY: the context is current (this call's contract).
+        unsafe { self.texel_buffers.destroy(&self.gl) };
+        if self.framebuffer != 0 {
+            // SAFETY: ours; the context is current (the caller's contract).
+            unsafe { (self.gl.delete_framebuffers)(1, &self.framebuffer) };
+            self.framebuffer = 0;
+        }
+        for v in self.views.drain(..) {
+            for b in [v.pixels, v.tiles].into_iter().filter(|&b| b != 0) {
+                // SAFETY: ours; the context is current (the caller's contract).
+                unsafe { (self.gl.delete_buffers)(1, &b) };
+            }
+        }
+    }
+
+    /// The function table (for the offline context's own transfers).
+    pub(in crate::gpu::opengl) fn gl(&self) -> &Gl {
+        &self.gl
+    }
+}

@@ -1,0 +1,13 @@
+//! A frame's work on the app's context (`GlEngine`): the views in place or through a buffer, the
+//! passes, the overlays and captures, with the app's GL state saved and put back.
+
+mod gl_engine;
+mod gl_view;
+mod program_warm_up;
+mod region;
+pub mod state_guard;
+mod view_pixels;
+
+pub use gl_engine::{GlEngine, Outcome, StoreThrough};
+pub use gl_view::{GlTarget, GlView};
+pub(in crate::gpu::opengl) use region::{read_region, write_region};

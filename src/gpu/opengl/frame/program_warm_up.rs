@@ -1,0 +1,97 @@
+//! Programs built ahead of the frames: when the app makes a swapchain the layer will enhance
+//! (a loading-time call, in the app's context), the programs its views need are built, and run
+//! once on a small texture of the layer's own. A driver that compiles a program's machine code
+//! at its first dispatch (Mesa's llvmpipe: most of a cold start) then does it there, not inside
+//! a frame call, where a late frame makes a runtime lengthen its display period.
+
+use super::gl_engine::{rows_aligned, GlEngine, Outcome};
+use super::gl_view::{GlTarget, GlView};
+use crate::algorithm::params::{Params, ViewMode};
+use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::gpu::opengl::conv::GlFormat;
+use crate::gpu::opengl::device::functions::{self as gl};
+use crate::gpu::opengl::device::GlError;
+use crate::image::RgbaImage;
+use std::time::{Duration, Instant};
+
+/// The warm-up texture's height; its width is 16 or 17 texels, so that its rows are whole
+/// 16-byte groups exactly when the app's views' rows are (the same pixel access variant).
+const WARM_UP_HEIGHT: u32 = 8;
+
+/// The background frame a warm-up samples when none was set yet.
+const WARM_UP_BACKGROUND: (u32, u32) = (6, 3);
+
+impl GlEngine {
+    /// Builds the programs views of `internal_format`, `width` texels wide, need for `params`,
+    /// waiting up to `limit`, and runs them once on a texture of the layer's own (deleted
+    /// after). Ok(false) when they were not ready within `limit` (the frame calls go on with
+    /// the build). The app's GL state is put back as by `enhance`.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn warm_up(
+        &mut self,
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+        limit: Duration,
+    ) -> Result<bool, GlError> {
+        let format = GlFormat::of(internal_format)?;
+        if params.mode == ViewMode::Off {
+            return Ok(true);
+        }
+        let w = match rows_aligned(width, format.pixel.bytes_per_pixel()) {
+            true => 16,
+            false => 17,
+        };
+        let g = self.gl();
+        let mut texture = 0;
+        // SAFETY: a new 2D texture of one level in a format the engine handles (GL 4.5 DSA):
+        // no binding of the app's changes.
+        unsafe {
+            (g.create_textures)(gl::TEXTURE_2D, 1, &mut texture);
+            (g.texture_storage_2d)(texture, 1, internal_format, w as i32, WARM_UP_HEIGHT as i32);
+        }
+        let view = GlView {
+            texture,
+            target: GlTarget::Texture2D,
+            internal_format,
+            rect: (0, 0, w, WARM_UP_HEIGHT),
+            mapping: params.camera_mapping(),
+        };
+        // SAFETY: the context is current (this call's contract); the texture is ours.
+        let result = unsafe { self.warm_up_view(&view, params, limit) };
+        // SAFETY: ours, bound nowhere.
+        unsafe { (self.gl().delete_textures)(1, &texture) };
+        result
+    }
+
+    /// # Safety
+    /// As for `warm_up`; `view` names a texture of the engine's own.
+    unsafe fn warm_up_view(
+        &mut self,
+        view: &GlView,
+        params: &Params,
+        limit: Duration,
+    ) -> Result<bool, GlError> {
+        let views = std::slice::from_ref(view);
+        let since = Instant::now();
+        // SAFETY: the context is current (the caller's contract).
+        while !unsafe { self.ready(views, params) }? {
+            if since.elapsed() > limit {
+                return Ok(false);
+            }
+        }
+        if !self.has_background() {
+            // Not a power of two either way, as cameras' frames are: llvmpipe compiles
+            // another variant for a texture whose sides are powers of two.
+            let black = RgbaImage::new(WARM_UP_BACKGROUND.0, WARM_UP_BACKGROUND.1, [0, 0, 0, 255]);
+            let texels = BlurredTexels::prepare(&black, BlurTaps::of(params));
+            // SAFETY: as above.
+            unsafe { self.set_background(&texels) }?;
+        }
+        // SAFETY: as above; the view's texture is ours, written by nothing else.
+        let outcome = unsafe { self.enhance(views, params) }?;
+        Ok(outcome == Outcome::Enhanced)
+    }
+}

@@ -1,0 +1,283 @@
+//! The app's GL state around the backend's calls: everything the recipe changes is read before
+//! it runs and put back after it, so that the app finds exactly the state it left. The error
+//! flag is not among it: the backend never calls glGetError (which would read and clear the
+//! app's pending error) and makes no call that raises one (object status queries tell it what
+//! failed), so whatever error the app had pending is still pending after the call. A binding
+//! that could not be put back (an object alive only through it, active transform feedback) is
+//! found before anything changes, and the call then does nothing (`GlError::Unrestorable`).
+
+use crate::gpu::core::interface::{
+    BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
+};
+use crate::gpu::opengl::device::functions::{self as gl, Gl};
+use crate::gpu::opengl::device::GlError;
+
+/// The indexed shader storage bindings the programs use.
+const STORAGE_SLOTS: [u32; 2] = [BINDING_PIXELS, BINDING_TILES];
+
+/// The pixel store parameters, pack and unpack.
+const PIXEL_STORE: [gl::Enum; 16] = [
+    gl::PACK_SWAP_BYTES,
+    gl::PACK_LSB_FIRST,
+    gl::PACK_ROW_LENGTH,
+    gl::PACK_SKIP_ROWS,
+    gl::PACK_SKIP_PIXELS,
+    gl::PACK_ALIGNMENT,
+    gl::PACK_SKIP_IMAGES,
+    gl::PACK_IMAGE_HEIGHT,
+    gl::UNPACK_SWAP_BYTES,
+    gl::UNPACK_LSB_FIRST,
+    gl::UNPACK_ROW_LENGTH,
+    gl::UNPACK_SKIP_ROWS,
+    gl::UNPACK_SKIP_PIXELS,
+    gl::UNPACK_ALIGNMENT,
+    gl::UNPACK_SKIP_IMAGES,
+    gl::UNPACK_IMAGE_HEIGHT,
+];
+
+/// Their defaults, which the recipe's transfers assume (tightly packed rows).
+const PIXEL_STORE_DEFAULTS: [gl::Int; 16] = [0, 0, 0, 0, 0, 4, 0, 0, 0, 0, 0, 0, 0, 4, 0, 0];
+
+/// One indexed buffer binding: the buffer, its offset and size (0 and 0 for a whole-buffer
+/// binding).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Indexed {
+    buffer: u32,
+    start: i64,
+    size: i64,
+}
+
+/// The image unit the in-place programs store through, as glGetIntegeri_v reads it: name,
+/// level, layered, layer, access, format.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct ImageUnit([i32; 6]);
+
+const IMAGE_UNIT_QUERIES: [gl::Enum; 6] = [
+    gl::IMAGE_BINDING_NAME,
+    gl::IMAGE_BINDING_LEVEL,
+    gl::IMAGE_BINDING_LAYERED,
+    gl::IMAGE_BINDING_LAYER,
+    gl::IMAGE_BINDING_ACCESS,
+    gl::IMAGE_BINDING_FORMAT,
+];
+
+impl ImageUnit {
+    fn save(g: &Gl) -> ImageUnit {
+        ImageUnit(IMAGE_UNIT_QUERIES.map(|q| {
+            let mut v = 0;
+            // SAFETY: an indexed query of image unit 6 (< GL_MAX_IMAGE_UNITS, at least 8 in
+            // 4.3) into a valid output.
+            unsafe { (g.get_integeri_v)(q, BINDING_APP_IMAGE, &mut v) };
+            v
+        }))
+    }
+
+    fn restore(&self, g: &Gl) {
+        let [name, level, layered, layer, access, format] = self.0;
+        // SAFETY: values read from this unit in `save` (GL's own defaults when unbound).
+        unsafe {
+            (g.bind_image_texture)(
+                BINDING_APP_IMAGE,
+                name as u32,
+                level,
+                u8::from(layered != 0),
+                layer,
+                access as u32,
+                format as u32,
+            )
+        };
+    }
+}
+
+/// The app's state saved, put back when this is dropped: also when the recipe panics between
+/// (the panic is caught at the layer's boundary, and the app finds its state as it left it).
+pub struct StateGuard<'a> {
+    g: &'a Gl,
+    saved: SavedState,
+}
+
+impl Drop for StateGuard<'_> {
+    fn drop(&mut self) {
+        self.saved.restore(self.g);
+    }
+}
+
+/// The state the recipe touches, as the app left it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SavedState {
+    program: i32,
+    pipeline: i32,
+    active_texture: i32,
+    /// The 2D texture and sampler bound to the unit the programs sample on.
+    texture: i32,
+    sampler: i32,
+    storage: [Indexed; 2],
+    image_unit: ImageUnit,
+    storage_generic: i32,
+    pack_buffer: i32,
+    unpack_buffer: i32,
+    indirect_buffer: i32,
+    draw_framebuffer: i32,
+    read_framebuffer: i32,
+    framebuffer_srgb: bool,
+    pixel_store: [i32; 16],
+}
+
+fn int(g: &Gl, name: gl::Enum) -> i32 {
+    let mut v = 0;
+    // SAFETY: a single-valued state query into a valid i32 (the context is 4.3 or later).
+    unsafe { (g.get_integerv)(name, &mut v) };
+    v
+}
+
+/// The texture unit the programs sample the background on (its binding number).
+fn sample_unit() -> gl::Enum {
+    gl::TEXTURE0 + BINDING_BLURRED_TEXELS
+}
+
+impl SavedState {
+    /// Reads the state and sets the pixel store to the defaults the recipe's transfers need;
+    /// or, changing nothing, why a binding could not be put back afterwards.
+    pub fn save(g: &Gl) -> Result<SavedState, GlError> {
+        let active_texture = int(g, gl::ACTIVE_TEXTURE);
+        // SAFETY: a valid texture unit (binding 5 < GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, at
+        // least 80 in 4.3); put back in `restore`.
+        unsafe { (g.active_texture)(sample_unit()) };
+        let texture = int(g, gl::TEXTURE_BINDING_2D);
+        let sampler = int(g, gl::SAMPLER_BINDING);
+        // SAFETY: the app's own active unit, just read.
+        unsafe { (g.active_texture)(active_texture as u32) };
+        let storage = STORAGE_SLOTS.map(|slot| {
+            let (mut buffer, mut start, mut size) = (0, 0i64, 0i64);
+            // SAFETY: indexed queries of a binding below GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS
+            // (at least 8 in 4.3) into valid outputs.
+            unsafe {
+                (g.get_integeri_v)(gl::SHADER_STORAGE_BUFFER_BINDING, slot, &mut buffer);
+                (g.get_integer64i_v)(gl::SHADER_STORAGE_BUFFER_START, slot, &mut start);
+                (g.get_integer64i_v)(gl::SHADER_STORAGE_BUFFER_SIZE, slot, &mut size);
+            }
+            Indexed {
+                buffer: buffer as u32,
+                start,
+                size,
+            }
+        });
+        let pixel_store = PIXEL_STORE.map(|p| int(g, p));
+        let saved = SavedState {
+            program: int(g, gl::CURRENT_PROGRAM),
+            pipeline: int(g, gl::PROGRAM_PIPELINE_BINDING),
+            active_texture,
+            texture,
+            sampler,
+            storage,
+            image_unit: ImageUnit::save(g),
+            storage_generic: int(g, gl::SHADER_STORAGE_BUFFER_BINDING),
+            pack_buffer: int(g, gl::PIXEL_PACK_BUFFER_BINDING),
+            unpack_buffer: int(g, gl::PIXEL_UNPACK_BUFFER_BINDING),
+            indirect_buffer: int(g, gl::DISPATCH_INDIRECT_BUFFER_BINDING),
+            draw_framebuffer: int(g, gl::DRAW_FRAMEBUFFER_BINDING),
+            read_framebuffer: int(g, gl::READ_FRAMEBUFFER_BINDING),
+            // SAFETY: GL_FRAMEBUFFER_SRGB is a valid capability in core 3.0+.
+            framebuffer_srgb: unsafe { (g.is_enabled)(gl::FRAMEBUFFER_SRGB) } != 0,
+            pixel_store,
+        };
+        if let Some(why) = saved.unrestorable(g) {
+            return Err(GlError::Unrestorable(why));
+        }
+        for (p, v) in PIXEL_STORE.iter().zip(PIXEL_STORE_DEFAULTS) {
+            // SAFETY: valid pixel store parameters and values.
+            unsafe { (g.pixel_storei)(*p, v) };
+        }
+        Ok(saved)
+    }
+
+    /// `save`, restored when the guard is dropped.
+    pub fn guard(g: &Gl) -> Result<StateGuard<'_>, GlError> {
+        Ok(StateGuard {
+            g,
+            saved: SavedState::save(g)?,
+        })
+    }
+
+    /// Why a saved binding could not be bound again once the recipe has bound its own, if so:
+    /// an object kept alive only by that binding (a program deleted while current, a texture,
+    /// buffer or sampler deleted through a shared context) would be freed when unbound, and
+    /// binding its name again would raise an error into the app's flag; active transform
+    /// feedback makes glUseProgram itself an error.
+    fn unrestorable(&self, g: &Gl) -> Option<&'static str> {
+        let gone = |name: i32, is: unsafe extern "system" fn(u32) -> u8| {
+            // SAFETY: glIs* take any name and raise no error.
+            name != 0 && unsafe { is(name as u32) } == 0
+        };
+        if self.program != 0 {
+            let mut deleted = 0;
+            // SAFETY: a program name that is current (so it exists); a valid pname.
+            unsafe { (g.get_programiv)(self.program as u32, gl::DELETE_STATUS, &mut deleted) };
+            if deleted != 0 {
+                return Some("the app's current program is deleted (kept alive by its binding)");
+            }
+        }
+        if int(g, gl::TRANSFORM_FEEDBACK_ACTIVE) != 0 && int(g, gl::TRANSFORM_FEEDBACK_PAUSED) == 0
+        {
+            return Some("the app's transform feedback is active");
+        }
+        let textures = [self.texture, self.image_unit.0[0]];
+        if textures.iter().any(|&t| gone(t, g.is_texture)) {
+            return Some("a texture the app has bound is deleted");
+        }
+        let buffers = self.storage.iter().map(|b| b.buffer as i32).chain([
+            self.storage_generic,
+            self.pack_buffer,
+            self.unpack_buffer,
+            self.indirect_buffer,
+        ]);
+        if buffers.into_iter().any(|b| gone(b, g.is_buffer)) {
+            return Some("a buffer the app has bound is deleted");
+        }
+        if gone(self.sampler, g.is_sampler) {
+            return Some("a sampler the app has bound is deleted");
+        }
+        if gone(self.pipeline, g.is_program_pipeline) {
+            return Some("the app's program pipeline is deleted");
+        }
+        None
+    }
+
+    /// Puts every value back. Each was valid when read, and objects the app named stay alive
+    /// across the call, so none of these calls raises an error.
+    pub fn restore(&self, g: &Gl) {
+        // SAFETY: every value was read from this context in `save`; the calls take them back
+        // in the order that leaves the generic bindings last (glBindBufferRange sets both).
+        unsafe {
+            (g.active_texture)(sample_unit());
+            (g.bind_texture)(gl::TEXTURE_2D, self.texture as u32);
+            (g.bind_sampler)(BINDING_BLURRED_TEXELS, self.sampler as u32);
+            (g.active_texture)(self.active_texture as u32);
+            for (slot, b) in STORAGE_SLOTS.iter().zip(&self.storage) {
+                if b.buffer != 0 && b.size > 0 {
+                    let (start, size) = (b.start as isize, b.size as isize);
+                    (g.bind_buffer_range)(gl::SHADER_STORAGE_BUFFER, *slot, b.buffer, start, size);
+                } else {
+                    (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, *slot, b.buffer);
+                }
+            }
+            (g.bind_buffer)(gl::SHADER_STORAGE_BUFFER, self.storage_generic as u32);
+            self.image_unit.restore(g);
+            (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, self.pack_buffer as u32);
+            (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, self.unpack_buffer as u32);
+            (g.bind_buffer)(gl::DISPATCH_INDIRECT_BUFFER, self.indirect_buffer as u32);
+            (g.bind_framebuffer)(gl::DRAW_FRAMEBUFFER, self.draw_framebuffer as u32);
+            (g.bind_framebuffer)(gl::READ_FRAMEBUFFER, self.read_framebuffer as u32);
+            if self.framebuffer_srgb {
+                (g.enable)(gl::FRAMEBUFFER_SRGB);
+            } else {
+                (g.disable)(gl::FRAMEBUFFER_SRGB);
+            }
+            for (p, v) in PIXEL_STORE.iter().zip(self.pixel_store) {
+                (g.pixel_storei)(*p, v);
+            }
+            (g.use_program)(self.program as u32);
+            (g.bind_program_pipeline)(self.pipeline as u32);
+        }
+    }
+}

@@ -1,0 +1,7 @@
+//! The backend on a context of its own (EGL, surfaceless): whole images for the command line and
+//! the layer's program builder, and the benchmark (`contrastxr bench --engine opengl`).
+
+mod bench;
+mod gl_offline;
+
+pub use gl_offline::GlOffline;

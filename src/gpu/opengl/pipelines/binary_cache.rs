@@ -1,0 +1,219 @@
+//! Linked program binaries (glGetProgramBinary) kept beside the Vulkan pipeline cache: one file
+//! per driver (its GL_VENDOR, GL_RENDERER and GL_VERSION) in the same folder, read and written
+//! as that cache's files are (gpu/vulkan/pipelines/pipeline_cache.rs: a regular file of bounded size opened
+//! without following links, the same length and checksum header, written atomically, other
+//! drivers' files removed when old). A file that is damaged or written for another driver is
+//! ignored and replaced; a binary the driver refuses is compiled again. The cache is only ever
+//! an optimisation.
+
+use crate::gpu::opengl::device::functions::{self as gl, Gl};
+use crate::gpu::vulkan::pipelines::pipeline_cache;
+use std::collections::HashMap;
+
+/// The data starts with this, then the driver string's length and bytes, the entry count,
+/// and per entry: source hash (u64), binary format (u32), length (u32), bytes.
+const MAGIC: &[u8; 8] = b"CXRGLPB1";
+
+pub struct BinaryCache {
+    driver: String,
+    /// Whether the driver gives binaries at all.
+    enabled: bool,
+    entries: HashMap<u64, (u32, Vec<u8>)>,
+    /// Entries were added since the file was read.
+    changed: bool,
+}
+
+/// FNV-1a of a program's source (its key in the cache) or of the driver string.
+pub fn source_hash(source: &str) -> u64 {
+    source.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// The file's name: "pipelines-gl-" and a hash of the driver string, so the pipeline
+/// cache's clean-up of other drivers' files covers it.
+fn file_name(driver: &str) -> String {
+    format!("pipelines-gl-{:016x}.bin", source_hash(driver))
+}
+
+/// The entries of a file's data, if it is whole and for `driver`.
+pub fn parse(data: &[u8], driver: &str) -> Result<HashMap<u64, (u32, Vec<u8>)>, String> {
+    let mut at = 0usize;
+    let mut take = |n: usize| -> Result<&[u8], String> {
+        let end = at.checked_add(n).filter(|&e| e <= data.len());
+        let end = end.ok_or("truncated")?;
+        let s = &data[at..end];
+        at = end;
+        Ok(s)
+    };
+    if take(8)? != MAGIC {
+        return Err("not a contrastxr program binary cache".into());
+    }
+    let u32_of = |b: &[u8]| u32::from_le_bytes(b.try_into().expect("4 bytes"));
+    let len = u32_of(take(4)?) as usize;
+    if take(len)? != driver.as_bytes() {
+        return Err("written for another driver".into());
+    }
+    let count = u32_of(take(4)?);
+    let mut entries = HashMap::new();
+    for _ in 0..count {
+        let hash = u64::from_le_bytes(take(8)?.try_into().expect("8 bytes"));
+        let format = u32_of(take(4)?);
+        let len = u32_of(take(4)?) as usize;
+        entries.insert(hash, (format, take(len)?.to_vec()));
+    }
+    if take(1).is_ok() {
+        return Err("trailing bytes".into());
+    }
+    Ok(entries)
+}
+
+fn data_of(driver: &str, entries: &HashMap<u64, (u32, Vec<u8>)>) -> Vec<u8> {
+    let mut out = MAGIC.to_vec();
+    out.extend_from_slice(&(driver.len() as u32).to_le_bytes());
+    out.extend_from_slice(driver.as_bytes());
+    out.extend_from_slice(&(entries.len() as u32).to_le_bytes());
+    let mut keys: Vec<_> = entries.keys().copied().collect();
+    keys.sort();
+    for k in keys {
+        let (format, bytes) = &entries[&k];
+        out.extend_from_slice(&k.to_le_bytes());
+        out.extend_from_slice(&format.to_le_bytes());
+        out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+        out.extend_from_slice(bytes);
+    }
+    out
+}
+
+/// The data of a whole file: the pipeline cache's header (magic, length, checksum) checked
+/// by writing it again.
+fn unwrap_file(bytes: &[u8]) -> Option<&[u8]> {
+    let data = bytes.get(24..)?;
+    (pipeline_cache::file_bytes(data) == bytes).then_some(data)
+}
+
+/// The entries of the driver's file (none where it is unreadable, damaged or foreign).
+fn read_entries(driver: &str, enabled: bool) -> HashMap<u64, (u32, Vec<u8>)> {
+    let path = pipeline_cache::directory().map(|d| d.join(file_name(driver)));
+    match path
+        .filter(|_| enabled)
+        .map(|p| pipeline_cache::read_file(&p))
+    {
+        Some(Ok(Some(bytes))) => unwrap_file(&bytes)
+            .ok_or_else(|| "damaged (length or checksum wrong)".to_string())
+            .and_then(|data| parse(data, driver))
+            .unwrap_or_default(),
+        _ => HashMap::new(),
+    }
+}
+
+impl BinaryCache {
+    /// The driver's file, read now (an unreadable or foreign one counts as empty).
+    pub fn load(driver: &str, enabled: bool) -> BinaryCache {
+        BinaryCache {
+            driver: driver.to_string(),
+            enabled,
+            entries: read_entries(driver, enabled),
+            changed: false,
+        }
+    }
+
+    /// Reads the file again, keeping this process's entries where both have one.
+    pub fn reload(&mut self) {
+        for (hash, entry) in read_entries(&self.driver, self.enabled) {
+            self.entries.entry(hash).or_insert(entry);
+        }
+    }
+
+    pub fn get(&self, hash: u64) -> Option<(u32, &[u8])> {
+        self.entries.get(&hash).map(|(f, b)| (*f, b.as_slice()))
+    }
+
+    /// Drops an entry the driver refused.
+    pub fn forget(&mut self, hash: u64) {
+        self.changed |= self.entries.remove(&hash).is_some();
+    }
+
+    /// Keeps a linked program's binary under its source's hash.
+    pub fn store(&mut self, g: &Gl, program: u32, hash: u64) {
+        if !self.enabled {
+            return;
+        }
+        let mut len = 0;
+        // SAFETY: a linked program of this context; a valid output.
+        unsafe { (g.get_programiv)(program, gl::PROGRAM_BINARY_LENGTH, &mut len) };
+        if len <= 0 {
+            return;
+        }
+        let mut bytes = vec![0u8; len as usize];
+        let (mut written, mut format) = (0, 0);
+        // SAFETY: the buffer holds `len` bytes, what GL said the binary needs.
+        unsafe {
+            (g.get_program_binary)(
+                program,
+                len,
+                &mut written,
+                &mut format,
+                bytes.as_mut_ptr().cast(),
+            )
+        };
+        bytes.truncate(written.clamp(0, len) as usize);
+        self.keep(hash, format, bytes);
+    }
+
+    /// Keeps a binary (of `format`) under its source's hash, to be written at the next save.
+    pub fn keep(&mut self, hash: u64, format: u32, bytes: Vec<u8>) {
+        if self.enabled && !bytes.is_empty() {
+            self.entries.insert(hash, (format, bytes));
+            self.changed = true;
+        }
+    }
+
+    /// Writes the file if entries were added (atomically; see gpu/vulkan/pipelines/pipeline_cache.rs),
+    /// merged with what the file holds now (another process, or a build thread of this one,
+    /// may have written it since it was read), with only the entries `current` names (the
+    /// sources of this build: a changed shader's old binaries are dropped, so the file does not
+    /// grow from build to build).
+    pub fn save(&mut self, current: &dyn Fn(u64) -> bool) {
+        if !self.changed {
+            return;
+        }
+        self.changed = false;
+        self.reload();
+        self.entries.retain(|&hash, _| current(hash));
+        let Some(dir) = pipeline_cache::directory() else {
+            return;
+        };
+        let name = file_name(&self.driver);
+        let bytes = pipeline_cache::file_bytes(&data_of(&self.driver, &self.entries));
+        if pipeline_cache::write_atomically(&dir, &name, &bytes).is_ok() {
+            pipeline_cache::remove_old_foreign(&dir, &name);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_round_trip_and_damage_is_refused() {
+        let mut entries = HashMap::new();
+        entries.insert(7u64, (0x8741u32, vec![1u8, 2, 3]));
+        entries.insert(9u64, (1u32, vec![]));
+        let data = data_of("Mesa | llvmpipe | 4.5", &entries);
+        let file = pipeline_cache::file_bytes(&data);
+        let back = parse(unwrap_file(&file).unwrap(), "Mesa | llvmpipe | 4.5").unwrap();
+        assert_eq!(back, entries);
+        assert!(parse(&data, "another driver").is_err());
+        for cut in 0..data.len() {
+            assert!(
+                parse(&data[..cut], "Mesa | llvmpipe | 4.5").is_err(),
+                "cut at {cut}"
+            );
+        }
+        let mut flipped = file.clone();
+        *flipped.last_mut().unwrap() ^= 1;
+        assert!(unwrap_file(&flipped).is_none());
+    }
+}

@@ -1,0 +1,9 @@
+//! The compute programs: built from the embedded GLSL in the order they are needed, through the
+//! program binary cache on disk.
+
+pub mod binary_cache;
+mod programs;
+
+pub use binary_cache::BinaryCache;
+pub(in crate::gpu::opengl) use programs::{classify, enhance, GL_FINISH_TILES};
+pub use programs::{gl_sources_id, Programs};

@@ -1,0 +1,25 @@
+//! The device and its resources: the Vulkan instance and device (its own, or the app's), the
+//! buffers and images the engine allocates, command buffers, barriers and image copies. The only
+//! room whose public types hold raw Vulkan handles in public fields.
+
+mod barrier;
+mod buffer;
+mod commands;
+mod device_image;
+mod error;
+mod gpu_device;
+mod image_copy;
+mod pinned_libraries;
+mod storage_image;
+
+pub use barrier::{barrier, colour_layer, layout_change};
+pub use buffer::{record_buffer_copy, GpuBuffer};
+pub use commands::Commands;
+pub use device_image::DeviceImage;
+pub use error::{GpuError, VkResultExt};
+pub use gpu_device::{physical_devices, DeviceKind, DeviceOptions, GpuDevice, PhysicalDeviceInfo};
+pub use image_copy::{
+    record_first_layout, record_image_region_copy, record_layout_barriers, record_region_copy,
+    ImageRegion,
+};
+pub(crate) use storage_image::StorageImage;

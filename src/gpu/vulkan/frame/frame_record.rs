@@ -1,0 +1,175 @@
+//! The recipe of a frame's command buffer (gpu/vulkan/frame/frame_engine.rs): background preparation, layout
+//! barriers, copies out of the app's images (into a buffer, or an image of the engine's own),
+//! enhancement, overlay, captures, copies back.
+
+use super::frame_engine::FrameEngine;
+use super::frame_view::{FrameView, ViewPath};
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::params::Params;
+use crate::gpu::core::CameraRect;
+use crate::gpu::core::OverlayPixels;
+use crate::gpu::vulkan::device::{
+    barrier, record_buffer_copy, record_first_layout, record_image_region_copy,
+    record_layout_barriers, record_region_copy, GpuBuffer, GpuError, ImageRegion,
+};
+use ash::vk;
+
+impl FrameEngine {
+    pub(super) fn submit(&mut self) -> Result<(), GpuError> {
+        // Inside xrEndFrame: the OpenXR spec gives the runtime, and so its layers, the app's
+        // queue during this call.
+        self.commands.submit(&self.gpu)
+    }
+
+    fn image_barriers(&self, items: &[FrameView], to_general: bool) {
+        let regions: Vec<ImageRegion> = items.iter().map(FrameView::region).collect();
+        record_layout_barriers(&self.gpu, self.commands.cmd, &regions, to_general);
+    }
+
+    /// Copies the region into its view's buffer or image, or back (`out` false; views
+    /// through a copy only).
+    fn copy_region(&self, item: &FrameView, out: bool) {
+        let view = &self.views[&item.key];
+        let cmd = self.commands.cmd;
+        match (item.path, &view.own) {
+            (ViewPath::InPlace, _) => {}
+            (ViewPath::ImageCopy, Some(own)) => {
+                record_image_region_copy(&self.gpu, cmd, &item.region(), own.image.raw, out)
+            }
+            _ => record_region_copy(&self.gpu, cmd, &item.region(), &view.target.pixels, out),
+        }
+    }
+
+    /// Where the view's pixels are while its passes run, for the images among them: the
+    /// app's image in place, the engine's own image on the image-copy path (the region at
+    /// its origin); None for a view through a buffer.
+    fn work_region(&self, item: &FrameView) -> Option<ImageRegion> {
+        match (item.path, &self.views[&item.key].own) {
+            (ViewPath::InPlace, _) => Some(item.region()),
+            (ViewPath::ImageCopy, Some(own)) => Some(ImageRegion {
+                image: own.image.raw,
+                array_index: 0,
+                offset: (0, 0),
+                extent: item.key.extent,
+            }),
+            _ => None,
+        }
+    }
+
+    /// Copies the view's current pixels (the image its passes run on, else the view's
+    /// buffer) into a capture buffer.
+    fn copy_to_capture(&self, item: &FrameView, dst: &GpuBuffer) {
+        let cmd = self.commands.cmd;
+        if let Some(region) = self.work_region(item) {
+            record_region_copy(&self.gpu, cmd, &region, dst, true);
+            return;
+        }
+        let src = &self.views[&item.key].target.pixels;
+        let region = [vk::BufferCopy::default().size(self.views[&item.key].target.pixel_bytes())];
+        record_buffer_copy(&self.gpu, cmd, (src, dst), &region);
+    }
+
+    /// The image-copy path's images to GENERAL (their contents discarded: the copy out
+    /// writes them), before the copies out.
+    fn own_image_barriers(&self, items: &[FrameView]) {
+        let images: Vec<vk::Image> = items
+            .iter()
+            .filter(|i| i.path == ViewPath::ImageCopy)
+            .filter_map(|i| self.views[&i.key].own.as_ref().map(|o| o.image.raw))
+            .collect();
+        if images.is_empty() {
+            return;
+        }
+        let write = (
+            vk::PipelineStageFlags::TRANSFER,
+            vk::AccessFlags::TRANSFER_WRITE,
+        );
+        let general = vk::ImageLayout::GENERAL;
+        record_first_layout(&self.gpu, self.commands.cmd, &images, general, write);
+    }
+
+    pub(super) fn record(
+        &mut self,
+        items: &[FrameView],
+        params: &Params,
+        overlay: Option<&OverlayPixels>,
+        staging: &[(GpuBuffer, GpuBuffer)],
+    ) -> Result<(), GpuError> {
+        self.commands.begin(&self.gpu)?;
+        self.record_prepared_copy();
+        let next = self.commands.next_submission();
+        self.ring.record_use(&self.gpu, self.commands.cmd, next);
+        let seq = self.background_sequence;
+        let bg = self.background.as_ref().expect("set in process");
+        let mappings: Vec<CameraMapping> = items.iter().map(|i| i.mapping).collect();
+        let needed = CameraRect::sampled_by(&mappings, bg.size);
+        let rect = match self.prepared_for {
+            // The views sample a mapped image that holds the frame's texels.
+            _ if self.ring.active() => None,
+            Some((s, done)) if s == seq && done.contains(&needed) => None,
+            // A view the frame's preparation did not cover: prepare both again.
+            Some((s, done)) if s == seq => Some(done.union(&needed)),
+            _ => Some(needed),
+        };
+        if let Some(rect) = rect {
+            self.engine
+                .record_background(&self.gpu, self.commands.cmd, bg, params, &rect)?;
+            self.prepared_for = Some((seq, rect));
+        }
+        let frame = self.frame;
+        for i in items {
+            if let Some(v) = self.views.get_mut(&i.key) {
+                v.last_frame = frame;
+            }
+        }
+        use vk::PipelineStageFlags as S;
+        self.image_barriers(items, true);
+        self.own_image_barriers(items);
+        items.iter().for_each(|i| self.copy_region(i, true));
+        barrier(
+            &self.gpu,
+            self.commands.cmd,
+            S::TRANSFER,
+            S::COMPUTE_SHADER | S::TRANSFER,
+        );
+        for (i, (before, _)) in items.iter().zip(staging) {
+            self.copy_to_capture(i, before);
+        }
+        if !staging.is_empty() {
+            // The capture copies read `pixels` before the enhancement writes it.
+            barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::COMPUTE_SHADER);
+        }
+        for i in items {
+            self.engine.record_enhance(
+                &self.gpu,
+                self.commands.cmd,
+                &self.views[&i.key].target,
+                params,
+                &i.mapping,
+            )?;
+        }
+        barrier(&self.gpu, self.commands.cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        let regions: Vec<ImageRegion> = items
+            .iter()
+            .map(|i| self.work_region(i).unwrap_or_else(|| i.region()))
+            .collect();
+        let views = items
+            .iter()
+            .zip(regions)
+            .map(|(i, region)| (i.key, &self.views[&i.key].target, region));
+        if self
+            .overlays
+            .record(&self.gpu, self.commands.cmd, overlay, views)?
+        {
+            // The capture and the copy back read what the indicator wrote.
+            barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::TRANSFER);
+        }
+        for (i, (_, after)) in items.iter().zip(staging) {
+            self.copy_to_capture(i, after);
+        }
+        items.iter().for_each(|i| self.copy_region(i, false));
+        self.image_barriers(items, false);
+        barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::HOST);
+        Ok(())
+    }
+}

@@ -1,0 +1,117 @@
+//! The unit of a frame's GPU work: one view region of an app's image, the key its buffers are
+//! kept under, and what a capture reads back of it.
+
+use crate::algorithm::mapping::CameraMapping;
+use crate::gpu::core::PixelFormat;
+use crate::gpu::vulkan::device::ImageRegion;
+use crate::gpu::vulkan::record::ViewShape;
+use ash::vk;
+
+/// One region of an app's image to enhance.
+#[derive(Clone, Debug)]
+pub struct FrameView {
+    pub key: ViewKey,
+    /// The app's image (its handle stays in the frame room; `region` gives it to a copy).
+    pub(super) image: vk::Image,
+    pub format: PixelFormat,
+    pub(super) vk_format: vk::Format,
+    /// How the region is enhanced: in place (the swapchain was made with storage usage for
+    /// it), or through a copy of the region into an image or a buffer of the engine's own.
+    pub path: ViewPath,
+    /// Where this view's display pixels lie in the camera image.
+    pub mapping: CameraMapping,
+}
+
+impl FrameView {
+    /// The view `key` of the app's `image`, whose Vulkan format is `vk_format` (`format` as the
+    /// engine reads it).
+    pub fn new(
+        key: ViewKey,
+        image: vk::Image,
+        format: PixelFormat,
+        vk_format: vk::Format,
+        path: ViewPath,
+        mapping: CameraMapping,
+    ) -> FrameView {
+        FrameView {
+            key,
+            image,
+            format,
+            vk_format,
+            path,
+            mapping,
+        }
+    }
+
+    /// The app image's Vulkan format (for a capture's description).
+    pub fn vk_format(&self) -> vk::Format {
+        self.vk_format
+    }
+
+    pub fn shape(&self) -> ViewShape {
+        ViewShape {
+            format: self.format,
+            width: self.key.extent.0,
+            in_place: self.path.runs_in_place_shaders(),
+        }
+    }
+
+    pub fn region(&self) -> ImageRegion {
+        ImageRegion {
+            image: self.image,
+            array_index: self.key.array_index,
+            offset: self.key.offset,
+            extent: self.key.extent,
+        }
+    }
+}
+
+/// How a view's region is enhanced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ViewPath {
+    /// In the app's image, through a storage view of its layer (the swapchain has storage
+    /// usage, and for sRGB a mutable format).
+    InPlace,
+    /// Copied (vkCmdCopyImage, raw bytes) into an image of the engine's own in a
+    /// size-compatible format with storage usage (`PixelFormat::image_copy_format`), enhanced
+    /// there by the in-place shaders, and copied back: for images the layer may not store to.
+    ImageCopy,
+    /// Copied into a buffer of the engine's own, enhanced there and copied back: where the
+    /// device cannot store to the image-copy path's format.
+    BufferCopy,
+}
+
+impl ViewPath {
+    /// Its name in the log and in a capture's JSON (`"path"`): `in-place`, `image-copy`,
+    /// `copy` (the buffer path's name since before the image-copy path).
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewPath::InPlace => "in-place",
+            ViewPath::ImageCopy => "image-copy",
+            ViewPath::BufferCopy => "copy",
+        }
+    }
+
+    /// Whether its passes are the in-place variants (on the app's image or on the engine's
+    /// copy of the region).
+    pub fn runs_in_place_shaders(self) -> bool {
+        self != ViewPath::BufferCopy
+    }
+}
+
+/// A view region's identity across frames: its swapchain (an opaque handle value), rectangle
+/// and array layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ViewKey {
+    pub swapchain: u64,
+    pub offset: (i32, i32),
+    pub extent: (u32, u32),
+    pub array_index: u32,
+}
+
+/// Raw bytes of one view read back for a capture: before and after the enhancement.
+pub struct CapturedView {
+    pub view: FrameView,
+    pub display: Vec<u8>,
+    pub output: Vec<u8>,
+}

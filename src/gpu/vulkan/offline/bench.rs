@@ -1,0 +1,362 @@
+//! The benchmark behind `contrastxr bench`: GPU time, from timestamp queries, of the plain copy
+//! pass (the floor), the per-frame enhancement, everything the layer records per display frame
+//! (the enhancement with the copies from and to the app's image: through buffers, in place,
+//! through images of the engine's own) and the per-camera-frame
+//! background preparation, over the same display regions, on the offline engine's device.
+
+use super::bench_case::{BenchCase, WARM_UP_RUNS};
+use super::bench_rig::Rig;
+use super::offline_engine::OfflineEngine;
+use crate::algorithm::params::Params;
+use crate::gpu::core::CameraRect;
+use crate::gpu::vulkan::device::{
+    barrier, record_first_layout, record_image_region_copy, record_layout_barriers,
+    record_region_copy, GpuError, ImageRegion, VkResultExt,
+};
+use crate::gpu::vulkan::record::ViewTarget;
+use ash::vk;
+
+/// Medians in milliseconds over all views of a case.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchResult {
+    pub case: BenchCase,
+    pub copy_ms: f64,
+    /// The copy with the enhancement's 16-byte accesses (None where rows are not aligned).
+    pub copy_wide_ms: Option<f64>,
+    pub enhance_ms: f64,
+    /// Everything the layer records per display frame: the layout transitions, the copies of
+    /// each view from the app's image into its buffer and back, and the enhancement.
+    pub frame_ms: f64,
+    /// The same without the enhancement: the layer's image copies alone.
+    pub image_copy_ms: f64,
+    /// The layer's frame in place: layout transitions and the enhancement in the app's
+    /// images, no copies (None when not asked for or the device cannot store the format).
+    pub frame_in_place_ms: Option<f64>,
+    /// The layer's frame through the image-copy path: layout transitions, the copies of each
+    /// view's region into an image of the engine's own and back (vkCmdCopyImage), and the
+    /// enhancement there by the in-place shaders (None when not asked for or the device cannot
+    /// store the format).
+    pub frame_image_copy_ms: Option<f64>,
+    /// The same without the enhancement: the image-copy path's copies alone.
+    pub image_copy_copies_ms: Option<f64>,
+    /// Per camera frame: decode and blur on the camera grid (once, whatever the views).
+    pub background_ms: f64,
+    /// Fraction of pixels that are foreground (neither black nor alpha 0).
+    pub foreground: f64,
+}
+
+impl BenchResult {
+    /// Enhancement time over copy time.
+    pub fn ratio(&self) -> f64 {
+        self.enhance_ms / self.copy_ms
+    }
+
+    /// Enhancement time over the 16-byte copy's time.
+    pub fn ratio_wide(&self) -> Option<f64> {
+        self.copy_wide_ms.map(|c| self.enhance_ms / c)
+    }
+
+    /// The layer's whole per-frame work over the copy's time.
+    pub fn frame_ratio(&self) -> f64 {
+        self.frame_ms / self.copy_ms
+    }
+
+    /// The frame in place over the frame through copies.
+    pub fn in_place_ratio(&self) -> Option<f64> {
+        self.frame_in_place_ms.map(|f| f / self.frame_ms)
+    }
+
+    /// The frame through the image-copy path over the frame in place.
+    pub fn image_copy_in_place_ratio(&self) -> Option<f64> {
+        Some(self.frame_image_copy_ms? / self.frame_in_place_ms?)
+    }
+
+    /// The frame through the image-copy path over the frame through buffer copies.
+    pub fn image_copy_frame_ratio(&self) -> Option<f64> {
+        self.frame_image_copy_ms.map(|f| f / self.frame_ms)
+    }
+
+    /// A display frame that also brings a new camera frame (a live camera at or above the
+    /// display's rate): the background preparation then the frame, one after the other on the
+    /// queue, so the sum of the two medians.
+    pub fn live_frame_ms(&self) -> f64 {
+        self.frame_ms + self.background_ms
+    }
+
+    pub fn megapixels(&self) -> f64 {
+        let (w, h) = self.case.region;
+        f64::from(w) * f64::from(h) * f64::from(self.case.views) / 1e6
+    }
+}
+
+/// The spans timed in each run, in `timed_run`'s order of recording (a start and an end
+/// timestamp each).
+#[derive(Clone, Copy)]
+enum Span {
+    Background,
+    CopyWide,
+    Copy,
+    Enhance,
+    Frame,
+    ImageCopy,
+    FrameInPlace,
+    FrameImageCopy,
+    ImageCopyCopies,
+}
+const SPANS: usize = 9;
+const QUERIES: u32 = 2 * SPANS as u32;
+
+impl OfflineEngine {
+    /// Times one case; `params` are the enhancement's settings (method, blur, ...).
+    pub fn bench(&mut self, case: &BenchCase, params: &Params) -> Result<BenchResult, GpuError> {
+        params.validate().map_err(GpuError::Unsupported)?;
+        let mut rig = Rig {
+            background: None,
+            views: Vec::new(),
+            sources: Vec::new(),
+            images: Vec::new(),
+            staging: None,
+            in_place: Vec::new(),
+            storage_views: Vec::new(),
+            image_copy: Vec::new(),
+            own_images: Vec::new(),
+            queries: vk::QueryPool::null(),
+        };
+        let result = self.bench_with(&mut rig, case, params);
+        self.destroy_rig(rig);
+        result
+    }
+
+    fn bench_with(
+        &mut self,
+        rig: &mut Rig,
+        case: &BenchCase,
+        params: &Params,
+    ) -> Result<BenchResult, GpuError> {
+        let foreground = self.build_rig(rig, case, QUERIES)?;
+        let mut samples: [Vec<f64>; SPANS] = Default::default();
+        for run in 0..WARM_UP_RUNS + case.runs {
+            let times = self.timed_run(rig, params)?;
+            if run >= WARM_UP_RUNS {
+                for (s, t) in samples.iter_mut().zip(times) {
+                    s.push(t);
+                }
+            }
+        }
+        let ms = samples.map(median);
+        Ok(BenchResult {
+            case: *case,
+            copy_ms: ms[Span::Copy as usize],
+            copy_wide_ms: rig
+                .views
+                .iter()
+                .all(ViewTarget::copies_wide)
+                .then_some(ms[Span::CopyWide as usize]),
+            enhance_ms: ms[Span::Enhance as usize],
+            frame_ms: ms[Span::Frame as usize],
+            image_copy_ms: ms[Span::ImageCopy as usize],
+            frame_in_place_ms: (!rig.in_place.is_empty())
+                .then_some(ms[Span::FrameInPlace as usize]),
+            frame_image_copy_ms: (!rig.image_copy.is_empty())
+                .then_some(ms[Span::FrameImageCopy as usize]),
+            image_copy_copies_ms: (!rig.image_copy.is_empty())
+                .then_some(ms[Span::ImageCopyCopies as usize]),
+            background_ms: ms[Span::Background as usize],
+            foreground,
+        })
+    }
+
+    /// What the layer records per display frame around (and, with `enhance`, including) the
+    /// enhancement: src/gpu/vulkan/frame/frame_record.rs's `record` less the background and captures.
+    fn record_frame(
+        &self,
+        cmd: vk::CommandBuffer,
+        (views, regions): (&[&ViewTarget], &[ImageRegion]),
+        params: &Params,
+        enhance: bool,
+    ) -> Result<(), GpuError> {
+        use vk::PipelineStageFlags as S;
+        let gpu = &self.gpu;
+        record_layout_barriers(gpu, cmd, regions, true);
+        for (r, v) in regions.iter().zip(views) {
+            record_region_copy(gpu, cmd, r, &v.pixels, true);
+        }
+        barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+        if enhance {
+            let mapping = params.camera_mapping();
+            for v in views {
+                self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+            }
+            barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        }
+        for (r, v) in regions.iter().zip(views) {
+            record_region_copy(gpu, cmd, r, &v.pixels, false);
+        }
+        record_layout_barriers(gpu, cmd, regions, false);
+        Ok(())
+    }
+
+    /// What the layer records per display frame in place: gpu/vulkan/frame/frame_record.rs's `record` for
+    /// in-place views, less the background and captures. Nothing without in-place views.
+    fn record_frame_in_place(
+        &self,
+        cmd: vk::CommandBuffer,
+        rig: &Rig,
+        regions: &[ImageRegion],
+        params: &Params,
+    ) -> Result<(), GpuError> {
+        if rig.in_place.is_empty() {
+            return Ok(());
+        }
+        let gpu = &self.gpu;
+        record_layout_barriers(gpu, cmd, regions, true);
+        let mapping = params.camera_mapping();
+        for v in &rig.in_place {
+            self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+        }
+        record_layout_barriers(gpu, cmd, regions, false);
+        Ok(())
+    }
+
+    /// What the layer records per display frame through the image-copy path
+    /// (gpu/vulkan/frame/frame_record.rs's `record` for such views, less the background and captures):
+    /// with `enhance`, the passes between the copies. Nothing without image-copy views.
+    fn record_frame_image_copy(
+        &self,
+        cmd: vk::CommandBuffer,
+        rig: &Rig,
+        regions: &[ImageRegion],
+        params: &Params,
+        enhance: bool,
+    ) -> Result<(), GpuError> {
+        if rig.image_copy.is_empty() {
+            return Ok(());
+        }
+        use vk::PipelineStageFlags as S;
+        let gpu = &self.gpu;
+        record_layout_barriers(gpu, cmd, regions, true);
+        let own: Vec<vk::Image> = rig.own_images.iter().map(|i| i.image.raw).collect();
+        let write = (S::TRANSFER, vk::AccessFlags::TRANSFER_WRITE);
+        record_first_layout(gpu, cmd, &own, vk::ImageLayout::GENERAL, write);
+        for (r, o) in regions.iter().zip(&own) {
+            record_image_region_copy(gpu, cmd, r, *o, true);
+        }
+        barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+        if enhance {
+            let mapping = params.camera_mapping();
+            for v in &rig.image_copy {
+                self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+            }
+            barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
+        }
+        for (r, o) in regions.iter().zip(&own) {
+            record_image_region_copy(gpu, cmd, r, *o, false);
+        }
+        record_layout_barriers(gpu, cmd, regions, false);
+        Ok(())
+    }
+
+    fn timestamp(&self, cmd: vk::CommandBuffer, pool: vk::QueryPool, query: u32) {
+        // SAFETY: cmd is recording; the query was reset in this command buffer. BOTTOM_OF_PIPE:
+        // written once all earlier commands are complete.
+        unsafe {
+            self.gpu.device.cmd_write_timestamp(
+                cmd,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                pool,
+                query,
+            )
+        };
+    }
+
+    /// One run: background, 16-byte copy, copy (which also restores the pristine pixels),
+    /// enhancement, then (after restoring the app images' content, untimed) the layer's whole
+    /// frame and its image copies alone. Returns each Span's GPU time in milliseconds (the
+    /// 16-byte copy's is 0 where the rows do not allow it).
+    fn timed_run(&mut self, rig: &Rig, params: &Params) -> Result<[f64; SPANS], GpuError> {
+        let all = vk::PipelineStageFlags::ALL_COMMANDS;
+        let views: Vec<&ViewTarget> = rig.views.iter().collect();
+        let regions = rig.regions(views[0].region);
+        let background = rig.background.as_ref().expect("made before");
+        let mapping = params.camera_mapping();
+        self.submit(|cmd| {
+            let (gpu, engine, q) = (&self.gpu, &self.engine, rig.queries);
+            // SAFETY: cmd is recording; the pool is ours and not in use by pending work.
+            unsafe { gpu.device.cmd_reset_query_pool(cmd, q, 0, QUERIES) };
+            let timed = |span: Span, record: &mut dyn FnMut() -> Result<(), GpuError>| {
+                barrier(gpu, cmd, all, all);
+                self.timestamp(cmd, q, 2 * span as u32);
+                let done = record();
+                self.timestamp(cmd, q, 2 * span as u32 + 1);
+                done
+            };
+            let rect = CameraRect::sampled_by(&vec![mapping; views.len()], background.size);
+            timed(Span::Background, &mut || {
+                engine.record_background(gpu, cmd, background, params, &rect)
+            })?;
+            timed(Span::CopyWide, &mut || {
+                views.iter().for_each(|v| {
+                    engine.record_copy_wide(gpu, cmd, v);
+                });
+                Ok(())
+            })?;
+            timed(Span::Copy, &mut || {
+                views
+                    .iter()
+                    .try_for_each(|v| engine.record_copy(gpu, cmd, v))
+            })?;
+            timed(Span::Enhance, &mut || {
+                for v in &views {
+                    engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+                }
+                Ok(())
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            let both = (views.as_slice(), regions.as_slice());
+            timed(Span::Frame, &mut || {
+                self.record_frame(cmd, both, params, true)
+            })?;
+            timed(Span::ImageCopy, &mut || {
+                self.record_frame(cmd, both, params, false)
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            timed(Span::FrameInPlace, &mut || {
+                self.record_frame_in_place(cmd, rig, &regions, params)
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            timed(Span::FrameImageCopy, &mut || {
+                self.record_frame_image_copy(cmd, rig, &regions, params, true)
+            })?;
+            timed(Span::ImageCopyCopies, &mut || {
+                self.record_frame_image_copy(cmd, rig, &regions, params, false)
+            })
+        })?;
+        let mut ticks = [0u64; QUERIES as usize];
+        // SAFETY: the submission was waited for; every query was written by it.
+        unsafe {
+            self.gpu.device.get_query_pool_results(
+                rig.queries,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
+        let ms = f64::from(self.gpu.timestamp_period()) / 1e6;
+        Ok(std::array::from_fn(|k| {
+            ticks[2 * k + 1].wrapping_sub(ticks[2 * k]) as f64 * ms
+        }))
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
+}

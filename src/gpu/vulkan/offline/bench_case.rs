@@ -1,0 +1,90 @@
+//! What the benchmark (gpu/vulkan/offline/bench.rs) times: its cases, the display content and the camera
+//! frame.
+
+/// The camera frame size the background preparation is timed with (a common camera mode).
+pub const CAMERA_SIZE: (u32, u32) = (1280, 720);
+/// Runs before the timed ones (pipeline warm-up, caches, clocks).
+pub const WARM_UP_RUNS: u32 = 3;
+
+/// What the display regions hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Content {
+    /// A typical mixed-reality frame: black (see-through) with two UI panels and a shaded
+    /// object, about 17% of the pixels foreground.
+    Typical,
+    /// Every pixel foreground (a colourful gradient, never black).
+    Full,
+}
+
+impl Content {
+    pub const ALL: [Content; 2] = [Content::Typical, Content::Full];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Content::Typical => "typical",
+            Content::Full => "full",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct BenchCase {
+    /// Per view.
+    pub region: (u32, u32),
+    pub views: u32,
+    pub content: Content,
+    /// Timed runs; the result is their median.
+    pub runs: u32,
+    /// Also time the layer's frame in place (the app's images with storage usage, enhanced
+    /// through storage views), where the device can.
+    pub in_place: bool,
+    /// Also time the layer's frame through the image-copy path (each region copied into an
+    /// image of the engine's own with storage usage, enhanced there by the in-place shaders,
+    /// copied back), where the device can store to its format.
+    pub image_copy: bool,
+}
+
+/// One RGBA8 pixel (R in the low byte) of the given content at (x, y) of a w x h region.
+pub fn content_pixel(content: Content, x: u32, y: u32, w: u32, h: u32) -> u32 {
+    let (u, v) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+    let rgba = |r: f32, g: f32, b: f32| {
+        let q = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u32;
+        q(r) | q(g) << 8 | q(b) << 16 | 255 << 24
+    };
+    if content == Content::Full {
+        return rgba(u.max(0.01), v, 0.5 + 0.5 * (u - v));
+    }
+    let inside =
+        |x0: f32, x1: f32, y0: f32, y1: f32| (x0..x1).contains(&u) && (y0..y1).contains(&v);
+    if inside(0.10, 0.40, 0.30, 0.60) {
+        return rgba(0.78, 0.82, 0.90);
+    }
+    if inside(0.60, 0.85, 0.15, 0.35) {
+        return rgba(0.15, 0.63, 0.31);
+    }
+    let (dx, dy) = ((u - 0.55) * w as f32, (v - 0.65) * h as f32);
+    let r = 0.12 * w.min(h) as f32;
+    let d2 = (dx * dx + dy * dy) / (r * r);
+    if d2 < 1.0 {
+        let shade = 1.0 - 0.6 * d2;
+        return rgba(0.9 * shade, 0.45 * shade, 0.1 * shade + 0.02);
+    }
+    0xff00_0000
+}
+
+/// A smooth camera frame with some texture (what the blur and FoV mapping see).
+pub fn camera_frame(size: (u32, u32)) -> Vec<[u8; 4]> {
+    let mut out = Vec::with_capacity((size.0 * size.1) as usize);
+    for y in 0..size.1 {
+        for x in 0..size.0 {
+            let t = ((x * 7 + y * 13) % 32) as u8;
+            out.push([
+                (x * 255 / size.0) as u8 / 2 + t,
+                (y * 255 / size.1) as u8 / 2 + 64,
+                160 - t,
+                255,
+            ]);
+        }
+    }
+    out
+}

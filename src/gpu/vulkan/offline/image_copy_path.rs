@@ -1,0 +1,235 @@
+//! The offline engine's image-copy path: a view's region of an app-like image that has no
+//! storage usage (as a swapchain whose runtime refused it), copied with vkCmdCopyImage into an
+//! image of the engine's own in the format's storage texel format, enhanced there by the
+//! in-place shaders and copied back, as the layer does (gpu/vulkan/frame/frame_record.rs); beside
+//! `enhance_raw` (through a buffer) and `enhance_raw_in_place` so that tests can hold the
+//! paths to each other, on any sub-rectangle and array layer.
+
+use super::offline_engine::OfflineEngine;
+use crate::algorithm::params::Params;
+use crate::gpu::core::CameraRect;
+use crate::gpu::core::PixelFormat;
+use crate::gpu::vulkan::conv::VkFormat;
+use crate::gpu::vulkan::device::{
+    barrier, record_first_layout, record_image_region_copy, record_layout_barriers, DeviceImage,
+    GpuBuffer, GpuError, ImageRegion, StorageImage,
+};
+use crate::gpu::vulkan::frame::{copy_path, ViewPath};
+use crate::gpu::vulkan::record::{Placement, ViewShape};
+use crate::image::RgbaImage;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// An app-like image and where the view's region lies in it.
+#[derive(Clone, Copy, Debug)]
+pub struct AppImage {
+    pub size: (u32, u32),
+    pub layers: u32,
+    /// The region: its offset, size and array layer.
+    pub offset: (i32, i32),
+    pub extent: (u32, u32),
+    pub layer: u32,
+}
+
+/// Every layer of `image` from `old` to `new` layout, after `src` accesses, before `dst`.
+fn all_layers(
+    image: vk::Image,
+    (old, new): (vk::ImageLayout, vk::ImageLayout),
+    (src, dst): (vk::AccessFlags, vk::AccessFlags),
+) -> vk::ImageMemoryBarrier<'static> {
+    vk::ImageMemoryBarrier::default()
+        .old_layout(old)
+        .new_layout(new)
+        .src_access_mask(src)
+        .dst_access_mask(dst)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image)
+        .subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .level_count(1)
+                .layer_count(vk::REMAINING_ARRAY_LAYERS),
+        )
+}
+
+impl OfflineEngine {
+    /// The image-copy path on `app`, an image of `vk_format`: `image_words` is the whole image's raw words (layer after
+    /// layer, rows tightly packed); the region is enhanced through an image of the engine's
+    /// own and the whole image is read back, every layer.
+    pub fn enhance_raw_image_copy(
+        &mut self,
+        image_words: &[u32],
+        (vk_format, app): (vk::Format, AppImage),
+        camera: &RgbaImage,
+        params: &Params,
+    ) -> Result<Vec<u32>, GpuError> {
+        params.validate().map_err(GpuError::Unsupported)?;
+        let format = PixelFormat::from_vk(vk_format)
+            .ok_or_else(|| GpuError::Unsupported(format!("{vk_format:?}")))?;
+        if copy_path(&self.gpu, format) != ViewPath::ImageCopy {
+            return Err(GpuError::Unsupported(format!(
+                "{vk_format:?} is not enhanced through an image copy on this device"
+            )));
+        }
+        let (w, h) = app.size;
+        let bytes = u64::from(w * h * app.layers * format.bytes_per_pixel());
+        if image_words.len() as u64 * 4 != bytes {
+            return Err(GpuError::Unsupported(
+                "pixel data does not match the image".into(),
+            ));
+        }
+        let own_format = format.image_copy_format().expect("checked by copy_path");
+        let usage = vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST
+            | vk::ImageUsageFlags::COLOR_ATTACHMENT;
+        let mut image = DeviceImage::layered(&self.gpu, app.size, app.layers, vk_format, usage)?;
+        let own = StorageImage::for_copies(&self.gpu, app.extent, own_format);
+        let mut own = match own {
+            Ok(o) => o,
+            Err(e) => {
+                image.destroy(&self.gpu);
+                return Err(e);
+            }
+        };
+        let staging = GpuBuffer::new(
+            &self.gpu,
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+            "staging",
+        );
+        let result = staging.and_then(|mut staging| {
+            let bytes: Vec<u8> = image_words.iter().flat_map(|w| w.to_le_bytes()).collect();
+            let run = staging.write(&bytes).and_then(|_| {
+                self.run_image_copy(&image, &own, &staging, (app, format), camera, params)
+            });
+            let out = run.and_then(|_| {
+                let mapped = staging.mapped().ok_or_else(|| {
+                    GpuError::Unsupported("staging buffer is not host-visible".into())
+                })?;
+                Ok(mapped
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                    .collect())
+            });
+            staging.destroy(&self.gpu);
+            out
+        });
+        own.destroy(&self.gpu);
+        image.destroy(&self.gpu);
+        result
+    }
+
+    /// Uploads every layer, prepares the background, runs the image-copy path on the region
+    /// and reads every layer back, in one submission.
+    fn run_image_copy(
+        &self,
+        image: &DeviceImage,
+        own: &StorageImage,
+        staging: &GpuBuffer,
+        (app, format): (AppImage, PixelFormat),
+        camera: &RgbaImage,
+        params: &Params,
+    ) -> Result<(), GpuError> {
+        let gpu = &self.gpu;
+        let size = (camera.width, camera.height);
+        let mut bg = self
+            .engine
+            .create_background(gpu, size, Placement::OFFLINE)?;
+        let shape = ViewShape {
+            format,
+            width: app.extent.0,
+            in_place: true,
+        };
+        let view = bg.upload(&camera.pixels).and_then(|_| {
+            self.engine
+                .create_shaped_view(gpu, (shape, app.extent.1), &bg, Placement::OFFLINE)
+        });
+        let mut view = match view {
+            Ok(v) => v,
+            Err(e) => {
+                bg.destroy(gpu);
+                return Err(e);
+            }
+        };
+        self.engine.bind_app_image(gpu, &view, own.view);
+        let mapping = params.camera_mapping();
+        let region = ImageRegion {
+            image: image.raw,
+            array_index: app.layer,
+            offset: app.offset,
+            extent: app.extent,
+        };
+        let whole = vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(app.layers),
+            )
+            .image_extent(vk::Extent3D {
+                width: app.size.0,
+                height: app.size.1,
+                depth: 1,
+            });
+        let done = self.submit(|cmd| {
+            use vk::{AccessFlags as A, ImageLayout as L, PipelineStageFlags as S};
+            let d = &gpu.device;
+            let layout = |(old, new), access, (src, dst)| {
+                let b = [all_layers(image.raw, (old, new), access)];
+                // SAFETY: cmd is recording; the image is ours and not in use elsewhere.
+                unsafe {
+                    d.cmd_pipeline_barrier(
+                        cmd,
+                        src,
+                        dst,
+                        vk::DependencyFlags::empty(),
+                        &[],
+                        &[],
+                        &b,
+                    )
+                };
+            };
+            let general = L::GENERAL;
+            layout(
+                (L::UNDEFINED, general),
+                (A::empty(), A::TRANSFER_WRITE),
+                (S::TOP_OF_PIPE, S::TRANSFER),
+            );
+            // SAFETY: cmd is recording; the buffer holds every layer, the image is in GENERAL.
+            unsafe { d.cmd_copy_buffer_to_image(cmd, staging.raw, image.raw, general, &[whole]) };
+            // As an app leaves its images at xrEndFrame.
+            layout(
+                (general, L::COLOR_ATTACHMENT_OPTIMAL),
+                (A::TRANSFER_WRITE, A::COLOR_ATTACHMENT_WRITE),
+                (S::TRANSFER, S::COLOR_ATTACHMENT_OUTPUT),
+            );
+            // What the layer records for a view through the image-copy path.
+            record_layout_barriers(gpu, cmd, &[region], true);
+            let write = (S::TRANSFER, A::TRANSFER_WRITE);
+            record_first_layout(gpu, cmd, &[own.image.raw], general, write);
+            record_image_region_copy(gpu, cmd, &region, own.image.raw, true);
+            barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+            let rect = CameraRect::sampled_by(&[mapping], bg.size);
+            self.engine
+                .record_background(gpu, cmd, &bg, params, &rect)?;
+            self.engine
+                .record_enhance(gpu, cmd, &view, params, &mapping)?;
+            barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
+            record_image_region_copy(gpu, cmd, &region, own.image.raw, false);
+            record_layout_barriers(gpu, cmd, &[region], false);
+            // Read every layer back.
+            layout(
+                (L::COLOR_ATTACHMENT_OPTIMAL, general),
+                (A::MEMORY_WRITE, A::TRANSFER_READ),
+                (S::ALL_COMMANDS, S::TRANSFER),
+            );
+            // SAFETY: as above, the other way.
+            unsafe { d.cmd_copy_image_to_buffer(cmd, image.raw, general, staging.raw, &[whole]) };
+            Ok(())
+        });
+        self.engine.destroy_view(gpu, &mut view);
+        bg.destroy(gpu);
+        done
+    }
+}

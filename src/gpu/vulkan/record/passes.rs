@@ -1,0 +1,400 @@
+//! Recording the engine's passes into a command buffer: the background preparation, the
+//! enhancement (classification, then the listed tiles only), and the copy passes (the
+//! benchmark's floor).
+
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::methods::Pass;
+use crate::algorithm::params::{Params, ViewMode};
+use crate::gpu::core::blurred_texels::TEXEL_BYTES;
+use crate::gpu::core::codes::{method_code, mode_code};
+use crate::gpu::core::interface::{
+    CLASSIFY_WORKGROUP, DECODE_ROWS, TILE, TILE_LIST_DISPATCH_OFFSET,
+};
+use crate::gpu::core::push_constants::PushConstants;
+use crate::gpu::core::shader_ids;
+use crate::gpu::core::shares_fetches;
+use crate::gpu::vulkan::device::{barrier, layout_change, GpuBuffer, GpuDevice, GpuError};
+use ash::vk;
+
+use super::recorder::{Engine, COMPUTE, WORKGROUP};
+use super::resources::{BackgroundFrame, ViewTarget};
+use crate::gpu::core::CameraRect;
+
+impl Engine {
+    /// Dispatches `pipeline` over `grid` invocations (in WORKGROUP x WORKGROUP groups).
+    pub(crate) fn dispatch(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        set: vk::DescriptorSet,
+        push: &PushConstants,
+        grid: (u32, u32),
+    ) {
+        let workgroup = (WORKGROUP, WORKGROUP);
+        self.dispatch_in(gpu, cmd, (pipeline, workgroup), set, push, grid);
+    }
+
+    /// Dispatches `pipeline`, whose workgroup size is given, over `grid` invocations.
+    fn dispatch_in(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        (pipeline, workgroup): (vk::Pipeline, (u32, u32)),
+        set: vk::DescriptorSet,
+        push: &PushConstants,
+        grid: (u32, u32),
+    ) {
+        self.bind_pipeline(gpu, cmd, pipeline, set, push);
+        let groups = (grid.0.div_ceil(workgroup.0), grid.1.div_ceil(workgroup.1));
+        // SAFETY: cmd is recording with the pipeline, set and push constants bound.
+        unsafe { gpu.device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
+    }
+
+    fn bind_pipeline(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        set: vk::DescriptorSet,
+        push: &PushConstants,
+    ) {
+        let d = &gpu.device;
+        // SAFETY: cmd is recording; pipeline, layout and set belong to this engine.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.pipelines.layout(),
+                0,
+                &[set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.pipelines.layout(),
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                push.bytes(),
+            );
+        }
+    }
+
+    /// Records the background preparation (docs/algorithm.md, Background preparation) for a camera frame already
+    /// uploaded: decode and blur on the camera grid, once per camera frame whatever the number
+    /// of views (each view's enhancement samples the result through its own mapping), for the
+    /// texels in `rect` (`CameraRect::sampled_by` the views' mappings).
+    pub fn record_background(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        background: &BackgroundFrame,
+        params: &Params,
+        rect: &CameraRect,
+    ) -> Result<(), GpuError> {
+        let all = vk::PipelineStageFlags::ALL_COMMANDS;
+        barrier(gpu, cmd, all, COMPUTE);
+        let identity = CameraMapping::IDENTITY;
+        // The pass reads the rectangle's first texel from region_size (shaders/background.wgsl).
+        let origin = (rect.x / 4 * 4, rect.y);
+        let push = PushConstants::new(params, background.size, origin, &identity);
+        let pipeline = self
+            .pipelines
+            .get(shader_ids::decode_blur(push.blur_half)?)?;
+        let right = (rect.x + rect.width).min(background.size.0);
+        self.record_decode(gpu, cmd, background, &push, (origin.0, right), rect)?;
+        barrier(gpu, cmd, COMPUTE, COMPUTE);
+        // 4 x DECODE_ROWS texels per invocation.
+        let grid = (
+            (right - origin.0).div_ceil(4),
+            rect.height.div_ceil(DECODE_ROWS),
+        );
+        self.dispatch(gpu, cmd, pipeline, background.set, &push, grid);
+        self.record_texels_copy(gpu, cmd, background, (origin.0, rect.y, right, rect.height));
+        barrier(gpu, cmd, vk::PipelineStageFlags::TRANSFER, all);
+        Ok(())
+    }
+
+    /// Decodes the camera texels the blur of `rect` reads: its blocks' windows reach
+    /// blur_half texels beyond it on each side, and 4 + blur_half right of a block's start.
+    fn record_decode(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        bg: &BackgroundFrame,
+        push: &PushConstants,
+        (x0, right): (u32, u32),
+        rect: &CameraRect,
+    ) -> Result<(), GpuError> {
+        let (w, h) = bg.size;
+        let half = push.blur_half;
+        let left = x0.saturating_sub(half) / 4 * 4;
+        let end = (right.div_ceil(4) * 4 + 4 + half).min(w);
+        let top = rect.y.saturating_sub(half);
+        let rows = rect.height.div_ceil(DECODE_ROWS) * DECODE_ROWS;
+        let bottom = (rect.y + rows + half).min(h);
+        let mut push = *push;
+        push.region_size = [left, top];
+        let grid = ((end - left).div_ceil(4), bottom - top);
+        let pipeline = self.pipelines.get(shader_ids::DECODE_CAMERA)?;
+        self.dispatch(gpu, cmd, pipeline, bg.set, &push, grid);
+        Ok(())
+    }
+
+    /// Copies the prepared rows x0..right of rows y..y + height of `blurred` into the image the
+    /// enhancement samples (GENERAL; its earlier contents are not needed: every texel a view
+    /// reads is in the rectangle just prepared).
+    fn record_texels_copy(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        bg: &BackgroundFrame,
+        (x0, y0, right, height): (u32, u32, u32, u32),
+    ) {
+        let to_general = [layout_change(
+            bg.texels.raw,
+            (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+            (
+                vk::AccessFlags::SHADER_READ,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+        )];
+        let written = [vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+            .dst_access_mask(vk::AccessFlags::TRANSFER_READ)];
+        let copy = [vk::BufferImageCopy::default()
+            .buffer_offset((u64::from(y0) * u64::from(bg.size.0) + u64::from(x0)) * 16)
+            .buffer_row_length(bg.size.0)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_offset(vk::Offset3D {
+                x: x0 as i32,
+                y: y0 as i32,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width: right - x0,
+                height,
+                depth: 1,
+            })];
+        let d = &gpu.device;
+        // SAFETY: cmd is recording; the image and buffer are ours, the region lies in both.
+        unsafe {
+            d.cmd_pipeline_barrier(
+                cmd,
+                COMPUTE,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::DependencyFlags::empty(),
+                &written,
+                &[],
+                &to_general,
+            );
+            d.cmd_copy_buffer_to_image(
+                cmd,
+                bg.blurred.raw,
+                bg.texels.raw,
+                vk::ImageLayout::GENERAL,
+                &copy,
+            );
+        }
+    }
+
+    /// Records the per-pixel enhancement of one view's `pixels`, in place: the tile
+    /// classification, then the enhancement over the listed tiles only (indirect dispatch),
+    /// which samples the view's background through `mapping` (display uv -> camera uv).
+    /// Nothing in `ViewMode::Off`. The caller orders its copy into `pixels` before this and its
+    /// copy out after it (see `barrier`), and the background's preparation before it.
+    pub fn record_enhance(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        view: &ViewTarget,
+        params: &Params,
+        mapping: &CameraMapping,
+    ) -> Result<(), GpuError> {
+        if params.mode == ViewMode::Off {
+            return Ok(());
+        }
+        let format = view.format.shader_code();
+        let access = view.shape().access();
+        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
+        let codes = (method_code(params.method), mode_code(params.mode), format);
+        let pipeline = self.enhance_pipeline(view, (codes, access, extras), mapping)?;
+        let classify = self.pipelines.get(shader_ids::classify(format, access)?)?;
+        let finish_tiles = self.pipelines.get(shader_ids::FINISH_TILES)?;
+        let mut push = PushConstants::new(params, view.camera_size, view.region, mapping);
+        // 16 bits each (interface.rs, region_origin): swapchain images are far smaller.
+        push.region_origin = (view.origin.0 & 0xffff) | (view.origin.1 << 16);
+        let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
+        use vk::PipelineStageFlags as S;
+        // The method's passes, in its entry's order (src/algorithm/method_table.rs; every
+        // entry's are PER_PIXEL_PASSES, which these arms implement).
+        for pass in params.method.entry().passes {
+            match pass {
+                Pass::Classify => {
+                    barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
+                    // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at
+                    // least 4 bytes.
+                    unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
+                    barrier(gpu, cmd, S::TRANSFER, COMPUTE);
+                    let classify = (classify, (CLASSIFY_WORKGROUP[0], CLASSIFY_WORKGROUP[1]));
+                    self.dispatch_in(gpu, cmd, classify, view.set, &push, tiles);
+                }
+                Pass::FinishTiles => {
+                    barrier(gpu, cmd, COMPUTE, COMPUTE);
+                    // A 1x1 grid is one workgroup of one invocation.
+                    self.dispatch(gpu, cmd, finish_tiles, view.set, &push, (1, 1));
+                }
+                Pass::Enhance => {
+                    barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
+                    self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
+                    // SAFETY: cmd is recording with the pipeline bound above; the tile buffer
+                    // has INDIRECT_BUFFER usage and its arguments were written by
+                    // finish_tiles.
+                    unsafe {
+                        gpu.device.cmd_dispatch_indirect(
+                            cmd,
+                            view.tiles.raw,
+                            TILE_LIST_DISPATCH_OFFSET,
+                        )
+                    };
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The `enhance` pipeline for a view: the shared-fetch variant where the view's mapping
+    /// allows it and it is built, else the general one (the same output).
+    fn enhance_pipeline(
+        &self,
+        view: &ViewTarget,
+        (codes, access, extras): ((u32, u32, u32), u32, bool),
+        mapping: &CameraMapping,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let shared = shader_ids::enhance_shared(codes, access, extras).filter(|_| {
+            self.shared_fetch && shares_fetches(mapping, view.region, view.camera_size)
+        });
+        match shared.map(|id| self.pipelines.get(id)) {
+            Some(Ok(p)) => Ok(p),
+            _ => self
+                .pipelines
+                .get(shader_ids::enhance(codes, access, extras)?),
+        }
+    }
+
+    /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source
+    /// (`bind_source`) into its `pixels` (4-byte formats), with the enhancement's dispatch shape.
+    pub fn record_copy(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        view: &ViewTarget,
+    ) -> Result<(), GpuError> {
+        let pipeline = self.pipelines.get(shader_ids::COPY_PIXELS)?;
+        let push = PushConstants::new(
+            &Params::default(),
+            view.camera_size,
+            view.region,
+            &CameraMapping::IDENTITY,
+        );
+        self.dispatch(gpu, cmd, pipeline, view.set, &push, view.region);
+        Ok(())
+    }
+
+    /// Records the benchmark's second floor: the same copy with the enhancement's memory access
+    /// shape (a tile row per invocation, 16-byte accesses). None where the view does not allow
+    /// it (`ViewTarget::copies_wide`).
+    pub fn record_copy_wide(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        view: &ViewTarget,
+    ) -> Option<()> {
+        if !view.copies_wide() {
+            return None;
+        }
+        let pipeline = self.pipelines.get(shader_ids::COPY_ROWS).ok()?;
+        let push = PushConstants::new(
+            &Params::default(),
+            view.camera_size,
+            view.region,
+            &CameraMapping::IDENTITY,
+        );
+        let grid = (view.region.0.div_ceil(TILE), view.region.1);
+        self.dispatch(gpu, cmd, pipeline, view.set, &push, grid);
+        Some(())
+    }
+}
+
+impl Engine {
+    /// Records the copy of `rect`'s texels from `staging` (laid out as the image, 16 bytes per
+    /// texel) into the image the enhancement samples: what `record_background` makes of the
+    /// same rectangle, from texels prepared on the CPU.
+    pub fn record_texels_upload(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        background: &BackgroundFrame,
+        staging: &GpuBuffer,
+        rect: &CameraRect,
+    ) {
+        let all = vk::PipelineStageFlags::ALL_COMMANDS;
+        let transfer = vk::PipelineStageFlags::TRANSFER;
+        let width = background.size.0;
+        let right = (rect.x + rect.width).min(width);
+        let to_general = [layout_change(
+            background.texels.raw,
+            (vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL),
+            (
+                vk::AccessFlags::MEMORY_READ,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+        )];
+        let first = u64::from(rect.y) * u64::from(width) + u64::from(rect.x);
+        let copy = [vk::BufferImageCopy::default()
+            .buffer_offset(first * TEXEL_BYTES as u64)
+            .buffer_row_length(width)
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_offset(vk::Offset3D {
+                x: rect.x as i32,
+                y: rect.y as i32,
+                z: 0,
+            })
+            .image_extent(vk::Extent3D {
+                width: right - rect.x,
+                height: rect.height,
+                depth: 1,
+            })];
+        let d = &gpu.device;
+        // SAFETY: cmd is recording; the image and the buffer are ours, and the region lies in
+        // both (the buffer holds the whole frame's texels, the rectangle is inside the frame).
+        unsafe {
+            d.cmd_pipeline_barrier(
+                cmd,
+                all,
+                transfer,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &to_general,
+            );
+            d.cmd_copy_buffer_to_image(
+                cmd,
+                staging.raw,
+                background.texels.raw,
+                vk::ImageLayout::GENERAL,
+                &copy,
+            );
+        }
+        barrier(gpu, cmd, transfer, all);
+    }
+}
