@@ -7,8 +7,8 @@
 // of the `method` and `mode` keys (src/config/keys.rs) and so of the CLI's --method, the shader
 // code and the `enhance` variants build.rs compiles (one per method, with the entry's WGSL
 // appended), and the tests that hold the entry's settings to KEYS, its push-constant fields to
-// PARAMS and to its WGSL, its passes to the recorder's, and the example config and README to
-// the names.
+// PARAMS and to its WGSL, its passes to a plan the backends run, and the example config and
+// README to the names.
 //
 // Dependency-free: build.rs includes this file too (it uses name, code, space and wgsl).
 //
@@ -27,7 +27,7 @@
 //   shaders/enhance.wgsl;
 // - `settings`: the config keys it reads (beyond the shared background preparation);
 // - `push`: the push-constant fields (src/gpu/core/interface.rs, PARAMS) its WGSL reads;
-// - `passes`: its GPU passes in order (the recorder, src/gpu/vulkan/record/passes.rs, runs these).
+// - `passes`: its GPU passes in order (src/gpu/core/plan.rs makes them the steps both backends run).
 macro_rules! with_methods {
     ($then:ident) => {
         $then! {

@@ -9,7 +9,8 @@ use super::method_reference::Reference;
 
 include!("method_table.rs");
 
-/// A GPU pass of a method, in the order the recorder runs them (src/gpu/vulkan/record/passes.rs).
+/// A GPU pass of a method. The backends run an entry's passes as the steps src/gpu/core/plan.rs
+/// makes of them, which holds each pass to the one it needs before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
     /// Lists the tiles with a foreground pixel (`classify`).
@@ -20,9 +21,8 @@ pub enum Pass {
     Enhance,
 }
 
-/// The passes the recorder implements (src/gpu/vulkan/record/passes.rs runs an entry's `passes` in their
-/// order; its arms assume this one): every entry's `passes` must be these (a test holds them
-/// to it).
+/// The per-pixel passes: classify lists the tiles with content, finish_tiles makes the
+/// dispatch of enhance over them.
 pub const PER_PIXEL_PASSES: [Pass; 3] = [Pass::Classify, Pass::FinishTiles, Pass::Enhance];
 
 /// One method, as its entry in method_table.rs says.
@@ -204,17 +204,6 @@ mod tests {
                 assert_ne!(a.name, b.name);
                 assert_ne!(a.code, b.code, "{} and {}", a.name, b.name);
             }
-        }
-    }
-
-    #[test]
-    fn every_entry_has_the_passes_the_recorder_runs() {
-        for e in &ENTRIES {
-            assert_eq!(
-                e.passes, PER_PIXEL_PASSES,
-                "{}: src/gpu/vulkan/record/passes.rs",
-                e.name
-            );
         }
     }
 

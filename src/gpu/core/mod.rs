@@ -16,13 +16,16 @@ pub mod modules;
 mod overlay;
 pub mod pixel_codec;
 mod pixel_format;
+pub mod plan;
 pub mod push_constants;
 pub mod shader_ids;
 mod shared_fetch;
 pub(crate) mod texels;
+mod variant_key;
 
 pub use camera_rect::CameraRect;
 pub use frame_input::FrameBackground;
 pub use overlay::{encode as overlay_pixel, OverlayPixels, Run};
 pub use pixel_format::{PixelFormat, PixelLayout};
 pub use shared_fetch::shares_fetches;
+pub use variant_key::VariantKey;

@@ -3,7 +3,8 @@
 //! src/gpu/core/interface.rs as the SPIR-V is), on the app's context, in place through an image
 //! unit or on a copy of each view in a buffer object. The same roles as `vulkan/`: `device` (the
 //! functions, the context's capabilities, errors), `pipelines` (the programs, their binary cache
-//! and background builds), `frame` (a frame's work: `GlEngine`, the app's state kept), `texels`,
+//! and background builds), `record` (a view's steps as GL calls), `frame` (a frame's work:
+//! `GlEngine`, the app's state kept), `texels`,
 //! `offline` (a context of its own for the command line and the benchmark) and `conv`.
 //!
 //! Called on the app's thread with its context current (the layer's xrEndFrame): no GL call is
@@ -18,6 +19,7 @@ pub mod device;
 pub mod frame;
 pub mod offline;
 pub mod pipelines;
+mod record;
 mod texels;
 
 pub use conv::GlFormat;

@@ -26,22 +26,21 @@ use super::gl_view::{GlTarget, GlView};
 use super::region::{read_region, write_region};
 use super::state_guard::SavedState;
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::methods::Pass;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
-use crate::gpu::core::codes::{method_code, mode_code};
 use crate::gpu::core::interface::{
     in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE, BINDING_APP_IMAGE,
-    BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES, CLASSIFY_WORKGROUP, TILE,
-    TILE_LIST_DISPATCH_OFFSET, TILE_LIST_HEADER_WORDS,
+    BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES, TILE, TILE_LIST_HEADER_WORDS,
 };
+use crate::gpu::core::plan::{view_steps, NoPlan, Step};
 use crate::gpu::core::push_constants::PushConstants;
-use crate::gpu::core::CameraRect;
+use crate::gpu::core::{CameraRect, VariantKey};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
 use crate::gpu::opengl::pipelines::{self, Programs};
+use crate::gpu::opengl::record::run_steps;
 use crate::gpu::opengl::texels::TexelBuffers;
 
 /// What a call did.
@@ -362,7 +361,6 @@ impl GlEngine {
         in_place: bool,
     ) -> Result<[usize; 3], GlError> {
         let format = GlFormat::of(internal_format)?;
-        let code = format.pixel.shader_code();
         let access = if in_place {
             ACCESS_IN_PLACE
         } else if rows_aligned(width, format.pixel.bytes_per_pixel()) {
@@ -370,13 +368,12 @@ impl GlEngine {
         } else {
             ACCESS_NARROW
         };
-        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
-        let codes = (method_code(params.method), mode_code(params.mode), code);
+        let key = VariantKey::of(params, format.pixel, access);
         let missing = || GlError::Format(internal_format);
         Ok([
-            pipelines::classify(code, access).ok_or_else(missing)?,
+            pipelines::classify(key.format, key.access).ok_or_else(missing)?,
             pipelines::GL_FINISH_TILES,
-            pipelines::enhance(codes, access, extras).ok_or_else(missing)?,
+            pipelines::enhance(key.codes(), key.access, key.extras).ok_or_else(missing)?,
         ])
     }
 
@@ -442,8 +439,14 @@ impl GlEngine {
             return Ok(Outcome::Enhanced);
         }
         let mut ids = Vec::new();
+        let mut steps = Vec::new();
         for v in views {
             ids.extend(self.view_programs(v, params)?);
+            let passes = params.method.entry().passes;
+            let plan = view_steps(passes, (v.rect.2, v.rect.3)).map_err(|NoPlan(why)| {
+                GlError::Input(format!("{}: {why}", params.method.name()))
+            })?;
+            steps.push(plan);
         }
         let Some(bg_size) = self.background.as_ref().map(|b| b.size) else {
             return Err(GlError::Input("no background frame was set".into()));
@@ -480,7 +483,7 @@ impl GlEngine {
         }
         for (k, v) in views.iter().enumerate() {
             let programs: [usize; 3] = ids[3 * k..3 * k + 3].try_into().expect("3 ids");
-            self.run_view(k, v, params, bg_size, programs);
+            self.run_view(k, v, (params, &steps[k]), bg_size, programs);
         }
         drop(state);
         Ok(Outcome::Enhanced)
@@ -565,7 +568,7 @@ impl GlEngine {
         &self,
         k: usize,
         v: &GlView,
-        params: &Params,
+        (params, steps): (&Params, &[Step]),
         bg_size: (u32, u32),
         ids: [usize; 3],
     ) {
@@ -583,8 +586,6 @@ impl GlEngine {
         classify.set_params(g, &push);
         enhance.set_params(g, &push);
         let bg = self.background.as_ref().expect("checked by the caller");
-        let tiles = (w.div_ceil(TILE), h.div_ceil(TILE));
-        let zero = 0u32;
         // SAFETY: every object is this engine's or the view's checked texture; the region lies
         // inside the texture and the buffer holds it (with the pixel store at its defaults,
         // rows tightly packed from offset 0); bindings are within the 4.3 minimums and put
@@ -606,37 +607,12 @@ impl GlEngine {
                     0
                 }
             };
-            (g.named_buffer_sub_data)(buffers.tiles, 0, 4, (&zero as *const u32).cast());
             (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, BINDING_TILES, buffers.tiles);
             (g.active_texture)(gl::TEXTURE0 + BINDING_BLURRED_TEXELS);
             (g.bind_texture)(gl::TEXTURE_2D, bg.texture);
             (g.bind_sampler)(BINDING_BLURRED_TEXELS, 0);
             (g.bind_buffer)(gl::DISPATCH_INDIRECT_BUFFER, buffers.tiles);
-            for pass in params.method.entry().passes {
-                match pass {
-                    Pass::Classify => {
-                        (g.use_program)(classify.raw);
-                        (g.dispatch_compute)(
-                            tiles.0.div_ceil(CLASSIFY_WORKGROUP[0]),
-                            tiles.1.div_ceil(CLASSIFY_WORKGROUP[1]),
-                            1,
-                        );
-                        (g.memory_barrier)(gl::SHADER_STORAGE_BARRIER_BIT);
-                    }
-                    Pass::FinishTiles => {
-                        (g.use_program)(finish_tiles.raw);
-                        (g.dispatch_compute)(1, 1, 1);
-                        (g.memory_barrier)(
-                            gl::SHADER_STORAGE_BARRIER_BIT | gl::COMMAND_BARRIER_BIT,
-                        );
-                    }
-                    Pass::Enhance => {
-                        (g.use_program)(enhance.raw);
-                        (g.dispatch_compute_indirect)(TILE_LIST_DISPATCH_OFFSET as isize);
-                        (g.memory_barrier)(gl::SHADER_STORAGE_BARRIER_BIT);
-                    }
-                }
-            }
+            run_steps(g, steps, buffers.tiles, [classify, finish_tiles, enhance]);
             if through.is_some() {
                 // The stores reach whatever reads the texture next: the app's sampling,
                 // blits, or the runtime's compositor through the memory it imported.

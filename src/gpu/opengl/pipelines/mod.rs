@@ -6,4 +6,4 @@ mod programs;
 
 pub use binary_cache::BinaryCache;
 pub(in crate::gpu::opengl) use programs::{classify, enhance, GL_FINISH_TILES};
-pub use programs::{gl_sources_id, Programs};
+pub use programs::{gl_sources_id, Program, Programs};

@@ -3,16 +3,13 @@
 //! benchmark's floor).
 
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::methods::Pass;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::blurred_texels::TEXEL_BYTES;
-use crate::gpu::core::codes::{method_code, mode_code};
-use crate::gpu::core::interface::{
-    CLASSIFY_WORKGROUP, DECODE_ROWS, TILE, TILE_LIST_DISPATCH_OFFSET,
-};
+use crate::gpu::core::interface::{DECODE_ROWS, TILE};
+use crate::gpu::core::plan::{encode, view_steps, Encoder, Grid, NoPlan, Reads, Shader};
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids;
-use crate::gpu::core::shares_fetches;
+use crate::gpu::core::{shares_fetches, VariantKey};
 use crate::gpu::vulkan::device::{barrier, layout_change, GpuBuffer, GpuDevice, GpuError};
 use ash::vk;
 
@@ -219,52 +216,29 @@ impl Engine {
         if params.mode == ViewMode::Off {
             return Ok(());
         }
-        let format = view.format.shader_code();
-        let access = view.shape().access();
-        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
-        let codes = (method_code(params.method), mode_code(params.mode), format);
-        let pipeline = self.enhance_pipeline(view, (codes, access, extras), mapping)?;
-        let classify = self.pipelines.get(shader_ids::classify(format, access)?)?;
-        let finish_tiles = self.pipelines.get(shader_ids::FINISH_TILES)?;
+        let key = VariantKey::of(params, view.format, view.shape().access());
         let mut push = PushConstants::new(params, view.camera_size, view.region, mapping);
         // 16 bits each (interface.rs, region_origin): swapchain images are far smaller.
         push.region_origin = (view.origin.0 & 0xffff) | (view.origin.1 << 16);
-        let tiles = (view.region.0.div_ceil(TILE), view.region.1.div_ceil(TILE));
-        use vk::PipelineStageFlags as S;
-        // The method's passes, in its entry's order (src/algorithm/method_table.rs; every
-        // entry's are PER_PIXEL_PASSES, which these arms implement).
-        for pass in params.method.entry().passes {
-            match pass {
-                Pass::Classify => {
-                    barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
-                    // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at
-                    // least 4 bytes.
-                    unsafe { gpu.device.cmd_fill_buffer(cmd, view.tiles.raw, 0, 4, 0) };
-                    barrier(gpu, cmd, S::TRANSFER, COMPUTE);
-                    let classify = (classify, (CLASSIFY_WORKGROUP[0], CLASSIFY_WORKGROUP[1]));
-                    self.dispatch_in(gpu, cmd, classify, view.set, &push, tiles);
-                }
-                Pass::FinishTiles => {
-                    barrier(gpu, cmd, COMPUTE, COMPUTE);
-                    // A 1x1 grid is one workgroup of one invocation.
-                    self.dispatch(gpu, cmd, finish_tiles, view.set, &push, (1, 1));
-                }
-                Pass::Enhance => {
-                    barrier(gpu, cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT);
-                    self.bind_pipeline(gpu, cmd, pipeline, view.set, &push);
-                    // SAFETY: cmd is recording with the pipeline bound above; the tile buffer
-                    // has INDIRECT_BUFFER usage and its arguments were written by
-                    // finish_tiles.
-                    unsafe {
-                        gpu.device.cmd_dispatch_indirect(
-                            cmd,
-                            view.tiles.raw,
-                            TILE_LIST_DISPATCH_OFFSET,
-                        )
-                    };
-                }
-            }
-        }
+        // The method's passes (its entry in src/algorithm/method_table.rs) as steps.
+        let steps =
+            view_steps(params.method.entry().passes, view.region).map_err(|NoPlan(why)| {
+                GpuError::Unsupported(format!("{}: {why}", params.method.name()))
+            })?;
+        let mut encoder = ViewEncoder {
+            engine: self,
+            gpu,
+            cmd,
+            view,
+            push: &push,
+            pipelines: [
+                self.pipelines
+                    .get(shader_ids::classify(key.format, key.access)?)?,
+                self.pipelines.get(shader_ids::FINISH_TILES)?,
+                self.enhance_pipeline(view, key, mapping)?,
+            ],
+        };
+        encode(&steps, &mut encoder).unwrap_or_else(|never| match never {});
         Ok(())
     }
 
@@ -273,9 +247,10 @@ impl Engine {
     fn enhance_pipeline(
         &self,
         view: &ViewTarget,
-        (codes, access, extras): ((u32, u32, u32), u32, bool),
+        key: VariantKey,
         mapping: &CameraMapping,
     ) -> Result<vk::Pipeline, GpuError> {
+        let (codes, access, extras) = (key.codes(), key.access, key.extras);
         let shared = shader_ids::enhance_shared(codes, access, extras).filter(|_| {
             self.shared_fetch && shares_fetches(mapping, view.region, view.camera_size)
         });
@@ -396,5 +371,63 @@ impl Engine {
             );
         }
         barrier(gpu, cmd, transfer, all);
+    }
+}
+
+/// One view's steps as Vulkan commands, recorded into `cmd` with the view's set and push
+/// constants.
+struct ViewEncoder<'a> {
+    engine: &'a Engine,
+    gpu: &'a GpuDevice,
+    cmd: vk::CommandBuffer,
+    view: &'a ViewTarget,
+    push: &'a PushConstants,
+    /// classify, finish_tiles, enhance.
+    pipelines: [vk::Pipeline; 3],
+}
+
+impl Encoder for ViewEncoder<'_> {
+    type Error = std::convert::Infallible;
+
+    fn clear_tiles(&mut self) {
+        use vk::PipelineStageFlags as S;
+        let (gpu, cmd) = (self.gpu, self.cmd);
+        barrier(gpu, cmd, COMPUTE | S::DRAW_INDIRECT, S::TRANSFER);
+        // SAFETY: cmd is recording; the tile buffer is ours, TRANSFER_DST, at least 4 bytes.
+        unsafe {
+            gpu.device
+                .cmd_fill_buffer(cmd, self.view.tiles.raw, 0, 4, 0)
+        };
+        barrier(gpu, cmd, S::TRANSFER, COMPUTE);
+    }
+
+    fn dispatch(&mut self, shader: Shader, grid: Grid) -> Result<(), Self::Error> {
+        let pipeline = self.pipelines[shader as usize];
+        let (gpu, cmd, set) = (self.gpu, self.cmd, self.view.set);
+        self.engine
+            .bind_pipeline(gpu, cmd, pipeline, set, self.push);
+        match grid {
+            // SAFETY: cmd is recording with the pipeline, set and push constants bound.
+            Grid::Groups(x, y) => unsafe { gpu.device.cmd_dispatch(cmd, x, y, 1) },
+            // SAFETY: as above; the tile buffer has INDIRECT_BUFFER usage and its arguments
+            // were written by finish_tiles.
+            Grid::TileList(offset) => unsafe {
+                gpu.device
+                    .cmd_dispatch_indirect(cmd, self.view.tiles.raw, offset)
+            },
+        }
+        Ok(())
+    }
+
+    fn barrier(&mut self, reads: Reads) {
+        use vk::PipelineStageFlags as S;
+        match reads {
+            Reads::Tiles => barrier(self.gpu, self.cmd, COMPUTE, COMPUTE),
+            Reads::TilesAndArguments => {
+                barrier(self.gpu, self.cmd, COMPUTE, COMPUTE | S::DRAW_INDIRECT)
+            }
+            // What reads the pixels next (a copy back, a layout change) records its own.
+            Reads::Pixels => {}
+        }
     }
 }

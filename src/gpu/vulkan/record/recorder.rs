@@ -8,7 +8,6 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::methods::Pass;
 use crate::algorithm::params::{Params, ViewMode};
-use crate::gpu::core::codes::{method_code, mode_code};
 use crate::gpu::core::interface::TILE;
 use crate::gpu::core::interface::{
     in_place_texel, BindingKind, BINDING_APP_IMAGE, BINDING_BLURRED, BINDING_BLURRED_TEXELS,
@@ -17,6 +16,7 @@ use crate::gpu::core::interface::{
 use crate::gpu::core::shader_ids::{self, ShaderId};
 use crate::gpu::core::shares_fetches;
 use crate::gpu::core::PixelFormat;
+use crate::gpu::core::VariantKey;
 use crate::gpu::vulkan::device::{
     colour_layer, DeviceImage, GpuBuffer, GpuDevice, GpuError, VkResultExt,
 };
@@ -374,16 +374,13 @@ impl Engine {
         if passes.contains(&Pass::FinishTiles) {
             ids.push(shader_ids::FINISH_TILES);
         }
-        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
         for view in views {
-            let code = view.format.shader_code();
-            let access = view.access();
-            let codes = (method_code(params.method), mode_code(params.mode), code);
+            let key = VariantKey::of(params, view.format, view.access());
             for pass in passes {
                 let id = match pass {
-                    Pass::Classify => shader_ids::classify(code, access)?,
+                    Pass::Classify => shader_ids::classify(key.format, key.access)?,
                     Pass::FinishTiles => continue,
-                    Pass::Enhance => shader_ids::enhance(codes, access, extras)?,
+                    Pass::Enhance => shader_ids::enhance(key.codes(), key.access, key.extras)?,
                 };
                 if !ids.contains(&id) {
                     ids.push(id);
@@ -402,15 +399,13 @@ impl Engine {
         views: impl IntoIterator<Item = (ViewShape, (u32, u32), &'a CameraMapping)>,
         camera: (u32, u32),
     ) -> Vec<ShaderId> {
-        let extras = params.achromatic_boost > 0.0 || params.luminance_cap > 0.0;
-        let codes = |code| (method_code(params.method), mode_code(params.mode), code);
         let mut ids = Vec::new();
         for (shape, region, mapping) in views {
             if !self.shared_fetch || !shares_fetches(mapping, region, camera) {
                 continue;
             }
-            let code = shape.format.shader_code();
-            if let Some(id) = shader_ids::enhance_shared(codes(code), shape.access(), extras) {
+            let key = VariantKey::of(params, shape.format, shape.access());
+            if let Some(id) = shader_ids::enhance_shared(key.codes(), key.access, key.extras) {
                 if !ids.contains(&id) {
                     ids.push(id);
                 }

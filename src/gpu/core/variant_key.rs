@@ -1,0 +1,63 @@
+//! Which variant of the per-pixel shaders a view takes: the codes build.rs specialises them on,
+//! derived from the settings once for every backend.
+
+use super::codes::{method_code, mode_code};
+use super::pixel_format::PixelFormat;
+use crate::algorithm::params::Params;
+
+/// The specialisation of a view's `classify` and `enhance`: the method, the view mode, the pixel
+/// format, how the pixels are reached (interface.rs ACCESS_*) and whether the method's extra
+/// steps run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct VariantKey {
+    pub method: u32,
+    pub mode: u32,
+    /// The FORMAT code (`PixelFormat::shader_code`).
+    pub format: u32,
+    pub access: u32,
+    /// The achromatic boost or the luminance cap is on: the variant with those steps.
+    pub extras: bool,
+}
+
+impl VariantKey {
+    /// The variant views of `format`, reached by `access`, take under `params`.
+    pub fn of(params: &Params, format: PixelFormat, access: u32) -> VariantKey {
+        VariantKey {
+            method: method_code(params.method),
+            mode: mode_code(params.mode),
+            format: format.shader_code(),
+            access,
+            extras: params.achromatic_boost > 0.0 || params.luminance_cap > 0.0,
+        }
+    }
+
+    /// (method, mode, format): the codes the variant tables are keyed by.
+    pub fn codes(self) -> (u32, u32, u32) {
+        (self.method, self.mode, self.format)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::core::interface::{ACCESS_IN_PLACE, FORMAT_SRGB_BIT, LAYOUT_RGBA8};
+
+    #[test]
+    fn the_extras_follow_either_setting() {
+        let key = |boost, cap| {
+            let params = Params {
+                achromatic_boost: boost,
+                luminance_cap: cap,
+                ..Params::default()
+            };
+            VariantKey::of(&params, PixelFormat::SRGB8, ACCESS_IN_PLACE)
+        };
+        assert!(!key(0.0, 0.0).extras);
+        assert!(key(0.2, 0.0).extras);
+        assert!(key(0.0, 0.9).extras);
+        let k = key(0.0, 0.0);
+        assert_eq!(k.format, LAYOUT_RGBA8 | FORMAT_SRGB_BIT);
+        let method = method_code(Params::default().method);
+        assert_eq!(k.codes(), (method, k.mode, k.format));
+    }
+}
