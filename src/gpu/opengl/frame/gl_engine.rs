@@ -23,24 +23,17 @@
 //! glGetError (nor anything that would raise an error it would then leave to the app).
 
 use super::gl_view::{GlTarget, GlView};
-use super::region::{read_region, write_region};
 use super::state_guard::SavedState;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
-use crate::gpu::core::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
-use crate::gpu::core::interface::{
-    in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE, BINDING_APP_IMAGE,
-    BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES, TILE, TILE_LIST_HEADER_WORDS,
-};
-use crate::gpu::core::plan::{view_steps, NoPlan, Step};
-use crate::gpu::core::push_constants::PushConstants;
+use crate::gpu::core::interface::{in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
+use crate::gpu::core::plan::{view_steps, NoPlan};
 use crate::gpu::core::{CameraRect, VariantKey};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
 use crate::gpu::opengl::pipelines::{self, Programs};
-use crate::gpu::opengl::record::run_steps;
 use crate::gpu::opengl::texels::TexelBuffers;
 
 /// What a call did.
@@ -54,11 +47,11 @@ pub enum Outcome {
 
 /// The background the views sample: an RGBA32UI texture (the layout of `BlurredTexels`), filled
 /// from the mapped upload buffers (texel_buffers.rs).
-struct Background {
-    texture: u32,
-    size: (u32, u32),
+pub(super) struct Background {
+    pub(super) texture: u32,
+    pub(super) size: (u32, u32),
     /// The `BlurredTexels::serial` the texture holds, and of which texels.
-    holds: Option<(u64, CameraRect)>,
+    pub(super) holds: Option<(u64, CameraRect)>,
 }
 
 /// How the programs store into a view's texture in place.
@@ -84,30 +77,30 @@ fn image_format(internal: u32) -> Option<gl::Enum> {
 
 /// A view slot's buffers, kept across frames and remade only when a view needs more.
 #[derive(Default)]
-struct ViewBuffers {
-    pixels: u32,
-    pixel_capacity: usize,
-    tiles: u32,
-    tile_capacity: usize,
+pub(super) struct ViewBuffers {
+    pub(super) pixels: u32,
+    pub(super) pixel_capacity: usize,
+    pub(super) tiles: u32,
+    pub(super) tile_capacity: usize,
 }
 
 pub struct GlEngine {
-    gl: Gl,
-    caps: Caps,
-    programs: Programs,
-    background: Option<Background>,
+    pub(super) gl: Gl,
+    pub(super) caps: Caps,
+    pub(super) programs: Programs,
+    pub(super) background: Option<Background>,
     /// Where the background's texels are uploaded from; a live source writes them there.
-    texel_buffers: TexelBuffers,
-    views: Vec<ViewBuffers>,
+    pub(super) texel_buffers: TexelBuffers,
+    pub(super) views: Vec<ViewBuffers>,
     /// An empty framebuffer object bound while the recipe runs: with the app's window-system
     /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
     /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer).
-    framebuffer: u32,
+    pub(super) framebuffer: u32,
     /// Whether views may be enhanced in place: by default on a GPU, not on a CPU driver
     /// (`Caps::software`); the `in_place` setting's `on` and `off` decide otherwise.
-    in_place: bool,
+    pub(super) in_place: bool,
     /// Which of the last enhanced views were stored in place (the others through a buffer).
-    last_in_place: Vec<bool>,
+    pub(super) last_in_place: Vec<bool>,
 }
 
 /// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
@@ -123,35 +116,11 @@ pub(in crate::gpu::opengl) fn rows_aligned(width: u32, bytes_per_pixel: u32) -> 
     (width * bytes_per_pixel) % 16 == 0
 }
 
-fn texture_level_int(g: &Gl, texture: u32, pname: gl::Enum) -> i32 {
+pub(super) fn texture_level_int(g: &Gl, texture: u32, pname: gl::Enum) -> i32 {
     let mut v = 0;
     // SAFETY: a texture name of this context (the caller's contract), level 0, a valid pname.
     unsafe { (g.get_texture_level_parameteriv)(texture, 0, pname, &mut v) };
     v
-}
-
-fn buffer_size(g: &Gl, buffer: u32) -> i32 {
-    let mut v = 0;
-    // SAFETY: a buffer this engine made; a valid pname.
-    unsafe { (g.get_named_buffer_parameteriv)(buffer, gl::BUFFER_SIZE, &mut v) };
-    v
-}
-
-/// A new buffer object of `bytes` bytes (uninitialised), or the allocation error: GL_BUFFER_SIZE
-/// tells whether the driver made it.
-fn new_buffer(g: &Gl, bytes: usize, what: &'static str) -> Result<u32, GlError> {
-    let mut buffer = 0;
-    // SAFETY: one name into a valid output; data null allocates without copying.
-    unsafe {
-        (g.create_buffers)(1, &mut buffer);
-        (g.named_buffer_data)(buffer, bytes as isize, std::ptr::null(), gl::DYNAMIC_COPY);
-    }
-    if buffer_size(g, buffer) as usize != bytes {
-        // SAFETY: ours.
-        unsafe { (g.delete_buffers)(1, &buffer) };
-        return Err(GlError::Allocation(what));
-    }
-    Ok(buffer)
 }
 
 impl GlEngine {
@@ -242,109 +211,11 @@ impl GlEngine {
     /// The fault point standing for a lost context. The context's reset status is never
     /// queried: a robust context reports a reset once, and that report is the app's (with it
     /// the app recreates its context); the layer's calls on a lost context do nothing.
-    fn check_lost(&self) -> Result<(), GlError> {
+    pub(super) fn check_lost(&self) -> Result<(), GlError> {
         if crate::fault::hit("gl-context-lost") {
             return Err(GlError::ContextLost);
         }
         Ok(())
-    }
-
-    /// Where a live source writes its frames' texels, on its own thread (memory writes into a
-    /// mapped buffer): one sink for the engine's life.
-    pub fn texel_sink(&self) -> std::sync::Arc<dyn TexelSink> {
-        self.texel_buffers.sink()
-    }
-
-    /// Background uploads of texels the source's thread wrote, and all uploads.
-    pub fn texels_from_source(&self) -> (u64, u64) {
-        self.texel_buffers.texels_from_source()
-    }
-
-    /// Makes `texels` the background the views sample: uploaded once (a new frame's texels,
-    /// told apart by their serial, from a mapped pixel unpack buffer), nothing when it holds
-    /// them already. Prepared on the source's thread (crate::gpu::core::blurred_texels), which for a live
-    /// source also writes them into that buffer; only the upload happens here.
-    ///
-    /// # Safety
-    /// The engine's context is current on this thread.
-    pub unsafe fn set_background(&mut self, texels: &BlurredTexels) -> Result<(), GlError> {
-        // SAFETY: this call's own contract; no mapping: the whole frame.
-        unsafe { self.set_background_for(texels, &[]) }
-    }
-
-    /// As `set_background`, for views at `mappings` (display uv to camera uv, as `GlView`
-    /// has them): only the texels they sample are uploaded (`CameraRect::sampled_by`; all of
-    /// them for no mapping).
-    ///
-    /// # Safety
-    /// The engine's context is current on this thread.
-    pub unsafe fn set_background_for(
-        &mut self,
-        texels: &BlurredTexels,
-        mappings: &[CameraMapping],
-    ) -> Result<(), GlError> {
-        self.check_lost()?;
-        let size = (texels.width, texels.height);
-        if size.0 == 0
-            || size.1 == 0
-            || texels.bytes.len() != size.0 as usize * size.1 as usize * TEXEL_BYTES
-        {
-            return Err(GlError::Input(
-                "the background frame is empty or damaged".into(),
-            ));
-        }
-        let needed = CameraRect::sampled_by(mappings, size);
-        let held = |b: &Background| {
-            b.size == size
-                && b.holds
-                    .is_some_and(|(n, r)| n == texels.serial && r.contains(&needed))
-        };
-        if self.background.as_ref().is_some_and(held) {
-            return Ok(());
-        }
-        if self.background.as_ref().is_some_and(|b| b.size != size) {
-            self.drop_background();
-        }
-        let g = &self.gl;
-        if self.background.is_none() {
-            let mut texture = 0;
-            // SAFETY: a new 2D texture of one level, RGBA32UI (4.2+), the background's size
-            // (checked against GL_TEXTURE_WIDTH below); nearest filtering, so that it is
-            // complete for texelFetch whatever the sampler state.
-            unsafe {
-                (g.create_textures)(gl::TEXTURE_2D, 1, &mut texture);
-                (g.texture_parameteri)(texture, gl::TEXTURE_MIN_FILTER, gl::NEAREST);
-                (g.texture_parameteri)(texture, gl::TEXTURE_MAG_FILTER, gl::NEAREST);
-                (g.texture_storage_2d)(texture, 1, gl::RGBA32UI, size.0 as i32, size.1 as i32);
-            }
-            let made = texture_level_int(g, texture, gl::TEXTURE_WIDTH) == size.0 as i32;
-            if !made {
-                // SAFETY: ours.
-                unsafe { (g.delete_textures)(1, &texture) };
-                return Err(GlError::Allocation("background texture"));
-            }
-            self.background = Some(Background {
-                texture,
-                size,
-                holds: None,
-            });
-        }
-        let bg = self.background.as_mut().expect("made above");
-        let state = SavedState::guard(g)?;
-        // SAFETY: the context is current (this call's contract); the texture is the
-        // background's, of the texels' size; the unpack binding is put back by the guard.
-        let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };
-        drop(state);
-        uploaded?;
-        bg.holds = Some((texels.serial, needed));
-        Ok(())
-    }
-
-    fn drop_background(&mut self) {
-        if let Some(bg) = self.background.take() {
-            // SAFETY: ours; the context is current (every caller's contract).
-            unsafe { (self.gl.delete_textures)(1, &bg.texture) };
-        }
     }
 
     /// The programs a (checked) view needs: classify, finish_tiles, enhance.
@@ -527,161 +398,6 @@ impl GlEngine {
             )));
         }
         Ok(())
-    }
-
-    /// Makes slot `k`'s buffers large enough for the view (no pixel buffer in place).
-    fn ensure_buffers(&mut self, k: usize, v: &GlView, in_place: bool) -> Result<(), GlError> {
-        let g = &self.gl;
-        let format = GlFormat::of(v.internal_format)?;
-        let (w, h) = (v.rect.2 as usize, v.rect.3 as usize);
-        // 16 bytes beyond the rows: the narrow access reads up to three words past the last
-        // pixel of a group.
-        let pixels = (w * h * format.pixel.bytes_per_pixel() as usize).div_ceil(16) * 16 + 16;
-        let tiles = w.div_ceil(TILE as usize) * h.div_ceil(TILE as usize);
-        let tile_bytes = (TILE_LIST_HEADER_WORDS as usize + tiles) * 4;
-        let slot = &mut self.views[k];
-        if !in_place && slot.pixel_capacity < pixels {
-            if slot.pixels != 0 {
-                // SAFETY: ours.
-                unsafe { (g.delete_buffers)(1, &slot.pixels) };
-                slot.pixels = 0;
-                slot.pixel_capacity = 0;
-            }
-            slot.pixels = new_buffer(g, pixels, "view buffer")?;
-            slot.pixel_capacity = pixels;
-        }
-        if slot.tile_capacity < tile_bytes {
-            if slot.tiles != 0 {
-                // SAFETY: ours.
-                unsafe { (g.delete_buffers)(1, &slot.tiles) };
-                slot.tiles = 0;
-                slot.tile_capacity = 0;
-            }
-            slot.tiles = new_buffer(g, tile_bytes, "tile list")?;
-            slot.tile_capacity = tile_bytes;
-        }
-        Ok(())
-    }
-
-    /// The recipe for one view (state saved by the caller; every object checked before).
-    fn run_view(
-        &self,
-        k: usize,
-        v: &GlView,
-        (params, steps): (&Params, &[Step]),
-        bg_size: (u32, u32),
-        ids: [usize; 3],
-    ) {
-        let g = &self.gl;
-        let format = GlFormat::of(v.internal_format).expect("checked");
-        let (x, y, w, h) = v.rect;
-        let through = self.store_through(v);
-        let bytes = w as usize * h as usize * format.pixel.bytes_per_pixel() as usize;
-        let buffers = &self.views[k];
-        let mapping = rows_from_bottom(&v.mapping);
-        let mut push = PushConstants::new(params, bg_size, (w, h), &mapping);
-        // 16 bits each (interface.rs, region_origin), as on Vulkan; only in place reads it.
-        push.region_origin = (x & 0xffff) | (y << 16);
-        let [classify, finish_tiles, enhance] = ids.map(|id| self.programs.get(id));
-        classify.set_params(g, &push);
-        enhance.set_params(g, &push);
-        let bg = self.background.as_ref().expect("checked by the caller");
-        // SAFETY: every object is this engine's or the view's checked texture; the region lies
-        // inside the texture and the buffer holds it (with the pixel store at its defaults,
-        // rows tightly packed from offset 0); bindings are within the 4.3 minimums and put
-        // back by the caller's SavedState.
-        unsafe {
-            let view_texture = match through {
-                Some(t) => self.bind_app_image(v, t),
-                None => {
-                    (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, buffers.pixels);
-                    read_region(g, v, format, v.rect, (std::ptr::null_mut(), bytes));
-                    let bound = (bytes.div_ceil(16) * 16 + 16) as isize;
-                    (g.bind_buffer_range)(
-                        gl::SHADER_STORAGE_BUFFER,
-                        BINDING_PIXELS,
-                        buffers.pixels,
-                        0,
-                        bound,
-                    );
-                    0
-                }
-            };
-            (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, BINDING_TILES, buffers.tiles);
-            (g.active_texture)(gl::TEXTURE0 + BINDING_BLURRED_TEXELS);
-            (g.bind_texture)(gl::TEXTURE_2D, bg.texture);
-            (g.bind_sampler)(BINDING_BLURRED_TEXELS, 0);
-            (g.bind_buffer)(gl::DISPATCH_INDIRECT_BUFFER, buffers.tiles);
-            run_steps(g, steps, buffers.tiles, [classify, finish_tiles, enhance]);
-            if through.is_some() {
-                // The stores reach whatever reads the texture next: the app's sampling,
-                // blits, or the runtime's compositor through the memory it imported.
-                (g.memory_barrier)(gl::ALL_BARRIER_BITS);
-                if view_texture != 0 {
-                    (g.delete_textures)(1, &view_texture);
-                }
-                return;
-            }
-            (g.memory_barrier)(
-                gl::PIXEL_BUFFER_BARRIER_BIT
-                    | gl::TEXTURE_UPDATE_BARRIER_BIT
-                    | gl::BUFFER_UPDATE_BARRIER_BIT,
-            );
-            (g.bind_buffer)(gl::PIXEL_UNPACK_BUFFER, buffers.pixels);
-            write_region(g, v, format, v.rect, std::ptr::null());
-        }
-    }
-
-    /// Binds the view's texel layer to the in-place programs' image unit, through a new
-    /// texture view where `through` says so; that view's name (0 for none), for the caller to
-    /// delete once the passes are recorded (GL keeps it alive while they run).
-    ///
-    /// # Safety
-    /// The engine's context is current; `v` is checked and `through` is `store_through(v)`.
-    unsafe fn bind_app_image(&self, v: &GlView, through: StoreThrough) -> u32 {
-        let g = &self.gl;
-        let layer = match v.target {
-            GlTarget::Texture2D => 0,
-            GlTarget::Texture2DArray { layer } => layer,
-        };
-        match through {
-            StoreThrough::Texture(unit_format) => {
-                // SAFETY: a checked texture and an image unit format of its size (GL's
-                // compatibility by size); one layer, not layered.
-                unsafe {
-                    (g.bind_image_texture)(
-                        BINDING_APP_IMAGE,
-                        v.texture,
-                        0,
-                        0,
-                        layer as i32,
-                        gl::READ_WRITE,
-                        unit_format,
-                    )
-                };
-                0
-            }
-            StoreThrough::View(view_format) => {
-                let mut view = 0;
-                // SAFETY: a name from glGenTextures, not yet bound, made a 2D view of one
-                // layer and level 0 of an immutable texture (checked by store_through) in a
-                // format of its size class (GL_SRGB8_ALPHA8 -> GL_RGBA8).
-                unsafe {
-                    (g.gen_textures)(1, &mut view);
-                    (g.texture_view)(view, gl::TEXTURE_2D, v.texture, view_format, 0, 1, layer, 1);
-                    (g.bind_image_texture)(
-                        BINDING_APP_IMAGE,
-                        view,
-                        0,
-                        0,
-                        0,
-                        gl::READ_WRITE,
-                        view_format,
-                    );
-                }
-                view
-            }
-        }
     }
 
     /// Writes the program binaries built since the last save (see binary_cache.rs).

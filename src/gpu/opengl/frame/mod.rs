@@ -1,12 +1,14 @@
 //! A frame's work on the app's context (`GlEngine`): the views in place or through a buffer, the
 //! passes, the overlays and captures, with the app's GL state saved and put back.
 
+mod gl_background;
 mod gl_engine;
 mod gl_view;
 mod program_warm_up;
 mod region;
 pub mod state_guard;
 mod view_pixels;
+mod view_recipe;
 
 pub use gl_engine::{GlEngine, Outcome, StoreThrough};
 pub use gl_view::{GlTarget, GlView};
