@@ -9,6 +9,7 @@ mod device_image;
 mod error;
 mod gpu_device;
 mod image_copy;
+mod physical_devices;
 mod pinned_libraries;
 mod storage_image;
 
@@ -17,9 +18,10 @@ pub use buffer::{record_buffer_copy, GpuBuffer};
 pub use commands::Commands;
 pub use device_image::DeviceImage;
 pub use error::{GpuError, VkResultExt};
-pub use gpu_device::{physical_devices, DeviceKind, DeviceOptions, GpuDevice, PhysicalDeviceInfo};
+pub use gpu_device::{DeviceKind, DeviceOptions, GpuDevice};
 pub use image_copy::{
     record_first_layout, record_image_region_copy, record_layout_barriers, record_region_copy,
     ImageRegion,
 };
+pub use physical_devices::{physical_devices, PhysicalDeviceInfo};
 pub(crate) use storage_image::StorageImage;
