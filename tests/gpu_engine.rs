@@ -1,6 +1,11 @@
-//! The GPU engine on the first Vulkan device (lavapipe in CI) with the validation layer on:
-//! every validation error fails the test.
+//! The Vulkan backend's own behaviour on the first Vulkan device (lavapipe in CI) with the
+//! validation layer on (every validation error fails the test): its shaders' SPIR-V, the
+//! in-place, image-copy and buffer paths, the background's preparation, the shared fetches and
+//! the benchmark. What every backend must do is tests/engine_conformance.rs.
 
+mod common;
+
+use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec::half_from_f32;
@@ -17,27 +22,6 @@ fn engine() -> OfflineEngine {
         matching: None,
     })
     .unwrap_or_else(|e| panic!("GPU engine: {e}"))
-}
-
-/// A deterministic pseudo-random image (xorshift), with some black and alpha-0 pixels.
-fn noise(width: u32, height: u32, seed: u32) -> RgbaImage {
-    let mut s = seed.max(1);
-    let mut next = move || {
-        s ^= s << 13;
-        s ^= s >> 17;
-        s ^= s << 5;
-        s
-    };
-    let mut img = RgbaImage::new(width, height, [0, 0, 0, 255]);
-    for p in img.pixels.iter_mut() {
-        let r = next();
-        *p = match r % 10 {
-            0 => [0, 0, 0, 255],
-            1 => [(r >> 8) as u8, (r >> 16) as u8, (r >> 24) as u8, 0],
-            _ => [(r >> 8) as u8, (r >> 16) as u8, (r >> 24) as u8, 255],
-        };
-    }
-    img
 }
 
 fn assert_clean(e: &OfflineEngine) {
@@ -67,47 +51,6 @@ fn every_embedded_shader_passes_spirv_val() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
-}
-
-#[test]
-fn lambda_zero_is_the_identity_bit_exact() {
-    let mut e = engine();
-    let display = noise(67, 41, 7);
-    let camera = noise(90, 50, 3);
-    let params = Params {
-        lambda_e: 0.0,
-        ..Params::default()
-    };
-    let out = e.enhance(&display, &camera, &params).unwrap();
-    assert_eq!(out, display);
-    assert_clean(&e);
-}
-
-#[test]
-fn black_and_transparent_pixels_are_untouched() {
-    let mut e = engine();
-    let display = noise(64, 64, 11);
-    let camera = RgbaImage::new(32, 32, [250, 230, 20, 255]);
-    for method in Method::ALL {
-        let params = Params {
-            method,
-            ..Params::default()
-        };
-        let out = e.enhance(&display, &camera, &params).unwrap();
-        let mut changed = 0;
-        for (a, b) in display.pixels.iter().zip(&out.pixels) {
-            if a[..3] == [0, 0, 0] || a[3] == 0 {
-                assert_eq!(a, b, "{method:?}");
-            }
-            assert_eq!(a[3], b[3], "alpha changed");
-            changed += usize::from(a != b);
-        }
-        assert!(
-            changed > 100,
-            "{method:?} changed only {changed} pixels on a yellow wall"
-        );
-    }
-    assert_clean(&e);
 }
 
 /// Encodes an 8-bit sRGB colour into each format's raw words, the way an app would store it.
@@ -213,17 +156,6 @@ fn formats_agree_on(e: &mut OfflineEngine, camera: &RgbaImage, colours: &[[u8; 4
     }
 }
 
-/// Counts pixels where the GPU output does not conform to the CPU reference (docs/algorithm.md, Conformance),
-/// with the CPU's own background preparation as the reference's B.
-fn nonconformant(
-    e: &mut OfflineEngine,
-    display: &RgbaImage,
-    camera: &RgbaImage,
-    params: &Params,
-) -> Vec<String> {
-    nonconformant_mapped(e, display, camera, &params.camera_mapping(), params)
-}
-
 /// `nonconformant` for a view at `mapping` in the camera image.
 fn nonconformant_mapped(
     e: &mut OfflineEngine,
@@ -284,58 +216,12 @@ fn check_all_methods_mapped(
     }
 }
 
-#[test]
-fn gpu_matches_cpu_on_random_images() {
-    let mut e = engine();
-    let camera = noise(131, 83, 5);
-    // Width 96: rows 16-byte aligned, the 16-byte access path (shaders/access_wide.wgsl);
-    // width 97: not aligned, the one-word path (access_narrow.wgsl).
-    for width in [96, 97] {
-        let display = noise(width, 61, 21);
-        check_all_methods(&mut e, &display, &camera, &Params::default());
-    }
-    assert_clean(&e);
-}
-
 /// A registered view's mapping (a plane-induced homography): not affine, the projective divide
 /// varying by about 15% across the view, and reaching past the camera's edges (clamp-to-edge).
 fn projective() -> CameraMapping {
     CameraMapping {
         rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
     }
-}
-
-#[test]
-fn gpu_matches_cpu_with_a_projective_mapping() {
-    let mut e = engine();
-    let camera = noise(131, 83, 5);
-    for width in [96, 97] {
-        let display = noise(width, 61, 23);
-        check_all_methods_mapped(&mut e, &display, &camera, &projective(), &Params::default());
-    }
-    assert_clean(&e);
-}
-
-#[test]
-fn gpu_matches_cpu_on_the_corner_cases() {
-    let mut e = engine();
-    let cases = contrastxr::algorithm::corner_cases();
-    let width = 64;
-    let height = (cases.len() as u32).div_ceil(width);
-    // One pixel per case; without blur and FoV mapping, camera pixel i is display pixel i's B.
-    let mut display = RgbaImage::new(width, height, [0, 0, 0, 255]);
-    let mut camera = RgbaImage::new(width, height, [0, 0, 0, 255]);
-    for (i, (d, b)) in cases.iter().enumerate() {
-        display.pixels[i] = [d[0], d[1], d[2], 255];
-        camera.pixels[i] = [b[0], b[1], b[2], 255];
-    }
-    let base = Params {
-        blur: false,
-        fov: false,
-        ..Params::default()
-    };
-    check_all_methods(&mut e, &display, &camera, &base);
-    assert_clean(&e);
 }
 
 #[test]
@@ -598,178 +484,6 @@ fn with_mode(mode: ViewMode) -> Params {
         mode,
         ..Params::default()
     }
-}
-
-#[test]
-fn off_mode_leaves_every_pixel_as_it_was() {
-    let mut e = engine();
-    let display = noise(50, 30, 31);
-    let camera = noise(64, 40, 2);
-    let out = e
-        .enhance(&display, &camera, &with_mode(ViewMode::Off))
-        .unwrap();
-    assert_eq!(out, display);
-    assert_clean(&e);
-}
-
-#[test]
-fn split_mode_is_original_left_enhanced_right_with_a_white_divider() {
-    let mut e = engine();
-    let (w, h) = (45, 37);
-    let display = noise(w, h, 41);
-    let camera = noise(70, 50, 13);
-    let enhanced = e.enhance(&display, &camera, &Params::default()).unwrap();
-    let split = e
-        .enhance(&display, &camera, &with_mode(ViewMode::Split))
-        .unwrap();
-    let half = w / 2;
-    let mut right_changed = 0;
-    for y in 0..h {
-        for x in 0..w {
-            let i = (y * w + x) as usize;
-            let (d, s) = (display.pixels[i], split.pixels[i]);
-            if x + 1 == half || x == half {
-                assert_eq!(s, [255, 255, 255, d[3]], "divider at ({x}, {y})");
-            } else if x < half {
-                assert_eq!(s, d, "left half changed at ({x}, {y})");
-            } else {
-                assert_eq!(s, enhanced.pixels[i], "right half at ({x}, {y})");
-                right_changed += usize::from(s != d);
-            }
-        }
-    }
-    assert!(right_changed > 100, "the right half was not enhanced");
-    assert_clean(&e);
-}
-
-#[test]
-fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
-    let mut e = engine();
-    let display = noise(60, 40, 51);
-    let camera = noise(80, 50, 17);
-    let params = Params::default();
-    let enhanced = e.enhance(&display, &camera, &params).unwrap();
-    let heat = e
-        .enhance(&display, &camera, &with_mode(ViewMode::Heatmap))
-        .unwrap();
-    // The CPU metric (docs/algorithm.md, Evaluation metric; f64) on the GPU's own enhanced output.
-    let bg = contrastxr::background_preparation::prepare(
-        &camera,
-        display.width,
-        display.height,
-        &params,
-    );
-    let mask = contrastxr::evaluate::metric::enhanced_mask(&display, &enhanced, &bg);
-    let mut marked = 0;
-    let mut disagree = 0;
-    for (i, (d, hm)) in display.pixels.iter().zip(&heat.pixels).enumerate() {
-        let cyan = *hm == [0, 255, 255, d[3]];
-        assert!(
-            cyan || hm == d,
-            "pixel {i}: {hm:?} is neither cyan nor the original"
-        );
-        marked += usize::from(cyan);
-        disagree += usize::from(cyan != mask[i]);
-    }
-    // f32 against f64 may flip a pixel sitting exactly on a criterion threshold.
-    assert!(marked > 100, "only {marked} pixels marked");
-    assert!(
-        disagree * 1000 <= display.pixels.len(),
-        "{disagree} pixels disagree with the metric"
-    );
-    assert_clean(&e);
-}
-
-#[test]
-fn background_mode_shows_the_prepared_background_on_every_pixel() {
-    let mut e = engine();
-    let display = noise(48, 27, 61);
-    let camera = noise(90, 60, 19);
-    let params = with_mode(ViewMode::Background);
-    let out = e.enhance(&display, &camera, &params).unwrap();
-    let bg = contrastxr::background_preparation::prepare(
-        &camera,
-        display.width,
-        display.height,
-        &params,
-    );
-    for (i, (d, o)) in display.pixels.iter().zip(&out.pixels).enumerate() {
-        let want =
-            contrastxr::colour::linear_to_srgb8(bg.linear[i] * f64::from(params.transmittance));
-        for k in 0..3 {
-            assert!(
-                o[k].abs_diff(want[k]) <= 1,
-                "pixel {i}: {o:?}, CPU background {want:?}"
-            );
-        }
-        assert_eq!(o[3], d[3], "alpha changed");
-    }
-    assert_clean(&e);
-}
-
-#[test]
-fn every_tile_is_enhanced_when_the_list_needs_more_than_one_dispatch_row() {
-    // 257 x 129 = 33153 tiles of 8x8: more than the 32768 workgroups of one indirect row.
-    let mut e = engine();
-    let display = RgbaImage::new(257 * 8, 129 * 8, [30, 200, 60, 255]);
-    let camera = RgbaImage::new(16, 16, [250, 230, 20, 255]);
-    let out = e.enhance(&display, &camera, &Params::default()).unwrap();
-    let first = out.pixels[0];
-    assert_ne!(first, display.pixels[0], "nothing changed");
-    let missed = out.pixels.iter().filter(|p| **p != first).count();
-    assert_eq!(missed, 0, "{missed} pixels not enhanced like the others");
-    assert_clean(&e);
-}
-
-#[test]
-fn isolated_pixels_in_edge_and_partial_tiles_are_enhanced() {
-    let mut e = engine();
-    // 67x41: the last tile column and row are partial. Black (skipped) except a few pixels.
-    let mut display = RgbaImage::new(67, 41, [0, 0, 0, 255]);
-    let spots = [
-        (0, 0),
-        (66, 0),
-        (0, 40),
-        (66, 40),
-        (33, 20),
-        (8, 8),
-        (7, 7),
-        (64, 39),
-    ];
-    for (k, &(x, y)) in spots.iter().enumerate() {
-        display.set(x, y, [200, 60 + 20 * k as u8, 90, 255]);
-    }
-    let camera = RgbaImage::new(20, 20, [230, 220, 40, 255]);
-    let params = Params::default();
-    let out = e.enhance(&display, &camera, &params).unwrap();
-    for &(x, y) in &spots {
-        assert_ne!(
-            out.get(x, y),
-            display.get(x, y),
-            "pixel ({x},{y}) was not enhanced"
-        );
-    }
-    assert!(nonconformant(&mut e, &display, &camera, &params).is_empty());
-    assert_clean(&e);
-}
-
-#[test]
-fn gpu_matches_cpu_with_the_options_beyond_the_paper() {
-    let mut e = engine();
-    let display = noise(61, 47, 33);
-    // A greyish camera so the achromatic boost is active on much of the frame.
-    let mut camera = noise(40, 30, 8);
-    for p in camera.pixels.iter_mut() {
-        let g = p[0] / 2 + 64;
-        *p = [g, g.saturating_add(p[1] % 6), g, 255];
-    }
-    let base = Params {
-        achromatic_boost: 1.0,
-        luminance_cap: 0.1,
-        ..Params::default()
-    };
-    check_all_methods(&mut e, &display, &camera, &base);
-    assert_clean(&e);
 }
 
 #[test]

@@ -13,7 +13,7 @@ pub mod core;
 pub mod opengl;
 pub mod vulkan;
 
-pub use self::core::{CameraRect, FrameBackground, PixelFormat, PixelLayout};
+pub use self::core::{CameraRect, FrameBackground, OfflineBackend, PixelFormat, PixelLayout};
 pub use vulkan::device::{DeviceOptions, GpuDevice, GpuError};
 pub use vulkan::frame::{CapturedView, FrameEngine, FrameOptions, FrameView, ViewKey, ViewPath};
 pub use vulkan::offline::OfflineEngine;

@@ -12,6 +12,7 @@
 
 pub mod capture_check;
 pub mod gl_client;
+pub mod images;
 pub mod pass_through;
 pub mod semantics;
 

@@ -13,6 +13,7 @@ pub mod codes;
 mod frame_input;
 pub mod interface;
 pub mod modules;
+mod offline_backend;
 mod overlay;
 pub mod pixel_codec;
 mod pixel_format;
@@ -25,6 +26,7 @@ mod variant_key;
 
 pub use camera_rect::CameraRect;
 pub use frame_input::FrameBackground;
+pub use offline_backend::OfflineBackend;
 pub use overlay::{encode as overlay_pixel, OverlayPixels, Run};
 pub use pixel_format::{PixelFormat, PixelLayout};
 pub use shared_fetch::shares_fetches;

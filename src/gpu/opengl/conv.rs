@@ -37,6 +37,13 @@ impl GlFormat {
         })
     }
 
+    /// The internal format whose texels are of `pixel`, if the backend enhances one.
+    pub fn internal_of(pixel: PixelFormat) -> Option<u32> {
+        Self::ALL
+            .into_iter()
+            .find(|&internal| GlFormat::of(internal).is_ok_and(|f| f.pixel == pixel))
+    }
+
     /// Every format the backend enhances.
     pub const ALL: [u32; 5] = [
         gl::RGBA8,

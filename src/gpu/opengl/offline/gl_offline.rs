@@ -6,6 +6,7 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::gpu::core::{OfflineBackend, PixelFormat};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
@@ -428,6 +429,38 @@ impl GlOffline {
         params: &Params,
     ) -> Result<RgbaImage, GlError> {
         self.enhance_mapped(display, camera, &params.camera_mapping(), params)
+    }
+}
+
+impl OfflineBackend for GlOffline {
+    fn api(&self) -> &'static str {
+        "opengl"
+    }
+
+    fn on_cpu(&self) -> bool {
+        self.engine.caps().software
+    }
+
+    fn pixel_formats(&self) -> Vec<PixelFormat> {
+        GlFormat::ALL
+            .iter()
+            .filter_map(|&internal| GlFormat::of(internal).ok())
+            .map(|f| f.pixel)
+            .collect()
+    }
+
+    fn enhance_pixels(
+        &mut self,
+        pixels: &[u32],
+        (region, format): ((u32, u32), PixelFormat),
+        camera: &RgbaImage,
+        mapping: &CameraMapping,
+        params: &Params,
+    ) -> Result<Vec<u32>, String> {
+        let internal = GlFormat::internal_of(format)
+            .ok_or_else(|| format!("OpenGL has no internal format for {format:?}"))?;
+        self.enhance_raw_mapped(pixels, (region, internal), camera, mapping, params)
+            .map_err(|e| e.to_string())
     }
 }
 

@@ -5,7 +5,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::core::CameraRect;
-use crate::gpu::core::PixelFormat;
+use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
 use crate::gpu::vulkan::record::{BackgroundFrame, Engine, Placement, ViewTarget};
@@ -293,6 +293,41 @@ impl OfflineEngine {
 
     pub fn validation_errors(&self) -> u32 {
         self.gpu.validation_errors()
+    }
+}
+
+impl OfflineBackend for OfflineEngine {
+    fn api(&self) -> &'static str {
+        "vulkan"
+    }
+
+    fn on_cpu(&self) -> bool {
+        self.is_cpu()
+    }
+
+    fn pixel_formats(&self) -> Vec<PixelFormat> {
+        use PixelLayout::*;
+        [Rgba8, Bgra8, Rgba16Unorm, Rgba16Float, A2b10g10r10]
+            .into_iter()
+            .flat_map(|layout| [true, false].map(|srgb| PixelFormat { layout, srgb }))
+            .filter(|f| !f.srgb || matches!(f.layout, Rgba8 | Bgra8))
+            .collect()
+    }
+
+    fn enhance_pixels(
+        &mut self,
+        pixels: &[u32],
+        shape: ((u32, u32), PixelFormat),
+        camera: &RgbaImage,
+        mapping: &CameraMapping,
+        params: &Params,
+    ) -> Result<Vec<u32>, String> {
+        self.enhance_raw_mapped(pixels, shape, camera, mapping, params)
+            .map_err(|e| e.to_string())
+    }
+
+    fn validation_errors(&self) -> u32 {
+        OfflineEngine::validation_errors(self)
     }
 }
 
