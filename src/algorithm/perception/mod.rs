@@ -10,7 +10,9 @@
 //! `tables` (for the GPU) and `report` (per-frame statistics).
 
 pub mod castle_csf;
+pub mod directions;
 pub mod frequency;
 pub mod light;
+pub mod method;
 pub mod perceived;
 pub mod settings;
