@@ -16,3 +16,4 @@ pub mod light;
 pub mod method;
 pub mod perceived;
 pub mod settings;
+pub mod tables;
