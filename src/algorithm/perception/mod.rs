@@ -15,5 +15,6 @@ pub mod frequency;
 pub mod light;
 pub mod method;
 pub mod perceived;
+pub mod report;
 pub mod settings;
 pub mod tables;
