@@ -104,7 +104,7 @@ pub fn perceptual(
     // The paper's colour first, then the 18 directions at the paper's change. Clipping in linear
     // RGB is no projection in CIELAB and can lengthen a change (by up to about 1.9x); such a
     // candidate would change the pixel more than the paper does, so it is not a candidate
-    // (docs/algorithm.md, *The perceptual method*, Candidates).
+    // (docs/algorithm.md, *The method, per pixel*, step 4).
     let mut best = Candidate::new(paper, d_lab, background, model);
     for u in DIRECTIONS {
         let colour = lab_to_clipped_linear(d_lab + budget * u);

@@ -1,9 +1,8 @@
-//! What the GPU needs per frame to evaluate c' (docs/algorithm.md, *The perceptual method*, On
-//! the GPU): the three channel sensitivities at each of the frame's frequencies, tabulated in
-//! f32 over log10 Y in [-1, 4.5] and interpolated linearly in log Y, with the frame's lights and
-//! the colour matrices rounded to f32; and c' evaluated from them in f32, as a shader would, so
-//! that a GPU implementation can be checked against it. Pure.
-
+//! What the GPU needs per frame to evaluate c' (docs/algorithm.md, *The method, per pixel*, on
+//! the GPU): the three channel sensitivities at each of the frame's frequencies, tabulated in f32
+//! over log10 Y in [-1, 4.5] and interpolated linearly in log Y, with the frame's lights and the
+//! colour matrices rounded to f32; and c' evaluated from them in f32, as a shader would, so that
+//! a GPU implementation can be checked against it. Pure.
 use glam::Vec3;
 
 use super::castle_csf::{self, Sensitivities};
