@@ -94,10 +94,9 @@ pub const AREA_DEG2: f64 = 1.0;
 /// yellow-violet (-(L + M) + 50.9875 S), applied to cone responses (L, M, S).
 pub const OPPONENT: [[f64; 3]; 3] = [[1.0, 1.0, 0.0], [1.0, -2.3112, 0.0], [-1.0, -1.0, 50.9875]];
 
-/// One channel's band-pass and size parameters.
+/// One channel's band-pass and size parameters (its peak frequency f_max is separate: the
+/// sustained channel's depends on Y).
 struct Channel {
-    /// Peak frequency (cpd), where it does not depend on Y.
-    f_max: f64,
     /// Bandwidth b: the band-pass is 10^(-(log f - log f_max)^2 / 2^b).
     bandwidth: f64,
     /// Below f_max the band-pass stays at or above 1 - a (a = 0: it stays at 1).
@@ -108,31 +107,30 @@ struct Channel {
 }
 
 const SUSTAINED: Channel = Channel {
-    f_max: f64::NAN, // depends on Y: sustained_f_max
     bandwidth: 0.000213047,
     low_floor_a: 0.100207,
     a0: 157.103,
     f0: 0.702338,
 };
 
+const TRANSIENT_F_MAX: f64 = 0.000316696;
 const TRANSIENT: Channel = Channel {
-    f_max: 0.000316696,
     bandwidth: 2.6761,
     low_floor_a: 0.000241177,
     a0: 3.81611,
     f0: 3.01389,
 };
 
+const RED_GREEN_F_MAX: f64 = 0.0178364;
 const RED_GREEN: Channel = Channel {
-    f_max: 0.0178364,
     bandwidth: 2.42104,
     low_floor_a: 0.0,
     a0: 2816.44,
     f0: 0.0711058,
 };
 
+const YELLOW_VIOLET_F_MAX: f64 = 0.00425753;
 const YELLOW_VIOLET: Channel = Channel {
-    f_max: 0.00425753,
     bandwidth: 2.68197,
     low_floor_a: 0.0,
     a0: 2.82789e7,
@@ -152,8 +150,8 @@ fn size_term<R: Real>(f: R, ch: &Channel) -> R {
 
 /// The band-pass LP(f) = 10^(-(log f - log f_max)^2 / 2^b), held at or above 1 - a below f_max.
 fn band_pass<R: Real>(f: R, f_max: R, ch: &Channel) -> R {
-    let octaves = f.log10() - f_max.log10();
-    let lp = R::of(10.0).powf(-(octaves * octaves) / R::of(2f64.powf(ch.bandwidth)));
+    let decades = f.log10() - f_max.log10();
+    let lp = R::of(10.0).powf(-(decades * decades) / R::of(2f64.powf(ch.bandwidth)));
     if f < f_max {
         lp.max(R::of(1.0 - ch.low_floor_a))
     } else {
@@ -184,7 +182,7 @@ pub fn sustained<R: Real>(y: R, f: R) -> R {
 /// The achromatic transient channel's sensitivity (before its weight R_trans).
 pub fn transient<R: Real>(y: R, f: R) -> R {
     let peak = R::of(2748.09) * y.powf(R::of(0.193434));
-    peak * band_pass(f, R::of(TRANSIENT.f_max), &TRANSIENT) * size_term(f, &TRANSIENT)
+    peak * band_pass(f, R::of(TRANSIENT_F_MAX), &TRANSIENT) * size_term(f, &TRANSIENT)
 }
 
 /// The transient channel's weight for a static stimulus, exp(-|w0|^0.3796 / 0.0844836) with
@@ -201,19 +199,25 @@ pub fn achromatic<R: Real>(y: R, f: R) -> R {
     sustained(y, f) + transient_weight(y) * transient(y, f)
 }
 
-fn chromatic<R: Real>(y: R, f: R, peak: &[f64; 3], ch: &Channel) -> R {
+fn chromatic<R: Real>(y: R, f: R, peak: &[f64; 3], f_max: f64, ch: &Channel) -> R {
     let s_max = R::of(peak[0]) * (R::of(1.0) + R::of(peak[1]) / y).powf(R::of(-peak[2]));
-    s_max * band_pass(f, R::of(ch.f_max), ch) * size_term(f, ch)
+    s_max * band_pass(f, R::of(f_max), ch) * size_term(f, ch)
 }
 
 /// The red-green sensitivity.
 pub fn red_green<R: Real>(y: R, f: R) -> R {
-    chromatic(y, f, &RED_GREEN_PEAK, &RED_GREEN)
+    chromatic(y, f, &RED_GREEN_PEAK, RED_GREEN_F_MAX, &RED_GREEN)
 }
 
 /// The yellow-violet sensitivity.
 pub fn yellow_violet<R: Real>(y: R, f: R) -> R {
-    chromatic(y, f, &YELLOW_VIOLET_PEAK, &YELLOW_VIOLET)
+    chromatic(
+        y,
+        f,
+        &YELLOW_VIOLET_PEAK,
+        YELLOW_VIOLET_F_MAX,
+        &YELLOW_VIOLET,
+    )
 }
 
 /// The three channels' sensitivities at one luminance and frequency.
