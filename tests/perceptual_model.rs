@@ -325,9 +325,10 @@ fn near_y_0_0113_the_transient_jump_is_in_the_closed_form_and_the_floor_keeps_th
 // The GPU's f32 tables against the f64 closed form.
 
 /// How far the tables may be from the closed form, relative, per channel. Linear interpolation
-/// over steps of h = 5.5/255 in log10 Y errs by at most h^2/8 times the curvature of S in log Y;
-/// the largest is the sustained channel's where its luminance factor bends toward
-/// 31 600 cd/m^2 (about 4e-4 at 30 cpd; 2.3e-4 at 2 to 8 cpd), then f32 rounding (6e-8).
+/// over steps of h = 5.5/255 in log10 Y errs by about h^2/8 times the curvature of S in log Y;
+/// the largest is the sustained channel's: 4e-4 at 30 cpd near the bottom of the range,
+/// 3.5e-4 at 1 cpd where its band-pass floor sets in (f_max(Y) crossing f), 2.3e-4 at 2 to
+/// 8 cpd near the top, where its luminance factor bends; then f32 rounding (6e-8).
 /// Since c' = c - c/C and C is a norm of the three channels, a relative error e in each S moves
 /// c' by at most e c/C <= e c: at 5e-4, well under the change in c' of one of the bisection's
 /// 256ths (about c'/256, 2e-4 at the default target 0.05), so the tables shift the method's
