@@ -11,6 +11,7 @@ pub mod method;
 pub mod method_reference;
 pub mod methods;
 pub mod params;
+pub mod perception;
 mod pixel;
 pub mod registration;
 pub mod reprojection;

@@ -1,0 +1,125 @@
+//! Which spatial frequency the contrast sensitivities are taken at (docs/algorithm.md, *Which
+//! frequency*): from the background's blur, an ensemble of image frequencies, or a fixed number
+//! of cycles per degree. Pure.
+
+/// The `frequency` setting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Frequency {
+    /// The frequency the background's Gaussian blur halves, from the blur's size in degrees of
+    /// view (the default).
+    Blur,
+    /// The mean of c' over the four [`ENSEMBLE_CPD`] frequencies.
+    Ensemble,
+    /// A fixed frequency in cycles per degree, used as given.
+    Cpd(f64),
+}
+
+/// The midpoints (cpd) of four bands of equal probability of a 1/f^1.8 amplitude spectrum over
+/// 1 to 30 cpd: the frequency distribution of images.
+pub const ENSEMBLE_CPD: [f64; 4] = [1.1679, 1.7145, 2.9920, 8.3785];
+
+/// The range `Blur` is clamped to (cpd). Below 1 cpd a 1 deg^2 patch makes every contrast
+/// invisible, which says nothing useful; 30 cpd is about the eye's resolution limit, and what
+/// an unblurred background gives.
+pub const BLUR_CPD_MIN: f64 = 1.0;
+pub const BLUR_CPD_MAX: f64 = 30.0;
+
+/// The frequency at which a Gaussian of sigma 1 degree halves a grating's amplitude:
+/// exp(-2 pi^2 sigma^2 f^2) = 1/2 gives f = sqrt(ln 2 / 2) / (pi sigma).
+pub fn blur_halving_cpd_deg() -> f64 {
+    (std::f64::consts::LN_2 / 2.0).sqrt() / std::f64::consts::PI
+}
+
+/// The background's blur, as the view sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlurGeometry {
+    /// The Gaussian's sigma in camera pixels (0 when the background is not blurred).
+    pub sigma_camera_px: f64,
+    /// How many display pixels one camera pixel covers.
+    pub display_px_per_camera_px: f64,
+    /// The view's display pixels per degree.
+    pub pixels_per_degree: f64,
+}
+
+impl BlurGeometry {
+    /// The blur's sigma in degrees of view.
+    pub fn sigma_deg(&self) -> f64 {
+        self.sigma_camera_px * self.display_px_per_camera_px / self.pixels_per_degree
+    }
+
+    /// `clamp(sqrt(ln 2 / 2) / (pi sigma_deg), 1, 30)`; 30 without blur.
+    pub fn halving_cpd(&self) -> f64 {
+        let f = blur_halving_cpd_deg() / self.sigma_deg();
+        if f.is_nan() {
+            BLUR_CPD_MAX
+        } else {
+            f.clamp(BLUR_CPD_MIN, BLUR_CPD_MAX)
+        }
+    }
+}
+
+/// The frequencies a frame's c' is averaged over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Frequencies {
+    One(f64),
+    Ensemble,
+}
+
+impl Frequencies {
+    /// In cpd; c' is their mean.
+    pub fn cpd(&self) -> &[f64] {
+        match self {
+            Frequencies::One(f) => std::slice::from_ref(f),
+            Frequencies::Ensemble => &ENSEMBLE_CPD,
+        }
+    }
+}
+
+impl Frequency {
+    /// The frequencies for a frame whose background has blur `blur`.
+    pub fn resolve(self, blur: &BlurGeometry) -> Frequencies {
+        match self {
+            Frequency::Blur => Frequencies::One(blur.halving_cpd()),
+            Frequency::Ensemble => Frequencies::Ensemble,
+            Frequency::Cpd(f) => Frequencies::One(f),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_halving_constant_is_the_one_stated() {
+        // 0.18738 as the docs round it.
+        assert!((blur_halving_cpd_deg() - 0.18738).abs() < 2e-5);
+        // At that frequency the Gaussian's transfer function is 1/2.
+        let (sigma, f) = (0.3, blur_halving_cpd_deg() / 0.3);
+        let mtf = (-2.0 * std::f64::consts::PI.powi(2) * sigma * sigma * f * f).exp();
+        assert!((mtf - 0.5).abs() < 1e-12, "{mtf}");
+    }
+
+    #[test]
+    fn blur_frequency_follows_the_blur_in_degrees_and_is_clamped() {
+        // sigma 1.5 camera px, 2 display px per camera px, 20 ppd: 0.15 deg -> 1.2493 cpd.
+        let g = BlurGeometry {
+            sigma_camera_px: 1.5,
+            display_px_per_camera_px: 2.0,
+            pixels_per_degree: 20.0,
+        };
+        assert!((g.halving_cpd() - 0.18739 / 0.15).abs() < 1e-3);
+        let wide = BlurGeometry {
+            sigma_camera_px: 15.0,
+            ..g
+        };
+        assert_eq!(wide.halving_cpd(), 1.0);
+        let none = BlurGeometry {
+            sigma_camera_px: 0.0,
+            ..g
+        };
+        assert_eq!(none.halving_cpd(), 30.0);
+        assert_eq!(Frequency::Cpd(4.0).resolve(&g), Frequencies::One(4.0));
+        assert_eq!(Frequency::Ensemble.resolve(&g).cpd(), &ENSEMBLE_CPD);
+    }
+}

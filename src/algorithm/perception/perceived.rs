@@ -1,0 +1,116 @@
+//! The perceived contrast c' of content over the world (docs/algorithm.md, *Light and
+//! contrast*): the physical RMS cone contrast c of the pattern a content edge makes, less its
+//! detection threshold c / C, with C from castleCSF at the pattern's mean luminance. Pure; the
+//! f64 reference (the f32 tables for the GPU are tables.rs).
+
+use glam::DVec3;
+
+use super::castle_csf::{self, Real};
+use super::frequency::Frequencies;
+use super::light::{Light, Pattern};
+use super::settings::PerceptualSettings;
+
+/// The lowest luminance floor (cd/m^2) the model accepts: the lower end of the GPU's tables
+/// (log10 Y = -1), clear of the transient weight's jump at 0.0113 cd/m^2.
+pub const LUMINANCE_MIN: f64 = 0.1;
+
+/// The luminance (cd/m^2) above which the sensitivities are held at their value there: the
+/// upper end of the GPU's tables (log10 Y = 4.5). Beyond the closed form, which has no upper
+/// end; the model and the tables then agree everywhere. Only a world brighter than about
+/// 30 000 cd/m^2 at the eye (direct sunlight on snow) reaches it.
+pub const LUMINANCE_MAX: f64 = 31622.776601683792;
+
+/// The RMS cone contrast `sqrt(((dL/L_m)^2 + (dM/M_m)^2 + (dS/S_m)^2) / 3)`; 0 where there is no
+/// light (a mean of 0).
+pub fn rms_cone_contrast<R: Real>(mean: [R; 3], amplitude: [R; 3]) -> R {
+    let mut sum = R::of(0.0);
+    for i in 0..3 {
+        if mean[i] > R::of(0.0) {
+            let k = amplitude[i] / mean[i];
+            sum = sum + k * k;
+        }
+    }
+    (sum / R::of(3.0)).sqrt()
+}
+
+/// Kulikowski's rule: the perceived contrast is the physical contrast less the threshold c / C,
+/// `c' = c max(1 - 1/C, 0)` (0 for C = 0).
+pub fn kulikowski<R: Real>(c: R, threshold_multiple: R) -> R {
+    if threshold_multiple <= R::of(0.0) {
+        return R::of(0.0);
+    }
+    c * (R::of(1.0) - R::of(1.0) / threshold_multiple).max(R::of(0.0))
+}
+
+/// c, C and c' of one pattern at one frequency.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contrast {
+    /// The physical (RMS cone) contrast.
+    pub physical: f64,
+    /// C: how many times its detection threshold the pattern is.
+    pub threshold_multiple: f64,
+    /// c'.
+    pub perceived: f64,
+}
+
+/// c, C and c' of `pattern` at frequency `f` (cpd), the sensitivities taken at luminance `y`.
+pub fn contrast(pattern: &Pattern, y: f64, f: f64) -> Contrast {
+    let physical = rms_cone_contrast(pattern.mean, pattern.amplitude);
+    let s = castle_csf::sensitivities(y, f);
+    let threshold_multiple = castle_csf::threshold_multiple(pattern.mean, pattern.amplitude, s);
+    Contrast {
+        physical,
+        threshold_multiple,
+        perceived: kulikowski(physical, threshold_multiple),
+    }
+}
+
+/// The model for one frame: the lights, the floor, the target and the frequencies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Model {
+    pub light: Light,
+    /// The floor on the luminance the sensitivities are taken at (cd/m^2).
+    pub min_luminance: f64,
+    /// The c' at which content counts as visible enough.
+    pub target_contrast: f64,
+    pub frequencies: Frequencies,
+}
+
+impl Model {
+    /// The model of `settings`, behind a lens of `transmittance`, at `frequencies` (from
+    /// `settings.frequency` resolved for the frame).
+    pub fn new(
+        settings: &PerceptualSettings,
+        transmittance: f64,
+        frequencies: Frequencies,
+    ) -> Model {
+        Model {
+            light: Light {
+                display_peak_nits: settings.display_peak_nits,
+                world_nits_at_eye: transmittance * settings.world_nits,
+            },
+            min_luminance: settings.min_luminance,
+            target_contrast: settings.target_contrast,
+            frequencies,
+        }
+    }
+
+    /// The luminance the sensitivities are taken at for a pattern of mean luminance `y`:
+    /// `y` floored at `min_luminance` and held at [`LUMINANCE_MAX`].
+    pub fn sensitivity_luminance(&self, y: f64) -> f64 {
+        y.max(self.min_luminance).min(LUMINANCE_MAX)
+    }
+
+    /// c' of linear display colour `display` over the linear (unattenuated) background
+    /// `background`: the mean over the frame's frequencies.
+    pub fn perceived_contrast(&self, display: DVec3, background: DVec3) -> f64 {
+        let pattern = self.light.pattern(display, background);
+        let y = self.sensitivity_luminance(pattern.luminance);
+        let cpd = self.frequencies.cpd();
+        let sum: f64 = cpd
+            .iter()
+            .map(|&f| contrast(&pattern, y, f).perceived)
+            .sum();
+        sum / cpd.len() as f64
+    }
+}
