@@ -5,14 +5,14 @@
 //! reached by the least change the bisection finds).
 
 use contrastxr::algorithm::perception::castle_csf::{self, Sensitivities};
+use contrastxr::algorithm::perception::frame_report::{frame_report, ReportPixel};
 use contrastxr::algorithm::perception::frequency::{Frequencies, ENSEMBLE_CPD};
 use contrastxr::algorithm::perception::light::{Light, Pattern};
-use contrastxr::algorithm::perception::method::{
+use contrastxr::algorithm::perception::model_settings::PerceptualSettings;
+use contrastxr::algorithm::perception::perceived_contrast::{contrast, Model};
+use contrastxr::algorithm::perception::perceptual_pixel::{
     perceptual, perceptual_over_paper, Class, Outcome,
 };
-use contrastxr::algorithm::perception::perceived::{contrast, Model};
-use contrastxr::algorithm::perception::report::{frame_report, ReportPixel};
-use contrastxr::algorithm::perception::settings::PerceptualSettings;
 use contrastxr::algorithm::perception::tables::{
     PerceptualTables, SensitivityTable, LOG_LUMINANCE_MAX, LOG_LUMINANCE_MIN,
 };
@@ -404,7 +404,7 @@ fn c_prime_from_the_tables_in_f32_follows_the_f64_model() {
             let want = model.perceived_contrast(d, b);
             let got = f64::from(tables.perceived_contrast(d.as_vec3(), b.as_vec3()));
             let p = model.light.pattern(d, b);
-            let c = contrastxr::algorithm::perception::perceived::rms_cone_contrast(
+            let c = contrastxr::algorithm::perception::perceived_contrast::rms_cone_contrast(
                 p.mean,
                 p.amplitude,
             );

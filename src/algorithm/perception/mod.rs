@@ -11,10 +11,10 @@
 
 pub mod castle_csf;
 pub mod directions;
+pub mod frame_report;
 pub mod frequency;
 pub mod light;
-pub mod method;
-pub mod perceived;
-pub mod report;
-pub mod settings;
+pub mod model_settings;
+pub mod perceived_contrast;
+pub mod perceptual_pixel;
 pub mod tables;

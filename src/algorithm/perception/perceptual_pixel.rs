@@ -8,7 +8,7 @@
 use glam::DVec3;
 
 use super::directions::DIRECTIONS;
-use super::perceived::Model;
+use super::perceived_contrast::Model;
 use crate::algorithm::params::{Method, Params};
 use crate::algorithm::pixel::enhance_linear;
 use crate::colour;

@@ -6,8 +6,8 @@
 use glam::DVec3;
 
 use super::frequency::Frequencies;
-use super::method::Class;
-use super::perceived::Model;
+use super::perceived_contrast::Model;
+use super::perceptual_pixel::Class;
 use crate::colour;
 
 /// The floor on the mean c' before that the gain divides by.

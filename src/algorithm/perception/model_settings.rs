@@ -2,7 +2,16 @@
 //! reading them from the config, the environment and the command line is not this module's job.
 
 use super::frequency::Frequency;
-use super::perceived::{LUMINANCE_MAX, LUMINANCE_MIN};
+
+/// The lowest luminance floor (cd/m^2) the model accepts: the lower end of the GPU's tables
+/// (log10 Y = -1), clear of the transient weight's jump at 0.0113 cd/m^2.
+pub const LUMINANCE_MIN: f64 = 0.1;
+
+/// The luminance (cd/m^2) above which the sensitivities are held at their value there: the
+/// upper end of the GPU's tables (log10 Y = 4.5). Beyond the closed form, which has no upper
+/// end; the model and the tables then agree everywhere. Only a world brighter than about
+/// 30 000 cd/m^2 at the eye (direct sunlight on snow) reaches it.
+pub const LUMINANCE_MAX: f64 = 31622.776601683792;
 
 /// How bright the display and the world are, how much contrast is enough, and at which spatial
 /// frequency contrast is judged.

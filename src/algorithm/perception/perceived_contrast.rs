@@ -8,17 +8,7 @@ use glam::DVec3;
 use super::castle_csf::{self, Real};
 use super::frequency::Frequencies;
 use super::light::{Light, Pattern};
-use super::settings::PerceptualSettings;
-
-/// The lowest luminance floor (cd/m^2) the model accepts: the lower end of the GPU's tables
-/// (log10 Y = -1), clear of the transient weight's jump at 0.0113 cd/m^2.
-pub const LUMINANCE_MIN: f64 = 0.1;
-
-/// The luminance (cd/m^2) above which the sensitivities are held at their value there: the
-/// upper end of the GPU's tables (log10 Y = 4.5). Beyond the closed form, which has no upper
-/// end; the model and the tables then agree everywhere. Only a world brighter than about
-/// 30 000 cd/m^2 at the eye (direct sunlight on snow) reaches it.
-pub const LUMINANCE_MAX: f64 = 31622.776601683792;
+use super::model_settings::{PerceptualSettings, LUMINANCE_MAX};
 
 /// The RMS cone contrast `sqrt(((dL/L_m)^2 + (dM/M_m)^2 + (dS/S_m)^2) / 3)`; 0 where there is no
 /// light (a mean of 0).
