@@ -37,25 +37,52 @@ impl std::fmt::Display for LayerError {
 /// answers the call itself.
 pub type LayerResult = Result<xr::Result, LayerError>;
 
+/// A panic the layer caught in its own code: what the layer was doing, and what the panic said.
+#[derive(Debug)]
+pub struct Contained<'a> {
+    /// What the layer was doing ("in xrEndFrame", "while enhancing"), as the log says it.
+    pub during: &'a str,
+    /// The panic's message.
+    pub message: String,
+}
+
+impl std::fmt::Display for Contained<'_> {
+    /// The log's words for it: "internal error in xrEndFrame".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "internal error {}", self.during)
+    }
+}
+
+/// The one place the layer catches panics: runs `body`, and returns what a panic in it said
+/// instead of unwinding further. The panic hook has already written the panic as one line of
+/// the log; the caller decides what the failure costs (usually the session's enhancement,
+/// through `SessionState::pass_through`).
+pub fn contain<R>(during: &str, body: impl FnOnce() -> R) -> Result<R, Contained<'_>> {
+    catch_unwind(AssertUnwindSafe(body)).map_err(|panic| Contained {
+        during,
+        message: panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into()),
+    })
+}
+
 /// Runs an entry point's body. A layer error becomes its XrResult; a panic is logged once and
 /// answered with `on_panic` (the layer then behaves as pass-through where the caller arranges
 /// it), never unwound into the app.
 pub fn guard(name: &str, on_panic: xr::Result, body: impl FnOnce() -> LayerResult) -> xr::Result {
-    match catch_unwind(AssertUnwindSafe(body)) {
+    let during = format!("in {name}");
+    match contain(&during, body) {
         Ok(Ok(result)) => result,
         Ok(Err(e)) => {
             log::debug(&format!("{name}: {e}"));
             e.result()
         }
         Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
             log::once(
                 &format!("panic-{name}"),
-                &format!("internal error in {name}: {what}"),
+                &format!("{panic}: {}", panic.message),
             );
             on_panic
         }
