@@ -19,6 +19,7 @@ mod gl_state_enums;
 mod gl_state_fns;
 mod gl_state_items;
 mod gl_state_objects;
+mod gl_swapchain;
 mod glx;
 mod gpu;
 mod leftovers;
