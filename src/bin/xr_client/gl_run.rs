@@ -126,31 +126,7 @@ fn run_session(
     let space = session
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
-    let check = options.check_untouched;
-    let (w, h) = view_size;
-    let projection = match options.layout {
-        Layout::Array => {
-            let views = [
-                LayerContent::Whole(Target::View(0)),
-                LayerContent::Whole(Target::View(1)),
-            ];
-            GlSwapchain::new(&session, &format, (w, h), &views, check)?
-        }
-        Layout::SideBySide => GlSwapchain::new(
-            &session,
-            &format,
-            (2 * w, h),
-            &[LayerContent::SideBySide],
-            check,
-        )?,
-    };
-    let quad = options
-        .quad
-        .then(|| {
-            let content = [LayerContent::Whole(Target::Quad)];
-            GlSwapchain::new(&session, &format, (w / 2, h / 2), &content, check)
-        })
-        .transpose()?;
+    let (projection, quad) = layer_swapchains(&session, &format, view_size, options)?;
     let churn = options.churn_swapchains.then(|| GlChurn {
         churner: Churner::default(),
         plan: churn::plan(
@@ -177,6 +153,53 @@ fn run_session(
         churn,
     };
     let result = frame_loop::run(instance, &mut frames, options, stats);
+    report_checks(&frames, report);
+    drop(frames);
+    std::thread::sleep(Duration::from_millis(options.idle_ms));
+    let t = Instant::now();
+    drop((space, session, waiter, stream));
+    report.teardown_ms.session(t.elapsed());
+    result
+}
+
+/// The projection swapchain in the layout asked for (an array of two layers, or one texture
+/// twice as wide), and with --quad the quad's, half the view's size.
+fn layer_swapchains(
+    session: &xr::Session<xr::OpenGL>,
+    format: &GlFormat,
+    (w, h): (u32, u32),
+    options: &Options,
+) -> Result<(GlSwapchain, Option<GlSwapchain>)> {
+    let check = options.check_untouched;
+    let projection = match options.layout {
+        Layout::Array => {
+            let views = [
+                LayerContent::Whole(Target::View(0)),
+                LayerContent::Whole(Target::View(1)),
+            ];
+            GlSwapchain::new(session, format, (w, h), &views, check)?
+        }
+        Layout::SideBySide => GlSwapchain::new(
+            session,
+            format,
+            (2 * w, h),
+            &[LayerContent::SideBySide],
+            check,
+        )?,
+    };
+    let quad = options
+        .quad
+        .then(|| {
+            let content = [LayerContent::Whole(Target::Quad)];
+            GlSwapchain::new(session, format, (w / 2, h / 2), &content, check)
+        })
+        .transpose()?;
+    Ok((projection, quad))
+}
+
+/// What the session's frames found: swapchains churned, and with --check-untouched each
+/// image's fate after its release.
+fn report_checks(frames: &GlFrames, report: &mut Report) {
     if let Some(churn) = &frames.churn {
         report.swapchains_churned += churn.churned.load(Ordering::Relaxed);
     }
@@ -186,12 +209,6 @@ fn run_session(
             report.frames_modified.extend(&log.modified);
         }
     }
-    drop(frames);
-    std::thread::sleep(Duration::from_millis(options.idle_ms));
-    let t = Instant::now();
-    drop((space, session, waiter, stream));
-    report.teardown_ms.session(t.elapsed());
-    result
 }
 
 /// The session on `gl`, through the binding it was made for.
@@ -216,9 +233,21 @@ fn create_session(
         return unsafe { instance.create_session::<xr::OpenGL>(system, &info) }
             .ctx("xrCreateSession");
     }
-    // The openxr crate has no session type for XR_MNDX_egl_enable: xrCreateSession with the
-    // binding chained by hand, the session then used as any OpenGL one (its swapchain images
-    // are XrSwapchainImageOpenGLKHR).
+    create_egl_session(instance, system, gl)
+}
+
+/// The session on an EGL context (XR_MNDX_egl_enable). The openxr crate has no session type for
+/// it: xrCreateSession with the binding chained by hand, the session then used as any OpenGL
+/// one (its swapchain images are XrSwapchainImageOpenGLKHR).
+fn create_egl_session(
+    instance: &xr::Instance,
+    system: xr::SystemId,
+    gl: &GlContext,
+) -> Result<(
+    xr::Session<xr::OpenGL>,
+    xr::FrameWaiter,
+    xr::FrameStream<xr::OpenGL>,
+)> {
     let get_proc = gl.get_proc_address();
     let binding = sys::GraphicsBindingEGLMNDX {
         ty: sys::GraphicsBindingEGLMNDX::TYPE,

@@ -157,6 +157,15 @@ impl GlStateCheck {
         let Some(frame) = self.frame.take() else {
             return Ok(());
         };
+        let changed = self.changes(frame);
+        self.changed.extend(changed);
+        self.checked += 1;
+        self.gl_error("reading the GL state after xrEndFrame")?;
+        self.put_back()
+    }
+
+    /// Every item that differs from what `before_end_frame` set, read in the client's context.
+    fn changes(&self, frame: u32) -> Vec<Change> {
         let mut changed = Vec::new();
         let mut note = |what: &str, before: &[i64], after: &[i64]| {
             if before != after {
@@ -193,9 +202,11 @@ impl GlStateCheck {
         for item in gl_items {
             note(&item.what, &item.set, &self.read(item));
         }
-        self.changed.extend(changed);
-        self.checked += 1;
-        self.gl_error("reading the GL state after xrEndFrame")?;
+        changed
+    }
+
+    /// Puts the client's own state back, and checks that it is all back.
+    fn put_back(&self) -> Result<()> {
         self.restore();
         self.gl_error("putting the client's GL state back")?;
         let now = self.read_all();
@@ -240,45 +251,18 @@ impl GlStateCheck {
         v[..item.set.len()].to_vec()
     }
 
+    /// Sets every item to the value the check gives it.
     fn set(&self) {
         let (f, o) = (&self.f, &self.objects);
-        // SAFETY: the client's context and pbuffers; names this check created, units and
-        // indices below GL 4.5's minimums, ranges inside the buffers at aligned offsets. The
-        // generic buffer bindings come after the indexed ones, which set them too.
+        // SAFETY: the client's context and pbuffers; names this check created, units below
+        // GL 4.5's minimums; valid pixel store values, capabilities and rectangles.
         unsafe {
             let ws = &f.window_system;
             ws.make_current(self.display, o.draw, self.read_drawable, self.context);
             (f.use_program)(o.program);
             (f.bind_program_pipeline)(o.pipeline);
-            for unit in 0..UNITS {
-                (f.active_texture)(TEXTURE0 + unit as Enum);
-                (f.bind_texture)(TEXTURE_2D, o.textures_2d[unit]);
-                (f.bind_texture)(TEXTURE_2D_ARRAY, o.textures_array[unit]);
-            }
-            (f.active_texture)(TEXTURE0 + ACTIVE_UNIT);
-            (f.bind_samplers)(0, UNITS as i32, o.samplers.as_ptr());
-            for unit in 0..UNITS {
-                (f.bind_image_texture)(
-                    unit as u32,
-                    o.textures_array[unit],
-                    1,
-                    1,
-                    1,
-                    READ_WRITE,
-                    R32UI,
-                );
-            }
-            for i in 0..UNITS {
-                let (offset, size) = Objects::range(o.storage_alignment, i);
-                let (target, buffer) = (SHADER_STORAGE_BUFFER, o.storage[i]);
-                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
-                let (offset, size) = Objects::range(o.uniform_alignment, i);
-                let (target, buffer) = (UNIFORM_BUFFER, o.uniform[i]);
-                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
-            }
-            for ((target, _, _), buffer) in GENERIC_BUFFERS.iter().zip(o.generic) {
-                (f.bind_buffer)(*target, buffer);
-            }
+            self.set_units();
+            self.set_buffers();
             for (pname, _, value, _) in PIXEL_STORE {
                 (f.pixel_store_i)(pname, value);
             }
@@ -293,6 +277,47 @@ impl GlStateCheck {
             (f.viewport)(x, y, w, h);
             let [x, y, w, h] = SCISSOR_SET;
             (f.scissor)(x, y, w, h);
+        }
+    }
+
+    /// Every unit's textures, sampler and image unit, then the active unit.
+    fn set_units(&self) {
+        let (f, o) = (&self.f, &self.objects);
+        // SAFETY: the client's context is current; names this check created, units below GL
+        // 4.5's minimums, level and layer 1 of textures that have them.
+        unsafe {
+            for unit in 0..UNITS {
+                (f.active_texture)(TEXTURE0 + unit as Enum);
+                (f.bind_texture)(TEXTURE_2D, o.textures_2d[unit]);
+                (f.bind_texture)(TEXTURE_2D_ARRAY, o.textures_array[unit]);
+            }
+            (f.active_texture)(TEXTURE0 + ACTIVE_UNIT);
+            (f.bind_samplers)(0, UNITS as i32, o.samplers.as_ptr());
+            for unit in 0..UNITS {
+                let texture = o.textures_array[unit];
+                (f.bind_image_texture)(unit as u32, texture, 1, 1, 1, READ_WRITE, R32UI);
+            }
+        }
+    }
+
+    /// The indexed storage and uniform buffer ranges, then the generic bindings (after the
+    /// indexed ones, which set them too).
+    fn set_buffers(&self) {
+        let (f, o) = (&self.f, &self.objects);
+        // SAFETY: the client's context is current; buffers this check created, indices below
+        // GL 4.5's minimums, ranges inside the buffers at aligned offsets.
+        unsafe {
+            for i in 0..UNITS {
+                let (offset, size) = Objects::range(o.storage_alignment, i);
+                let (target, buffer) = (SHADER_STORAGE_BUFFER, o.storage[i]);
+                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
+                let (offset, size) = Objects::range(o.uniform_alignment, i);
+                let (target, buffer) = (UNIFORM_BUFFER, o.uniform[i]);
+                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
+            }
+            for ((target, _, _), buffer) in GENERIC_BUFFERS.iter().zip(o.generic) {
+                (f.bind_buffer)(*target, buffer);
+            }
         }
     }
 
