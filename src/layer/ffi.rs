@@ -37,13 +37,12 @@ impl std::fmt::Display for LayerError {
 /// answers the call itself.
 pub type LayerResult = Result<xr::Result, LayerError>;
 
-/// A panic the layer caught in its own code: what the layer was doing, and what the panic said.
+/// A panic the layer caught in its own code, by what the layer was doing (the panic's own
+/// words are already in the log, through the panic hook).
 #[derive(Debug)]
 pub struct Contained<'a> {
     /// What the layer was doing ("in xrEndFrame", "while enhancing"), as the log says it.
     pub during: &'a str,
-    /// The panic's message.
-    pub message: String,
 }
 
 impl std::fmt::Display for Contained<'_> {
@@ -53,18 +52,22 @@ impl std::fmt::Display for Contained<'_> {
     }
 }
 
-/// The one place the layer catches panics: runs `body`, and returns what a panic in it said
-/// instead of unwinding further. The panic hook has already written the panic as one line of
-/// the log; the caller decides what the failure costs (usually the session's enhancement,
-/// through `SessionState::pass_through`).
+/// Runs part of the layer's work with a panic in it contained: an error comes back instead of
+/// an unwind. The panic hook has already written the panic as one line of the log;
+/// the caller decides what the failure costs (usually the session's enhancement, through
+/// `SessionState::pass_through`).
 pub fn contain<R>(during: &str, body: impl FnOnce() -> R) -> Result<R, Contained<'_>> {
-    catch_unwind(AssertUnwindSafe(body)).map_err(|panic| Contained {
-        during,
-        message: panic
+    caught(body).map_err(|_| Contained { during })
+}
+
+/// The one place the layer catches panics ([`contain`] and [`guard`] run their bodies here).
+fn caught<R>(body: impl FnOnce() -> R) -> Result<R, String> {
+    catch_unwind(AssertUnwindSafe(body)).map_err(|panic| {
+        panic
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
             .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown panic".into()),
+            .unwrap_or_else(|| "unknown panic".into())
     })
 }
 
@@ -72,17 +75,16 @@ pub fn contain<R>(during: &str, body: impl FnOnce() -> R) -> Result<R, Contained
 /// answered with `on_panic` (the layer then behaves as pass-through where the caller arranges
 /// it), never unwound into the app.
 pub fn guard(name: &str, on_panic: xr::Result, body: impl FnOnce() -> LayerResult) -> xr::Result {
-    let during = format!("in {name}");
-    match contain(&during, body) {
+    match caught(body) {
         Ok(Ok(result)) => result,
         Ok(Err(e)) => {
             log::debug(&format!("{name}: {e}"));
             e.result()
         }
-        Err(panic) => {
+        Err(what) => {
             log::once(
                 &format!("panic-{name}"),
-                &format!("{panic}: {}", panic.message),
+                &format!("internal error in {name}: {what}"),
             );
             on_panic
         }
