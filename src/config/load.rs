@@ -1,5 +1,5 @@
 //! Finding and reading the config file (and the shipped device profiles) for an environment,
-//! then resolving them ([`super::resolve`]). Reads never hang the caller, which may be the
+//! then resolving them ([`mod@super::resolve`]). Reads never hang the caller, which may be the
 //! app's thread; a file that cannot be read is one problem line, never an error.
 
 use super::path::{self, Env};
