@@ -71,6 +71,16 @@ unsafe extern "system" fn destroy_swapchain(sc: xr::Swapchain) -> xr::Result {
     record(sc.into_raw(), "destroy_swapchain")
 }
 
+unsafe extern "system" fn create_swapchain(
+    s: xr::Session,
+    _: *const xr::SwapchainCreateInfo,
+    swapchain: *mut xr::Swapchain,
+) -> xr::Result {
+    // SAFETY: the layer forwards the app's handle pointer, valid in these tests.
+    unsafe { *swapchain = xr::Swapchain::from_raw(fresh_handle()) };
+    record(s.into_raw(), "create_swapchain")
+}
+
 unsafe extern "system" fn destroy_session(s: xr::Session) -> xr::Result {
     record(s.into_raw(), "destroy_session")
 }
@@ -88,7 +98,6 @@ unsupported! {
     get_instance_proc_addr(xr::Instance, *const c_char, *mut Option<xr::pfn::VoidFunction>);
     destroy_instance(xr::Instance);
     create_session(xr::Instance, *const xr::SessionCreateInfo, *mut xr::Session);
-    create_swapchain(xr::Session, *const xr::SwapchainCreateInfo, *mut xr::Swapchain);
     enumerate_images(xr::Swapchain, u32, *mut u32, *mut xr::SwapchainImageBaseHeader);
     get_system_properties(xr::Instance, xr::SystemId, *mut xr::SystemProperties);
     create_reference_space(xr::Session, *const xr::ReferenceSpaceCreateInfo, *mut xr::Space);
@@ -272,7 +281,17 @@ impl Drop for Rig {
 
 /// The rig's swapchain: 64x64, one layer, enhanced through a copy.
 fn swapchain_info() -> SwapchainInfo {
-    let app_info = xr::SwapchainCreateInfo {
+    SwapchainInfo::new(
+        &colour_swapchain(),
+        Some(super::graphics::fake_graphics::FORMAT),
+        true,
+        false,
+    )
+}
+
+/// An app's create info of a 64x64 colour swapchain.
+pub fn colour_swapchain() -> xr::SwapchainCreateInfo {
+    xr::SwapchainCreateInfo {
         ty: xr::SwapchainCreateInfo::TYPE,
         next: std::ptr::null(),
         create_flags: xr::SwapchainCreateFlags::EMPTY,
@@ -284,11 +303,5 @@ fn swapchain_info() -> SwapchainInfo {
         face_count: 1,
         array_size: 1,
         mip_count: 1,
-    };
-    SwapchainInfo::new(
-        &app_info,
-        Some(super::graphics::fake_graphics::FORMAT),
-        true,
-        false,
-    )
+    }
 }

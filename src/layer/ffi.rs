@@ -122,3 +122,32 @@ pub unsafe fn c_str<'a>(p: *const std::ffi::c_char) -> Option<&'a str> {
     // SAFETY: guaranteed by the caller.
     unsafe { std::ffi::CStr::from_ptr(p) }.to_str().ok()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A panic comes back as what the layer was doing, in the log's words; a body that ends
+    /// normally gives its value.
+    #[test]
+    fn contain_turns_a_panic_into_the_logs_words() {
+        let caught = contain("in xrEndFrame", || -> u32 { panic!("fault injected") });
+        assert_eq!(
+            caught.map_err(|e| e.to_string()),
+            Err("internal error in xrEndFrame".to_string())
+        );
+        assert_eq!(contain("while enhancing", || 7).ok(), Some(7));
+    }
+
+    /// An entry point that panics answers `on_panic`; a layer error, its own result.
+    #[test]
+    fn guard_answers_a_panic_and_a_layer_error() {
+        let on_panic = xr::Result::ERROR_RUNTIME_FAILURE;
+        let panicked = guard("xrTestCall", on_panic, || panic!("fault injected"));
+        assert_eq!(panicked, on_panic);
+        let unknown = guard("xrTestCall", on_panic, || {
+            Err(LayerError::UnknownHandle("XrSession"))
+        });
+        assert_eq!(unknown, xr::Result::ERROR_HANDLE_INVALID);
+    }
+}

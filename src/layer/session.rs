@@ -277,6 +277,23 @@ mod tests {
         assert!(lock(&rig.state()).engine.is_none());
     }
 
+    /// A panic in the graphics while the app makes a swapchain (the shaders it will need are
+    /// requested): the app gets its swapchain, and the session passes through.
+    #[test]
+    fn a_panic_while_requesting_shaders_passes_the_session_through() {
+        let rig = Rig::new();
+        rig.fake.answer(Outcome::Panic);
+        let mut made = xr::Swapchain::NULL;
+        let info = super::super::fake_runtime::colour_swapchain();
+        // SAFETY: the layer's entry point with valid arguments.
+        let created = unsafe { swapchain::create_swapchain(rig.session, &info, &mut made) };
+        assert_eq!(created, xr::Result::SUCCESS);
+        assert_ne!(made, xr::Swapchain::NULL);
+        assert_eq!(rig.runtime_calls(), ["create_swapchain"]);
+        assert_eq!(rig.fake.calls().requested_shaders, 1);
+        assert!(lock(&rig.state()).engine.is_none());
+    }
+
     /// Frames whose shaders are still being built pass through, and the engine stays.
     #[test]
     fn pending_frames_pass_through_and_keep_the_engine() {
