@@ -103,7 +103,14 @@ unsupported! {
     create_reference_space(xr::Session, *const xr::ReferenceSpaceCreateInfo, *mut xr::Space);
     destroy_space(xr::Space);
     locate_space(xr::Space, xr::Space, xr::Time, *mut xr::SpaceLocation);
-    enumerate_blend_modes(xr::Instance, xr::SystemId, xr::ViewConfigurationType, u32, *mut u32, *mut xr::EnvironmentBlendMode);
+    enumerate_blend_modes(
+        xr::Instance,
+        xr::SystemId,
+        xr::ViewConfigurationType,
+        u32,
+        *mut u32,
+        *mut xr::EnvironmentBlendMode
+    );
 }
 
 /// The fake runtime's functions, as the layer's dispatch holds the next layer's.
