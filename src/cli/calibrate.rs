@@ -281,22 +281,6 @@ impl Target {
     }
 }
 
-fn settings_now(target: &Target) -> config::Settings {
-    let file = [Some(target.path.as_path()), target.seed.as_deref()]
-        .into_iter()
-        .flatten()
-        .find(|p| p.is_file());
-    let text = file.and_then(|p| contrastxr::user_file::read_text(p).ok());
-    let source = file
-        .zip(text.as_deref())
-        .map(|(path, text)| config::Source { path, text });
-    let who = config::Who {
-        app: target.app.as_deref().unwrap_or(""),
-        device: target.device.as_deref(),
-    };
-    config::resolve_for(who, source, &Env::default()).settings
-}
-
 fn say(input: &Input, line: &str) {
     // In raw mode the terminal does not return the carriage by itself.
     let end = if input.is_tty() { "\r\n" } else { "\n" };
@@ -407,7 +391,11 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             );
         }
     }
-    let settings = settings_now(&target);
+    let who = config::Who {
+        app: target.app.as_deref().unwrap_or(""),
+        device: target.device.as_deref(),
+    };
+    let settings = edit::current(&target.path, target.seed.as_deref(), who);
     let start = [target.eye(&settings, 0), target.eye(&settings, 1)];
     let mut eyes = start;
     target.set("mode", &Value::Text("background".into()))?;

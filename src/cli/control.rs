@@ -6,8 +6,7 @@ use super::error::{print, CliError};
 
 /// `--app NAME`, also taken by `config`.
 pub const OPTIONS: &[Opt] = &[Opt::value("--app", "NAME")];
-use contrastxr::config::{self, edit, Env, Source};
-use std::path::Path;
+use contrastxr::config::{self, edit, Env};
 
 pub fn usage() -> String {
     "usage: contrastxr toggle [--app NAME] [MODE]\n\
@@ -25,18 +24,6 @@ pub fn usage() -> String {
 
 fn target() -> Result<(std::path::PathBuf, Option<std::path::PathBuf>), CliError> {
     config::path::for_writing(&Env::capture()).map_err(CliError::Failure)
-}
-
-fn current_settings(path: &Path, seed: Option<&Path>, app: Option<&str>) -> config::Settings {
-    let file = [Some(path), seed]
-        .into_iter()
-        .flatten()
-        .find(|p| p.is_file());
-    let text = file.and_then(|p| contrastxr::user_file::read_text(p).ok());
-    let source = file
-        .zip(text.as_deref())
-        .map(|(path, text)| Source { path, text });
-    config::resolve(app.unwrap_or(""), source, &Env::default()).settings
 }
 
 fn warn_if_overridden(key: &config::Key) {
@@ -84,7 +71,11 @@ pub fn run_set(args: &mut Args) -> Result<(), CliError> {
         .map_err(|e| CliError::Failure(format!("{}: {e}", key.name)))?;
     let (path, seed) = target()?;
     // Checked against what the file already says (e.g. an even blur_size needs blur = false).
-    let mut current = current_settings(&path, seed.as_deref(), app.as_deref());
+    let who = config::Who {
+        app: app.as_deref().unwrap_or(""),
+        device: None,
+    };
+    let mut current = edit::current(&path, seed.as_deref(), who);
     key.apply(&mut current, value.clone())
         .map_err(|e| CliError::Failure(format!("{}: {e}", key.name)))?;
     warn_if_overridden(key);

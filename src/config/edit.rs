@@ -4,7 +4,8 @@
 
 use super::keys::{key, Key};
 use super::path::Env;
-use super::resolve::{resolve, Source};
+use super::resolve::{resolve, resolve_for, Source, Who};
+use super::settings::Settings;
 use super::value::Value;
 use crate::algorithm::params::ViewMode;
 use std::path::Path;
@@ -23,6 +24,21 @@ fn read(path: &Path, seed: Option<&Path>) -> Result<String, String> {
             crate::user_file::read_text(p).map_err(|why| format!("config {} {why}", p.display()))
         }
     }
+}
+
+/// The settings the file about to be edited gives `who` now, without the environment: the
+/// file, else the seed it will be copied from, else the defaults (a file that cannot be read
+/// counts as none). What `toggle`, `set` and `calibrate` start from.
+pub fn current(path: &Path, seed: Option<&Path>, who: Who) -> Settings {
+    let file = [Some(path), seed]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file());
+    let text = file.and_then(|p| crate::user_file::read_text(p).ok());
+    let source = file
+        .zip(text.as_deref())
+        .map(|(path, text)| Source { path, text });
+    resolve_for(who, source, &Env::default()).settings
 }
 
 /// Writes `text` to `path` through a temporary file in the same folder and a rename.

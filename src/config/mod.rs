@@ -12,6 +12,7 @@
 pub mod edit;
 pub mod file;
 pub mod keys;
+pub mod load;
 mod origin;
 pub mod path;
 pub mod resolve;
@@ -21,11 +22,10 @@ pub mod value;
 pub mod watch;
 
 pub use keys::{key, Key, KEYS};
+pub use load::{load, load_for};
 pub use origin::{Origin, Table};
 pub use path::Env;
-pub use resolve::{
-    check, is_off, load, load_for, resolve, resolve_for, resolve_with, Resolved, Source, Who,
-};
+pub use resolve::{check, is_off, resolve, resolve_for, resolve_with, Resolved, Source, Who};
 pub use settings::{Capture, InPlace, Registration, Settings, EYES};
 pub use value::{Kind, Value};
 pub use watch::Live;

@@ -4,8 +4,9 @@
 //! watcher holds the lock at that instant, the next frame takes it.
 
 use super::keys::KEYS;
+use super::load::load_for;
 use super::path::{self, Env};
-use super::resolve::{load_for, Resolved, Who};
+use super::resolve::{Resolved, Who};
 use super::settings::Settings;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};

@@ -6,6 +6,7 @@
 //! `xrDestroyInstance` and the process's exit wait (boundedly) for what was handed over.
 
 use super::capture_files::CaptureJob;
+use super::ffi::contain;
 use super::log;
 use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Condvar, Mutex, MutexGuard, Once, OnceLock};
@@ -91,9 +92,8 @@ fn start() -> Option<Sender<CaptureJob>> {
         .spawn(move || {
             while let Some(job) = next_job(&rx) {
                 let bytes = job.bytes();
-                let written =
-                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job.write()))
-                        .unwrap_or_else(|_| Err("internal error while writing".into()));
+                let written = contain("while writing", || job.write())
+                    .unwrap_or_else(|panic| Err(panic.to_string()));
                 if let Err(e) = written {
                     log::once("capture-failed", &format!("capture failed: {e}"));
                 }
@@ -169,7 +169,7 @@ pub fn finish(limit: Duration) -> bool {
 
 extern "C" fn at_exit() {
     // A panic must not unwind into libc.
-    let _ = std::panic::catch_unwind(|| {
+    let _ = contain("at exit", || {
         if !finish(EXIT_WAIT) {
             log::info("exiting with captures not yet written (the capture folder's file system is stalled)");
         }

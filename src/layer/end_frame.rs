@@ -4,6 +4,7 @@
 
 use super::capture_files;
 use super::capture_writer;
+use super::ffi;
 use super::graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
 use super::indicator;
 use super::live_settings::Settings;
@@ -271,18 +272,14 @@ pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
     s.frame_in_use = None;
 }
 
-/// `process` with panics caught: a panic turns the session into pass-through.
+/// `process` with panics contained: a panic turns the session into pass-through.
 fn guarded_process(
     s: &mut SessionState,
     items: Vec<ViewImage>,
     blend: Option<xr::EnvironmentBlendMode>,
 ) {
-    let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| process(s, items, blend)));
-    if done.is_err() {
-        log::info(
-            "internal error while enhancing: passing this session's frames through from now on",
-        );
-        s.retire_engine();
+    if let Err(panic) = ffi::contain("while enhancing", || process(s, items, blend)) {
+        s.pass_through(&panic.to_string());
     }
 }
 
@@ -340,12 +337,7 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
         }
         Err(NotDone::Pending) => log::once("pipelines-pending", graphics.pending_line()),
         Err(NotDone::Skipped(why)) => log::once(&format!("skipped: {why}"), &why),
-        Err(NotDone::Failed(e)) => {
-            log::info(&format!(
-                "{e}: passing this session's frames through from now on"
-            ));
-            s.retire_engine();
-        }
+        Err(NotDone::Failed(e)) => s.pass_through(&e),
     }
 }
 

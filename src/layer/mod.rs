@@ -10,6 +10,8 @@ mod capture_writer;
 mod dispatch;
 mod end_frame;
 mod entry;
+#[cfg(test)]
+mod fake_runtime;
 mod ffi;
 pub mod graphics;
 mod headset_settings;

@@ -5,7 +5,7 @@
 //! At xrEndFrame a session also takes newer settings from the config watcher (never waiting);
 //! a changed background source is reopened on a helper thread while frames pass through.
 
-use super::ffi::{guard, LayerError};
+use super::ffi::{contain, guard, Contained, LayerError};
 use super::graphics::{self, Bound};
 use super::state::{self, lock, SessionState};
 use super::{blend, end_frame, headset_settings, log, sources, swapchain};
@@ -155,14 +155,9 @@ fn layer_end_frame(session: xr::Session, s: &Mutex<SessionState>, info: *const x
     sources::pick_up_settings(session, &mut s);
     // SAFETY: the app's frame end info (null is left for the runtime to reject).
     if let Some(info) = unsafe { info.as_ref() } {
-        let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            end_frame::enhance_frame(&mut s, info)
-        }));
-        if done.is_err() {
-            log::info(
-                "internal error while enhancing: passing this session's frames through from now on",
-            );
-            s.retire_engine();
+        let enhanced = contain("while enhancing", || end_frame::enhance_frame(&mut s, info));
+        if let Err(panic) = enhanced {
+            s.pass_through(&panic.to_string());
         }
     }
     if let Err(e) = crate::fault::check("end-frame") {
@@ -174,17 +169,11 @@ fn layer_end_frame(session: xr::Session, s: &Mutex<SessionState>, info: *const x
 
 /// After a panic in the layer's part of xrEndFrame: the session passes through from now on,
 /// and every image still held is released, so the app's frame reaches the runtime whole.
-fn recover_end_frame(session: xr::Session, s: &Mutex<SessionState>) {
-    log::once(
-        "end-frame-panic",
-        "internal error in xrEndFrame: passing this session's frames through from now on",
-    );
-    lock(s).retire_engine();
-    let released = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        swapchain::release_held(session)
-    }));
-    if released.is_err() {
-        log::once("release-failed", "internal error releasing held images");
+fn recover_end_frame(session: xr::Session, s: &Mutex<SessionState>, panic: Contained) {
+    lock(s).pass_through(&panic.to_string());
+    let released = contain("releasing held images", || swapchain::release_held(session));
+    if let Err(panic) = released {
+        log::once("release-failed", &panic.to_string());
     }
 }
 
@@ -198,11 +187,8 @@ pub unsafe extern "system" fn end_frame(
         let s = state::session(session).ok_or(LayerError::UnknownHandle("XrSession"))?;
         let next = lock(&s).next;
         // A panic anywhere in the layer's part still forwards the app's frame.
-        let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            layer_end_frame(session, &s, info)
-        }));
-        if done.is_err() {
-            recover_end_frame(session, &s);
+        if let Err(panic) = contain("in xrEndFrame", || layer_end_frame(session, &s, info)) {
+            recover_end_frame(session, &s, panic);
         }
         // An app's ADDITIVE frame on a display set additive: the runtime gets a mode it has.
         let additive = lock(&s).settings.additive_display;
@@ -213,4 +199,143 @@ pub unsafe extern "system" fn end_frame(
         // SAFETY: forwarding the app's call (no layer lock is held while the runtime works).
         Ok(unsafe { (next.end_frame)(session, info) })
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::fake_runtime::Rig;
+    use super::super::graphics::fake_graphics::Outcome;
+    use super::*;
+
+    const FRAME: [&str; 4] = ["acquire", "wait", "release", "end_frame"];
+
+    /// The app's release is held (the runtime does not see it) until xrEndFrame, where the
+    /// image is enhanced and then released, before the runtime's xrEndFrame.
+    #[test]
+    fn a_held_release_reaches_the_runtime_after_the_enhancement_and_before_the_frame() {
+        let rig = Rig::new();
+        assert_eq!(rig.render(), [xr::Result::SUCCESS; 3]);
+        assert_eq!(rig.runtime_calls(), ["acquire", "wait"]);
+        assert!(rig.fake.calls().enhanced.is_empty());
+        assert_eq!(rig.end_frame(), xr::Result::SUCCESS);
+        assert_eq!(rig.runtime_calls(), FRAME);
+        assert_eq!(rig.fake.calls().enhanced, [[rig.swapchain.into_raw()]]);
+        assert_eq!(lock(&rig.state()).processed, 1);
+    }
+
+    /// A frame the graphics fail: the session passes through from then on (its engine retired,
+    /// told to stop building, and never asked again), and every frame still reaches the
+    /// runtime whole.
+    #[test]
+    fn a_failed_frame_passes_the_session_through_and_the_frames_still_reach_the_runtime() {
+        let rig = Rig::new();
+        rig.fake.answer(Outcome::Fail("the fake failed".into()));
+        for _ in 0..2 {
+            rig.render();
+            assert_eq!(rig.end_frame(), xr::Result::SUCCESS);
+        }
+        assert_eq!(rig.runtime_calls(), [FRAME, FRAME].concat());
+        assert_eq!(rig.fake.calls().enhanced.len(), 1);
+        assert_eq!(rig.fake.calls().stopped_building, 1);
+        let state = rig.state();
+        let s = lock(&state);
+        assert!(s.engine.is_none());
+        assert_eq!((s.retired.len(), s.processed), (1, 0));
+    }
+
+    /// A panic in the graphics while enhancing costs the app nothing: xrEndFrame succeeds, the
+    /// held image and the frame reach the runtime, and the session passes through.
+    #[test]
+    fn a_panic_while_enhancing_passes_the_session_through() {
+        let rig = Rig::new();
+        rig.fake.answer(Outcome::Panic);
+        rig.render();
+        assert_eq!(rig.end_frame(), xr::Result::SUCCESS);
+        assert_eq!(rig.runtime_calls(), FRAME);
+        assert_eq!(rig.fake.calls().stopped_building, 1);
+        assert!(lock(&rig.state()).engine.is_none());
+    }
+
+    /// A panic at a release ahead of xrEndFrame (a pipelined app, enhanced at its next
+    /// acquire) is contained the same way: the acquire succeeds and the release reaches the
+    /// runtime before it.
+    #[test]
+    fn a_panic_while_enhancing_ahead_passes_the_session_through() {
+        let rig = Rig::new();
+        rig.render();
+        rig.fake.answer(Outcome::Panic);
+        let mut index = 0;
+        // SAFETY: the layer's entry point with valid arguments.
+        let acquired = unsafe {
+            swapchain::acquire_swapchain_image(rig.swapchain, std::ptr::null(), &mut index)
+        };
+        assert_eq!(acquired, xr::Result::SUCCESS);
+        assert_eq!(
+            rig.runtime_calls(),
+            ["acquire", "wait", "release", "acquire"]
+        );
+        assert!(lock(&rig.state()).engine.is_none());
+    }
+
+    /// A panic in the graphics while the app makes a swapchain (the shaders it will need are
+    /// requested): the app gets its swapchain, and the session passes through.
+    #[test]
+    fn a_panic_while_requesting_shaders_passes_the_session_through() {
+        let rig = Rig::new();
+        rig.fake.answer(Outcome::Panic);
+        let mut made = xr::Swapchain::NULL;
+        let info = super::super::fake_runtime::colour_swapchain();
+        // SAFETY: the layer's entry point with valid arguments.
+        let created = unsafe { swapchain::create_swapchain(rig.session, &info, &mut made) };
+        assert_eq!(created, xr::Result::SUCCESS);
+        assert_ne!(made, xr::Swapchain::NULL);
+        assert_eq!(rig.runtime_calls(), ["create_swapchain"]);
+        assert_eq!(rig.fake.calls().requested_shaders, 1);
+        assert!(lock(&rig.state()).engine.is_none());
+    }
+
+    /// Frames whose shaders are still being built pass through, and the engine stays.
+    #[test]
+    fn pending_frames_pass_through_and_keep_the_engine() {
+        let rig = Rig::new();
+        rig.fake.answer(Outcome::Pending);
+        rig.render();
+        rig.end_frame();
+        assert!(lock(&rig.state()).engine.is_some());
+        rig.fake.answer(Outcome::Enhance);
+        rig.render();
+        rig.end_frame();
+        assert_eq!(rig.runtime_calls(), [FRAME, FRAME].concat());
+        assert_eq!(lock(&rig.state()).processed, 1);
+        assert_eq!(rig.fake.calls().stopped_building, 0);
+    }
+
+    /// A swapchain whose views the graphics cannot release: the session passes through (its
+    /// views stay under handles the runtime may give out again), and the destroy reaches the
+    /// runtime.
+    #[test]
+    fn a_swapchain_the_graphics_cannot_forget_passes_the_session_through() {
+        let rig = Rig::new();
+        rig.fake.fail_forget();
+        // SAFETY: the layer's entry point with the rig's swapchain.
+        let destroyed = unsafe { swapchain::destroy_swapchain(rig.swapchain) };
+        assert_eq!(destroyed, xr::Result::SUCCESS);
+        assert_eq!(rig.runtime_calls(), ["destroy_swapchain"]);
+        assert!(lock(&rig.state()).engine.is_none());
+    }
+
+    /// Passing through twice retires the engine once; the session's end finishes every
+    /// engine, retired or not.
+    #[test]
+    fn a_retired_engine_is_stopped_once_and_finished_at_the_session_end() {
+        let rig = Rig::new();
+        let state = rig.state();
+        lock(&state).pass_through("the first failure");
+        lock(&state).pass_through("a second failure");
+        assert_eq!(lock(&state).retired.len(), 1);
+        assert_eq!(rig.fake.calls().stopped_building, 1);
+        assert_eq!(rig.fake.calls().finished, 0);
+        forget(rig.session);
+        assert_eq!(rig.fake.calls().finished, 1);
+    }
 }

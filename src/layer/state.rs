@@ -27,6 +27,9 @@ pub struct InstanceState {
     pub timespec: Option<super::timespec::Timespec>,
 }
 
+/// What the log says, after why, when a session stops being enhanced.
+pub const PASSING_THROUGH: &str = "passing this session's frames through from now on";
+
 pub struct SessionState {
     pub handle: xr::Session,
     pub instance: xr::Instance,
@@ -69,11 +72,14 @@ pub struct SessionState {
 }
 
 impl SessionState {
-    /// The session passes its frames through from now on. Its engine's pipeline thread is
-    /// told to stop, and the engine is kept until xrDestroySession, so that no call of the
-    /// app waits here for a shader compile, a device teardown or a cache write.
-    pub fn retire_engine(&mut self) {
+    /// The one way a session turns pass-through: the log says why, once ("{why}: passing this
+    /// session's frames through from now on"), and the engine retires. Its pipeline thread is
+    /// told to stop, and the engine is kept until xrDestroySession, so that no call of the app
+    /// waits here for a shader compile, a device teardown or a cache write. A session already
+    /// passing through says nothing more (a failure that repeats each frame is one line).
+    pub fn pass_through(&mut self, why: &str) {
         if let Some(engine) = self.engine.take() {
+            log::info(&format!("{why}: {PASSING_THROUGH}"));
             engine.stop_building();
             self.retired.push(engine);
         }

@@ -7,7 +7,7 @@
 //! gets the runtime's own answer. Queue work happens only in calls the spec lets use the app's
 //! queue: xrAcquireSwapchainImage, xrReleaseSwapchainImage, xrEndFrame.
 
-use super::ffi::{guard, LayerError};
+use super::ffi::{contain, guard, LayerError};
 use super::image_states::{ImageStates, ReleasePlan};
 use super::log;
 use super::state::{self, lock, SessionState, SwapchainInfo, SwapchainState};
@@ -190,14 +190,11 @@ fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_
     let Some(graphics) = s.engine.as_mut() else {
         return;
     };
-    let prepared = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+    let prepared = contain("while preparing the shaders at xrCreateSwapchain", || {
         graphics.request_shaders(&params, format, width, in_place)
-    }));
-    if prepared.is_err() {
-        log::info(
-            "internal error while preparing the shaders at xrCreateSwapchain: passing this session's frames through from now on",
-        );
-        s.retire_engine();
+    });
+    if let Err(panic) = prepared {
+        s.pass_through(&panic.to_string());
     }
 }
 
@@ -236,10 +233,7 @@ fn forget(sc: &Arc<Mutex<SwapchainState>>, swapchain: xr::Swapchain) {
             .map(|graphics| graphics.forget_swapchain(swapchain.into_raw()));
         if let Some(Err(e)) = forgotten {
             // Its image views stay alive under handles the runtime may reuse: no more frames.
-            log::info(&format!(
-                "xrDestroySwapchain: {e}: passing this session's frames through from now on"
-            ));
-            s.retire_engine();
+            s.pass_through(&format!("xrDestroySwapchain: {e}"));
         }
     });
     state::registry().swapchains.remove(&swapchain.into_raw());

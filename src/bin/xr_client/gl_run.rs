@@ -13,74 +13,17 @@ use crate::error::{fail, Context, Result};
 use crate::frame_loop::{self, projection_views_on, quad_layer_on, Stats};
 use crate::gl_binding::GlBinding;
 use crate::gl_state::GlStateCheck;
-use crate::glx::{self, GlContext, Texture};
-use crate::pattern::{image_bytes, LayerContent, Rows, Target};
+use crate::gl_swapchain::{choose, gl_name, is_gl_depth, GlFormat, GlSwapchain};
+use crate::glx::GlContext;
+use crate::pattern::{LayerContent, Rows, Target};
 use crate::run_report::Report;
 use crate::script::ScriptApi;
-use crate::swapchain_format::SwapchainFormat;
-use crate::untouched::Untouched;
 use openxr as xr;
 use openxr::sys;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 const VIEW_TYPE: xr::ViewConfigurationType = xr::ViewConfigurationType::PRIMARY_STEREO;
-
-/// A swapchain format by its GL internal format, with the client's encoding of it (the same
-/// bytes as the Vulkan format of that layout) and the (format, type) of its pixel transfers.
-struct GlFormat {
-    internal: u32,
-    encoding: SwapchainFormat,
-    transfer: (u32, u32),
-}
-
-/// The GL colour formats the client fills.
-fn gl_formats() -> [GlFormat; 5] {
-    let by = |name| SwapchainFormat::by_name(name).expect("a known format");
-    [
-        GlFormat {
-            internal: 0x8C43,
-            encoding: by("R8G8B8A8_SRGB"),
-            transfer: (glx::GL_RGBA, glx::GL_UNSIGNED_BYTE),
-        },
-        GlFormat {
-            internal: 0x8058,
-            encoding: by("R8G8B8A8_UNORM"),
-            transfer: (glx::GL_RGBA, glx::GL_UNSIGNED_BYTE),
-        },
-        GlFormat {
-            internal: 0x881A,
-            encoding: by("R16G16B16A16_SFLOAT"),
-            transfer: (glx::GL_RGBA, glx::GL_HALF_FLOAT),
-        },
-        GlFormat {
-            internal: 0x805B,
-            encoding: by("R16G16B16A16_UNORM"),
-            transfer: (glx::GL_RGBA, glx::GL_UNSIGNED_SHORT),
-        },
-        GlFormat {
-            internal: 0x8059,
-            encoding: by("A2B10G10R10_UNORM"),
-            transfer: (glx::GL_RGBA, glx::GL_UNSIGNED_INT_2_10_10_10_REV),
-        },
-    ]
-}
-
-/// The GL name of a format (for --list-formats and errors).
-fn gl_name(internal: u32) -> String {
-    match internal {
-        0x8C43 => "GL_SRGB8_ALPHA8".into(),
-        0x8058 => "GL_RGBA8".into(),
-        0x881A => "GL_RGBA16F".into(),
-        0x805B => "GL_RGBA16".into(),
-        0x8059 => "GL_RGB10_A2".into(),
-        0x81A5 => "GL_DEPTH_COMPONENT16".into(),
-        0x8CAC => "GL_DEPTH_COMPONENT32F".into(),
-        0x88F0 => "GL_DEPTH24_STENCIL8".into(),
-        0x8CAD => "GL_DEPTH32F_STENCIL8".into(),
-        other => format!("GL format 0x{other:04x}"),
-    }
-}
 
 /// One instance with one OpenGL session (or --sessions of them) on this thread's context.
 pub fn run(
@@ -183,31 +126,7 @@ fn run_session(
     let space = session
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
-    let check = options.check_untouched;
-    let (w, h) = view_size;
-    let projection = match options.layout {
-        Layout::Array => {
-            let views = [
-                LayerContent::Whole(Target::View(0)),
-                LayerContent::Whole(Target::View(1)),
-            ];
-            GlSwapchain::new(&session, &format, (w, h), &views, check)?
-        }
-        Layout::SideBySide => GlSwapchain::new(
-            &session,
-            &format,
-            (2 * w, h),
-            &[LayerContent::SideBySide],
-            check,
-        )?,
-    };
-    let quad = options
-        .quad
-        .then(|| {
-            let content = [LayerContent::Whole(Target::Quad)];
-            GlSwapchain::new(&session, &format, (w / 2, h / 2), &content, check)
-        })
-        .transpose()?;
+    let (projection, quad) = layer_swapchains(&session, &format, view_size, options)?;
     let churn = options.churn_swapchains.then(|| GlChurn {
         churner: Churner::default(),
         plan: churn::plan(
@@ -234,6 +153,53 @@ fn run_session(
         churn,
     };
     let result = frame_loop::run(instance, &mut frames, options, stats);
+    report_checks(&frames, report);
+    drop(frames);
+    std::thread::sleep(Duration::from_millis(options.idle_ms));
+    let t = Instant::now();
+    drop((space, session, waiter, stream));
+    report.teardown_ms.session(t.elapsed());
+    result
+}
+
+/// The projection swapchain in the layout asked for (an array of two layers, or one texture
+/// twice as wide), and with --quad the quad's, half the view's size.
+fn layer_swapchains(
+    session: &xr::Session<xr::OpenGL>,
+    format: &GlFormat,
+    (w, h): (u32, u32),
+    options: &Options,
+) -> Result<(GlSwapchain, Option<GlSwapchain>)> {
+    let check = options.check_untouched;
+    let projection = match options.layout {
+        Layout::Array => {
+            let views = [
+                LayerContent::Whole(Target::View(0)),
+                LayerContent::Whole(Target::View(1)),
+            ];
+            GlSwapchain::new(session, format, (w, h), &views, check)?
+        }
+        Layout::SideBySide => GlSwapchain::new(
+            session,
+            format,
+            (2 * w, h),
+            &[LayerContent::SideBySide],
+            check,
+        )?,
+    };
+    let quad = options
+        .quad
+        .then(|| {
+            let content = [LayerContent::Whole(Target::Quad)];
+            GlSwapchain::new(session, format, (w / 2, h / 2), &content, check)
+        })
+        .transpose()?;
+    Ok((projection, quad))
+}
+
+/// What the session's frames found: swapchains churned, and with --check-untouched each
+/// image's fate after its release.
+fn report_checks(frames: &GlFrames, report: &mut Report) {
     if let Some(churn) = &frames.churn {
         report.swapchains_churned += churn.churned.load(Ordering::Relaxed);
     }
@@ -243,12 +209,6 @@ fn run_session(
             report.frames_modified.extend(&log.modified);
         }
     }
-    drop(frames);
-    std::thread::sleep(Duration::from_millis(options.idle_ms));
-    let t = Instant::now();
-    drop((space, session, waiter, stream));
-    report.teardown_ms.session(t.elapsed());
-    result
 }
 
 /// The session on `gl`, through the binding it was made for.
@@ -273,9 +233,21 @@ fn create_session(
         return unsafe { instance.create_session::<xr::OpenGL>(system, &info) }
             .ctx("xrCreateSession");
     }
-    // The openxr crate has no session type for XR_MNDX_egl_enable: xrCreateSession with the
-    // binding chained by hand, the session then used as any OpenGL one (its swapchain images
-    // are XrSwapchainImageOpenGLKHR).
+    create_egl_session(instance, system, gl)
+}
+
+/// The session on an EGL context (XR_MNDX_egl_enable). The openxr crate has no session type for
+/// it: xrCreateSession with the binding chained by hand, the session then used as any OpenGL
+/// one (its swapchain images are XrSwapchainImageOpenGLKHR).
+fn create_egl_session(
+    instance: &xr::Instance,
+    system: xr::SystemId,
+    gl: &GlContext,
+) -> Result<(
+    xr::Session<xr::OpenGL>,
+    xr::FrameWaiter,
+    xr::FrameStream<xr::OpenGL>,
+)> {
     let get_proc = gl.get_proc_address();
     let binding = sys::GraphicsBindingEGLMNDX {
         ty: sys::GraphicsBindingEGLMNDX::TYPE,
@@ -311,116 +283,6 @@ fn create_session(
     Ok(unsafe { xr::Session::from_raw(instance.clone(), handle, Box::new(())) })
 }
 
-fn choose(wanted: Option<SwapchainFormat>, offered: &[u32]) -> Result<GlFormat> {
-    // In the runtime's order: `auto` takes the first one the client can fill.
-    let known = offered
-        .iter()
-        .filter_map(|&o| gl_formats().into_iter().find(|f| f.internal == o));
-    let found = match wanted {
-        Some(w) => known.into_iter().find(|f| f.encoding == w),
-        None => known.into_iter().next(),
-    };
-    found.ok_or_else(|| {
-        let names: Vec<_> = offered.iter().map(|&f| gl_name(f)).collect();
-        crate::error::ClientError(format!(
-            "no wanted GL format among those offered: {}",
-            names.join(" ")
-        ))
-    })
-}
-
-/// A runtime swapchain whose GL textures the client fills with the test pattern by uploads
-/// (the GL counterpart of pattern_swapchain.rs).
-struct GlSwapchain {
-    handle: xr::Swapchain<xr::OpenGL>,
-    images: Vec<u32>,
-    texture: Texture,
-    /// Every layer's pattern, rows bottom first.
-    pattern: Vec<u8>,
-    transfer: (u32, u32),
-    texel_bytes: usize,
-    /// With --check-untouched: what became of each image after its release.
-    check: Option<Untouched>,
-    scratch: Vec<u8>,
-}
-
-impl GlSwapchain {
-    fn new(
-        session: &xr::Session<xr::OpenGL>,
-        format: &GlFormat,
-        size: (u32, u32),
-        content: &[LayerContent],
-        check: bool,
-    ) -> Result<GlSwapchain> {
-        let layers = content.len() as u32;
-        let handle = session
-            .create_swapchain(&xr::SwapchainCreateInfo {
-                create_flags: xr::SwapchainCreateFlags::EMPTY,
-                usage_flags: xr::SwapchainUsageFlags::COLOR_ATTACHMENT
-                    | xr::SwapchainUsageFlags::SAMPLED,
-                format: format.internal,
-                sample_count: 1,
-                width: size.0,
-                height: size.1,
-                face_count: 1,
-                array_size: layers,
-                mip_count: 1,
-            })
-            .ctx(&format!(
-                "xrCreateSwapchain ({} {}x{}, arraySize {layers})",
-                gl_name(format.internal),
-                size.0,
-                size.1
-            ))?;
-        let images = handle
-            .enumerate_images()
-            .ctx("xrEnumerateSwapchainImages")?;
-        Ok(GlSwapchain {
-            check: check.then(|| Untouched::new(images.len())),
-            handle,
-            images,
-            texture: Texture {
-                size,
-                layers,
-                array: layers > 1,
-            },
-            pattern: image_bytes(format.encoding, size, content, Rows::BottomFirst),
-            transfer: format.transfer,
-            texel_bytes: format.encoding.bytes_per_texel(),
-            scratch: Vec::new(),
-        })
-    }
-
-    /// Acquires and waits for the next image, checks it against what it was released with,
-    /// writes `frame`'s pattern into it and releases it.
-    fn draw(&mut self, gl: &GlContext, frame: u32) -> Result<()> {
-        let index = self.handle.acquire_image().ctx("xrAcquireSwapchainImage")?;
-        self.handle
-            .wait_image(xr::Duration::INFINITE)
-            .ctx("xrWaitSwapchainImage")?;
-        let image = self.images[index as usize];
-        if let Some(log) = &mut self.check {
-            let same = match log.written_before(index) {
-                true => {
-                    let (texture, transfer) = (self.texture, self.transfer);
-                    gl.read(
-                        image,
-                        texture,
-                        transfer,
-                        &mut self.scratch,
-                        self.texel_bytes,
-                    )?;
-                    Some(self.scratch == self.pattern)
-                }
-                false => None,
-            };
-            log.record(index, frame, same);
-        }
-        gl.upload(image, self.texture, self.transfer, &self.pattern)?;
-        self.handle.release_image().ctx("xrReleaseSwapchainImage")
-    }
-}
-
 /// An OpenGL session's frames, on the thread whose context the session was made with.
 struct GlFrames<'s> {
     session: &'s xr::Session<xr::OpenGL>,
@@ -446,11 +308,6 @@ struct GlChurn {
     plan: Vec<churn::Churn>,
     next: usize,
     churned: AtomicU32,
-}
-
-/// Whether a GL internal format is a depth (or depth-stencil) format.
-fn is_gl_depth(format: u32) -> bool {
-    matches!(format, 0x81A5 | 0x81A6 | 0x81A7 | 0x8CAC | 0x88F0 | 0x8CAD)
 }
 
 /// xrEndFrame with `layers`, inside --check-gl-state's set and check.

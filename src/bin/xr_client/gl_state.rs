@@ -13,138 +13,13 @@
 //! xrEndFrame, as a layer that forgets to restore them would: the check must see it.
 
 use crate::error::{fail, Result};
-use crate::gl_binding::GlBinding;
+use crate::gl_state_enums::*;
+use crate::gl_state_fns::{Fns, GLX_ITEMS};
+use crate::gl_state_items::{items, Item, Query, CONTEXT_ITEM, READ_DRAWABLE_ITEM};
+use crate::gl_state_objects::Objects;
 use crate::glx::GlContext;
-use contrastxr::gpu::core::interface::BINDINGS;
 use serde::Serialize;
-use std::ffi::{c_char, c_int, c_void};
-
-type Enum = u32;
-
-/// Units checked for textures, samplers and image units, and indices for indexed buffer
-/// bindings: 0 up to the highest binding number of the layer's shaders.
-const UNITS: usize = {
-    let (mut n, mut i) = (1, 0);
-    while i < BINDINGS.len() {
-        if BINDINGS[i].number as usize + 1 > n {
-            n = BINDINGS[i].number as usize + 1;
-        }
-        i += 1;
-    }
-    n
-};
-// GL 4.5's smallest GL_MAX_IMAGE_UNITS and GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS.
-const _: () = assert!(UNITS <= 8);
-
-/// The active texture unit the check sets (GL_TEXTURE5).
-const ACTIVE_UNIT: u32 = 5;
-const _: () = assert!((ACTIVE_UNIT as usize) < UNITS);
-
-const NO_ERROR: Enum = 0;
-const INVALID_ENUM: Enum = 0x0500;
-/// Not a capability: glEnable raises GL_INVALID_ENUM, the error the client leaves pending.
-const NOT_A_CAPABILITY: Enum = 0xFFFF;
-
-const TEXTURE0: Enum = 0x84C0;
-const ACTIVE_TEXTURE: Enum = 0x84E0;
-const TEXTURE_2D: Enum = 0x0DE1;
-const TEXTURE_2D_ARRAY: Enum = 0x8C1A;
-const TEXTURE_BINDING_2D: Enum = 0x8069;
-const TEXTURE_BINDING_2D_ARRAY: Enum = 0x8C1D;
-const SAMPLER_BINDING: Enum = 0x8919;
-const CURRENT_PROGRAM: Enum = 0x8B8D;
-const PROGRAM_PIPELINE_BINDING: Enum = 0x825A;
-const COMPUTE_SHADER: Enum = 0x91B9;
-const LINK_STATUS: Enum = 0x8B82;
-const RGBA8: Enum = 0x8058;
-const R32UI: Enum = 0x8236;
-const READ_WRITE: Enum = 0x88BA;
-const IMAGE_BINDING_NAME: Enum = 0x8F3A;
-const IMAGE_BINDING_LEVEL: Enum = 0x8F3B;
-const IMAGE_BINDING_LAYERED: Enum = 0x8F3C;
-const IMAGE_BINDING_LAYER: Enum = 0x8F3D;
-const IMAGE_BINDING_ACCESS: Enum = 0x8F3E;
-const IMAGE_BINDING_FORMAT: Enum = 0x906E;
-const SHADER_STORAGE_BUFFER: Enum = 0x90D2;
-const SHADER_STORAGE_BUFFER_BINDING: Enum = 0x90D3;
-const SHADER_STORAGE_BUFFER_START: Enum = 0x90D4;
-const SHADER_STORAGE_BUFFER_SIZE: Enum = 0x90D5;
-const SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT: Enum = 0x90DF;
-const UNIFORM_BUFFER: Enum = 0x8A11;
-const UNIFORM_BUFFER_BINDING: Enum = 0x8A28;
-const UNIFORM_BUFFER_START: Enum = 0x8A29;
-const UNIFORM_BUFFER_SIZE: Enum = 0x8A2A;
-const UNIFORM_BUFFER_OFFSET_ALIGNMENT: Enum = 0x8A34;
-const PIXEL_UNPACK_BUFFER: Enum = 0x88EC;
-const UNPACK_ALIGNMENT: Enum = 0x0CF5;
-const DRAW_FRAMEBUFFER: Enum = 0x8CA9;
-const READ_FRAMEBUFFER: Enum = 0x8CA8;
-const DRAW_FRAMEBUFFER_BINDING: Enum = 0x8CA6;
-const READ_FRAMEBUFFER_BINDING: Enum = 0x8CAA;
-const RENDERBUFFER: Enum = 0x8D41;
-const RENDERBUFFER_BINDING: Enum = 0x8CA7;
-const VERTEX_ARRAY_BINDING: Enum = 0x85B5;
-const FRAMEBUFFER_SRGB: Enum = 0x8DB9;
-const VIEWPORT: Enum = 0x0BA2;
-const SCISSOR_BOX: Enum = 0x0C10;
-
-/// The generic buffer binding points: target, its binding query, the query's name.
-const GENERIC_BUFFERS: [(Enum, Enum, &str); 9] = [
-    (
-        SHADER_STORAGE_BUFFER,
-        SHADER_STORAGE_BUFFER_BINDING,
-        "GL_SHADER_STORAGE_BUFFER_BINDING",
-    ),
-    (
-        UNIFORM_BUFFER,
-        UNIFORM_BUFFER_BINDING,
-        "GL_UNIFORM_BUFFER_BINDING",
-    ),
-    (0x88EB, 0x88ED, "GL_PIXEL_PACK_BUFFER_BINDING"),
-    (
-        PIXEL_UNPACK_BUFFER,
-        0x88EF,
-        "GL_PIXEL_UNPACK_BUFFER_BINDING",
-    ),
-    (0x90EE, 0x90EF, "GL_DISPATCH_INDIRECT_BUFFER_BINDING"),
-    (0x8F3F, 0x8F43, "GL_DRAW_INDIRECT_BUFFER_BINDING"),
-    (0x8F36, 0x8F36, "GL_COPY_READ_BUFFER_BINDING"),
-    (0x8F37, 0x8F37, "GL_COPY_WRITE_BUFFER_BINDING"),
-    (0x8892, 0x8894, "GL_ARRAY_BUFFER_BINDING"),
-];
-
-/// The pixel store: parameter, its name, the value the check sets, the client's own value
-/// (GL's default, but for the alignments: the client's transfers are tightly packed).
-const PIXEL_STORE: [(Enum, &str, i32, i32); 16] = [
-    (0x0D00, "GL_PACK_SWAP_BYTES", 1, 0),
-    (0x0D01, "GL_PACK_LSB_FIRST", 1, 0),
-    (0x0D02, "GL_PACK_ROW_LENGTH", 9, 0),
-    (0x0D03, "GL_PACK_SKIP_ROWS", 3, 0),
-    (0x0D04, "GL_PACK_SKIP_PIXELS", 2, 0),
-    (0x0D05, "GL_PACK_ALIGNMENT", 8, 1),
-    (0x806B, "GL_PACK_SKIP_IMAGES", 1, 0),
-    (0x806C, "GL_PACK_IMAGE_HEIGHT", 5, 0),
-    (0x0CF0, "GL_UNPACK_SWAP_BYTES", 1, 0),
-    (0x0CF1, "GL_UNPACK_LSB_FIRST", 1, 0),
-    (0x0CF2, "GL_UNPACK_ROW_LENGTH", 7, 0),
-    (0x0CF3, "GL_UNPACK_SKIP_ROWS", 4, 0),
-    (0x0CF4, "GL_UNPACK_SKIP_PIXELS", 3, 0),
-    (UNPACK_ALIGNMENT, "GL_UNPACK_ALIGNMENT", 2, 1),
-    (0x806D, "GL_UNPACK_SKIP_IMAGES", 2, 0),
-    (0x806E, "GL_UNPACK_IMAGE_HEIGHT", 6, 0),
-];
-
-/// Capabilities the check enables (the client leaves them disabled).
-const ENABLES: [(Enum, &str); 3] = [
-    (FRAMEBUFFER_SRGB, "GL_FRAMEBUFFER_SRGB"),
-    (0x0C11, "GL_SCISSOR_TEST"),
-    (0x0BE2, "GL_BLEND"),
-];
-
-/// The viewport and scissor box the check sets (the client's are its 16x16 pbuffer's).
-const VIEWPORT_SET: [i32; 4] = [1, 2, 11, 13];
-const SCISSOR_SET: [i32; 4] = [3, 4, 5, 6];
-const PBUFFER_RECT: [i32; 4] = [0, 0, 16, 16];
+use std::ffi::c_void;
 
 /// What --disturb-gl-state can change (each an item's name, without its unit).
 pub const DISTURBABLE: [&str; 10] = [
@@ -170,337 +45,6 @@ pub struct Change {
     /// A number, or an array for a query of several values.
     pub before: serde_json::Value,
     pub after: serde_json::Value,
-}
-
-/// How an item is read back.
-#[derive(Clone, Copy, Debug)]
-enum Query {
-    /// glGetInteger64v (up to 4 values).
-    Integer(Enum),
-    /// glGetInteger64i_v.
-    Indexed(Enum, u32),
-    /// glIsEnabled.
-    Enabled(Enum),
-    Context,
-    Drawable,
-    ReadDrawable,
-}
-
-/// One piece of state, and the value the check sets it to.
-struct Item {
-    what: String,
-    query: Query,
-    set: Vec<i64>,
-}
-
-type Create = unsafe extern "C" fn(i32, *mut u32);
-
-/// The GL and GLX functions the check calls.
-struct Fns {
-    get_integer64v: unsafe extern "C" fn(Enum, *mut i64),
-    get_integer64i_v: unsafe extern "C" fn(Enum, u32, *mut i64),
-    is_enabled: unsafe extern "C" fn(Enum) -> u8,
-    enable: unsafe extern "C" fn(Enum),
-    disable: unsafe extern "C" fn(Enum),
-    get_error: unsafe extern "C" fn() -> Enum,
-    active_texture: unsafe extern "C" fn(Enum),
-    bind_texture: unsafe extern "C" fn(Enum, u32),
-    bind_textures: unsafe extern "C" fn(u32, i32, *const u32),
-    bind_samplers: unsafe extern "C" fn(u32, i32, *const u32),
-    bind_image_texture: unsafe extern "C" fn(u32, u32, i32, u8, i32, Enum, Enum),
-    bind_image_textures: unsafe extern "C" fn(u32, i32, *const u32),
-    bind_buffer: unsafe extern "C" fn(Enum, u32),
-    bind_buffer_range: unsafe extern "C" fn(Enum, u32, u32, isize, isize),
-    bind_buffers_base: unsafe extern "C" fn(Enum, u32, i32, *const u32),
-    bind_framebuffer: unsafe extern "C" fn(Enum, u32),
-    bind_renderbuffer: unsafe extern "C" fn(Enum, u32),
-    bind_vertex_array: unsafe extern "C" fn(u32),
-    use_program: unsafe extern "C" fn(u32),
-    bind_program_pipeline: unsafe extern "C" fn(u32),
-    pixel_store_i: unsafe extern "C" fn(Enum, i32),
-    viewport: unsafe extern "C" fn(i32, i32, i32, i32),
-    scissor: unsafe extern "C" fn(i32, i32, i32, i32),
-    create_textures: unsafe extern "C" fn(Enum, i32, *mut u32),
-    texture_storage_2d: unsafe extern "C" fn(u32, i32, Enum, i32, i32),
-    texture_storage_3d: unsafe extern "C" fn(u32, i32, Enum, i32, i32, i32),
-    create_samplers: Create,
-    create_buffers: Create,
-    named_buffer_storage: unsafe extern "C" fn(u32, isize, *const c_void, u32),
-    create_framebuffers: Create,
-    create_renderbuffers: Create,
-    create_vertex_arrays: Create,
-    create_program_pipelines: Create,
-    create_shader_program_v: unsafe extern "C" fn(Enum, i32, *const *const c_char) -> u32,
-    get_program_iv: unsafe extern "C" fn(u32, Enum, *mut i32),
-    window_system: WindowSystem,
-}
-
-/// The window-system calls of the check: GLX's, or with --gl-binding egl EGL's (whose draw and
-/// read surfaces stand for GLX's drawables, held as u64 as XIDs are).
-enum WindowSystem {
-    Glx {
-        get_current_context: unsafe extern "C" fn() -> *mut c_void,
-        get_current_drawable: unsafe extern "C" fn() -> u64,
-        get_current_read_drawable: unsafe extern "C" fn() -> u64,
-        make_context_current: unsafe extern "C" fn(*mut c_void, u64, u64, *mut c_void) -> c_int,
-    },
-    Egl {
-        get_current_context: unsafe extern "C" fn() -> *mut c_void,
-        get_current_surface: unsafe extern "C" fn(i32) -> *mut c_void,
-        make_current:
-            unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, *mut c_void) -> u32,
-    },
-}
-
-const EGL_DRAW: i32 = 0x3059;
-const EGL_READ: i32 = 0x305A;
-
-impl WindowSystem {
-    fn load(gl: &GlContext) -> Result<WindowSystem> {
-        // SAFETY: each field's type is the C type of the function named (glx.h, egl.h).
-        unsafe {
-            Ok(match gl.binding {
-                GlBinding::Xlib => WindowSystem::Glx {
-                    get_current_context: gl.glx_function(c"glXGetCurrentContext")?,
-                    get_current_drawable: gl.glx_function(c"glXGetCurrentDrawable")?,
-                    get_current_read_drawable: gl.glx_function(c"glXGetCurrentReadDrawable")?,
-                    make_context_current: gl.glx_function(c"glXMakeContextCurrent")?,
-                },
-                GlBinding::Egl => WindowSystem::Egl {
-                    get_current_context: gl.glx_function(c"eglGetCurrentContext")?,
-                    get_current_surface: gl.glx_function(c"eglGetCurrentSurface")?,
-                    make_current: gl.glx_function(c"eglMakeCurrent")?,
-                },
-            })
-        }
-    }
-
-    /// The names of the current context, draw and read drawable queries (the GLX_ITEMS).
-    fn names(&self) -> [&'static str; GLX_ITEMS] {
-        match self {
-            WindowSystem::Glx { .. } => [
-                "glXGetCurrentContext",
-                "glXGetCurrentDrawable",
-                "glXGetCurrentReadDrawable",
-            ],
-            WindowSystem::Egl { .. } => [
-                "eglGetCurrentContext",
-                "eglGetCurrentSurface(EGL_DRAW)",
-                "eglGetCurrentSurface(EGL_READ)",
-            ],
-        }
-    }
-
-    /// # Safety
-    /// Queries of this thread's current context: always valid.
-    unsafe fn current_context(&self) -> *mut c_void {
-        // SAFETY: as the caller promises.
-        unsafe {
-            match self {
-                WindowSystem::Glx {
-                    get_current_context,
-                    ..
-                }
-                | WindowSystem::Egl {
-                    get_current_context,
-                    ..
-                } => get_current_context(),
-            }
-        }
-    }
-
-    /// # Safety
-    /// As `current_context`.
-    unsafe fn current_drawable(&self, read: bool) -> u64 {
-        // SAFETY: as the caller promises.
-        unsafe {
-            match self {
-                WindowSystem::Glx {
-                    get_current_drawable,
-                    get_current_read_drawable,
-                    ..
-                } => match read {
-                    false => get_current_drawable(),
-                    true => get_current_read_drawable(),
-                },
-                WindowSystem::Egl {
-                    get_current_surface,
-                    ..
-                } => get_current_surface(if read { EGL_READ } else { EGL_DRAW }) as u64,
-            }
-        }
-    }
-
-    /// # Safety
-    /// `display` and `context` the client's, `draw` and `read` drawables (or EGL surfaces) of
-    /// its configuration.
-    unsafe fn make_current(
-        &self,
-        display: *mut c_void,
-        draw: u64,
-        read: u64,
-        context: *mut c_void,
-    ) {
-        // SAFETY: as the caller promises.
-        unsafe {
-            match self {
-                WindowSystem::Glx {
-                    make_context_current,
-                    ..
-                } => {
-                    make_context_current(display, draw, read, context);
-                }
-                WindowSystem::Egl { make_current, .. } => {
-                    make_current(display, draw as *mut c_void, read as *mut c_void, context);
-                }
-            }
-        }
-    }
-}
-
-impl Fns {
-    fn load(gl: &GlContext) -> Result<Fns> {
-        // SAFETY: each field's type is the C type of the function named (gl.h, glext.h, glx.h).
-        unsafe {
-            Ok(Fns {
-                get_integer64v: gl.function(c"glGetInteger64v")?,
-                get_integer64i_v: gl.function(c"glGetInteger64i_v")?,
-                is_enabled: gl.function(c"glIsEnabled")?,
-                enable: gl.function(c"glEnable")?,
-                disable: gl.function(c"glDisable")?,
-                get_error: gl.function(c"glGetError")?,
-                active_texture: gl.function(c"glActiveTexture")?,
-                bind_texture: gl.function(c"glBindTexture")?,
-                bind_textures: gl.function(c"glBindTextures")?,
-                bind_samplers: gl.function(c"glBindSamplers")?,
-                bind_image_texture: gl.function(c"glBindImageTexture")?,
-                bind_image_textures: gl.function(c"glBindImageTextures")?,
-                bind_buffer: gl.function(c"glBindBuffer")?,
-                bind_buffer_range: gl.function(c"glBindBufferRange")?,
-                bind_buffers_base: gl.function(c"glBindBuffersBase")?,
-                bind_framebuffer: gl.function(c"glBindFramebuffer")?,
-                bind_renderbuffer: gl.function(c"glBindRenderbuffer")?,
-                bind_vertex_array: gl.function(c"glBindVertexArray")?,
-                use_program: gl.function(c"glUseProgram")?,
-                bind_program_pipeline: gl.function(c"glBindProgramPipeline")?,
-                pixel_store_i: gl.function(c"glPixelStorei")?,
-                viewport: gl.function(c"glViewport")?,
-                scissor: gl.function(c"glScissor")?,
-                create_textures: gl.function(c"glCreateTextures")?,
-                texture_storage_2d: gl.function(c"glTextureStorage2D")?,
-                texture_storage_3d: gl.function(c"glTextureStorage3D")?,
-                create_samplers: gl.function(c"glCreateSamplers")?,
-                create_buffers: gl.function(c"glCreateBuffers")?,
-                named_buffer_storage: gl.function(c"glNamedBufferStorage")?,
-                create_framebuffers: gl.function(c"glCreateFramebuffers")?,
-                create_renderbuffers: gl.function(c"glCreateRenderbuffers")?,
-                create_vertex_arrays: gl.function(c"glCreateVertexArrays")?,
-                create_program_pipelines: gl.function(c"glCreateProgramPipelines")?,
-                create_shader_program_v: gl.function(c"glCreateShaderProgramv")?,
-                get_program_iv: gl.function(c"glGetProgramiv")?,
-                window_system: WindowSystem::load(gl)?,
-            })
-        }
-    }
-}
-
-/// The objects whose names the check binds; created once, never deleted (the run is short).
-struct Objects {
-    program: u32,
-    pipeline: u32,
-    textures_2d: [u32; UNITS],
-    textures_array: [u32; UNITS],
-    samplers: [u32; UNITS],
-    storage: [u32; UNITS],
-    uniform: [u32; UNITS],
-    generic: [u32; GENERIC_BUFFERS.len()],
-    storage_alignment: i64,
-    uniform_alignment: i64,
-    /// Draw and read.
-    framebuffers: [u32; 2],
-    renderbuffer: u32,
-    vertex_array: u32,
-    /// Two pbuffers of the check's own: the draw and read drawables it makes current.
-    draw: u64,
-    read: u64,
-}
-
-/// Bytes of each buffer; the indexed ranges lie inside it at every offset alignment up to 256.
-const BUFFER_BYTES: isize = 4096;
-
-impl Objects {
-    fn create(f: &Fns, gl: &GlContext) -> Result<Objects> {
-        let names = |create: Create, n: usize| {
-            let mut v = vec![0u32; n];
-            // SAFETY: room for n names.
-            unsafe { create(n as i32, v.as_mut_ptr()) };
-            v
-        };
-        let array = |v: Vec<u32>| -> [u32; UNITS] { v.try_into().expect("UNITS names") };
-        let source = c"#version 430 core\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
-        let mut linked = 0;
-        // SAFETY: one NUL-terminated source; the program is a name of this context.
-        let program = unsafe {
-            let program = (f.create_shader_program_v)(COMPUTE_SHADER, 1, &source.as_ptr());
-            (f.get_program_iv)(program, LINK_STATUS, &mut linked);
-            program
-        };
-        if program == 0 || linked == 0 {
-            return fail("--check-gl-state: the compute program does not link");
-        }
-        let mut textures_2d = [0; UNITS];
-        let mut textures_array = [0; UNITS];
-        // SAFETY: room for UNITS names; storage of two levels of 4x4 (x2 layers) RGBA8 on
-        // textures just created.
-        unsafe {
-            (f.create_textures)(TEXTURE_2D, UNITS as i32, textures_2d.as_mut_ptr());
-            (f.create_textures)(TEXTURE_2D_ARRAY, UNITS as i32, textures_array.as_mut_ptr());
-            for t in textures_2d {
-                (f.texture_storage_2d)(t, 2, RGBA8, 4, 4);
-            }
-            for t in textures_array {
-                (f.texture_storage_3d)(t, 2, RGBA8, 4, 4, 2);
-            }
-        }
-        let buffers = names(f.create_buffers, 2 * UNITS + GENERIC_BUFFERS.len());
-        for &b in &buffers {
-            // SAFETY: a buffer just created, immutable storage with no data and no flags.
-            unsafe { (f.named_buffer_storage)(b, BUFFER_BYTES, std::ptr::null(), 0) };
-        }
-        let alignment = |pname| {
-            let mut v = 0;
-            // SAFETY: a single-valued query.
-            unsafe { (f.get_integer64v)(pname, &mut v) };
-            v.max(1)
-        };
-        let framebuffers = names(f.create_framebuffers, 2);
-        let objects = Objects {
-            program,
-            pipeline: names(f.create_program_pipelines, 1)[0],
-            textures_2d,
-            textures_array,
-            samplers: array(names(f.create_samplers, UNITS)),
-            storage: array(buffers[..UNITS].to_vec()),
-            uniform: array(buffers[UNITS..2 * UNITS].to_vec()),
-            generic: buffers[2 * UNITS..].try_into().expect("one per target"),
-            storage_alignment: alignment(SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT),
-            uniform_alignment: alignment(UNIFORM_BUFFER_OFFSET_ALIGNMENT),
-            framebuffers: [framebuffers[0], framebuffers[1]],
-            renderbuffer: names(f.create_renderbuffers, 1)[0],
-            vertex_array: names(f.create_vertex_arrays, 1)[0],
-            draw: pbuffer(gl)?,
-            read: pbuffer(gl)?,
-        };
-        if objects.storage_alignment > 256 || objects.uniform_alignment > 256 {
-            return fail("--check-gl-state: buffer offset alignments above 256");
-        }
-        Ok(objects)
-    }
-
-    /// Indexed range `i` of a buffer target: (offset, size).
-    fn range(alignment: i64, i: usize) -> (i64, i64) {
-        (alignment * (i as i64 + 1), 16 * (i as i64 + 1))
-    }
 }
 
 /// The check over a run: its objects, and what it found.
@@ -613,6 +157,15 @@ impl GlStateCheck {
         let Some(frame) = self.frame.take() else {
             return Ok(());
         };
+        let changed = self.changes(frame);
+        self.changed.extend(changed);
+        self.checked += 1;
+        self.gl_error("reading the GL state after xrEndFrame")?;
+        self.put_back()
+    }
+
+    /// Every item that differs from what `before_end_frame` set, read in the client's context.
+    fn changes(&self, frame: u32) -> Vec<Change> {
         let mut changed = Vec::new();
         let mut note = |what: &str, before: &[i64], after: &[i64]| {
             if before != after {
@@ -649,9 +202,11 @@ impl GlStateCheck {
         for item in gl_items {
             note(&item.what, &item.set, &self.read(item));
         }
-        self.changed.extend(changed);
-        self.checked += 1;
-        self.gl_error("reading the GL state after xrEndFrame")?;
+        changed
+    }
+
+    /// Puts the client's own state back, and checks that it is all back.
+    fn put_back(&self) -> Result<()> {
         self.restore();
         self.gl_error("putting the client's GL state back")?;
         let now = self.read_all();
@@ -696,45 +251,18 @@ impl GlStateCheck {
         v[..item.set.len()].to_vec()
     }
 
+    /// Sets every item to the value the check gives it.
     fn set(&self) {
         let (f, o) = (&self.f, &self.objects);
-        // SAFETY: the client's context and pbuffers; names this check created, units and
-        // indices below GL 4.5's minimums, ranges inside the buffers at aligned offsets. The
-        // generic buffer bindings come after the indexed ones, which set them too.
+        // SAFETY: the client's context and pbuffers; names this check created, units below
+        // GL 4.5's minimums; valid pixel store values, capabilities and rectangles.
         unsafe {
             let ws = &f.window_system;
             ws.make_current(self.display, o.draw, self.read_drawable, self.context);
             (f.use_program)(o.program);
             (f.bind_program_pipeline)(o.pipeline);
-            for unit in 0..UNITS {
-                (f.active_texture)(TEXTURE0 + unit as Enum);
-                (f.bind_texture)(TEXTURE_2D, o.textures_2d[unit]);
-                (f.bind_texture)(TEXTURE_2D_ARRAY, o.textures_array[unit]);
-            }
-            (f.active_texture)(TEXTURE0 + ACTIVE_UNIT);
-            (f.bind_samplers)(0, UNITS as i32, o.samplers.as_ptr());
-            for unit in 0..UNITS {
-                (f.bind_image_texture)(
-                    unit as u32,
-                    o.textures_array[unit],
-                    1,
-                    1,
-                    1,
-                    READ_WRITE,
-                    R32UI,
-                );
-            }
-            for i in 0..UNITS {
-                let (offset, size) = Objects::range(o.storage_alignment, i);
-                let (target, buffer) = (SHADER_STORAGE_BUFFER, o.storage[i]);
-                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
-                let (offset, size) = Objects::range(o.uniform_alignment, i);
-                let (target, buffer) = (UNIFORM_BUFFER, o.uniform[i]);
-                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
-            }
-            for ((target, _, _), buffer) in GENERIC_BUFFERS.iter().zip(o.generic) {
-                (f.bind_buffer)(*target, buffer);
-            }
+            self.set_units();
+            self.set_buffers();
             for (pname, _, value, _) in PIXEL_STORE {
                 (f.pixel_store_i)(pname, value);
             }
@@ -749,6 +277,47 @@ impl GlStateCheck {
             (f.viewport)(x, y, w, h);
             let [x, y, w, h] = SCISSOR_SET;
             (f.scissor)(x, y, w, h);
+        }
+    }
+
+    /// Every unit's textures, sampler and image unit, then the active unit.
+    fn set_units(&self) {
+        let (f, o) = (&self.f, &self.objects);
+        // SAFETY: the client's context is current; names this check created, units below GL
+        // 4.5's minimums, level and layer 1 of textures that have them.
+        unsafe {
+            for unit in 0..UNITS {
+                (f.active_texture)(TEXTURE0 + unit as Enum);
+                (f.bind_texture)(TEXTURE_2D, o.textures_2d[unit]);
+                (f.bind_texture)(TEXTURE_2D_ARRAY, o.textures_array[unit]);
+            }
+            (f.active_texture)(TEXTURE0 + ACTIVE_UNIT);
+            (f.bind_samplers)(0, UNITS as i32, o.samplers.as_ptr());
+            for unit in 0..UNITS {
+                let texture = o.textures_array[unit];
+                (f.bind_image_texture)(unit as u32, texture, 1, 1, 1, READ_WRITE, R32UI);
+            }
+        }
+    }
+
+    /// The indexed storage and uniform buffer ranges, then the generic bindings (after the
+    /// indexed ones, which set them too).
+    fn set_buffers(&self) {
+        let (f, o) = (&self.f, &self.objects);
+        // SAFETY: the client's context is current; buffers this check created, indices below
+        // GL 4.5's minimums, ranges inside the buffers at aligned offsets.
+        unsafe {
+            for i in 0..UNITS {
+                let (offset, size) = Objects::range(o.storage_alignment, i);
+                let (target, buffer) = (SHADER_STORAGE_BUFFER, o.storage[i]);
+                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
+                let (offset, size) = Objects::range(o.uniform_alignment, i);
+                let (target, buffer) = (UNIFORM_BUFFER, o.uniform[i]);
+                (f.bind_buffer_range)(target, i as u32, buffer, offset as isize, size as isize);
+            }
+            for ((target, _, _), buffer) in GENERIC_BUFFERS.iter().zip(o.generic) {
+                (f.bind_buffer)(*target, buffer);
+            }
         }
     }
 
@@ -821,189 +390,5 @@ impl GlStateCheck {
                 }
             }
         }
-    }
-}
-
-/// The first items: the current context, draw and read drawables.
-const GLX_ITEMS: usize = 3;
-const CONTEXT_ITEM: usize = 0;
-const READ_DRAWABLE_ITEM: usize = 2;
-
-/// Every item, with the value `set` gives it (the GLX_ITEMS first).
-fn items(o: &Objects, context: *mut c_void, names: [&str; GLX_ITEMS]) -> Vec<Item> {
-    let item = |what: String, query, set: &[i64]| Item {
-        what,
-        query,
-        set: set.to_vec(),
-    };
-    let name = |n: u32| [n as i64];
-    let mut items = vec![
-        item(names[0].into(), Query::Context, &[context as i64]),
-        item(names[1].into(), Query::Drawable, &[o.draw as i64]),
-        item(names[2].into(), Query::ReadDrawable, &[o.read as i64]),
-        item(
-            "GL_CURRENT_PROGRAM".into(),
-            Query::Integer(CURRENT_PROGRAM),
-            &name(o.program),
-        ),
-        item(
-            "GL_PROGRAM_PIPELINE_BINDING".into(),
-            Query::Integer(PROGRAM_PIPELINE_BINDING),
-            &name(o.pipeline),
-        ),
-        item(
-            "GL_ACTIVE_TEXTURE".into(),
-            Query::Integer(ACTIVE_TEXTURE),
-            &name(TEXTURE0 + ACTIVE_UNIT),
-        ),
-    ];
-    for unit in 0..UNITS {
-        let u = unit as u32;
-        let at = |what: &str| format!("{what}[{unit}]");
-        items.extend([
-            item(
-                at("GL_TEXTURE_BINDING_2D"),
-                Query::Indexed(TEXTURE_BINDING_2D, u),
-                &name(o.textures_2d[unit]),
-            ),
-            item(
-                at("GL_TEXTURE_BINDING_2D_ARRAY"),
-                Query::Indexed(TEXTURE_BINDING_2D_ARRAY, u),
-                &name(o.textures_array[unit]),
-            ),
-            item(
-                at("GL_SAMPLER_BINDING"),
-                Query::Indexed(SAMPLER_BINDING, u),
-                &name(o.samplers[unit]),
-            ),
-            item(
-                at("GL_IMAGE_BINDING_NAME"),
-                Query::Indexed(IMAGE_BINDING_NAME, u),
-                &name(o.textures_array[unit]),
-            ),
-            item(
-                at("GL_IMAGE_BINDING_LEVEL"),
-                Query::Indexed(IMAGE_BINDING_LEVEL, u),
-                &[1],
-            ),
-            item(
-                at("GL_IMAGE_BINDING_LAYERED"),
-                Query::Indexed(IMAGE_BINDING_LAYERED, u),
-                &[1],
-            ),
-            item(
-                at("GL_IMAGE_BINDING_LAYER"),
-                Query::Indexed(IMAGE_BINDING_LAYER, u),
-                &[1],
-            ),
-            item(
-                at("GL_IMAGE_BINDING_ACCESS"),
-                Query::Indexed(IMAGE_BINDING_ACCESS, u),
-                &name(READ_WRITE),
-            ),
-            item(
-                at("GL_IMAGE_BINDING_FORMAT"),
-                Query::Indexed(IMAGE_BINDING_FORMAT, u),
-                &name(R32UI),
-            ),
-        ]);
-        let indexed = [
-            (
-                "GL_SHADER_STORAGE_BUFFER",
-                [
-                    SHADER_STORAGE_BUFFER_BINDING,
-                    SHADER_STORAGE_BUFFER_START,
-                    SHADER_STORAGE_BUFFER_SIZE,
-                ],
-                o.storage[unit],
-                o.storage_alignment,
-            ),
-            (
-                "GL_UNIFORM_BUFFER",
-                [
-                    UNIFORM_BUFFER_BINDING,
-                    UNIFORM_BUFFER_START,
-                    UNIFORM_BUFFER_SIZE,
-                ],
-                o.uniform[unit],
-                o.uniform_alignment,
-            ),
-        ];
-        for (target, [binding, start, size], buffer, alignment) in indexed {
-            let (offset, bytes) = Objects::range(alignment, unit);
-            items.extend([
-                item(
-                    at(&format!("{target}_BINDING")),
-                    Query::Indexed(binding, u),
-                    &name(buffer),
-                ),
-                item(
-                    at(&format!("{target}_START")),
-                    Query::Indexed(start, u),
-                    &[offset],
-                ),
-                item(
-                    at(&format!("{target}_SIZE")),
-                    Query::Indexed(size, u),
-                    &[bytes],
-                ),
-            ]);
-        }
-    }
-    for ((_, binding, what), buffer) in GENERIC_BUFFERS.iter().zip(o.generic) {
-        items.push(item(
-            what.to_string(),
-            Query::Integer(*binding),
-            &name(buffer),
-        ));
-    }
-    for (pname, what, value, _) in PIXEL_STORE {
-        items.push(item(what.into(), Query::Integer(pname), &[value as i64]));
-    }
-    items.extend([
-        item(
-            "GL_DRAW_FRAMEBUFFER_BINDING".into(),
-            Query::Integer(DRAW_FRAMEBUFFER_BINDING),
-            &name(o.framebuffers[0]),
-        ),
-        item(
-            "GL_READ_FRAMEBUFFER_BINDING".into(),
-            Query::Integer(READ_FRAMEBUFFER_BINDING),
-            &name(o.framebuffers[1]),
-        ),
-        item(
-            "GL_RENDERBUFFER_BINDING".into(),
-            Query::Integer(RENDERBUFFER_BINDING),
-            &name(o.renderbuffer),
-        ),
-        item(
-            "GL_VERTEX_ARRAY_BINDING".into(),
-            Query::Integer(VERTEX_ARRAY_BINDING),
-            &name(o.vertex_array),
-        ),
-    ]);
-    for (cap, what) in ENABLES {
-        items.push(item(what.into(), Query::Enabled(cap), &[1]));
-    }
-    let rect = |r: [i32; 4]| r.map(i64::from);
-    items.push(item(
-        "GL_VIEWPORT".into(),
-        Query::Integer(VIEWPORT),
-        &rect(VIEWPORT_SET),
-    ));
-    items.push(item(
-        "GL_SCISSOR_BOX".into(),
-        Query::Integer(SCISSOR_BOX),
-        &rect(SCISSOR_SET),
-    ));
-    items
-}
-
-/// Another 16x16 pbuffer on the context's configuration: a GLX pbuffer, or with EGL an
-/// EGLSurface (as u64).
-fn pbuffer(gl: &GlContext) -> Result<u64> {
-    match gl.binding {
-        GlBinding::Xlib => gl.glx_pbuffer(),
-        GlBinding::Egl => crate::egl::pbuffer(gl),
     }
 }

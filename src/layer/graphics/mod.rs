@@ -9,6 +9,8 @@
 //! A new API is a new folder here with a `bind` function, listed in `bindings::BINDINGS`.
 
 pub mod bindings;
+#[cfg(test)]
+pub mod fake_graphics;
 pub mod opengl;
 pub mod session_graphics;
 pub mod vulkan;

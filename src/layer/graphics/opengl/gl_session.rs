@@ -2,15 +2,16 @@
 //! the layer acts on, every call inside that context (made current when it is not), and the
 //! background texels uploaded once per new frame: a live source writes them into the engine's
 //! mapped upload buffer on its own thread; a frame its source did not prepare, such as a
-//! static one, is prepared here once.
+//! static one, is prepared once ([`super::gl_frame_call`], which does a frame call's work).
 
 use super::app_context::{AppContext, Entered};
+use super::gl_frame_call::{failed, gl_view, Frame};
 use super::program_builder::{Built, ProgramBuilder};
 use crate::algorithm::params::Params;
 use crate::config::InPlace;
-use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
-use crate::gpu::core::{overlay_pixel, FrameBackground, OverlayPixels};
-use crate::gpu::opengl::{GlEngine, GlError, GlFormat, GlTarget, GlView, Outcome};
+use crate::gpu::core::blurred_texels::BlurredTexels;
+use crate::gpu::core::{FrameBackground, OverlayPixels};
+use crate::gpu::opengl::{GlEngine, GlFormat, GlView};
 use crate::gpu::PixelFormat;
 use crate::layer::graphics::session_graphics::{
     CapturedImage, NotDone, SessionGraphics, ViewImage,
@@ -20,9 +21,6 @@ use crate::layer::log;
 use openxr_sys as xr;
 use std::cell::Cell;
 use std::time::{Duration, Instant};
-
-/// A frame call past this long is told in the debug log.
-const SLOW_FRAME: Duration = Duration::from_millis(100);
 
 /// How long a frame with `wait_for_pipelines` waits for its programs.
 const PROGRAM_WAIT: Duration = Duration::from_secs(60);
@@ -56,33 +54,6 @@ pub struct GlSession {
 // SAFETY: the binding's display and context pointers are used only on the app's threads that
 // call into the layer, under the session's lock, as the runtime uses them.
 unsafe impl Send for GlSession {}
-
-/// A GL error as the layer takes it: an app binding the engine could not put back passes
-/// only this frame through; anything else, the session.
-fn failed(e: GlError) -> NotDone {
-    match e {
-        GlError::Unrestorable(_) => NotDone::Skipped(e.to_string()),
-        e => NotDone::Failed(e.to_string()),
-    }
-}
-
-fn gl_view(v: &ViewImage) -> GlView {
-    let (x, y) = v.key.offset;
-    let (w, h) = v.key.extent;
-    GlView {
-        texture: v.image as u32,
-        target: match v.layered {
-            true => GlTarget::Texture2DArray {
-                layer: v.key.array_index,
-            },
-            false => GlTarget::Texture2D,
-        },
-        internal_format: v.api_format as u32,
-        // An OpenXR imageRect of an OpenGL swapchain counts rows from the bottom, as GL does.
-        rect: (x as u32, y as u32, w, h),
-        mapping: v.mapping,
-    }
-}
 
 impl GlSession {
     pub fn new(api: &'static str, context: Box<dyn AppContext>) -> GlSession {
@@ -141,24 +112,6 @@ impl GlSession {
         drop(entered);
         result
     }
-}
-
-/// The background's texels for this frame: its source's, when made for these settings, else
-/// prepared here once per background sequence.
-fn texels<'a>(
-    background: &'a FrameBackground,
-    prepared_here: &'a mut Option<(u64, BlurredTexels)>,
-    params: &Params,
-) -> &'a BlurredTexels {
-    let size = (background.image.width, background.image.height);
-    if let Some(t) = background.prepared.filter(|t| t.made_for(size, params)) {
-        return t;
-    }
-    if prepared_here.as_ref().map(|(s, _)| *s) != Some(background.sequence) {
-        let t = BlurredTexels::prepare_once(background.image, BlurTaps::of(params));
-        *prepared_here = Some((background.sequence, t));
-    }
-    &prepared_here.as_ref().expect("set above").1
 }
 
 /// What became of a view shape's programs when the session first met it.
@@ -433,62 +386,14 @@ impl SessionGraphics for GlSession {
     ) -> Result<Vec<CapturedImage>, NotDone> {
         let gl_views: Vec<GlView> = views.iter().map(gl_view).collect();
         self.in_context(|engine, prepared_here| {
-            let t = texels(&background, prepared_here, params);
-            let started = Instant::now();
-            let mappings: Vec<_> = gl_views.iter().map(|v| v.mapping).collect();
-            // SAFETY: inside `in_context`: the engine's context is current.
-            unsafe { engine.set_background_for(t, &mappings) }.map_err(failed)?;
-            let uploaded = started.elapsed();
-            let read = |engine: &GlEngine| -> Result<Vec<Vec<u8>>, NotDone> {
-                gl_views
-                    .iter()
-                    // SAFETY: inside `in_context`; the view names a swapchain texture.
-                    .map(|v| unsafe { engine.read_view(v) }.map_err(failed))
-                    .collect()
+            let frame = Frame {
+                views,
+                gl_views: &gl_views,
+                background: &background,
+                params,
             };
-            let before = if capture { read(engine)? } else { Vec::new() };
-            // SAFETY: inside `in_context`; the layer holds the views' images (their release),
-            // so nothing else writes them during the call.
-            match unsafe { engine.enhance(&gl_views, params) }.map_err(failed)? {
-                Outcome::Compiling => return Err(NotDone::Pending),
-                Outcome::Enhanced => {}
-            }
-            let took = started.elapsed();
-            if took > SLOW_FRAME {
-                // A driver that compiles a program's code at its first dispatch does it here.
-                log::debug(&format!(
-                    "an OpenGL frame call took {:.0} ms (background upload {:.0} ms)",
-                    took.as_secs_f64() * 1e3,
-                    uploaded.as_secs_f64() * 1e3
-                ));
-            }
-            if let Some(o) = overlay {
-                for (v, g) in views.iter().zip(&gl_views) {
-                    let runs = (o.runs)(v.key.extent);
-                    let pixel = overlay_pixel(v.format, o.colour);
-                    // SAFETY: as for the enhancement above.
-                    unsafe { engine.draw_runs(g, &runs, &pixel) }.map_err(failed)?;
-                }
-            }
-            if !capture {
-                return Ok(Vec::new());
-            }
-            let after = read(engine)?;
-            let stored = engine.last_in_place();
-            Ok(views
-                .iter()
-                .zip(before.into_iter().zip(after))
-                .enumerate()
-                .map(|(k, (v, (display, output)))| CapturedImage {
-                    path: match stored.get(k) {
-                        Some(true) => "in-place",
-                        _ => "copy",
-                    },
-                    view: v.clone(),
-                    display,
-                    output,
-                })
-                .collect())
+            // SAFETY: inside `in_context`: the app's context is current on this thread.
+            unsafe { frame.enhance(engine, prepared_here, overlay, capture) }
         })
     }
 

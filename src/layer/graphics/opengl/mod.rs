@@ -5,6 +5,7 @@
 mod app_context;
 mod egl_context;
 mod gl_bindings;
+mod gl_frame_call;
 mod gl_session;
 mod glx_context;
 mod program_builder;
