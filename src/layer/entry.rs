@@ -195,6 +195,7 @@ fn register_instance(
     // SAFETY: gipa is the next layer's and handle was created by it.
     match unsafe { NextFns::load(gipa, handle) } {
         Ok(next) => {
+            graphics::instance_created(handle, next.get_instance_proc_addr);
             let state = InstanceState {
                 next,
                 settings: Arc::new(settings),

@@ -50,6 +50,12 @@ pub fn intercepted(name: &str) -> Option<xr::pfn::VoidFunction> {
     vulkan::intercepted(name)
 }
 
+/// Tells the APIs of an instance the layer serves, with the next layer's xrGetInstanceProcAddr
+/// (which the functions they intercept forward through).
+pub fn instance_created(instance: xr::Instance, next: xr::pfn::GetInstanceProcAddr) {
+    vulkan::app_vulkan::instance_created(instance, next);
+}
+
 /// Forgets what the APIs kept for an instance the app destroys.
 pub fn forget_instance(instance: xr::Instance) {
     vulkan::app_vulkan::forget(instance);

@@ -15,5 +15,5 @@ pub mod opengl;
 pub mod session_graphics;
 pub mod vulkan;
 
-pub use bindings::{bind, forget_instance, intercepted, ENHANCED_APIS};
+pub use bindings::{bind, forget_instance, instance_created, intercepted, ENHANCED_APIS};
 pub use session_graphics::{Bound, CapturedImage, NotDone, SessionGraphics, ViewImage};

@@ -4,7 +4,6 @@
 //! from the Vulkan loader already loaded in the process; the layer never loads another.
 
 use crate::layer::ffi::{guard, LayerError};
-use crate::layer::state;
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::collections::HashMap;
@@ -13,6 +12,23 @@ use std::sync::{Mutex, MutexGuard, OnceLock};
 /// The app's vkGetInstanceProcAddr by the VkInstance it was given for, with the XrInstance
 /// it came through.
 type Given = HashMap<u64, (u64, vk::PFN_vkGetInstanceProcAddr)>;
+
+/// The next layer's xrGetInstanceProcAddr by the XrInstance it serves: what the layer's
+/// xrCreateVulkanInstanceKHR forwards through.
+type Next = HashMap<u64, xr::pfn::GetInstanceProcAddr>;
+
+fn next_fns() -> MutexGuard<'static, Next> {
+    static NEXT: OnceLock<Mutex<Next>> = OnceLock::new();
+    // Only map operations happen under this lock.
+    NEXT.get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+}
+
+/// Keeps the next layer's xrGetInstanceProcAddr for an XrInstance the layer serves.
+pub fn instance_created(instance: xr::Instance, next: xr::pfn::GetInstanceProcAddr) {
+    next_fns().insert(instance.into_raw(), next);
+}
 
 fn given() -> MutexGuard<'static, Given> {
     static GIVEN: OnceLock<Mutex<Given>> = OnceLock::new();
@@ -35,12 +51,12 @@ pub unsafe extern "system" fn create_vulkan_instance(
         "xrCreateVulkanInstanceKHR",
         xr::Result::ERROR_RUNTIME_FAILURE,
         || {
-            let inst = state::instance(instance).ok_or(LayerError::UnknownHandle("XrInstance"))?;
+            let lookup = next_fns().get(&instance.into_raw()).copied();
+            let lookup = lookup.ok_or(LayerError::UnknownHandle("XrInstance"))?;
             let mut next = None;
             let name = c"xrCreateVulkanInstanceKHR";
             // SAFETY: the next layer's lookup, with a NUL-terminated name and a valid out pointer.
-            let found =
-                unsafe { (inst.next.get_instance_proc_addr)(instance, name.as_ptr(), &mut next) };
+            let found = unsafe { lookup(instance, name.as_ptr(), &mut next) };
             let Some(next) = next.filter(|_| found == xr::Result::SUCCESS) else {
                 return Ok(found);
             };
@@ -95,6 +111,7 @@ fn loaded_loader() -> Option<vk::PFN_vkGetInstanceProcAddr> {
 
 /// Forgets what the app gave through the XrInstance it destroys.
 pub fn forget(instance: xr::Instance) {
+    next_fns().remove(&instance.into_raw());
     given().retain(|_, (of, _)| *of != instance.into_raw());
 }
 
