@@ -7,7 +7,7 @@
 //! docs/algorithm.md, Colour spaces, and the interface's declarations
 //! (src/gpu/core/interface.rs). One module of `build/` per job:
 //!
-//! - `methods`: the method table (src/algorithm/method_table.rs) as build.rs sees it;
+//! - `methods`: the method table (src/algorithm/method/table.rs) as build.rs sees it;
 //! - `colour`: the colour constants;
 //! - `variants`: the variants built, as a typed list;
 //! - `wgsl`: a shader's WGSL source assembled;
@@ -64,7 +64,7 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=src/gpu/core/approx_constants.rs");
     println!("cargo:rerun-if-changed=src/gpu/core/interface.rs");
-    println!("cargo:rerun-if-changed=src/algorithm/method_table.rs");
+    println!("cargo:rerun-if-changed=src/algorithm/method/table.rs");
     let prefix = |access_code: u32, format: u32| prefix(&common, access_code, format);
     // Parses, checks and writes `file`.spv; the parsed module, for the GLSL.
     let write = |file: &str, stage: &str, source: &str, entry: &str| -> Parsed {

@@ -1,8 +1,8 @@
-//! The method table (src/algorithm/method_table.rs) as build.rs sees it: each entry's name,
+//! The method table (src/algorithm/method/table.rs) as build.rs sees it: each entry's name,
 //! code, space and WGSL file.
 
 // Dependency-free, so included here as in the library.
-include!("../src/algorithm/method_table.rs");
+include!("../src/algorithm/method/table.rs");
 
 /// A method as build.rs sees its entry.
 pub struct BuildMethod {

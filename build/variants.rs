@@ -95,7 +95,7 @@ fn enhance_of(pixels: PixelAccess) -> Vec<Enhance> {
     codes.sort();
     assert!(
         codes.windows(2).all(|w| w[0] != w[1]),
-        "src/algorithm/method_table.rs: two methods share a code"
+        "src/algorithm/method/table.rs: two methods share a code"
     );
     let variant = |method, mode, extras, shared| Enhance {
         method,

@@ -1,7 +1,7 @@
 // The per-pixel enhancement (docs/algorithm.md, Per-pixel optimisation: Algorithm 1 and its
 // four constraints) and the comparison methods (docs/algorithm.md, Comparison methods), on one
 // display region's raw pixels, in place, four pixels at a time; each variant's method is its
-// own file in shaders/methods/ (src/algorithm/method_table.rs), which build.rs appends
+// own file in shaders/methods/ (src/algorithm/method/table.rs), which build.rs appends
 // (Colours in common.wgsl). Every branch is a per-pixel select: a CPU driver runs all of them
 // anyway. A pixel the method leaves unchanged keeps its words, bit for bit.
 

@@ -10,7 +10,7 @@ use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec;
 use contrastxr::gpu::opengl::GlOffline;
-use contrastxr::gpu::{DeviceOptions, OfflineBackend, OfflineEngine, PixelFormat, PixelLayout};
+use contrastxr::gpu::{DeviceOptions, OfflineBackend, PixelFormat, PixelLayout, VkOffline};
 use contrastxr::image::RgbaImage;
 
 /// Runs `test` on each backend in turn, then checks Vulkan's validation log.
@@ -21,7 +21,7 @@ fn each_backend(test: impl Fn(&mut dyn OfflineBackend)) {
         matching: None,
     };
     let mut vulkan =
-        OfflineEngine::with_options(&options).unwrap_or_else(|e| panic!("Vulkan engine: {e}"));
+        VkOffline::with_options(&options).unwrap_or_else(|e| panic!("Vulkan engine: {e}"));
     test(&mut vulkan);
     assert_eq!(
         OfflineBackend::validation_errors(&vulkan),

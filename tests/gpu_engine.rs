@@ -11,12 +11,12 @@ use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec::half_from_f32;
 use contrastxr::gpu::vulkan::offline::AppImage;
 use contrastxr::gpu::vulkan::VkFormat;
-use contrastxr::gpu::{DeviceOptions, OfflineEngine, PixelFormat, PixelLayout};
+use contrastxr::gpu::{DeviceOptions, PixelFormat, PixelLayout, VkOffline};
 use contrastxr::image::RgbaImage;
 use std::process::Command;
 
-fn engine() -> OfflineEngine {
-    OfflineEngine::with_options(&DeviceOptions {
+fn engine() -> VkOffline {
+    VkOffline::with_options(&DeviceOptions {
         index: 0,
         validation: true,
         matching: None,
@@ -24,7 +24,7 @@ fn engine() -> OfflineEngine {
     .unwrap_or_else(|e| panic!("GPU engine: {e}"))
 }
 
-fn assert_clean(e: &OfflineEngine) {
+fn assert_clean(e: &VkOffline) {
     assert_eq!(
         e.validation_errors(),
         0,
@@ -107,7 +107,7 @@ fn formats_agree_with_the_8bit_srgb_path() {
     assert_clean(&e);
 }
 
-fn formats_agree_on(e: &mut OfflineEngine, camera: &RgbaImage, colours: &[[u8; 4]]) {
+fn formats_agree_on(e: &mut VkOffline, camera: &RgbaImage, colours: &[[u8; 4]]) {
     let region = (colours.len() as u32, 1);
     let params = Params::default();
     let srgb: Vec<u32> = colours.iter().map(|p| u32::from_le_bytes(*p)).collect();
@@ -158,7 +158,7 @@ fn formats_agree_on(e: &mut OfflineEngine, camera: &RgbaImage, colours: &[[u8; 4
 
 /// `nonconformant` for a view at `mapping` in the camera image.
 fn nonconformant_mapped(
-    e: &mut OfflineEngine,
+    e: &mut VkOffline,
     display: &RgbaImage,
     camera: &RgbaImage,
     mapping: &CameraMapping,
@@ -181,17 +181,12 @@ fn nonconformant_mapped(
     bad
 }
 
-fn check_all_methods(
-    e: &mut OfflineEngine,
-    display: &RgbaImage,
-    camera: &RgbaImage,
-    base: &Params,
-) {
+fn check_all_methods(e: &mut VkOffline, display: &RgbaImage, camera: &RgbaImage, base: &Params) {
     check_all_methods_mapped(e, display, camera, &base.camera_mapping(), base);
 }
 
 fn check_all_methods_mapped(
-    e: &mut OfflineEngine,
+    e: &mut VkOffline,
     display: &RgbaImage,
     camera: &RgbaImage,
     mapping: &CameraMapping,
@@ -837,7 +832,7 @@ fn differing<T: PartialEq>(a: &[T], b: &[T]) -> usize {
 
 /// The output with the shared-fetch variant allowed and with the general one forced.
 fn shared_and_general(
-    e: &mut OfflineEngine,
+    e: &mut VkOffline,
     display: &RgbaImage,
     camera: &RgbaImage,
     mapping: &CameraMapping,
@@ -857,7 +852,7 @@ fn shared_and_general(
 /// boundary by one step: there, at most one step (8-bit code or half-float unit) in any
 /// channel, on at most 1 in 1000 values. `shared` and `general` are the outputs' channels as
 /// integers.
-fn assert_shared_fetch_contract(e: &OfflineEngine, shared: &[u32], general: &[u32], what: &str) {
+fn assert_shared_fetch_contract(e: &VkOffline, shared: &[u32], general: &[u32], what: &str) {
     assert_eq!(shared.len(), general.len(), "{what}");
     let differ = differing(shared, general);
     if e.is_cpu() {
@@ -923,7 +918,7 @@ fn shared_fetches_give_the_general_variants_output() {
         .collect();
     let params = Params::default();
     for mapping in shared_fetch_mappings() {
-        let run = |e: &mut OfflineEngine| {
+        let run = |e: &mut VkOffline| {
             e.enhance_raw_mapped(&raw, ((100, 9), format), &camera, &mapping, &params)
                 .unwrap()
         };
@@ -961,7 +956,7 @@ fn shared_fetches_in_place_match_the_general_variant() {
             .iter()
             .map(|p| u32::from_le_bytes(*p))
             .collect();
-        let run = |e: &mut OfflineEngine| {
+        let run = |e: &mut VkOffline| {
             let format = vk::Format::R8G8B8A8_SRGB;
             e.enhance_raw_in_place(&raw, (region, format), &camera, &params)
                 .unwrap()

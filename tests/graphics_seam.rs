@@ -14,7 +14,7 @@ const API_SPECIFIC: [&str; 10] = [
     "SwapchainImageVulkan",
     "SwapchainImageOpenGL",
     "gpu::opengl",
-    "FrameEngine",
+    "FrameRunner",
     "app_vulkan",
 ];
 

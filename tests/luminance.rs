@@ -5,7 +5,7 @@ use contrastxr::algorithm::{
     conformant, enhance_scaled, enhance_srgb8, enhance_srgb8_trace, Method, Params,
 };
 use contrastxr::colour;
-use contrastxr::gpu::{DeviceOptions, OfflineEngine};
+use contrastxr::gpu::{DeviceOptions, VkOffline};
 use contrastxr::image::RgbaImage;
 use glam::DVec3;
 
@@ -122,7 +122,7 @@ fn noise(width: u32, height: u32, seed: u32) -> RgbaImage {
 
 #[test]
 fn the_gpu_is_within_one_code_value_of_the_reference() {
-    let mut e = OfflineEngine::with_options(&DeviceOptions {
+    let mut e = VkOffline::with_options(&DeviceOptions {
         index: 0,
         validation: true,
         matching: None,

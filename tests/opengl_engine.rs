@@ -654,7 +654,7 @@ fn the_entry_points_are_found_through_the_gl_in_the_process() {
     let mut gl = context();
     let functions = contrastxr::gpu::opengl::Gl::from_process().unwrap();
     // SAFETY: the offline context is current on this thread; the functions are its driver's.
-    let mut engine = unsafe { contrastxr::gpu::opengl::GlEngine::new(functions) }.unwrap();
+    let mut engine = unsafe { contrastxr::gpu::opengl::GlFrameRunner::new(functions) }.unwrap();
     let camera = noise(32, 24, 6);
     let display = noise(16, 8, 7);
     let params = Params::default();

@@ -16,8 +16,8 @@ use contrastxr::gpu::vulkan::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use contrastxr::gpu::{
-    DeviceOptions, FrameBackground, FrameEngine, FrameOptions, FrameView, GpuDevice, OfflineEngine,
-    PixelFormat, PixelLayout, ViewKey, ViewPath,
+    BackgroundInput, DeviceOptions, FrameOptions, FrameRunner, FrameView, GpuDevice, PixelFormat,
+    PixelLayout, ViewKey, ViewPath, VkOffline,
 };
 use contrastxr::image::RgbaImage;
 use gpu_allocator::MemoryLocation;
@@ -80,7 +80,7 @@ struct Path {
 /// Two app images (two swapchains of one image each), left in COLOR_ATTACHMENT_OPTIMAL as an
 /// app leaves them for the runtime, and a frame engine that enhances them.
 struct Rig {
-    engine: FrameEngine,
+    engine: FrameRunner,
     images: [DeviceImage; 2],
     buffer: GpuBuffer,
     path: Path,
@@ -91,7 +91,7 @@ struct Rig {
 impl Rig {
     fn new(path: Path) -> Rig {
         let gpu = GpuDevice::create(&OPTIONS).unwrap();
-        let mut engine = FrameEngine::new(gpu, &[]).unwrap();
+        let mut engine = FrameRunner::new(gpu, &[]).unwrap();
         engine.set_direct_texels(path.direct);
         let gpu = &engine.gpu;
         let images =
@@ -183,7 +183,7 @@ impl Rig {
     fn frame(&mut self, i: usize, camera: &RgbaImage, prepared: bool, sequence: u64) {
         let params = Params::default();
         let texels = BlurredTexels::prepare(camera, BlurTaps::of(&params));
-        let background = FrameBackground {
+        let background = BackgroundInput {
             image: camera,
             prepared: prepared.then_some(&texels),
             sequence,
@@ -222,7 +222,7 @@ impl Rig {
 /// What the offline engine makes of `display` against `camera`, with the texels prepared on
 /// the CPU (`prepared`) or by the GPU passes.
 fn expected(display: &RgbaImage, camera: &RgbaImage, prepared: bool) -> Vec<u8> {
-    let mut e = OfflineEngine::with_options(&OPTIONS).unwrap();
+    let mut e = VkOffline::with_options(&OPTIONS).unwrap();
     e.set_cpu_background(prepared);
     let params = Params::default();
     let words: Vec<u32> = display

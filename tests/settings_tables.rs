@@ -41,7 +41,7 @@ fn a_missing_key_is_reported() {
 }
 
 /// A text that names methods as values (each within `quote`, as `"hue-only"` in TOML) names
-/// them all or only gives an example: the method table (src/algorithm/method_table.rs) is the
+/// them all or only gives an example: the method table (src/algorithm/method/table.rs) is the
 /// list, and the help derives its list from it. Quoted, since a method's name may be a word
 /// of the prose (`luminance`). Ok where every method is named, or at most one but paper.
 fn names_every_method_or_one(text: &str, quote: char) -> Result<(), String> {

@@ -4,8 +4,8 @@
 use glam::DVec3;
 
 use super::conformance::{PixelTrace, NEAR_THRESHOLD};
-use super::method_reference::Reference;
 use super::params::{Params, SUBTRACTION_K_B, SUBTRACTION_K_V};
+use super::reference_fn::Reference;
 use super::scaled::enhance_scaled_traced;
 use crate::colour;
 

@@ -8,8 +8,8 @@ use super::constraints::{
     ab_plane, change_vector, chroma_constraint, jnd_constraint, luminance_constraint, split_chroma,
     Margin,
 };
-use super::method_reference::Reference;
 use super::params::{Params, ACHROMATIC_CHROMA};
+use super::reference_fn::Reference;
 
 /// P and how close the computation came to a branch flip.
 #[derive(Clone, Copy, Debug)]
@@ -21,7 +21,7 @@ pub struct ScaledOutcome {
 }
 
 /// The method's P for display colour D on background B (both scaled): its entry's scaled
-/// reference (src/algorithm/method_table.rs) where there is a change vector E. A method in
+/// reference (src/algorithm/method/table.rs) where there is a change vector E. A method in
 /// linear light (subtraction; see `enhance_linear`) returns D unchanged here.
 pub fn enhance_scaled(display: DVec3, background: DVec3, params: &Params) -> DVec3 {
     enhance_scaled_traced(display, background, params).p
@@ -40,7 +40,7 @@ pub fn enhance_scaled_traced(display: DVec3, background: DVec3, params: &Params)
     ScaledOutcome { p, margin: m.0 }
 }
 
-// The methods' scaled references, as their entries in method_table.rs name them: P from D, B
+// The methods' scaled references, as their entries in method/table.rs name them: P from D, B
 // and E.
 
 /// Algorithm 1: the chroma and luminance constraints shape E into dir; P = D + dir; then JND.

@@ -6,7 +6,7 @@ use super::error::CliError;
 use contrastxr::algorithm::{Method, Params};
 use contrastxr::gpu::opengl::GlOffline;
 use contrastxr::gpu::vulkan::offline::{BenchCase, BenchResult, Content, CAMERA_SIZE};
-use contrastxr::gpu::{DeviceOptions, OfflineEngine};
+use contrastxr::gpu::{DeviceOptions, VkOffline};
 
 const DEFAULT_SIZES: &str = "1268x720,1920x1080,2064x2208,3840x3840";
 
@@ -151,7 +151,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         matching: None,
     };
     let mut engine =
-        OfflineEngine::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
+        VkOffline::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
     let device = engine.device_name().to_string();
     report(&device, json, &cases, |case| {
         engine

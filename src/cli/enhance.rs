@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use super::args::{Args, Opt};
-use super::engine_choice;
+use super::backend_choice;
 use super::error::CliError;
 use super::options::{self, method_usage, ENGINE_USAGE};
 
@@ -29,7 +29,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let display = options::load_path(&display_path, "display")?;
     let camera = options::load_path(&background_path, "background")?;
     let start = Instant::now();
-    let out = engine_choice::run(engine, &display, &camera, &params).map_err(CliError::Failure)?;
+    let out = backend_choice::run(engine, &display, &camera, &params).map_err(CliError::Failure)?;
     let seconds = start.elapsed().as_secs_f64();
     options::save_image(&out, &out_path)?;
     super::error::print(&format!(

@@ -8,7 +8,7 @@ use contrastxr::image::RgbaImage;
 
 use super::args::parse_list;
 use super::args::{Args, Opt};
-use super::engine_choice::{self, Engine};
+use super::backend_choice::{self, Backend};
 use super::error::CliError;
 use super::options::{self, method_usage, ENGINE_USAGE};
 
@@ -44,7 +44,7 @@ struct Inputs {
     display: RgbaImage,
     camera: RgbaImage,
     params: Params,
-    engine: Engine,
+    engine: Backend,
     json: bool,
     figure: Option<String>,
     app_images: bool,
@@ -90,7 +90,7 @@ fn enhanced_image(
     params: &Params,
 ) -> Result<RgbaImage, CliError> {
     let Some(path) = path else {
-        return engine_choice::run(inputs.engine, &inputs.display, &inputs.camera, params)
+        return backend_choice::run(inputs.engine, &inputs.display, &inputs.camera, params)
             .map_err(CliError::Failure);
     };
     let img = options::load_path(path, "enhanced")?;

@@ -4,6 +4,7 @@
 
 mod animate;
 mod args;
+mod backend_choice;
 mod bench;
 mod calibrate;
 mod camera;
@@ -12,7 +13,6 @@ mod completions;
 mod config;
 mod control;
 mod doctor;
-mod engine_choice;
 mod enhance;
 mod error;
 mod evaluate;

@@ -6,7 +6,7 @@ use contrastxr::image::RgbaImage;
 
 use super::args::Args;
 use super::args::Opt;
-use super::engine_choice::Engine;
+use super::backend_choice::Backend;
 use super::error::CliError;
 
 /// A setting of the method the offline commands take as an option: its name in
@@ -115,10 +115,10 @@ pub fn params(args: &mut Args) -> Result<Params, CliError> {
     Ok(settings.params)
 }
 
-pub fn engine(args: &mut Args) -> Result<Engine, CliError> {
+pub fn engine(args: &mut Args) -> Result<Backend, CliError> {
     match args.value(&["--engine"])? {
-        None => Ok(Engine::Gpu),
-        Some(v) => Engine::parse(&v).ok_or_else(|| {
+        None => Ok(Backend::Vulkan),
+        Some(v) => Backend::parse(&v).ok_or_else(|| {
             CliError::Failure(format!("--engine must be gpu, cpu or opengl, got '{v}'"))
         }),
     }

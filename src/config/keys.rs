@@ -23,8 +23,8 @@ pub struct Key {
 }
 
 /// The values of `mode`: the view modes, and the comparison methods (shown in mode enhance),
-/// from the method table (src/algorithm/method_table.rs).
-pub use crate::algorithm::methods::MODES;
+/// from the method table (src/algorithm/method/table.rs).
+pub use crate::algorithm::method::MODES;
 
 fn float(v: Value) -> Result<f32, String> {
     match v {
@@ -194,7 +194,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_METHOD",
         env_negated: false,
         kind: Kind::Text,
-        doc: crate::algorithm::methods::METHOD_DOC,
+        doc: crate::algorithm::method::METHOD_DOC,
         set: set_method,
         get: |s| Value::Text(s.params.method.name().into()),
     },
@@ -203,7 +203,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_MODE",
         env_negated: false,
         kind: Kind::Text,
-        doc: crate::algorithm::methods::MODE_DOC,
+        doc: crate::algorithm::method::MODE_DOC,
         set: set_mode,
         get: |s| Value::Text(s.params.mode.name().into()),
     },

@@ -13,8 +13,8 @@ pub mod core;
 pub mod opengl;
 pub mod vulkan;
 
-pub use self::core::{CameraRect, FrameBackground, OfflineBackend, PixelFormat, PixelLayout};
+pub use self::core::{BackgroundInput, CameraRect, OfflineBackend, PixelFormat, PixelLayout};
 pub use vulkan::device::{DeviceOptions, GpuDevice, GpuError};
-pub use vulkan::frame::{CapturedView, FrameEngine, FrameOptions, FrameView, ViewKey, ViewPath};
-pub use vulkan::offline::OfflineEngine;
-pub use vulkan::record::{BackgroundFrame, Engine, Placement, ViewShape, ViewTarget};
+pub use vulkan::frame::{CapturedView, FrameOptions, FrameRunner, FrameView, ViewKey, ViewPath};
+pub use vulkan::offline::VkOffline;
+pub use vulkan::record::{CameraResources, Placement, Recorder, ViewShape, ViewTarget};

@@ -17,7 +17,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
 use crate::camera;
 use crate::gpu::core::blurred_texels::BlurTaps;
-use crate::gpu::core::{FrameBackground, OverlayPixels};
+use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::ViewKey;
 use crate::image::RgbaImage;
 use openxr_sys as xr;
@@ -288,14 +288,14 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
     // Mode off: the app's frames untouched, no GPU work at all.
     if items.is_empty()
         || s.settings.params.mode == ViewMode::Off
-        || s.engine.is_none()
+        || s.graphics.is_none()
         || !acts_on(s, blend)
     {
         sources::close_when_idle(s);
         return;
     }
     sources::open_when_needed(s);
-    if let (Some(bg), Some(graphics)) = (&s.background, &s.engine) {
+    if let (Some(bg), Some(graphics)) = (&s.background, &s.graphics) {
         // Live frames come prepared for these settings from the source's thread (and, where
         // the graphics can take them, written straight into what the views sample).
         bg.prepare_with(BlurTaps::of(&s.settings.params));
@@ -310,13 +310,13 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
     };
     let sequence = background_sequence(frame.sequence, &s.settings);
     let prepared = frame.prepared.as_deref();
-    let background = FrameBackground {
+    let background = BackgroundInput {
         image: &frame.image,
         prepared,
         sequence,
     };
     let done = enhance(s, &items, background, options);
-    let graphics = s.engine.as_ref().expect("checked above");
+    let graphics = s.graphics.as_ref().expect("checked above");
     let lines = graphics.frame_lines(&items, prepared.is_some());
     match done {
         Ok(views) => {
@@ -355,10 +355,10 @@ struct FrameOptions {
 fn enhance(
     s: &mut SessionState,
     views: &[ViewImage],
-    background: FrameBackground,
+    background: BackgroundInput,
     options: FrameOptions,
 ) -> Result<Vec<CapturedImage>, NotDone> {
-    let graphics = s.engine.as_mut().expect("checked by the caller");
+    let graphics = s.graphics.as_mut().expect("checked by the caller");
     let params = &s.settings.params;
     graphics.ready(views, params, options.wait_for_pipelines)?;
     // The indicator's time starts with the first enhanced frame, not while shaders build.
@@ -394,7 +394,7 @@ fn write_capture(s: &SessionState, views: Vec<CapturedImage>, bg: &Arc<RgbaImage
     };
     for (k, v) in views.into_iter().enumerate() {
         let motion = motion::capture_json(s.motion.views.get(k));
-        let Some(graphics) = s.engine.as_ref() else {
+        let Some(graphics) = s.graphics.as_ref() else {
             return;
         };
         let api = capture_files::Api {

@@ -169,7 +169,7 @@ impl Rig {
             instance: xr::Instance::from_raw(fresh_handle()),
             next,
             settings: Arc::new(settings),
-            engine: Some(graphics),
+            graphics: Some(graphics),
             retired: Vec::new(),
             indicator: Default::default(),
             started: std::time::Instant::now(),

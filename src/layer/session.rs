@@ -58,7 +58,7 @@ pub unsafe extern "system" fn create_session(
             instance,
             next: inst.next,
             settings,
-            engine,
+            graphics: engine,
             retired: Vec::new(),
             indicator: Default::default(),
             started,
@@ -239,7 +239,7 @@ mod tests {
         assert_eq!(rig.fake.calls().stopped_building, 1);
         let state = rig.state();
         let s = lock(&state);
-        assert!(s.engine.is_none());
+        assert!(s.graphics.is_none());
         assert_eq!((s.retired.len(), s.processed), (1, 0));
     }
 
@@ -253,7 +253,7 @@ mod tests {
         assert_eq!(rig.end_frame(), xr::Result::SUCCESS);
         assert_eq!(rig.runtime_calls(), FRAME);
         assert_eq!(rig.fake.calls().stopped_building, 1);
-        assert!(lock(&rig.state()).engine.is_none());
+        assert!(lock(&rig.state()).graphics.is_none());
     }
 
     /// A panic at a release ahead of xrEndFrame (a pipelined app, enhanced at its next
@@ -274,7 +274,7 @@ mod tests {
             rig.runtime_calls(),
             ["acquire", "wait", "release", "acquire"]
         );
-        assert!(lock(&rig.state()).engine.is_none());
+        assert!(lock(&rig.state()).graphics.is_none());
     }
 
     /// A panic in the graphics while the app makes a swapchain (the shaders it will need are
@@ -291,7 +291,7 @@ mod tests {
         assert_ne!(made, xr::Swapchain::NULL);
         assert_eq!(rig.runtime_calls(), ["create_swapchain"]);
         assert_eq!(rig.fake.calls().requested_shaders, 1);
-        assert!(lock(&rig.state()).engine.is_none());
+        assert!(lock(&rig.state()).graphics.is_none());
     }
 
     /// Frames whose shaders are still being built pass through, and the engine stays.
@@ -301,7 +301,7 @@ mod tests {
         rig.fake.answer(Outcome::Pending);
         rig.render();
         rig.end_frame();
-        assert!(lock(&rig.state()).engine.is_some());
+        assert!(lock(&rig.state()).graphics.is_some());
         rig.fake.answer(Outcome::Enhance);
         rig.render();
         rig.end_frame();
@@ -321,7 +321,7 @@ mod tests {
         let destroyed = unsafe { swapchain::destroy_swapchain(rig.swapchain) };
         assert_eq!(destroyed, xr::Result::SUCCESS);
         assert_eq!(rig.runtime_calls(), ["destroy_swapchain"]);
-        assert!(lock(&rig.state()).engine.is_none());
+        assert!(lock(&rig.state()).graphics.is_none());
     }
 
     /// Passing through twice retires the engine once; the session's end finishes every

@@ -136,7 +136,7 @@ pub(super) fn pick_up_settings(session: xr::Session, s: &mut SessionState) {
     let source_changed =
         newer.background != s.settings.background || newer.camera != s.settings.camera;
     // A background not opened yet opens with the new settings when it is first needed.
-    if source_changed && s.engine.is_some() && s.background_requested {
+    if source_changed && s.graphics.is_some() && s.background_requested {
         start_reopen(
             session,
             s.background.take(),

@@ -38,7 +38,7 @@ pub struct SessionState {
     /// The session's graphics, which do the frame's work on the app's device or context.
     /// None: this session passes through (an API the layer does not enhance, set-up failed,
     /// or an earlier failure).
-    pub engine: Option<Box<dyn SessionGraphics>>,
+    pub graphics: Option<Box<dyn SessionGraphics>>,
     /// Engines of earlier failures, kept until xrDestroySession: ending one waits for its
     /// pipeline thread, which no frame call may do.
     pub retired: Vec<Box<dyn SessionGraphics>>,
@@ -78,7 +78,7 @@ impl SessionState {
     /// waits here for a shader compile, a device teardown or a cache write. A session already
     /// passing through says nothing more (a failure that repeats each frame is one line).
     pub fn pass_through(&mut self, why: &str) {
-        if let Some(engine) = self.engine.take() {
+        if let Some(engine) = self.graphics.take() {
             log::info(&format!("{why}: {PASSING_THROUGH}"));
             engine.stop_building();
             self.retired.push(engine);
@@ -93,7 +93,12 @@ impl SessionState {
     /// its pipeline thread, then destroys what it made. On the app's thread, inside
     /// xrDestroySession or xrDestroyInstance.
     pub fn end_engines(&mut self) {
-        for engine in self.engine.take().into_iter().chain(self.retired.drain(..)) {
+        for engine in self
+            .graphics
+            .take()
+            .into_iter()
+            .chain(self.retired.drain(..))
+        {
             if let Err(e) = engine.finish() {
                 log::info(&format!(
                     "the GPU did not finish the layer's last work ({e}): its objects are left alive, not destroyed"

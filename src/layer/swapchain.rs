@@ -43,7 +43,7 @@ fn enhanceable(info: &xr::SwapchainCreateInfo) -> bool {
 /// What the session's graphics need of a swapchain: the pixel format its images are enhanced
 /// in (None: they pass through), the usage the layer must have, and usage for in place.
 fn plan(s: &SessionState, info: &xr::SwapchainCreateInfo) -> Option<Plan> {
-    let graphics = s.engine.as_ref()?;
+    let graphics = s.graphics.as_ref()?;
     let pixel = graphics
         .pixel_format(info.format)
         .filter(|_| enhanceable(info))?;
@@ -187,7 +187,7 @@ fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_
         return;
     }
     let params = s.settings.params.clone();
-    let Some(graphics) = s.engine.as_mut() else {
+    let Some(graphics) = s.graphics.as_mut() else {
         return;
     };
     let prepared = contain("while preparing the shaders at xrCreateSwapchain", || {
@@ -228,7 +228,7 @@ fn forget(sc: &Arc<Mutex<SwapchainState>>, swapchain: xr::Swapchain) {
         sc.states = ImageStates::default();
         let Some(s) = s else { return };
         let forgotten = s
-            .engine
+            .graphics
             .as_mut()
             .map(|graphics| graphics.forget_swapchain(swapchain.into_raw()));
         if let Some(Err(e)) = forgotten {
@@ -266,7 +266,7 @@ pub(crate) unsafe extern "system" fn enumerate_swapchain_images(
                 // SAFETY: on success the runtime filled *count structs of the type the app chose.
                 let n = unsafe { *count } as usize;
                 with_session(&sc, |s, sc| {
-                    let graphics = s.and_then(|s| s.engine.as_ref());
+                    let graphics = s.and_then(|s| s.graphics.as_ref());
                     // SAFETY: n structs of the app's chosen type were written (checked non-null).
                     if let Some(raw) = graphics.and_then(|g| unsafe { g.images(images, n) }) {
                         sc.set_images(raw);

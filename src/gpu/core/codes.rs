@@ -4,7 +4,7 @@
 use super::interface::*;
 use crate::algorithm::params::{Method, ViewMode};
 
-/// The code the shaders use for a method: its entry's (src/algorithm/method_table.rs), for
+/// The code the shaders use for a method: its entry's (src/algorithm/method/table.rs), for
 /// which build.rs builds its `enhance` variants.
 pub fn method_code(method: Method) -> u32 {
     method.entry().code

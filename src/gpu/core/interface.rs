@@ -213,7 +213,7 @@ pub const MODE_BACKGROUND: u32 = 4;
 /// one variant of its own).
 pub const ENHANCE_MODES: [u32; 3] = [MODE_ENHANCE, MODE_SPLIT, MODE_HEATMAP];
 
-// The method codes are the method table's (src/algorithm/method_table.rs, `code`).
+// The method codes are the method table's (src/algorithm/method/table.rs, `code`).
 
 /// The codes written into every shader as WGSL constants, by name.
 pub const CODES: [(&str, u32); 23] = [

@@ -25,7 +25,7 @@ pub(crate) mod texels;
 mod variant_key;
 
 pub use camera_rect::CameraRect;
-pub use frame_input::FrameBackground;
+pub use frame_input::BackgroundInput;
 pub use offline_backend::OfflineBackend;
 pub use overlay::{encode as overlay_pixel, OverlayPixels, Run};
 pub use pixel_format::{PixelFormat, PixelLayout};

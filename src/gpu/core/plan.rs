@@ -1,10 +1,10 @@
 //! A view's enhancement as steps, written once for every backend: from the method's passes (its
-//! entry in src/algorithm/method_table.rs) and the view's size, which shader runs over which
+//! entry in src/algorithm/method/table.rs) and the view's size, which shader runs over which
 //! grid and what each must see of the one before. A backend encodes the steps through
 //! [`Encoder`] (Vulkan: commands and pipeline barriers; OpenGL: calls and memory barriers).
 
 use super::interface::{CLASSIFY_WORKGROUP, TILE, TILE_LIST_DISPATCH_OFFSET};
-use crate::algorithm::methods::Pass;
+use crate::algorithm::method::Pass;
 
 /// The per-view shaders, by their job; each backend names its own variant of each through the
 /// view's [`VariantKey`](super::VariantKey).
@@ -112,7 +112,7 @@ pub fn encode<E: Encoder>(steps: &[Step], encoder: &mut E) -> Result<(), E::Erro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::algorithm::methods::PER_PIXEL_PASSES;
+    use crate::algorithm::method::PER_PIXEL_PASSES;
 
     #[test]
     fn the_per_pixel_passes_in_steps() {
@@ -134,7 +134,7 @@ mod tests {
         );
     }
 
-    /// Every method's passes (its entry in method_table.rs) make steps the backends run.
+    /// Every method's passes (its entry in method/table.rs) make steps the backends run.
     #[test]
     fn every_method_has_a_plan() {
         for method in crate::algorithm::method::Method::ALL {

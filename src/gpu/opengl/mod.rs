@@ -4,7 +4,7 @@
 //! unit or on a copy of each view in a buffer object. The same roles as `vulkan/`: `device` (the
 //! functions, the context's capabilities, errors), `pipelines` (the programs, their binary cache
 //! and background builds), `record` (a view's steps as GL calls), `frame` (a frame's work:
-//! `GlEngine`, the app's state kept), `texels`,
+//! `GlFrameRunner`, the app's state kept), `texels`,
 //! `offline` (a context of its own for the command line and the benchmark) and `conv`.
 //!
 //! Called on the app's thread with its context current (the layer's xrEndFrame): no GL call is
@@ -24,6 +24,6 @@ mod texels;
 
 pub use conv::GlFormat;
 pub use device::{Gl, GlError};
-pub use frame::{GlEngine, GlTarget, GlView, Outcome, StoreThrough};
+pub use frame::{GlFrameRunner, GlTarget, GlView, Outcome, StoreThrough};
 pub use offline::GlOffline;
 pub use pipelines::{gl_sources_id, BinaryCache};

@@ -4,7 +4,7 @@
 
 use super::session_graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
 use crate::algorithm::params::Params;
-use crate::gpu::core::{FrameBackground, OverlayPixels};
+use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::PixelFormat;
 use crate::layer::live_settings::Settings;
 use openxr_sys as xr;
@@ -154,7 +154,7 @@ impl SessionGraphics for FakeGraphics {
     fn enhance(
         &mut self,
         views: &[ViewImage],
-        _background: FrameBackground,
+        _background: BackgroundInput,
         _params: &Params,
         _overlay: Option<&OverlayPixels>,
         _capture: bool,

@@ -3,7 +3,7 @@
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
-use crate::gpu::core::{FrameBackground, OverlayPixels};
+use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::{PixelFormat, ViewKey};
 use crate::layer::live_settings::Settings;
 use openxr_sys as xr;
@@ -96,7 +96,7 @@ pub trait SessionGraphics: Send {
     fn enhance(
         &mut self,
         views: &[ViewImage],
-        background: FrameBackground,
+        background: BackgroundInput,
         params: &Params,
         overlay: Option<&OverlayPixels>,
         capture: bool,

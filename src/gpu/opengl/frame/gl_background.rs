@@ -2,7 +2,7 @@
 //! prepares), uploaded into the engine's texture from the texel buffers, only the rectangle the
 //! views sample.
 
-use super::gl_engine::{texture_level_int, Background, GlEngine};
+use super::gl_frame_runner::{texture_level_int, Background, GlFrameRunner};
 use super::state_guard::SavedState;
 use crate::algorithm::mapping::CameraMapping;
 use crate::gpu::core::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
@@ -10,7 +10,7 @@ use crate::gpu::core::CameraRect;
 use crate::gpu::opengl::device::functions as gl;
 use crate::gpu::opengl::device::GlError;
 
-impl GlEngine {
+impl GlFrameRunner {
     /// Where a live source writes its frames' texels, on its own thread (memory writes into a
     /// mapped buffer): one sink for the engine's life.
     pub fn texel_sink(&self) -> std::sync::Arc<dyn TexelSink> {

@@ -1,8 +1,8 @@
-//! A frame's work on the app's context (`GlEngine`): the views in place or through a buffer, the
+//! A frame's work on the app's context (`GlFrameRunner`): the views in place or through a buffer, the
 //! passes, the overlays and captures, with the app's GL state saved and put back.
 
 mod gl_background;
-mod gl_engine;
+mod gl_frame_runner;
 mod gl_view;
 mod program_warm_up;
 mod region;
@@ -10,6 +10,6 @@ pub mod state_guard;
 mod view_pixels;
 mod view_recipe;
 
-pub use gl_engine::{GlEngine, Outcome, StoreThrough};
+pub use gl_frame_runner::{GlFrameRunner, Outcome, StoreThrough};
 pub use gl_view::{GlTarget, GlView};
 pub(in crate::gpu::opengl) use region::{read_region, write_region};

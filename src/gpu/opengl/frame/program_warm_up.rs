@@ -4,7 +4,7 @@
 //! at its first dispatch (Mesa's llvmpipe: most of a cold start) then does it there, not inside
 //! a frame call, where a late frame makes a runtime lengthen its display period.
 
-use super::gl_engine::{rows_aligned, GlEngine, Outcome};
+use super::gl_frame_runner::{rows_aligned, GlFrameRunner, Outcome};
 use super::gl_view::{GlTarget, GlView};
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
@@ -21,7 +21,7 @@ const WARM_UP_HEIGHT: u32 = 8;
 /// The background frame a warm-up samples when none was set yet.
 const WARM_UP_BACKGROUND: (u32, u32) = (6, 3);
 
-impl GlEngine {
+impl GlFrameRunner {
     /// Builds the programs views of `internal_format`, `width` texels wide, need for `params`,
     /// waiting up to `limit`, and runs them once on a texture of the layer's own (deleted
     /// after). Ok(false) when they were not ready within `limit` (the frame calls go on with

@@ -2,7 +2,7 @@
 //! the indicator's lit runs written over an enhanced view. Both with the app's state saved and
 //! put back, no buffer bound to the pixel pack/unpack points and the pixel store at defaults.
 
-use super::gl_engine::GlEngine;
+use super::gl_frame_runner::GlFrameRunner;
 use super::gl_view::GlView;
 use super::region::{read_region, write_region};
 use super::state_guard::SavedState;
@@ -55,7 +55,7 @@ fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> Result<R, GlError> {
     Ok(r)
 }
 
-impl GlEngine {
+impl GlFrameRunner {
     /// The view's pixels, rows top first (as the view is seen), tightly packed.
     ///
     /// # Safety

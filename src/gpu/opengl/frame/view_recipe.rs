@@ -2,7 +2,7 @@
 //! bound in place (an image unit, through a texture view for sRGB) or copied into a buffer, the
 //! view's steps run (src/gpu/opengl/record.rs) and the region copied back.
 
-use super::gl_engine::{rows_from_bottom, GlEngine, StoreThrough};
+use super::gl_frame_runner::{rows_from_bottom, GlFrameRunner, StoreThrough};
 use super::gl_view::{GlTarget, GlView};
 use super::region::{read_region, write_region};
 use crate::algorithm::params::Params;
@@ -41,7 +41,7 @@ fn new_buffer(g: &Gl, bytes: usize, what: &'static str) -> Result<u32, GlError> 
     Ok(buffer)
 }
 
-impl GlEngine {
+impl GlFrameRunner {
     /// Makes slot `k`'s buffers large enough for the view (no pixel buffer in place).
     pub(super) fn ensure_buffers(
         &mut self,

@@ -10,7 +10,7 @@ use crate::gpu::core::{OfflineBackend, PixelFormat};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
-use crate::gpu::opengl::frame::{GlEngine, Outcome};
+use crate::gpu::opengl::frame::{GlFrameRunner, Outcome};
 use crate::gpu::opengl::frame::{GlTarget, GlView};
 use crate::image::RgbaImage;
 use std::ffi::{c_void, CStr};
@@ -43,7 +43,7 @@ struct Egl {
 /// The engine on its own surfaceless EGL context (not Send: the context is current on the
 /// thread that made it).
 pub struct GlOffline {
-    engine: GlEngine,
+    engine: GlFrameRunner,
     egl: Egl,
     display: *mut c_void,
     context: *mut c_void,
@@ -178,7 +178,7 @@ impl GlOffline {
         // functions too).
         let loaded = Gl::load(&mut |name| unsafe { get(name.as_ptr()) });
         // SAFETY: the context is current on this thread and `loaded` was loaded for it.
-        let engine = loaded.and_then(|gl| unsafe { GlEngine::new(gl) });
+        let engine = loaded.and_then(|gl| unsafe { GlFrameRunner::new(gl) });
         match engine {
             Ok(engine) => Ok(GlOffline {
                 engine,
@@ -203,7 +203,7 @@ impl GlOffline {
     }
 
     /// The engine on this context.
-    pub fn engine(&mut self) -> &mut GlEngine {
+    pub fn engine(&mut self) -> &mut GlFrameRunner {
         &mut self.engine
     }
 

@@ -1,8 +1,8 @@
-//! The recipe of a frame's command buffer (gpu/vulkan/frame/frame_engine.rs): background preparation, layout
+//! The recipe of a frame's command buffer (gpu/vulkan/frame/frame_runner.rs): background preparation, layout
 //! barriers, copies out of the app's images (into a buffer, or an image of the engine's own),
 //! enhancement, overlay, captures, copies back.
 
-use super::frame_engine::FrameEngine;
+use super::frame_runner::FrameRunner;
 use super::frame_view::{FrameView, ViewPath};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
@@ -14,7 +14,7 @@ use crate::gpu::vulkan::device::{
 };
 use ash::vk;
 
-impl FrameEngine {
+impl FrameRunner {
     pub(super) fn submit(&mut self) -> Result<(), GpuError> {
         // Inside xrEndFrame: the OpenXR spec gives the runtime, and so its layers, the app's
         // queue during this call.

@@ -1,11 +1,11 @@
-//! A frame's whole GPU work in one call (`FrameEngine::process`): the views' copies or in-place
+//! A frame's whole GPU work in one call (`FrameRunner::process`): the views' copies or in-place
 //! images, the background (uploaded, or texels a source prepared), the passes, the overlays and
 //! the captures, on the app's device and queue; and the pipelines' warm-up on CPU drivers, which
 //! runs frames.
 
 mod app_views;
-mod frame_engine;
 mod frame_record;
+mod frame_runner;
 mod frame_view;
 mod overlay_copies;
 mod prepared_background;
@@ -13,6 +13,6 @@ mod warm_up;
 
 pub(crate) use app_views::storage_view;
 pub use app_views::{can_store, copy_path};
-pub use frame_engine::{FrameEngine, FrameOptions, PipelinesReady};
+pub use frame_runner::{FrameOptions, FrameRunner, PipelinesReady};
 
 pub use frame_view::{CapturedView, FrameView, ViewKey, ViewPath};

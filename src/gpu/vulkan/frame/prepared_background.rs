@@ -7,18 +7,18 @@
 //! The passes remain for frames that come without prepared texels, or with texels made for
 //! other blur settings, and for the offline engine.
 
-use super::frame_engine::FrameEngine;
+use super::frame_runner::FrameRunner;
 use super::frame_view::FrameView;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::TexelSink;
+use crate::gpu::core::BackgroundInput;
 use crate::gpu::core::CameraRect;
-use crate::gpu::core::FrameBackground;
 use crate::gpu::vulkan::device::GpuError;
 use crate::gpu::vulkan::texels::TexelRing;
 use std::sync::Arc;
 
-impl FrameEngine {
+impl FrameRunner {
     /// Whether prepared texels go straight into mapped images: on where the device samples
     /// them (the default), off forces the staging buffers and the image copy.
     pub fn set_direct_texels(&mut self, on: bool) {
@@ -52,7 +52,7 @@ impl FrameEngine {
     /// buffers cannot be made.
     pub(super) fn write_direct(
         &mut self,
-        background: &FrameBackground,
+        background: &BackgroundInput,
         views: &[FrameView],
         params: &Params,
         idle: bool,
@@ -114,7 +114,7 @@ impl FrameEngine {
     /// the GPU.
     pub(super) fn stage_prepared(
         &mut self,
-        background: &FrameBackground,
+        background: &BackgroundInput,
         views: &[FrameView],
         params: &Params,
     ) -> Result<bool, GpuError> {
@@ -143,7 +143,7 @@ impl FrameEngine {
     /// also when an earlier call used prepared texels for the same frame.
     pub(super) fn upload_unprepared(
         &mut self,
-        background: &FrameBackground,
+        background: &BackgroundInput,
     ) -> Result<(), GpuError> {
         self.ring.set_inactive();
         let behind = std::mem::take(&mut self.camera_behind);

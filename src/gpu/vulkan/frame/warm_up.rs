@@ -25,7 +25,7 @@ use crate::gpu::vulkan::device::{
     record_first_layout, Commands, DeviceKind, GpuDevice, GpuError, StorageImage,
 };
 use crate::gpu::vulkan::pipelines::{on_exit, BuildMode, WarmUpHook};
-use crate::gpu::vulkan::record::{BackgroundFrame, Engine, Placement, ViewTarget};
+use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
 use ash::vk;
 use std::collections::HashSet;
 use std::sync::{Arc, Mutex, Once, OnceLock};
@@ -63,9 +63,9 @@ const DROP_WAIT_NS: u64 = 1_000_000_000;
 const SLOW_BUILD: Duration = Duration::from_secs(5);
 
 pub struct WarmUp {
-    engine: Engine,
+    engine: Recorder,
     commands: Commands,
-    background: BackgroundFrame,
+    background: CameraResources,
     view: ViewTarget,
     /// The sampled image has been moved to GENERAL.
     image_ready: bool,
@@ -157,7 +157,7 @@ impl WarmUp {
     pub fn new(app: &GpuDevice) -> Result<WarmUp, GpuError> {
         crate::fault::check("warm-up-device").map_err(GpuError::Unsupported)?;
         let gpu = GpuDevice::create_beside(app)?;
-        let mut engine = Engine::new(&gpu, 1, BuildMode::Inline, None)?;
+        let mut engine = Recorder::new(&gpu, 1, BuildMode::Inline, None)?;
         let mut commands = match Commands::new(&gpu) {
             Ok(c) => c,
             Err(e) => {
@@ -228,7 +228,7 @@ impl WarmUp {
         let pipeline = self.engine.pipelines().get(id)?;
         self.commands.begin(&self.gpu)?;
         let cmd = self.commands.cmd;
-        let (bg_set, image) = Engine::background_parts(&self.background);
+        let (bg_set, image) = Recorder::background_parts(&self.background);
         if !self.image_ready {
             record_to_general(&self.gpu, cmd, image);
             self.image_ready = true;
@@ -240,7 +240,7 @@ impl WarmUp {
         let gpu = &self.gpu;
         let set = match shader_ids::reads_camera(id) {
             true => bg_set,
-            false => Engine::view_set(&self.view),
+            false => Recorder::view_set(&self.view),
         };
         let push = PushConstants::new(&Params::default(), SIZE, SIZE, &CameraMapping::IDENTITY);
         // A grid of one workgroup.

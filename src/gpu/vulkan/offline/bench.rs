@@ -6,7 +6,7 @@
 
 use super::bench_case::{BenchCase, WARM_UP_RUNS};
 use super::bench_rig::Rig;
-use super::offline_engine::OfflineEngine;
+use super::vk_offline::VkOffline;
 use crate::algorithm::params::Params;
 use crate::gpu::core::CameraRect;
 use crate::gpu::vulkan::device::{
@@ -106,7 +106,7 @@ enum Span {
 const SPANS: usize = 9;
 const QUERIES: u32 = 2 * SPANS as u32;
 
-impl OfflineEngine {
+impl VkOffline {
     /// Times one case; `params` are the enhancement's settings (method, blur, ...).
     pub fn bench(&mut self, case: &BenchCase, params: &Params) -> Result<BenchResult, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;

@@ -4,7 +4,7 @@
 //! app-like images and the timestamp queries; and their release.
 
 use super::bench_case::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE};
-use super::offline_engine::OfflineEngine;
+use super::vk_offline::VkOffline;
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::device::StorageImage;
@@ -13,13 +13,13 @@ use crate::gpu::vulkan::device::{
 };
 use crate::gpu::vulkan::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError, VkResultExt};
 use crate::gpu::vulkan::frame::{can_store, copy_path, storage_view, ViewPath};
-use crate::gpu::vulkan::record::{BackgroundFrame, Placement, ViewShape, ViewTarget};
+use crate::gpu::vulkan::record::{CameraResources, Placement, ViewShape, ViewTarget};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 /// Everything one case allocates; `destroy` frees what was made.
 pub(super) struct Rig {
-    pub(super) background: Option<BackgroundFrame>,
+    pub(super) background: Option<CameraResources>,
     pub(super) views: Vec<ViewTarget>,
     pub(super) sources: Vec<GpuBuffer>,
     /// One app-like image per view (R8G8B8A8_SRGB, as the content), kept in
@@ -64,7 +64,7 @@ fn app_image(gpu: &GpuDevice, case: &BenchCase) -> Result<DeviceImage, GpuError>
     DeviceImage::with_flags(gpu, case.region, vk::Format::R8G8B8A8_SRGB, usage, flags)
 }
 
-impl OfflineEngine {
+impl VkOffline {
     /// One view through the image-copy path per app image, bound to an image of its own.
     fn add_image_copy_views(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<(), GpuError> {
         let gpu = &self.gpu;

@@ -5,7 +5,7 @@
 //! `enhance_raw` (through a buffer) and `enhance_raw_in_place` so that tests can hold the
 //! paths to each other, on any sub-rectangle and array layer.
 
-use super::offline_engine::OfflineEngine;
+use super::vk_offline::VkOffline;
 use crate::algorithm::params::Params;
 use crate::gpu::core::CameraRect;
 use crate::gpu::core::PixelFormat;
@@ -53,7 +53,7 @@ fn all_layers(
         )
 }
 
-impl OfflineEngine {
+impl VkOffline {
     /// The image-copy path on `app`, an image of `vk_format`: `image_words` is the whole image's raw words (layer after
     /// layer, rows tightly packed); the region is enhanced through an image of the engine's
     /// own and the whole image is read back, every layer.

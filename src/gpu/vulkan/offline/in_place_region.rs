@@ -2,7 +2,7 @@
 //! through a storage view of it, as the layer does for swapchains with storage usage; beside
 //! `enhance_raw` (through a buffer) so that tests can hold the two paths to each other.
 
-use super::offline_engine::OfflineEngine;
+use super::vk_offline::VkOffline;
 use crate::algorithm::params::Params;
 use crate::gpu::core::CameraRect;
 use crate::gpu::core::PixelFormat;
@@ -20,7 +20,7 @@ use gpu_allocator::MemoryLocation;
 /// An image of `format` that a region can be enhanced in: storage usage, and for sRGB a
 /// mutable format (its storage view is UNORM).
 fn storage_capable_image(
-    offline: &OfflineEngine,
+    offline: &VkOffline,
     region: (u32, u32),
     (vk_format, format): (vk::Format, PixelFormat),
 ) -> Result<DeviceImage, GpuError> {
@@ -35,7 +35,7 @@ fn storage_capable_image(
     DeviceImage::with_flags(&offline.gpu, region, vk_format, usage, flags)
 }
 
-impl OfflineEngine {
+impl VkOffline {
     /// `enhance_raw` in place: the raw pixels are written into an image of `vk_format`,
     /// enhanced there through a storage view, and read back.
     pub fn enhance_raw_in_place(

@@ -1,4 +1,4 @@
-//! The method's recipe on one device: `Engine` holds the pipelines and the per-view and
+//! The method's recipe on one device: `Recorder` holds the pipelines and the per-view and
 //! background resources and records the passes (decode and blur of the background, classify,
 //! finish_tiles, enhance) into a command buffer its caller owns.
 
@@ -6,6 +6,6 @@ mod passes;
 mod recorder;
 mod resources;
 
-pub use recorder::Engine;
+pub use recorder::Recorder;
 pub(crate) use resources::TEXELS_FORMAT;
-pub use resources::{BackgroundFrame, Placement, ViewShape, ViewTarget};
+pub use resources::{CameraResources, Placement, ViewShape, ViewTarget};

@@ -13,11 +13,11 @@ use crate::gpu::core::{shares_fetches, VariantKey};
 use crate::gpu::vulkan::device::{barrier, layout_change, GpuBuffer, GpuDevice, GpuError};
 use ash::vk;
 
-use super::recorder::{Engine, COMPUTE, WORKGROUP};
-use super::resources::{BackgroundFrame, ViewTarget};
+use super::recorder::{Recorder, COMPUTE, WORKGROUP};
+use super::resources::{CameraResources, ViewTarget};
 use crate::gpu::core::CameraRect;
 
-impl Engine {
+impl Recorder {
     /// Dispatches `pipeline` over `grid` invocations (in WORKGROUP x WORKGROUP groups).
     pub(crate) fn dispatch(
         &self,
@@ -86,7 +86,7 @@ impl Engine {
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
-        background: &BackgroundFrame,
+        background: &CameraResources,
         params: &Params,
         rect: &CameraRect,
     ) -> Result<(), GpuError> {
@@ -119,7 +119,7 @@ impl Engine {
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
-        bg: &BackgroundFrame,
+        bg: &CameraResources,
         push: &PushConstants,
         (x0, right): (u32, u32),
         rect: &CameraRect,
@@ -146,7 +146,7 @@ impl Engine {
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
-        bg: &BackgroundFrame,
+        bg: &CameraResources,
         (x0, y0, right, height): (u32, u32, u32, u32),
     ) {
         let to_general = [layout_change(
@@ -220,7 +220,7 @@ impl Engine {
         let mut push = PushConstants::new(params, view.camera_size, view.region, mapping);
         // 16 bits each (interface.rs, region_origin): swapchain images are far smaller.
         push.region_origin = (view.origin.0 & 0xffff) | (view.origin.1 << 16);
-        // The method's passes (its entry in src/algorithm/method_table.rs) as steps.
+        // The method's passes (its entry in src/algorithm/method/table.rs) as steps.
         let steps =
             view_steps(params.method.entry().passes, view.region).map_err(|NoPlan(why)| {
                 GpuError::Unsupported(format!("{}: {why}", params.method.name()))
@@ -306,7 +306,7 @@ impl Engine {
     }
 }
 
-impl Engine {
+impl Recorder {
     /// Records the copy of `rect`'s texels from `staging` (laid out as the image, 16 bytes per
     /// texel) into the image the enhancement samples: what `record_background` makes of the
     /// same rectangle, from texels prepared on the CPU.
@@ -314,7 +314,7 @@ impl Engine {
         &self,
         gpu: &GpuDevice,
         cmd: vk::CommandBuffer,
-        background: &BackgroundFrame,
+        background: &CameraResources,
         staging: &GpuBuffer,
         rect: &CameraRect,
     ) {
@@ -377,7 +377,7 @@ impl Engine {
 /// One view's steps as Vulkan commands, recorded into `cmd` with the view's set and push
 /// constants.
 struct ViewEncoder<'a> {
-    engine: &'a Engine,
+    engine: &'a Recorder,
     gpu: &'a GpuDevice,
     cmd: vk::CommandBuffer,
     view: &'a ViewTarget,

@@ -6,7 +6,7 @@
 //! be a storage-image format: the caller copies a view's region into `ViewTarget::pixels` and back.
 
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::methods::Pass;
+use crate::algorithm::method::Pass;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::interface::TILE;
 use crate::gpu::core::interface::{
@@ -25,7 +25,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::resources::{
-    alloc_all, camera_stride, free_set, transfer_storage, BackgroundFrame, Placement, ViewShape,
+    alloc_all, camera_stride, free_set, transfer_storage, CameraResources, Placement, ViewShape,
     ViewTarget, STORAGE, TEXELS_FORMAT,
 };
 
@@ -39,7 +39,7 @@ const MAX_BACKGROUNDS: u32 = 2;
 /// 5 entries past them (blur half-width 7).
 const DECODED_SLACK: u64 = 16 * 8;
 
-pub struct Engine {
+pub struct Recorder {
     pub(super) pipelines: Pipelines,
     pool: vk::DescriptorPool,
     /// Take the shared-fetch variant where a view's mapping allows it (gpu/core/shared_fetch.rs);
@@ -49,7 +49,7 @@ pub struct Engine {
 
 pub(super) const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
 
-impl Engine {
+impl Recorder {
     /// Sets up the pipelines, built as `mode` says; `max_views` bounds how many ViewTargets
     /// may exist at once.
     pub fn new(
@@ -57,7 +57,7 @@ impl Engine {
         max_views: u32,
         mode: BuildMode,
         warm_up: Option<WarmUpHook>,
-    ) -> Result<Engine, GpuError> {
+    ) -> Result<Recorder, GpuError> {
         let mut pipelines = Pipelines::new(gpu, mode, warm_up)?;
         let max_sets = max_views + MAX_BACKGROUNDS;
         let sizes = [
@@ -77,7 +77,7 @@ impl Engine {
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a valid device.
         match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
-            Ok(pool) => Ok(Engine {
+            Ok(pool) => Ok(Recorder {
                 pipelines,
                 pool,
                 shared_fetch: true,
@@ -97,7 +97,7 @@ impl Engine {
         gpu: &GpuDevice,
         size: (u32, u32),
         placement: Placement,
-    ) -> Result<BackgroundFrame, GpuError> {
+    ) -> Result<CameraResources, GpuError> {
         if size.0 == 0 || size.1 == 0 {
             return Err(GpuError::Unsupported("empty camera frame".into()));
         }
@@ -118,7 +118,7 @@ impl Engine {
                 ),
             ],
         )?;
-        let mut bg = BackgroundFrame {
+        let mut bg = CameraResources {
             size,
             camera,
             blurred,
@@ -148,7 +148,7 @@ impl Engine {
         self.shared_fetch = on;
     }
 
-    pub(crate) fn background_parts(bg: &BackgroundFrame) -> (vk::DescriptorSet, vk::Image) {
+    pub(crate) fn background_parts(bg: &CameraResources) -> (vk::DescriptorSet, vk::Image) {
         (bg.set, bg.texels.raw)
     }
 
@@ -157,7 +157,7 @@ impl Engine {
     }
 
     /// The image the enhancement samples, its view, and the preparation's descriptor set.
-    fn make_texels(&self, gpu: &GpuDevice, bg: &mut BackgroundFrame) -> Result<(), GpuError> {
+    fn make_texels(&self, gpu: &GpuDevice, bg: &mut CameraResources) -> Result<(), GpuError> {
         let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
         bg.texels = DeviceImage::with_usage(gpu, bg.size, TEXELS_FORMAT, usage)?;
         let info = vk::ImageViewCreateInfo::default()
@@ -194,7 +194,7 @@ impl Engine {
         gpu: &GpuDevice,
         region: (u32, u32),
         format: PixelFormat,
-        background: &BackgroundFrame,
+        background: &CameraResources,
         placement: Placement,
     ) -> Result<ViewTarget, GpuError> {
         let shape = ViewShape {
@@ -211,7 +211,7 @@ impl Engine {
         &self,
         gpu: &GpuDevice,
         (shape, height): (ViewShape, u32),
-        background: &BackgroundFrame,
+        background: &CameraResources,
         placement: Placement,
     ) -> Result<ViewTarget, GpuError> {
         let (region, format) = ((shape.width, height), shape.format);
@@ -284,7 +284,7 @@ impl Engine {
     }
 
     /// Points a view's descriptor set at a (new) background frame. The set must not be in use.
-    pub fn bind(&self, gpu: &GpuDevice, view: &mut ViewTarget, background: &BackgroundFrame) {
+    pub fn bind(&self, gpu: &GpuDevice, view: &mut ViewTarget, background: &CameraResources) {
         let buffers = [
             (BINDING_CAMERA, &background.camera),
             (BINDING_BLURRED, &background.blurred),
@@ -368,7 +368,7 @@ impl Engine {
         }
         let half = params.blur_taps().len() as u32 / 2;
         let mut ids = vec![shader_ids::DECODE_CAMERA, shader_ids::decode_blur(half)?];
-        // The method's passes (its entry in src/algorithm/method_table.rs): the one shader
+        // The method's passes (its entry in src/algorithm/method/table.rs): the one shader
         // every view shares first, then each view's own.
         let passes = params.method.entry().passes;
         if passes.contains(&Pass::FinishTiles) {

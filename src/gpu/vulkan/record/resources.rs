@@ -9,7 +9,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 /// One camera frame on the GPU and its blurred linear-light copy (camera grid).
-pub struct BackgroundFrame {
+pub struct CameraResources {
     pub size: (u32, u32),
     /// RGBA8 sRGB, one u32 per pixel, rows padded to a multiple of 4 pixels (the shader reads
     /// 16 bytes at a time); host-visible, written with `upload`.
@@ -26,7 +26,7 @@ pub struct BackgroundFrame {
     pub(super) pool: vk::DescriptorPool,
 }
 
-impl BackgroundFrame {
+impl CameraResources {
     /// The view of the blurred image that the enhancement samples.
     pub fn texels_view(&self) -> vk::ImageView {
         self.texels_view
@@ -105,7 +105,7 @@ pub struct ViewTarget {
     pub region: (u32, u32),
     pub format: PixelFormat,
     /// Enhanced in place: the shaders read and write the app's image (bound with
-    /// `Engine::bind_app_image`, at `origin` in it), and `pixels` is a stand-in.
+    /// `Recorder::bind_app_image`, at `origin` in it), and `pixels` is a stand-in.
     pub in_place: bool,
     /// Where the region starts in the app's image (in place only).
     pub origin: (u32, u32),

@@ -258,7 +258,7 @@ impl TexelRing {
     }
 
     /// The staging buffer and rectangle the frame copies into the background's image, once:
-    /// laid out as the image, 16 bytes per texel (`Engine::record_texels_upload`).
+    /// laid out as the image, 16 bytes per texel (`Recorder::record_texels_upload`).
     pub fn take_copy(&mut self) -> Option<(&GpuBuffer, CameraRect)> {
         let rect = self.copy.take().filter(|_| self.active)?;
         match self.memory.get(self.current)? {

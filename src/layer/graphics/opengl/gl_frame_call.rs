@@ -4,8 +4,8 @@
 
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
-use crate::gpu::core::{overlay_pixel, FrameBackground, OverlayPixels};
-use crate::gpu::opengl::{GlEngine, GlError, GlTarget, GlView, Outcome};
+use crate::gpu::core::{overlay_pixel, BackgroundInput, OverlayPixels};
+use crate::gpu::opengl::{GlError, GlFrameRunner, GlTarget, GlView, Outcome};
 use crate::layer::graphics::session_graphics::{CapturedImage, NotDone, ViewImage};
 use crate::layer::log;
 use std::time::{Duration, Instant};
@@ -44,7 +44,7 @@ pub(super) fn gl_view(v: &ViewImage) -> GlView {
 /// The background's texels for this frame: its source's, when made for these settings, else
 /// prepared here once per background sequence.
 fn texels<'a>(
-    background: &'a FrameBackground,
+    background: &'a BackgroundInput,
     prepared_here: &'a mut Option<(u64, BlurredTexels)>,
     params: &Params,
 ) -> &'a BlurredTexels {
@@ -64,7 +64,7 @@ pub(super) struct Frame<'a> {
     pub views: &'a [ViewImage],
     /// The same views as the engine takes them.
     pub gl_views: &'a [GlView],
-    pub background: &'a FrameBackground<'a>,
+    pub background: &'a BackgroundInput<'a>,
     pub params: &'a Params,
 }
 
@@ -77,7 +77,7 @@ impl Frame<'_> {
     /// (their release), so nothing else writes them during the call.
     pub unsafe fn enhance(
         &self,
-        engine: &mut GlEngine,
+        engine: &mut GlFrameRunner,
         prepared_here: &mut Option<(u64, BlurredTexels)>,
         overlay: Option<&OverlayPixels>,
         capture: bool,
@@ -110,7 +110,7 @@ impl Frame<'_> {
     }
 
     /// Each view's bytes as they are now (inside the caller's `enhance`).
-    fn read(&self, engine: &GlEngine) -> Result<Vec<Vec<u8>>, NotDone> {
+    fn read(&self, engine: &GlFrameRunner) -> Result<Vec<Vec<u8>>, NotDone> {
         self.gl_views
             .iter()
             // SAFETY: inside `enhance`: the context is current; the view names a swapchain
@@ -123,7 +123,11 @@ impl Frame<'_> {
     ///
     /// # Safety
     /// As [`Frame::enhance`].
-    unsafe fn draw_overlay(&self, engine: &mut GlEngine, o: &OverlayPixels) -> Result<(), NotDone> {
+    unsafe fn draw_overlay(
+        &self,
+        engine: &mut GlFrameRunner,
+        o: &OverlayPixels,
+    ) -> Result<(), NotDone> {
         for (v, g) in self.views.iter().zip(self.gl_views) {
             let runs = (o.runs)(v.key.extent);
             let pixel = overlay_pixel(v.format, o.colour);

@@ -10,8 +10,8 @@ use super::program_builder::{Built, ProgramBuilder};
 use crate::algorithm::params::Params;
 use crate::config::InPlace;
 use crate::gpu::core::blurred_texels::BlurredTexels;
-use crate::gpu::core::{FrameBackground, OverlayPixels};
-use crate::gpu::opengl::{GlEngine, GlFormat, GlView};
+use crate::gpu::core::{BackgroundInput, OverlayPixels};
+use crate::gpu::opengl::{GlFormat, GlFrameRunner, GlView};
 use crate::gpu::PixelFormat;
 use crate::layer::graphics::session_graphics::{
     CapturedImage, NotDone, SessionGraphics, ViewImage,
@@ -29,7 +29,7 @@ pub struct GlSession {
     api: &'static str,
     context: Box<dyn AppContext>,
     /// Made at the first frame the layer acts on, with the app's context current.
-    engine: Option<GlEngine>,
+    engine: Option<GlFrameRunner>,
     /// Texels prepared here for a frame that came without them, by its background sequence.
     texels: Option<(u64, BlurredTexels)>,
     /// When the first program build began, and when all were ready.
@@ -75,7 +75,7 @@ impl GlSession {
     /// Runs `f` with the app's context current on this thread (and the engine made).
     fn in_context<R>(
         &mut self,
-        f: impl FnOnce(&mut GlEngine, &mut Option<(u64, BlurredTexels)>) -> Result<R, NotDone>,
+        f: impl FnOnce(&mut GlFrameRunner, &mut Option<(u64, BlurredTexels)>) -> Result<R, NotDone>,
     ) -> Result<R, NotDone> {
         let entered = Entered::enter(&*self.context).map_err(NotDone::Failed)?;
         let engine = match self.engine.take() {
@@ -85,7 +85,7 @@ impl GlSession {
             None => self
                 .context
                 .gl()
-                .and_then(|gl| unsafe { GlEngine::new(gl) }),
+                .and_then(|gl| unsafe { GlFrameRunner::new(gl) }),
         };
         let result = match engine {
             Ok(mut engine) => {
@@ -379,7 +379,7 @@ impl SessionGraphics for GlSession {
     fn enhance(
         &mut self,
         views: &[ViewImage],
-        background: FrameBackground,
+        background: BackgroundInput,
         params: &Params,
         overlay: Option<&OverlayPixels>,
         capture: bool,

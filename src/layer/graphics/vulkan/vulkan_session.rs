@@ -5,11 +5,11 @@
 use super::{app_vulkan, in_place};
 use crate::algorithm::params::Params;
 use crate::gpu::core::shader_ids::ShaderId;
-use crate::gpu::core::{FrameBackground, OverlayPixels};
+use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::vulkan::conv::VkFormat;
-use crate::gpu::vulkan::frame::{copy_path, FrameEngine, FrameOptions, PipelinesReady};
+use crate::gpu::vulkan::frame::{copy_path, FrameOptions, FrameRunner, PipelinesReady};
 use crate::gpu::vulkan::pipelines::Origin;
-use crate::gpu::{Engine, FrameView, GpuDevice, GpuError, PixelFormat, ViewPath, ViewShape};
+use crate::gpu::{FrameView, GpuDevice, GpuError, PixelFormat, Recorder, ViewPath, ViewShape};
 use crate::layer::graphics::session_graphics::{
     Bound, CapturedImage, NotDone, SessionGraphics, ViewImage,
 };
@@ -21,7 +21,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 pub struct VulkanSession {
-    engine: FrameEngine,
+    engine: FrameRunner,
     /// The last `ready` answer, taken by the next `enhance`.
     ready: Option<PipelinesReady>,
     /// Whether views not enhanced in place go through an image of the engine's own where
@@ -54,7 +54,7 @@ pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bo
 
 /// The session's frame engine on the app's device (its pipelines start building at once, on
 /// its own thread).
-fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<FrameEngine, GpuError> {
+fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<FrameRunner, GpuError> {
     let raw_instance = vk::Instance::from_raw(b.instance as u64);
     let entry = app_vulkan::entry_for(raw_instance).map_err(GpuError::NoLoader)?;
     // SAFETY: the handles come from a Vulkan binding the runtime accepted; the app keeps them
@@ -70,9 +70,9 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<Frame
         )
     }?;
     // The background preparation's shaders first: the views' ones need a swapchain's format.
-    let first = Engine::shaders_for(&settings.params, []).unwrap_or_default();
+    let first = Recorder::shaders_for(&settings.params, []).unwrap_or_default();
     gpu.queue_has_compute()?;
-    let engine = FrameEngine::new(gpu, &[])?;
+    let engine = FrameRunner::new(gpu, &[])?;
     // Through request_shaders: a warm-up device that cannot be made is said here.
     request_shaders(&engine, &first);
     log::info(&format!(
@@ -85,7 +85,7 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<Frame
 /// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
 /// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device is
 /// made here when one of them needs it, never on the pipeline thread (gpu/vulkan/frame/warm_up.rs).
-fn request_shaders(engine: &FrameEngine, ids: &[ShaderId]) {
+fn request_shaders(engine: &FrameRunner, ids: &[ShaderId]) {
     let t = Instant::now();
     match engine.request(ids) {
         Some(Ok(())) => log::debug(&format!(
@@ -197,7 +197,7 @@ impl SessionGraphics for VulkanSession {
             width,
             in_place: in_place || image_copy,
         };
-        if let Ok(ids) = Engine::shaders_for(params, [shape]) {
+        if let Ok(ids) = Recorder::shaders_for(params, [shape]) {
             request_shaders(&self.engine, &ids);
         }
     }
@@ -223,7 +223,7 @@ impl SessionGraphics for VulkanSession {
     fn enhance(
         &mut self,
         views: &[ViewImage],
-        background: FrameBackground,
+        background: BackgroundInput,
         params: &Params,
         overlay: Option<&OverlayPixels>,
         capture: bool,

@@ -3,50 +3,52 @@
 
 use contrastxr::algorithm::Params;
 use contrastxr::gpu::opengl::GlOffline;
-use contrastxr::gpu::OfflineEngine;
+use contrastxr::gpu::VkOffline;
 use contrastxr::image::RgbaImage;
 use contrastxr::reference;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Engine {
-    Gpu,
+pub enum Backend {
+    /// The Vulkan backend (`--engine gpu`), on the first Vulkan device or `CONTRASTXR_VK_DEVICE`.
+    Vulkan,
+    /// The CPU reference.
     Cpu,
     /// The OpenGL backend, as the layer runs it for OpenGL apps.
     OpenGl,
 }
 
-impl Engine {
-    pub fn parse(name: &str) -> Option<Engine> {
+impl Backend {
+    pub fn parse(name: &str) -> Option<Backend> {
         match name {
-            "gpu" => Some(Engine::Gpu),
-            "cpu" => Some(Engine::Cpu),
-            "opengl" => Some(Engine::OpenGl),
+            "gpu" => Some(Backend::Vulkan),
+            "cpu" => Some(Backend::Cpu),
+            "opengl" => Some(Backend::OpenGl),
             _ => None,
         }
     }
 
     pub fn name(self) -> &'static str {
         match self {
-            Engine::Gpu => "gpu",
-            Engine::Cpu => "cpu",
-            Engine::OpenGl => "opengl",
+            Backend::Vulkan => "gpu",
+            Backend::Cpu => "cpu",
+            Backend::OpenGl => "opengl",
         }
     }
 }
 
 /// Enhances `display` against the camera frame `camera` (any size) with the chosen engine.
 pub fn run(
-    engine: Engine,
+    engine: Backend,
     display: &RgbaImage,
     camera: &RgbaImage,
     params: &Params,
 ) -> Result<RgbaImage, String> {
     match engine {
-        Engine::Cpu => Ok(reference::enhance_with_camera(display, camera, params)),
-        Engine::Gpu => OfflineEngine::new()
+        Backend::Cpu => Ok(reference::enhance_with_camera(display, camera, params)),
+        Backend::Vulkan => VkOffline::new()
             .and_then(|mut gpu| gpu.enhance(display, camera, params))
             .map_err(|e| e.to_string()),
-        Engine::OpenGl => GlOffline::new()
+        Backend::OpenGl => GlOffline::new()
             .and_then(|mut gl| gl.enhance(display, camera, params))
             .map_err(|e| e.to_string()),
     }

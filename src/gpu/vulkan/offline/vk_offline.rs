@@ -8,14 +8,14 @@ use crate::gpu::core::CameraRect;
 use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
-use crate::gpu::vulkan::record::{BackgroundFrame, Engine, Placement, ViewTarget};
+use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
 use crate::gpu::vulkan::texels::staging_buffer;
 use crate::image::RgbaImage;
 use ash::vk;
 use std::cell::RefCell;
 
-pub struct OfflineEngine {
-    pub(super) engine: Engine,
+pub struct VkOffline {
+    pub(super) engine: Recorder,
     /// RefCell: `submit` records through `&self` (the engine and device are only read).
     commands: RefCell<Commands>,
     /// Enhance with the background's texels prepared on the CPU and copied in, as the layer
@@ -27,7 +27,7 @@ pub struct OfflineEngine {
 
 /// The prepared background read back from the GPU: the blurred camera image, linear light,
 /// on the camera grid (row-major).
-pub struct GpuBackground {
+pub struct BackgroundReadBack {
     pub width: u32,
     pub height: u32,
     pub linear: Vec<[f32; 3]>,
@@ -49,17 +49,17 @@ fn unpack_linear(bytes: &[u8]) -> [f32; 3] {
     })
 }
 
-impl OfflineEngine {
+impl VkOffline {
     /// The first Vulkan device (or `CONTRASTXR_VK_DEVICE`), validation per `CONTRASTXR_VK_VALIDATION`.
-    pub fn new() -> Result<OfflineEngine, GpuError> {
+    pub fn new() -> Result<VkOffline, GpuError> {
         Self::with_options(&DeviceOptions::from_env())
     }
 
-    pub fn with_options(options: &DeviceOptions) -> Result<OfflineEngine, GpuError> {
+    pub fn with_options(options: &DeviceOptions) -> Result<VkOffline, GpuError> {
         let gpu = GpuDevice::create(options)?;
-        let engine = Engine::new(&gpu, 4, BuildMode::Inline, None)?;
+        let engine = Recorder::new(&gpu, 4, BuildMode::Inline, None)?;
         let commands = RefCell::new(Commands::new(&gpu)?);
-        Ok(OfflineEngine {
+        Ok(VkOffline {
             engine,
             commands,
             cpu_background: false,
@@ -113,7 +113,7 @@ impl OfflineEngine {
         camera: &RgbaImage,
         region: (u32, u32),
         format: PixelFormat,
-    ) -> Result<(BackgroundFrame, ViewTarget), GpuError> {
+    ) -> Result<(CameraResources, ViewTarget), GpuError> {
         let mut bg = self.engine.create_background(
             &self.gpu,
             (camera.width, camera.height),
@@ -133,7 +133,7 @@ impl OfflineEngine {
         }
     }
 
-    fn release(&self, mut bg: BackgroundFrame, mut view: ViewTarget) {
+    fn release(&self, mut bg: CameraResources, mut view: ViewTarget) {
         self.engine.destroy_view(&self.gpu, &mut view);
         bg.destroy(&self.gpu);
     }
@@ -251,7 +251,7 @@ impl OfflineEngine {
         &mut self,
         camera: &RgbaImage,
         params: &Params,
-    ) -> Result<GpuBackground, GpuError> {
+    ) -> Result<BackgroundReadBack, GpuError> {
         let rect = CameraRect::full((camera.width, camera.height));
         self.prepare_background_in(camera, params, &rect)
     }
@@ -263,7 +263,7 @@ impl OfflineEngine {
         camera: &RgbaImage,
         params: &Params,
         rect: &CameraRect,
-    ) -> Result<GpuBackground, GpuError> {
+    ) -> Result<BackgroundReadBack, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
         let (width, height) = (camera.width, camera.height);
         let (bg, view) = self.stage(camera, (1, 1), PixelFormat::SRGB8)?;
@@ -280,7 +280,7 @@ impl OfflineEngine {
             let (linear, right) = entries
                 .map(|e| (unpack_linear(&e[..8]), unpack_linear(&e[8..])))
                 .unzip();
-            Ok(GpuBackground {
+            Ok(BackgroundReadBack {
                 width,
                 height,
                 linear,
@@ -296,7 +296,7 @@ impl OfflineEngine {
     }
 }
 
-impl OfflineBackend for OfflineEngine {
+impl OfflineBackend for VkOffline {
     fn api(&self) -> &'static str {
         "vulkan"
     }
@@ -327,11 +327,11 @@ impl OfflineBackend for OfflineEngine {
     }
 
     fn validation_errors(&self) -> u32 {
-        OfflineEngine::validation_errors(self)
+        VkOffline::validation_errors(self)
     }
 }
 
-impl Drop for OfflineEngine {
+impl Drop for VkOffline {
     fn drop(&mut self) {
         if self.commands.get_mut().destroy(&self.gpu).is_err() {
             // The GPU may still use the engine's objects: leave them alive.

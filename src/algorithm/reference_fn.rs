@@ -1,5 +1,5 @@
 //! The type of a method's CPU reference, which each entry of the method table names
-//! (src/algorithm/methods.rs) and the per-pixel code calls (src/algorithm/pixel.rs, scaled.rs).
+//! (src/algorithm/method/method_entry.rs) and the per-pixel code calls (src/algorithm/pixel.rs, scaled.rs).
 //! A file of its own: the entries name the reference functions, and those files name this type,
 //! so neither can hold it without an import circle.
 

@@ -1,13 +1,13 @@
-//! The per-pixel methods as one table (src/algorithm/method_table.rs, one entry each): each
+//! The per-pixel methods as one table (src/algorithm/method/table.rs, one entry each): each
 //! method's entry (its CPU reference, shader file, settings and passes), and the names derived
 //! from them for the settings, the command line and their help. The `Method` type itself is
-//! src/algorithm/method.rs; the type of an entry's CPU reference, `Reference`, is
-//! src/algorithm/method_reference.rs.
+//! src/algorithm/method/kind.rs; the type of an entry's CPU reference, `Reference`, is
+//! src/algorithm/reference_fn.rs.
 
-use super::method::Method;
-use super::method_reference::Reference;
+use super::kind::Method;
+use crate::algorithm::reference_fn::Reference;
 
-include!("method_table.rs");
+include!("table.rs");
 
 /// A GPU pass of a method. The backends run an entry's passes as the steps src/gpu/core/plan.rs
 /// makes of them, which holds each pass to the one it needs before it.
@@ -25,7 +25,7 @@ pub enum Pass {
 /// dispatch of enhance over them.
 pub const PER_PIXEL_PASSES: [Pass; 3] = [Pass::Classify, Pass::FinishTiles, Pass::Enhance];
 
-/// One method, as its entry in method_table.rs says.
+/// One method, as its entry in method/table.rs says.
 #[derive(Debug)]
 pub struct MethodEntry {
     pub method: Method,
@@ -74,14 +74,14 @@ macro_rules! define_methods {
 
 /// The functions the entries name (`reference: Scaled(f)` or `Linear(f)`).
 mod reference {
-    pub(super) use super::super::pixel::*;
-    pub(super) use super::super::scaled::*;
+    pub(super) use crate::algorithm::pixel::*;
+    pub(super) use crate::algorithm::scaled::*;
 }
 
 with_methods!(define_methods);
 
 impl Method {
-    /// Its entry in method_table.rs.
+    /// Its entry in method/table.rs.
     pub fn entry(self) -> &'static MethodEntry {
         &ENTRIES[self as usize]
     }

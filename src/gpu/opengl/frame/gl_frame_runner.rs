@@ -84,7 +84,7 @@ pub(super) struct ViewBuffers {
     pub(super) tile_capacity: usize,
 }
 
-pub struct GlEngine {
+pub struct GlFrameRunner {
     pub(super) gl: Gl,
     pub(super) caps: Caps,
     pub(super) programs: Programs,
@@ -123,16 +123,16 @@ pub(super) fn texture_level_int(g: &Gl, texture: u32, pname: gl::Enum) -> i32 {
     v
 }
 
-impl GlEngine {
+impl GlFrameRunner {
     /// An engine on the context current on this thread, or why that context cannot run it.
     /// Builds nothing yet: the programs are built by the frame calls that need them.
     ///
     /// # Safety
     /// A GL context is current on this thread, `gl` was loaded for it (or a context of the same
     /// driver), and every later call is made with that same context current.
-    pub unsafe fn new(gl: Gl) -> Result<GlEngine, GlError> {
+    pub unsafe fn new(gl: Gl) -> Result<GlFrameRunner, GlError> {
         let caps = Caps::check(&gl)?;
-        Ok(GlEngine {
+        Ok(GlFrameRunner {
             programs: Programs::new(&caps),
             in_place: !caps.software,
             gl,

@@ -3,7 +3,7 @@
 // Adding a method is adding an entry here, its WGSL (shaders/methods/), its CPU reference
 // (a function of src/algorithm/scaled.rs, or of pixel.rs for one in linear light) and its test
 // (docs/architecture.md, Adding a method). Everything else is derived from or checked against
-// this table: the `Method` type and its names (src/algorithm/methods.rs), the values and help
+// this table: the `Method` type and its names (src/algorithm/method/method_entry.rs), the values and help
 // of the `method` and `mode` keys (src/config/keys.rs) and so of the CLI's --method, the shader
 // code and the `enhance` variants build.rs compiles (one per method, with the entry's WGSL
 // appended), and the tests that hold the entry's settings to KEYS, its push-constant fields to

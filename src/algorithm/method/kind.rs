@@ -1,9 +1,9 @@
 //! Which per-pixel method runs: the `Method` type, one variant per entry of the method table
-//! (src/algorithm/method_table.rs), with its name on the command line and in config and JSON.
+//! (src/algorithm/method/table.rs), with its name on the command line and in config and JSON.
 //! Its entry (CPU reference, shader, settings, passes) is `Method::entry`
-//! (src/algorithm/methods.rs).
+//! (src/algorithm/method/method_entry.rs).
 
-include!("method_table.rs");
+include!("table.rs");
 
 macro_rules! define_method {
     ($($variant:ident {
@@ -13,7 +13,7 @@ macro_rules! define_method {
         $($rest:tt)*
     }),* $(,)?) => {
         /// Which per-pixel method runs (docs/algorithm.md, Per-pixel optimisation and
-        /// Comparison methods); one variant per entry of method_table.rs.
+        /// Comparison methods); one variant per entry of method/table.rs.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         pub enum Method {
             $(#[doc = $doc] $variant,)*

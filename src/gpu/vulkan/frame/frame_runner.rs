@@ -10,13 +10,13 @@ use super::overlay_copies::Overlays;
 use super::warm_up::{WarmUp, WarmUpSlot};
 use crate::algorithm::params::Params;
 use crate::gpu::core::shader_ids::ShaderId;
+use crate::gpu::core::BackgroundInput;
 use crate::gpu::core::CameraRect;
-use crate::gpu::core::FrameBackground;
 use crate::gpu::core::OverlayPixels;
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::device::{Commands, GpuDevice, GpuError, StorageImage};
 use crate::gpu::vulkan::pipelines::{BuildMode, BuildReport};
-use crate::gpu::vulkan::record::{BackgroundFrame, Engine, Placement, ViewTarget};
+use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
 use crate::gpu::vulkan::texels::TexelRing;
 use crate::image::RgbaImage;
 use ash::vk;
@@ -47,7 +47,7 @@ pub(super) struct PreparedView {
 }
 
 impl PreparedView {
-    fn destroy(&mut self, engine: &Engine, gpu: &GpuDevice) {
+    fn destroy(&mut self, engine: &Recorder, gpu: &GpuDevice) {
         engine.destroy_view(gpu, &mut self.target);
         if let Some(mut own) = self.own.take() {
             own.destroy(gpu);
@@ -70,10 +70,10 @@ pub struct FrameOptions {
 #[derive(Debug)]
 pub struct PipelinesReady(());
 
-pub struct FrameEngine {
-    pub(super) engine: Engine,
+pub struct FrameRunner {
+    pub(super) engine: Recorder,
     pub(super) commands: Commands,
-    pub(super) background: Option<BackgroundFrame>,
+    pub(super) background: Option<CameraResources>,
     pub(super) background_sequence: u64,
     /// The background sequence the blurred camera image was prepared for (once per camera
     /// frame, whatever the number of views), and the camera texels prepared.
@@ -99,12 +99,12 @@ pub struct FrameEngine {
     pub gpu: GpuDevice,
 }
 
-impl FrameEngine {
+impl FrameRunner {
     /// Sets up the engine on the session's device; its pipelines start building at once on
     /// the engine's own thread, `first` first.
-    pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<FrameEngine, GpuError> {
+    pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<FrameRunner, GpuError> {
         let (warm_up, hook) = WarmUp::slot(&gpu).unzip();
-        let mut engine = Engine::new(&gpu, MAX_VIEWS, BuildMode::Background, hook)?;
+        let mut engine = Recorder::new(&gpu, MAX_VIEWS, BuildMode::Background, hook)?;
         let commands = match Commands::new(&gpu) {
             Ok(c) => c,
             Err(e) => {
@@ -112,7 +112,7 @@ impl FrameEngine {
                 return Err(e);
             }
         };
-        let frame_engine = FrameEngine {
+        let frame_runner = FrameRunner {
             engine,
             commands,
             background: None,
@@ -129,8 +129,8 @@ impl FrameEngine {
             warm_up,
             gpu,
         };
-        frame_engine.request(first);
-        Ok(frame_engine)
+        frame_runner.request(first);
+        Ok(frame_runner)
     }
 
     /// Tells the pipeline thread to stop, without waiting: the session passes through from now
@@ -167,7 +167,7 @@ impl FrameEngine {
         params: &Params,
         wait: bool,
     ) -> Result<PipelinesReady, GpuError> {
-        let ids = Engine::shaders_for(params, views.iter().map(FrameView::shape))?;
+        let ids = Recorder::shaders_for(params, views.iter().map(FrameView::shape))?;
         // A failed warm-up device only means slower first dispatches.
         let _ = self.prepare_warm_up(&ids);
         match self.engine.ready(&ids)? {
@@ -351,7 +351,7 @@ impl FrameEngine {
         &mut self,
         ready: PipelinesReady,
         views: &[FrameView],
-        background: FrameBackground,
+        background: BackgroundInput,
         params: &Params,
         overlay: Option<&OverlayPixels>,
         options: FrameOptions,
@@ -438,7 +438,7 @@ impl FrameEngine {
     }
 }
 
-impl FrameEngine {
+impl FrameRunner {
     /// Ends the engine: waits for its last work and its pipeline thread, then destroys what it
     /// made. An error says the GPU did not finish, and the objects were left alive.
     pub fn finish(mut self) -> Result<(), GpuError> {
@@ -486,9 +486,9 @@ impl FrameEngine {
     }
 }
 
-impl Drop for FrameEngine {
+impl Drop for FrameRunner {
     /// Runs on the app's thread (xrDestroySession, xrDestroyInstance, or a failed set-up),
-    /// when [`FrameEngine::finish`] was not called.
+    /// when [`FrameRunner::finish`] was not called.
     fn drop(&mut self) {
         let _ = self.tear_down();
     }
