@@ -5,8 +5,8 @@
 
 mod common;
 
+use common::conformance::{check_all_methods, nonconformant, projective};
 use common::images::noise;
-use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec;
 use contrastxr::gpu::opengl::GlOffline;
@@ -44,61 +44,6 @@ fn enhance(
         .unwrap_or_else(|e| panic!("{api}: {e}"))
 }
 
-/// Pixels where the backend's output does not conform to the CPU reference, with the CPU's own
-/// background preparation as the reference's B.
-fn nonconformant(
-    b: &mut dyn OfflineBackend,
-    display: &RgbaImage,
-    camera: &RgbaImage,
-    mapping: &CameraMapping,
-    params: &Params,
-) -> Vec<String> {
-    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
-    let api = b.api();
-    let out = b
-        .enhance_image(display, camera, mapping, params)
-        .unwrap_or_else(|e| panic!("{api}: {e}"));
-    let (w, h) = (display.width, display.height);
-    let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, mapping, params);
-    let mut bad = Vec::new();
-    for (i, (d, g)) in display.pixels.iter().zip(&out.pixels).enumerate() {
-        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
-        if !conformant(&trace, *g) {
-            bad.push(format!(
-                "pixel {i}: display {d:?} cpu {:?} {api} {g:?}",
-                trace.out
-            ));
-        }
-    }
-    bad
-}
-
-fn check_all_methods(
-    b: &mut dyn OfflineBackend,
-    (display, camera): (&RgbaImage, &RgbaImage),
-    mapping: &CameraMapping,
-    base: &Params,
-) {
-    for method in Method::ALL {
-        for lambda_e in [0.1, 0.4, 1.0] {
-            let params = Params {
-                method,
-                lambda_e,
-                ..base.clone()
-            };
-            let bad = nonconformant(b, display, camera, mapping, &params);
-            assert!(
-                bad.is_empty(),
-                "{}: {method:?} lambda_e {lambda_e}: {} of {} pixels differ, e.g. {:?}",
-                b.api(),
-                bad.len(),
-                display.pixels.len(),
-                &bad[..bad.len().min(5)]
-            );
-        }
-    }
-}
-
 #[test]
 fn matches_cpu_on_random_images() {
     let camera = noise(131, 83, 5);
@@ -111,14 +56,6 @@ fn matches_cpu_on_random_images() {
             check_all_methods(b, (&display, &camera), &params.camera_mapping(), &params);
         }
     });
-}
-
-/// A registered view's mapping (a plane-induced homography): not affine, the projective divide
-/// varying by about 15% across the view, and reaching past the camera's edges (clamp-to-edge).
-fn projective() -> CameraMapping {
-    CameraMapping {
-        rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
-    }
 }
 
 #[test]

@@ -5,6 +5,7 @@
 
 mod common;
 
+use common::conformance::{check_all_methods, nonconformant, projective};
 use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
@@ -156,69 +157,6 @@ fn formats_agree_on(e: &mut VkOffline, camera: &RgbaImage, colours: &[[u8; 4]]) 
     }
 }
 
-/// `nonconformant` for a view at `mapping` in the camera image.
-fn nonconformant_mapped(
-    e: &mut VkOffline,
-    display: &RgbaImage,
-    camera: &RgbaImage,
-    mapping: &CameraMapping,
-    params: &Params,
-) -> Vec<String> {
-    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
-    let gpu = e.enhance_mapped(display, camera, mapping, params).unwrap();
-    let (w, h) = (display.width, display.height);
-    let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, mapping, params);
-    let mut bad = Vec::new();
-    for (i, (d, g)) in display.pixels.iter().zip(&gpu.pixels).enumerate() {
-        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
-        if !conformant(&trace, *g) {
-            bad.push(format!(
-                "pixel {i}: display {d:?} cpu {:?} gpu {g:?}",
-                trace.out
-            ));
-        }
-    }
-    bad
-}
-
-fn check_all_methods(e: &mut VkOffline, display: &RgbaImage, camera: &RgbaImage, base: &Params) {
-    check_all_methods_mapped(e, display, camera, &base.camera_mapping(), base);
-}
-
-fn check_all_methods_mapped(
-    e: &mut VkOffline,
-    display: &RgbaImage,
-    camera: &RgbaImage,
-    mapping: &CameraMapping,
-    base: &Params,
-) {
-    for method in Method::ALL {
-        for lambda_e in [0.1, 0.4, 1.0] {
-            let params = Params {
-                method,
-                lambda_e,
-                ..base.clone()
-            };
-            let bad = nonconformant_mapped(e, display, camera, mapping, &params);
-            assert!(
-                bad.is_empty(),
-                "{method:?} lambda_e {lambda_e}: {} of {} pixels differ, e.g. {:?}",
-                bad.len(),
-                display.pixels.len(),
-                &bad[..bad.len().min(5)]
-            );
-        }
-    }
-}
-
-/// A registered view's mapping (a plane-induced homography): not affine, the projective divide
-/// varying by about 15% across the view, and reaching past the camera's edges (clamp-to-edge).
-fn projective() -> CameraMapping {
-    CameraMapping {
-        rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
-    }
-}
-
 #[test]
 fn gpu_background_matches_cpu_preparation() {
     // The per-camera-frame part: decode and blur on the camera grid.
@@ -349,13 +287,19 @@ fn gpu_matches_cpu_with_texels_prepared_on_the_cpu() {
     e.set_cpu_background(true);
     let camera = noise(131, 83, 5);
     let display = noise(97, 61, 21);
-    check_all_methods(&mut e, &display, &camera, &Params::default());
+    let params = Params::default();
+    check_all_methods(
+        &mut e,
+        (&display, &camera),
+        &params.camera_mapping(),
+        &params,
+    );
     let wide = Params {
         blur_size: 9,
         blur_sigma: 3.0,
         ..Params::default()
     };
-    check_all_methods_mapped(&mut e, &display, &camera, &projective(), &wide);
+    check_all_methods(&mut e, (&display, &camera), &projective(), &wide);
     assert_clean(&e);
 }
 
@@ -939,7 +883,7 @@ fn shared_fetches_conform_to_the_cpu_reference() {
     let camera = noise(64, 40, 13);
     for (width, mapping) in [96, 97].into_iter().zip(shared_fetch_mappings()) {
         let display = noise(width, 29, 3 * width);
-        check_all_methods_mapped(&mut e, &display, &camera, &mapping, &Params::default());
+        check_all_methods(&mut e, (&display, &camera), &mapping, &Params::default());
     }
     assert_clean(&e);
 }
@@ -997,7 +941,7 @@ fn mappings_the_shared_fetches_cannot_serve_take_the_general_variant() {
         let (shared, general) = shared_and_general(&mut e, &display, &camera, &mapping);
         let differ = differing(&shared.pixels, &general.pixels);
         assert_eq!(differ, 0, "{mapping:?}: pixels differ");
-        let bad = nonconformant_mapped(&mut e, &display, &camera, &mapping, &Params::default());
+        let bad = nonconformant(&mut e, &display, &camera, &mapping, &Params::default());
         assert!(
             bad.is_empty(),
             "{mapping:?}: {:?}",

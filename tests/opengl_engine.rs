@@ -6,6 +6,7 @@
 
 mod common;
 
+use common::conformance::nonconformant;
 use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::Params;
@@ -23,34 +24,6 @@ const RGBA16: u32 = 0x805B;
 
 fn context() -> GlOffline {
     GlOffline::new().unwrap_or_else(|e| panic!("OpenGL context: {e}"))
-}
-
-/// Pixels where the GL output does not conform to the CPU reference, with the CPU's own
-/// background preparation as the reference's B.
-fn nonconformant(
-    gl: &mut GlOffline,
-    display: &RgbaImage,
-    camera: &RgbaImage,
-    mapping: &CameraMapping,
-    params: &Params,
-) -> Vec<String> {
-    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
-    let out = gl
-        .enhance_mapped(display, camera, mapping, params)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let (w, h) = (display.width, display.height);
-    let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, mapping, params);
-    let mut bad = Vec::new();
-    for (i, (d, g)) in display.pixels.iter().zip(&out.pixels).enumerate() {
-        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
-        if !conformant(&trace, *g) {
-            bad.push(format!(
-                "pixel {i}: display {d:?} cpu {:?} gl {g:?}",
-                trace.out
-            ));
-        }
-    }
-    bad
 }
 
 /// A projective mapping (a registered view's homography) over a camera whose top and bottom

@@ -11,6 +11,7 @@
 #![allow(dead_code)] // each test crate uses a different part
 
 pub mod capture_check;
+pub mod conformance;
 pub mod gl_client;
 pub mod images;
 pub mod pass_through;

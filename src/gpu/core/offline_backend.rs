@@ -2,6 +2,7 @@
 //! backend: what the command line enhances with and what one conformance suite
 //! (tests/engine_conformance.rs) holds each backend to.
 
+use super::pixel_codec;
 use super::pixel_format::PixelFormat;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
@@ -37,17 +38,10 @@ pub trait OfflineBackend {
         mapping: &CameraMapping,
         params: &Params,
     ) -> Result<RgbaImage, String> {
-        let words: Vec<u32> = display
-            .pixels
-            .iter()
-            .map(|p| u32::from_le_bytes(*p))
-            .collect();
         let shape = ((display.width, display.height), PixelFormat::SRGB8);
+        let words = pixel_codec::srgb8_words(display);
         let out = self.enhance_pixels(&words, shape, camera, mapping, params)?;
-        Ok(RgbaImage {
-            pixels: out.iter().map(|w| w.to_le_bytes()).collect(),
-            ..display.clone()
-        })
+        Ok(pixel_codec::srgb8_image(display, &out))
     }
 
     /// Vulkan validation errors so far (0 where the backend has no validation layer).

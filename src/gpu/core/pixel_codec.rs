@@ -5,6 +5,7 @@
 //! keeps an encoder of its own, so that its checks of the layer stay independent of this one.
 
 use super::pixel_format::{PixelFormat, PixelLayout};
+use crate::image::RgbaImage;
 
 /// IEEE 754 binary16 bits of `v` in [0, 1] (what colour channels need), rounded to nearest even.
 pub fn half_from_f32(v: f32) -> u16 {
@@ -77,6 +78,23 @@ pub fn encode(format: PixelFormat, [r, g, b, a]: [f64; 4]) -> Vec<u8> {
                 | unorm(a, 3.0) << 30;
             word.to_le_bytes().to_vec()
         }
+    }
+}
+
+/// An 8-bit sRGB image's pixels as raw words of `PixelFormat::SRGB8`, one per pixel.
+pub fn srgb8_words(image: &RgbaImage) -> Vec<u32> {
+    image
+        .pixels
+        .iter()
+        .map(|p| u32::from_le_bytes(*p))
+        .collect()
+}
+
+/// `like` with its pixels replaced by raw words of `PixelFormat::SRGB8`.
+pub fn srgb8_image(like: &RgbaImage, words: &[u32]) -> RgbaImage {
+    RgbaImage {
+        pixels: words.iter().map(|w| w.to_le_bytes()).collect(),
+        ..like.clone()
     }
 }
 

@@ -6,7 +6,7 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
-use crate::gpu::core::{OfflineBackend, PixelFormat};
+use crate::gpu::core::{pixel_codec, OfflineBackend, PixelFormat};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
@@ -407,18 +407,11 @@ impl GlOffline {
         mapping: &CameraMapping,
         params: &Params,
     ) -> Result<RgbaImage, GlError> {
-        let words: Vec<u32> = display
-            .pixels
-            .iter()
-            .map(|p| u32::from_le_bytes(*p))
-            .collect();
         let region = (display.width, display.height);
+        let words = pixel_codec::srgb8_words(display);
         let out =
             self.enhance_raw_mapped(&words, (region, gl::SRGB8_ALPHA8), camera, mapping, params)?;
-        Ok(RgbaImage {
-            pixels: out.iter().map(|w| w.to_le_bytes()).collect(),
-            ..display.clone()
-        })
+        Ok(pixel_codec::srgb8_image(display, &out))
     }
 
     /// `enhance_mapped` with the manual FoV mapping of `params`.

@@ -5,7 +5,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::core::CameraRect;
-use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
+use crate::gpu::core::{pixel_codec, OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
 use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
@@ -231,18 +231,10 @@ impl VkOffline {
         mapping: &CameraMapping,
         params: &Params,
     ) -> Result<RgbaImage, GpuError> {
-        let words: Vec<u32> = display
-            .pixels
-            .iter()
-            .map(|p| u32::from_le_bytes(*p))
-            .collect();
-        let region = (display.width, display.height);
-        let target = (region, PixelFormat::SRGB8);
-        let out = self.enhance_raw_mapped(&words, target, camera, mapping, params)?;
-        Ok(RgbaImage {
-            pixels: out.iter().map(|w| w.to_le_bytes()).collect(),
-            ..display.clone()
-        })
+        let shape = ((display.width, display.height), PixelFormat::SRGB8);
+        let words = pixel_codec::srgb8_words(display);
+        let out = self.enhance_raw_mapped(&words, shape, camera, mapping, params)?;
+        Ok(pixel_codec::srgb8_image(display, &out))
     }
 
     /// Runs only the background preparation (once per camera frame: decode and blur on the
