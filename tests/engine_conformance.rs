@@ -40,7 +40,7 @@ fn enhance(
     params: &Params,
 ) -> RgbaImage {
     let api = b.api();
-    b.enhance_image(display, camera, &params.camera_mapping(), params)
+    b.enhance_mapped(display, camera, &params.camera_mapping(), params)
         .unwrap_or_else(|e| panic!("{api}: {e}"))
 }
 

@@ -12,6 +12,7 @@ use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec::half_from_f32;
 use contrastxr::gpu::vulkan::offline::AppImage;
 use contrastxr::gpu::vulkan::VkFormat;
+use contrastxr::gpu::OfflineBackend;
 use contrastxr::gpu::{DeviceOptions, PixelFormat, PixelLayout, VkOffline};
 use contrastxr::image::RgbaImage;
 use std::process::Command;

@@ -5,6 +5,7 @@ use contrastxr::algorithm::{
     conformant, enhance_scaled, enhance_srgb8, enhance_srgb8_trace, Method, Params,
 };
 use contrastxr::colour;
+use contrastxr::gpu::OfflineBackend;
 use contrastxr::gpu::{DeviceOptions, VkOffline};
 use contrastxr::image::RgbaImage;
 use glam::DVec3;

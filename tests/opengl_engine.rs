@@ -13,6 +13,7 @@ use contrastxr::algorithm::Params;
 use contrastxr::gpu::core::pixel_codec;
 use contrastxr::gpu::opengl::GlFormat;
 use contrastxr::gpu::opengl::{GlOffline, GlTarget, GlView};
+use contrastxr::gpu::OfflineBackend;
 use contrastxr::image::RgbaImage;
 use std::ffi::{c_void, CStr};
 

@@ -3,7 +3,7 @@
 
 use contrastxr::algorithm::Params;
 use contrastxr::gpu::opengl::GlOffline;
-use contrastxr::gpu::VkOffline;
+use contrastxr::gpu::{OfflineBackend, VkOffline};
 use contrastxr::image::RgbaImage;
 use contrastxr::reference;
 
@@ -45,11 +45,13 @@ pub fn run(
 ) -> Result<RgbaImage, String> {
     match engine {
         Backend::Cpu => Ok(reference::enhance_with_camera(display, camera, params)),
-        Backend::Vulkan => VkOffline::new()
-            .and_then(|mut gpu| gpu.enhance(display, camera, params))
-            .map_err(|e| e.to_string()),
-        Backend::OpenGl => GlOffline::new()
-            .and_then(|mut gl| gl.enhance(display, camera, params))
-            .map_err(|e| e.to_string()),
+        Backend::Vulkan => {
+            let mut vulkan = VkOffline::new().map_err(|e| e.to_string())?;
+            vulkan.enhance(display, camera, params)
+        }
+        Backend::OpenGl => {
+            let mut opengl = GlOffline::new().map_err(|e| e.to_string())?;
+            opengl.enhance(display, camera, params)
+        }
     }
 }

@@ -17,7 +17,7 @@ pub fn nonconformant(
     use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
     let api = b.api();
     let out = b
-        .enhance_image(display, camera, mapping, params)
+        .enhance_mapped(display, camera, mapping, params)
         .unwrap_or_else(|e| panic!("{api}: {e}"));
     let (w, h) = (display.width, display.height);
     let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, mapping, params);

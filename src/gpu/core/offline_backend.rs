@@ -31,7 +31,7 @@ pub trait OfflineBackend {
     ) -> Result<Vec<u32>, String>;
 
     /// Enhances an 8-bit sRGB image against a camera frame, through `mapping`.
-    fn enhance_image(
+    fn enhance_mapped(
         &mut self,
         display: &RgbaImage,
         camera: &RgbaImage,
@@ -42,6 +42,16 @@ pub trait OfflineBackend {
         let words = pixel_codec::srgb8_words(display);
         let out = self.enhance_pixels(&words, shape, camera, mapping, params)?;
         Ok(pixel_codec::srgb8_image(display, &out))
+    }
+
+    /// `enhance_mapped` with the manual FoV mapping of `params`.
+    fn enhance(
+        &mut self,
+        display: &RgbaImage,
+        camera: &RgbaImage,
+        params: &Params,
+    ) -> Result<RgbaImage, String> {
+        self.enhance_mapped(display, camera, &params.camera_mapping(), params)
     }
 
     /// Vulkan validation errors so far (0 where the backend has no validation layer).

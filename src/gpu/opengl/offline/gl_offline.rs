@@ -6,7 +6,7 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
-use crate::gpu::core::{pixel_codec, OfflineBackend, PixelFormat};
+use crate::gpu::core::{OfflineBackend, PixelFormat};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
@@ -397,31 +397,6 @@ impl GlOffline {
     ) -> Result<Vec<u32>, GlError> {
         let mapping = params.camera_mapping();
         self.enhance_raw_mapped(pixels, (region, internal_format), camera, &mapping, params)
-    }
-
-    /// Enhances an 8-bit sRGB image (a GL_SRGB8_ALPHA8 texture) against a camera frame.
-    pub fn enhance_mapped(
-        &mut self,
-        display: &RgbaImage,
-        camera: &RgbaImage,
-        mapping: &CameraMapping,
-        params: &Params,
-    ) -> Result<RgbaImage, GlError> {
-        let region = (display.width, display.height);
-        let words = pixel_codec::srgb8_words(display);
-        let out =
-            self.enhance_raw_mapped(&words, (region, gl::SRGB8_ALPHA8), camera, mapping, params)?;
-        Ok(pixel_codec::srgb8_image(display, &out))
-    }
-
-    /// `enhance_mapped` with the manual FoV mapping of `params`.
-    pub fn enhance(
-        &mut self,
-        display: &RgbaImage,
-        camera: &RgbaImage,
-        params: &Params,
-    ) -> Result<RgbaImage, GlError> {
-        self.enhance_mapped(display, camera, &params.camera_mapping(), params)
     }
 }
 

@@ -5,7 +5,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::core::CameraRect;
-use crate::gpu::core::{pixel_codec, OfflineBackend, PixelFormat, PixelLayout};
+use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
 use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
@@ -210,31 +210,6 @@ impl VkOffline {
         });
         self.release(bg, view);
         out
-    }
-
-    /// Enhances an 8-bit sRGB display image against a camera frame of any size, with the
-    /// manual FoV mapping of `params`.
-    pub fn enhance(
-        &mut self,
-        display: &RgbaImage,
-        camera: &RgbaImage,
-        params: &Params,
-    ) -> Result<RgbaImage, GpuError> {
-        self.enhance_mapped(display, camera, &params.camera_mapping(), params)
-    }
-
-    /// `enhance` with the view's camera mapping given.
-    pub fn enhance_mapped(
-        &mut self,
-        display: &RgbaImage,
-        camera: &RgbaImage,
-        mapping: &CameraMapping,
-        params: &Params,
-    ) -> Result<RgbaImage, GpuError> {
-        let shape = ((display.width, display.height), PixelFormat::SRGB8);
-        let words = pixel_codec::srgb8_words(display);
-        let out = self.enhance_raw_mapped(&words, shape, camera, mapping, params)?;
-        Ok(pixel_codec::srgb8_image(display, &out))
     }
 
     /// Runs only the background preparation (once per camera frame: decode and blur on the
