@@ -683,6 +683,7 @@ fn the_frame_report_sums_the_worked_examples() {
     );
     let moved = change(DVec3::from(dim), DVec3::from(e5.display));
     assert_rel(r.mean_delta_e, moved / 3.0, 1e-12, "delta E");
+    assert_rel(r.max_delta_e, moved, 1e-12, "largest delta E");
     assert_eq!(r.frequencies, Frequencies::One(2.0));
     // Without content: nothing to gain.
     let empty = frame_report([pixel([0.0; 3], [0.5; 3], [0.0; 3], 1.0)], &m);
