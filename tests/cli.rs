@@ -241,6 +241,171 @@ fn evaluate_of_unchanged_output_finds_nothing_enhanced() {
     let m = json(&o);
     assert_eq!(m["enhanced_pixels"], 0);
     assert_eq!(m["delta_e_out_display"]["max"], 0.0);
+    // Nothing changed: the perceived contrast neither.
+    assert_eq!(
+        m["perceived_contrast_before"],
+        m["perceived_contrast_after"]
+    );
+    assert_eq!(m["perceived_contrast_gain"], 1.0);
+    assert_eq!(m["brought_to_target_fraction"], 0.0);
+}
+
+/// The perceived contrast `evaluate` reports, by hand from the model's second worked example
+/// (docs/algorithm.md, *The perceptual method*: grey 0.5 over a grey 0.8 world at 5000 cd/m^2,
+/// lens 0.3, 2 cpd has c 0.04 and C 4.298, so C / c = 107.45 there, which hardly moves with a
+/// few cd/m^2). Grey on grey, c is the Michelson contrast `Y_D / (Y_D + 2 Y_tB)` and c' =
+/// `c (1 - 1 / (107.45 c))`. Background code 231 is linear 0.799103, Y_tB = 0.3 * 5000 *
+/// 0.799103 = 1198.654; display code 188 (linear 0.502886, Y_D 100.577): c 0.040265, c'
+/// 0.030958, below the target 0.05; white (Y_D 200): c 0.077003, c' 0.067696.
+#[test]
+fn evaluate_reports_the_perceived_contrast_of_a_hand_computed_case() {
+    let (display, output, background) = (
+        scratch("pc-display.png"),
+        scratch("pc-output.png"),
+        scratch("pc-background.png"),
+    );
+    let grey = [188, 188, 188, 255];
+    RgbaImage::new(2, 1, grey).save_png(&display).unwrap();
+    let mut out = RgbaImage::new(2, 1, grey);
+    out.set(1, 0, [255, 255, 255, 255]);
+    out.save_png(&output).unwrap();
+    RgbaImage::new(2, 1, [231, 231, 231, 255])
+        .save_png(&background)
+        .unwrap();
+    let o = contrastxr(&[
+        "evaluate",
+        "--display",
+        display.to_str().unwrap(),
+        "--background",
+        background.to_str().unwrap(),
+        "--enhanced",
+        output.to_str().unwrap(),
+        "--no-blur",
+        "--no-fov",
+        "--transmittance",
+        "0.3",
+        "--world-nits",
+        "5000",
+        "--frequency",
+        "2",
+        "--json",
+    ]);
+    let m = json(&o);
+    let f = |k: &str| m[k].as_f64().unwrap_or_else(|| panic!("{k} in {m}"));
+    let near = |a: f64, b: f64, rel: f64| (a - b).abs() <= rel * b.abs();
+    assert!(near(f("perceived_contrast_before"), 0.030958, 1e-3), "{m}");
+    let after = (0.030958 + 0.067696) / 2.0;
+    assert!(near(f("perceived_contrast_after"), after, 2e-3), "{m}");
+    assert!(near(
+        f("perceived_contrast_gain"),
+        f("perceived_contrast_after") / f("perceived_contrast_before"),
+        1e-12
+    ));
+    assert!(near(
+        f("perceived_contrast_log2_gain"),
+        f("perceived_contrast_gain").log2(),
+        1e-12
+    ));
+    assert_eq!(
+        [
+            "left_alone_fraction",
+            "brought_to_target_fraction",
+            "out_of_reach_fraction"
+        ]
+        .map(f),
+        [0.0, 0.5, 0.5],
+        "{m}"
+    );
+    assert!(near(f("mean_world_luminance"), 1198.654, 1e-5), "{m}");
+    assert_eq!(m["frequency"], "2");
+    assert_eq!(m["frequency_cpd"], serde_json::json!([2.0]));
+    assert_eq!(f("target_contrast"), 0.05);
+    // The default frequency follows the blur: sigma 1.5 camera px, here one display px each,
+    // at --ppd 15: 0.1 deg, so sqrt(ln 2 / 2) / (pi 0.1) = 1.8739 cpd.
+    let o = contrastxr(&[
+        "evaluate",
+        "--display",
+        display.to_str().unwrap(),
+        "--background",
+        background.to_str().unwrap(),
+        "--enhanced",
+        output.to_str().unwrap(),
+        "--no-fov",
+        "--ppd",
+        "15",
+        "--json",
+    ]);
+    let m = json(&o);
+    let cpd = m["frequency_cpd"][0].as_f64().unwrap();
+    assert!((cpd - 1.87391).abs() < 1e-4, "{m}");
+    assert_eq!(m["frequency"], "blur");
+}
+
+/// Any method's output gets the perceived contrast, and the text output says it.
+#[test]
+fn evaluate_reports_the_perceived_contrast_for_every_method() {
+    for method in ["luminance", "subtraction"] {
+        let args = [
+            "evaluate",
+            "--display",
+            DISPLAY,
+            "--background",
+            SKY,
+            "--engine",
+            "cpu",
+            "--method",
+            method,
+        ];
+        let m = json(&contrastxr(&[&args[..], &["--json"]].concat()));
+        let f = |k: &str| m[k].as_f64().unwrap_or_else(|| panic!("{k} in {m}"));
+        assert!(f("perceived_contrast_before") > 0.0, "{method}: {m}");
+        assert!(f("perceived_contrast_after") > 0.0, "{method}: {m}");
+        let classes =
+            f("left_alone_fraction") + f("brought_to_target_fraction") + f("out_of_reach_fraction");
+        assert!((classes - 1.0).abs() < 1e-9, "{method}: {m}");
+        let o = contrastxr(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains("perceived contrast c'"), "{text}");
+        assert!(text.contains("out of reach"), "{text}");
+    }
+}
+
+#[test]
+fn evaluate_refuses_perceptual_settings_out_of_range() {
+    for (flag, value, says) in [
+        (
+            "--min-luminance",
+            "0.01",
+            "min_luminance must be in [0.1, 31623]",
+        ),
+        ("--display-peak-nits", "0", "display_peak_nits must be > 0"),
+        (
+            "--target-contrast",
+            "0",
+            "target_contrast must be in (0, 1]",
+        ),
+        ("--frequency", "sharp", "--frequency"),
+        (
+            "--ppd",
+            "0",
+            "--ppd must be a number of pixels per degree > 0",
+        ),
+    ] {
+        let o = contrastxr(&[
+            "evaluate",
+            "--display",
+            DISPLAY,
+            "--background",
+            SKY,
+            "--enhanced",
+            DISPLAY,
+            flag,
+            value,
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{flag} {value}");
+        assert!(stderr(&o).contains(says), "{flag} {value}: {}", stderr(&o));
+    }
 }
 
 #[test]

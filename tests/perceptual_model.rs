@@ -8,7 +8,6 @@ use contrastxr::algorithm::perception::castle_csf::{self, Sensitivities};
 use contrastxr::algorithm::perception::frame_report::{frame_report, ReportPixel};
 use contrastxr::algorithm::perception::frequency::{Frequencies, ENSEMBLE_CPD};
 use contrastxr::algorithm::perception::light::{Light, Pattern};
-use contrastxr::algorithm::perception::model_settings::PerceptualSettings;
 use contrastxr::algorithm::perception::perceived_contrast::{contrast, Model};
 use contrastxr::algorithm::perception::perceptual_pixel::{
     perceptual, perceptual_over_paper, Class, Outcome,
@@ -16,6 +15,7 @@ use contrastxr::algorithm::perception::perceptual_pixel::{
 use contrastxr::algorithm::perception::tables::{
     PerceptualTables, SensitivityTable, LOG_LUMINANCE_MAX, LOG_LUMINANCE_MIN,
 };
+use contrastxr::algorithm::perceptual_settings::PerceptualSettings;
 use contrastxr::algorithm::{enhance_linear, Params};
 use contrastxr::colour;
 use glam::{DVec3, Vec3};
@@ -683,6 +683,7 @@ fn the_frame_report_sums_the_worked_examples() {
     );
     let moved = change(DVec3::from(dim), DVec3::from(e5.display));
     assert_rel(r.mean_delta_e, moved / 3.0, 1e-12, "delta E");
+    assert_rel(r.max_delta_e, moved, 1e-12, "largest delta E");
     assert_eq!(r.frequencies, Frequencies::One(2.0));
     // Without content: nothing to gain.
     let empty = frame_report([pixel([0.0; 3], [0.5; 3], [0.0; 3], 1.0)], &m);

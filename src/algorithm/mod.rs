@@ -10,6 +10,7 @@ pub mod mapping;
 pub mod method;
 pub mod params;
 pub mod perception;
+pub mod perceptual_settings;
 mod pixel;
 pub mod reference_fn;
 pub mod registration;

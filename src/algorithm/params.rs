@@ -1,6 +1,7 @@
 //! The method's settings, shared by the CPU reference, the GPU engine, the CLI and the layer.
 
 pub use super::method::Method;
+use super::perceptual_settings::PerceptualSettings;
 
 /// What the layer shows (docs/control.md, Modes). `Enhance` is the product; the others are for
 /// comparison and calibration while wearing the headset. Comparison methods are `Method`s.
@@ -77,6 +78,11 @@ pub struct Params {
     /// Beyond the paper (its second limitation): the output's luminance Y is at most
     /// (1 + luminance_cap) times the input's, scaling the colour down if needed. 0 = off.
     pub luminance_cap: f32,
+    /// Beyond the paper: how bright the display and the world are, the contrast that is
+    /// enough and the frequency it is judged at, for the perceptual model
+    /// (docs/algorithm.md, *The perceptual method*). f64, as the model's CPU reference takes
+    /// them.
+    pub perceptual: PerceptualSettings,
 }
 
 /// Background chroma (scaled a'b' length, ~10 a*b* units) below which it counts as near grey.
@@ -98,6 +104,7 @@ impl Default for Params {
             mode: ViewMode::Enhance,
             achromatic_boost: 0.0,
             luminance_cap: 0.0,
+            perceptual: PerceptualSettings::default(),
         }
     }
 }
@@ -192,7 +199,7 @@ impl Params {
         if self.blur && self.blur_size > 1 && self.blur_sigma <= 0.0 {
             return Err(format!("blur_sigma must be > 0, got {}", self.blur_sigma));
         }
-        Ok(())
+        self.perceptual.validate()
     }
 }
 

@@ -1,9 +1,11 @@
-//! `contrastxr evaluate`: the paper's enhanced-pixel metric for one enhancement, or a sweep
-//! over lambda_e; optionally a figure (perceived original | perceived enhanced | cyan map).
+//! `contrastxr evaluate`: the paper's enhanced-pixel metric and the perceived contrast before
+//! and after, for one enhancement or a sweep over lambda_e; optionally a figure (perceived
+//! original | perceived enhanced | cyan map).
 
 use contrastxr::algorithm::Params;
 use contrastxr::background_preparation;
-use contrastxr::evaluate::{self as eval, Metrics};
+use contrastxr::evaluate::perception_report::offline_frequencies;
+use contrastxr::evaluate::{self as eval, Metrics, PerceptionReport};
 use contrastxr::image::RgbaImage;
 
 use super::args::parse_list;
@@ -20,19 +22,27 @@ pub const OPTIONS: &[Opt] = &[
     Opt::flag("--json"),
     Opt::value("--figure", "FIG.png"),
     Opt::flag("--app-images"),
+    Opt::value("--ppd", "N"),
 ];
+
+/// The view's pixels per degree when `--ppd` is not given: the perceptual model's `blur`
+/// frequency needs it.
+pub const DEFAULT_PPD: f64 = 20.0;
 
 const USAGE: &str = "\
 usage: contrastxr evaluate --display D.png --background B.png [--enhanced OUT.png] [options]
        contrastxr evaluate --display D.png --background B.png --sweep 0.2,0.4,0.6,0.8,1.0 [options]
 
 Measures the share of foreground pixels whose contrast with the background went up by a
-noticeable amount (the paper's metric). Without --enhanced the method runs first (--engine).
+noticeable amount (the paper's metric), and the perceived contrast c' of the content before
+and after (the perceptual model, with its settings below). Without --enhanced the method runs
+first (--engine).
   --enhanced OUT.png   the enhanced image to measure (the display's size)
   --sweep L1,L2,...    run the method at each lambda_e and print one row per value
   --json               print the metrics as JSON (an array of rows for --sweep)
   --figure FIG.png     write a figure; one row per lambda_e for --sweep
   --app-images         put the display and enhanced images themselves in the figure too
+  --ppd N              the display's pixels per degree of view (20), for frequency = blur
 
 ";
 
@@ -48,6 +58,7 @@ struct Inputs {
     json: bool,
     figure: Option<String>,
     app_images: bool,
+    ppd: f64,
 }
 
 pub fn run(args: &mut Args) -> Result<(), CliError> {
@@ -58,6 +69,17 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let json = args.flag("--json");
     let figure = args.value(&["--figure"])?;
     let app_images = args.flag("--app-images");
+    let ppd = match args.value(&["--ppd"])? {
+        None => DEFAULT_PPD,
+        Some(t) => match t.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => v,
+            _ => {
+                return Err(CliError::Failure(format!(
+                    "--ppd must be a number of pixels per degree > 0, got '{t}'"
+                )))
+            }
+        },
+    };
     let params = options::params(args)?;
     let engine = options::engine(args)?;
     args.finish()?;
@@ -77,6 +99,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         json,
         figure,
         app_images,
+        ppd,
     };
     match lambdas {
         Some(l) => run_sweep(&inputs, &l),
@@ -104,10 +127,32 @@ fn enhanced_image(
     Ok(img)
 }
 
-fn measure(inputs: &Inputs, enhanced: &RgbaImage, params: &Params) -> Metrics {
+/// The paper's metric and the perceived contrast, over the same prepared background.
+struct Measured {
+    metrics: Metrics,
+    perception: PerceptionReport,
+}
+
+impl Measured {
+    /// Both as one JSON object (the metric's keys, then the perceived contrast's).
+    fn json(&self) -> serde_json::Value {
+        let mut v = serde_json::to_value(&self.metrics).expect("metrics serialise");
+        let p = serde_json::to_value(&self.perception).expect("the report serialises");
+        if let (Some(v), serde_json::Value::Object(p)) = (v.as_object_mut(), p) {
+            v.extend(p);
+        }
+        v
+    }
+}
+
+fn measure(inputs: &Inputs, enhanced: &RgbaImage, params: &Params) -> Measured {
     let d = &inputs.display;
     let bg = background_preparation::prepare(&inputs.camera, d.width, d.height, params);
-    eval::metrics(d, enhanced, &bg)
+    let frequencies = offline_frequencies(params, d.width, inputs.camera.width, inputs.ppd);
+    Measured {
+        metrics: eval::metrics(d, enhanced, &bg),
+        perception: eval::perception_report(d, enhanced, &bg, params, frequencies),
+    }
 }
 
 fn run_single(inputs: &Inputs, path: Option<&str>) -> Result<(), CliError> {
@@ -116,10 +161,12 @@ fn run_single(inputs: &Inputs, path: Option<&str>) -> Result<(), CliError> {
     if inputs.json {
         super::error::print(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&m).expect("metrics serialise")
+            serde_json::to_string_pretty(&m.json()).expect("metrics serialise")
         ));
     } else {
-        super::error::print(&metrics_text(&m));
+        super::error::print(
+            &(metrics_text(&m.metrics) + &perception_text(&m.perception, &inputs.params)),
+        );
     }
     if let Some(fig) = &inputs.figure {
         let img = if inputs.app_images {
@@ -148,6 +195,34 @@ fn metrics_text(m: &Metrics) -> String {
     ] {
         out += &format!("{name:<22} {:>8.3} {:>8.3} {:>8.3}\n", s.min, s.mean, s.max);
     }
+    out
+}
+
+fn perception_text(p: &PerceptionReport, params: &Params) -> String {
+    let s = &params.perceptual;
+    let cpd: Vec<String> = p.frequency_cpd.iter().map(|f| format!("{f:.2}")).collect();
+    let mut out = format!(
+        "perceived contrast c' (display {} cd/m², world {} cd/m², frequency {}: {} cpd): \
+         {:.4} -> {:.4} (x{:.3})\n",
+        s.display_peak_nits,
+        s.world_nits,
+        p.frequency,
+        cpd.join(", "),
+        p.perceived_contrast_before,
+        p.perceived_contrast_after,
+        p.perceived_contrast_gain
+    );
+    out += &format!(
+        "target c' {}: left alone {:.2}%, brought to target {:.2}%, out of reach {:.2}%\n",
+        p.target_contrast,
+        100.0 * p.left_alone_fraction,
+        100.0 * p.brought_to_target_fraction,
+        100.0 * p.out_of_reach_fraction
+    );
+    out += &format!(
+        "world behind the content: {:.1} cd/m² at the eye\n",
+        p.mean_world_luminance
+    );
     out
 }
 
@@ -185,11 +260,11 @@ fn run_sweep(inputs: &Inputs, lambdas: &[f32]) -> Result<(), CliError> {
     Ok(())
 }
 
-fn sweep_json(rows: &[(f32, Metrics)]) -> String {
+fn sweep_json(rows: &[(f32, Measured)]) -> String {
     let values: Vec<serde_json::Value> = rows
         .iter()
         .map(|(l, m)| {
-            let mut v = serde_json::to_value(m).expect("metrics serialise");
+            let mut v = m.json();
             v["lambda_e"] = serde_json::json!(l);
             v
         })
@@ -200,19 +275,27 @@ fn sweep_json(rows: &[(f32, Metrics)]) -> String {
     )
 }
 
-fn sweep_table(rows: &[(f32, Metrics)]) -> String {
+fn sweep_table(rows: &[(f32, Measured)]) -> String {
     let mut out = format!(
-        "{:>8} {:>10} {:>10} {:>9} {:>14} {:>14}\n",
-        "lambda_e", "foreground", "enhanced", "percent", "mean dE(out,D)", "mean dE(B,out)"
+        "{:>8} {:>10} {:>10} {:>9} {:>14} {:>14} {:>9}\n",
+        "lambda_e",
+        "foreground",
+        "enhanced",
+        "percent",
+        "mean dE(out,D)",
+        "mean dE(B,out)",
+        "c' gain"
     );
     for (l, m) in rows {
+        let (p, m) = (&m.perception, &m.metrics);
         out += &format!(
-            "{l:>8} {:>10} {:>10} {:>8.2}% {:>14.3} {:>14.3}\n",
+            "{l:>8} {:>10} {:>10} {:>8.2}% {:>14.3} {:>14.3} {:>9.3}\n",
             m.foreground_pixels,
             m.enhanced_pixels,
             m.enhanced_percent,
             m.delta_e_out_display.mean,
-            m.delta_e_bg_out.mean
+            m.delta_e_bg_out.mean,
+            p.perceived_contrast_gain
         );
     }
     out

@@ -33,7 +33,7 @@ const fn switch_off(key: &'static str, long: &'static str) -> ParamOption {
 
 /// The method's settings as options; each is parsed and checked by its key, as in the config
 /// file (a test holds this list to KEYS).
-pub const PARAM_OPTIONS: [ParamOption; 12] = [
+pub const PARAM_OPTIONS: [ParamOption; 17] = [
     option("method", "--method", "M"),
     option("lambda_e", "--lambda-e", "F"),
     option("lambda_jnd_scaled", "--lambda-jnd-scaled", "F"),
@@ -46,6 +46,11 @@ pub const PARAM_OPTIONS: [ParamOption; 12] = [
     option("fov_scale", "--fov-scale", "X,Y"),
     option("fov_offset", "--fov-offset", "X,Y"),
     switch_off("fov", "--no-fov"),
+    option("display_peak_nits", "--display-peak-nits", "NITS"),
+    option("world_nits", "--world-nits", "NITS"),
+    option("target_contrast", "--target-contrast", "F"),
+    option("min_luminance", "--min-luminance", "NITS"),
+    option("frequency", "--frequency", "FREQ"),
 ];
 
 /// The options [`params`] reads.

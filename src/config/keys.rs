@@ -3,8 +3,9 @@
 //! through this table.
 
 use super::settings::{InPlace, Settings};
-use super::value::{Kind, Value};
+use super::value::{short_f64, Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
+use crate::algorithm::perceptual_settings::Frequency;
 use crate::algorithm::registration::Lens;
 use crate::camera::usb_id::UsbId;
 use std::path::PathBuf;
@@ -32,6 +33,17 @@ fn float(v: Value) -> Result<f32, String> {
         Value::Float(x) => Err(format!("{x} is not a finite number")),
         other => Err(format!("{other} is not a number")),
     }
+}
+
+/// A number for an f64 setting: the shortest decimal of the f32 a value holds (0.05, not
+/// 0.0500000007), so that a value read back is the one written.
+fn float64(v: Value) -> Result<f64, String> {
+    float(v).map(short_f64)
+}
+
+fn set_frequency(s: &mut Settings, v: Value) -> Result<(), String> {
+    s.params.perceptual.frequency = Frequency::parse(&text(v)?)?;
+    Ok(())
 }
 
 fn non_negative(v: Value) -> Result<f32, String> {
@@ -354,6 +366,63 @@ pub const KEYS: &[Key] = &[
             Ok(())
         },
         get: |s| Value::Float(s.params.luminance_cap),
+    },
+    Key {
+        name: "display_peak_nits",
+        env: "CONTRASTXR_DISPLAY_PEAK_NITS",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "perceptual model: the display's luminance at full white, in cd/m^2 (> 0)",
+        set: |s, v| {
+            s.params.perceptual.display_peak_nits = float64(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.perceptual.display_peak_nits as f32),
+    },
+    Key {
+        name: "world_nits",
+        env: "CONTRASTXR_WORLD_NITS",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "perceptual model: the world's luminance, in cd/m^2 before the lens, that the camera's full white stands for (>= 0)",
+        set: |s, v| {
+            s.params.perceptual.world_nits = float64(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.perceptual.world_nits as f32),
+    },
+    Key {
+        name: "target_contrast",
+        env: "CONTRASTXR_TARGET_CONTRAST",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "perceptual model: the perceived contrast c' at which content counts as visible enough, in (0, 1] (1 is never reached)",
+        set: |s, v| {
+            s.params.perceptual.target_contrast = float64(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.perceptual.target_contrast as f32),
+    },
+    Key {
+        name: "min_luminance",
+        env: "CONTRASTXR_MIN_LUMINANCE",
+        env_negated: false,
+        kind: Kind::Float,
+        doc: "perceptual model: the floor, in cd/m^2, on the luminance contrast sensitivity is taken at (0.1 to 31623)",
+        set: |s, v| {
+            s.params.perceptual.min_luminance = float64(v)?;
+            Ok(())
+        },
+        get: |s| Value::Float(s.params.perceptual.min_luminance as f32),
+    },
+    Key {
+        name: "frequency",
+        env: "CONTRASTXR_FREQUENCY",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "perceptual model: the spatial frequency contrast is judged at: blur (the one the background's blur halves), ensemble (four frequencies of images) or a number of cycles per degree",
+        set: set_frequency,
+        get: |s| Value::Text(s.params.perceptual.frequency.name()),
     },
     Key {
         name: "blur",
@@ -831,6 +900,60 @@ mod tests {
             .apply(&mut s, Value::Text("webcam".into()))
             .is_err());
         assert_eq!(s, Settings::default());
+    }
+
+    #[test]
+    fn perceptual_settings_read_back_as_written_and_are_range_checked() {
+        let mut s = Settings::default();
+        let set = |s: &mut Settings, name: &str, text: &str| {
+            let k = key(name).unwrap();
+            k.apply(s, k.parse_setting(text)?)
+        };
+        set(&mut s, "target_contrast", "0.07").unwrap();
+        set(&mut s, "world_nits", "5000").unwrap();
+        set(&mut s, "display_peak_nits", "600").unwrap();
+        set(&mut s, "min_luminance", "0.3").unwrap();
+        set(&mut s, "frequency", "ensemble").unwrap();
+        let p = &s.params.perceptual;
+        assert_eq!(
+            (
+                p.target_contrast,
+                p.world_nits,
+                p.display_peak_nits,
+                p.min_luminance
+            ),
+            (0.07, 5000.0, 600.0, 0.3)
+        );
+        assert_eq!(p.frequency, Frequency::Ensemble);
+        set(&mut s, "frequency", "4").unwrap();
+        assert_eq!(s.params.perceptual.frequency, Frequency::Cpd(4.0));
+        assert_eq!(key("frequency").unwrap().get(&s), Value::Text("4".into()));
+        let before = s.clone();
+        for (name, text, says) in [
+            ("display_peak_nits", "0", "display_peak_nits must be > 0"),
+            ("world_nits", "-1", "world_nits must be >= 0"),
+            ("target_contrast", "0", "target_contrast must be in (0, 1]"),
+            (
+                "target_contrast",
+                "1.5",
+                "target_contrast must be in (0, 1]",
+            ),
+            (
+                "min_luminance",
+                "0.01",
+                "min_luminance must be in [0.1, 31623]",
+            ),
+            (
+                "frequency",
+                "-2",
+                "frequency must be blur, ensemble or a number",
+            ),
+            ("frequency", "sharp", "is not blur, ensemble or a number"),
+        ] {
+            let e = set(&mut s, name, text).unwrap_err();
+            assert!(e.contains(says), "{name} = {text}: {e}");
+        }
+        assert_eq!(s, before, "a refused value leaves the settings unchanged");
     }
 
     #[test]

@@ -127,7 +127,7 @@ fn article(type_name: &str) -> String {
 }
 
 /// An f32 as the shortest f64 that prints the same, so 0.4 is written `0.4`, not 0.4000000059.
-fn short_f64(x: f32) -> f64 {
+pub(super) fn short_f64(x: f32) -> f64 {
     x.to_string().parse().unwrap_or(f64::from(x))
 }
 

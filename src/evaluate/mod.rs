@@ -1,12 +1,13 @@
 //! Evaluation of an enhancement (docs/algorithm.md, Results): the paper's enhanced-pixel metric,
-//! the simulated perceived image of an additive display, and figures a person can look at.
-//! Pure CPU; it never runs the method itself.
+//! the perceptual model's perceived contrast, the simulated perceived image of an additive
+//! display, and figures a person can look at. Pure CPU; it never runs the method itself.
 
 pub mod animation;
 pub mod figure;
 pub mod font;
 pub mod metric;
 pub mod perceived;
+pub mod perception_report;
 
 pub use animation::{encode_apng, AnimationFrame};
 pub use figure::{
@@ -14,3 +15,4 @@ pub use figure::{
 };
 pub use metric::{enhanced_mask, metrics, Metrics, Stats, JND_DELTA_E};
 pub use perceived::perceived;
+pub use perception_report::{perception_report, PerceptionReport};

@@ -38,8 +38,10 @@ pub struct FrameReport {
     pub left_alone: f64,
     pub brought_to_target: f64,
     pub out_of_reach: f64,
-    /// Mean CIE76 Delta E*ab between display colour and output.
+    /// Mean and largest CIE76 Delta E*ab between display colour and output (0 without
+    /// content).
     pub mean_delta_e: f64,
+    pub max_delta_e: f64,
     /// Mean luminance (cd/m^2) of the world behind the content, as it reaches the eye (t W Y_B).
     pub mean_world_luminance: f64,
     pub frequencies: Frequencies,
@@ -48,6 +50,7 @@ pub struct FrameReport {
 /// The report of a frame's pixels under `model`.
 pub fn frame_report(pixels: impl IntoIterator<Item = ReportPixel>, model: &Model) -> FrameReport {
     let (mut n, mut before, mut after, mut delta_e, mut world) = (0usize, 0.0, 0.0, 0.0, 0.0);
+    let mut max_delta_e: f64 = 0.0;
     let (mut alone, mut brought, mut out) = (0usize, 0usize, 0usize);
     for p in pixels {
         if p.alpha == 0.0 || p.display == DVec3::ZERO {
@@ -63,10 +66,12 @@ pub fn frame_report(pixels: impl IntoIterator<Item = ReportPixel>, model: &Model
             Class::BroughtToTarget => brought += 1,
             _ => out += 1,
         }
-        delta_e += colour::delta_e(
+        let change = colour::delta_e(
             colour::linear_to_lab(p.display),
             colour::linear_to_lab(p.output),
         );
+        delta_e += change;
+        max_delta_e = max_delta_e.max(change);
         world += model.light.world_xyz(p.background).y;
     }
     let mean = |sum: f64| if n == 0 { 0.0 } else { sum / n as f64 };
@@ -87,6 +92,7 @@ pub fn frame_report(pixels: impl IntoIterator<Item = ReportPixel>, model: &Model
         brought_to_target: share(brought),
         out_of_reach: share(out),
         mean_delta_e: mean(delta_e),
+        max_delta_e,
         mean_world_luminance: mean(world),
         frequencies: model.frequencies,
     }

@@ -2,17 +2,8 @@
 //! frequency*): from the background's blur, an ensemble of image frequencies, or a fixed number
 //! of cycles per degree. Pure.
 
-/// The `frequency` setting.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Frequency {
-    /// The frequency the background's Gaussian blur halves, from the blur's size in degrees of
-    /// view (the default).
-    Blur,
-    /// The mean of c' over the four [`ENSEMBLE_CPD`] frequencies.
-    Ensemble,
-    /// A fixed frequency in cycles per degree, used as given.
-    Cpd(f64),
-}
+use crate::algorithm::params::Params;
+pub use crate::algorithm::perceptual_settings::Frequency;
 
 /// The midpoints (cpd) of four bands of equal probability of a 1/f^1.8 amplitude spectrum over
 /// 1 to 30 cpd: the frequency distribution of images.
@@ -42,6 +33,30 @@ pub struct BlurGeometry {
 }
 
 impl BlurGeometry {
+    /// The blur of `params` in a view `display_width` pixels wide with `pixels_per_degree`,
+    /// over a camera frame `camera_width` pixels wide placed by the manual FoV mapping
+    /// (`Params::fov_mapping`, as the command line places it): the view's width covers
+    /// `fov_scale.x` of the camera's, so one camera pixel spans `display_width / (fov_scale.x
+    /// camera_width)` display pixels. Sigma 0 without blur.
+    pub fn manual(
+        params: &Params,
+        display_width: u32,
+        camera_width: u32,
+        pixels_per_degree: f64,
+    ) -> BlurGeometry {
+        let blurred = params.blur && params.blur_size > 1;
+        let scale = f64::from(params.fov_mapping().0[0]);
+        BlurGeometry {
+            sigma_camera_px: if blurred {
+                f64::from(params.blur_sigma)
+            } else {
+                0.0
+            },
+            display_px_per_camera_px: f64::from(display_width) / (scale * f64::from(camera_width)),
+            pixels_per_degree,
+        }
+    }
+
     /// The blur's sigma in degrees of view.
     pub fn sigma_deg(&self) -> f64 {
         self.sigma_camera_px * self.display_px_per_camera_px / self.pixels_per_degree
@@ -120,6 +135,17 @@ mod tests {
         };
         assert_eq!(none.halving_cpd(), 30.0);
         assert_eq!(Frequency::Cpd(4.0).resolve(&g), Frequencies::One(4.0));
+        // The command line's default view: 640 display px over 0.65 of a 960 px camera frame,
+        // sigma 1.5, 20 ppd: 1.5 * (640 / 624) / 20 = 0.076923 deg -> 2.4361 cpd.
+        let manual = BlurGeometry::manual(&Params::default(), 640, 960, 20.0);
+        assert!((manual.sigma_deg() - 0.0769231).abs() < 1e-6, "{manual:?}");
+        assert!((manual.halving_cpd() - 2.43608).abs() < 1e-4, "{manual:?}");
+        let unblurred = Params {
+            blur: false,
+            ..Params::default()
+        };
+        let manual = BlurGeometry::manual(&unblurred, 640, 960, 20.0);
+        assert_eq!(manual.halving_cpd(), BLUR_CPD_MAX);
         assert_eq!(Frequency::Ensemble.resolve(&g).cpd(), &ENSEMBLE_CPD);
     }
 }

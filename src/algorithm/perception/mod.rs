@@ -6,7 +6,8 @@
 //!
 //! Sections of the model, one file each: `light` (the physical light and the pattern an edge of
 //! content makes), `castle_csf` (the contrast sensitivities), `perceived` (c, C and c'),
-//! `frequency` (which spatial frequency), `settings`; of the method: `directions`, `method`,
+//! `frequency` (which spatial frequency; the settings themselves are
+//! `algorithm::perceptual_settings`, which `Params` holds); of the method: `directions`, `method`,
 //! `tables` (for the GPU) and `report` (per-frame statistics).
 
 pub mod castle_csf;
@@ -14,7 +15,6 @@ pub mod directions;
 pub mod frame_report;
 pub mod frequency;
 pub mod light;
-pub mod model_settings;
 pub mod perceived_contrast;
 pub mod perceptual_pixel;
 pub mod tables;

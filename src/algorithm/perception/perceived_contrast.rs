@@ -8,7 +8,7 @@ use glam::DVec3;
 use super::castle_csf::{self, Real};
 use super::frequency::Frequencies;
 use super::light::{Light, Pattern};
-use super::model_settings::{PerceptualSettings, LUMINANCE_MAX};
+use crate::algorithm::perceptual_settings::{PerceptualSettings, LUMINANCE_MAX};
 
 /// The RMS cone contrast `sqrt(((dL/L_m)^2 + (dM/M_m)^2 + (dS/S_m)^2) / 3)`; 0 where there is no
 /// light (a mean of 0).

@@ -7,8 +7,8 @@ use glam::Vec3;
 
 use super::castle_csf::{self, Sensitivities};
 use super::light::XYZ_TO_LMS;
-use super::model_settings::{LUMINANCE_MAX, LUMINANCE_MIN};
 use super::perceived_contrast::{kulikowski, rms_cone_contrast, Model};
+use crate::algorithm::perceptual_settings::{LUMINANCE_MAX, LUMINANCE_MIN};
 use crate::colour::LINEAR_TO_XYZ;
 
 /// Entries per channel and frequency.
