@@ -738,3 +738,58 @@ fn a_tie_between_rooms_is_found() {
         ["gpu <-> packing.rs"]
     );
 }
+
+/// The files of one GPU backend that import a file of another, as "from -> to" (relative to
+/// `src`).
+fn across_backends(graph: &BTreeMap<PathBuf, BTreeSet<PathBuf>>, src: &Path) -> Vec<String> {
+    let backend = |f: &Path| {
+        ["gpu/vulkan", "gpu/opengl"]
+            .into_iter()
+            .find(|b| f.starts_with(src.join(b)))
+    };
+    let rel = |p: &Path| p.strip_prefix(src).unwrap().display().to_string();
+    let mut found = Vec::new();
+    for (from, targets) in graph {
+        for to in targets {
+            if let (Some(a), Some(b)) = (backend(from), backend(to)) {
+                if a != b {
+                    found.push(format!("{} -> {}", rel(from), rel(to)));
+                }
+            }
+        }
+    }
+    found
+}
+
+/// A backend stands on the core alone: what two backends share lives in `gpu/core/` (the
+/// benchmark's cases, the cache files), not in one backend that the other reaches into.
+#[test]
+fn no_backend_imports_another() {
+    let found = across_backends(&import_graph(&src_tree(), Path::new(SRC)), Path::new(SRC));
+    assert!(
+        found.is_empty(),
+        "imports across backends:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The check sees an OpenGL file reaching into Vulkan's rooms.
+#[test]
+fn an_import_across_backends_is_found() {
+    let src = Path::new("/made-up/src");
+    let tree = Tree::from([
+        (
+            src.join("gpu/vulkan/offline/bench.rs"),
+            "pub const RUNS: u32 = 3;\n".to_string(),
+        ),
+        (
+            src.join("gpu/opengl/offline/bench.rs"),
+            "use crate::gpu::vulkan::offline::bench::RUNS;\n".into(),
+        ),
+    ]);
+    let graph = import_graph(&tree, src);
+    assert_eq!(
+        across_backends(&graph, src),
+        ["gpu/opengl/offline/bench.rs -> gpu/vulkan/offline/bench.rs"]
+    );
+}

@@ -2,7 +2,7 @@
 //! hangs or floods the app, and writing it always leaves a whole file, also with two writers in
 //! separate PID namespaces (two sandboxed apps) at once.
 
-use contrastxr::gpu::vulkan::pipelines::pipeline_cache::{
+use contrastxr::gpu::core::cache_files::{
     read_file, remove_old_foreign, write_atomically, MAX_FILE_BYTES,
 };
 use std::path::{Path, PathBuf};

@@ -4,8 +4,8 @@
 use super::args::Args;
 use super::error::CliError;
 use contrastxr::algorithm::{Method, Params};
+use contrastxr::gpu::core::bench::{BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::opengl::GlOffline;
-use contrastxr::gpu::vulkan::offline::{BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::{DeviceOptions, VkOffline};
 
 const DEFAULT_SIZES: &str = "1268x720,1920x1080,2064x2208,3840x3840";
@@ -42,9 +42,9 @@ pub fn usage() -> String {
          img copy is that buffer path's copies alone, in place stores through an image unit\n\
          (enh is the same figure: nothing else runs around the passes), bg is the upload of a\n\
          camera frame's texels (their blur runs on the source's CPU thread, not timed).\n",
-        contrastxr::gpu::vulkan::offline::WARM_UP_RUNS,
-        contrastxr::gpu::vulkan::offline::CAMERA_SIZE.0,
-        contrastxr::gpu::vulkan::offline::CAMERA_SIZE.1,
+        contrastxr::gpu::core::bench::WARM_UP_RUNS,
+        contrastxr::gpu::core::bench::CAMERA_SIZE.0,
+        contrastxr::gpu::core::bench::CAMERA_SIZE.1,
     )
 }
 

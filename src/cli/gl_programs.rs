@@ -66,7 +66,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     }
     lower_priority();
     close_inherited_files();
-    contrastxr::gpu::vulkan::pipelines::pipeline_cache::writes_may_wait();
+    contrastxr::gpu::core::cache_files::writes_may_wait();
     let mut gl = GlOffline::new().map_err(|e| CliError::Failure(e.to_string()))?;
     let own = gl.engine().caps().driver.clone();
     if driver.is_some_and(|d| !same_driver(&d, &own)) {

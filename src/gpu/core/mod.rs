@@ -7,7 +7,9 @@
 
 #[cfg(test)]
 mod approx;
+pub mod bench;
 pub mod blurred_texels;
+pub mod cache_files;
 mod camera_rect;
 pub mod codes;
 mod frame_input;

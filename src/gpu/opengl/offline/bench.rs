@@ -12,15 +12,15 @@
 
 use super::gl_offline::GlOffline;
 use crate::algorithm::params::Params;
+use crate::gpu::core::bench::{
+    camera_frame, content_pixel, median, BenchCase, BenchResult, Content, CAMERA_SIZE, WARM_UP_RUNS,
+};
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
 use crate::gpu::opengl::frame::{read_region, write_region};
 use crate::gpu::opengl::frame::{GlTarget, GlView};
-use crate::gpu::vulkan::offline::{
-    camera_frame, content_pixel, BenchCase, BenchResult, Content, CAMERA_SIZE, WARM_UP_RUNS,
-};
 use crate::image::RgbaImage;
 
 /// The spans timed in each run.
@@ -41,11 +41,6 @@ struct GlRig {
     queries: [u32; SPANS],
     /// Each span's wall time in ms, on a CPU driver (`Caps::software`).
     walls: [f64; SPANS],
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// The region's texels of `content`, rows bottom first, and the foreground fraction.

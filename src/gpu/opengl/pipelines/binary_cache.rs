@@ -1,13 +1,13 @@
 //! Linked program binaries (glGetProgramBinary) kept beside the Vulkan pipeline cache: one file
 //! per driver (its GL_VENDOR, GL_RENDERER and GL_VERSION) in the same folder, read and written
-//! as that cache's files are (gpu/vulkan/pipelines/pipeline_cache.rs: a regular file of bounded size opened
+//! as that cache's files are (gpu/core/cache_files.rs: a regular file of bounded size opened
 //! without following links, the same length and checksum header, written atomically, other
 //! drivers' files removed when old). A file that is damaged or written for another driver is
 //! ignored and replaced; a binary the driver refuses is compiled again. The cache is only ever
 //! an optimisation.
 
+use crate::gpu::core::cache_files;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
-use crate::gpu::vulkan::pipelines::pipeline_cache;
 use std::collections::HashMap;
 
 /// The data starts with this, then the driver string's length and bytes, the entry count,
@@ -89,16 +89,13 @@ fn data_of(driver: &str, entries: &HashMap<u64, (u32, Vec<u8>)>) -> Vec<u8> {
 /// by writing it again.
 fn unwrap_file(bytes: &[u8]) -> Option<&[u8]> {
     let data = bytes.get(24..)?;
-    (pipeline_cache::file_bytes(data) == bytes).then_some(data)
+    (cache_files::file_bytes(data) == bytes).then_some(data)
 }
 
 /// The entries of the driver's file (none where it is unreadable, damaged or foreign).
 fn read_entries(driver: &str, enabled: bool) -> HashMap<u64, (u32, Vec<u8>)> {
-    let path = pipeline_cache::directory().map(|d| d.join(file_name(driver)));
-    match path
-        .filter(|_| enabled)
-        .map(|p| pipeline_cache::read_file(&p))
-    {
+    let path = cache_files::directory().map(|d| d.join(file_name(driver)));
+    match path.filter(|_| enabled).map(|p| cache_files::read_file(&p)) {
         Some(Ok(Some(bytes))) => unwrap_file(&bytes)
             .ok_or_else(|| "damaged (length or checksum wrong)".to_string())
             .and_then(|data| parse(data, driver))
@@ -169,7 +166,7 @@ impl BinaryCache {
         }
     }
 
-    /// Writes the file if entries were added (atomically; see gpu/vulkan/pipelines/pipeline_cache.rs),
+    /// Writes the file if entries were added (atomically; see gpu/core/cache_files.rs),
     /// merged with what the file holds now (another process, or a build thread of this one,
     /// may have written it since it was read), with only the entries `current` names (the
     /// sources of this build: a changed shader's old binaries are dropped, so the file does not
@@ -181,13 +178,13 @@ impl BinaryCache {
         self.changed = false;
         self.reload();
         self.entries.retain(|&hash, _| current(hash));
-        let Some(dir) = pipeline_cache::directory() else {
+        let Some(dir) = cache_files::directory() else {
             return;
         };
         let name = file_name(&self.driver);
-        let bytes = pipeline_cache::file_bytes(&data_of(&self.driver, &self.entries));
-        if pipeline_cache::write_atomically(&dir, &name, &bytes).is_ok() {
-            pipeline_cache::remove_old_foreign(&dir, &name);
+        let bytes = cache_files::file_bytes(&data_of(&self.driver, &self.entries));
+        if cache_files::write_atomically(&dir, &name, &bytes).is_ok() {
+            cache_files::remove_old_foreign(&dir, &name);
         }
     }
 }
@@ -202,7 +199,7 @@ mod tests {
         entries.insert(7u64, (0x8741u32, vec![1u8, 2, 3]));
         entries.insert(9u64, (1u32, vec![]));
         let data = data_of("Mesa | llvmpipe | 4.5", &entries);
-        let file = pipeline_cache::file_bytes(&data);
+        let file = cache_files::file_bytes(&data);
         let back = parse(unwrap_file(&file).unwrap(), "Mesa | llvmpipe | 4.5").unwrap();
         assert_eq!(back, entries);
         assert!(parse(&data, "another driver").is_err());

@@ -3,8 +3,8 @@
 //! engine's own), the pristine content, the
 //! app-like images and the timestamp queries; and their release.
 
-use super::bench_case::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE};
 use super::vk_offline::VkOffline;
+use crate::gpu::core::bench::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE};
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::device::StorageImage;

@@ -12,7 +12,7 @@ use crate::gpu::vulkan::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use crate::gpu::vulkan::frame::{can_store, storage_view};
-use crate::gpu::vulkan::record::{Placement, ViewShape};
+use crate::gpu::vulkan::record::ViewShape;
 use crate::image::RgbaImage;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -115,26 +115,12 @@ impl VkOffline {
         params: &Params,
     ) -> Result<(), GpuError> {
         let gpu = &self.gpu;
-        let size = (camera.width, camera.height);
-        let mut bg = self
-            .engine
-            .create_background(gpu, size, Placement::OFFLINE)?;
         let shape = ViewShape {
             format,
             width: region.0,
             in_place: true,
         };
-        let view = bg.upload(&camera.pixels).and_then(|_| {
-            self.engine
-                .create_shaped_view(gpu, (shape, region.1), &bg, Placement::OFFLINE)
-        });
-        let mut view = match view {
-            Ok(v) => v,
-            Err(e) => {
-                bg.destroy(gpu);
-                return Err(e);
-            }
-        };
+        let (mut bg, mut view) = self.stage_shaped(camera, (shape, region.1))?;
         self.engine.bind_app_image(gpu, &view, storage);
         let mapping = params.camera_mapping();
         let place = [ImageRegion {

@@ -8,7 +8,7 @@ use crate::gpu::core::CameraRect;
 use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
-use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
+use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewShape, ViewTarget};
 use crate::gpu::vulkan::texels::staging_buffer;
 use crate::image::RgbaImage;
 use ash::vk;
@@ -114,6 +114,21 @@ impl VkOffline {
         region: (u32, u32),
         format: PixelFormat,
     ) -> Result<(CameraResources, ViewTarget), GpuError> {
+        let shape = ViewShape {
+            format,
+            width: region.0,
+            in_place: false,
+        };
+        self.stage_shaped(camera, (shape, region.1))
+    }
+
+    /// The camera frame uploaded and a view of `shape` and height made over it (bound to the
+    /// background); nothing is left allocated on an error.
+    pub(super) fn stage_shaped(
+        &self,
+        camera: &RgbaImage,
+        (shape, height): (ViewShape, u32),
+    ) -> Result<(CameraResources, ViewTarget), GpuError> {
         let mut bg = self.engine.create_background(
             &self.gpu,
             (camera.width, camera.height),
@@ -122,7 +137,7 @@ impl VkOffline {
         let uploaded = bg.upload(&camera.pixels);
         let view = uploaded.and_then(|_| {
             self.engine
-                .create_view(&self.gpu, region, format, &bg, Placement::OFFLINE)
+                .create_shaped_view(&self.gpu, (shape, height), &bg, Placement::OFFLINE)
         });
         match view {
             Ok(view) => Ok((bg, view)),
