@@ -153,3 +153,54 @@ fn every_backend_has_the_same_roles() {
         );
     }
 }
+
+/// The files that may be longer than [`MAX_LINES`]: the settings table, one entry per key.
+const LONG_FILES: &[&str] = &["config/keys.rs"];
+
+/// Lines a file of `src/` may have: a reader sees a file's job at once.
+const MAX_LINES: usize = 500;
+
+/// Each file of `src/` over `max` lines, as "path: lines", but those in `allowed`.
+fn long_files(files: &[(PathBuf, usize)], max: usize, allowed: &[&str]) -> Vec<String> {
+    files
+        .iter()
+        .filter(|(path, lines)| {
+            let rel = path.strip_prefix(SRC).unwrap_or(path);
+            *lines > max && !allowed.iter().any(|a| rel == Path::new(a))
+        })
+        .map(|(path, lines)| format!("{}: {lines}", path.display()))
+        .collect()
+}
+
+#[test]
+fn no_file_is_over_500_lines_but_the_settings_table() {
+    let mut files = Vec::new();
+    rust_files(Path::new(SRC), &mut files);
+    let counted: Vec<(PathBuf, usize)> = files
+        .into_iter()
+        .map(|f| {
+            let lines = std::fs::read_to_string(&f).unwrap().lines().count();
+            (f, lines)
+        })
+        .collect();
+    let long = long_files(&counted, MAX_LINES, LONG_FILES);
+    assert!(
+        long.is_empty(),
+        "files over {MAX_LINES} lines:\n{}",
+        long.join("\n")
+    );
+}
+
+#[test]
+fn a_long_file_is_found_and_the_table_allowed() {
+    let src = Path::new(SRC);
+    let files = [
+        (src.join("gpu/a.rs"), 501),
+        (src.join("gpu/b.rs"), 500),
+        (src.join("config/keys.rs"), 900),
+    ];
+    assert_eq!(
+        long_files(&files, MAX_LINES, LONG_FILES),
+        [format!("{}: 501", src.join("gpu/a.rs").display())]
+    );
+}
