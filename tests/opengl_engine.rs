@@ -174,6 +174,8 @@ app_gl! {
     create_framebuffers = c"glCreateFramebuffers": fn(i32, *mut u32);
     bind_framebuffer = c"glBindFramebuffer": fn(u32, u32);
     pixel_storei = c"glPixelStorei": fn(u32, i32);
+    pixel_transferf = c"glPixelTransferf": fn(u32, f32);
+    get_floatv = c"glGetFloatv": fn(u32, *mut f32);
 }
 
 /// Every value of the state the recipe may touch, as the app reads it.
@@ -952,4 +954,75 @@ fn a_program_kept_only_by_its_binding_passes_the_frame_through() {
     gl.enhance_views(&[view], &params).unwrap();
     let again = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
     assert_ne!(again, before, "frames are not enhanced again");
+}
+
+/// In a compatibility-profile context the app's pixel-transfer state (a red scale, a green bias
+/// and the colour maps on, whose default maps send every component to 0) would apply to the
+/// texels the buffer path writes back with glTextureSubImage: the call sets it neutral and puts
+/// it back, so every format's enhanced texels are those of a context with none, and the app
+/// finds its own values after the call, with no error raised; in place too (where the texture
+/// is checked without GL_TEXTURE_TARGET, which Mesa refuses in such a context).
+#[test]
+fn a_compatibility_contexts_pixel_transfer_does_not_alter_the_written_texels() {
+    const RED_SCALE: u32 = 0x0D14;
+    const GREEN_BIAS: u32 = 0x0D19;
+    const MAP_COLOR: u32 = 0x0D10;
+    let apps = [(RED_SCALE, 0.5f32), (GREEN_BIAS, 0.25), (MAP_COLOR, 1.0)];
+    let neutral = [(RED_SCALE, 1.0f32), (GREEN_BIAS, 0.0), (MAP_COLOR, 0.0)];
+    let mut gl = GlOffline::compatibility().unwrap_or_else(|e| panic!("OpenGL context: {e}"));
+    assert!(gl.engine().caps().compatibility, "{:?}", gl.engine().caps());
+    let a = app_gl(&gl);
+    let params = Params::default();
+    gl.set_camera(&noise(40, 30, 5), &params).unwrap();
+    let (w, h) = (33u32, 19u32);
+    let set = |values: &[(u32, f32)]| {
+        for &(p, v) in values {
+            // SAFETY: the context is current on this thread; a pixel-transfer parameter.
+            unsafe { (a.pixel_transferf)(p, v) };
+        }
+    };
+    let formats = [RGBA8, SRGB8_ALPHA8, RGBA16F, RGBA16, RGB10_A2];
+    for (internal, in_place) in formats.into_iter().flat_map(|f| [(f, false), (f, true)]) {
+        gl.engine().set_in_place(in_place);
+        let format = GlFormat::of(internal).unwrap();
+        let texels: Vec<u8> = noise(w, h, 9)
+            .pixels
+            .into_iter()
+            .flat_map(|p| encode(format, p))
+            .flat_map(u32::to_le_bytes)
+            .collect();
+        let mut outputs = Vec::new();
+        for with_state in [false, true] {
+            let texture = gl.create_texture(internal, (w, h), &texels).unwrap();
+            if with_state {
+                set(&apps);
+            }
+            let view = GlView {
+                texture,
+                target: GlTarget::Texture2D,
+                internal_format: internal,
+                rect: (0, 0, w, h),
+                mapping: params.camera_mapping(),
+            };
+            gl.enhance_views(&[view], &params).unwrap();
+            if with_state {
+                for (p, v) in apps {
+                    let mut got = 0.0f32;
+                    // SAFETY: a single-valued query into a valid f32.
+                    unsafe { (a.get_floatv)(p, &mut got) };
+                    assert_eq!(got, v, "{internal:#x}: the app's {p:#x} was not put back");
+                }
+                // SAFETY: glGetError takes no arguments.
+                assert_eq!(unsafe { (a.get_error)() }, 0, "{internal:#x}: an error");
+                set(&neutral);
+            }
+            outputs.push(gl.read_texture(texture, internal, (w, h)).unwrap());
+            gl.delete_texture(texture);
+        }
+        assert_ne!(outputs[0], texels, "{internal:#x}: nothing changed");
+        assert!(
+            outputs[1] == outputs[0],
+            "{internal:#x}: the app's pixel transfer altered the written texels"
+        );
+    }
 }

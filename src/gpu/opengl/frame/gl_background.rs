@@ -92,7 +92,7 @@ impl GlFrameRunner {
             });
         }
         let bg = self.background.as_mut().expect("made above");
-        let state = SavedState::guard(g)?;
+        let state = SavedState::guard(g, &self.caps)?;
         // SAFETY: the context is current (this call's contract); the texture is the
         // background's, of the texels' size; the unpack binding is put back by the guard.
         let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };

@@ -346,7 +346,7 @@ impl GlFrameRunner {
                 }
             }
         }
-        let state = SavedState::guard(&self.gl)?;
+        let state = SavedState::guard(&self.gl, &self.caps)?;
         // SAFETY: a framebuffer this engine made; the app's bindings are put back by the guard.
         unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
         if crate::fault::hit("gl-recipe-panic") {
@@ -372,10 +372,21 @@ impl GlFrameRunner {
             GlTarget::Texture2D => (0, gl::TEXTURE_2D),
             GlTarget::Texture2DArray { layer } => (layer, gl::TEXTURE_2D_ARRAY),
         };
-        let mut actual = 0;
-        // SAFETY: a texture name of this context (the caller's contract); GL_TEXTURE_TARGET
-        // is a valid glGetTextureParameteriv query in 4.5.
-        unsafe { (g.get_texture_parameteriv)(v.texture, gl::TEXTURE_TARGET, &mut actual) };
+        // Mesa answers GL_TEXTURE_TARGET in a core context only (in a compatibility context
+        // it raises GL_INVALID_ENUM into the app's flag): there a 2D texture is told by its
+        // depth of 1, and the view's kind is the swapchain's (its array size).
+        let actual = if self.caps.compatibility {
+            match v.target {
+                GlTarget::Texture2D if depth != 1 => gl::TEXTURE_2D_ARRAY as i32,
+                _ => target as i32,
+            }
+        } else {
+            let mut actual = 0;
+            // SAFETY: a texture name of this context (the caller's contract); GL_TEXTURE_TARGET
+            // is a valid glGetTextureParameteriv query in a 4.5 core context.
+            unsafe { (g.get_texture_parameteriv)(v.texture, gl::TEXTURE_TARGET, &mut actual) };
+            actual
+        };
         if actual as u32 != target {
             return Err(GlError::Input(format!(
                 "a view's texture has target {actual:#06x}, not the {target:#06x} the view says"

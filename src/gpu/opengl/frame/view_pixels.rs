@@ -8,6 +8,7 @@ use super::region::{read_region, write_region};
 use super::state_guard::SavedState;
 use crate::gpu::core::Run;
 use crate::gpu::opengl::conv::GlFormat;
+use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
 
@@ -43,8 +44,8 @@ unsafe fn draw(g: &Gl, v: &GlView, format: GlFormat, runs: &[Run], pixel: &[u8])
 }
 
 /// Runs `f` with the app's state saved, no pixel buffers bound, and puts the state back.
-fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> Result<R, GlError> {
-    let state = SavedState::guard(g)?;
+fn with_client_memory<R>(g: &Gl, caps: &Caps, f: impl FnOnce() -> R) -> Result<R, GlError> {
+    let state = SavedState::guard(g, caps)?;
     // SAFETY: unbinding the pixel buffer points (put back by the guard).
     unsafe {
         (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, 0);
@@ -65,7 +66,7 @@ impl GlFrameRunner {
         let format = GlFormat::of(v.internal_format)?;
         let g = self.gl();
         // SAFETY: the view was checked; the context is current (the caller's contract).
-        let bottom_first = with_client_memory(g, || unsafe { read(g, v, format) })?;
+        let bottom_first = with_client_memory(g, &self.caps, || unsafe { read(g, v, format) })?;
         let row = v.rect.2 as usize * format.pixel.bytes_per_pixel() as usize;
         Ok(bottom_first
             .chunks_exact(row.max(1))
@@ -88,6 +89,6 @@ impl GlFrameRunner {
         }
         let g = self.gl();
         // SAFETY: as for `read_view`.
-        with_client_memory(g, || unsafe { draw(g, v, format, runs, pixel) })
+        with_client_memory(g, &self.caps, || unsafe { draw(g, v, format, runs, pixel) })
     }
 }
