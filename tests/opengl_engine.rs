@@ -1026,3 +1026,19 @@ fn a_compatibility_contexts_pixel_transfer_does_not_alter_the_written_texels() {
         );
     }
 }
+
+/// An engine tells its own context from another current in its place, even where the other's
+/// objects have the same names (each context's first framebuffer is 1): only then may the layer
+/// delete the objects of a session that ended while the context was current elsewhere.
+#[test]
+fn an_engine_knows_its_own_context() {
+    let mut first = context();
+    // SAFETY: the first context is current on this thread.
+    assert!(unsafe { first.engine().made_in_current_context() });
+    let mut second = context();
+    // SAFETY: a context of the same driver (the second) is current on this thread.
+    unsafe {
+        assert!(!first.engine().made_in_current_context());
+        assert!(second.engine().made_in_current_context());
+    }
+}

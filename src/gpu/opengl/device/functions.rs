@@ -147,6 +147,9 @@ gl_functions! {
     create_framebuffers = "glCreateFramebuffers": fn(Sizei, *mut Uint);
     named_framebuffer_parameteri = "glNamedFramebufferParameteri": fn(Uint, Enum, Int);
     delete_framebuffers = "glDeleteFramebuffers": fn(Sizei, *const Uint);
+    is_framebuffer = "glIsFramebuffer": fn(Uint) -> u8;
+    object_label = "glObjectLabel": fn(Enum, Uint, Sizei, *const i8);
+    get_object_label = "glGetObjectLabel": fn(Enum, Uint, Sizei, *mut Sizei, *mut i8);
     finish = "glFinish": fn();
     @optional
     // The compatibility profile's pixel transfer and colour matrix (state_guard.rs).

@@ -94,8 +94,12 @@ pub struct GlFrameRunner {
     pub(super) views: Vec<ViewBuffers>,
     /// An empty framebuffer object bound while the recipe runs: with the app's window-system
     /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
-    /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer).
+    /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer). Made
+    /// with the engine and labelled `label`: framebuffers are never shared between contexts,
+    /// so finding it under that label tells that the current context is the engine's own.
     pub(super) framebuffer: u32,
+    /// The framebuffer's label, unique to this engine in the process.
+    label: String,
     /// Whether views may be enhanced in place: by default on a GPU, not on a CPU driver
     /// (`Caps::software`); the `in_place` setting's `on` and `off` decide otherwise.
     pub(super) in_place: bool,
@@ -132,6 +136,30 @@ impl GlFrameRunner {
     /// driver), and every later call is made with that same context current.
     pub unsafe fn new(gl: Gl) -> Result<GlFrameRunner, GlError> {
         let caps = Caps::check(&gl)?;
+        static ENGINES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = ENGINES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let label = format!("contrastxr engine {}.{n}", std::process::id());
+        let mut framebuffer = 0;
+        // SAFETY: the context is current (this call's contract) and 4.5 (Caps): one name into
+        // a valid output, deleted in `destroy`; a 1x1 default size makes it complete without
+        // attachments, so validating it raises no debug message in the app's callback; the
+        // label's length is given.
+        unsafe {
+            (gl.create_framebuffers)(1, &mut framebuffer);
+            for p in [
+                gl::FRAMEBUFFER_DEFAULT_WIDTH,
+                gl::FRAMEBUFFER_DEFAULT_HEIGHT,
+            ] {
+                (gl.named_framebuffer_parameteri)(framebuffer, p, 1);
+            }
+            let text = label.as_bytes();
+            (gl.object_label)(
+                gl::FRAMEBUFFER,
+                framebuffer,
+                text.len() as i32,
+                text.as_ptr().cast(),
+            );
+        }
         Ok(GlFrameRunner {
             programs: Programs::new(&caps),
             in_place: !caps.software,
@@ -140,9 +168,44 @@ impl GlFrameRunner {
             background: None,
             texel_buffers: TexelBuffers::default(),
             views: Vec::new(),
-            framebuffer: 0,
+            framebuffer,
+            label,
             last_in_place: Vec::new(),
         })
+    }
+
+    /// Whether the context current on this thread is the one the engine was made in (its
+    /// framebuffer is there under its label), so that its names are its objects: a context
+    /// destroyed meanwhile, and another made at the same address, fail this. Raises no error.
+    ///
+    /// # Safety
+    /// A context of the engine's driver is current on this thread.
+    pub unsafe fn made_in_current_context(&self) -> bool {
+        let g = &self.gl;
+        // SAFETY: glIsFramebuffer takes any name and raises no error.
+        if self.framebuffer == 0 || unsafe { (g.is_framebuffer)(self.framebuffer) } == 0 {
+            return false;
+        }
+        let mut text = vec![0u8; self.label.len() + 2];
+        let mut length = 0;
+        // SAFETY: a framebuffer of this context (just checked); the output holds text.len()
+        // bytes, which GL is told.
+        unsafe {
+            (g.get_object_label)(
+                gl::FRAMEBUFFER,
+                self.framebuffer,
+                text.len() as i32,
+                &mut length,
+                text.as_mut_ptr().cast(),
+            )
+        };
+        text.get(..length.max(0) as usize) == Some(self.label.as_bytes())
+    }
+
+    /// The source's thread writes no more texels into the engine's mapped buffers (no GL
+    /// call): for an engine whose objects are deleted later, in its context.
+    pub fn close_to_sources(&mut self) {
+        self.texel_buffers.close();
     }
 
     /// Whether views may be enhanced in place, or always go through a buffer (the default:
@@ -331,20 +394,6 @@ impl GlFrameRunner {
             .collect();
         for (k, v) in views.iter().enumerate() {
             self.ensure_buffers(k, v, self.last_in_place[k])?;
-        }
-        if self.framebuffer == 0 {
-            // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`. A 1x1
-            // default size makes it complete without attachments, so validating it raises no
-            // debug message in the app's callback.
-            unsafe {
-                (self.gl.create_framebuffers)(1, &mut self.framebuffer);
-                for p in [
-                    gl::FRAMEBUFFER_DEFAULT_WIDTH,
-                    gl::FRAMEBUFFER_DEFAULT_HEIGHT,
-                ] {
-                    (self.gl.named_framebuffer_parameteri)(self.framebuffer, p, 1);
-                }
-            }
         }
         let state = SavedState::guard(&self.gl, &self.caps)?;
         // SAFETY: a framebuffer this engine made; the app's bindings are put back by the guard.

@@ -163,6 +163,10 @@ impl AppContext for GlxContext {
         Ok(Some(Box::new(previous)))
     }
 
+    fn key(&self) -> (usize, usize) {
+        (self.display as usize, self.context as usize)
+    }
+
     fn gl(&self) -> Result<Gl, GlError> {
         Self::load_gl()
     }
