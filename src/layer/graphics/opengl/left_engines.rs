@@ -84,6 +84,7 @@ pub unsafe fn delete_left_on(key: ContextKey) {
 }
 
 /// How many left engines wait (for the tests).
+#[cfg(test)]
 pub fn waiting() -> usize {
     lock().len()
 }
