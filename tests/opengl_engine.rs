@@ -1042,3 +1042,110 @@ fn an_engine_knows_its_own_context() {
         assert!(second.engine().made_in_current_context());
     }
 }
+
+/// The driver's debug messages about the engine's own work (building and linking its programs,
+/// making its buffers and textures, uploading the background, the passes) do not reach the
+/// app's debug callback: with the app's debug output on and a callback set, a first frame with
+/// new programs, a background and a view sends it none, also with a message the driver sends
+/// while the recipe runs (fault point `gl-driver-message`; Mesa's llvmpipe sends none of its
+/// own here), and the app's debug output is still on after the call; the app's own message
+/// still reaches it.
+#[test]
+fn the_engines_work_sends_the_apps_debug_callback_nothing() {
+    // A cache folder of its own (the program binaries' and Mesa's), so that the programs are
+    // compiled, and their logs made, in the call.
+    let cache = std::env::temp_dir().join(format!("contrastxr-debug-{}", std::process::id()));
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "debug_output_child", "--ignored", "--nocapture"])
+        .env("XDG_CACHE_HOME", &cache)
+        .env("CONTRASTXR_FAULT", "gl-driver-message")
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&cache);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("1 passed"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Run by `the_engines_work_sends_the_apps_debug_callback_nothing` with an empty cache folder.
+#[test]
+#[ignore = "run by the_engines_work_sends_the_apps_debug_callback_nothing"]
+fn debug_output_child() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
+    static COUNT: AtomicUsize = AtomicUsize::new(0);
+    static TEXTS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    extern "system" fn callback(
+        _: u32,
+        _: u32,
+        _: u32,
+        _: u32,
+        length: i32,
+        message: *const std::ffi::c_char,
+        _: *const c_void,
+    ) {
+        COUNT.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: GL passes the message's text and its length.
+        let text = unsafe { std::slice::from_raw_parts(message.cast::<u8>(), length as usize) };
+        TEXTS
+            .lock()
+            .unwrap()
+            .push(String::from_utf8_lossy(text).into_owned());
+    }
+    type Callback =
+        extern "system" fn(u32, u32, u32, u32, i32, *const std::ffi::c_char, *const c_void);
+    type SetCallback = unsafe extern "system" fn(Callback, *const c_void);
+    type Insert = unsafe extern "system" fn(u32, u32, u32, u32, i32, *const std::ffi::c_char);
+    const DEBUG_OUTPUT: u32 = 0x92E0;
+    const DEBUG_OUTPUT_SYNCHRONOUS: u32 = 0x8242;
+    let mut gl = context();
+    let a = app_gl(&gl);
+    // SAFETY: the functions of these names have these C types.
+    let (set_callback, insert) = unsafe {
+        (
+            std::mem::transmute::<*const c_void, SetCallback>(load(&gl, c"glDebugMessageCallback")),
+            std::mem::transmute::<*const c_void, Insert>(load(&gl, c"glDebugMessageInsert")),
+        )
+    };
+    let params = Params::default();
+    let (w, h) = (40u32, 24u32);
+    let texels: Vec<u8> = noise(w, h, 3).pixels.into_iter().flatten().collect();
+    let texture = gl.create_texture(SRGB8_ALPHA8, (w, h), &texels).unwrap();
+    // SAFETY: the context is current on this thread; a callback of GL's type.
+    unsafe {
+        set_callback(callback, std::ptr::null());
+        (a.enable)(DEBUG_OUTPUT);
+        (a.enable)(DEBUG_OUTPUT_SYNCHRONOUS);
+    }
+    gl.set_camera(&noise(30, 20, 4), &params).unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, w, h),
+        mapping: params.camera_mapping(),
+    };
+    gl.enhance_views(&[view], &params).unwrap();
+    let during = COUNT.load(Ordering::Relaxed);
+    let texts = TEXTS.lock().unwrap().clone();
+    // SAFETY: as above: the app's own message (GL_DEBUG_SOURCE_APPLICATION, TYPE_MARKER,
+    // SEVERITY_NOTIFICATION), which must still arrive.
+    unsafe {
+        assert_ne!(
+            (a.is_enabled)(DEBUG_OUTPUT),
+            0,
+            "the app's debug output was left off"
+        );
+        insert(0x824A, 0x8268, 1, 0x826B, -1, c"the app's".as_ptr());
+    }
+    let after = COUNT.load(Ordering::Relaxed);
+    gl.delete_texture(texture);
+    assert_eq!(
+        during, 0,
+        "the engine's work sent the app's callback: {texts:?}"
+    );
+    assert_eq!(after, 1, "the app's own message did not arrive");
+}

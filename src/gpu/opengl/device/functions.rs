@@ -149,6 +149,7 @@ gl_functions! {
     delete_framebuffers = "glDeleteFramebuffers": fn(Sizei, *const Uint);
     is_framebuffer = "glIsFramebuffer": fn(Uint) -> u8;
     object_label = "glObjectLabel": fn(Enum, Uint, Sizei, *const i8);
+    debug_message_insert = "glDebugMessageInsert": fn(Enum, Enum, Uint, Enum, Sizei, *const i8);
     get_object_label = "glGetObjectLabel": fn(Enum, Uint, Sizei, *mut Sizei, *mut i8);
     finish = "glFinish": fn();
     @optional
@@ -206,6 +207,10 @@ pub const READ_FRAMEBUFFER: Enum = 0x8CA8;
 pub const DRAW_FRAMEBUFFER_BINDING: Enum = 0x8CA6;
 pub const READ_FRAMEBUFFER_BINDING: Enum = 0x8CAA;
 pub const FRAMEBUFFER_SRGB: Enum = 0x8DB9;
+pub const DEBUG_OUTPUT: Enum = 0x92E0;
+pub const DEBUG_SOURCE_THIRD_PARTY: Enum = 0x8249;
+pub const DEBUG_TYPE_OTHER: Enum = 0x8251;
+pub const DEBUG_SEVERITY_MEDIUM: Enum = 0x9147;
 pub const PACK_SWAP_BYTES: Enum = 0x0D00;
 pub const PACK_LSB_FIRST: Enum = 0x0D01;
 pub const PACK_ROW_LENGTH: Enum = 0x0D02;

@@ -3,7 +3,7 @@
 //! views sample.
 
 use super::gl_frame_runner::{texture_level_int, Background, GlFrameRunner};
-use super::state_guard::SavedState;
+use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::gpu::core::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use crate::gpu::core::CameraRect;
@@ -45,6 +45,8 @@ impl GlFrameRunner {
         texels: &BlurredTexels,
         mappings: &[CameraMapping],
     ) -> Result<(), GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_lost()?;
         let size = (texels.width, texels.height);
         if size.0 == 0

@@ -23,7 +23,7 @@
 //! glGetError (nor anything that would raise an error it would then leave to the app).
 
 use super::gl_view::{GlTarget, GlView};
-use super::state_guard::SavedState;
+use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::interface::{in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
@@ -136,6 +136,8 @@ impl GlFrameRunner {
     /// driver), and every later call is made with that same context current.
     pub unsafe fn new(gl: Gl) -> Result<GlFrameRunner, GlError> {
         let caps = Caps::check(&gl)?;
+        // SAFETY: the context is current (this call's contract) and 4.5 (Caps).
+        let _quiet = unsafe { DebugOutputOff::new(&gl) };
         static ENGINES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
         let n = ENGINES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let label = format!("contrastxr engine {}.{n}", std::process::id());
@@ -324,6 +326,8 @@ impl GlFrameRunner {
         width: u32,
         params: &Params,
     ) -> Result<bool, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_lost()?;
         if params.mode == ViewMode::Off {
             return Ok(true);
@@ -339,6 +343,8 @@ impl GlFrameRunner {
     /// # Safety
     /// As for `enhance`.
     pub unsafe fn ready(&mut self, views: &[GlView], params: &Params) -> Result<bool, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_lost()?;
         params.validate().map_err(GlError::Input)?;
         if params.mode == ViewMode::Off || views.is_empty() {
@@ -365,6 +371,8 @@ impl GlFrameRunner {
         views: &[GlView],
         params: &Params,
     ) -> Result<Outcome, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         // SAFETY: this call's own contract.
         if !unsafe { self.ready(views, params) }? {
             return Ok(Outcome::Compiling);
@@ -400,6 +408,20 @@ impl GlFrameRunner {
         unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
         if crate::fault::hit("gl-recipe-panic") {
             panic!("fault point gl-recipe-panic");
+        }
+        if crate::fault::hit("gl-driver-message") {
+            let text = c"fault point gl-driver-message: a driver's note on the layer's work";
+            // SAFETY: a third party's message, its text NUL-terminated (length -1).
+            unsafe {
+                (self.gl.debug_message_insert)(
+                    gl::DEBUG_SOURCE_THIRD_PARTY,
+                    gl::DEBUG_TYPE_OTHER,
+                    1,
+                    gl::DEBUG_SEVERITY_MEDIUM,
+                    -1,
+                    text.as_ptr(),
+                )
+            };
         }
         for (k, v) in views.iter().enumerate() {
             let programs: [usize; 3] = ids[3 * k..3 * k + 3].try_into().expect("3 ids");
@@ -470,6 +492,8 @@ impl GlFrameRunner {
     /// # Safety
     /// The engine's context is current on this thread.
     pub unsafe fn destroy(&mut self) {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.save_program_cache();
         self.programs.destroy(&self.gl);
         self.drop_background();

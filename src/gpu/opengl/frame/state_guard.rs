@@ -93,6 +93,45 @@ impl ImageUnit {
     }
 }
 
+/// The app's debug output (GL_DEBUG_OUTPUT, core since 4.3) off while a call of the backend
+/// runs, on again when this is dropped if it was on: the driver's messages about the layer's
+/// own work (a compile log, a buffer's placement, a slow path) are no business of the app's
+/// callback or message log. Turning it off raises no message and no error, unlike a debug
+/// group (glPushDebugGroup and glPopDebugGroup each send the app's callback a message), and
+/// leaves the app's message filters untouched. Holds no borrow: the engine stays usable.
+pub struct DebugOutputOff {
+    /// glEnable, to turn it on again; None when it was off.
+    enable: Option<unsafe extern "system" fn(gl::Enum)>,
+}
+
+impl DebugOutputOff {
+    /// Turns the current context's debug output off, if on.
+    ///
+    /// # Safety
+    /// A context of `g`'s driver is current on this thread, and stays current until this is
+    /// dropped.
+    pub unsafe fn new(g: &Gl) -> DebugOutputOff {
+        // SAFETY: a core 4.3 capability, the context being 4.5 (the caller's contract).
+        let on = unsafe { (g.is_enabled)(gl::DEBUG_OUTPUT) } != 0;
+        if on {
+            // SAFETY: as above.
+            unsafe { (g.disable)(gl::DEBUG_OUTPUT) };
+        }
+        DebugOutputOff {
+            enable: on.then_some(g.enable),
+        }
+    }
+}
+
+impl Drop for DebugOutputOff {
+    fn drop(&mut self) {
+        if let Some(enable) = self.enable {
+            // SAFETY: the same context is current (`new`'s contract).
+            unsafe { enable(gl::DEBUG_OUTPUT) };
+        }
+    }
+}
+
 /// The compatibility profile's pixel-transfer state, as far as it differs from the neutral
 /// one: only that is set neutral for the call and put back (a core context has none).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -5,7 +5,7 @@
 use super::gl_frame_runner::GlFrameRunner;
 use super::gl_view::GlView;
 use super::region::{read_region, write_region};
-use super::state_guard::SavedState;
+use super::state_guard::{DebugOutputOff, SavedState};
 use crate::gpu::core::Run;
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::caps::Caps;
@@ -62,6 +62,8 @@ impl GlFrameRunner {
     /// # Safety
     /// The engine's context is current, and `v` names one of its textures (checked here).
     pub unsafe fn read_view(&self, v: &GlView) -> Result<Vec<u8>, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_view(v)?;
         let format = GlFormat::of(v.internal_format)?;
         let g = self.gl();
@@ -82,6 +84,8 @@ impl GlFrameRunner {
     /// # Safety
     /// As for `read_view`.
     pub unsafe fn draw_runs(&self, v: &GlView, runs: &[Run], pixel: &[u8]) -> Result<(), GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_view(v)?;
         let format = GlFormat::of(v.internal_format)?;
         if pixel.len() != format.pixel.bytes_per_pixel() as usize {
