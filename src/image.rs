@@ -137,12 +137,13 @@ impl RgbaImage {
         })
     }
 
-    /// Writes an 8-bit PNG: RGBA if the image has alpha, else RGB.
+    /// Writes an 8-bit PNG: RGBA if the image has alpha, else RGB. As a capture is written
+    /// (`user_file::write_replacing`): a link or FIFO at `path` (a planted name in a shared
+    /// folder the command line writes frames to) is replaced, never written through or waited
+    /// on.
     pub fn save_png(&self, path: &Path) -> Result<(), String> {
-        let file = std::fs::File::create(path)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        self.write_png(std::io::BufWriter::new(file))
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        let bytes = self.encode_png()?;
+        crate::user_file::write_replacing(path, &bytes)
     }
 
     /// The image as an 8-bit PNG file's bytes (see [`save_png`](Self::save_png)).
@@ -458,6 +459,24 @@ mod tests {
         // Not larger than the bound: unchanged.
         let same = scene(5, 3);
         assert_eq!(same.clone().shrunk((640, 480)), same);
+    }
+
+    /// A symbolic link at the name a PNG is saved to (planted in a shared folder) is replaced,
+    /// never written through: the file it points to keeps its bytes.
+    #[test]
+    fn saving_a_png_never_writes_through_a_link() {
+        let dir = std::env::temp_dir().join(format!("contrastxr-png-link-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let victim = dir.join("victim.txt");
+        std::fs::write(&victim, b"keep me").unwrap();
+        let path = dir.join("frame-0000.png");
+        std::os::unix::fs::symlink(&victim, &path).unwrap();
+        scene(8, 6).save_png(&path).unwrap();
+        assert_eq!(std::fs::read(&victim).unwrap(), b"keep me");
+        assert!(!std::fs::symlink_metadata(&path).unwrap().is_symlink());
+        assert_eq!(RgbaImage::load(&path).unwrap(), scene(8, 6));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
