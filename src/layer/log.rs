@@ -97,8 +97,21 @@ fn open_file(path: &Path) -> Result<std::fs::File, String> {
 /// The file's first open, on a helper thread waited for [`FIRST_OPEN`] at most; past that the
 /// log keeps to stderr for the process (said once), never touching the file again.
 fn open_first(log: &mut Log, path: &Path) -> Option<std::fs::File> {
+    let (tx, rx) = sync_channel(1);
     let p = path.to_path_buf();
-    match crate::user_file::within("log file", FIRST_OPEN, move || Ok(open_file(&p))) {
+    // A thread of the log's own, not counted among user_file's stuck readers: one per process.
+    let opener = std::thread::Builder::new()
+        .name("contrastxr-log-open".into())
+        .spawn(move || {
+            let _ = tx.send(open_file(&p));
+        });
+    let answer = match opener {
+        Ok(_) => rx
+            .recv_timeout(FIRST_OPEN)
+            .map_err(|_| format!("took more than {} ms to open", FIRST_OPEN.as_millis())),
+        Err(e) => Err(format!("cannot be opened (no thread: {e})")),
+    };
+    match answer {
         Ok(Ok(f)) => Some(f),
         Ok(Err(_)) => open_or_say(log, path),
         Err(e) => {
