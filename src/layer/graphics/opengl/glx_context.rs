@@ -134,7 +134,7 @@ thread_local! {
 /// before the layer's (the app's, or Xlib's default), as if the layer were not there.
 unsafe extern "C" fn layer_x_error(display: *mut Display, event: *mut c_void) -> c_int {
     // SAFETY: Xlib passes the error's event, an XErrorEvent.
-    let serial = u64::from(unsafe { (*event.cast::<XErrorEvent>()).serial });
+    let serial: u64 = unsafe { (*event.cast::<XErrorEvent>()).serial };
     let own = display as usize == OWN_DISPLAY.load(Ordering::Acquire)
         && (OWN_FIRST.load(Ordering::Acquire)..OWN_END.load(Ordering::Acquire)).contains(&serial);
     if own || CHAINING.with(Cell::get) {
@@ -180,7 +180,7 @@ impl Glx {
             if let Some(h) = before.filter(|&h| h as usize != layer_x_error as *const () as usize) {
                 CHAINED.store(h as usize, Ordering::Release);
             }
-            OWN_FIRST.store(u64::from((self.next_request)(display)), Ordering::Release);
+            OWN_FIRST.store((self.next_request)(display), Ordering::Release);
             OWN_END.store(u64::MAX, Ordering::Release);
             OWN_DISPLAY.store(display as usize, Ordering::Release);
             let made = (self.make_context_current)(display, drawable, drawable, context);
