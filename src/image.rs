@@ -461,24 +461,6 @@ mod tests {
         assert_eq!(same.clone().shrunk((640, 480)), same);
     }
 
-    /// A symbolic link at the name a PNG is saved to (planted in a shared folder) is replaced,
-    /// never written through: the file it points to keeps its bytes.
-    #[test]
-    fn saving_a_png_never_writes_through_a_link() {
-        let dir = std::env::temp_dir().join(format!("contrastxr-png-link-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let victim = dir.join("victim.txt");
-        std::fs::write(&victim, b"keep me").unwrap();
-        let path = dir.join("frame-0000.png");
-        std::os::unix::fs::symlink(&victim, &path).unwrap();
-        scene(8, 6).save_png(&path).unwrap();
-        assert_eq!(std::fs::read(&victim).unwrap(), b"keep me");
-        assert!(!std::fs::symlink_metadata(&path).unwrap().is_symlink());
-        assert_eq!(RgbaImage::load(&path).unwrap(), scene(8, 6));
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
     #[test]
     fn a_png_shrinks_row_by_row_as_it_would_whole() {
         let dir = std::env::temp_dir().join(format!("contrastxr-image-{}", std::process::id()));

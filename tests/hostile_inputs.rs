@@ -834,6 +834,41 @@ fn a_stalled_log_folder_never_holds_the_apps_thread() {
     );
 }
 
+// ---- files the command line writes ----
+
+/// A small picture to save.
+fn picture() -> contrastxr::image::RgbaImage {
+    contrastxr::image::RgbaImage {
+        width: 8,
+        height: 6,
+        pixels: (0..48)
+            .map(|i| [i as u8 * 5, 90, 200 - i as u8, 255])
+            .collect(),
+        has_alpha: false,
+    }
+}
+
+/// A symbolic link at the name a PNG is saved to (planted in a shared folder) is replaced,
+/// never written through: the file it points to keeps its bytes.
+#[test]
+fn saving_a_png_never_writes_through_a_link() {
+    let dir = std::env::temp_dir().join(format!("contrastxr-png-link-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let victim = dir.join("victim.txt");
+    std::fs::write(&victim, b"keep me").unwrap();
+    let path = dir.join("frame-0000.png");
+    std::os::unix::fs::symlink(&victim, &path).unwrap();
+    picture().save_png(&path).unwrap();
+    assert_eq!(std::fs::read(&victim).unwrap(), b"keep me");
+    assert!(!std::fs::symlink_metadata(&path).unwrap().is_symlink());
+    assert_eq!(
+        contrastxr::image::RgbaImage::load(&path).unwrap(),
+        picture()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 // ---- a large `image:` background ----
 
 /// A 4000x3000 picture (12 megapixels) with the texture of a photo: smooth fields and noise, so

@@ -100,32 +100,20 @@ fn open_first(log: &mut Log, path: &Path) -> Option<std::fs::File> {
     let (tx, rx) = sync_channel(1);
     let p = path.to_path_buf();
     // A thread of the log's own, not counted among user_file's stuck readers: one per process.
-    let opener = std::thread::Builder::new()
-        .name("contrastxr-log-open".into())
-        .spawn(move || {
-            let _ = tx.send(open_file(&p));
-        });
-    let answer = match opener {
-        Ok(_) => rx
-            .recv_timeout(FIRST_OPEN)
-            .map_err(|_| format!("took more than {} ms to open", FIRST_OPEN.as_millis())),
-        Err(e) => Err(format!("cannot be opened (no thread: {e})")),
-    };
-    match answer {
-        Ok(Ok(f)) => Some(f),
-        Ok(Err(_)) => open_or_say(log, path),
-        Err(e) => {
-            log.stalled = true;
-            log.said_unwritable = true;
-            write_stderr(
-                log,
-                &format!(
-                    "log file not written: {} {e} (a stalled file system?): the log keeps to stderr",
-                    path.display()
-                ),
-            );
-            None
-        }
+    let opener = std::thread::Builder::new().name("contrastxr-log-open".into());
+    match opener.spawn(move || tx.send(open_file(&p))) {
+        Ok(_) => match rx.recv_timeout(FIRST_OPEN) {
+            Ok(Ok(f)) => Some(f),
+            Ok(Err(_)) => open_or_say(log, path),
+            Err(_) => {
+                (log.stalled, log.said_unwritable) = (true, true);
+                let ms = FIRST_OPEN.as_millis();
+                let why = format!("log file not written: {} took more than {ms} ms to open (a stalled file system?): the log keeps to stderr", path.display());
+                write_stderr(log, &why);
+                None
+            }
+        },
+        Err(_) => open_or_say(log, path),
     }
 }
 

@@ -76,8 +76,7 @@ impl GlOffline {
         Self::with_profile(version, false)
     }
 
-    /// An OpenGL 4.5 compatibility-profile context, as many apps make (the tests set its
-    /// legacy pixel-transfer state, which a core context has not).
+    /// An OpenGL 4.5 compatibility-profile context, as many apps make.
     pub fn compatibility() -> Result<GlOffline, GlError> {
         Self::with_profile((4, 5), true)
     }
@@ -173,13 +172,8 @@ impl GlOffline {
             )
         };
         if context.is_null() {
-            let profile = if compatibility {
-                "compatibility"
-            } else {
-                "core"
-            };
             return Err(GlError::Context(format!(
-                "EGL made no OpenGL {major}.{minor} {profile} context"
+                "EGL made no OpenGL {major}.{minor} context of that profile"
             )));
         }
         // SAFETY: the display and context are valid; no surfaces (surfaceless).
