@@ -7,14 +7,15 @@
 //! `camera-loss`, `end-frame`, `queue-without-compute`, `build-panic`,
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
 //! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`,
-//! `gl-program-thread`, `gl-program-build`, `gl-recipe-panic`, `stalled-file-system`
+//! `gl-program-thread`, `gl-program-build`, `gl-recipe-panic`, `gl-driver-message`,
+//! `stalled-file-system`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 22] = [
+pub const POINTS: [(&str, &str); 23] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -85,6 +86,10 @@ pub const POINTS: [(&str, &str); 22] = [
     (
         "gl-recipe-panic",
         "a panic inside the OpenGL recipe, with the layer's framebuffer bound in the app's context",
+    ),
+    (
+        "gl-driver-message",
+        "the driver sends a debug message about the OpenGL recipe's work (one inserted as a third party's while the recipe runs)",
     ),
     (
         "stalled-file-system",

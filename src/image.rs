@@ -137,12 +137,13 @@ impl RgbaImage {
         })
     }
 
-    /// Writes an 8-bit PNG: RGBA if the image has alpha, else RGB.
+    /// Writes an 8-bit PNG: RGBA if the image has alpha, else RGB. As a capture is written
+    /// (`user_file::write_replacing`): a link or FIFO at `path` (a planted name in a shared
+    /// folder the command line writes frames to) is replaced, never written through or waited
+    /// on.
     pub fn save_png(&self, path: &Path) -> Result<(), String> {
-        let file = std::fs::File::create(path)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-        self.write_png(std::io::BufWriter::new(file))
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        let bytes = self.encode_png()?;
+        crate::user_file::write_replacing(path, &bytes)
     }
 
     /// The image as an 8-bit PNG file's bytes (see [`save_png`](Self::save_png)).

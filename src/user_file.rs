@@ -242,6 +242,41 @@ fn within_as<T: Send + 'static>(
     }
 }
 
+/// Writes `path` without following a link or blocking, and without writing through anything
+/// already there: the bytes go to a new file beside it (`O_CREAT | O_EXCL | O_NOFOLLOW |
+/// O_NONBLOCK`) named for this process, which is then renamed to `path`. What was at `path` (an
+/// earlier file, a link planted there, a FIFO) is replaced, never written into; a folder there,
+/// or a name another user holds in a shared folder, fails in words.
+pub fn write_replacing(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    use std::io::Write;
+    stall();
+    let failed = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    let Some(name) = path.file_name() else {
+        return Err(format!("cannot write {}: no file name", path.display()));
+    };
+    let fresh = path.with_file_name(format!(
+        ".{}.{}.new",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .mode(0o644)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(&fresh)
+        .map_err(failed)?;
+    let written = file.write_all(bytes).and_then(|()| {
+        drop(file);
+        std::fs::rename(&fresh, path)
+    });
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&fresh);
+        return Err(failed(e));
+    }
+    Ok(())
+}
+
 /// Checks that `path` is a folder (following links), for a setting that names one.
 pub fn folder(path: &Path) -> Result<(), String> {
     let meta = std::fs::metadata(path).map_err(|e| lookup_failure(path, &e))?;

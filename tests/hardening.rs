@@ -1038,3 +1038,44 @@ fn captures_on_a_stalled_file_system_never_hold_a_frame() {
     let left = r.lines_with("exiting with captures not yet written");
     assert_eq!(left.len(), 1, "{:#?}", r.lines);
 }
+
+/// With `pipelines = "wait"` the frame call waits for the background to open 1 s at most: an
+/// `image:` background on a stalled file system (`stalled-file-system`: its look-up takes 2 s,
+/// as under a hung mount) leaves no frame-loop call at 1.6 s or more, and says once that frames
+/// pass through until it has opened.
+#[test]
+fn a_background_on_a_stalled_file_system_holds_a_waiting_frame_at_most_a_second() {
+    let tag = "stalled-background-wait";
+    warm_shared_cache();
+    let picture = scratch_dir(tag).join("background.png");
+    let pixels = (0..64 * 48)
+        .map(|i| [(i % 251) as u8, 90, 160, 255])
+        .collect();
+    let image = contrastxr::image::RgbaImage {
+        width: 64,
+        height: 48,
+        pixels,
+        has_alpha: false,
+    };
+    image.save_png(&picture).unwrap();
+    let background = format!("image:{}", picture.display());
+    let env = [
+        ("CONTRASTXR_FAULT", "stalled-file-system"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_BACKGROUND", background.as_str()),
+    ];
+    let args = ["--frames", "80", "--size", SIZE, "--timing"];
+    let Some(r) = client(tag, &no_config(tag), &env, &args) else {
+        return;
+    };
+    r.assert_ran(80);
+    let longest = longest_call_ms(&r.report);
+    eprintln!("{tag}: longest frame-loop call {longest:.1} ms");
+    assert!(
+        longest < 1600.0,
+        "a frame-loop call took {longest:.1} ms: {}",
+        r.report["timing"]["calls"]
+    );
+    let said = r.lines_with("did not open within 1 s");
+    assert_eq!(said.len(), 1, "{:#?}", r.lines);
+}

@@ -792,6 +792,83 @@ fn a_stalled_file_system_never_holds_the_apps_thread() {
     );
 }
 
+/// The log file's first open on a stalled file system (`stalled-file-system`: the open takes
+/// 2 s, as under a hung mount) holds the app's thread at most `log::FIRST_OPEN`: the first line
+/// returns within 400 ms, later lines at once (the log keeps to stderr, said once, and the file
+/// is not touched again). Run in a child process of this test binary, where the fault is armed.
+#[test]
+fn a_stalled_log_folder_never_holds_the_apps_thread() {
+    const NAME: &str = "a_stalled_log_folder_never_holds_the_apps_thread";
+    if std::env::var_os("CONTRASTXR_FAULT").is_none() {
+        let state = scratch_dir("stalled-log");
+        let out = Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+            .env("CONTRASTXR_FAULT", "stalled-file-system")
+            .env("XDG_STATE_HOME", &state)
+            .output()
+            .expect("run the child");
+        let text = String::from_utf8_lossy(&out.stderr).into_owned()
+            + &String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{text}");
+        assert!(text.contains("1 passed"), "{text}");
+        let said = text.matches("the log keeps to stderr").count();
+        assert_eq!(said, 1, "{text}");
+        return;
+    }
+    let t = Instant::now();
+    contrastxr::layer::log::info("the first line");
+    let first = t.elapsed();
+    let t = Instant::now();
+    for _ in 0..10 {
+        contrastxr::layer::log::info("a later line");
+    }
+    let later = t.elapsed();
+    eprintln!("first line in {first:?}, ten more in {later:?}");
+    assert!(
+        first < Duration::from_millis(400),
+        "the first line took {first:?}"
+    );
+    assert!(
+        later < Duration::from_millis(100),
+        "ten later lines took {later:?}"
+    );
+}
+
+// ---- files the command line writes ----
+
+/// A small picture to save.
+fn picture() -> contrastxr::image::RgbaImage {
+    contrastxr::image::RgbaImage {
+        width: 8,
+        height: 6,
+        pixels: (0..48)
+            .map(|i| [i as u8 * 5, 90, 200 - i as u8, 255])
+            .collect(),
+        has_alpha: false,
+    }
+}
+
+/// A symbolic link at the name a PNG is saved to (planted in a shared folder) is replaced,
+/// never written through: the file it points to keeps its bytes.
+#[test]
+fn saving_a_png_never_writes_through_a_link() {
+    let dir = std::env::temp_dir().join(format!("contrastxr-png-link-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let victim = dir.join("victim.txt");
+    std::fs::write(&victim, b"keep me").unwrap();
+    let path = dir.join("frame-0000.png");
+    std::os::unix::fs::symlink(&victim, &path).unwrap();
+    picture().save_png(&path).unwrap();
+    assert_eq!(std::fs::read(&victim).unwrap(), b"keep me");
+    assert!(!std::fs::symlink_metadata(&path).unwrap().is_symlink());
+    assert_eq!(
+        contrastxr::image::RgbaImage::load(&path).unwrap(),
+        picture()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 // ---- a large `image:` background ----
 
 /// A 4000x3000 picture (12 megapixels) with the texture of a photo: smooth fields and noise, so

@@ -148,6 +148,8 @@ app_gl! {
     create_framebuffers = c"glCreateFramebuffers": fn(i32, *mut u32);
     bind_framebuffer = c"glBindFramebuffer": fn(u32, u32);
     pixel_storei = c"glPixelStorei": fn(u32, i32);
+    pixel_transferf = c"glPixelTransferf": fn(u32, f32);
+    get_floatv = c"glGetFloatv": fn(u32, *mut f32);
 }
 
 /// Every value of the state the recipe may touch, as the app reads it.
@@ -926,4 +928,198 @@ fn a_program_kept_only_by_its_binding_passes_the_frame_through() {
     gl.enhance_views(&[view], &params).unwrap();
     let again = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
     assert_ne!(again, before, "frames are not enhanced again");
+}
+
+/// In a compatibility-profile context the app's pixel-transfer state (a red scale, a green bias
+/// and the colour maps on, whose default maps send every component to 0) would apply to the
+/// texels the buffer path writes back with glTextureSubImage: the call sets it neutral and puts
+/// it back, so every format's enhanced texels are those of a context with none, and the app
+/// finds its own values after the call, with no error raised; in place too (where the texture
+/// is checked without GL_TEXTURE_TARGET, which Mesa refuses in such a context).
+#[test]
+fn a_compatibility_contexts_pixel_transfer_does_not_alter_the_written_texels() {
+    const RED_SCALE: u32 = 0x0D14;
+    const GREEN_BIAS: u32 = 0x0D19;
+    const MAP_COLOR: u32 = 0x0D10;
+    let apps = [(RED_SCALE, 0.5f32), (GREEN_BIAS, 0.25), (MAP_COLOR, 1.0)];
+    let neutral = [(RED_SCALE, 1.0f32), (GREEN_BIAS, 0.0), (MAP_COLOR, 0.0)];
+    let mut gl = GlOffline::compatibility().unwrap_or_else(|e| panic!("OpenGL context: {e}"));
+    assert!(gl.engine().caps().compatibility, "{:?}", gl.engine().caps());
+    let a = app_gl(&gl);
+    let params = Params::default();
+    gl.set_camera(&noise(40, 30, 5), &params).unwrap();
+    let (w, h) = (33u32, 19u32);
+    let set = |values: &[(u32, f32)]| {
+        for &(p, v) in values {
+            // SAFETY: the context is current on this thread; a pixel-transfer parameter.
+            unsafe { (a.pixel_transferf)(p, v) };
+        }
+    };
+    let formats = [RGBA8, SRGB8_ALPHA8, RGBA16F, RGBA16, RGB10_A2];
+    for (internal, in_place) in formats.into_iter().flat_map(|f| [(f, false), (f, true)]) {
+        gl.engine().set_in_place(in_place);
+        let format = GlFormat::of(internal).unwrap();
+        let texels: Vec<u8> = noise(w, h, 9)
+            .pixels
+            .into_iter()
+            .flat_map(|p| encode(format, p))
+            .flat_map(u32::to_le_bytes)
+            .collect();
+        let mut outputs = Vec::new();
+        for with_state in [false, true] {
+            let texture = gl.create_texture(internal, (w, h), &texels).unwrap();
+            if with_state {
+                set(&apps);
+            }
+            let view = GlView {
+                texture,
+                target: GlTarget::Texture2D,
+                internal_format: internal,
+                rect: (0, 0, w, h),
+                mapping: params.camera_mapping(),
+            };
+            gl.enhance_views(&[view], &params).unwrap();
+            if with_state {
+                for (p, v) in apps {
+                    let mut got = 0.0f32;
+                    // SAFETY: a single-valued query into a valid f32.
+                    unsafe { (a.get_floatv)(p, &mut got) };
+                    assert_eq!(got, v, "{internal:#x}: the app's {p:#x} was not put back");
+                }
+                // SAFETY: glGetError takes no arguments.
+                assert_eq!(unsafe { (a.get_error)() }, 0, "{internal:#x}: an error");
+                set(&neutral);
+            }
+            outputs.push(gl.read_texture(texture, internal, (w, h)).unwrap());
+            gl.delete_texture(texture);
+        }
+        assert_ne!(outputs[0], texels, "{internal:#x}: nothing changed");
+        assert!(
+            outputs[1] == outputs[0],
+            "{internal:#x}: the app's pixel transfer altered the written texels"
+        );
+    }
+}
+
+/// An engine tells its own context from another current in its place, even where the other's
+/// objects have the same names (each context's first framebuffer is 1): only then may the layer
+/// delete the objects of a session that ended while the context was current elsewhere.
+#[test]
+fn an_engine_knows_its_own_context() {
+    let mut first = context();
+    // SAFETY: the first context is current on this thread.
+    assert!(unsafe { first.engine().made_in_current_context() });
+    let mut second = context();
+    // SAFETY: a context of the same driver (the second) is current on this thread.
+    unsafe {
+        assert!(!first.engine().made_in_current_context());
+        assert!(second.engine().made_in_current_context());
+    }
+}
+
+/// The driver's debug messages about the engine's own work (building and linking its programs,
+/// making its buffers and textures, uploading the background, the passes) do not reach the
+/// app's debug callback: with the app's debug output on and a callback set, a first frame with
+/// new programs, a background and a view sends it none, also with a message the driver sends
+/// while the recipe runs (fault point `gl-driver-message`; Mesa's llvmpipe sends none of its
+/// own here), and the app's debug output is still on after the call; the app's own message
+/// still reaches it.
+#[test]
+fn the_engines_work_sends_the_apps_debug_callback_nothing() {
+    // A cache folder of its own (the program binaries' and Mesa's), so that the programs are
+    // compiled, and their logs made, in the call.
+    let cache = std::env::temp_dir().join(format!("contrastxr-debug-{}", std::process::id()));
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "debug_output_child", "--ignored", "--nocapture"])
+        .env("XDG_CACHE_HOME", &cache)
+        .env("CONTRASTXR_FAULT", "gl-driver-message")
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&cache);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("1 passed"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Run by `the_engines_work_sends_the_apps_debug_callback_nothing` with an empty cache folder.
+#[test]
+#[ignore = "run by the_engines_work_sends_the_apps_debug_callback_nothing"]
+fn debug_output_child() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
+    static COUNT: AtomicUsize = AtomicUsize::new(0);
+    static TEXTS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    extern "system" fn callback(
+        _: u32,
+        _: u32,
+        _: u32,
+        _: u32,
+        length: i32,
+        message: *const std::ffi::c_char,
+        _: *const c_void,
+    ) {
+        COUNT.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: GL passes the message's text and its length.
+        let text = unsafe { std::slice::from_raw_parts(message.cast::<u8>(), length as usize) };
+        TEXTS
+            .lock()
+            .unwrap()
+            .push(String::from_utf8_lossy(text).into_owned());
+    }
+    type Callback =
+        extern "system" fn(u32, u32, u32, u32, i32, *const std::ffi::c_char, *const c_void);
+    type SetCallback = unsafe extern "system" fn(Callback, *const c_void);
+    type Insert = unsafe extern "system" fn(u32, u32, u32, u32, i32, *const std::ffi::c_char);
+    const DEBUG_OUTPUT: u32 = 0x92E0;
+    const DEBUG_OUTPUT_SYNCHRONOUS: u32 = 0x8242;
+    let mut gl = context();
+    let a = app_gl(&gl);
+    // SAFETY: the functions of these names have these C types.
+    let (set_callback, insert) = unsafe {
+        (
+            std::mem::transmute::<*const c_void, SetCallback>(load(&gl, c"glDebugMessageCallback")),
+            std::mem::transmute::<*const c_void, Insert>(load(&gl, c"glDebugMessageInsert")),
+        )
+    };
+    let params = Params::default();
+    let (w, h) = (40u32, 24u32);
+    let texels: Vec<u8> = noise(w, h, 3).pixels.into_iter().flatten().collect();
+    let texture = gl.create_texture(SRGB8_ALPHA8, (w, h), &texels).unwrap();
+    // SAFETY: the context is current on this thread; a callback of GL's type.
+    unsafe {
+        set_callback(callback, std::ptr::null());
+        (a.enable)(DEBUG_OUTPUT);
+        (a.enable)(DEBUG_OUTPUT_SYNCHRONOUS);
+    }
+    gl.set_camera(&noise(30, 20, 4), &params).unwrap();
+    let view = GlView {
+        texture,
+        target: GlTarget::Texture2D,
+        internal_format: SRGB8_ALPHA8,
+        rect: (0, 0, w, h),
+        mapping: params.camera_mapping(),
+    };
+    gl.enhance_views(&[view], &params).unwrap();
+    let during = COUNT.load(Ordering::Relaxed);
+    let texts = TEXTS.lock().unwrap().clone();
+    // SAFETY: as above: the app's own message (GL_DEBUG_SOURCE_APPLICATION, TYPE_MARKER,
+    // SEVERITY_NOTIFICATION), which must still arrive.
+    unsafe {
+        assert_ne!(
+            (a.is_enabled)(DEBUG_OUTPUT),
+            0,
+            "the app's debug output was left off"
+        );
+        insert(0x824A, 0x8268, 1, 0x826B, -1, c"the app's".as_ptr());
+    }
+    let after = COUNT.load(Ordering::Relaxed);
+    gl.delete_texture(texture);
+    assert_eq!(
+        during, 0,
+        "the engine's work sent the app's callback: {texts:?}"
+    );
+    assert_eq!(after, 1, "the app's own message did not arrive");
 }

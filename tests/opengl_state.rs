@@ -238,3 +238,48 @@ fn a_panic_inside_the_recipe_leaves_the_apps_gl_state_as_it_was() {
 fn a_failed_context_switch_is_undone() {
     kept_and_passed_through("gl-make-current", &["could not be made current"]);
 }
+
+/// The app's X errors are the app's: a thread of the client keeps making X errors on a second
+/// X connection, counted by the client's own error handler, while every xrEndFrame is called
+/// with the client's context released, so that the layer makes the app's context current and
+/// puts it back around each frame (with its X error handler in place for its own switch).
+/// Every error the client made reaches the client's handler, none swallowed by the layer's,
+/// and the frames are enhanced.
+#[test]
+fn the_apps_x_errors_reach_its_handler_while_the_layer_switches_contexts() {
+    let Some(sandbox) = sandbox() else {
+        return;
+    };
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+    ];
+    let cmd = [
+        common::XR_CLIENT,
+        "--graphics",
+        "opengl",
+        "--x-errors-elsewhere",
+        "--json",
+        "--frames",
+        "150",
+        "--size",
+        "64x48",
+        "--format",
+        "R8G8B8A8_SRGB",
+    ];
+    let run = sandbox.run_x11_for(&cmd, &env, 120);
+    run.assert_success();
+    let report = run.client_report();
+    let what = run.describe();
+    let made = report["x_errors_made"].as_u64().expect("x_errors_made");
+    let seen = report["x_errors_seen"].as_u64().expect("x_errors_seen");
+    eprintln!("X errors made {made}, seen by the app's handler {seen}");
+    assert!(made >= 100, "too few errors made to tell: {what}");
+    assert_eq!(seen, made, "the app's handler missed X errors: {what}");
+    let enhanced = common::layer_lines(&run)
+        .iter()
+        .any(|l| l.contains("processing frames (2 views per frame)"));
+    assert!(enhanced, "{what}");
+}

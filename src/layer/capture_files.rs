@@ -177,34 +177,10 @@ impl CaptureJob {
     }
 }
 
-/// Writes `name` in `dir` without following a link or blocking, and without writing through
-/// anything already there: the bytes go to a new file (`O_CREAT | O_EXCL | O_NOFOLLOW |
-/// O_NONBLOCK`) named for this process, which is then renamed to `name`. What was at `name`
-/// (an earlier capture, a link planted there, a FIFO) is replaced, never written into; a
-/// folder there, or a name another user holds in a shared folder, fails in words.
+/// Writes `name` in `dir` as [`crate::user_file::write_replacing`] does: never through a link
+/// or anything else already there, never blocking on a FIFO.
 pub fn create_file(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), String> {
-    use std::io::Write;
-    use std::os::unix::fs::OpenOptionsExt;
-    crate::user_file::stall();
-    let path = dir.join(name);
-    let fresh = dir.join(format!(".{name}.{}.new", std::process::id()));
-    let failed = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
-    let mut file = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .mode(0o644)
-        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
-        .open(&fresh)
-        .map_err(failed)?;
-    let written = file.write_all(bytes).and_then(|()| {
-        drop(file);
-        std::fs::rename(&fresh, &path)
-    });
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&fresh);
-        return Err(failed(e));
-    }
-    Ok(())
+    crate::user_file::write_replacing(&dir.join(name), bytes)
 }
 
 #[cfg(test)]

@@ -9,8 +9,10 @@
 //! Logging never blocks an app's call: a line stderr cannot take at once (a pipe read slowly,
 //! or by nobody) waits in a bounded backlog that a thread of the log's own writes in order;
 //! past [`BACKLOG_LINES`] lines are dropped and counted. The file is opened non-blocking, a
-//! regular file only, never through a symlink. A log file that cannot be written is said once
-//! on stderr.
+//! regular file only, never through a symlink, the first time on a helper thread waited for
+//! [`FIRST_OPEN`] at most: a log folder on a hung file system (a network or FUSE mount) costs
+//! the app's thread that once, and the log then keeps to stderr for the process. A log file
+//! that cannot be written is said once on stderr.
 
 use std::collections::HashSet;
 use std::io::Write;
@@ -22,6 +24,9 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 /// Lines waiting for a slow stderr; past this many, lines are dropped and counted.
 pub const BACKLOG_LINES: usize = 256;
+
+/// How long the app's thread waits at most for the log file's first open.
+pub const FIRST_OPEN: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// Size past which the log file is rotated.
 pub const MAX_BYTES: u64 = 1 << 20;
@@ -41,6 +46,8 @@ struct Log {
     dropped: u64,
     /// Why the file cannot be written has been said on stderr.
     said_unwritable: bool,
+    /// The first open did not return in time: the file is never touched again.
+    stalled: bool,
 }
 
 /// `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state/...`).
@@ -71,6 +78,7 @@ pub fn rotated(path: &Path) -> PathBuf {
 /// regular file and never through a symlink at its last component; the error names the path.
 fn open_file(path: &Path) -> Result<std::fs::File, String> {
     use std::os::unix::fs::OpenOptionsExt;
+    crate::user_file::stall();
     let dir = path.parent().unwrap_or(Path::new("/"));
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let file = std::fs::OpenOptions::new()
@@ -83,6 +91,29 @@ fn open_file(path: &Path) -> Result<std::fs::File, String> {
         Ok(m) if m.is_file() => Ok(file),
         Ok(_) => Err(format!("{} is not a regular file", path.display())),
         Err(e) => Err(format!("cannot read {}: {e}", path.display())),
+    }
+}
+
+/// The file's first open, on a helper thread waited for [`FIRST_OPEN`] at most; past that the
+/// log keeps to stderr for the process (said once), never touching the file again.
+fn open_first(log: &mut Log, path: &Path) -> Option<std::fs::File> {
+    let (tx, rx) = sync_channel(1);
+    let p = path.to_path_buf();
+    // A thread of the log's own, not counted among user_file's stuck readers: one per process.
+    let opener = std::thread::Builder::new().name("contrastxr-log-open".into());
+    match opener.spawn(move || tx.send(open_file(&p))) {
+        Ok(_) => match rx.recv_timeout(FIRST_OPEN) {
+            Ok(Ok(f)) => Some(f),
+            Ok(Err(_)) => open_or_say(log, path),
+            Err(_) => {
+                (log.stalled, log.said_unwritable) = (true, true);
+                let ms = FIRST_OPEN.as_millis();
+                let why = format!("log file not written: {} took more than {ms} ms to open (a stalled file system?): the log keeps to stderr", path.display());
+                write_stderr(log, &why);
+                None
+            }
+        },
+        Err(_) => open_or_say(log, path),
     }
 }
 
@@ -142,8 +173,9 @@ fn log() -> &'static Mutex<Log> {
             debug: std::env::var("CONTRASTXR_LOG").is_ok_and(|v| v == "debug"),
             dropped: 0,
             said_unwritable: false,
+            stalled: false,
         };
-        log.file = path.and_then(|p| open_or_say(&mut log, &p));
+        log.file = path.and_then(|p| open_first(&mut log, &p));
         let exe = std::env::current_exe()
             .map_or("an unknown program".into(), |p| p.display().to_string());
         write_file(&mut log, &format!("{LOADED}{exe}"));
@@ -155,7 +187,7 @@ fn log() -> &'static Mutex<Log> {
 /// did (the path then names a different file than ours).
 fn keep_in_bounds(log: &mut Log) {
     use std::os::unix::fs::MetadataExt;
-    let Some(path) = log.path.clone() else {
+    let Some(path) = log.path.clone().filter(|_| !log.stalled) else {
         return;
     };
     let ours = log.file.as_ref().and_then(|f| f.metadata().ok());
@@ -365,6 +397,7 @@ mod tests {
             debug: false,
             dropped: 0,
             said_unwritable: false,
+            stalled: false,
         };
         let line = "x".repeat(1000);
         for _ in 0..1100 {

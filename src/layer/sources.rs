@@ -7,7 +7,7 @@ use super::state::SessionState;
 use crate::camera::{self, Background, CaptureConfig};
 use openxr_sys as xr;
 use std::collections::HashMap;
-use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, TryRecvError};
 use std::sync::{Mutex, MutexGuard, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -67,9 +67,15 @@ fn start_reopen(
 /// goes off; it opens again at the next frame the layer acts on).
 const CLOSE_AFTER_IDLE: Duration = Duration::from_secs(2);
 
-/// Opens the session's background at the first frame the layer acts on: at once with
-/// `pipelines = "wait"` (every frame enhanced), else on a helper thread while frames pass
-/// through. A source that failed to open is tried again only when the config changes.
+/// How long a frame call with `pipelines = "wait"` waits for the background to open: a source
+/// on a hung file system (a network or FUSE mount) or a device that does not answer costs the
+/// app's thread this once, and frames pass through until it has opened.
+const OPEN_WAIT: Duration = Duration::from_secs(1);
+
+/// Opens the session's background at the first frame the layer acts on, on a helper thread:
+/// with `pipelines = "wait"` (every frame enhanced) the frame call waits for it up to
+/// [`OPEN_WAIT`], else frames pass through meanwhile. A source that failed to open is tried
+/// again only when the config changes.
 pub(super) fn open_when_needed(s: &mut SessionState) {
     s.idle_since = None;
     if s.background.is_some() || s.background_requested {
@@ -78,10 +84,33 @@ pub(super) fn open_when_needed(s: &mut SessionState) {
     s.background_requested = true;
     let spec = s.settings.background.clone();
     let camera = super::motion::camera_config(&s.settings, &s.motion);
+    start_reopen(s.handle, None, spec, camera);
     if s.settings.wait_for_pipelines {
-        s.background = open_background_logged(&spec, &camera);
-    } else {
-        start_reopen(s.handle, None, spec, camera);
+        wait_for_opened(s, OPEN_WAIT);
+    }
+}
+
+/// Waits up to `limit` for the background the helper thread is opening; past that it is left
+/// to the frame calls that come after (`take_reopened`), said once.
+fn wait_for_opened(s: &mut SessionState, limit: Duration) {
+    let session = s.handle.into_raw();
+    // Not waited for under the map's lock: other sessions' frame calls take it.
+    let Some(rx) = reopening().remove(&session) else {
+        return;
+    };
+    match rx.recv_timeout(limit) {
+        Ok(bg) => s.background = bg,
+        Err(RecvTimeoutError::Timeout) => {
+            log::once(
+                "background-open-wait",
+                &format!(
+                    "the background did not open within {} s: frames pass through until it has",
+                    limit.as_secs_f64()
+                ),
+            );
+            reopening().insert(session, rx);
+        }
+        Err(RecvTimeoutError::Disconnected) => {}
     }
 }
 

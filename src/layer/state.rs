@@ -100,9 +100,7 @@ impl SessionState {
             .chain(self.retired.drain(..))
         {
             if let Err(e) = engine.finish() {
-                log::info(&format!(
-                    "the GPU did not finish the layer's last work ({e}): its objects are left alive, not destroyed"
-                ));
+                log::info(&e);
             }
         }
     }

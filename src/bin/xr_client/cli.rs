@@ -96,6 +96,11 @@ usage: contrastxr-xr-client [options]
                           GL_ACTIVE_TEXTURE GL_CURRENT_PROGRAM GL_TEXTURE_BINDING_2D
                           GL_IMAGE_BINDING_NAME GL_PIXEL_UNPACK_BUFFER_BINDING
                           GL_UNPACK_ALIGNMENT GL_DRAW_FRAMEBUFFER_BINDING GL_FRAMEBUFFER_SRGB
+  --x-errors-elsewhere    with --graphics opengl (Xlib): count the X errors a thread of the
+                          client keeps making on a second X connection with an X error handler
+                          of the client's, and call xrEndFrame with the context released (a
+                          layer then switches contexts around every frame); report both counts
+                          (`x_errors_made`, `x_errors_seen`)
   The JSON report holds resident memory and open file descriptors every 50 frames
   (`memory`) and after each session (`sessions`).";
 
@@ -172,6 +177,9 @@ pub struct Options {
     pub check_gl_state: bool,
     /// Items of gl_state::DISTURBABLE the client changes before xrEndFrame (a test of the check).
     pub disturb_gl_state: Vec<String>,
+    /// With --graphics opengl (Xlib): X errors made on a second connection, counted by the
+    /// client's handler, and xrEndFrame called with the context released.
+    pub x_errors_elsewhere: bool,
 }
 
 impl Default for Options {
@@ -207,6 +215,7 @@ impl Default for Options {
             linger_ms: None,
             check_gl_state: false,
             disturb_gl_state: Vec::new(),
+            x_errors_elsewhere: false,
         }
     }
 }
@@ -267,6 +276,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--stderr-full" => options.stderr_full = true,
             "--check-untouched" => options.check_untouched = true,
             "--check-gl-state" => options.check_gl_state = true,
+            "--x-errors-elsewhere" => options.x_errors_elsewhere = true,
             "--disturb-gl-state" => {
                 for item in value()?.split(',') {
                     if !crate::gl_state::DISTURBABLE.contains(&item) {
@@ -304,6 +314,10 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
     }
     if options.gl_binding == GlBinding::Egl && options.graphics != Graphics::OpenGl {
         return Err("--gl-binding needs --graphics opengl".into());
+    }
+    let xlib = options.graphics == Graphics::OpenGl && options.gl_binding == GlBinding::Xlib;
+    if options.x_errors_elsewhere && !xlib {
+        return Err("--x-errors-elsewhere needs --graphics opengl with the Xlib binding".into());
     }
     if !options.disturb_gl_state.is_empty() && !options.check_gl_state {
         return Err("--disturb-gl-state needs --check-gl-state".into());

@@ -18,6 +18,7 @@ use crate::glx::GlContext;
 use crate::pattern::{LayerContent, Rows, Target};
 use crate::run_report::Report;
 use crate::script::ScriptApi;
+use crate::x_errors::XErrors;
 use openxr as xr;
 use openxr::sys;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -70,9 +71,13 @@ pub fn run(
         true => Some(GlStateCheck::new(&gl, &options.disturb_gl_state)?),
         false => None,
     };
+    let x_errors = match options.x_errors_elsewhere {
+        true => Some(XErrors::start(&gl)?),
+        false => None,
+    };
     let mut result = Ok(());
     for _ in 0..options.sessions.max(1) {
-        let session = (&gl, &mut state);
+        let session = (&gl, &mut state, x_errors.as_ref());
         result = run_session(
             &instance, system, blend_mode, session, options, report, stats,
         );
@@ -86,6 +91,10 @@ pub fn run(
         if options.list_formats {
             break;
         }
+    }
+    if let Some(x_errors) = x_errors {
+        let (made, seen) = x_errors.finish();
+        (report.x_errors_made, report.x_errors_seen) = (Some(made), Some(seen));
     }
     if let Some(state) = state {
         report.gl_state_checked = state.checked;
@@ -102,7 +111,7 @@ fn run_session(
     instance: &xr::Instance,
     system: xr::SystemId,
     blend_mode: xr::EnvironmentBlendMode,
-    (gl, state): (&GlContext, &mut Option<GlStateCheck>),
+    (gl, state, x_errors): (&GlContext, &mut Option<GlStateCheck>, Option<&XErrors>),
     options: &Options,
     report: &mut Report,
     stats: &mut Stats,
@@ -151,6 +160,7 @@ fn run_session(
         blend_mode,
         state,
         churn,
+        x_errors,
     };
     let result = frame_loop::run(instance, &mut frames, options, stats);
     report_checks(&frames, report);
@@ -299,6 +309,8 @@ struct GlFrames<'s> {
     state: &'s mut Option<GlStateCheck>,
     /// With --churn-swapchains: the swapchains made and destroyed between frames.
     churn: Option<GlChurn>,
+    /// With --x-errors-elsewhere: the context is released around xrEndFrame.
+    x_errors: Option<&'s XErrors>,
 }
 
 /// --churn-swapchains in an OpenGL session: one swapchain of the plan made (and the oldest
@@ -310,9 +322,10 @@ struct GlChurn {
     churned: AtomicU32,
 }
 
-/// xrEndFrame with `layers`, inside --check-gl-state's set and check.
+/// xrEndFrame with `layers`, inside --check-gl-state's set and check (and with
+/// --x-errors-elsewhere with the context released).
 fn end_frame(
-    (stream, state): (&mut xr::FrameStream<xr::OpenGL>, &mut Option<GlStateCheck>),
+    (stream, state, x_errors): EndFrame<'_>,
     (time, mode): (xr::Time, xr::EnvironmentBlendMode),
     layers: &[&xr::CompositionLayerBase<'_, xr::OpenGL>],
     frame: u32,
@@ -320,12 +333,26 @@ fn end_frame(
     if let Some(check) = state.as_mut() {
         check.before_end_frame(frame)?;
     }
-    stream.end(time, mode, layers).ctx("xrEndFrame")?;
+    if let Some(x) = x_errors {
+        x.release_context();
+    }
+    let ended = stream.end(time, mode, layers).ctx("xrEndFrame");
+    if let Some(x) = x_errors {
+        x.take_context()?;
+    }
+    ended?;
     if let Some(check) = state.as_mut() {
         check.after_end_frame()?;
     }
     Ok(())
 }
+
+/// What xrEndFrame goes through: the stream, --check-gl-state's check, --x-errors-elsewhere.
+type EndFrame<'a> = (
+    &'a mut xr::FrameStream<xr::OpenGL>,
+    &'a mut Option<GlStateCheck>,
+    Option<&'a XErrors>,
+);
 
 impl frame_loop::Frames for GlFrames<'_> {
     type Api = xr::OpenGL;
@@ -356,7 +383,7 @@ impl frame_loop::Frames for GlFrames<'_> {
         stats.frames_ended += 1;
         let (time, frame) = (frame_state.predicted_display_time, stats.frames_ended - 1);
         if !frame_state.should_render || options.script.is_some() {
-            let end = (&mut *self.stream, &mut *self.state);
+            let end = (&mut *self.stream, &mut *self.state, self.x_errors);
             return end_frame(end, (time, self.blend_mode), &[], frame);
         }
         let (_, located) = self
@@ -389,7 +416,7 @@ impl frame_loop::Frames for GlFrames<'_> {
                 .map(|q| -> &xr::CompositionLayerBase<'_, xr::OpenGL> { q }),
         );
         let start = Instant::now();
-        let end = (&mut *self.stream, &mut *self.state);
+        let end = (&mut *self.stream, &mut *self.state, self.x_errors);
         end_frame(end, (time, self.blend_mode), &layers, frame)?;
         let ended = Instant::now();
         let ms = (ended - start).as_secs_f64() * 1e3;

@@ -34,6 +34,7 @@ mod swapchain_format;
 mod timing;
 mod untouched;
 mod validation;
+mod x_errors;
 
 use std::process::ExitCode;
 

@@ -44,6 +44,12 @@ pub struct Report {
     /// every item one of them changed (empty when all held).
     pub gl_state_checked: u32,
     pub gl_state_changed: Vec<crate::gl_state::Change>,
+    /// With --x-errors-elsewhere: the X errors the client's thread made, and those its handler
+    /// saw.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x_errors_made: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x_errors_seen: Option<u64>,
     /// Every 50 submitted frames.
     pub memory: Vec<Sample>,
     /// After each session was destroyed.

@@ -182,8 +182,8 @@ impl TexelBuffers {
         Ok(())
     }
 
-    /// The source's thread writes no more (a write under way ends first).
-    fn close(&mut self) {
+    /// The source's thread writes no more (a write under way ends first); no GL call.
+    pub fn close(&mut self) {
         self.sink.connect(None);
         if let Some(slots) = self.slots.take() {
             slots.close();

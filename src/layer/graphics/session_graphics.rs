@@ -109,7 +109,8 @@ pub trait SessionGraphics: Send {
     fn frame_lines(&self, views: &[ViewImage], prepared: bool) -> Vec<(&'static str, String)>;
     /// The session passes through from now on: stop building, without waiting.
     fn stop_building(&self);
-    /// Ends the engine on the app's thread (xrDestroySession): its last work, its objects.
+    /// Ends the engine on the app's thread (xrDestroySession): its last work, its objects; Err is
+    /// the one line the log says when they could not all be ended now.
     fn finish(self: Box<Self>) -> Result<(), String>;
 }
 

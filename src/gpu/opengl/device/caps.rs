@@ -20,6 +20,12 @@ pub struct Caps {
     /// A driver that renders on the CPU (llvmpipe, softpipe): there a buffer copy is a memcpy
     /// and image load/store costs more than it saves, so views go through a buffer by default.
     pub software: bool,
+    /// A compatibility-profile context: its pixel-transfer state (glPixelTransfer) applies to
+    /// the backend's transfers of non-integer texels, so the state guard neutralises it.
+    pub compatibility: bool,
+    /// GL_ARB_imaging in a compatibility-profile context: colour tables, convolution,
+    /// histogram, minmax and the colour matrix apply to those transfers too.
+    pub imaging: bool,
 }
 
 /// GL_VERSION without the context's profile.
@@ -114,7 +120,24 @@ impl Caps {
         // SAFETY: GL 4.1 query into a valid i32.
         unsafe { (gl.get_integerv)(gl::NUM_PROGRAM_BINARY_FORMATS, &mut formats) };
         let renderer = text(gl, gl::RENDERER);
+        let mut profile = 0;
+        // SAFETY: GL 3.2 query into a valid i32.
+        unsafe { (gl.get_integerv)(gl::CONTEXT_PROFILE_MASK, &mut profile) };
+        let compatibility = profile & gl::CONTEXT_COMPATIBILITY_PROFILE_BIT != 0;
+        if compatibility && gl.pixel_transferf.is_none() {
+            return Err(GlError::Unsupported(
+                "a compatibility-profile context without glPixelTransferf".into(),
+            ));
+        }
+        let imaging = compatibility && has("GL_ARB_imaging");
+        if imaging && (gl.matrix_mode.is_none() || gl.load_matrixf.is_none()) {
+            return Err(GlError::Unsupported(
+                "GL_ARB_imaging without glMatrixMode or glLoadMatrixf".into(),
+            ));
+        }
         Ok(Caps {
+            compatibility,
+            imaging,
             version,
             software: is_software(&renderer),
             parallel_compile: has("GL_KHR_parallel_shader_compile")

@@ -19,16 +19,23 @@ pub type Sync = *const c_void;
 pub type ProcLoader<'a> = &'a mut dyn FnMut(&CStr) -> *const c_void;
 
 macro_rules! gl_functions {
-    ($($field:ident = $name:literal : fn($($arg:ty),*) $(-> $ret:ty)?;)*) => {
+    (
+        $($field:ident = $name:literal : fn($($arg:ty),*) $(-> $ret:ty)?;)*
+        @optional
+        $($ofield:ident = $oname:literal : fn($($oarg:ty),*) $(-> $oret:ty)?;)*
+    ) => {
         /// The entry points, each a function pointer of the context that was current when
         /// they were loaded (GL function pointers are valid for every context of the same
-        /// driver; the backend calls them only with its context current).
+        /// driver; the backend calls them only with its context current). The optional ones
+        /// are the compatibility profile's, called only on such a context (`Caps`).
         pub struct Gl {
             $(pub $field: unsafe extern "system" fn($($arg),*) $(-> $ret)?,)*
+            $(pub $ofield: Option<unsafe extern "system" fn($($oarg),*) $(-> $oret)?>,)*
         }
 
         impl Gl {
-            /// Every entry point through `get`; an error naming the first it does not find.
+            /// Every entry point through `get`; an error naming the first required one it
+            /// does not find.
             pub fn load(get: ProcLoader) -> Result<Gl, GlError> {
                 Ok(Gl {
                     $($field: {
@@ -44,6 +51,15 @@ macro_rules! gl_functions {
                             std::mem::transmute::<*const c_void, unsafe extern "system" fn($($arg),*) $(-> $ret)?>(p)
                         }
                     },)*
+                    $($ofield: {
+                        let name = CStr::from_bytes_with_nul(concat!($oname, "\0").as_bytes())
+                            .expect("a NUL-terminated name");
+                        let p = get(name);
+                        // SAFETY: as above, where the loader found one.
+                        (!p.is_null()).then(|| unsafe {
+                            std::mem::transmute::<*const c_void, unsafe extern "system" fn($($oarg),*) $(-> $oret)?>(p)
+                        })
+                    },)*
                 })
             }
         }
@@ -56,6 +72,7 @@ gl_functions! {
     get_integerv = "glGetIntegerv": fn(Enum, *mut Int);
     get_integeri_v = "glGetIntegeri_v": fn(Enum, Uint, *mut Int);
     get_integer64i_v = "glGetInteger64i_v": fn(Enum, Uint, *mut i64);
+    get_floatv = "glGetFloatv": fn(Enum, *mut f32);
     is_enabled = "glIsEnabled": fn(Enum) -> u8;
     enable = "glEnable": fn(Enum);
     disable = "glDisable": fn(Enum);
@@ -130,7 +147,16 @@ gl_functions! {
     create_framebuffers = "glCreateFramebuffers": fn(Sizei, *mut Uint);
     named_framebuffer_parameteri = "glNamedFramebufferParameteri": fn(Uint, Enum, Int);
     delete_framebuffers = "glDeleteFramebuffers": fn(Sizei, *const Uint);
+    is_framebuffer = "glIsFramebuffer": fn(Uint) -> u8;
+    object_label = "glObjectLabel": fn(Enum, Uint, Sizei, *const i8);
+    debug_message_insert = "glDebugMessageInsert": fn(Enum, Enum, Uint, Enum, Sizei, *const i8);
+    get_object_label = "glGetObjectLabel": fn(Enum, Uint, Sizei, *mut Sizei, *mut i8);
     finish = "glFinish": fn();
+    @optional
+    // The compatibility profile's pixel transfer and colour matrix (state_guard.rs).
+    pixel_transferf = "glPixelTransferf": fn(Enum, f32);
+    matrix_mode = "glMatrixMode": fn(Enum);
+    load_matrixf = "glLoadMatrixf": fn(*const f32);
 }
 
 // Queries.
@@ -143,6 +169,7 @@ pub const MAJOR_VERSION: Enum = 0x821B;
 pub const MINOR_VERSION: Enum = 0x821C;
 pub const CONTEXT_PROFILE_MASK: Enum = 0x9126;
 pub const CONTEXT_ES_PROFILE_BIT: Int = 0x4;
+pub const CONTEXT_COMPATIBILITY_PROFILE_BIT: Int = 0x2;
 pub const NUM_PROGRAM_BINARY_FORMATS: Enum = 0x87FE;
 pub const MAX_COMPUTE_WORK_GROUP_COUNT: Enum = 0x91BE;
 
@@ -180,6 +207,10 @@ pub const READ_FRAMEBUFFER: Enum = 0x8CA8;
 pub const DRAW_FRAMEBUFFER_BINDING: Enum = 0x8CA6;
 pub const READ_FRAMEBUFFER_BINDING: Enum = 0x8CAA;
 pub const FRAMEBUFFER_SRGB: Enum = 0x8DB9;
+pub const DEBUG_OUTPUT: Enum = 0x92E0;
+pub const DEBUG_SOURCE_THIRD_PARTY: Enum = 0x8249;
+pub const DEBUG_TYPE_OTHER: Enum = 0x8251;
+pub const DEBUG_SEVERITY_MEDIUM: Enum = 0x9147;
 pub const PACK_SWAP_BYTES: Enum = 0x0D00;
 pub const PACK_LSB_FIRST: Enum = 0x0D01;
 pub const PACK_ROW_LENGTH: Enum = 0x0D02;
@@ -196,6 +227,59 @@ pub const UNPACK_SKIP_PIXELS: Enum = 0x0CF4;
 pub const UNPACK_ALIGNMENT: Enum = 0x0CF5;
 pub const UNPACK_SKIP_IMAGES: Enum = 0x806D;
 pub const UNPACK_IMAGE_HEIGHT: Enum = 0x806E;
+
+// The compatibility profile's pixel transfer (glPixelTransfer) and its imaging subset
+// (GL_ARB_imaging), which apply to transfers of non-integer texels; the state guard sets them
+// to these neutral values around the backend's calls.
+pub const PIXEL_TRANSFER_NEUTRAL: [(Enum, f32); 14] = [
+    (0x0D10, 0.0), // GL_MAP_COLOR
+    (0x0D11, 0.0), // GL_MAP_STENCIL
+    (0x0D12, 0.0), // GL_INDEX_SHIFT
+    (0x0D13, 0.0), // GL_INDEX_OFFSET
+    (0x0D14, 1.0), // GL_RED_SCALE
+    (0x0D15, 0.0), // GL_RED_BIAS
+    (0x0D18, 1.0), // GL_GREEN_SCALE
+    (0x0D19, 0.0), // GL_GREEN_BIAS
+    (0x0D1A, 1.0), // GL_BLUE_SCALE
+    (0x0D1B, 0.0), // GL_BLUE_BIAS
+    (0x0D1C, 1.0), // GL_ALPHA_SCALE
+    (0x0D1D, 0.0), // GL_ALPHA_BIAS
+    (0x0D1E, 1.0), // GL_DEPTH_SCALE
+    (0x0D1F, 0.0), // GL_DEPTH_BIAS
+];
+pub const IMAGING_TRANSFER_NEUTRAL: [(Enum, f32); 16] = [
+    (0x801C, 1.0), // GL_POST_CONVOLUTION_RED_SCALE
+    (0x801D, 1.0), // GL_POST_CONVOLUTION_GREEN_SCALE
+    (0x801E, 1.0), // GL_POST_CONVOLUTION_BLUE_SCALE
+    (0x801F, 1.0), // GL_POST_CONVOLUTION_ALPHA_SCALE
+    (0x8020, 0.0), // GL_POST_CONVOLUTION_RED_BIAS
+    (0x8021, 0.0), // GL_POST_CONVOLUTION_GREEN_BIAS
+    (0x8022, 0.0), // GL_POST_CONVOLUTION_BLUE_BIAS
+    (0x8023, 0.0), // GL_POST_CONVOLUTION_ALPHA_BIAS
+    (0x80B4, 1.0), // GL_POST_COLOR_MATRIX_RED_SCALE
+    (0x80B5, 1.0), // GL_POST_COLOR_MATRIX_GREEN_SCALE
+    (0x80B6, 1.0), // GL_POST_COLOR_MATRIX_BLUE_SCALE
+    (0x80B7, 1.0), // GL_POST_COLOR_MATRIX_ALPHA_SCALE
+    (0x80B8, 0.0), // GL_POST_COLOR_MATRIX_RED_BIAS
+    (0x80B9, 0.0), // GL_POST_COLOR_MATRIX_GREEN_BIAS
+    (0x80BA, 0.0), // GL_POST_COLOR_MATRIX_BLUE_BIAS
+    (0x80BB, 0.0), // GL_POST_COLOR_MATRIX_ALPHA_BIAS
+];
+/// The imaging subset's stages, each off by default.
+pub const IMAGING_STAGES: [Enum; 8] = [
+    0x80D0, // GL_COLOR_TABLE
+    0x8010, // GL_CONVOLUTION_1D
+    0x8011, // GL_CONVOLUTION_2D
+    0x8012, // GL_SEPARABLE_2D
+    0x80D1, // GL_POST_CONVOLUTION_COLOR_TABLE
+    0x80D2, // GL_POST_COLOR_MATRIX_COLOR_TABLE
+    0x8024, // GL_HISTOGRAM
+    0x802E, // GL_MINMAX
+];
+pub const COLOR_MATRIX: Enum = 0x80B1;
+pub const MATRIX_MODE: Enum = 0x0BA0;
+/// glMatrixMode's colour matrix (GL_COLOR).
+pub const COLOR: Enum = 0x1800;
 
 // Buffers and textures.
 pub const DYNAMIC_COPY: Enum = 0x88EA;

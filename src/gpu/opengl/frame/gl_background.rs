@@ -3,7 +3,7 @@
 //! views sample.
 
 use super::gl_frame_runner::{texture_level_int, Background, GlFrameRunner};
-use super::state_guard::SavedState;
+use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::gpu::core::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
 use crate::gpu::core::CameraRect;
@@ -45,6 +45,8 @@ impl GlFrameRunner {
         texels: &BlurredTexels,
         mappings: &[CameraMapping],
     ) -> Result<(), GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_lost()?;
         let size = (texels.width, texels.height);
         if size.0 == 0
@@ -92,7 +94,7 @@ impl GlFrameRunner {
             });
         }
         let bg = self.background.as_mut().expect("made above");
-        let state = SavedState::guard(g)?;
+        let state = SavedState::guard(g, &self.caps)?;
         // SAFETY: the context is current (this call's contract); the texture is the
         // background's, of the texels' size; the unpack binding is put back by the guard.
         let uploaded = unsafe { self.texel_buffers.upload(g, texels, bg.texture, &needed) };

@@ -22,8 +22,8 @@
 //! Everything the recipe changes of the app's GL state is put back (state_guard.rs), and it calls no
 //! glGetError (nor anything that would raise an error it would then leave to the app).
 
-use super::gl_view::{GlTarget, GlView};
-use super::state_guard::SavedState;
+use super::gl_view::GlView;
+use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::interface::{in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
@@ -94,8 +94,12 @@ pub struct GlFrameRunner {
     pub(super) views: Vec<ViewBuffers>,
     /// An empty framebuffer object bound while the recipe runs: with the app's window-system
     /// framebuffer bound, a dispatch makes Mesa's software drivers validate it, after which
-    /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer).
+    /// the app's next glFinish presents its front buffer (an X error on a GLX pbuffer). Made
+    /// with the engine and labelled `label`: framebuffers are never shared between contexts,
+    /// so finding it under that label tells that the current context is the engine's own.
     pub(super) framebuffer: u32,
+    /// The framebuffer's label, unique to this engine in the process.
+    label: String,
     /// Whether views may be enhanced in place: by default on a GPU, not on a CPU driver
     /// (`Caps::software`); the `in_place` setting's `on` and `off` decide otherwise.
     pub(super) in_place: bool,
@@ -132,6 +136,32 @@ impl GlFrameRunner {
     /// driver), and every later call is made with that same context current.
     pub unsafe fn new(gl: Gl) -> Result<GlFrameRunner, GlError> {
         let caps = Caps::check(&gl)?;
+        // SAFETY: the context is current (this call's contract) and 4.5 (Caps).
+        let _quiet = unsafe { DebugOutputOff::new(&gl) };
+        static ENGINES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = ENGINES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let label = format!("contrastxr engine {}.{n}", std::process::id());
+        let mut framebuffer = 0;
+        // SAFETY: the context is current (this call's contract) and 4.5 (Caps): one name into
+        // a valid output, deleted in `destroy`; a 1x1 default size makes it complete without
+        // attachments, so validating it raises no debug message in the app's callback; the
+        // label's length is given.
+        unsafe {
+            (gl.create_framebuffers)(1, &mut framebuffer);
+            for p in [
+                gl::FRAMEBUFFER_DEFAULT_WIDTH,
+                gl::FRAMEBUFFER_DEFAULT_HEIGHT,
+            ] {
+                (gl.named_framebuffer_parameteri)(framebuffer, p, 1);
+            }
+            let text = label.as_bytes();
+            (gl.object_label)(
+                gl::FRAMEBUFFER,
+                framebuffer,
+                text.len() as i32,
+                text.as_ptr().cast(),
+            );
+        }
         Ok(GlFrameRunner {
             programs: Programs::new(&caps),
             in_place: !caps.software,
@@ -140,9 +170,44 @@ impl GlFrameRunner {
             background: None,
             texel_buffers: TexelBuffers::default(),
             views: Vec::new(),
-            framebuffer: 0,
+            framebuffer,
+            label,
             last_in_place: Vec::new(),
         })
+    }
+
+    /// Whether the context current on this thread is the one the engine was made in (its
+    /// framebuffer is there under its label), so that its names are its objects: a context
+    /// destroyed meanwhile, and another made at the same address, fail this. Raises no error.
+    ///
+    /// # Safety
+    /// A context of the engine's driver is current on this thread.
+    pub unsafe fn made_in_current_context(&self) -> bool {
+        let g = &self.gl;
+        // SAFETY: glIsFramebuffer takes any name and raises no error.
+        if self.framebuffer == 0 || unsafe { (g.is_framebuffer)(self.framebuffer) } == 0 {
+            return false;
+        }
+        let mut text = vec![0u8; self.label.len() + 2];
+        let mut length = 0;
+        // SAFETY: a framebuffer of this context (just checked); the output holds text.len()
+        // bytes, which GL is told.
+        unsafe {
+            (g.get_object_label)(
+                gl::FRAMEBUFFER,
+                self.framebuffer,
+                text.len() as i32,
+                &mut length,
+                text.as_mut_ptr().cast(),
+            )
+        };
+        text.get(..length.max(0) as usize) == Some(self.label.as_bytes())
+    }
+
+    /// The source's thread writes no more texels into the engine's mapped buffers (no GL
+    /// call): for an engine whose objects are deleted later, in its context.
+    pub fn close_to_sources(&mut self) {
+        self.texel_buffers.close();
     }
 
     /// Whether views may be enhanced in place, or always go through a buffer (the default:
@@ -261,6 +326,8 @@ impl GlFrameRunner {
         width: u32,
         params: &Params,
     ) -> Result<bool, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_lost()?;
         if params.mode == ViewMode::Off {
             return Ok(true);
@@ -276,6 +343,8 @@ impl GlFrameRunner {
     /// # Safety
     /// As for `enhance`.
     pub unsafe fn ready(&mut self, views: &[GlView], params: &Params) -> Result<bool, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_lost()?;
         params.validate().map_err(GlError::Input)?;
         if params.mode == ViewMode::Off || views.is_empty() {
@@ -302,6 +371,8 @@ impl GlFrameRunner {
         views: &[GlView],
         params: &Params,
     ) -> Result<Outcome, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         // SAFETY: this call's own contract.
         if !unsafe { self.ready(views, params) }? {
             return Ok(Outcome::Compiling);
@@ -332,25 +403,25 @@ impl GlFrameRunner {
         for (k, v) in views.iter().enumerate() {
             self.ensure_buffers(k, v, self.last_in_place[k])?;
         }
-        if self.framebuffer == 0 {
-            // SAFETY: one name into a valid output (GL 4.5 DSA); deleted in `destroy`. A 1x1
-            // default size makes it complete without attachments, so validating it raises no
-            // debug message in the app's callback.
-            unsafe {
-                (self.gl.create_framebuffers)(1, &mut self.framebuffer);
-                for p in [
-                    gl::FRAMEBUFFER_DEFAULT_WIDTH,
-                    gl::FRAMEBUFFER_DEFAULT_HEIGHT,
-                ] {
-                    (self.gl.named_framebuffer_parameteri)(self.framebuffer, p, 1);
-                }
-            }
-        }
-        let state = SavedState::guard(&self.gl)?;
+        let state = SavedState::guard(&self.gl, &self.caps)?;
         // SAFETY: a framebuffer this engine made; the app's bindings are put back by the guard.
         unsafe { (self.gl.bind_framebuffer)(gl::FRAMEBUFFER, self.framebuffer) };
         if crate::fault::hit("gl-recipe-panic") {
             panic!("fault point gl-recipe-panic");
+        }
+        if crate::fault::hit("gl-driver-message") {
+            let text = c"fault point gl-driver-message: a driver's note on the layer's work";
+            // SAFETY: a third party's message, its text NUL-terminated (length -1).
+            unsafe {
+                (self.gl.debug_message_insert)(
+                    gl::DEBUG_SOURCE_THIRD_PARTY,
+                    gl::DEBUG_TYPE_OTHER,
+                    1,
+                    gl::DEBUG_SEVERITY_MEDIUM,
+                    -1,
+                    text.as_ptr(),
+                )
+            };
         }
         for (k, v) in views.iter().enumerate() {
             let programs: [usize; 3] = ids[3 * k..3 * k + 3].try_into().expect("3 ids");
@@ -358,46 +429,6 @@ impl GlFrameRunner {
         }
         drop(state);
         Ok(Outcome::Enhanced)
-    }
-
-    /// The view's texture is there with its format, and the region lies inside it.
-    pub(in crate::gpu::opengl) fn check_view(&self, v: &GlView) -> Result<(), GlError> {
-        let g = &self.gl;
-        let (x, y, w, h) = v.rect;
-        let width = texture_level_int(g, v.texture, gl::TEXTURE_WIDTH);
-        let height = texture_level_int(g, v.texture, gl::TEXTURE_HEIGHT);
-        let depth = texture_level_int(g, v.texture, gl::TEXTURE_DEPTH);
-        let internal = texture_level_int(g, v.texture, gl::TEXTURE_INTERNAL_FORMAT) as u32;
-        let (layer, target) = match v.target {
-            GlTarget::Texture2D => (0, gl::TEXTURE_2D),
-            GlTarget::Texture2DArray { layer } => (layer, gl::TEXTURE_2D_ARRAY),
-        };
-        let mut actual = 0;
-        // SAFETY: a texture name of this context (the caller's contract); GL_TEXTURE_TARGET
-        // is a valid glGetTextureParameteriv query in 4.5.
-        unsafe { (g.get_texture_parameteriv)(v.texture, gl::TEXTURE_TARGET, &mut actual) };
-        if actual as u32 != target {
-            return Err(GlError::Input(format!(
-                "a view's texture has target {actual:#06x}, not the {target:#06x} the view says"
-            )));
-        }
-        let inside = w > 0
-            && h > 0
-            && u64::from(x) + u64::from(w) <= width.max(0) as u64
-            && u64::from(y) + u64::from(h) <= height.max(0) as u64
-            && i64::from(layer) < i64::from(depth);
-        if !inside {
-            return Err(GlError::Input(format!(
-                "a view's region {w}x{h} at ({x}, {y}) layer {layer} is not inside its {width}x{height}x{depth} texture"
-            )));
-        }
-        if internal != v.internal_format {
-            return Err(GlError::Input(format!(
-                "a view's texture is {internal:#06x}, not the {:#06x} the view says",
-                v.internal_format
-            )));
-        }
-        Ok(())
     }
 
     /// Writes the program binaries built since the last save (see binary_cache.rs).
@@ -410,6 +441,8 @@ impl GlFrameRunner {
     /// # Safety
     /// The engine's context is current on this thread.
     pub unsafe fn destroy(&mut self) {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.save_program_cache();
         self.programs.destroy(&self.gl);
         self.drop_background();

@@ -6,6 +6,7 @@
 
 use super::gl_frame_runner::{rows_aligned, GlFrameRunner, Outcome};
 use super::gl_view::{GlTarget, GlView};
+use super::state_guard::DebugOutputOff;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::opengl::conv::GlFormat;
@@ -36,6 +37,8 @@ impl GlFrameRunner {
         params: &Params,
         limit: Duration,
     ) -> Result<bool, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         let format = GlFormat::of(internal_format)?;
         if params.mode == ViewMode::Off {
             return Ok(true);

@@ -5,10 +5,14 @@
 //! failed), so whatever error the app had pending is still pending after the call. A binding
 //! that could not be put back (an object alive only through it, active transform feedback) is
 //! found before anything changes, and the call then does nothing (`GlError::Unrestorable`).
+//! In a compatibility-profile context the pixel-transfer state (glPixelTransfer's scales,
+//! biases, index shift and colour maps; GL_ARB_imaging's stages and colour matrix) would apply
+//! to the recipe's transfers of non-integer texels: it is set neutral for the call and put back.
 
 use crate::gpu::core::interface::{
     BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
 };
+use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
 
@@ -89,6 +93,155 @@ impl ImageUnit {
     }
 }
 
+/// The app's debug output (GL_DEBUG_OUTPUT, core since 4.3) off while a call of the backend
+/// runs, on again when this is dropped if it was on: the driver's messages about the layer's
+/// own work (a compile log, a buffer's placement, a slow path) are no business of the app's
+/// callback or message log. Turning it off raises no message and no error, unlike a debug
+/// group (glPushDebugGroup and glPopDebugGroup each send the app's callback a message), and
+/// leaves the app's message filters untouched. Holds no borrow: the engine stays usable.
+pub struct DebugOutputOff {
+    /// glEnable, to turn it on again; None when it was off.
+    enable: Option<unsafe extern "system" fn(gl::Enum)>,
+}
+
+impl DebugOutputOff {
+    /// Turns the current context's debug output off, if on.
+    ///
+    /// # Safety
+    /// A context of `g`'s driver is current on this thread, and stays current until this is
+    /// dropped.
+    pub unsafe fn new(g: &Gl) -> DebugOutputOff {
+        // SAFETY: a core 4.3 capability, the context being 4.5 (the caller's contract).
+        let on = unsafe { (g.is_enabled)(gl::DEBUG_OUTPUT) } != 0;
+        if on {
+            // SAFETY: as above.
+            unsafe { (g.disable)(gl::DEBUG_OUTPUT) };
+        }
+        DebugOutputOff {
+            enable: on.then_some(g.enable),
+        }
+    }
+}
+
+impl Drop for DebugOutputOff {
+    fn drop(&mut self) {
+        if let Some(enable) = self.enable {
+            // SAFETY: the same context is current (`new`'s contract).
+            unsafe { enable(gl::DEBUG_OUTPUT) };
+        }
+    }
+}
+
+/// The compatibility profile's pixel-transfer state, as far as it differs from the neutral
+/// one: only that is set neutral for the call and put back (a core context has none).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+struct PixelTransfer {
+    /// Each glPixelTransfer parameter that was not neutral, with the app's value (f32 bits).
+    changed: Vec<(gl::Enum, u32)>,
+    /// The imaging stages the app had enabled.
+    stages: Vec<gl::Enum>,
+    /// The app's colour matrix (f32 bits) and matrix mode, when the matrix was not identity.
+    color_matrix: Option<([u32; 16], i32)>,
+}
+
+const IDENTITY: [f32; 16] = [
+    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+];
+
+impl PixelTransfer {
+    /// Reads the state (nothing on a core context); changes nothing.
+    fn save(g: &Gl, caps: &Caps) -> PixelTransfer {
+        let mut saved = PixelTransfer::default();
+        if !caps.compatibility {
+            return saved;
+        }
+        let imaging: &[(gl::Enum, f32)] = if caps.imaging {
+            &gl::IMAGING_TRANSFER_NEUTRAL
+        } else {
+            &[]
+        };
+        for &(p, neutral) in gl::PIXEL_TRANSFER_NEUTRAL.iter().chain(imaging) {
+            let mut v = 0.0f32;
+            // SAFETY: a single-valued pixel-transfer query of a compatibility context (the
+            // imaging ones only with GL_ARB_imaging) into a valid f32.
+            unsafe { (g.get_floatv)(p, &mut v) };
+            if v != neutral {
+                saved.changed.push((p, v.to_bits()));
+            }
+        }
+        if caps.imaging {
+            saved.stages = gl::IMAGING_STAGES
+                .into_iter()
+                // SAFETY: GL_ARB_imaging's capabilities, which the context has.
+                .filter(|&c| unsafe { (g.is_enabled)(c) } != 0)
+                .collect();
+            let mut m = [0.0f32; 16];
+            // SAFETY: GL_COLOR_MATRIX is 16 floats (GL_ARB_imaging).
+            unsafe { (g.get_floatv)(gl::COLOR_MATRIX, m.as_mut_ptr()) };
+            if m != IDENTITY {
+                saved.color_matrix = Some((m.map(f32::to_bits), int(g, gl::MATRIX_MODE)));
+            }
+        }
+        saved
+    }
+
+    /// Sets what differed to its neutral value.
+    fn neutralise(&self, g: &Gl) {
+        let neutral = |p: gl::Enum| {
+            gl::PIXEL_TRANSFER_NEUTRAL
+                .iter()
+                .chain(&gl::IMAGING_TRANSFER_NEUTRAL)
+                .find(|(q, _)| *q == p)
+                .map_or(0.0, |&(_, v)| v)
+        };
+        if let Some(transfer) = g.pixel_transferf {
+            for &(p, _) in &self.changed {
+                // SAFETY: a parameter read in `save`, set to its default.
+                unsafe { transfer(p, neutral(p)) };
+            }
+        }
+        for &c in &self.stages {
+            // SAFETY: a capability the context has (read in `save`).
+            unsafe { (g.disable)(c) };
+        }
+        if let (Some((_, mode)), Some(matrix_mode), Some(load)) =
+            (self.color_matrix, g.matrix_mode, g.load_matrixf)
+        {
+            // SAFETY: GL_ARB_imaging's colour matrix (Caps checked the entry points); the
+            // app's matrix mode, read in `save`, is made current again.
+            unsafe {
+                matrix_mode(gl::COLOR);
+                load(IDENTITY.as_ptr());
+                matrix_mode(mode as u32);
+            }
+        }
+    }
+
+    fn restore(&self, g: &Gl) {
+        if let Some(transfer) = g.pixel_transferf {
+            for &(p, v) in &self.changed {
+                // SAFETY: the app's value of a parameter, read in `save`.
+                unsafe { transfer(p, f32::from_bits(v)) };
+            }
+        }
+        for &c in &self.stages {
+            // SAFETY: as in `neutralise`.
+            unsafe { (g.enable)(c) };
+        }
+        if let (Some((m, mode)), Some(matrix_mode), Some(load)) =
+            (self.color_matrix, g.matrix_mode, g.load_matrixf)
+        {
+            let m = m.map(f32::from_bits);
+            // SAFETY: as in `neutralise`, loading the app's matrix.
+            unsafe {
+                matrix_mode(gl::COLOR);
+                load(m.as_ptr());
+                matrix_mode(mode as u32);
+            }
+        }
+    }
+}
+
 /// The app's state saved, put back when this is dropped: also when the recipe panics between
 /// (the panic is caught at the layer's boundary, and the app finds its state as it left it).
 pub struct StateGuard<'a> {
@@ -121,6 +274,7 @@ pub struct SavedState {
     read_framebuffer: i32,
     framebuffer_srgb: bool,
     pixel_store: [i32; 16],
+    pixel_transfer: PixelTransfer,
 }
 
 fn int(g: &Gl, name: gl::Enum) -> i32 {
@@ -136,9 +290,10 @@ fn sample_unit() -> gl::Enum {
 }
 
 impl SavedState {
-    /// Reads the state and sets the pixel store to the defaults the recipe's transfers need;
-    /// or, changing nothing, why a binding could not be put back afterwards.
-    pub fn save(g: &Gl) -> Result<SavedState, GlError> {
+    /// Reads the state and sets the pixel store (and a compatibility context's pixel
+    /// transfer) to the defaults the recipe's transfers need; or, changing nothing, why a
+    /// binding could not be put back afterwards.
+    pub fn save(g: &Gl, caps: &Caps) -> Result<SavedState, GlError> {
         let active_texture = int(g, gl::ACTIVE_TEXTURE);
         // SAFETY: a valid texture unit (binding 5 < GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS, at
         // least 80 in 4.3); put back in `restore`.
@@ -180,6 +335,7 @@ impl SavedState {
             // SAFETY: GL_FRAMEBUFFER_SRGB is a valid capability in core 3.0+.
             framebuffer_srgb: unsafe { (g.is_enabled)(gl::FRAMEBUFFER_SRGB) } != 0,
             pixel_store,
+            pixel_transfer: PixelTransfer::save(g, caps),
         };
         if let Some(why) = saved.unrestorable(g) {
             return Err(GlError::Unrestorable(why));
@@ -188,14 +344,15 @@ impl SavedState {
             // SAFETY: valid pixel store parameters and values.
             unsafe { (g.pixel_storei)(*p, v) };
         }
+        saved.pixel_transfer.neutralise(g);
         Ok(saved)
     }
 
     /// `save`, restored when the guard is dropped.
-    pub fn guard(g: &Gl) -> Result<StateGuard<'_>, GlError> {
+    pub fn guard<'a>(g: &'a Gl, caps: &Caps) -> Result<StateGuard<'a>, GlError> {
         Ok(StateGuard {
             g,
-            saved: SavedState::save(g)?,
+            saved: SavedState::save(g, caps)?,
         })
     }
 
@@ -276,6 +433,7 @@ impl SavedState {
             for (p, v) in PIXEL_STORE.iter().zip(self.pixel_store) {
                 (g.pixel_storei)(*p, v);
             }
+            self.pixel_transfer.restore(g);
             (g.use_program)(self.program as u32);
             (g.bind_program_pipeline)(self.pipeline as u32);
         }

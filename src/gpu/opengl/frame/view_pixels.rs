@@ -5,9 +5,10 @@
 use super::gl_frame_runner::GlFrameRunner;
 use super::gl_view::GlView;
 use super::region::{read_region, write_region};
-use super::state_guard::SavedState;
+use super::state_guard::{DebugOutputOff, SavedState};
 use crate::gpu::core::Run;
 use crate::gpu::opengl::conv::GlFormat;
+use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
 
@@ -43,8 +44,8 @@ unsafe fn draw(g: &Gl, v: &GlView, format: GlFormat, runs: &[Run], pixel: &[u8])
 }
 
 /// Runs `f` with the app's state saved, no pixel buffers bound, and puts the state back.
-fn with_client_memory<R>(g: &Gl, f: impl FnOnce() -> R) -> Result<R, GlError> {
-    let state = SavedState::guard(g)?;
+fn with_client_memory<R>(g: &Gl, caps: &Caps, f: impl FnOnce() -> R) -> Result<R, GlError> {
+    let state = SavedState::guard(g, caps)?;
     // SAFETY: unbinding the pixel buffer points (put back by the guard).
     unsafe {
         (g.bind_buffer)(gl::PIXEL_PACK_BUFFER, 0);
@@ -61,11 +62,13 @@ impl GlFrameRunner {
     /// # Safety
     /// The engine's context is current, and `v` names one of its textures (checked here).
     pub unsafe fn read_view(&self, v: &GlView) -> Result<Vec<u8>, GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_view(v)?;
         let format = GlFormat::of(v.internal_format)?;
         let g = self.gl();
         // SAFETY: the view was checked; the context is current (the caller's contract).
-        let bottom_first = with_client_memory(g, || unsafe { read(g, v, format) })?;
+        let bottom_first = with_client_memory(g, &self.caps, || unsafe { read(g, v, format) })?;
         let row = v.rect.2 as usize * format.pixel.bytes_per_pixel() as usize;
         Ok(bottom_first
             .chunks_exact(row.max(1))
@@ -81,6 +84,8 @@ impl GlFrameRunner {
     /// # Safety
     /// As for `read_view`.
     pub unsafe fn draw_runs(&self, v: &GlView, runs: &[Run], pixel: &[u8]) -> Result<(), GlError> {
+        // SAFETY: the engine's context is current (this call's contract).
+        let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.check_view(v)?;
         let format = GlFormat::of(v.internal_format)?;
         if pixel.len() != format.pixel.bytes_per_pixel() as usize {
@@ -88,6 +93,6 @@ impl GlFrameRunner {
         }
         let g = self.gl();
         // SAFETY: as for `read_view`.
-        with_client_memory(g, || unsafe { draw(g, v, format, runs, pixel) })
+        with_client_memory(g, &self.caps, || unsafe { draw(g, v, format, runs, pixel) })
     }
 }

@@ -31,6 +31,7 @@ const CONTEXT_MAJOR_VERSION: i32 = 0x3098;
 const CONTEXT_MINOR_VERSION: i32 = 0x30FB;
 const CONTEXT_OPENGL_PROFILE_MASK: i32 = 0x30FD;
 const CONTEXT_OPENGL_CORE_PROFILE_BIT: i32 = 1;
+const CONTEXT_OPENGL_COMPATIBILITY_PROFILE_BIT: i32 = 2;
 const NONE: i32 = 0x3038;
 
 /// libEGL's entry points the offline context uses.
@@ -71,7 +72,16 @@ impl GlOffline {
 
     /// The same with a core context of another version (a test asks for an older one, which
     /// the engine must refuse).
-    pub fn with_version((major, minor): (i32, i32)) -> Result<GlOffline, GlError> {
+    pub fn with_version(version: (i32, i32)) -> Result<GlOffline, GlError> {
+        Self::with_profile(version, false)
+    }
+
+    /// An OpenGL 4.5 compatibility-profile context, as many apps make.
+    pub fn compatibility() -> Result<GlOffline, GlError> {
+        Self::with_profile((4, 5), true)
+    }
+
+    fn with_profile((major, minor): (i32, i32), compatibility: bool) -> Result<GlOffline, GlError> {
         // SAFETY: dlopen of a library name; the handle is kept for the process (never closed).
         let lib =
             unsafe { libc::dlopen(c"libEGL.so.1".as_ptr(), libc::RTLD_NOW | libc::RTLD_LOCAL) };
@@ -143,7 +153,11 @@ impl GlOffline {
             CONTEXT_MINOR_VERSION,
             minor,
             CONTEXT_OPENGL_PROFILE_MASK,
-            CONTEXT_OPENGL_CORE_PROFILE_BIT,
+            if compatibility {
+                CONTEXT_OPENGL_COMPATIBILITY_PROFILE_BIT
+            } else {
+                CONTEXT_OPENGL_CORE_PROFILE_BIT
+            },
             NONE,
         ];
         // SAFETY: an initialised display; no config (EGL_KHR_no_config_context, which Mesa
@@ -159,7 +173,7 @@ impl GlOffline {
         };
         if context.is_null() {
             return Err(GlError::Context(format!(
-                "EGL made no OpenGL {major}.{minor} core context"
+                "EGL made no OpenGL {major}.{minor} context of that profile"
             )));
         }
         // SAFETY: the display and context are valid; no surfaces (surfaceless).

@@ -16,6 +16,8 @@ pub trait AppContext {
     fn leave(&self, previous: Option<Previous>);
     /// The GL entry points for the context (with it current).
     fn gl(&self) -> Result<Gl, GlError>;
+    /// Which context this is: its display and context handles, as the binding gave them.
+    fn key(&self) -> (usize, usize);
 }
 
 /// The app's context entered, left again when this is dropped: also when the layer's work in

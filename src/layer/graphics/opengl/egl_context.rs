@@ -128,6 +128,10 @@ impl AppContext for EglContext {
         unsafe { (self.egl.make_current)(display, p.draw, p.read, p.context) };
     }
 
+    fn key(&self) -> (usize, usize) {
+        (self.display as usize, self.context as usize)
+    }
+
     fn gl(&self) -> Result<Gl, GlError> {
         let get = self.get_proc_address;
         Gl::load(&mut |name| {

@@ -6,6 +6,7 @@
 
 use super::app_context::{AppContext, Entered};
 use super::gl_frame_call::{failed, gl_view, Frame};
+use super::left_engines;
 use super::program_builder::{Built, ProgramBuilder};
 use crate::algorithm::params::Params;
 use crate::config::InPlace;
@@ -78,6 +79,8 @@ impl GlSession {
         f: impl FnOnce(&mut GlFrameRunner, &mut Option<(u64, BlurredTexels)>) -> Result<R, NotDone>,
     ) -> Result<R, NotDone> {
         let entered = Entered::enter(&*self.context).map_err(NotDone::Failed)?;
+        // SAFETY: the app's context is current on this thread.
+        unsafe { left_engines::delete_left_on(self.context.key()) };
         let engine = match self.engine.take() {
             Some(engine) => Ok(engine),
             // SAFETY: the app's context is current on this thread; the engine's later calls
@@ -468,8 +471,15 @@ impl SessionGraphics for GlSession {
             }
             Err(why) => {
                 engine.save_program_cache();
-                Err(format!("{why}: its OpenGL objects are left to the context"))
+                left_engines::keep(self.context.key(), engine);
+                Err(format!(
+                    "{why}: its OpenGL objects are deleted when the layer next has that context current"
+                ))
             }
         }
     }
 }
+
+#[cfg(test)]
+#[path = "gl_session_tests.rs"]
+mod tests;

@@ -8,6 +8,7 @@ mod gl_bindings;
 mod gl_frame_call;
 mod gl_session;
 mod glx_context;
+mod left_engines;
 mod program_builder;
 
 pub use gl_bindings::{bind_egl, bind_xlib};

@@ -314,6 +314,10 @@ impl SessionGraphics for VulkanSession {
     }
 
     fn finish(self: Box<Self>) -> Result<(), String> {
-        self.engine.finish().map_err(|e| e.to_string())
+        self.engine.finish().map_err(|e| {
+            format!(
+                "the GPU did not finish the layer's last work ({e}): its objects are left alive, not destroyed"
+            )
+        })
     }
 }
