@@ -15,7 +15,7 @@ use contrastxr::gpu::opengl::GlFormat;
 use contrastxr::gpu::opengl::{GlOffline, GlTarget, GlView};
 use contrastxr::gpu::OfflineBackend;
 use contrastxr::image::RgbaImage;
-use std::ffi::{c_void, CStr};
+use std::ffi::{c_void, CStr, OsStr};
 
 const RGBA8: u32 = 0x8058;
 const SRGB8_ALPHA8: u32 = 0x8C43;
@@ -30,6 +30,23 @@ fn context() -> GlOffline {
 /// A projective mapping (a registered view's homography) over a camera whose top and bottom
 /// halves differ: a pixel sampling the background of the row mirrored from it (GL's rows
 /// counted from the bottom, not turned) takes the other half's colour and fails the check.
+/// Runs the ignored test `name` of this binary in a child process with `env` set (a fault
+/// point, a cache folder, a GL version), and holds that it passed.
+fn run_child(name: &str, env: &[(&str, &OsStr)]) {
+    let mut child = std::process::Command::new(std::env::current_exe().unwrap());
+    child.args(["--exact", name, "--ignored", "--nocapture"]);
+    for (key, value) in env {
+        child.env(key, value);
+    }
+    let out = child.output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("1 passed"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[test]
 fn the_background_behind_each_pixel_is_the_one_above_or_below_it_as_displayed() {
     let mut gl = context();
@@ -376,19 +393,12 @@ fn link_failure_child() {
 #[test]
 fn a_program_that_fails_to_link_leaves_the_texture_untouched() {
     let cache = std::env::temp_dir().join(format!("contrastxr-gl-link-{}", std::process::id()));
-    let out = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["--exact", "link_failure_child", "--ignored", "--nocapture"])
-        .env("CONTRASTXR_FAULT", "gl-program-link")
-        .env("XDG_CACHE_HOME", &cache)
-        .output()
-        .unwrap();
+    let env = [
+        ("CONTRASTXR_FAULT", OsStr::new("gl-program-link")),
+        ("XDG_CACHE_HOME", cache.as_os_str()),
+    ];
+    run_child("link_failure_child", &env);
     let _ = std::fs::remove_dir_all(&cache);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success() && text.contains("1 passed"),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// `contrastxr enhance --engine opengl` runs the OpenGL backend on its offline context and
@@ -477,21 +487,11 @@ fn compile_child() {
 #[test]
 fn frames_pass_through_while_programs_build_and_binaries_are_kept() {
     let cache = std::env::temp_dir().join(format!("contrastxr-gl-build-{}", std::process::id()));
-    let out = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["--exact", "compile_child", "--ignored", "--nocapture"])
-        .env("XDG_CACHE_HOME", &cache)
-        .output()
-        .unwrap();
+    run_child("compile_child", &[("XDG_CACHE_HOME", cache.as_os_str())]);
     let files: Vec<_> = std::fs::read_dir(cache.join("contrastxr"))
         .map(|d| d.filter_map(|e| e.ok()).map(|e| e.file_name()).collect())
         .unwrap_or_default();
     let _ = std::fs::remove_dir_all(&cache);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success() && text.contains("1 passed"),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(
         files
             .iter()
@@ -609,16 +609,9 @@ fn old_context_child() {
 /// refused with one line saying why, before the engine makes any GL call past the queries.
 #[test]
 fn a_context_older_than_4_5_is_refused_with_the_reason() {
-    let out = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["--exact", "old_context_child", "--ignored", "--nocapture"])
-        .env("MESA_GL_VERSION_OVERRIDE", "4.3")
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success() && text.contains("1 passed"),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
+    run_child(
+        "old_context_child",
+        &[("MESA_GL_VERSION_OVERRIDE", OsStr::new("4.3"))],
     );
 }
 
@@ -1029,19 +1022,12 @@ fn the_engines_work_sends_the_apps_debug_callback_nothing() {
     // A cache folder of its own (the program binaries' and Mesa's), so that the programs are
     // compiled, and their logs made, in the call.
     let cache = std::env::temp_dir().join(format!("contrastxr-debug-{}", std::process::id()));
-    let out = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["--exact", "debug_output_child", "--ignored", "--nocapture"])
-        .env("XDG_CACHE_HOME", &cache)
-        .env("CONTRASTXR_FAULT", "gl-driver-message")
-        .output()
-        .unwrap();
+    let env = [
+        ("XDG_CACHE_HOME", cache.as_os_str()),
+        ("CONTRASTXR_FAULT", OsStr::new("gl-driver-message")),
+    ];
+    run_child("debug_output_child", &env);
     let _ = std::fs::remove_dir_all(&cache);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success() && text.contains("1 passed"),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// Run by `the_engines_work_sends_the_apps_debug_callback_nothing` with an empty cache folder.
