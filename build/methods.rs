@@ -8,7 +8,7 @@ include!("../src/algorithm/method/table.rs");
 pub struct BuildMethod {
     pub name: &'static str,
     pub code: u32,
-    /// `Scaled` or `Linear` (the entry's reference).
+    /// `Scaled`, `Linear` or `Perceptual` (the entry's reference).
     pub space: &'static str,
     pub wgsl: &'static str,
 }

@@ -7,7 +7,7 @@ use std::fs;
 
 use crate::colour::colour_constants;
 use crate::interface::*;
-use crate::methods::by_code;
+use crate::methods::{by_code, paper_code};
 
 /// Reads a shader file, telling cargo to run build.rs again when it changes.
 pub fn read(path: &str) -> String {
@@ -53,23 +53,31 @@ pub fn specialise((method, mode, format): (u32, u32, u32), extras: bool) -> Stri
     )
 }
 
-/// A method's WGSL, appended to shaders/enhance.wgsl in its variants: the entry's file, and a
-/// stand-in for the function of the other space (enhance.wgsl calls both, behind the constant
-/// METHOD_LINEAR).
+/// A method's WGSL, appended to shaders/enhance.wgsl in its variants: the entry's file, and
+/// stand-ins for the functions of the other spaces (enhance.wgsl calls all three, behind the
+/// constants METHOD_LINEAR and METHOD_PERCEPTUAL). A perceptual method spends the paper's
+/// change, so the paper's file comes with it.
 pub fn method_wgsl(code: u32) -> String {
     let m = by_code(code);
-    println!("cargo:rerun-if-changed={}", m.wgsl);
-    let own = fs::read_to_string(m.wgsl).unwrap_or_else(|e| panic!("{} ({}): {e}", m.wgsl, m.name));
+    let own = read(m.wgsl);
     let linear = m.space == "Linear";
-    let stand_in = if linear {
-        "fn method_scaled(s: Step) -> Colours {\n    return s.d;\n}\n"
-    } else {
-        "fn method_linear(display: Colours, bg: Background) -> Colours {\n    return display;\n}\n"
-    };
-    format!(
-        "\n// The method `{}` ({}).\nconst METHOD_LINEAR: bool = {linear};\n{own}{stand_in}",
+    let perceptual = m.space == "Perceptual";
+    let mut s = format!(
+        "\n// The method `{}` ({}).\nconst METHOD_LINEAR: bool = {linear};\nconst METHOD_PERCEPTUAL: bool = {perceptual};\n{own}",
         m.name, m.wgsl
-    )
+    );
+    if perceptual {
+        s += &read(by_code(paper_code()).wgsl);
+    }
+    if !perceptual {
+        s += "fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perceived {\n    return Perceived(paper, vec4<u32>(0u));\n}\n";
+    }
+    if linear {
+        s += "fn method_scaled(s: Step) -> Colours {\n    return s.d;\n}\n";
+    } else {
+        s += "fn method_linear(display: Colours, bg: Background) -> Colours {\n    return display;\n}\n";
+    }
+    s
 }
 
 /// Pixel access (shaders/access_*.wgsl, ACCESS_*): wide for regions whose rows are 16-byte

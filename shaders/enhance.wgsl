@@ -267,6 +267,17 @@ struct Enhanced {
     changed: vec4<bool>,
 }
 
+// What the perceptual method did with each pixel (PERCEIVED_*; 0 from every other method),
+// which its heatmap shows.
+const PERCEIVED_LEFT_ALONE: u32 = 1u;
+const PERCEIVED_TO_TARGET: u32 = 2u;
+const PERCEIVED_OUT_OF_REACH: u32 = 3u;
+
+struct Perceived {
+    out: Enhanced,
+    kind: vec4<u32>,
+}
+
 // The display pixels' background (docs/algorithm.md, Background preparation): `linear` sampled from the blurred camera
 // image (not attenuated: what subtraction uses), `scaled` the paper's B.
 struct Background {
@@ -274,17 +285,22 @@ struct Background {
     scaled: Colours,
 }
 
-fn enhance_linear(display: Colours, bg: Background) -> Enhanced {
+fn enhance_linear(display: Colours, bg: Background) -> Perceived {
     let b = bg.scaled;
     if (METHOD_LINEAR) {
         // A method in linear light (shaders/methods/, `method_linear`): every pixel changes.
         let out = method_linear(display, bg);
-        return Enhanced(cap_luminance(display, clip(out)), vec4<bool>(true));
+        return Perceived(Enhanced(cap_luminance(display, clip(out)), vec4<bool>(true)), vec4<u32>(0u));
     }
     let d = linear_to_scaled(display);
     let s = enhance_scaled(d, b);
     let changed = (s[0] != d[0]) | (s[1] != d[1]) | (s[2] != d[2]);
-    return Enhanced(cap_luminance(display, clip(scaled_to_linear(s))), changed);
+    let scaled = Enhanced(cap_luminance(display, clip(scaled_to_linear(s))), changed);
+    if (METHOD_PERCEPTUAL) {
+        // The paper's change spent by perception (shaders/methods/, `method_perceptual`).
+        return method_perceptual(display, bg, scaled);
+    }
+    return Perceived(scaled, vec4<u32>(0u));
 }
 
 // Unscaled CIE76 Delta E*ab between scaled-space colours.
@@ -323,11 +339,21 @@ fn enhance_group(x: u32, w: Words, bg: Background) -> Words {
     }
     let b = bg.scaled;
     let display = decode_stored(stored_colours(w));
-    let e = enhance_linear(display, bg);
+    let perceived = enhance_linear(display, bg);
+    let e = perceived.out;
     let stored = encode_stored(e.linear);
     var out = encode_words(w, stored);
     var changed = e.changed & !see_through(w);
-    if (MODE == MODE_HEATMAP) {
+    if (MODE == MODE_HEATMAP && METHOD_PERCEPTUAL) {
+        // Every content pixel by its class: left alone green, brought to the target cyan, out
+        // of reach magenta.
+        let k = perceived.kind;
+        let one = vec4<f32>(1.0);
+        let zero = vec4<f32>(0.0);
+        let reach = k == vec4<u32>(PERCEIVED_OUT_OF_REACH);
+        out = encode_words(w, Colours(select(zero, one, reach), select(one, zero, reach), select(zero, one, k >= vec4<u32>(PERCEIVED_TO_TARGET))));
+        changed = !see_through(w);
+    } else if (MODE == MODE_HEATMAP) {
         out = encode_words(w, Colours(vec4<f32>(0.0), vec4<f32>(1.0), vec4<f32>(1.0)));
         changed = changed & is_enhanced(b, display, stored);
     }

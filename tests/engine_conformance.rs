@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::conformance::{check_all_methods, nonconformant, projective};
+use common::conformance::{check_all_methods, nonconformant, projective, reference_params};
 use common::images::noise;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec;
@@ -206,6 +206,18 @@ fn isolated_pixels_in_edge_and_partial_tiles_are_enhanced() {
     });
 }
 
+/// `method` at settings where it changes most pixels: the defaults, but for the perceptual
+/// method a bright world and a target it spends the paper's whole change on.
+fn changing(method: Method) -> Params {
+    match method {
+        Method::Perceptual => perceptual(5000.0, 1.0),
+        method => Params {
+            method,
+            ..Params::default()
+        },
+    }
+}
+
 fn with_mode(mode: ViewMode) -> Params {
     Params {
         mode,
@@ -231,14 +243,11 @@ fn split_mode_is_original_left_enhanced_right_with_a_white_divider() {
     each_backend(|b| {
         let api = b.api();
         for method in Method::ALL {
-            let params = Params {
-                method,
-                ..Params::default()
-            };
+            let params = changing(method);
             let enhanced = enhance(b, &display, &camera, &params);
             let split_params = Params {
-                method,
-                ..with_mode(ViewMode::Split)
+                mode: ViewMode::Split,
+                ..changing(method)
             };
             let split = enhance(b, &display, &camera, &split_params);
             let half = w / 2;
@@ -273,7 +282,8 @@ fn heatmap_mode_marks_exactly_the_pixels_the_metric_counts_as_enhanced() {
     let camera = noise(80, 50, 17);
     each_backend(|b| {
         let api = b.api();
-        for method in Method::ALL {
+        // The perceptual method's heatmap shows its classes (the test below).
+        for method in Method::ALL.into_iter().filter(|&m| m != Method::Perceptual) {
             let params = Params {
                 method,
                 ..Params::default()
@@ -396,6 +406,7 @@ fn every_format_matches_cpu_for_every_method() {
             let bg = contrastxr::background_preparation::prepare_mapped(
                 &camera, w, h, &mapping, &params,
             );
+            let view = reference_params(&params, &mapping, w, camera.width);
             for format in b.pixel_formats() {
                 let words = (format.bytes_per_pixel() / 4) as usize;
                 let raw: Vec<u32> = display
@@ -430,7 +441,7 @@ fn every_format_matches_cpu_for_every_method() {
                         f64::from(input[3]),
                         bg.linear[i],
                         bg.scaled[i],
-                        &params,
+                        &view,
                     )
                     .unwrap_or(d_lin);
                     let g = as_srgb(format, g);
@@ -455,5 +466,129 @@ fn every_format_matches_cpu_for_every_method() {
                 );
             }
         }
+    });
+}
+
+/// The perceptual method's params at `world` nits and target `target`.
+fn perceptual(world: f64, target: f64) -> Params {
+    let mut p = Params {
+        method: Method::Perceptual,
+        ..Params::default()
+    };
+    p.perceptual.world_nits = world;
+    p.perceptual.target_contrast = target;
+    p
+}
+
+/// The perceptual method at the three light levels of docs/algorithm.md's evidence, at the
+/// default target and at target 1 (every pixel spends the paper's change), both frequency
+/// modes: within the contract, with few pixels excused as near a decision (the argmax over
+/// the candidates and the bisection may flip within the GPU tables' tolerance), and many
+/// changed, unlike the paper.
+#[test]
+fn perceptual_matches_cpu_at_three_light_levels() {
+    use contrastxr::algorithm::enhance_srgb8_trace;
+    use contrastxr::algorithm::perceptual_settings::Frequency;
+    let camera = noise(131, 83, 5);
+    let display = noise(97, 61, 21);
+    let mapping = Params::default().camera_mapping();
+    each_backend(|b| {
+        let api = b.api();
+        // At 500 nits most pixels already reach the default target: few change.
+        for (world, target, frequency, changing) in [
+            (20.0, 1.0, Frequency::Blur, 10),
+            (500.0, 0.05, Frequency::Blur, 100),
+            (5000.0, 0.05, Frequency::Ensemble, 10),
+            (5000.0, 1.0, Frequency::Blur, 10),
+        ] {
+            let mut params = perceptual(world, target);
+            params.perceptual.frequency = frequency;
+            let bad = nonconformant(b, &display, &camera, &mapping, &params);
+            assert!(bad.is_empty(), "{api} {world} nits: {bad:?}");
+            let (w, h) = (display.width, display.height);
+            let bg = contrastxr::background_preparation::prepare_mapped(
+                &camera, w, h, &mapping, &params,
+            );
+            let view = reference_params(&params, &mapping, w, camera.width);
+            let paper = Params {
+                method: Method::Paper,
+                ..view.clone()
+            };
+            let (mut near, mut changed, mut not_paper) = (0, 0, 0);
+            for (i, d) in display.pixels.iter().enumerate() {
+                let t = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &view);
+                let p = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &paper);
+                near += usize::from(t.near_threshold);
+                changed += usize::from(t.out != *d);
+                not_paper += usize::from(t.out != p.out);
+            }
+            let n = display.pixels.len();
+            assert!(
+                near * 10 < n,
+                "{api} {world} nits: {near} of {n} near a decision"
+            );
+            assert!(
+                changed * changing > n,
+                "{api} {world} nits: {changed} of {n} changed"
+            );
+            assert!(
+                not_paper * 2 > n,
+                "{api} {world} nits: {not_paper} like the paper"
+            );
+        }
+    });
+}
+
+/// The perceptual method's heatmap paints each content pixel by its class, as the CPU
+/// reference classes it: left alone green, brought to the target cyan, out of reach magenta.
+#[test]
+fn the_perceptual_heatmap_shows_the_three_classes() {
+    use contrastxr::algorithm::perception::perceived_contrast::Model;
+    use contrastxr::algorithm::perception::perceptual_pixel::{perceptual_over_paper, Class};
+    let display = noise(60, 40, 51);
+    let camera = noise(80, 50, 17);
+    let mapping = Params::default().camera_mapping();
+    each_backend(|b| {
+        let api = b.api();
+        let params = Params {
+            mode: ViewMode::Heatmap,
+            ..perceptual(3000.0, 0.2)
+        };
+        let heat = b
+            .enhance_mapped(&display, &camera, &mapping, &params)
+            .unwrap_or_else(|e| panic!("{api}: {e}"));
+        let (w, h) = (display.width, display.height);
+        let bg =
+            contrastxr::background_preparation::prepare_mapped(&camera, w, h, &mapping, &params);
+        let view = reference_params(&params, &mapping, w, camera.width);
+        let model = Model::of_params(&view);
+        let mut counts = [0usize; 3];
+        let mut disagree = 0;
+        for (i, (d, hm)) in display.pixels.iter().zip(&heat.pixels).enumerate() {
+            let lin = contrastxr::colour::srgb8_to_linear([d[0], d[1], d[2]]);
+            let alpha = f64::from(d[3]) / 255.0;
+            let want = match perceptual_over_paper(lin, alpha, bg.linear[i], &view, &model).class {
+                Class::NoContent => *d,
+                Class::LeftAlone => [0, 255, 0, d[3]],
+                Class::BroughtToTarget => [0, 255, 255, d[3]],
+                Class::OutOfReach => [255, 0, 255, d[3]],
+            };
+            for (k, colour) in [[0, 255, 0], [0, 255, 255], [255, 0, 255]]
+                .iter()
+                .enumerate()
+            {
+                counts[k] += usize::from(hm[..3] == colour[..]);
+            }
+            disagree += usize::from(*hm != want);
+        }
+        assert!(
+            counts.iter().all(|&c| c > 20),
+            "{api}: classes painted {counts:?}"
+        );
+        // f32 against f64 may flip a pixel sitting on the target.
+        assert!(
+            disagree * 100 <= display.pixels.len(),
+            "{api}: {disagree} pixels disagree"
+        );
     });
 }

@@ -4,6 +4,7 @@
 use glam::DVec3;
 
 use super::conformance::{PixelTrace, NEAR_THRESHOLD};
+use super::constraints::Margin;
 use super::params::{Params, SUBTRACTION_K_B, SUBTRACTION_K_V};
 use super::reference_fn::Reference;
 use super::scaled::enhance_scaled_traced;
@@ -67,10 +68,23 @@ fn enhance_linear_traced(
     } else {
         colour::scaled_to_linear(out.p)
     };
-    LinearOutcome {
+    let scaled = LinearOutcome {
         unclipped,
         margin: out.margin,
         cap_scale: luminance_cap_scale(display_linear, unclipped, params.luminance_cap),
+    };
+    match params.method.entry().reference {
+        // The paper's output is this method's budget (enhance_scaled_traced ran the paper).
+        Reference::Perceptual(method) => {
+            let mut m = Margin(scaled.margin);
+            let out = method(display_linear, bg_linear, scaled.linear(), params, &mut m);
+            LinearOutcome {
+                unclipped: out,
+                margin: m.0,
+                cap_scale: 1.0,
+            }
+        }
+        _ => scaled,
     }
 }
 

@@ -16,6 +16,10 @@ pub enum Reference {
     Scaled(fn(DVec3, DVec3, DVec3, &Params, &mut Margin) -> DVec3),
     /// The unclipped output from the display and the (unattenuated) background, linear light.
     Linear(fn(DVec3, DVec3, &Params) -> DVec3),
+    /// The output, clipped to [0, 1], from the display, the (unattenuated) background and the
+    /// paper method's output (clipped), linear light: a method that spends the paper's colour
+    /// change its own way. `Margin` records how close each decision came to flipping.
+    Perceptual(fn(DVec3, DVec3, DVec3, &Params, &mut Margin) -> DVec3),
 }
 
 impl std::fmt::Debug for Reference {
@@ -23,6 +27,7 @@ impl std::fmt::Debug for Reference {
         f.write_str(match self {
             Reference::Scaled(_) => "Scaled",
             Reference::Linear(_) => "Linear",
+            Reference::Perceptual(_) => "Perceptual",
         })
     }
 }

@@ -35,6 +35,8 @@ pub fn enhance_scaled_traced(display: DVec3, background: DVec3, params: &Params)
         params.method.entry().reference,
     ) {
         (Some(e), Reference::Scaled(method)) => method(display, background, e, params, &mut m),
+        // A perceptual method spends the paper's change (src/algorithm/pixel.rs).
+        (Some(e), Reference::Perceptual(_)) => paper(display, background, e, params, &mut m),
         _ => display,
     };
     ScaledOutcome { p, margin: m.0 }

@@ -21,9 +21,10 @@ pub fn nonconformant(
         .unwrap_or_else(|e| panic!("{api}: {e}"));
     let (w, h) = (display.width, display.height);
     let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, mapping, params);
+    let view = reference_params(params, mapping, w, camera.width);
     let mut bad = Vec::new();
     for (i, (d, g)) in display.pixels.iter().zip(&out.pixels).enumerate() {
-        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], params);
+        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &view);
         if !conformant(&trace, *g) {
             bad.push(format!(
                 "pixel {i}: display {d:?} cpu {:?} {api} {g:?}",
@@ -32,6 +33,26 @@ pub fn nonconformant(
         }
     }
     bad
+}
+
+/// The params the CPU reference takes for a view `width` pixels wide over a camera frame
+/// `camera_width` wide placed by `mapping`, at the offline engines' pixels per degree: the
+/// `blur` frequency resolved as the engines resolve it for the view.
+pub fn reference_params(
+    params: &Params,
+    mapping: &CameraMapping,
+    width: u32,
+    camera_width: u32,
+) -> Params {
+    use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
+    use contrastxr::gpu::core::perceptual_words::{view_params, ViewGeometry};
+    let geometry = ViewGeometry {
+        mapping,
+        display_width: width,
+        camera_width,
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
+    };
+    view_params(params, &geometry)
 }
 
 pub fn check_all_methods(

@@ -74,6 +74,7 @@ macro_rules! define_methods {
 
 /// The functions the entries name (`reference: Scaled(f)` or `Linear(f)`).
 mod reference {
+    pub(super) use crate::algorithm::perception::perceptual_pixel::perceptual_step;
     pub(super) use crate::algorithm::pixel::*;
     pub(super) use crate::algorithm::scaled::*;
 }
@@ -248,6 +249,9 @@ mod tests {
                 Reference::Scaled(_) => "fn method_scaled(s: Step) -> Colours",
                 Reference::Linear(_) => {
                     "fn method_linear(display: Colours, bg: Background) -> Colours"
+                }
+                Reference::Perceptual(_) => {
+                    "fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perceived"
                 }
             };
             assert!(wgsl.contains(wanted), "{} lacks `{wanted}`", e.wgsl);

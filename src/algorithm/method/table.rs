@@ -21,10 +21,13 @@
 // - `reference`: `Scaled(f)`, f in src/algorithm/scaled.rs, called with D, B and the change
 //   vector E in the scaled space where there is one (|B| > 1e-6), returning P; or `Linear(f)`,
 //   f in src/algorithm/pixel.rs, called with the display and background in linear light,
-//   returning the unclipped output;
+//   returning the unclipped output; or `Perceptual(f)`, f in
+//   src/algorithm/perception/perceptual_pixel.rs, called with the display, the background
+//   and the paper method's output in linear light, returning the clipped output;
 // - `wgsl`: its shader file, which defines `method_scaled(s: Step) -> Colours` (Scaled) or
-//   `method_linear(display: Colours, bg: Background) -> Colours` (Linear), see
-//   shaders/enhance.wgsl;
+//   `method_linear(display: Colours, bg: Background) -> Colours` (Linear) or
+//   `method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perceived`
+//   (Perceptual, which runs after the paper's `method_scaled`), see shaders/enhance.wgsl;
 // - `settings`: the config keys it reads (beyond the shared background preparation);
 // - `push`: the push-constant fields (src/gpu/core/interface.rs, PARAMS) its WGSL reads;
 // - `passes`: its GPU passes in order (src/gpu/core/plan.rs makes them the steps both backends run).
@@ -95,6 +98,17 @@ macro_rules! with_methods {
                 wgsl: "shaders/methods/luminance.wgsl",
                 settings: ["lambda_e", "luminance_cap"],
                 push: ["lambda_e"],
+                passes: [Classify, FinishTiles, Enhance],
+            },
+            Perceptual {
+                name: "perceptual",
+                code: 6,
+                doc: "The paper's colour change spent where the eye gains most, down to the least that reaches target_contrast (beyond the paper).",
+                comparison: false,
+                reference: Perceptual(perceptual_step),
+                wgsl: "shaders/methods/perceptual.wgsl",
+                settings: ["lambda_e", "lambda_jnd_scaled", "achromatic_boost", "luminance_cap", "display_peak_nits", "world_nits", "target_contrast", "min_luminance", "frequency"],
+                push: [],
                 passes: [Classify, FinishTiles, Enhance],
             },
         }

@@ -2,8 +2,12 @@
 //! frequency*): from the background's blur, an ensemble of image frequencies, or a fixed number
 //! of cycles per degree. Pure.
 
+use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 pub use crate::algorithm::perceptual_settings::Frequency;
+
+/// A view's pixels per degree where nothing says otherwise (the command line's default).
+pub const DEFAULT_PIXELS_PER_DEGREE: f64 = 20.0;
 
 /// The midpoints (cpd) of four bands of equal probability of a 1/f^1.8 amplitude spectrum over
 /// 1 to 30 cpd: the frequency distribution of images.
@@ -57,6 +61,46 @@ impl BlurGeometry {
         }
     }
 
+    /// The blur of `params` in a view `display_width` pixels wide with `pixels_per_degree`,
+    /// over a camera frame `camera_width` pixels wide placed by `mapping`: one camera pixel
+    /// spans `display_width / (|d camera_u / d display_u| camera_width)` display pixels, the
+    /// derivative taken at the view's centre (a projective mapping's scale varies across the
+    /// view). Equal to [`manual`](Self::manual) for the manual mapping.
+    pub fn of_view(
+        params: &Params,
+        mapping: &CameraMapping,
+        display_width: u32,
+        camera_width: u32,
+        pixels_per_degree: f64,
+    ) -> BlurGeometry {
+        let [a, b, c] = mapping.rows[0];
+        let [g, h, i] = mapping.rows[2];
+        let (u, v) = (0.5, 0.5);
+        let z = g * u + h * v + i;
+        let du = (a * z - g * (a * u + b * v + c)) / (z * z);
+        BlurGeometry {
+            display_px_per_camera_px: f64::from(display_width)
+                / (du.abs() * f64::from(camera_width)),
+            pixels_per_degree,
+            ..BlurGeometry::unplaced(params)
+        }
+    }
+
+    /// The blur of `params` where no view places it (one pixel's reference): one display
+    /// pixel per camera pixel at [`DEFAULT_PIXELS_PER_DEGREE`].
+    pub fn unplaced(params: &Params) -> BlurGeometry {
+        let blurred = params.blur && params.blur_size > 1;
+        BlurGeometry {
+            sigma_camera_px: if blurred {
+                f64::from(params.blur_sigma)
+            } else {
+                0.0
+            },
+            display_px_per_camera_px: 1.0,
+            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
+        }
+    }
+
     /// The blur's sigma in degrees of view.
     pub fn sigma_deg(&self) -> f64 {
         self.sigma_camera_px * self.display_px_per_camera_px / self.pixels_per_degree
@@ -99,6 +143,17 @@ impl Frequency {
             Frequency::Cpd(f) => Frequencies::One(f),
         }
     }
+}
+
+/// `params` for one view of blur `blur`: its `frequency` setting, where `blur`, replaced by the
+/// number of cycles per degree the view's blur gives, so that every pixel of the view (on the
+/// GPU and in the CPU reference) is judged at the same frequency.
+pub fn for_view(params: &Params, blur: &BlurGeometry) -> Params {
+    let mut out = params.clone();
+    if let Frequency::Blur = params.perceptual.frequency {
+        out.perceptual.frequency = Frequency::Cpd(blur.halving_cpd());
+    }
+    out
 }
 
 #[cfg(test)]
@@ -146,6 +201,29 @@ mod tests {
         };
         let manual = BlurGeometry::manual(&unblurred, 640, 960, 20.0);
         assert_eq!(manual.halving_cpd(), BLUR_CPD_MAX);
+        // The manual mapping as a CameraMapping gives the same: 640 / (0.65 * 960) display px
+        // per camera px.
+        let p = Params::default();
+        let view = BlurGeometry::of_view(&p, &p.camera_mapping(), 640, 960, 20.0);
+        assert!(
+            (view.display_px_per_camera_px - 640.0 / 624.0).abs() < 1e-6,
+            "{view:?}"
+        );
+        // A projective mapping z = 0.5 u + 0.75 at the centre (z = 1): d cu / du = (2 * 1 -
+        // 0.5 * (2 * 0.5 + 0)) / 1 = 1.5, so 600 / (1.5 * 800) = 0.5 display px per camera px.
+        let projective = CameraMapping {
+            rows: [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.5, 0.0, 0.75]],
+        };
+        let view = BlurGeometry::of_view(&p, &projective, 600, 800, 20.0);
+        assert!(
+            (view.display_px_per_camera_px - 0.5).abs() < 1e-12,
+            "{view:?}"
+        );
+        let resolved = for_view(&p, &view);
+        assert_eq!(
+            resolved.perceptual.frequency,
+            Frequency::Cpd(view.halving_cpd())
+        );
         assert_eq!(Frequency::Ensemble.resolve(&g).cpd(), &ENSEMBLE_CPD);
     }
 }

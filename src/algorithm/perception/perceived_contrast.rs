@@ -6,8 +6,9 @@
 use glam::DVec3;
 
 use super::castle_csf::{self, Real};
-use super::frequency::Frequencies;
+use super::frequency::{BlurGeometry, Frequencies};
 use super::light::{Light, Pattern};
+use crate::algorithm::params::Params;
 use crate::algorithm::perceptual_settings::{PerceptualSettings, LUMINANCE_MAX};
 
 /// The RMS cone contrast `sqrt(((dL/L_m)^2 + (dM/M_m)^2 + (dS/S_m)^2) / 3)`; 0 where there is no
@@ -64,6 +65,9 @@ pub struct Model {
     /// The c' at which content counts as visible enough.
     pub target_contrast: f64,
     pub frequencies: Frequencies,
+    /// A factor on every threshold multiple C: 1 for the model itself. The conformance trace
+    /// varies it by the GPU tables' tolerance to find the pixels whose output they may flip.
+    pub threshold_scale: f64,
 }
 
 impl Model {
@@ -82,7 +86,23 @@ impl Model {
             min_luminance: settings.min_luminance,
             target_contrast: settings.target_contrast,
             frequencies,
+            threshold_scale: 1.0,
         }
+    }
+
+    /// The model of `params`: its perceptual settings behind its lens, the frequency setting
+    /// resolved as [`BlurGeometry::unplaced`] says where it is `blur` (a view's engine resolves
+    /// it for the view first, `frequency::for_view`).
+    pub fn of_params(params: &Params) -> Model {
+        let frequencies = params
+            .perceptual
+            .frequency
+            .resolve(&BlurGeometry::unplaced(params));
+        Model::new(
+            &params.perceptual,
+            f64::from(params.transmittance),
+            frequencies,
+        )
     }
 
     /// The luminance the sensitivities are taken at for a pattern of mean luminance `y`:
@@ -99,7 +119,10 @@ impl Model {
         let cpd = self.frequencies.cpd();
         let sum: f64 = cpd
             .iter()
-            .map(|&f| contrast(&pattern, y, f).perceived)
+            .map(|&f| {
+                let c = contrast(&pattern, y, f);
+                kulikowski(c.physical, self.threshold_scale * c.threshold_multiple)
+            })
             .sum();
         sum / cpd.len() as f64
     }

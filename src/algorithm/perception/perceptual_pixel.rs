@@ -9,6 +9,8 @@ use glam::DVec3;
 
 use super::directions::DIRECTIONS;
 use super::perceived_contrast::Model;
+use crate::algorithm::conformance::NEAR_THRESHOLD;
+use crate::algorithm::constraints::Margin;
 use crate::algorithm::params::{Method, Params};
 use crate::algorithm::pixel::enhance_linear;
 use crate::colour;
@@ -20,6 +22,16 @@ pub const BISECTION_STEPS: u32 = 8;
 /// it: the round trip CIELAB -> linear RGB -> CIELAB of an unclipped candidate is exact only
 /// to about 1e-12.
 pub const BUDGET_SLACK: f64 = 1e-6;
+
+/// The relative tolerance of the GPU's threshold multiples C: its f32 sensitivity tables are
+/// within 5e-4 of the closed form (src/algorithm/perception/tables.rs), and the colour
+/// conversions add less. A pixel whose output changes when every C is scaled by 1 -+ this
+/// may legitimately come out of the GPU as either (docs/algorithm.md, Conformance).
+pub const THRESHOLD_TOLERANCE: f64 = 2e-3;
+
+/// A candidate's CIELAB change closer to the budget than this (Delta E, plus the same
+/// fraction of the budget) may be kept or dropped either way in f32.
+pub const CHANGE_NEAR: f64 = 1e-3;
 
 /// What the method did with a pixel (docs/algorithm.md, *What it reports*).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -75,6 +87,26 @@ pub fn perceptual(
     paper_output: DVec3,
     model: &Model,
 ) -> Outcome {
+    perceptual_traced(
+        display,
+        alpha,
+        background,
+        paper_output,
+        model,
+        &mut Margin::new(),
+    )
+}
+
+/// [`perceptual`], recording in `m` how close each of its decisions came to going the other
+/// way.
+fn perceptual_traced(
+    display: DVec3,
+    alpha: f64,
+    background: DVec3,
+    paper_output: DVec3,
+    model: &Model,
+    m: &mut Margin,
+) -> Outcome {
     if alpha == 0.0 || display == DVec3::ZERO {
         return Outcome {
             output: display,
@@ -107,13 +139,22 @@ pub fn perceptual(
     // (docs/algorithm.md, *The method, per pixel*, step 4).
     let mut best = Candidate::new(paper, d_lab, background, model);
     for u in DIRECTIONS {
-        let colour = lab_to_clipped_linear(d_lab + budget * u);
+        let unclipped = colour::xyz_to_linear(colour::lab_to_xyz(d_lab + budget * u));
+        let colour = unclipped.clamp(DVec3::ZERO, DVec3::ONE);
         let c = Candidate::new(colour, d_lab, background, model);
+        if colour != unclipped {
+            // In the scaled units of NEAR_THRESHOLD: a gap of CHANGE_NEAR (1 + budget) is at it.
+            m.note(
+                (c.change - budget).abs() * NEAR_THRESHOLD / (CHANGE_NEAR * (1.0 + budget)),
+                0.0,
+            );
+        }
         if c.change > budget + BUDGET_SLACK {
             continue;
         }
-        if c.perceived > best.perceived || (c.perceived == best.perceived && c.change < best.change)
-        {
+        // Changes within the slack are equal: unclipped, every candidate's is the budget.
+        let smaller = c.change < best.change - BUDGET_SLACK;
+        if c.perceived > best.perceived || (c.perceived == best.perceived && smaller) {
             best = c;
         }
     }
@@ -185,4 +226,34 @@ pub fn perceptual_over_paper(
     let paper =
         enhance_linear(display, alpha, background, bg_scaled, &paper_params).unwrap_or(display);
     perceptual(display, alpha, background, paper, model)
+}
+
+/// The method's CPU reference as its entry in the method table names it
+/// (`Reference::Perceptual`): the output for linear display colour `display` over the linear,
+/// unattenuated background `background`, given the paper method's output `paper` (clipped),
+/// with the model of `params` ([`Model::of_params`]).
+/// Records in `m` the candidates' decisions near the budget and, as at its threshold, a pixel
+/// whose output the GPU tables' tolerance may change ([`THRESHOLD_TOLERANCE`]).
+pub fn perceptual_step(
+    display: DVec3,
+    background: DVec3,
+    paper: DVec3,
+    params: &Params,
+    m: &mut Margin,
+) -> DVec3 {
+    let model = Model::of_params(params);
+    let out = perceptual_traced(display, 1.0, background, paper, &model, m).output;
+    for scale in [1.0 - THRESHOLD_TOLERANCE, 1.0 + THRESHOLD_TOLERANCE] {
+        let varied = Model {
+            threshold_scale: scale,
+            ..model
+        };
+        let other = perceptual_traced(display, 1.0, background, paper, &varied, &mut Margin::new());
+        // Every output is a candidate or a bisection step: any difference is a decision that
+        // went the other way.
+        if other.output != out {
+            m.note(0.0, 0.0);
+        }
+    }
+    out
 }

@@ -72,13 +72,16 @@ pub const BINDING_SOURCE: u32 = 4;
 pub const BINDING_BLURRED_TEXELS: u32 = 5;
 /// The app's image layer, for enhancing in place (ACCESS_IN_PLACE).
 pub const BINDING_APP_IMAGE: u32 = 6;
+/// The perceptual model of the view's frame (PERCEPTUAL_* below), which the `perceptual`
+/// method reads: f32 words.
+pub const BINDING_PERCEPTUAL: u32 = 7;
 
 fn always(decl: &str) -> Option<String> {
     Some(decl.to_string())
 }
 
 /// Every binding, in binding order.
-pub const BINDINGS: [Binding; 7] = [
+pub const BINDINGS: [Binding; 8] = [
     Binding {
         number: BINDING_CAMERA,
         name: "camera",
@@ -134,7 +137,39 @@ pub const BINDINGS: [Binding; 7] = [
             _ => None,
         },
     },
+    Binding {
+        number: BINDING_PERCEPTUAL,
+        name: "perceptual",
+        kind: BindingKind::StorageBuffer,
+        wgsl: |_, _| always("<storage, read> perceptual: array<f32>"),
+    },
 ];
+
+/// The `perceptual` buffer (src/gpu/core/perceptual_words.rs writes it): a header of
+/// PERCEPTUAL_HEADER_WORDS f32 words at the PERCEPTUAL_AT_* offsets, then for each of the
+/// frame's frequencies (at most PERCEPTUAL_MAX_FREQUENCIES) three sensitivity tables of
+/// PERCEPTUAL_TABLE_LEN entries (achromatic, red-green, yellow-violet) over log10 Y.
+pub const PERCEPTUAL_HEADER_WORDS: u32 = 24;
+pub const PERCEPTUAL_TABLE_LEN: u32 = 256;
+pub const PERCEPTUAL_MAX_FREQUENCIES: u32 = 4;
+/// The buffer's size in words.
+pub const PERCEPTUAL_WORDS: u32 =
+    PERCEPTUAL_HEADER_WORDS + PERCEPTUAL_MAX_FREQUENCIES * 3 * PERCEPTUAL_TABLE_LEN;
+/// Header offsets: linear RGB -> LMS (9 words, row-major), RGB -> luminance (3 words), then
+/// one word each.
+pub const PERCEPTUAL_AT_RGB_TO_LMS: u32 = 0;
+pub const PERCEPTUAL_AT_RGB_TO_LUMINANCE: u32 = 9;
+/// Half the display's peak luminance (the pattern's amplitude per unit of display colour).
+pub const PERCEPTUAL_AT_HALF_PEAK: u32 = 12;
+/// The world's luminance at the eye for the camera's linear 1.0 (t W).
+pub const PERCEPTUAL_AT_WORLD: u32 = 13;
+pub const PERCEPTUAL_AT_LOG_MIN_LUMINANCE: u32 = 14;
+pub const PERCEPTUAL_AT_TARGET: u32 = 15;
+/// The number of frequencies, as a float.
+pub const PERCEPTUAL_AT_FREQUENCIES: u32 = 16;
+/// log10 Y of the tables' first entry, and the entries per unit of log10 Y.
+pub const PERCEPTUAL_AT_LOG_Y_FIRST: u32 = 17;
+pub const PERCEPTUAL_AT_ENTRIES_PER_LOG_Y: u32 = 18;
 
 /// Side of the square tiles the enhancement skips when they hold no foreground pixel, and the
 /// workgroup size (TILE x TILE) of the per-pixel passes.
@@ -216,7 +251,7 @@ pub const ENHANCE_MODES: [u32; 3] = [MODE_ENHANCE, MODE_SPLIT, MODE_HEATMAP];
 // The method codes are the method table's (src/algorithm/method/table.rs, `code`).
 
 /// The codes written into every shader as WGSL constants, by name.
-pub const CODES: [(&str, u32); 23] = [
+pub const CODES: [(&str, u32); 36] = [
     ("TILE", TILE),
     ("DECODE_ROWS", DECODE_ROWS),
     ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
@@ -240,6 +275,28 @@ pub const CODES: [(&str, u32); 23] = [
     ("ACCESS_NARROW", ACCESS_NARROW),
     ("ACCESS_WIDE", ACCESS_WIDE),
     ("ACCESS_IN_PLACE", ACCESS_IN_PLACE),
+    ("PERCEPTUAL_HEADER_WORDS", PERCEPTUAL_HEADER_WORDS),
+    ("PERCEPTUAL_TABLE_LEN", PERCEPTUAL_TABLE_LEN),
+    ("PERCEPTUAL_MAX_FREQUENCIES", PERCEPTUAL_MAX_FREQUENCIES),
+    ("PERCEPTUAL_AT_RGB_TO_LMS", PERCEPTUAL_AT_RGB_TO_LMS),
+    (
+        "PERCEPTUAL_AT_RGB_TO_LUMINANCE",
+        PERCEPTUAL_AT_RGB_TO_LUMINANCE,
+    ),
+    ("PERCEPTUAL_AT_HALF_PEAK", PERCEPTUAL_AT_HALF_PEAK),
+    ("PERCEPTUAL_AT_WORLD", PERCEPTUAL_AT_WORLD),
+    (
+        "PERCEPTUAL_AT_LOG_MIN_LUMINANCE",
+        PERCEPTUAL_AT_LOG_MIN_LUMINANCE,
+    ),
+    ("PERCEPTUAL_AT_TARGET", PERCEPTUAL_AT_TARGET),
+    ("PERCEPTUAL_AT_FREQUENCIES", PERCEPTUAL_AT_FREQUENCIES),
+    ("PERCEPTUAL_AT_LOG_Y_FIRST", PERCEPTUAL_AT_LOG_Y_FIRST),
+    (
+        "PERCEPTUAL_AT_ENTRIES_PER_LOG_Y",
+        PERCEPTUAL_AT_ENTRIES_PER_LOG_Y,
+    ),
+    ("PERCEPTUAL_WORDS", PERCEPTUAL_WORDS),
 ];
 
 /// The blurred background packs each texel's linear R, G, B into 21 bits each (two texels per

@@ -17,6 +17,7 @@ pub mod interface;
 pub mod modules;
 mod offline_backend;
 mod overlay;
+pub mod perceptual_words;
 pub mod pixel_codec;
 mod pixel_format;
 pub mod plan;

@@ -27,6 +27,7 @@ use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::interface::{in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
+use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::plan::{view_steps, NoPlan};
 use crate::gpu::core::{CameraRect, VariantKey};
 use crate::gpu::opengl::conv::GlFormat;
@@ -82,6 +83,9 @@ pub(super) struct ViewBuffers {
     pub(super) pixel_capacity: usize,
     pub(super) tiles: u32,
     pub(super) tile_capacity: usize,
+    /// The perceptual model of the view's frame (`perceptual` method; 0 until one needs it).
+    pub(super) perceptual: u32,
+    pub(super) perceptual_words: PerceptualWords,
 }
 
 pub struct GlFrameRunner {
@@ -402,6 +406,7 @@ impl GlFrameRunner {
             .collect();
         for (k, v) in views.iter().enumerate() {
             self.ensure_buffers(k, v, self.last_in_place[k])?;
+            self.upload_model(k, v, params, bg_size)?;
         }
         let state = SavedState::guard(&self.gl, &self.caps)?;
         // SAFETY: a framebuffer this engine made; the app's bindings are put back by the guard.
@@ -454,7 +459,10 @@ impl GlFrameRunner {
             self.framebuffer = 0;
         }
         for v in self.views.drain(..) {
-            for b in [v.pixels, v.tiles].into_iter().filter(|&b| b != 0) {
+            for b in [v.pixels, v.tiles, v.perceptual]
+                .into_iter()
+                .filter(|&b| b != 0)
+            {
                 // SAFETY: ours; the context is current (the caller's contract).
                 unsafe { (self.gl.delete_buffers)(1, &b) };
             }

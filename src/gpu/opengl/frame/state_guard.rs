@@ -10,14 +10,14 @@
 //! to the recipe's transfers of non-integer texels: it is set neutral for the call and put back.
 
 use crate::gpu::core::interface::{
-    BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES,
+    BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_TILES,
 };
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
 
 /// The indexed shader storage bindings the programs use.
-const STORAGE_SLOTS: [u32; 2] = [BINDING_PIXELS, BINDING_TILES];
+const STORAGE_SLOTS: [u32; 3] = [BINDING_PIXELS, BINDING_TILES, BINDING_PERCEPTUAL];
 
 /// The pixel store parameters, pack and unpack.
 const PIXEL_STORE: [gl::Enum; 16] = [
@@ -264,7 +264,7 @@ pub struct SavedState {
     /// The 2D texture and sampler bound to the unit the programs sample on.
     texture: i32,
     sampler: i32,
-    storage: [Indexed; 2],
+    storage: [Indexed; STORAGE_SLOTS.len()],
     image_unit: ImageUnit,
     storage_generic: i32,
     pack_buffer: i32,

@@ -6,10 +6,12 @@ use super::gl_frame_runner::{rows_from_bottom, GlFrameRunner, StoreThrough};
 use super::gl_view::{GlTarget, GlView};
 use super::region::{read_region, write_region};
 use crate::algorithm::params::Params;
+use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::interface::{
-    BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PIXELS, BINDING_TILES, TILE,
-    TILE_LIST_HEADER_WORDS,
+    BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_TILES,
+    TILE, TILE_LIST_HEADER_WORDS,
 };
+use crate::gpu::core::perceptual_words::ViewGeometry;
 use crate::gpu::core::plan::Step;
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::opengl::conv::GlFormat;
@@ -81,6 +83,38 @@ impl GlFrameRunner {
         Ok(())
     }
 
+    /// Uploads the view's perceptual model (src/gpu/core/perceptual_words.rs) into slot `k`'s
+    /// buffer where its method reads one (the buffer made on first use).
+    pub(super) fn upload_model(
+        &mut self,
+        k: usize,
+        v: &GlView,
+        params: &Params,
+        bg_size: (u32, u32),
+    ) -> Result<(), GlError> {
+        let g = &self.gl;
+        let slot = &mut self.views[k];
+        let geometry = ViewGeometry {
+            mapping: &v.mapping,
+            display_width: v.rect.2,
+            camera_width: bg_size.0,
+            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
+        };
+        let Some(words) = slot.perceptual_words.of_view(params, &geometry) else {
+            return Ok(());
+        };
+        let bytes = std::mem::size_of_val(words);
+        if slot.perceptual == 0 {
+            slot.perceptual = new_buffer(g, bytes, "perceptual model")?;
+        }
+        // SAFETY: the slot's buffer of exactly `bytes` bytes (PERCEPTUAL_WORDS words), from
+        // words that live through the call.
+        unsafe {
+            (g.named_buffer_sub_data)(slot.perceptual, 0, bytes as isize, words.as_ptr().cast())
+        };
+        Ok(())
+    }
+
     /// The recipe for one view (state saved by the caller; every object checked before).
     pub(super) fn run_view(
         &self,
@@ -126,6 +160,13 @@ impl GlFrameRunner {
                 }
             };
             (g.bind_buffer_base)(gl::SHADER_STORAGE_BUFFER, BINDING_TILES, buffers.tiles);
+            if buffers.perceptual != 0 {
+                (g.bind_buffer_base)(
+                    gl::SHADER_STORAGE_BUFFER,
+                    BINDING_PERCEPTUAL,
+                    buffers.perceptual,
+                );
+            }
             (g.active_texture)(gl::TEXTURE0 + BINDING_BLURRED_TEXELS);
             (g.bind_texture)(gl::TEXTURE_2D, bg.texture);
             (g.bind_sampler)(BINDING_BLURRED_TEXELS, 0);

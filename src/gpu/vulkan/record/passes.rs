@@ -6,6 +6,7 @@ use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::blurred_texels::TEXEL_BYTES;
 use crate::gpu::core::interface::{DECODE_ROWS, TILE};
+use crate::gpu::core::perceptual_words::ViewGeometry;
 use crate::gpu::core::plan::{encode, view_steps, Encoder, Grid, NoPlan, Reads, Shader};
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids;
@@ -217,6 +218,7 @@ impl Recorder {
             return Ok(());
         }
         let key = VariantKey::of(params, view.format, view.shape().access());
+        self.record_model(gpu, cmd, view, params, mapping);
         let mut push = PushConstants::new(params, view.camera_size, view.region, mapping);
         // 16 bits each (interface.rs, region_origin): swapchain images are far smaller.
         push.region_origin = (view.origin.0 & 0xffff) | (view.origin.1 << 16);
@@ -240,6 +242,42 @@ impl Recorder {
         };
         encode(&steps, &mut encoder).unwrap_or_else(|never| match never {});
         Ok(())
+    }
+
+    /// Records the upload of the view's perceptual model (src/gpu/core/perceptual_words.rs)
+    /// where its method reads one, ordered after earlier passes' reads of it and before the
+    /// enhancement's.
+    fn record_model(
+        &self,
+        gpu: &GpuDevice,
+        cmd: vk::CommandBuffer,
+        view: &ViewTarget,
+        params: &Params,
+        mapping: &CameraMapping,
+    ) {
+        let geometry = ViewGeometry {
+            mapping,
+            display_width: view.region.0,
+            camera_width: view.camera_size.0,
+            pixels_per_degree: view.pixels_per_degree,
+        };
+        let mut words = view
+            .perceptual_words
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let Some(words) = words.of_view(params, &geometry) else {
+            return;
+        };
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_ne_bytes()).collect();
+        let transfer = vk::PipelineStageFlags::TRANSFER;
+        barrier(gpu, cmd, COMPUTE, transfer);
+        // SAFETY: cmd is recording outside a render pass; the buffer is the view's, made with
+        // TRANSFER_DST usage and PERCEPTUAL_WORDS words (at most 65536 bytes, a multiple of 4).
+        unsafe {
+            gpu.device
+                .cmd_update_buffer(cmd, view.perceptual.raw, 0, &bytes)
+        };
+        barrier(gpu, cmd, transfer, COMPUTE);
     }
 
     /// The `enhance` pipeline for a view: the shared-fetch variant where the view's mapping

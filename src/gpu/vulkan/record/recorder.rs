@@ -8,10 +8,12 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::method::Pass;
 use crate::algorithm::params::{Params, ViewMode};
+use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::interface::TILE;
 use crate::gpu::core::interface::{
     in_place_texel, BindingKind, BINDING_APP_IMAGE, BINDING_BLURRED, BINDING_BLURRED_TEXELS,
-    BINDING_CAMERA, BINDING_PIXELS, BINDING_SOURCE, BINDING_TILES, TILE_LIST_HEADER_WORDS,
+    BINDING_CAMERA, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_SOURCE, BINDING_TILES,
+    PERCEPTUAL_WORDS, TILE_LIST_HEADER_WORDS,
 };
 use crate::gpu::core::shader_ids::{self, ShaderId};
 use crate::gpu::core::shares_fetches;
@@ -234,7 +236,8 @@ impl Recorder {
         let tile_usage =
             STORAGE | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let gpu_only = MemoryLocation::GpuOnly;
-        let [pixels, tiles] = alloc_all(
+        let model_usage = STORAGE | vk::BufferUsageFlags::TRANSFER_DST;
+        let [pixels, tiles, perceptual] = alloc_all(
             gpu,
             [
                 (px * bpp, usage, at, "pixels"),
@@ -243,6 +246,12 @@ impl Recorder {
                     tile_usage,
                     gpu_only,
                     "tiles",
+                ),
+                (
+                    u64::from(PERCEPTUAL_WORDS) * 4,
+                    model_usage,
+                    gpu_only,
+                    "perceptual",
                 ),
             ],
         )?;
@@ -253,6 +262,9 @@ impl Recorder {
             origin: (0, 0),
             pixels,
             tiles,
+            perceptual,
+            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
+            perceptual_words: Default::default(),
             set: vk::DescriptorSet::null(),
             camera_size: background.size,
         };
@@ -292,6 +304,7 @@ impl Recorder {
             (BINDING_TILES, &view.tiles),
             // The copy passes read the pixels in place unless a source is bound.
             (BINDING_SOURCE, &view.pixels),
+            (BINDING_PERCEPTUAL, &view.perceptual),
         ];
         for (binding, buffer) in buffers {
             self.write_set(gpu, view.set, binding, &[buffer]);
@@ -352,7 +365,7 @@ impl Recorder {
 
     pub fn destroy_view(&self, gpu: &GpuDevice, view: &mut ViewTarget) {
         free_set(gpu, self.pool, &mut view.set);
-        for b in [&mut view.pixels, &mut view.tiles] {
+        for b in [&mut view.pixels, &mut view.tiles, &mut view.perceptual] {
             b.destroy(gpu);
         }
     }

@@ -3,6 +3,7 @@
 //! live, and how they are allocated and freed.
 
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
+use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError};
 use ash::vk;
@@ -113,6 +114,13 @@ pub struct ViewTarget {
     pub pixels: GpuBuffer,
     /// Indirect dispatch arguments and the list of non-empty tiles (TileList in shaders/common.wgsl).
     pub tiles: GpuBuffer,
+    /// The perceptual model of the view's frame (`perceptual` method; src/gpu/core/perceptual_words.rs),
+    /// updated in the command buffer before the enhancement.
+    pub perceptual: GpuBuffer,
+    /// The view's pixels per degree (what resolves the `blur` frequency for it).
+    pub pixels_per_degree: f64,
+    /// The view's last perceptual words, kept while its model stays the same.
+    pub(super) perceptual_words: std::sync::Mutex<PerceptualWords>,
     pub(super) set: vk::DescriptorSet,
     pub(super) camera_size: (u32, u32),
 }

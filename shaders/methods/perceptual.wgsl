@@ -1,0 +1,183 @@
+// `perceptual` (docs/algorithm.md, The perceptual method; beyond the paper): the paper's
+// colour change r (its output, `paper`, from the paper's method_scaled, appended after this
+// file) spent where the eye gains most. A pixel already seen at the target contrast is left
+// alone; otherwise the most visible of the paper's colour and the colours r away in 18 fixed
+// CIELAB directions (clipped; dropped if clipping lengthened the change), then back toward the
+// display colour to the least change that reaches the target (8 halvings). c' is the model's
+// perceived contrast, evaluated from the view's tables in `perceptual` (PERCEPTUAL_* in
+// src/gpu/core/interface.rs), as src/algorithm/perception/tables.rs does in f32.
+
+// How far a candidate's CIELAB change may pass r and still count as within it (the CPU
+// reference's BUDGET_SLACK).
+const BUDGET_SLACK: f32 = 1e-6;
+const BISECTION_STEPS: u32 = 8u;
+const LOG10_E: f32 = 0.4342944819;
+
+fn model(at: u32) -> f32 {
+    return perceptual[at];
+}
+
+// A row of one of the header's matrices times each pixel's colour.
+fn model_row(at: u32, c: Colours) -> vec4<f32> {
+    return model(at) * c[0] + model(at + 1u) * c[1] + model(at + 2u) * c[2];
+}
+
+fn cone_responses(c: Colours) -> Colours {
+    let m = PERCEPTUAL_AT_RGB_TO_LMS;
+    return Colours(model_row(m, c), model_row(m + 3u, c), model_row(m + 6u, c));
+}
+
+// The world's light behind four pixels as it reaches the eye (t W): its cone responses and
+// luminance, the same for every candidate colour.
+struct World {
+    lms: Colours,
+    luminance: vec4<f32>,
+}
+
+fn world_of(background: Colours) -> World {
+    let tw = model(PERCEPTUAL_AT_WORLD);
+    let lms = cone_responses(background);
+    return World(Colours(tw * lms[0], tw * lms[1], tw * lms[2]), tw * model_row(PERCEPTUAL_AT_RGB_TO_LUMINANCE, background));
+}
+
+// Channel k's sensitivity of frequency f at table position x (linear between entries).
+fn sensitivity(f: u32, k: u32, i: vec4<u32>, t: vec4<f32>) -> vec4<f32> {
+    let at = PERCEPTUAL_HEADER_WORDS + (f * 3u + k) * PERCEPTUAL_TABLE_LEN;
+    let lo = vec4<f32>(model(at + i.x), model(at + i.y), model(at + i.z), model(at + i.w));
+    let hi = vec4<f32>(model(at + i.x + 1u), model(at + i.y + 1u), model(at + i.z + 1u), model(at + i.w + 1u));
+    return lo + t * (hi - lo);
+}
+
+// A cone contrast ratio, 0 where there is no light.
+fn ratio(a: vec4<f32>, m: vec4<f32>) -> vec4<f32> {
+    return select(vec4<f32>(0.0), a / m, m > vec4<f32>(0.0));
+}
+
+// c' of four linear display colours over their world: the physical RMS cone contrast of the
+// pattern (world, world + display) less its threshold, by castleCSF at the pattern's mean
+// luminance, averaged over the frame's frequencies.
+fn perceived_contrast(display: Colours, world: World) -> vec4<f32> {
+    let half_peak = model(PERCEPTUAL_AT_HALF_PEAK);
+    let lms = cone_responses(display);
+    let amp = Colours(half_peak * lms[0], half_peak * lms[1], half_peak * lms[2]);
+    let mean = world.lms + amp;
+    let y = world.luminance + half_peak * model_row(PERCEPTUAL_AT_RGB_TO_LUMINANCE, display);
+    let log_y = max(LOG10_E * log(max(y, vec4<f32>(1e-30))), vec4<f32>(model(PERCEPTUAL_AT_LOG_MIN_LUMINANCE)));
+    let k0 = ratio(amp[0], mean[0]);
+    let k1 = ratio(amp[1], mean[1]);
+    let k2 = ratio(amp[2], mean[2]);
+    let c = sqrt((k0 * k0 + k1 * k1 + k2 * k2) * (1.0 / 3.0));
+    // The opponent channels (castleCSF's K), each against the achromatic mean.
+    let m1 = abs(mean[0] + mean[1]);
+    let inv_m1 = select(vec4<f32>(0.0), 1.0 / m1, m1 > vec4<f32>(0.0));
+    let d1 = abs(amp[0] + amp[1]) * inv_m1;
+    let d2 = abs(amp[0] - 2.3112 * amp[1]) * inv_m1;
+    let d3 = abs(50.9875 * amp[2] - amp[0] - amp[1]) * inv_m1;
+    let last = f32(PERCEPTUAL_TABLE_LEN - 1u);
+    let x = clamp((log_y - model(PERCEPTUAL_AT_LOG_Y_FIRST)) * model(PERCEPTUAL_AT_ENTRIES_PER_LOG_Y), vec4<f32>(0.0), vec4<f32>(last));
+    let i = min(vec4<u32>(x), vec4<u32>(PERCEPTUAL_TABLE_LEN - 2u));
+    let t = x - vec4<f32>(i);
+    let n = u32(model(PERCEPTUAL_AT_FREQUENCIES));
+    var sum = vec4<f32>(0.0);
+    for (var f = 0u; f < n; f++) {
+        let a = d1 * sensitivity(f, 0u, i, t);
+        let rg = d2 * sensitivity(f, 1u, i, t);
+        let yv = d3 * sensitivity(f, 2u, i, t);
+        let multiple = sqrt(a * a + rg * rg + yv * yv);
+        let kept = select(vec4<f32>(0.0), max(1.0 - 1.0 / multiple, vec4<f32>(0.0)), multiple > vec4<f32>(0.0));
+        sum += c * kept;
+    }
+    return sum / f32(n);
+}
+
+// The 18 directions, unit vectors in CIELAB (L*, a*, b*): the 6 axes, the 8 diagonals of the
+// cube, the 4 diagonals of the a*b* plane.
+fn direction(k: u32) -> vec3<f32> {
+    let s3 = 0.57735026919;
+    let s2 = 0.70710678119;
+    if (k < 6u) {
+        let axis = k / 2u;
+        let sign = select(1.0, -1.0, (k & 1u) != 0u);
+        return sign * vec3<f32>(f32(axis == 0u), f32(axis == 1u), f32(axis == 2u));
+    }
+    if (k < 14u) {
+        let j = k - 6u;
+        return s3 * vec3<f32>(select(1.0, -1.0, (j & 4u) != 0u), select(1.0, -1.0, (j & 2u) != 0u), select(1.0, -1.0, (j & 1u) != 0u));
+    }
+    let j = k - 14u;
+    return s2 * vec3<f32>(0.0, select(1.0, -1.0, (j & 2u) != 0u), select(1.0, -1.0, (j & 1u) != 0u));
+}
+
+// A CIELAB step (Delta E units) as a step in the scaled space, per pixel of length r.
+fn scaled_step(u: vec3<f32>, r: vec4<f32>) -> Colours {
+    return Colours(r * (u.x / 50.0), r * (u.y / 128.0), r * (u.z / 128.0));
+}
+
+// The best candidate so far, per pixel.
+struct Best {
+    colour: Colours,
+    scaled: Colours,
+    change: vec4<f32>,
+    perceived: vec4<f32>,
+}
+
+fn keep_better(best: Best, colour: Colours, scaled: Colours, change: vec4<f32>, perceived: vec4<f32>, valid: vec4<bool>) -> Best {
+    // Changes within the slack are equal: unclipped, every candidate's is the budget.
+    let smaller = change < best.change - BUDGET_SLACK;
+    let better = valid & ((perceived > best.perceived) | ((perceived == best.perceived) & smaller));
+    return Best(pick(best.colour, colour, better), pick(best.scaled, scaled, better), select(best.change, change, better), select(best.perceived, perceived, better));
+}
+
+fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perceived {
+    let world = world_of(bg.linear);
+    let goal = model(PERCEPTUAL_AT_TARGET);
+    let before = perceived_contrast(display, world);
+    let d = linear_to_scaled(display);
+    let paper_scaled = linear_to_scaled(paper.linear);
+    // The paper's change; none where the paper leaves the pixel.
+    let budget = select(vec4<f32>(0.0), delta_e(d, paper_scaled), paper.changed);
+    let alone = before >= vec4<f32>(goal);
+    let none = !alone & (budget == vec4<f32>(0.0));
+    let unchanged = Enhanced(display, vec4<bool>(false));
+    let kind = select(select(vec4<u32>(0u), vec4<u32>(PERCEIVED_OUT_OF_REACH), none), vec4<u32>(PERCEIVED_LEFT_ALONE), alone);
+    if (all(alone | none)) {
+        return Perceived(unchanged, kind);
+    }
+    var best = Best(paper.linear, paper_scaled, budget, perceived_contrast(paper.linear, world));
+    for (var k = 0u; k < 18u; k++) {
+        let lab = d + scaled_step(direction(k), budget);
+        let unclipped = scaled_to_linear(lab);
+        let colour = clip(unclipped);
+        let clipped = (colour[0] != unclipped[0]) | (colour[1] != unclipped[1]) | (colour[2] != unclipped[2]);
+        // Clipping in linear RGB may lengthen the change beyond the paper's: then it is no
+        // candidate. Unclipped, the change is the budget.
+        var scaled = lab;
+        var change = budget;
+        if (any(clipped)) {
+            let back = linear_to_scaled(colour);
+            scaled = pick(lab, back, clipped);
+            change = select(budget, delta_e(d, back), clipped);
+        }
+        let valid = change <= budget + BUDGET_SLACK;
+        best = keep_better(best, colour, scaled, change, perceived_contrast(colour, world), valid);
+    }
+    let reached = best.perceived >= vec4<f32>(goal);
+    var out = best.colour;
+    if (any(reached & !alone & !none)) {
+        // Back toward D on the straight CIELAB line: c'(D) < target <= c'(1).
+        var lo = vec4<f32>(0.0);
+        var hi = vec4<f32>(1.0);
+        let span = best.scaled - d;
+        for (var step = 0u; step < BISECTION_STEPS; step++) {
+            let mid = 0.5 * (lo + hi);
+            let colour = clip(scaled_to_linear(d + per_pixel(mid, span)));
+            let ok = perceived_contrast(colour, world) >= vec4<f32>(goal);
+            hi = select(hi, mid, ok);
+            lo = select(mid, lo, ok);
+            out = pick(out, colour, ok);
+        }
+    }
+    let moved = !alone & !none;
+    let moved_kind = select(vec4<u32>(PERCEIVED_OUT_OF_REACH), vec4<u32>(PERCEIVED_TO_TARGET), reached);
+    return Perceived(Enhanced(pick(display, out, moved), moved), select(kind, moved_kind, moved));
+}

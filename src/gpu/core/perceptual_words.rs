@@ -1,0 +1,145 @@
+//! A view's `perceptual` buffer (src/gpu/core/interface.rs, PERCEPTUAL_*): the perceptual
+//! model of its frame as the `perceptual` method's shader reads it, the f32 tables of
+//! src/algorithm/perception/tables.rs laid out in words. Both backends upload these words as
+//! they are; a view's words are made again only when its model changes.
+
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::params::{Method, Params};
+use crate::algorithm::perception::frequency::{for_view, BlurGeometry};
+use crate::algorithm::perception::perceived_contrast::Model;
+use crate::algorithm::perception::tables::{
+    PerceptualTables, LOG_LUMINANCE_MIN, LOG_LUMINANCE_STEP, TABLE_LEN,
+};
+use crate::gpu::core::interface::*;
+
+/// Where a view lies and how finely: what resolves the `blur` frequency for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewGeometry<'a> {
+    pub mapping: &'a CameraMapping,
+    pub display_width: u32,
+    pub camera_width: u32,
+    pub pixels_per_degree: f64,
+}
+
+/// The params of one view for the `perceptual` method: `params` with the `blur` frequency
+/// resolved for the view's geometry, what the CPU reference of the view's pixels takes too.
+pub fn view_params(params: &Params, view: &ViewGeometry) -> Params {
+    let blur = BlurGeometry::of_view(
+        params,
+        view.mapping,
+        view.display_width,
+        view.camera_width,
+        view.pixels_per_degree,
+    );
+    for_view(params, &blur)
+}
+
+/// The words of a model (PERCEPTUAL_WORDS of them; unused frequencies zero).
+pub fn model_words(model: &Model) -> Vec<u32> {
+    let tables = PerceptualTables::new(model);
+    let mut w = vec![0f32; PERCEPTUAL_WORDS as usize];
+    let at = |i: u32| i as usize;
+    for (r, row) in tables.rgb_to_lms.iter().enumerate() {
+        w[at(PERCEPTUAL_AT_RGB_TO_LMS) + 3 * r..][..3].copy_from_slice(row);
+    }
+    w[at(PERCEPTUAL_AT_RGB_TO_LUMINANCE)..][..3].copy_from_slice(&tables.rgb_to_luminance);
+    w[at(PERCEPTUAL_AT_HALF_PEAK)] = 0.5 * tables.display_peak_nits;
+    w[at(PERCEPTUAL_AT_WORLD)] = tables.world_nits_at_eye;
+    w[at(PERCEPTUAL_AT_LOG_MIN_LUMINANCE)] = tables.log_min_luminance;
+    w[at(PERCEPTUAL_AT_TARGET)] = tables.target_contrast;
+    let n = tables
+        .frequencies
+        .len()
+        .min(PERCEPTUAL_MAX_FREQUENCIES as usize);
+    w[at(PERCEPTUAL_AT_FREQUENCIES)] = n as f32;
+    w[at(PERCEPTUAL_AT_LOG_Y_FIRST)] = LOG_LUMINANCE_MIN as f32;
+    w[at(PERCEPTUAL_AT_ENTRIES_PER_LOG_Y)] = (1.0 / LOG_LUMINANCE_STEP) as f32;
+    for (f, t) in tables.frequencies.iter().take(n).enumerate() {
+        for (k, channel) in [&t.achromatic, &t.red_green, &t.yellow_violet]
+            .into_iter()
+            .enumerate()
+        {
+            let start = at(PERCEPTUAL_HEADER_WORDS) + (3 * f + k) * TABLE_LEN;
+            w[start..start + TABLE_LEN].copy_from_slice(channel);
+        }
+    }
+    w.into_iter().map(f32::to_bits).collect()
+}
+
+/// The last model's words, kept: a view's model changes only with the settings or the view.
+#[derive(Default)]
+pub struct PerceptualWords {
+    last: Option<(Model, Vec<u32>)>,
+}
+
+impl PerceptualWords {
+    /// The words a view of `params` at `view` needs; None unless its method is `perceptual`.
+    pub fn of_view(&mut self, params: &Params, view: &ViewGeometry) -> Option<&[u32]> {
+        if params.method != Method::Perceptual {
+            return None;
+        }
+        let model = Model::of_params(&view_params(params, view));
+        if self.last.as_ref().map(|(m, _)| m) != Some(&model) {
+            self.last = Some((model, model_words(&model)));
+        }
+        self.last.as_ref().map(|(_, w)| w.as_slice())
+    }
+}
+
+const _: () = assert!(TABLE_LEN == PERCEPTUAL_TABLE_LEN as usize);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::algorithm::perception::frequency::Frequencies;
+    use crate::algorithm::perceptual_settings::PerceptualSettings;
+
+    #[test]
+    fn the_words_hold_the_tables_where_the_interface_says() {
+        let model = Model::new(&PerceptualSettings::default(), 0.4, Frequencies::Ensemble);
+        let tables = PerceptualTables::new(&model);
+        let w: Vec<f32> = model_words(&model)
+            .into_iter()
+            .map(f32::from_bits)
+            .collect();
+        assert_eq!(w.len(), PERCEPTUAL_WORDS as usize);
+        assert_eq!(w[PERCEPTUAL_AT_FREQUENCIES as usize], 4.0);
+        assert_eq!(w[PERCEPTUAL_AT_HALF_PEAK as usize], 100.0);
+        assert_eq!(w[PERCEPTUAL_AT_WORLD as usize], 400.0);
+        assert_eq!(w[PERCEPTUAL_AT_TARGET as usize], 0.05);
+        assert_eq!(
+            w[PERCEPTUAL_AT_RGB_TO_LMS as usize + 4],
+            tables.rgb_to_lms[1][1]
+        );
+        // The third frequency's yellow-violet entry 100.
+        let at = PERCEPTUAL_HEADER_WORDS as usize + (3 * 2 + 2) * TABLE_LEN + 100;
+        assert_eq!(w[at], tables.frequencies[2].yellow_violet[100]);
+        assert_eq!(
+            w.last(),
+            Some(&tables.frequencies[3].yellow_violet[TABLE_LEN - 1])
+        );
+    }
+
+    #[test]
+    fn only_the_perceptual_method_has_words_and_a_new_model_makes_new_ones() {
+        let mapping = CameraMapping::IDENTITY;
+        let view = ViewGeometry {
+            mapping: &mapping,
+            display_width: 640,
+            camera_width: 640,
+            pixels_per_degree: 20.0,
+        };
+        let mut words = PerceptualWords::default();
+        assert!(words.of_view(&Params::default(), &view).is_none());
+        let mut params = Params {
+            method: Method::Perceptual,
+            ..Params::default()
+        };
+        let first = words.of_view(&params, &view).unwrap().to_vec();
+        params.perceptual.world_nits = 5000.0;
+        let second = words.of_view(&params, &view).unwrap().to_vec();
+        assert_ne!(first, second);
+        let at = PERCEPTUAL_AT_WORLD as usize;
+        assert_eq!(f32::from_bits(second[at]), 2000.0);
+    }
+}
