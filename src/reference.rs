@@ -2,6 +2,9 @@
 //! Slow and exact (f64); the GPU engine is tested against it.
 
 use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::perception::frequency::{
+    view_params, ViewGeometry, DEFAULT_PIXELS_PER_DEGREE,
+};
 use crate::algorithm::{enhance_srgb8, Params};
 use crate::background_preparation::{self, PreparedBackground};
 use crate::image::RgbaImage;
@@ -46,5 +49,12 @@ pub fn enhance_with_camera_mapped(
 ) -> RgbaImage {
     let (w, h) = (display.width, display.height);
     let bg = background_preparation::prepare_mapped(camera, w, h, mapping, params);
-    enhance_image(display, &bg, params)
+    // The perceptual method's `blur` frequency, resolved for the view as the engines do.
+    let view = ViewGeometry {
+        mapping,
+        display_width: w,
+        camera_width: camera.width,
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
+    };
+    enhance_image(display, &bg, &view_params(params, &view))
 }

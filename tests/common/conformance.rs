@@ -44,8 +44,9 @@ pub fn reference_params(
     width: u32,
     camera_width: u32,
 ) -> Params {
-    use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
-    use contrastxr::gpu::core::perceptual_words::{view_params, ViewGeometry};
+    use contrastxr::algorithm::perception::frequency::{
+        view_params, ViewGeometry, DEFAULT_PIXELS_PER_DEGREE,
+    };
     let geometry = ViewGeometry {
         mapping,
         display_width: width,

@@ -156,6 +156,28 @@ pub fn for_view(params: &Params, blur: &BlurGeometry) -> Params {
     out
 }
 
+/// Where a view lies and how finely: what resolves the `blur` frequency for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewGeometry<'a> {
+    pub mapping: &'a CameraMapping,
+    pub display_width: u32,
+    pub camera_width: u32,
+    pub pixels_per_degree: f64,
+}
+
+/// The params of one view for the `perceptual` method: `params` with the `blur` frequency
+/// resolved for the view's geometry, what the CPU reference of the view's pixels takes too.
+pub fn view_params(params: &Params, view: &ViewGeometry) -> Params {
+    let blur = BlurGeometry::of_view(
+        params,
+        view.mapping,
+        view.display_width,
+        view.camera_width,
+        view.pixels_per_degree,
+    );
+    for_view(params, &blur)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

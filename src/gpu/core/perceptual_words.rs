@@ -3,36 +3,13 @@
 //! src/algorithm/perception/tables.rs laid out in words. Both backends upload these words as
 //! they are; a view's words are made again only when its model changes.
 
-use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Method, Params};
-use crate::algorithm::perception::frequency::{for_view, BlurGeometry};
+use crate::algorithm::perception::frequency::{view_params, ViewGeometry};
 use crate::algorithm::perception::perceived_contrast::Model;
 use crate::algorithm::perception::tables::{
     PerceptualTables, LOG_LUMINANCE_MIN, LOG_LUMINANCE_STEP, TABLE_LEN,
 };
 use crate::gpu::core::interface::*;
-
-/// Where a view lies and how finely: what resolves the `blur` frequency for it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ViewGeometry<'a> {
-    pub mapping: &'a CameraMapping,
-    pub display_width: u32,
-    pub camera_width: u32,
-    pub pixels_per_degree: f64,
-}
-
-/// The params of one view for the `perceptual` method: `params` with the `blur` frequency
-/// resolved for the view's geometry, what the CPU reference of the view's pixels takes too.
-pub fn view_params(params: &Params, view: &ViewGeometry) -> Params {
-    let blur = BlurGeometry::of_view(
-        params,
-        view.mapping,
-        view.display_width,
-        view.camera_width,
-        view.pixels_per_degree,
-    );
-    for_view(params, &blur)
-}
 
 /// The words of a model (PERCEPTUAL_WORDS of them; unused frequencies zero).
 pub fn model_words(model: &Model) -> Vec<u32> {
@@ -91,6 +68,7 @@ const _: () = assert!(TABLE_LEN == PERCEPTUAL_TABLE_LEN as usize);
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::algorithm::mapping::CameraMapping;
     use crate::algorithm::perception::frequency::Frequencies;
     use crate::algorithm::perceptual_settings::PerceptualSettings;
 

@@ -6,12 +6,12 @@ use super::gl_frame_runner::{rows_from_bottom, GlFrameRunner, StoreThrough};
 use super::gl_view::{GlTarget, GlView};
 use super::region::{read_region, write_region};
 use crate::algorithm::params::Params;
+use crate::algorithm::perception::frequency::ViewGeometry;
 use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::interface::{
     BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_TILES,
     TILE, TILE_LIST_HEADER_WORDS,
 };
-use crate::gpu::core::perceptual_words::ViewGeometry;
 use crate::gpu::core::plan::Step;
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::opengl::conv::GlFormat;

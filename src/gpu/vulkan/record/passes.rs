@@ -4,9 +4,9 @@
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
+use crate::algorithm::perception::frequency::ViewGeometry;
 use crate::gpu::core::blurred_texels::TEXEL_BYTES;
 use crate::gpu::core::interface::{DECODE_ROWS, TILE};
-use crate::gpu::core::perceptual_words::ViewGeometry;
 use crate::gpu::core::plan::{encode, view_steps, Encoder, Grid, NoPlan, Reads, Shader};
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids;
