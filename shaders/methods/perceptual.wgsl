@@ -14,7 +14,7 @@ const BISECTION_STEPS: u32 = 8u;
 const LOG10_E: f32 = 0.4342944819;
 
 fn model(at: u32) -> f32 {
-    return perceptual[at];
+    return perceptual[at / 4u][at % 4u];
 }
 
 // A row of one of the header's matrices times each pixel's colour.
@@ -40,12 +40,23 @@ fn world_of(background: Colours) -> World {
     return World(Colours(tw * lms[0], tw * lms[1], tw * lms[2]), tw * model_row(PERCEPTUAL_AT_RGB_TO_LUMINANCE, background));
 }
 
-// Channel k's sensitivity of frequency f at table position x (linear between entries).
-fn sensitivity(f: u32, k: u32, i: vec4<u32>, t: vec4<f32>) -> vec4<f32> {
-    let at = PERCEPTUAL_HEADER_WORDS + (f * 3u + k) * PERCEPTUAL_TABLE_LEN;
-    let lo = vec4<f32>(model(at + i.x), model(at + i.y), model(at + i.z), model(at + i.w));
-    let hi = vec4<f32>(model(at + i.x + 1u), model(at + i.y + 1u), model(at + i.z + 1u), model(at + i.w + 1u));
-    return lo + t * (hi - lo);
+// The three channels' sensitivities of frequency f at table position i + t (linear between
+// entries) for each pixel: x, y, z of each vec4 (achromatic, red-green, yellow-violet).
+struct Sensitivities {
+    achromatic: vec4<f32>,
+    red_green: vec4<f32>,
+    yellow_violet: vec4<f32>,
+}
+
+fn entry(f: u32, i: u32, t: f32) -> vec3<f32> {
+    let at = PERCEPTUAL_HEADER_WORDS / 4u + f * PERCEPTUAL_TABLE_LEN + i;
+    let lo = perceptual[at].xyz;
+    return lo + t * (perceptual[at + 1u].xyz - lo);
+}
+
+fn sensitivities(f: u32, i: vec4<u32>, t: vec4<f32>) -> Sensitivities {
+    let s = transpose(mat4x3<f32>(entry(f, i.x, t.x), entry(f, i.y, t.y), entry(f, i.z, t.z), entry(f, i.w, t.w)));
+    return Sensitivities(s[0], s[1], s[2]);
 }
 
 // A cone contrast ratio, 0 where there is no light.
@@ -53,22 +64,39 @@ fn ratio(a: vec4<f32>, m: vec4<f32>) -> vec4<f32> {
     return select(vec4<f32>(0.0), a / m, m > vec4<f32>(0.0));
 }
 
-// c' of four linear display colours over their world: the physical RMS cone contrast of the
-// pattern (world, world + display) less its threshold, by castleCSF at the pattern's mean
-// luminance, averaged over the frame's frequencies.
-fn perceived_contrast(display: Colours, world: World) -> vec4<f32> {
+// The pattern four linear display colours make over their world (alternating between the
+// world and world + display): its cone responses' amplitude and mean, its mean luminance, and
+// its physical RMS cone contrast c, which bounds c' (c' = c max(1 - 1/C, 0) <= c).
+struct Pattern {
+    amp: Colours,
+    mean: Colours,
+    luminance: vec4<f32>,
+    c: vec4<f32>,
+}
+
+fn pattern(display: Colours, world: World) -> Pattern {
     let half_peak = model(PERCEPTUAL_AT_HALF_PEAK);
     let lms = cone_responses(display);
     let amp = Colours(half_peak * lms[0], half_peak * lms[1], half_peak * lms[2]);
     let mean = world.lms + amp;
     let y = world.luminance + half_peak * model_row(PERCEPTUAL_AT_RGB_TO_LUMINANCE, display);
-    let log_y = max(LOG10_E * log(max(y, vec4<f32>(1e-30))), vec4<f32>(model(PERCEPTUAL_AT_LOG_MIN_LUMINANCE)));
     let k0 = ratio(amp[0], mean[0]);
     let k1 = ratio(amp[1], mean[1]);
     let k2 = ratio(amp[2], mean[2]);
-    let c = sqrt((k0 * k0 + k1 * k1 + k2 * k2) * (1.0 / 3.0));
+    return Pattern(amp, mean, y, sqrt((k0 * k0 + k1 * k1 + k2 * k2) * (1.0 / 3.0)));
+}
+
+// c' of four patterns: c less its threshold, by castleCSF at the pattern's mean luminance,
+// averaged over the frame's frequencies. Only where `wanted`: where no pixel wants it, 0
+// without the tables (a caller that knows c' cannot matter there, from c, skips the lookups).
+fn perceived_of(p: Pattern, wanted: vec4<bool>) -> vec4<f32> {
+    if (!any(wanted)) {
+        return vec4<f32>(0.0);
+    }
+    let log_y = max(LOG10_E * log(max(p.luminance, vec4<f32>(1e-30))), vec4<f32>(model(PERCEPTUAL_AT_LOG_MIN_LUMINANCE)));
     // The opponent channels (castleCSF's K), each against the achromatic mean.
-    let m1 = abs(mean[0] + mean[1]);
+    let amp = p.amp;
+    let m1 = abs(p.mean[0] + p.mean[1]);
     let inv_m1 = select(vec4<f32>(0.0), 1.0 / m1, m1 > vec4<f32>(0.0));
     let d1 = abs(amp[0] + amp[1]) * inv_m1;
     let d2 = abs(amp[0] - 2.3112 * amp[1]) * inv_m1;
@@ -80,14 +108,22 @@ fn perceived_contrast(display: Colours, world: World) -> vec4<f32> {
     let n = u32(model(PERCEPTUAL_AT_FREQUENCIES));
     var sum = vec4<f32>(0.0);
     for (var f = 0u; f < n; f++) {
-        let a = d1 * sensitivity(f, 0u, i, t);
-        let rg = d2 * sensitivity(f, 1u, i, t);
-        let yv = d3 * sensitivity(f, 2u, i, t);
+        let s = sensitivities(f, i, t);
+        let a = d1 * s.achromatic;
+        let rg = d2 * s.red_green;
+        let yv = d3 * s.yellow_violet;
         let multiple = sqrt(a * a + rg * rg + yv * yv);
         let kept = select(vec4<f32>(0.0), max(1.0 - 1.0 / multiple, vec4<f32>(0.0)), multiple > vec4<f32>(0.0));
-        sum += c * kept;
+        sum += p.c * kept;
     }
     return sum / f32(n);
+}
+
+// c' where it may reach `at_least` (c >= at_least), -1 elsewhere (it cannot: c' <= c).
+fn perceived_from(display: Colours, world: World, at_least: vec4<f32>) -> vec4<f32> {
+    let p = pattern(display, world);
+    let may = p.c >= at_least;
+    return select(vec4<f32>(-1.0), perceived_of(p, may), may);
 }
 
 // The 18 directions, unit vectors in CIELAB (L*, a*, b*): the 6 axes, the 8 diagonals of the
@@ -131,7 +167,7 @@ fn keep_better(best: Best, colour: Colours, scaled: Colours, change: vec4<f32>, 
 fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perceived {
     let world = world_of(bg.linear);
     let goal = model(PERCEPTUAL_AT_TARGET);
-    let before = perceived_contrast(display, world);
+    let before = perceived_from(display, world, vec4<f32>(goal));
     let d = linear_to_scaled(display);
     let paper_scaled = linear_to_scaled(paper.linear);
     // The paper's change; none where the paper leaves the pixel.
@@ -143,23 +179,28 @@ fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perce
     if (all(alone | none)) {
         return Perceived(unchanged, kind);
     }
-    var best = Best(paper.linear, paper_scaled, budget, perceived_contrast(paper.linear, world));
+    var best = Best(paper.linear, paper_scaled, budget, perceived_from(paper.linear, world, vec4<f32>(0.0)));
     for (var k = 0u; k < 18u; k++) {
         let lab = d + scaled_step(direction(k), budget);
         let unclipped = scaled_to_linear(lab);
         let colour = clip(unclipped);
         let clipped = (colour[0] != unclipped[0]) | (colour[1] != unclipped[1]) | (colour[2] != unclipped[2]);
+        // Only a candidate whose c reaches the best c' so far may beat it (c' <= c).
+        let p = pattern(colour, world);
+        let may = p.c >= best.perceived;
         // Clipping in linear RGB may lengthen the change beyond the paper's: then it is no
         // candidate. Unclipped, the change is the budget.
         var scaled = lab;
         var change = budget;
-        if (any(clipped)) {
+        if (any(clipped & may)) {
             let back = linear_to_scaled(colour);
             scaled = pick(lab, back, clipped);
             change = select(budget, delta_e(d, back), clipped);
         }
         let valid = change <= budget + BUDGET_SLACK;
-        best = keep_better(best, colour, scaled, change, perceived_contrast(colour, world), valid);
+        let wanted = may & valid;
+        let perceived = select(vec4<f32>(-1.0), perceived_of(p, wanted), wanted);
+        best = keep_better(best, colour, scaled, change, perceived, valid);
     }
     let reached = best.perceived >= vec4<f32>(goal);
     var out = best.colour;
@@ -171,7 +212,7 @@ fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perce
         for (var step = 0u; step < BISECTION_STEPS; step++) {
             let mid = 0.5 * (lo + hi);
             let colour = clip(scaled_to_linear(d + per_pixel(mid, span)));
-            let ok = perceived_contrast(colour, world) >= vec4<f32>(goal);
+            let ok = perceived_from(colour, world, vec4<f32>(goal)) >= vec4<f32>(goal);
             hi = select(hi, mid, ok);
             lo = select(mid, lo, ok);
             out = pick(out, colour, ok);

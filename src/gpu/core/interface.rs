@@ -141,20 +141,22 @@ pub const BINDINGS: [Binding; 8] = [
         number: BINDING_PERCEPTUAL,
         name: "perceptual",
         kind: BindingKind::StorageBuffer,
-        wgsl: |_, _| always("<storage, read> perceptual: array<f32>"),
+        wgsl: |_, _| always("<storage, read> perceptual: array<vec4<f32>>"),
     },
 ];
 
-/// The `perceptual` buffer (src/gpu/core/perceptual_words.rs writes it): a header of
-/// PERCEPTUAL_HEADER_WORDS f32 words at the PERCEPTUAL_AT_* offsets, then for each of the
-/// frame's frequencies (at most PERCEPTUAL_MAX_FREQUENCIES) three sensitivity tables of
-/// PERCEPTUAL_TABLE_LEN entries (achromatic, red-green, yellow-violet) over log10 Y.
+/// The `perceptual` buffer (src/gpu/core/perceptual_words.rs writes it), vec4s of f32: a
+/// header of PERCEPTUAL_HEADER_WORDS words at the PERCEPTUAL_AT_* offsets, then for each of
+/// the frame's frequencies (at most PERCEPTUAL_MAX_FREQUENCIES) PERCEPTUAL_TABLE_LEN entries
+/// over log10 Y, each one vec4 of the three sensitivities (achromatic, red-green,
+/// yellow-violet, then 0): one load per entry, which a CPU driver makes lane by lane.
 pub const PERCEPTUAL_HEADER_WORDS: u32 = 24;
 pub const PERCEPTUAL_TABLE_LEN: u32 = 256;
 pub const PERCEPTUAL_MAX_FREQUENCIES: u32 = 4;
 /// The buffer's size in words.
 pub const PERCEPTUAL_WORDS: u32 =
-    PERCEPTUAL_HEADER_WORDS + PERCEPTUAL_MAX_FREQUENCIES * 3 * PERCEPTUAL_TABLE_LEN;
+    PERCEPTUAL_HEADER_WORDS + PERCEPTUAL_MAX_FREQUENCIES * 4 * PERCEPTUAL_TABLE_LEN;
+const _: () = assert!(PERCEPTUAL_HEADER_WORDS % 4 == 0);
 /// Header offsets: linear RGB -> LMS (9 words, row-major), RGB -> luminance (3 words), then
 /// one word each.
 pub const PERCEPTUAL_AT_RGB_TO_LMS: u32 = 0;

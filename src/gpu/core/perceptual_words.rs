@@ -32,12 +32,13 @@ pub fn model_words(model: &Model) -> Vec<u32> {
     w[at(PERCEPTUAL_AT_LOG_Y_FIRST)] = LOG_LUMINANCE_MIN as f32;
     w[at(PERCEPTUAL_AT_ENTRIES_PER_LOG_Y)] = (1.0 / LOG_LUMINANCE_STEP) as f32;
     for (f, t) in tables.frequencies.iter().take(n).enumerate() {
-        for (k, channel) in [&t.achromatic, &t.red_green, &t.yellow_violet]
-            .into_iter()
-            .enumerate()
-        {
-            let start = at(PERCEPTUAL_HEADER_WORDS) + (3 * f + k) * TABLE_LEN;
-            w[start..start + TABLE_LEN].copy_from_slice(channel);
+        for i in 0..TABLE_LEN {
+            let entry = at(PERCEPTUAL_HEADER_WORDS) + 4 * (f * TABLE_LEN + i);
+            w[entry..entry + 3].copy_from_slice(&[
+                t.achromatic[i],
+                t.red_green[i],
+                t.yellow_violet[i],
+            ]);
         }
     }
     w.into_iter().map(f32::to_bits).collect()
@@ -89,13 +90,18 @@ mod tests {
             w[PERCEPTUAL_AT_RGB_TO_LMS as usize + 4],
             tables.rgb_to_lms[1][1]
         );
-        // The third frequency's yellow-violet entry 100.
-        let at = PERCEPTUAL_HEADER_WORDS as usize + (3 * 2 + 2) * TABLE_LEN + 100;
-        assert_eq!(w[at], tables.frequencies[2].yellow_violet[100]);
-        assert_eq!(
-            w.last(),
-            Some(&tables.frequencies[3].yellow_violet[TABLE_LEN - 1])
-        );
+        // The third frequency's entry 100: its three sensitivities, then 0.
+        let at = PERCEPTUAL_HEADER_WORDS as usize + 4 * (2 * TABLE_LEN + 100);
+        let t = &tables.frequencies[2];
+        let entry = [
+            t.achromatic[100],
+            t.red_green[100],
+            t.yellow_violet[100],
+            0.0,
+        ];
+        assert_eq!(w[at..at + 4], entry);
+        let last = &w[w.len() - 4..];
+        assert_eq!(last[2], tables.frequencies[3].yellow_violet[TABLE_LEN - 1]);
     }
 
     #[test]
