@@ -371,6 +371,76 @@ fn evaluate_reports_the_perceived_contrast_for_every_method() {
     }
 }
 
+/// `--compare` runs each method on the same inputs: one JSON row per method, the same c'
+/// before, and at 500 cd/m² (an office) the perceptual method changes colours far less than the
+/// paper's (docs/algorithm.md, Measured on the samples); its figure has a row per method.
+#[test]
+fn evaluate_compares_methods_row_by_row_with_a_figure() {
+    let figure = scratch("compare.png");
+    let args = [
+        "evaluate",
+        "--display",
+        DISPLAY,
+        "--background",
+        SKY,
+        "--compare",
+        "paper,perceptual",
+        "--world-nits",
+        "500",
+        "--figure",
+        figure.to_str().unwrap(),
+    ];
+    let rows = json(&contrastxr(&[&args[..], &["--json"]].concat()));
+    let rows = rows.as_array().unwrap_or_else(|| panic!("{rows}"));
+    let names: Vec<&str> = rows.iter().map(|r| r["method"].as_str().unwrap()).collect();
+    assert_eq!(names, ["paper", "perceptual"]);
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} in {r}"));
+    let (paper, perceptual) = (&rows[0], &rows[1]);
+    assert_eq!(
+        f(paper, "perceived_contrast_before"),
+        f(perceptual, "perceived_contrast_before")
+    );
+    let change = |r: &serde_json::Value| r["delta_e_out_display"]["mean"].as_f64().unwrap();
+    assert!(
+        change(perceptual) < 0.7 * change(paper),
+        "{perceptual} against {paper}"
+    );
+    let img = load(&figure);
+    let single = scratch("single.png");
+    let one = contrastxr(&[
+        "evaluate",
+        "--display",
+        DISPLAY,
+        "--background",
+        SKY,
+        "--compare",
+        "perceptual",
+        "--figure",
+        single.to_str().unwrap(),
+    ]);
+    assert!(one.status.success(), "{}", stderr(&one));
+    let text = String::from_utf8_lossy(&one.stdout);
+    assert!(
+        text.contains("perceptual") && text.contains("at target"),
+        "{text}"
+    );
+    let row = load(&single);
+    assert_eq!(img.width, row.width);
+    assert!(
+        img.height > 2 * row.height - 100,
+        "{} vs {}",
+        img.height,
+        row.height
+    );
+    let o = contrastxr(&[&args[..6], &["paper,sharpest"]].concat());
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("'sharpest' is not a method"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn evaluate_refuses_perceptual_settings_out_of_range() {
     for (flag, value, says) in [

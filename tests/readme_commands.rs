@@ -131,6 +131,12 @@ const RUN: &[Run] = &[
         Some(0),
         "lambda_e foreground   enhanced",
     ),
+    run(
+        "contrastxr evaluate --display samples/display-hand-interaction.png --background \
+         samples/background-yellow-wall.png --compare paper,perceptual --world-nits 500 --json",
+        Some(0),
+        "\"method\": \"perceptual\"",
+    ),
 ];
 
 /// Concrete examples not run here, and why.

@@ -2,9 +2,10 @@
 //! and after, for one enhancement or a sweep over lambda_e; optionally a figure (perceived
 //! original | perceived enhanced | cyan map).
 
-use contrastxr::algorithm::Params;
+use contrastxr::algorithm::{Method, Params};
 use contrastxr::background_preparation;
-use contrastxr::evaluate::perception_report::offline_frequencies;
+use contrastxr::evaluate::class_figure::class_row;
+use contrastxr::evaluate::perception_report::{model as perception_model, offline_frequencies};
 use contrastxr::evaluate::{self as eval, Metrics, PerceptionReport};
 use contrastxr::image::RgbaImage;
 
@@ -23,6 +24,7 @@ pub const OPTIONS: &[Opt] = &[
     Opt::value("--figure", "FIG.png"),
     Opt::flag("--app-images"),
     Opt::value("--ppd", "N"),
+    Opt::value("--compare", "M1,M2,..."),
 ];
 
 /// The view's pixels per degree when `--ppd` is not given: the perceptual model's `blur`
@@ -32,6 +34,7 @@ pub const DEFAULT_PPD: f64 = 20.0;
 const USAGE: &str = "\
 usage: contrastxr evaluate --display D.png --background B.png [--enhanced OUT.png] [options]
        contrastxr evaluate --display D.png --background B.png --sweep 0.2,0.4,0.6,0.8,1.0 [options]
+       contrastxr evaluate --display D.png --background B.png --compare paper,perceptual [options]
 
 Measures the share of foreground pixels whose contrast with the background went up by a
 noticeable amount (the paper's metric), and the perceived contrast c' of the content before
@@ -43,6 +46,10 @@ first (--engine).
   --figure FIG.png     write a figure; one row per lambda_e for --sweep
   --app-images         put the display and enhanced images themselves in the figure too
   --ppd N              the display's pixels per degree of view (20), for frequency = blur
+  --compare M1,M2,...  run each method and print one row per method; the figure has a row per
+                       method: perceived original, perceived output, and the content pixels by
+                       perceived contrast (left alone green, brought to the target cyan, out of
+                       reach magenta)
 
 ";
 
@@ -69,6 +76,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let json = args.flag("--json");
     let figure = args.value(&["--figure"])?;
     let app_images = args.flag("--app-images");
+    let compare = args.value(&["--compare"])?;
     let ppd = match args.value(&["--ppd"])? {
         None => DEFAULT_PPD,
         Some(t) => match t.trim().parse::<f64>() {
@@ -88,6 +96,12 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             "--sweep runs the method itself; leave out --enhanced".into(),
         ));
     }
+    if compare.is_some() && (enhanced.is_some() || sweep.is_some()) {
+        return Err(CliError::Usage(
+            "--compare runs each method itself; leave out --enhanced and --sweep".into(),
+        ));
+    }
+    let methods = compare.map(|c| parse_methods(&c)).transpose()?;
     let lambdas = sweep.map(|s| parse_list("--sweep", &s)).transpose()?;
     let display = options::load_path(&display_path, "display")?;
     let camera = options::load_path(&background_path, "background")?;
@@ -101,9 +115,10 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         app_images,
         ppd,
     };
-    match lambdas {
-        Some(l) => run_sweep(&inputs, &l),
-        None => run_single(&inputs, enhanced.as_deref()),
+    match (lambdas, methods) {
+        (Some(l), _) => run_sweep(&inputs, &l),
+        (None, Some(m)) => run_compare(&inputs, &m),
+        (None, None) => run_single(&inputs, enhanced.as_deref()),
     }
 }
 
@@ -258,6 +273,107 @@ fn run_sweep(inputs: &Inputs, lambdas: &[f32]) -> Result<(), CliError> {
         options::save_image(&eval::stack_rows(&figure_rows), fig)?;
     }
     Ok(())
+}
+
+/// `--compare`'s list: method names, at least one.
+fn parse_methods(text: &str) -> Result<Vec<Method>, CliError> {
+    text.split(',')
+        .map(|name| {
+            Method::parse(name.trim()).ok_or_else(|| {
+                CliError::Usage(format!(
+                    "--compare: '{}' is not a method ({})",
+                    name.trim(),
+                    contrastxr::algorithm::method::METHOD_DOC
+                ))
+            })
+        })
+        .collect()
+}
+
+/// Each method on the same inputs: a row each (text or JSON), and the figure's rows.
+fn run_compare(inputs: &Inputs, methods: &[Method]) -> Result<(), CliError> {
+    let mut rows = Vec::new();
+    let mut figure_rows = Vec::new();
+    for &method in methods {
+        let params = Params {
+            method,
+            ..inputs.params.clone()
+        };
+        let enhanced = enhanced_image(inputs, None, &params)?;
+        let m = measure(inputs, &enhanced, &params);
+        if inputs.figure.is_some() {
+            let d = &inputs.display;
+            let bg = background_preparation::prepare(&inputs.camera, d.width, d.height, &params);
+            let frequencies =
+                offline_frequencies(&params, d.width, inputs.camera.width, inputs.ppd);
+            let p = &m.perception;
+            let title = format!(
+                "METHOD {}   PERCEIVED CONTRAST X{:.3}   AT TARGET {:.1}%   MEAN DE {:.2}",
+                method.name(),
+                p.perceived_contrast_gain,
+                100.0 * (p.left_alone_fraction + p.brought_to_target_fraction),
+                m.metrics.delta_e_out_display.mean
+            );
+            let model = perception_model(&params, frequencies);
+            figure_rows.push(class_row(
+                (d, &enhanced, &inputs.camera),
+                &bg,
+                &params,
+                &model,
+                &title,
+            ));
+        }
+        rows.push((method, m));
+    }
+    super::error::print(&if inputs.json {
+        let values: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|(method, m)| {
+                let mut v = m.json();
+                v["method"] = serde_json::json!(method.name());
+                v
+            })
+            .collect();
+        format!(
+            "{}\n",
+            serde_json::to_string_pretty(&values).expect("rows serialise")
+        )
+    } else {
+        compare_table(&rows)
+    });
+    if let Some(fig) = &inputs.figure {
+        options::save_image(&eval::stack_rows(&figure_rows), fig)?;
+    }
+    Ok(())
+}
+
+fn compare_table(rows: &[(Method, Measured)]) -> String {
+    let mut out = format!(
+        "{:>12} {:>9} {:>9} {:>8} {:>11} {:>12} {:>13} {:>13}\n",
+        "method",
+        "c' before",
+        "c' after",
+        "c' gain",
+        "at target",
+        "out of reach",
+        "mean dE(out,D)",
+        "max dE(out,D)"
+    );
+    for (method, m) in rows {
+        let (p, s) = (&m.perception, &m.metrics.delta_e_out_display);
+        out += &format!(
+            "{:>12} {:>9.4} {:>9.4} {:>8.3} {:>10.1}% {:>11.1}% {:>14.3} {:>13.3}\n",
+            method.name(),
+            p.perceived_contrast_before,
+            p.perceived_contrast_after,
+            p.perceived_contrast_gain,
+            100.0 * (p.left_alone_fraction + p.brought_to_target_fraction),
+            100.0 * p.out_of_reach_fraction,
+            s.mean,
+            s.max
+        );
+    }
+    out
 }
 
 fn sweep_json(rows: &[(f32, Measured)]) -> String {

@@ -9,16 +9,16 @@ use crate::background_preparation;
 use crate::colour;
 use crate::image::RgbaImage;
 
-const MARGIN: u32 = 16;
-const GAP: u32 = 12;
+pub(super) const MARGIN: u32 = 16;
+pub(super) const GAP: u32 = 12;
 /// Panels wider than this are shrunk by an integer factor so a figure stays a screen wide.
-const MAX_PANEL_WIDTH: u32 = 640;
-const BACKDROP: [u8; 4] = [22, 24, 28, 255];
-const TEXT: [u8; 4] = [236, 238, 242, 255];
+pub(super) const MAX_PANEL_WIDTH: u32 = 640;
+pub(super) const BACKDROP: [u8; 4] = [22, 24, 28, 255];
+pub(super) const TEXT: [u8; 4] = [236, 238, 242, 255];
 const CYAN: [u8; 4] = [0, 255, 255, 255];
 /// Map colour of display pixels that are not foreground (transparent on the headset).
-const MAP_EMPTY: [u8; 4] = [14, 16, 20, 255];
-const LABEL_SCALE: u32 = 2;
+pub(super) const MAP_EMPTY: [u8; 4] = [14, 16, 20, 255];
+pub(super) const LABEL_SCALE: u32 = 2;
 const LABEL_PAD: u32 = 6;
 
 /// One figure row without a title, on its own backdrop.
@@ -182,7 +182,7 @@ fn cyan_map(display: &RgbaImage, mask: &[bool]) -> RgbaImage {
 }
 
 /// Box-filter downscale by an integer factor (1 = copy).
-fn shrink(img: &RgbaImage, factor: u32) -> RgbaImage {
+pub(super) fn shrink(img: &RgbaImage, factor: u32) -> RgbaImage {
     if factor <= 1 {
         return img.clone();
     }
@@ -206,7 +206,7 @@ fn shrink(img: &RgbaImage, factor: u32) -> RgbaImage {
     out
 }
 
-fn blit(dst: &mut RgbaImage, src: &RgbaImage, x0: u32, y0: u32) {
+pub(super) fn blit(dst: &mut RgbaImage, src: &RgbaImage, x0: u32, y0: u32) {
     for y in 0..src.height.min(dst.height.saturating_sub(y0)) {
         for x in 0..src.width.min(dst.width.saturating_sub(x0)) {
             dst.set(x0 + x, y0 + y, src.get(x, y));
@@ -215,7 +215,7 @@ fn blit(dst: &mut RgbaImage, src: &RgbaImage, x0: u32, y0: u32) {
 }
 
 /// Text on a translucent dark box, legible on any panel.
-fn label_box(img: &mut RgbaImage, x: u32, y: u32, text: &str, scale: u32) {
+pub(super) fn label_box(img: &mut RgbaImage, x: u32, y: u32, text: &str, scale: u32) {
     let (w, h) = (
         text_width(text, scale) + 2 * LABEL_PAD,
         text_height(scale) + 2 * LABEL_PAD,

@@ -3,6 +3,7 @@
 //! display, and figures a person can look at. Pure CPU; it never runs the method itself.
 
 pub mod animation;
+pub mod class_figure;
 pub mod figure;
 pub mod font;
 pub mod metric;
