@@ -283,3 +283,25 @@ fn the_apps_x_errors_reach_its_handler_while_the_layer_switches_contexts() {
         .any(|l| l.contains("processing frames (2 views per frame)"));
     assert!(enhanced, "{what}");
 }
+
+/// The perceptual method binds one more shader storage buffer, its view's model: the app finds
+/// that binding (and every other) as it left it, every frame enhanced.
+#[test]
+fn the_perceptual_methods_model_binding_is_put_back() {
+    let extra = [("CONTRASTXR_METHOD", "perceptual")];
+    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &extra) else {
+        return;
+    };
+    let (report, others, _) = changes(&run);
+    let what = run.describe();
+    let checked = report["gl_state_checked"].as_u64().unwrap_or(0);
+    assert!(checked >= 10, "{what}");
+    let lines = common::layer_lines(&run);
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("processing frames (2 views per frame)")),
+        "{what}"
+    );
+    assert_eq!(others, Vec::<Value>::new(), "{what}");
+}
