@@ -148,10 +148,14 @@ impl Frequency {
 /// `params` for one view of blur `blur`: its `frequency` setting, where `blur`, replaced by the
 /// number of cycles per degree the view's blur gives, so that every pixel of the view (on the
 /// GPU and in the CPU reference) is judged at the same frequency.
+/// The frequency is rounded to a step of 2^(1/1024) (0.07 %), far below what moves c', so that
+/// a view whose field of view jitters from frame to frame keeps its model (and the GPU tables
+/// made from it).
 pub fn for_view(params: &Params, blur: &BlurGeometry) -> Params {
     let mut out = params.clone();
     if let Frequency::Blur = params.perceptual.frequency {
-        out.perceptual.frequency = Frequency::Cpd(blur.halving_cpd());
+        let steps = (blur.halving_cpd().log2() * 1024.0).round();
+        out.perceptual.frequency = Frequency::Cpd((steps / 1024.0).exp2());
     }
     out
 }
@@ -241,11 +245,16 @@ mod tests {
             (view.display_px_per_camera_px - 0.5).abs() < 1e-12,
             "{view:?}"
         );
-        let resolved = for_view(&p, &view);
-        assert_eq!(
-            resolved.perceptual.frequency,
-            Frequency::Cpd(view.halving_cpd())
-        );
+        let Frequency::Cpd(f) = for_view(&p, &view).perceptual.frequency else {
+            panic!("blur not resolved");
+        };
+        assert!((f / view.halving_cpd() - 1.0).abs() < 4e-4, "{f}");
+        // A view a hair wider keeps the same frequency.
+        let wider = BlurGeometry {
+            pixels_per_degree: view.pixels_per_degree * (1.0 + 1e-7),
+            ..view
+        };
+        assert_eq!(for_view(&p, &wider).perceptual.frequency, Frequency::Cpd(f));
         assert_eq!(Frequency::Ensemble.resolve(&g).cpd(), &ENSEMBLE_CPD);
     }
 }
