@@ -12,7 +12,7 @@ use super::args::parse_list;
 use super::args::{Args, Opt};
 use super::backend_choice::{self, Backend};
 use super::error::CliError;
-use super::options::{self, method_usage, ENGINE_USAGE};
+use super::options::{self, method_usage, ppd_usage, ENGINE_USAGE};
 
 pub const OPTIONS: &[Opt] = &[
     Opt::value("--display", "D.png"),
@@ -22,12 +22,7 @@ pub const OPTIONS: &[Opt] = &[
     Opt::flag("--json"),
     Opt::value("--figure", "FIG.png"),
     Opt::flag("--app-images"),
-    Opt::value("--ppd", "N"),
 ];
-
-/// The view's pixels per degree when `--ppd` is not given: the perceptual model's `blur`
-/// frequency needs it.
-pub const DEFAULT_PPD: f64 = 20.0;
 
 const USAGE: &str = "\
 usage: contrastxr evaluate --display D.png --background B.png [--enhanced OUT.png] [options]
@@ -42,12 +37,10 @@ first (--engine).
   --json               print the metrics as JSON (an array of rows for --sweep)
   --figure FIG.png     write a figure; one row per lambda_e for --sweep
   --app-images         put the display and enhanced images themselves in the figure too
-  --ppd N              the display's pixels per degree of view (20), for frequency = blur
-
 ";
 
 pub fn usage() -> String {
-    format!("{USAGE}{}{ENGINE_USAGE}", method_usage())
+    format!("{USAGE}{}\n{}{ENGINE_USAGE}", ppd_usage(), method_usage())
 }
 
 struct Inputs {
@@ -69,17 +62,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let json = args.flag("--json");
     let figure = args.value(&["--figure"])?;
     let app_images = args.flag("--app-images");
-    let ppd = match args.value(&["--ppd"])? {
-        None => DEFAULT_PPD,
-        Some(t) => match t.trim().parse::<f64>() {
-            Ok(v) if v.is_finite() && v > 0.0 => v,
-            _ => {
-                return Err(CliError::Failure(format!(
-                    "--ppd must be a number of pixels per degree > 0, got '{t}'"
-                )))
-            }
-        },
-    };
+    let ppd = options::pixels_per_degree(args)?;
     let params = options::params(args)?;
     let engine = options::engine(args)?;
     args.finish()?;
@@ -198,7 +181,8 @@ fn metrics_text(m: &Metrics) -> String {
     out
 }
 
-fn perception_text(p: &PerceptionReport, params: &Params) -> String {
+/// The perceived contrast in three lines (`enhance` prints them too).
+pub(super) fn perception_text(p: &PerceptionReport, params: &Params) -> String {
     let s = &params.perceptual;
     let cpd: Vec<String> = p.frequency_cpd.iter().map(|f| format!("{f:.2}")).collect();
     let mut out = format!(
