@@ -51,13 +51,14 @@ fn layer_env(
     env
 }
 
-/// Runs the test client for `frames` frames at 160x120 in `format` through the layer.
+/// Runs the test client for `frames` frames at 128x96 in `format` through the layer: views
+/// small enough for their report to take every pixel (`perception_step` 1).
 fn run_client(format: &str, frames: u32, env: &[(String, String)]) -> Option<SandboxRun> {
     let sandbox = sandbox()?;
     let env: Vec<(&str, &str)> = env.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
     let frames = frames.to_string();
     let cmd = [
-        XR_CLIENT, "--json", "--frames", &frames, "--size", "160x120", "--format", format,
+        XR_CLIENT, "--json", "--frames", &frames, "--size", "128x96", "--format", format,
     ];
     let run = sandbox.run(&cmd, &env);
     run.assert_success();
@@ -126,9 +127,10 @@ fn assert_plausible(c: &Captured) {
     assert_eq!(j["frequency"], "blur", "{j}");
     let cpd = j["frequency_cpd"][0].as_f64().unwrap();
     assert!((1.0..=30.0).contains(&cpd), "{j}");
-    // The client's views are 160 px wide: 0.3 to 10 px per degree at the axis is a field of
-    // view between about 16 and 170 degrees, as a headset's.
-    assert!((0.3..10.0).contains(&f("pixels_per_degree")), "{j}");
+    // The client's views are 128 px wide: 0.1 to 10 px per degree at the axis is a field of
+    // view between about 13 and 170 degrees, as a headset's.
+    assert!((0.1..10.0).contains(&f("pixels_per_degree")), "{j}");
+    assert_eq!(j["perception_step"], 1, "every pixel of a small view: {j}");
     // A meadow under 1000 cd/m^2 through a lens of 0.4: between dark soil and white sky.
     assert!((10.0..400.0).contains(&f("mean_world_luminance")), "{j}");
 }

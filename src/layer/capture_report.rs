@@ -14,9 +14,20 @@ use crate::gpu::core::pixel_codec;
 use crate::gpu::PixelFormat;
 use glam::DVec3;
 
-/// The most pixels the out-of-reach check looks at per view: it takes every n-th pixel of a
-/// larger view, which says as much about the share of content out of reach.
-pub const CHECK_PIXELS: usize = 1 << 16;
+/// The most pixels a report looks at per view: every pixel of a view up to this size, every
+/// k-th row and column of a larger one, so that the capture thread's work per view is bounded
+/// (about 10 ms in a debug build) however large the view and however many frames are captured.
+pub const REPORT_PIXELS: usize = 1 << 14;
+
+/// The least k for which every k-th row and column of a `width` x `height` view are at most
+/// [`REPORT_PIXELS`] pixels (1 for a view no larger).
+pub fn report_step(width: u32, height: u32) -> u32 {
+    let mut k = 1u32;
+    while (width.div_ceil(k) as usize) * (height.div_ceil(k) as usize) > REPORT_PIXELS {
+        k += 1;
+    }
+    k
+}
 
 /// One raw pixel as linear light and alpha: an sRGB format's codes through the sRGB curve
 /// exactly as an 8-bit image's, a linear one's values clipped to [0, 1] (anything not finite
@@ -43,37 +54,32 @@ pub fn linear_pixel(format: PixelFormat, px: &[u8]) -> (DVec3, f64) {
     )
 }
 
-/// The report of `job`'s view over every `every`-th pixel (1: all of them, as a capture's JSON
-/// has it).
-pub fn view_report(job: &CaptureJob, every: usize) -> PerceptionReport {
+/// The report of `job`'s view over every `step`-th row and column ([`report_step`]: every
+/// pixel of a view of up to [`REPORT_PIXELS`]).
+pub fn view_report(job: &CaptureJob, step: u32) -> PerceptionReport {
     let v = &job.view;
     let (w, h) = job.extent;
     let camera = &job.background;
     let blur = BlurGeometry::of_view(&v.params, &v.mapping, w, camera.width, v.pixels_per_degree);
     let model = model(&v.params, v.params.perceptual.frequency.resolve(&blur));
-    // Only the pixels looked at: the check never blurs a whole camera frame.
+    // Only the pixels looked at: a report never blurs a whole camera frame.
     let behind = PointBackground::new(camera, &v.params);
     let bpp = job.format.bytes_per_pixel() as usize;
-    let count = (w as usize * h as usize)
-        .min(job.display.len() / bpp)
-        .min(job.output.len() / bpp);
-    let pixels = (0..count).step_by(every.max(1)).map(|i| {
-        let at = |bytes: &[u8]| linear_pixel(job.format, &bytes[i * bpp..(i + 1) * bpp]);
-        let ((display, alpha), (output, _)) = (at(&job.display), at(&job.output));
-        let xy = ((i % w as usize) as u32, (i / w as usize) as u32);
-        ReportPixel {
+    let step = step.max(1) as usize;
+    let rows = (0..h).step_by(step);
+    let looked_at = rows.flat_map(|y| (0..w).step_by(step).map(move |x| (x, y)));
+    let pixels = looked_at.filter_map(|(x, y)| {
+        let i = (y as usize * w as usize + x as usize) * bpp;
+        let at = |bytes: &[u8]| bytes.get(i..i + bpp).map(|px| linear_pixel(job.format, px));
+        let ((display, alpha), (output, _)) = (at(&job.display)?, at(&job.output)?);
+        Some(ReportPixel {
             display,
             alpha,
-            background: behind.at(&v.mapping, (w, h), xy),
+            background: behind.at(&v.mapping, (w, h), (x, y)),
             output,
-        }
+        })
     });
     PerceptionReport::new(&frame_report(pixels, &model), &v.params)
-}
-
-/// The step the out-of-reach check takes through a view of `pixels` pixels.
-pub fn check_step(pixels: usize) -> usize {
-    pixels.div_ceil(CHECK_PIXELS).max(1)
 }
 
 #[cfg(test)]
@@ -124,11 +130,16 @@ mod tests {
     }
 
     #[test]
-    fn the_check_looks_at_a_bounded_number_of_pixels() {
-        assert_eq!(check_step(100), 1);
-        assert_eq!(check_step(CHECK_PIXELS), 1);
-        assert_eq!(check_step(CHECK_PIXELS + 1), 2);
-        let big: usize = 2048 * 2048;
-        assert!(big.div_ceil(check_step(big)) <= CHECK_PIXELS);
+    fn a_report_looks_at_a_bounded_number_of_pixels() {
+        assert_eq!(report_step(128, 128), 1);
+        assert_eq!(report_step(160, 96), 1);
+        // 320x240: every 2nd is 160x120 = 19200, every 3rd 107x80 = 8560.
+        assert_eq!(report_step(320, 240), 3);
+        for (w, h) in [(129, 128), (2048, 2048), (4000, 1), (1, 1 << 20)] {
+            let k = report_step(w, h);
+            let n = |k: u32| w.div_ceil(k) as usize * h.div_ceil(k) as usize;
+            assert!(n(k) <= REPORT_PIXELS, "{w}x{h}: {k}");
+            assert!(k == 1 || n(k - 1) > REPORT_PIXELS, "{w}x{h}: {k}");
+        }
     }
 }

@@ -7,7 +7,7 @@
 //! `xrDestroyInstance` and the process's exit wait (boundedly) for what was handed over.
 
 use super::capture_files::CaptureJob;
-use super::capture_report::{check_step, view_report};
+use super::capture_report::{report_step, view_report};
 use super::ffi::contain;
 use super::log;
 use super::reach_advice;
@@ -123,20 +123,17 @@ fn start() -> Option<Sender<CaptureJob>> {
     }
 }
 
-/// A view's perception report (over every pixel for a capture's JSON, over a bounded sample
-/// for the check), the out-of-reach advice, then its files, if it has any.
+/// A view's perception report (over a bounded sample of a large view), the out-of-reach
+/// advice, then its files, if it has any.
 fn report_and_write(mut job: CaptureJob) -> Result<(), String> {
-    let (w, h) = job.extent;
-    let every = match job.dir {
-        Some(_) => 1,
-        None => check_step(w as usize * h as usize),
-    };
-    let report = view_report(&job, every);
+    let step = report_step(job.extent.0, job.extent.1);
+    let report = view_report(&job, step);
     reach_advice::consider(&report, &job.view.params);
     if let (Some(json), Ok(serde_json::Value::Object(keys))) =
         (job.json.as_object_mut(), serde_json::to_value(&report))
     {
         json.extend(keys);
+        json.insert("perception_step".into(), step.into());
     }
     job.write()
 }
