@@ -23,7 +23,7 @@ const USAGE: &str =
      Enhances the colour contrast of the display image (virtual content; black is transparent)\n\
      against the background image (a camera frame of any size). PNG or JPEG in, PNG out,\n\
      RGB or RGBA; alpha passes through and the output has the display's layout. Then prints the\n\
-     perceived contrast c' of the content before and after, as `evaluate` does.\n";
+     perceived contrast c' of the content before and after, as `evaluate` does.\n\n";
 
 pub fn run(args: &mut Args) -> Result<(), CliError> {
     let display_path = args.required(&["--display"])?;
