@@ -89,14 +89,7 @@ impl LinearImage {
     /// Bilinear sample at texture coordinates (u, v): texel centres at (i + 0.5) / W,
     /// clamp-to-edge.
     fn sample(&self, u: f64, v: f64) -> DVec3 {
-        let x = u * f64::from(self.width) - 0.5;
-        let y = v * f64::from(self.height) - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let top = self.at(x0, y0).lerp(self.at(x0 + 1, y0), fx);
-        let bottom = self.at(x0, y0 + 1).lerp(self.at(x0 + 1, y0 + 1), fx);
-        top.lerp(bottom, fy)
+        bilinear((self.width, self.height), u, v, |x, y| self.at(x, y))
     }
 
     /// Resamples onto a `width` x `height` display grid: camera_uv = mapping(display_uv).
@@ -111,6 +104,90 @@ impl LinearImage {
             }
         }
         out
+    }
+}
+
+/// Bilinear sample at texture coordinates (u, v) of a `size` image whose texel `(x, y)`
+/// (clamped to the image by `at`) is `at(x, y)`.
+fn bilinear(size: (u32, u32), u: f64, v: f64, at: impl Fn(i64, i64) -> DVec3) -> DVec3 {
+    let x = u * f64::from(size.0) - 0.5;
+    let y = v * f64::from(size.1) - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let top = at(x0, y0).lerp(at(x0 + 1, y0), fx);
+    let bottom = at(x0, y0 + 1).lerp(at(x0 + 1, y0 + 1), fx);
+    top.lerp(bottom, fy)
+}
+
+/// The prepared background behind single display pixels, without decoding or blurring the
+/// whole camera frame: what [`prepare_mapped`]'s `linear` holds there, to the last bit (the
+/// same sums in the same order), for a sample of the pixels of a view over a large frame.
+pub struct PointBackground<'a> {
+    camera: &'a RgbaImage,
+    taps: Vec<f64>,
+    /// Linear light of each code, as `LinearImage::decode` takes it.
+    lut: Vec<f64>,
+}
+
+impl<'a> PointBackground<'a> {
+    pub fn new(camera: &'a RgbaImage, params: &Params) -> Self {
+        PointBackground {
+            camera,
+            taps: params.blur_taps(),
+            lut: (0..=255u8).map(colour::code_to_linear).collect(),
+        }
+    }
+
+    fn clamped(&self, x: i64, y: i64) -> (u32, u32) {
+        let x = x.clamp(0, i64::from(self.camera.width) - 1) as u32;
+        let y = y.clamp(0, i64::from(self.camera.height) - 1) as u32;
+        (x, y)
+    }
+
+    fn decoded(&self, x: i64, y: i64) -> DVec3 {
+        let (x, y) = self.clamped(x, y);
+        let p = self.camera.get(x, y);
+        DVec3::new(
+            self.lut[p[0] as usize],
+            self.lut[p[1] as usize],
+            self.lut[p[2] as usize],
+        )
+    }
+
+    /// Texel `(x, y)` of the blurred frame: the vertical pass over the horizontal one, as
+    /// `LinearImage::blur` makes it.
+    fn blurred(&self, x: i64, y: i64) -> DVec3 {
+        if self.taps.len() <= 1 {
+            return self.decoded(x, y);
+        }
+        let (x, y) = self.clamped(x, y);
+        let (x, y) = (i64::from(x), i64::from(y));
+        let half = (self.taps.len() / 2) as i64;
+        let mut sum = DVec3::ZERO;
+        for (k, &t) in self.taps.iter().enumerate() {
+            let row = i64::from(self.clamped(x, y + k as i64 - half).1);
+            let mut across = DVec3::ZERO;
+            for (j, &s) in self.taps.iter().enumerate() {
+                across += s * self.decoded(x + j as i64 - half, row);
+            }
+            sum += t * across;
+        }
+        sum
+    }
+
+    /// The background behind display pixel `(x, y)` of a `width` x `height` view at `mapping`.
+    pub fn at(
+        &self,
+        mapping: &CameraMapping,
+        (width, height): (u32, u32),
+        (x, y): (u32, u32),
+    ) -> DVec3 {
+        let u = (f64::from(x) + 0.5) / f64::from(width);
+        let v = (f64::from(y) + 0.5) / f64::from(height);
+        let c = mapping.apply(DVec2::new(u, v));
+        let size = (self.camera.width, self.camera.height);
+        bilinear(size, c.x, c.y, |x, y| self.blurred(x, y))
     }
 }
 
@@ -189,6 +266,37 @@ mod tests {
         }
         let scaled = colour::linear_to_scaled(f64::from(0.4f32) * want);
         assert!((bg.scaled[5] - scaled).abs().max_element() < 1e-12);
+    }
+
+    /// Pixel by pixel, the point background is the prepared background exactly: blurred and
+    /// not, under a projective mapping that reaches past the frame's edges.
+    #[test]
+    fn the_point_background_is_the_prepared_one_to_the_bit() {
+        let mut camera = RgbaImage::new(9, 7, [0, 0, 0, 255]);
+        for y in 0..7 {
+            for x in 0..9 {
+                let c = |k: u32| ((x * 37 + y * 91 + k * 53) % 256) as u8;
+                camera.set(x, y, [c(0), c(1), c(2), 255]);
+            }
+        }
+        let mapping = CameraMapping {
+            rows: [[1.3, 0.1, -0.2], [0.05, 1.2, -0.1], [0.2, 0.1, 1.0]],
+        };
+        for blur_size in [1, 3, 5] {
+            let params = Params {
+                blur_size,
+                ..Params::default()
+            };
+            let (w, h) = (11, 6);
+            let bg = prepare_mapped(&camera, w, h, &mapping, &params);
+            let point = PointBackground::new(&camera, &params);
+            for y in 0..h {
+                for x in 0..w {
+                    let i = (y * w + x) as usize;
+                    assert_eq!(point.at(&mapping, (w, h), (x, y)), bg.linear[i], "{x} {y}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -441,6 +441,57 @@ fn evaluate_compares_methods_row_by_row_with_a_figure() {
     );
 }
 
+/// `enhance` prints the perceived contrast of its output at its `--ppd`: what `evaluate` says
+/// of the same output at the same `--ppd`, with the frequency the blur halves there (sigma
+/// 1.5 camera px, 640 display px over 0.65 of the 960 px wall: 1.025641 display px each; at
+/// 10 px per degree 0.153846 deg, so 0.18739 / 0.153846 = 1.2180 cpd).
+#[test]
+fn enhance_reports_the_perceived_contrast_at_its_ppd() {
+    let out = scratch("enhanced-ppd.png");
+    let out = out.to_str().unwrap();
+    let o = contrastxr(&[
+        "enhance",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "-o",
+        out,
+        "--engine",
+        "cpu",
+        "--ppd",
+        "10",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let said = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(said.contains("frequency blur: 1.22 cpd"), "{said}");
+    let o = contrastxr(&[
+        "evaluate",
+        "--display",
+        DISPLAY,
+        "--background",
+        YELLOW,
+        "--enhanced",
+        out,
+        "--ppd",
+        "10",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let evaluated = String::from_utf8_lossy(&o.stdout).into_owned();
+    let perceived = &evaluated[evaluated.find("perceived contrast c'").unwrap()..];
+    assert!(
+        said.ends_with(perceived),
+        "enhance: {said}\nevaluate: {perceived}"
+    );
+    let o = enhance_with(&["--engine", "cpu", "--ppd", "0"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--ppd must be a number of pixels per degree > 0"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn evaluate_refuses_perceptual_settings_out_of_range() {
     for (flag, value, says) in [

@@ -9,6 +9,7 @@ mod common;
 use common::conformance::nonconformant;
 use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
+use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use contrastxr::algorithm::Params;
 use contrastxr::gpu::core::pixel_codec;
 use contrastxr::gpu::opengl::GlFormat;
@@ -257,6 +258,7 @@ fn built_srgb_view(gl: &mut GlOffline, seeds: (u32, u32), params: &Params) -> (G
         internal_format: SRGB8_ALPHA8,
         rect: (0, 0, 40, 24),
         mapping: params.camera_mapping(),
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     gl.enhance_views(&[view], params).unwrap();
     (view, bytes)
@@ -379,6 +381,7 @@ fn link_failure_child() {
         internal_format: SRGB8_ALPHA8,
         rect: (0, 0, 24, 16),
         mapping: params.camera_mapping(),
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     let err = gl.enhance_views(&[view], &params).unwrap_err().to_string();
     assert!(
@@ -458,6 +461,7 @@ fn compile_child() {
             internal_format: SRGB8_ALPHA8,
             rect: (0, 0, 24, 16),
             mapping: params.camera_mapping(),
+            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
         };
         // SAFETY: the offline context is current on this thread; the texture is its own.
         let outcome = unsafe { gl.engine().enhance(&[view], &params) }.unwrap();
@@ -547,6 +551,7 @@ fn a_region_of_a_texture_and_a_layer_of_an_array_are_enhanced_in_place() {
         internal_format: SRGB8_ALPHA8,
         rect: (x0 as u32, y0 as u32, w as u32, h as u32),
         mapping,
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     gl.enhance_views(&[view], &params).unwrap();
     let out = gl
@@ -581,6 +586,7 @@ fn a_region_of_a_texture_and_a_layer_of_an_array_are_enhanced_in_place() {
         internal_format: SRGB8_ALPHA8,
         rect: (0, 0, 32, 20),
         mapping,
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     gl.enhance_views(&[view], &params).unwrap();
     let out = gl
@@ -639,6 +645,7 @@ fn the_entry_points_are_found_through_the_gl_in_the_process() {
         internal_format: SRGB8_ALPHA8,
         rect: (0, 0, 16, 8),
         mapping: params.camera_mapping(),
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     // SAFETY: as above, and the texture is this context's.
     unsafe {
@@ -675,6 +682,7 @@ fn a_view_its_texture_cannot_hold_is_refused_without_a_gl_error() {
         internal_format: SRGB8_ALPHA8,
         rect: (0, 0, 16, 8),
         mapping: params.camera_mapping(),
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     let wrong = [
         GlView {
@@ -742,6 +750,7 @@ fn in_place_and_through_a_buffer_give_the_same_texels() {
                     internal_format: internal,
                     rect: (7, 3, 29, 17),
                     mapping,
+                    pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
                 };
                 paths.push(gl.engine().store_through(&view));
                 gl.enhance_views(&[view], &params).unwrap();
@@ -970,6 +979,7 @@ fn a_compatibility_contexts_pixel_transfer_does_not_alter_the_written_texels() {
                 internal_format: internal,
                 rect: (0, 0, w, h),
                 mapping: params.camera_mapping(),
+                pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
             };
             gl.enhance_views(&[view], &params).unwrap();
             if with_state {
@@ -1087,6 +1097,7 @@ fn debug_output_child() {
         internal_format: SRGB8_ALPHA8,
         rect: (0, 0, w, h),
         mapping: params.camera_mapping(),
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     gl.enhance_views(&[view], &params).unwrap();
     let during = COUNT.load(Ordering::Relaxed);

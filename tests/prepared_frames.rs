@@ -7,6 +7,7 @@
 //! thread keeps offering other frames' texels.
 
 use ash::vk;
+use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use contrastxr::algorithm::Params;
 use contrastxr::gpu::core::blurred_texels::{BlurTaps, BlurredTexels, TexelSink};
 use contrastxr::gpu::vulkan::device::Commands;
@@ -133,6 +134,7 @@ impl Rig {
             vk_format,
             ViewPath::BufferCopy,
             params.camera_mapping(),
+            DEFAULT_PIXELS_PER_DEGREE,
         )
     }
 

@@ -1,6 +1,7 @@
 //! The one place the CLI chooses between the GPU engine (Vulkan, or OpenGL on an offline EGL
 //! context) and the CPU reference.
 
+use contrastxr::algorithm::perception::frequency::{view_params, ViewGeometry};
 use contrastxr::algorithm::Params;
 use contrastxr::gpu::opengl::GlOffline;
 use contrastxr::gpu::{OfflineBackend, VkOffline};
@@ -36,13 +37,24 @@ impl Backend {
     }
 }
 
-/// Enhances `display` against the camera frame `camera` (any size) with the chosen engine.
+/// Enhances `display` against the camera frame `camera` (any size) with the chosen engine, the
+/// view at `pixels_per_degree` (its perceptual model's `blur` frequency resolved for it, placed
+/// by the manual mapping, so that every engine judges it alike).
 pub fn run(
     engine: Backend,
     display: &RgbaImage,
     camera: &RgbaImage,
     params: &Params,
+    pixels_per_degree: f64,
 ) -> Result<RgbaImage, String> {
+    let mapping = params.camera_mapping();
+    let view = ViewGeometry {
+        mapping: &mapping,
+        display_width: display.width,
+        camera_width: camera.width,
+        pixels_per_degree,
+    };
+    let params = &view_params(params, &view);
     match engine {
         Backend::Cpu => Ok(reference::enhance_with_camera(display, camera, params)),
         Backend::Vulkan => {

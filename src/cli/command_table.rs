@@ -41,6 +41,7 @@ pub const COMMANDS: &[Subcommand] = &[
         run: enhance::run,
         options: &[
             enhance::OPTIONS,
+            options::PPD_OPTIONS,
             options::METHOD_OPTIONS,
             options::ENGINE_OPTIONS,
         ],
@@ -53,6 +54,7 @@ pub const COMMANDS: &[Subcommand] = &[
         run: evaluate::run,
         options: &[
             evaluate::OPTIONS,
+            options::PPD_OPTIONS,
             options::METHOD_OPTIONS,
             options::ENGINE_OPTIONS,
         ],

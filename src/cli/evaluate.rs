@@ -13,7 +13,7 @@ use super::args::parse_list;
 use super::args::{Args, Opt};
 use super::backend_choice::{self, Backend};
 use super::error::CliError;
-use super::options::{self, method_usage, ENGINE_USAGE};
+use super::options::{self, method_usage, ppd_usage, ENGINE_USAGE};
 
 pub const OPTIONS: &[Opt] = &[
     Opt::value("--display", "D.png"),
@@ -23,13 +23,8 @@ pub const OPTIONS: &[Opt] = &[
     Opt::flag("--json"),
     Opt::value("--figure", "FIG.png"),
     Opt::flag("--app-images"),
-    Opt::value("--ppd", "N"),
     Opt::value("--compare", "M1,M2,..."),
 ];
-
-/// The view's pixels per degree when `--ppd` is not given: the perceptual model's `blur`
-/// frequency needs it.
-pub const DEFAULT_PPD: f64 = 20.0;
 
 const USAGE: &str = "\
 usage: contrastxr evaluate --display D.png --background B.png [--enhanced OUT.png] [options]
@@ -45,16 +40,14 @@ first (--engine).
   --json               print the metrics as JSON (an array of rows for --sweep)
   --figure FIG.png     write a figure; one row per lambda_e for --sweep
   --app-images         put the display and enhanced images themselves in the figure too
-  --ppd N              the display's pixels per degree of view (20), for frequency = blur
   --compare M1,M2,...  run each method and print one row per method; the figure has a row per
                        method: perceived original, perceived output, and the content pixels by
                        perceived contrast (left alone green, brought to the target cyan, out of
                        reach magenta)
-
 ";
 
 pub fn usage() -> String {
-    format!("{USAGE}{}{ENGINE_USAGE}", method_usage())
+    format!("{USAGE}{}\n{}{ENGINE_USAGE}", ppd_usage(), method_usage())
 }
 
 struct Inputs {
@@ -77,17 +70,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let figure = args.value(&["--figure"])?;
     let app_images = args.flag("--app-images");
     let compare = args.value(&["--compare"])?;
-    let ppd = match args.value(&["--ppd"])? {
-        None => DEFAULT_PPD,
-        Some(t) => match t.trim().parse::<f64>() {
-            Ok(v) if v.is_finite() && v > 0.0 => v,
-            _ => {
-                return Err(CliError::Failure(format!(
-                    "--ppd must be a number of pixels per degree > 0, got '{t}'"
-                )))
-            }
-        },
-    };
+    let ppd = options::pixels_per_degree(args)?;
     let params = options::params(args)?;
     let engine = options::engine(args)?;
     args.finish()?;
@@ -128,8 +111,14 @@ fn enhanced_image(
     params: &Params,
 ) -> Result<RgbaImage, CliError> {
     let Some(path) = path else {
-        return backend_choice::run(inputs.engine, &inputs.display, &inputs.camera, params)
-            .map_err(CliError::Failure);
+        return backend_choice::run(
+            inputs.engine,
+            &inputs.display,
+            &inputs.camera,
+            params,
+            inputs.ppd,
+        )
+        .map_err(CliError::Failure);
     };
     let img = options::load_path(path, "enhanced")?;
     let (d, e) = (&inputs.display, &img);
@@ -213,7 +202,8 @@ fn metrics_text(m: &Metrics) -> String {
     out
 }
 
-fn perception_text(p: &PerceptionReport, params: &Params) -> String {
+/// The perceived contrast in three lines (`enhance` prints them too).
+pub(super) fn perception_text(p: &PerceptionReport, params: &Params) -> String {
     let s = &params.perceptual;
     let cpd: Vec<String> = p.frequency_cpd.iter().map(|f| format!("{f:.2}")).collect();
     let mut out = format!(

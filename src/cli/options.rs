@@ -1,5 +1,6 @@
 //! The options shared by `enhance` and `evaluate`: method, preprocessing, engine, images.
 
+use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use contrastxr::algorithm::Params;
 use contrastxr::config::{self, Key, Settings, Value};
 use contrastxr::image::RgbaImage;
@@ -94,6 +95,31 @@ pub fn method_usage() -> String {
 /// The help of [`ENGINE_OPTIONS`], for the commands that run the method.
 pub const ENGINE_USAGE: &str =
     "  --engine E               gpu|cpu|opengl (gpu; cpu is the exact, slower reference; opengl\n                           the layer's OpenGL backend on an offline EGL context)\n";
+
+/// The help of [`PPD_OPTIONS`], one line.
+pub fn ppd_usage() -> String {
+    format!(
+        "  --ppd N              the display's pixels per degree of view \
+         ({DEFAULT_PIXELS_PER_DEGREE}), for frequency = blur\n"
+    )
+}
+
+/// The option [`pixels_per_degree`] reads.
+pub const PPD_OPTIONS: &[Opt] = &[Opt::value("--ppd", "N")];
+
+/// `--ppd`: the view's display pixels per degree, for the perceptual model's `blur` frequency
+/// (the layer takes a view's from its field of view); `DEFAULT_PIXELS_PER_DEGREE` without it.
+pub fn pixels_per_degree(args: &mut Args) -> Result<f64, CliError> {
+    match args.value(&["--ppd"])? {
+        None => Ok(DEFAULT_PIXELS_PER_DEGREE),
+        Some(t) => match t.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+            _ => Err(CliError::Failure(format!(
+                "--ppd must be a number of pixels per degree > 0, got '{t}'"
+            ))),
+        },
+    }
+}
 
 /// The option [`engine`] reads.
 pub const ENGINE_OPTIONS: &[Opt] = &[Opt::value("--engine", "E")];

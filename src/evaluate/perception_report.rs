@@ -6,7 +6,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::algorithm::perception::frame_report::{frame_report, FrameReport, ReportPixel};
-use crate::algorithm::perception::frequency::{BlurGeometry, Frequencies};
+use crate::algorithm::perception::frequency::{view_frequencies, BlurGeometry, Frequencies};
 use crate::algorithm::perception::perceived_contrast::Model;
 use crate::algorithm::Params;
 use crate::background_preparation::PreparedBackground;
@@ -47,7 +47,7 @@ pub fn offline_frequencies(
     pixels_per_degree: f64,
 ) -> Frequencies {
     let blur = BlurGeometry::manual(params, display_width, camera_width, pixels_per_degree);
-    params.perceptual.frequency.resolve(&blur)
+    view_frequencies(params, &blur)
 }
 
 /// The model of `params` (its perceptual settings and transmittance) at `frequencies`.

@@ -1,8 +1,12 @@
 //! `CONTRASTXR_CAPTURE_DIR`: writes what the app rendered, what the runtime got and the
-//! background used, for each processed view of the selected frames. How users show that the
-//! layer works, and how the tests see the null compositor's frames.
+//! background used, for each processed view of the selected frames, with the perceived
+//! contrast of its content before and after. How users show that the layer works, and how the
+//! tests see the null compositor's frames. The layer's own read-back for its out-of-reach
+//! check is a capture without files.
 
 use super::graphics::CapturedImage;
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::Params;
 use crate::colour;
 use crate::config::{Settings, Value, KEYS};
 use crate::gpu::core::pixel_codec;
@@ -87,18 +91,32 @@ pub struct Api {
     pub format: String,
 }
 
-/// One captured view's files, taken on the app's thread and written by the capture thread
-/// (`capture_writer`): the pixels as read back, and the JSON as it was at the frame.
+/// What a captured view's perception report needs besides its pixels and the camera frame.
+#[derive(Clone, Debug)]
+pub struct ReportView {
+    /// The settings the frame was processed with.
+    pub params: Params,
+    /// Display uv (v from the view's top edge) to camera uv.
+    pub mapping: CameraMapping,
+    pub pixels_per_degree: f64,
+}
+
+/// One captured view, taken on the app's thread and handed to the capture thread
+/// (`capture_writer`), which makes its perception report and writes its files: the pixels as
+/// read back, and the JSON as it was at the frame.
 pub struct CaptureJob {
-    pub dir: PathBuf,
+    /// The capture folder; None for the out-of-reach check's read-back, which writes no file.
+    pub dir: Option<PathBuf>,
     /// `frame-N-view-V`, which every file name starts with.
     pub stem: String,
     pub format: PixelFormat,
     pub extent: (u32, u32),
     pub display: Vec<u8>,
     pub output: Vec<u8>,
+    /// The camera frame the view was enhanced against.
     pub background: Arc<RgbaImage>,
     pub json: serde_json::Value,
+    pub view: ReportView,
 }
 
 impl CaptureJob {
@@ -129,6 +147,7 @@ impl CaptureJob {
             // image of the layer's own and back), or "copy" (out into a buffer and back).
             "path": captured.path,
             "camera_mapping": item.mapping.rows,
+            "pixels_per_degree": item.pixels_per_degree,
             "background": settings.background,
             "params": settings_json(settings),
         });
@@ -136,14 +155,39 @@ impl CaptureJob {
             object.extend(motion);
         }
         CaptureJob {
-            dir: dir.to_path_buf(),
+            dir: Some(dir.to_path_buf()),
             stem: format!("frame-{frame}-view-{view}"),
             format: item.format,
             extent: (w, h),
+            view: ReportView {
+                params: settings.params.clone(),
+                mapping: item.mapping,
+                pixels_per_degree: item.pixels_per_degree,
+            },
             display: captured.display,
             output: captured.output,
             background,
             json,
+        }
+    }
+
+    /// The out-of-reach check's read-back of one view: its report, no files.
+    pub fn check(captured: CapturedImage, background: Arc<RgbaImage>, params: &Params) -> Self {
+        let item = &captured.view;
+        CaptureJob {
+            dir: None,
+            stem: "check".into(),
+            format: item.format,
+            extent: item.key.extent,
+            view: ReportView {
+                params: params.clone(),
+                mapping: item.mapping,
+                pixels_per_degree: item.pixels_per_degree,
+            },
+            display: captured.display,
+            output: captured.output,
+            background,
+            json: serde_json::Value::Null,
         }
     }
 
@@ -152,14 +196,16 @@ impl CaptureJob {
         self.display.len() + self.output.len()
     }
 
-    /// Writes the view's files, the JSON last (its presence says the others are complete).
-    /// Errors are one sentence.
+    /// Writes the view's files, the JSON last (its presence says the others are complete);
+    /// nothing without a folder. Errors are one sentence.
     pub fn write(&self) -> Result<(), String> {
-        prepare_folder(&self.dir)?;
-        let (w, h) = self.extent;
-        let file = |suffix: &str, bytes: &[u8]| {
-            create_file(&self.dir, &format!("{}{suffix}", self.stem), bytes)
+        let Some(dir) = &self.dir else {
+            return Ok(());
         };
+        prepare_folder(dir)?;
+        let (w, h) = self.extent;
+        let file =
+            |suffix: &str, bytes: &[u8]| create_file(dir, &format!("{}{suffix}", self.stem), bytes);
         file(
             "-display.png",
             &to_srgb8(self.format, &self.display, w, h).encode_png()?,
@@ -213,7 +259,7 @@ mod tests {
             srgb: true,
         };
         CaptureJob {
-            dir: dir.to_path_buf(),
+            dir: Some(dir.to_path_buf()),
             stem: "frame-0-view-0".into(),
             format: f,
             extent: (2, 1),
@@ -221,6 +267,11 @@ mod tests {
             output: vec![7, 8, 9, 255, 10, 11, 12, 255],
             background: Arc::new(RgbaImage::new(2, 1, [20, 30, 40, 255])),
             json: serde_json::json!({"frame": 0}),
+            view: ReportView {
+                params: Params::default(),
+                mapping: Params::default().camera_mapping(),
+                pixels_per_degree: 20.0,
+            },
         }
     }
 

@@ -1,13 +1,16 @@
-//! The capture thread (`contrastxr-capture`): captured views are written here, off the app's
-//! thread, in the order they were taken. The app's thread only hands over what it read back
+//! The capture thread (`contrastxr-capture`): captured views get their perception report and
+//! are written here, off the app's thread, in the order they were taken; the out-of-reach
+//! check's read-backs get their report and no files. The app's thread only hands over what it read back
 //! (`capture_files::CaptureJob`), never waiting for a file system: a capture folder on a hung
 //! mount, a FIFO or a slow disk delays the files, not the frames. What waits to be written is
 //! bounded ([`MOST_WAITING`]): past it a view's capture is dropped, said once.
 //! `xrDestroyInstance` and the process's exit wait (boundedly) for what was handed over.
 
 use super::capture_files::CaptureJob;
+use super::capture_report::{report_step, view_report};
 use super::ffi::contain;
 use super::log;
+use super::reach_advice;
 use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Condvar, Mutex, MutexGuard, Once, OnceLock};
 use std::time::{Duration, Instant};
@@ -92,7 +95,7 @@ fn start() -> Option<Sender<CaptureJob>> {
         .spawn(move || {
             while let Some(job) = next_job(&rx) {
                 let bytes = job.bytes();
-                let written = contain("while writing", || job.write())
+                let written = contain("while writing", || report_and_write(job))
                     .unwrap_or_else(|panic| Err(panic.to_string()));
                 if let Err(e) = written {
                     log::once("capture-failed", &format!("capture failed: {e}"));
@@ -118,6 +121,21 @@ fn start() -> Option<Sender<CaptureJob>> {
             None
         }
     }
+}
+
+/// A view's perception report (over a bounded sample of a large view), the out-of-reach
+/// advice, then its files, if it has any.
+fn report_and_write(mut job: CaptureJob) -> Result<(), String> {
+    let step = report_step(job.extent.0, job.extent.1);
+    let report = view_report(&job, step);
+    reach_advice::consider(&report, &job.view.params);
+    if let (Some(json), Ok(serde_json::Value::Object(keys))) =
+        (job.json.as_object_mut(), serde_json::to_value(&report))
+    {
+        json.extend(keys);
+        json.insert("perception_step".into(), step.into());
+    }
+    job.write()
 }
 
 /// The next capture to write; None once none has come for [`IDLE_END`], when the thread ends
@@ -179,8 +197,10 @@ extern "C" fn at_exit() {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::algorithm::Params;
     use crate::gpu::{PixelFormat, PixelLayout};
     use crate::image::RgbaImage;
+    use crate::layer::capture_files::ReportView;
     use std::sync::Arc;
 
     fn capture_threads() -> usize {
@@ -200,7 +220,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("contrastxr-writer-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         write(CaptureJob {
-            dir: dir.clone(),
+            dir: Some(dir.clone()),
             stem: "frame-0-view-0".into(),
             format: PixelFormat {
                 layout: PixelLayout::Rgba8,
@@ -211,6 +231,11 @@ mod tests {
             output: vec![4, 5, 6, 255],
             background: Arc::new(RgbaImage::new(1, 1, [7, 8, 9, 255])),
             json: serde_json::json!({"frame": 0}),
+            view: ReportView {
+                params: Params::default(),
+                mapping: Params::default().camera_mapping(),
+                pixels_per_degree: 20.0,
+            },
         });
         assert!(finish(Duration::from_secs(5)));
         assert!(dir.join("frame-0-view-0.json").is_file());

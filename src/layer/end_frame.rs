@@ -2,7 +2,7 @@
 //! configured, quads), with which camera mapping, and their enhancement on the app's queue,
 //! at xrEndFrame or, for an image an app released ahead of its xrEndFrame, at that release.
 
-use super::capture_files;
+use super::capture_files::{self, CaptureJob};
 use super::capture_writer;
 use super::ffi;
 use super::graphics::{CapturedImage, NotDone, SessionGraphics, ViewImage};
@@ -10,11 +10,13 @@ use super::indicator;
 use super::live_settings::Settings;
 use super::log;
 use super::motion::{self, FrameMotion};
+use super::reach_advice;
 use super::sources;
 use super::state::{self, lock, SessionState, SwapchainState, ViewRegion};
 use super::view_mappings::{self, ViewGeometry};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::ViewMode;
+use crate::algorithm::perception::frequency::{view_pixels_per_degree, DEFAULT_PIXELS_PER_DEGREE};
 use crate::camera;
 use crate::gpu::core::blurred_texels::BlurTaps;
 use crate::gpu::core::{BackgroundInput, OverlayPixels};
@@ -29,6 +31,7 @@ use std::time::Instant;
 struct SubImage {
     sub: xr::SwapchainSubImage,
     mapping: Option<CameraMapping>,
+    pixels_per_degree: Option<f64>,
 }
 
 /// The sub-images of the frame's layers that the layer enhances, with each projection view's
@@ -66,15 +69,25 @@ unsafe fn sub_images(
             let mappings = motion.mappings(settings, &geometry, proj.space);
             for (k, (view, (mapping, source))) in views.iter().zip(mappings).enumerate() {
                 sources.push((k, mapping, source));
+                let (fov, width) = (view.fov, view.sub_image.image_rect.extent.width);
                 out.push(SubImage {
                     sub: view.sub_image,
                     mapping: Some(mapping),
+                    pixels_per_degree: Some(view_pixels_per_degree(
+                        f64::from(fov.angle_left),
+                        f64::from(fov.angle_right),
+                        width.max(0) as u32,
+                    )),
                 });
             }
         } else if settings.quad_layers && base.ty == xr::StructureType::COMPOSITION_LAYER_QUAD {
             // SAFETY: the type tag says this is a quad layer.
             let sub = unsafe { (*(layer as *const xr::CompositionLayerQuad)).sub_image };
-            out.push(SubImage { sub, mapping: None });
+            out.push(SubImage {
+                sub,
+                mapping: None,
+                pixels_per_degree: None,
+            });
         }
     }
     out
@@ -120,17 +133,22 @@ fn work_item(
         layered: sc.info.array_size > 1,
         in_place: sc.info.in_place,
         mapping,
+        pixels_per_degree: region
+            .pixels_per_degree
+            .unwrap_or(DEFAULT_PIXELS_PER_DEGREE),
     })
 }
 
 /// Each enhanced sub-image's swapchain with its regions in this frame, in submission order.
 fn regions_by_swapchain(subs: &[SubImage]) -> Vec<(xr::Swapchain, Vec<ViewRegion>)> {
     let mut out: Vec<(xr::Swapchain, Vec<ViewRegion>)> = Vec::new();
-    for SubImage { sub, mapping } in subs {
+    for s in subs {
+        let sub = &s.sub;
         let region = ViewRegion {
             rect: sub.image_rect,
             array_index: sub.image_array_index,
-            mapping: *mapping,
+            mapping: s.mapping,
+            pixels_per_degree: s.pixels_per_degree,
         };
         match out.iter_mut().find(|(h, _)| *h == sub.swapchain) {
             Some((_, regions)) => regions.push(region),
@@ -179,6 +197,7 @@ fn regions_ahead(s: &SessionState, sc: &SwapchainState) -> Vec<ViewRegion> {
             rect,
             array_index,
             mapping: None,
+            pixels_per_degree: None,
         })
         .collect()
 }
@@ -304,8 +323,12 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
     let Some(frame) = background_frame(s) else {
         return;
     };
+    // Captures make their report anyway; otherwise, once a minute from the first enhanced
+    // frame, a read-back for the check of how much content is out of reach (reach_advice).
+    let files = capturing(s);
+    let check = !files && s.processed > 0 && reach_advice::read_back_due(&s.settings.params);
     let options = FrameOptions {
-        capture: capturing(s),
+        capture: files || check,
         wait_for_pipelines: s.settings.wait_for_pipelines,
     };
     let sequence = background_sequence(frame.sequence, &s.settings);
@@ -323,8 +346,14 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
             if s.processed == 0 {
                 log_began(s.started, graphics.as_ref());
             }
-            if options.capture {
+            if files {
                 write_capture(s, views, &frame.image);
+            } else if check {
+                log::debug(reach_advice::READ_BACK_LINE);
+                for v in views {
+                    let job = CaptureJob::check(v, frame.image.clone(), &s.settings.params);
+                    capture_writer::write(job);
+                }
             }
             s.processed += 1;
             log::once(
@@ -401,7 +430,7 @@ fn write_capture(s: &SessionState, views: Vec<CapturedImage>, bg: &Arc<RgbaImage
             graphics: graphics.graphics(),
             format: graphics.format_name(v.view.api_format),
         };
-        let job = capture_files::CaptureJob::new(
+        let job = CaptureJob::new(
             &c.dir,
             s.processed,
             k,

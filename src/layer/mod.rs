@@ -6,6 +6,7 @@
 mod app_spaces;
 mod blend;
 pub mod capture_files;
+mod capture_report;
 mod capture_writer;
 mod dispatch;
 mod end_frame;
@@ -21,6 +22,7 @@ pub mod installed_files;
 pub mod live_settings;
 pub mod log;
 mod motion;
+mod reach_advice;
 pub mod session;
 mod session_motion;
 mod sources;

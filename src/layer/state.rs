@@ -115,6 +115,9 @@ pub struct ViewRegion {
     /// frame's xrEndFrame (None for quad layers, and for the whole-image regions used before the
     /// first xrEndFrame: they take the manual mapping).
     pub mapping: Option<crate::algorithm::mapping::CameraMapping>,
+    /// A projection view's pixels per degree, from its field of view and width (None where
+    /// `mapping` is).
+    pub pixels_per_degree: Option<f64>,
 }
 
 #[derive(Clone, Debug)]

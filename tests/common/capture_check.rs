@@ -2,6 +2,9 @@
 //! computed here from the captured display and background, within the tolerance of
 //! docs/algorithm.md, Conformance. Formats by their Vulkan or OpenGL names.
 
+use contrastxr::algorithm::mapping::CameraMapping;
+use contrastxr::algorithm::perception::frequency::{view_params, ViewGeometry};
+use contrastxr::algorithm::perceptual_settings::{Frequency, PerceptualSettings};
 use contrastxr::algorithm::{conformant, enhance_linear, enhance_srgb8_trace, Method, Params};
 use contrastxr::background_preparation::{prepare, PreparedBackground};
 use contrastxr::image::RgbaImage;
@@ -133,8 +136,37 @@ pub fn params_of(json: &serde_json::Value) -> Params {
         fov_scale: pair("fov_scale"),
         fov_offset: pair("fov_offset"),
         method: Method::parse(p["method"].as_str().unwrap()).unwrap(),
+        perceptual: perceptual_of(p),
         ..Params::default()
     }
+}
+
+/// The perceptual model's settings of a capture's `params`.
+fn perceptual_of(p: &serde_json::Value) -> PerceptualSettings {
+    let f = |k: &str| p[k].as_f64().unwrap_or_else(|| panic!("{k} in {p}"));
+    PerceptualSettings {
+        display_peak_nits: f("display_peak_nits"),
+        world_nits: f("world_nits"),
+        target_contrast: f("target_contrast"),
+        min_luminance: f("min_luminance"),
+        frequency: Frequency::parse(p["frequency"].as_str().unwrap()).unwrap(),
+    }
+}
+
+/// A captured view's params as the layer ran its method: the perceptual model's `blur`
+/// frequency resolved for the view (its pixels per degree and camera mapping in the capture).
+pub fn view_params_of(json: &serde_json::Value, camera_width: u32) -> Params {
+    let rows = &json["camera_mapping"];
+    let mapping = CameraMapping {
+        rows: std::array::from_fn(|r| std::array::from_fn(|c| rows[r][c].as_f64().unwrap())),
+    };
+    let view = ViewGeometry {
+        mapping: &mapping,
+        display_width: json["rect"]["width"].as_u64().unwrap() as u32,
+        camera_width,
+        pixels_per_degree: json["pixels_per_degree"].as_f64().unwrap(),
+    };
+    view_params(&params_of(json), &view)
 }
 
 /// A raw pixel decoded independently of the layer: channel values as stored, and alpha.
@@ -192,7 +224,7 @@ pub fn check_view(c: &Captured) -> usize {
         c.json["rect"]["width"].as_u64().unwrap() as u32,
         c.json["rect"]["height"].as_u64().unwrap() as u32,
     );
-    let params = params_of(&c.json);
+    let params = view_params_of(&c.json, c.camera.width);
     let bg: PreparedBackground = prepare(&c.camera, w, h, &params);
     let bpp = c.json["bytes_per_pixel"].as_u64().unwrap() as usize;
     assert_eq!(

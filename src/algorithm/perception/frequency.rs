@@ -2,12 +2,36 @@
 //! frequency*): from the background's blur, an ensemble of image frequencies, or a fixed number
 //! of cycles per degree. Pure.
 
+use glam::DVec2;
+
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 pub use crate::algorithm::perceptual_settings::Frequency;
 
-/// A view's pixels per degree where nothing says otherwise (the command line's default).
+/// A view's display pixels per degree where nothing says otherwise: the command line's `--ppd`
+/// default, and the views of the offline engines, the benchmark and the warm-ups.
 pub const DEFAULT_PIXELS_PER_DEGREE: f64 = 20.0;
+
+/// The pixels per degree of a view `width` pixels wide whose field of view spans
+/// `angle_left` to `angle_right` (radians, an `XrFovf`'s, left negative): the density of a
+/// pinhole projection across the width where the view is sparsest, at its optical axis (or the
+/// edge nearest it), `width / (tan r - tan l)` pixels per unit of tan, times `cos^-2` of that
+/// angle, per degree. [`DEFAULT_PIXELS_PER_DEGREE`] for a field of view no projection has.
+pub fn view_pixels_per_degree(angle_left: f64, angle_right: f64, width: u32) -> f64 {
+    let half_turn = std::f64::consts::FRAC_PI_2;
+    let usable = angle_left.is_finite()
+        && angle_right.is_finite()
+        && angle_left < angle_right
+        && angle_left > -half_turn
+        && angle_right < half_turn
+        && width > 0;
+    if !usable {
+        return DEFAULT_PIXELS_PER_DEGREE;
+    }
+    let per_tan = f64::from(width) / (angle_right.tan() - angle_left.tan());
+    let axis = 0.0f64.clamp(angle_left, angle_right);
+    per_tan / axis.cos().powi(2) * std::f64::consts::PI / 180.0
+}
 
 /// The midpoints (cpd) of four bands of equal probability of a 1/f^1.8 amplitude spectrum over
 /// 1 to 30 cpd: the frequency distribution of images.
@@ -62,10 +86,10 @@ impl BlurGeometry {
     }
 
     /// The blur of `params` in a view `display_width` pixels wide with `pixels_per_degree`,
-    /// over a camera frame `camera_width` pixels wide placed by `mapping`: one camera pixel
-    /// spans `display_width / (|d camera_u / d display_u| camera_width)` display pixels, the
-    /// derivative taken at the view's centre (a projective mapping's scale varies across the
-    /// view). Equal to [`manual`](Self::manual) for the manual mapping.
+    /// whose display uv lies at `mapping` in a camera frame `camera_width` pixels wide: one
+    /// camera pixel spans `display_width / (camera_width du_c/du)` display pixels, with
+    /// `du_c/du` the rate at which the camera's u moves with the display's at the view's
+    /// centre. A mapping that does not move u there (degenerate) takes the manual one's.
     pub fn of_view(
         params: &Params,
         mapping: &CameraMapping,
@@ -73,16 +97,16 @@ impl BlurGeometry {
         camera_width: u32,
         pixels_per_degree: f64,
     ) -> BlurGeometry {
-        let [a, b, c] = mapping.rows[0];
-        let [g, h, i] = mapping.rows[2];
-        let (u, v) = (0.5, 0.5);
-        let z = g * u + h * v + i;
-        let du = (a * z - g * (a * u + b * v + c)) / (z * z);
-        BlurGeometry {
-            display_px_per_camera_px: f64::from(display_width)
-                / (du.abs() * f64::from(camera_width)),
-            pixels_per_degree,
-            ..BlurGeometry::unplaced(params)
+        let manual = BlurGeometry::manual(params, display_width, camera_width, pixels_per_degree);
+        let rate = horizontal_rate(mapping, DVec2::splat(0.5));
+        let per_camera_px = f64::from(display_width) / (rate * f64::from(camera_width));
+        if per_camera_px.is_finite() && per_camera_px > 0.0 {
+            BlurGeometry {
+                display_px_per_camera_px: per_camera_px,
+                ..manual
+            }
+        } else {
+            manual
         }
     }
 
@@ -117,6 +141,15 @@ impl BlurGeometry {
     }
 }
 
+/// `|d u_c / d u|` of `mapping` at display uv `at`: for `(x, y, z) = M (u, v, 1)` and
+/// `u_c = x / z`, `(m00 z - x m20) / z^2`.
+fn horizontal_rate(mapping: &CameraMapping, at: DVec2) -> f64 {
+    let r = &mapping.rows;
+    let x = r[0][0] * at.x + r[0][1] * at.y + r[0][2];
+    let z = r[2][0] * at.x + r[2][1] * at.y + r[2][2];
+    ((r[0][0] * z - x * r[2][0]) / (z * z)).abs()
+}
+
 /// The frequencies a frame's c' is averaged over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Frequencies {
@@ -143,6 +176,11 @@ impl Frequency {
             Frequency::Cpd(f) => Frequencies::One(f),
         }
     }
+}
+
+/// The frequencies a view of blur `blur` judges contrast at, as [`for_view`] resolves them.
+pub fn view_frequencies(params: &Params, blur: &BlurGeometry) -> Frequencies {
+    for_view(params, blur).perceptual.frequency.resolve(blur)
 }
 
 /// `params` for one view of blur `blur`: its `frequency` setting, where `blur`, replaced by the
@@ -256,5 +294,77 @@ mod tests {
         };
         assert_eq!(for_view(&p, &wider).perceptual.frequency, Frequency::Cpd(f));
         assert_eq!(Frequency::Ensemble.resolve(&g).cpd(), &ENSEMBLE_CPD);
+    }
+
+    /// A view's mapping with a known scale gives what the manual mapping gives: the default
+    /// manual mapping itself (u_c = 0.65 u + 0.175), and the same scale written projectively
+    /// (every row times 2) with a shift, which changes neither du_c/du nor the blur. By hand:
+    /// 640 display px over 0.65 of 960 camera px is 640 / 624 = 1.025641 display px per camera
+    /// px; sigma 1.5 at 20 ppd is 0.0769231 deg.
+    #[test]
+    fn a_views_mapping_of_known_scale_gives_the_manual_blur() {
+        let params = Params::default();
+        let manual = BlurGeometry::manual(&params, 640, 960, 20.0);
+        let default_view = BlurGeometry::of_view(&params, &params.camera_mapping(), 640, 960, 20.0);
+        assert!((default_view.display_px_per_camera_px - 1.025641).abs() < 1e-6);
+        assert!((default_view.sigma_deg() - 0.0769231).abs() < 1e-6);
+        assert!((default_view.sigma_deg() - manual.sigma_deg()).abs() < 1e-12);
+        let projective = CameraMapping {
+            rows: [[1.3, 0.0, 0.1], [0.0, 1.3, 0.4], [0.0, 0.0, 2.0]],
+        };
+        let shifted = BlurGeometry::of_view(&params, &projective, 640, 960, 20.0);
+        assert!((shifted.display_px_per_camera_px - 1.025641).abs() < 1e-6);
+        // Half the scale in the camera: each camera pixel covers twice the display pixels,
+        // so the blur is twice as wide in degrees and the frequency half.
+        let half = CameraMapping::affine([0.325, 0.325], [0.3, 0.3]);
+        let wider = BlurGeometry::of_view(&params, &half, 640, 960, 20.0);
+        assert!((wider.sigma_deg() - 2.0 * 0.0769231).abs() < 1e-6);
+        // A projective mapping: x = u + 0.1, z = 0.5 u + 1 at u = v = 0.5: z = 1.25, x = 0.6,
+        // du_c/du = (1 * 1.25 - 0.6 * 0.5) / 1.25^2 = 0.608; 640 / (0.608 * 960) = 1.096491.
+        let tilted = CameraMapping {
+            rows: [[1.0, 0.0, 0.1], [0.0, 1.0, 0.0], [0.5, 0.0, 1.0]],
+        };
+        let g = BlurGeometry::of_view(&params, &tilted, 640, 960, 20.0);
+        assert!(
+            (g.display_px_per_camera_px - 1.096491).abs() < 1e-6,
+            "{g:?}"
+        );
+        // A mapping that does not move u: the manual blur.
+        let flat = CameraMapping::affine([0.0, 0.65], [0.5, 0.175]);
+        assert_eq!(
+            BlurGeometry::of_view(&params, &flat, 640, 960, 20.0),
+            manual
+        );
+    }
+
+    /// Pixels per degree from a field of view, by hand: 1000 px over +-45 deg has 500 px per
+    /// unit of tan, so 500 pi / 180 = 8.72665 per degree at the axis; an asymmetric view
+    /// (-40, +50 deg: tan sum 0.839100 + 1.191754 = 2.030854) 1000 / 2.030854 pi / 180 =
+    /// 8.59407; a view wholly right of the axis (10 to 50 deg: tan 1.191754 - 0.176327 =
+    /// 1.015427) at its left edge, 1000 / 1.015427 / cos^2(10 deg) pi / 180 = 17.72254.
+    #[test]
+    fn pixels_per_degree_follow_the_field_of_view() {
+        let rad = |d: f64| d.to_radians();
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-4;
+        assert!(near(
+            view_pixels_per_degree(rad(-45.0), rad(45.0), 1000),
+            8.72665
+        ));
+        assert!(near(
+            view_pixels_per_degree(rad(-40.0), rad(50.0), 1000),
+            8.59407
+        ));
+        assert!(near(
+            view_pixels_per_degree(rad(10.0), rad(50.0), 1000),
+            17.72254
+        ));
+        for (l, r, w) in [
+            (0.5, -0.5, 100),
+            (-1.6, 0.5, 100),
+            (f64::NAN, 0.5, 100),
+            (-0.5, 0.5, 0),
+        ] {
+            assert_eq!(view_pixels_per_degree(l, r, w), DEFAULT_PIXELS_PER_DEGREE);
+        }
     }
 }

@@ -24,6 +24,10 @@ pub struct ViewImage {
     pub in_place: bool,
     /// Display uv (v from the view's top edge) to camera uv.
     pub mapping: CameraMapping,
+    /// The view's display pixels per degree, from its field of view and width
+    /// (`perception::frequency::view_pixels_per_degree`); the default for a quad, and for a
+    /// whole image before the first xrEndFrame.
+    pub pixels_per_degree: f64,
 }
 
 /// A view read back for a capture: its bytes before and after the enhancement, rows top first

@@ -26,4 +26,6 @@ pub struct GlView {
     pub rect: (u32, u32, u32, u32),
     /// Display uv (v from the view's top edge) to camera uv, as the Vulkan path takes it.
     pub mapping: CameraMapping,
+    /// The view's display pixels per degree (the perceptual model's frequency needs it).
+    pub pixels_per_degree: f64,
 }

@@ -8,6 +8,7 @@ use super::gl_frame_runner::{rows_aligned, GlFrameRunner, Outcome};
 use super::gl_view::{GlTarget, GlView};
 use super::state_guard::DebugOutputOff;
 use crate::algorithm::params::{Params, ViewMode};
+use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl};
@@ -61,6 +62,7 @@ impl GlFrameRunner {
             internal_format,
             rect: (0, 0, w, WARM_UP_HEIGHT),
             mapping: params.camera_mapping(),
+            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
         };
         // SAFETY: the context is current (this call's contract); the texture is ours.
         let result = unsafe { self.warm_up_view(&view, params, limit) };

@@ -7,7 +7,6 @@ use super::gl_view::{GlTarget, GlView};
 use super::region::{read_region, write_region};
 use crate::algorithm::params::Params;
 use crate::algorithm::perception::frequency::ViewGeometry;
-use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::interface::{
     BINDING_APP_IMAGE, BINDING_BLURRED_TEXELS, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_TILES,
     TILE, TILE_LIST_HEADER_WORDS,
@@ -98,7 +97,7 @@ impl GlFrameRunner {
             mapping: &v.mapping,
             display_width: v.rect.2,
             camera_width: bg_size.0,
-            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
+            pixels_per_degree: v.pixels_per_degree,
         };
         let Some(words) = slot.perceptual_words.of_view(params, &geometry) else {
             return Ok(());

@@ -12,6 +12,7 @@
 
 use super::gl_offline::GlOffline;
 use crate::algorithm::params::Params;
+use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::bench::{
     camera_frame, content_pixel, median, BenchCase, BenchResult, Content, CAMERA_SIZE, WARM_UP_RUNS,
 };
@@ -80,6 +81,7 @@ impl GlOffline {
                 internal_format: internal,
                 rect: (0, 0, case.region.0, case.region.1),
                 mapping: params.camera_mapping(),
+                pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
             });
             rig.pristine
                 .push(self.create_texture(internal, case.region, &texels)?);

@@ -5,6 +5,7 @@
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
+use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::core::{OfflineBackend, PixelFormat};
 use crate::gpu::opengl::conv::GlFormat;
@@ -388,6 +389,7 @@ impl GlOffline {
             internal_format,
             rect: (0, 0, region.0, region.1),
             mapping: *mapping,
+            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
         };
         let result = self
             .enhance_views(&[view], params)

@@ -140,6 +140,9 @@ impl FrameRunner {
             barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::COMPUTE_SHADER);
         }
         for i in items {
+            if let Some(view) = self.views.get_mut(&i.key) {
+                view.target.pixels_per_degree = i.pixels_per_degree;
+            }
             self.engine.record_enhance(
                 &self.gpu,
                 self.commands.cmd,

@@ -20,11 +20,13 @@ pub struct FrameView {
     pub path: ViewPath,
     /// Where this view's display pixels lie in the camera image.
     pub mapping: CameraMapping,
+    /// The view's display pixels per degree (the perceptual model's frequency needs it).
+    pub pixels_per_degree: f64,
 }
 
 impl FrameView {
     /// The view `key` of the app's `image`, whose Vulkan format is `vk_format` (`format` as the
-    /// engine reads it).
+    /// engine reads it), with `pixels_per_degree` display pixels per degree.
     pub fn new(
         key: ViewKey,
         image: vk::Image,
@@ -32,6 +34,7 @@ impl FrameView {
         vk_format: vk::Format,
         path: ViewPath,
         mapping: CameraMapping,
+        pixels_per_degree: f64,
     ) -> FrameView {
         FrameView {
             key,
@@ -40,6 +43,7 @@ impl FrameView {
             vk_format,
             path,
             mapping,
+            pixels_per_degree,
         }
     }
 

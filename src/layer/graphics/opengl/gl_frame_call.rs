@@ -38,6 +38,7 @@ pub(super) fn gl_view(v: &ViewImage) -> GlView {
         // An OpenXR imageRect of an OpenGL swapchain counts rows from the bottom, as GL does.
         rect: (x as u32, y as u32, w, h),
         mapping: v.mapping,
+        pixels_per_degree: v.pixels_per_degree,
     }
 }
 

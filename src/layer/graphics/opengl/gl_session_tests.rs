@@ -1,6 +1,7 @@
 //! Tests of gl_session.rs: sessions of an offline context standing for the app's.
 
 use super::*;
+use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::opengl::{Gl, GlError, GlOffline};
 use crate::gpu::ViewKey;
 use crate::image::RgbaImage;
@@ -86,6 +87,7 @@ fn sessions_ended_with_their_context_elsewhere_leave_a_bounded_number_of_objects
         layered: false,
         in_place: false,
         mapping: params.camera_mapping(),
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     let mut counts = Vec::new();
     for sequence in 1..=6 {

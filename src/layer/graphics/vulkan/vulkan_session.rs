@@ -118,6 +118,7 @@ impl VulkanSession {
             vk::Format::from_raw(v.api_format as i32),
             self.path(v),
             v.mapping,
+            v.pixels_per_degree,
         )
     }
 }
