@@ -20,6 +20,7 @@ pub mod indicator;
 pub mod installed_files;
 pub mod live_settings;
 pub mod log;
+pub mod log_file;
 mod motion;
 pub mod session;
 mod session_motion;
