@@ -33,7 +33,7 @@ pub const LOADED: &str = "layer loaded into ";
 pub const GRAPHICS_API: &str = "graphics API of this session: ";
 
 struct Log {
-    /// The file's queue to its writer; None without a file (no path, no thread).
+    /// The file's queue to its writer; None without a file.
     file: Option<FileQueue>,
     seen: HashSet<String>,
     debug: bool,
@@ -99,14 +99,7 @@ fn log() -> &'static Mutex<Log> {
             debug: std::env::var("CONTRASTXR_LOG").is_ok_and(|v| v == "debug"),
             dropped: 0,
         };
-        log.file = match path().map(|p| FileQueue::start(p, say_on_stderr)) {
-            Some(Ok(queue)) => Some(queue),
-            Some(Err(e)) => {
-                write_stderr(&mut log, &format!("log file not written: {e}"));
-                None
-            }
-            None => None,
-        };
+        log.file = path().map(|p| FileQueue::new(p, say_on_stderr));
         let exe = std::env::current_exe()
             .map_or("an unknown program".into(), |p| p.display().to_string());
         write_file(&mut log, &format!("{LOADED}{exe}"));

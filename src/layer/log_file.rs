@@ -4,7 +4,9 @@
 //! stamped lines through a queue of [`QUEUE_LINES`], never waiting: a file system that hangs (a
 //! network or FUSE mount), at the first open or at any line after it, holds the writer, never
 //! the app. Lines the queue cannot take are dropped and counted, said once on stderr, and the
-//! count is written in the file when the queue takes lines again.
+//! count is written in the file when the queue takes lines again. The writer ends after
+//! [`IDLE`] without a line (the next line starts another), so no thread of the layer's stays
+//! once the app stops using it.
 //!
 //! The file is opened non-blocking, a regular file only, never through a symlink; it is capped
 //! at [`MAX_BYTES`]: past that it becomes `layer.log.1` (replacing the previous one) and a new
@@ -13,8 +15,9 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
-use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError, SyncSender, TrySendError};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// Lines waiting for the writer; past this many, lines are dropped and counted.
@@ -33,6 +36,10 @@ pub fn rotated(path: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
+/// How long the writer waits for a line before it ends (the next line starts another): no
+/// thread of the layer's stays once the app stops using it.
+const IDLE: Duration = Duration::from_millis(200);
+
 /// What the writer is handed.
 enum Job {
     /// A whole line, its newline included.
@@ -41,46 +48,43 @@ enum Job {
     Flush(SyncSender<()>),
 }
 
-/// The app's side of the file: the queue to its writer, and what the queue dropped.
+/// The running writer's queue and the process that started it (a forked child has no writer);
+/// None when none runs. Lines and flushes are queued only under this lock, and a writer that
+/// ends takes it to see its queue empty and clear it: nothing is queued to a writer that ended.
+static WRITER: Mutex<Option<(SyncSender<Job>, u32)>> = Mutex::new(None);
+
+fn writer() -> std::sync::MutexGuard<'static, Option<(SyncSender<Job>, u32)>> {
+    WRITER.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Why the file cannot be written has been said on stderr (once per process).
+static SAID: AtomicBool = AtomicBool::new(false);
+
+/// The app's side of the file: where it is, and what the queue dropped.
 pub struct FileQueue {
-    jobs: SyncSender<Job>,
+    path: PathBuf,
+    /// Writes a line on stderr alone.
+    say: fn(&str),
     /// Lines dropped since the queue last took one.
     dropped: u64,
     /// The first drop has been said on stderr.
     said_behind: bool,
 }
 
-/// The writer's queue, for [`flush`] (which must not wait for the log's lock), and the process
-/// that started it (a forked child has no writer).
-static JOBS: OnceLock<(SyncSender<Job>, u32)> = OnceLock::new();
-
 impl FileQueue {
-    /// Starts the writer of the file at `path` (it opens the file first); `say` writes a line
-    /// on stderr alone, which the writer uses to say once why the file cannot be written. Err
-    /// when no thread can start.
-    pub fn start(path: PathBuf, say: fn(&str)) -> Result<FileQueue, String> {
-        let (jobs, queued) = sync_channel(QUEUE_LINES);
-        let writer = Writer {
-            path,
-            file: None,
-            said: false,
-            say,
-        };
-        std::thread::Builder::new()
-            .name("contrastxr-log-file".into())
-            .spawn(move || writer.run(queued))
-            .map_err(|e| format!("no thread for the log file: {e}"))?;
-        if JOBS.set((jobs.clone(), std::process::id())).is_ok() {
+    /// The file at `path`, written by a writer started at the first line (and again at a line
+    /// after it ended); `say` writes a line on stderr alone, which the writer uses to say once
+    /// why the file cannot be written.
+    pub fn new(path: PathBuf, say: fn(&str)) -> FileQueue {
+        static AT_EXIT: std::sync::Once = std::sync::Once::new();
+        AT_EXIT.call_once(|| {
             // SAFETY: registers a function of the library's own, which stays mapped until the
             // process ends (the layer's library is RTLD_NODELETE; the tests' is the executable).
             unsafe { libc::atexit(flush_at_exit) };
-        }
-        Ok(FileQueue::on(jobs))
-    }
-
-    fn on(jobs: SyncSender<Job>) -> FileQueue {
+        });
         FileQueue {
-            jobs,
+            path,
+            say,
             dropped: 0,
             said_behind: false,
         }
@@ -89,17 +93,18 @@ impl FileQueue {
     /// Hands the writer `text` after `prefix` (its time and process), never waiting. Returns a
     /// line for stderr the first time the queue is full.
     pub fn write(&mut self, prefix: &str, text: &str) -> Option<String> {
+        let mut writer = writer();
         if self.dropped > 0 {
             let n = self.dropped;
             let note =
                 format!("{prefix}{n} lines dropped: the log file's system did not keep up\n");
-            if !self.try_send(note) {
+            if !self.send(&mut writer, note) {
                 self.dropped += 1;
                 return None;
             }
             self.dropped = 0;
         }
-        if self.try_send(format!("{prefix}{text}\n")) {
+        if self.send(&mut writer, format!("{prefix}{text}\n")) {
             return None;
         }
         self.dropped += 1;
@@ -108,35 +113,58 @@ impl FileQueue {
         })
     }
 
-    fn try_send(&self, line: String) -> bool {
-        match self.jobs.try_send(Job::Line(line)) {
-            Ok(()) => true,
-            Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) => false,
+    /// Queues `line`, starting a writer when none runs in this process; false when the queue
+    /// is full or no writer can start.
+    fn send(&self, writer: &mut Option<(SyncSender<Job>, u32)>, line: String) -> bool {
+        let pid = std::process::id();
+        let mut job = Job::Line(line);
+        if let Some((jobs, _)) = writer.as_ref().filter(|(_, at)| *at == pid) {
+            match jobs.try_send(job) {
+                Ok(()) => return true,
+                Err(TrySendError::Full(_)) => return false,
+                // It panicked: another starts.
+                Err(TrySendError::Disconnected(back)) => job = back,
+            }
         }
+        let (jobs, queued) = sync_channel(QUEUE_LINES);
+        let w = Writer {
+            path: self.path.clone(),
+            file: None,
+            say: self.say,
+        };
+        let spawned = std::thread::Builder::new()
+            .name("contrastxr-log-file".into())
+            .spawn(move || w.run(queued));
+        if spawned.is_err() {
+            *writer = None;
+            return false;
+        }
+        let sent = jobs.try_send(job).is_ok();
+        *writer = Some((jobs, pid));
+        sent
     }
 }
 
 /// Waits at most `limit` for the writer to write every line queued so far; false when it did
-/// not in time (or there is no writer).
+/// not in time.
 pub fn flush(limit: Duration) -> bool {
-    let Some((jobs, pid)) = JOBS.get() else {
-        return false;
-    };
-    if *pid != std::process::id() {
-        return false;
-    }
     let since = Instant::now();
     let (done, answered) = sync_channel(1);
     let mut job = Job::Flush(done);
     loop {
+        let writer = writer();
+        let Some((jobs, _)) = writer.as_ref().filter(|(_, at)| *at == std::process::id()) else {
+            // No writer: every line queued was written.
+            return true;
+        };
         match jobs.try_send(job) {
             Ok(()) => break,
-            Err(TrySendError::Full(back)) if since.elapsed() < limit => {
-                job = back;
-                std::thread::sleep(Duration::from_millis(1));
-            }
-            Err(_) => return false,
+            Err(TrySendError::Full(back)) if since.elapsed() < limit => job = back,
+            Err(TrySendError::Full(_)) => return false,
+            Err(TrySendError::Disconnected(_)) => return true,
         }
+        drop(writer);
+        std::thread::sleep(Duration::from_millis(1));
     }
     answered
         .recv_timeout(limit.saturating_sub(since.elapsed()))
@@ -148,11 +176,10 @@ extern "C" fn flush_at_exit() {
     let _ = std::panic::catch_unwind(|| flush(EXIT_WAIT));
 }
 
-/// The writer's side, on its own thread: the file and whether its failure was said.
+/// The writer's side, on its own thread: the file.
 struct Writer {
     path: PathBuf,
     file: Option<std::fs::File>,
-    said: bool,
     say: fn(&str),
 }
 
@@ -160,14 +187,14 @@ impl Writer {
     fn run(mut self, jobs: Receiver<Job>) {
         let body = std::panic::AssertUnwindSafe(|| {
             self.file = self.open();
-            for job in jobs {
+            while let Some(job) = next(&jobs) {
                 match job {
                     Job::Line(line) => self.write(&line),
                     Job::Flush(done) => drop(done.send(())),
                 }
             }
         });
-        // A panic ends the writer: the queue then takes no line, and lines are dropped.
+        // A panic ends the writer (the next line starts another).
         let _ = std::panic::catch_unwind(body);
     }
 
@@ -176,7 +203,7 @@ impl Writer {
         match open_file(&self.path) {
             Ok(f) => Some(f),
             Err(e) => {
-                if !std::mem::replace(&mut self.said, true) {
+                if !SAID.swap(true, Ordering::Relaxed) {
                     (self.say)(&format!("log file not written: {e}"));
                 }
                 None
@@ -203,6 +230,25 @@ impl Writer {
         self.keep_in_bounds();
         if let Some(f) = self.file.as_mut() {
             let _ = f.write_all(line.as_bytes());
+        }
+    }
+}
+
+/// The writer's next job; None once it has waited [`IDLE`] for one, the queue then seen empty
+/// under the writer's lock and the writer cleared (the next line starts another).
+fn next(jobs: &Receiver<Job>) -> Option<Job> {
+    match jobs.recv_timeout(IDLE) {
+        Ok(job) => Some(job),
+        Err(RecvTimeoutError::Disconnected) => None,
+        Err(RecvTimeoutError::Timeout) => {
+            let mut writer = writer();
+            match jobs.try_recv() {
+                Ok(job) => Some(job),
+                Err(_) => {
+                    *writer = None;
+                    None
+                }
+            }
         }
     }
 }
@@ -245,7 +291,6 @@ mod tests {
         let mut writer = Writer {
             file: None,
             path: path.clone(),
-            said: false,
             say: |line| panic!("said: {line}"),
         };
         writer.file = writer.open();
@@ -262,13 +307,36 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// The tests that use the process's writer, one at a time.
+    fn one_writer() -> std::sync::MutexGuard<'static, ()> {
+        static ONE: Mutex<()> = Mutex::new(());
+        ONE.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn lines(queued: &Receiver<Job>) -> Vec<String> {
+        queued
+            .try_iter()
+            .filter_map(|j| match j {
+                Job::Line(l) => Some(l),
+                Job::Flush(_) => None,
+            })
+            .collect()
+    }
+
     /// A writer that takes nothing (its file system hung): the queue takes QUEUE_LINES lines,
     /// then drops and counts the rest without waiting, says so once, and once the writer takes
     /// lines again the count comes first, then the line.
     #[test]
     fn a_full_queue_drops_and_counts_lines_without_waiting() {
+        let _one = one_writer();
         let (jobs, queued) = sync_channel(QUEUE_LINES);
-        let mut queue = FileQueue::on(jobs);
+        *writer() = Some((jobs, std::process::id()));
+        let mut queue = FileQueue {
+            path: PathBuf::from("/nowhere/layer.log"),
+            say: |line| panic!("said: {line}"),
+            dropped: 0,
+            said_behind: false,
+        };
         let t = Instant::now();
         let said: Vec<String> = (0..QUEUE_LINES + 5)
             .filter_map(|i| queue.write("T ", &format!("line {i}")))
@@ -283,33 +351,56 @@ mod tests {
             said[0].contains("lines are dropped and counted"),
             "{said:?}"
         );
-        let lines: Vec<String> = queued
-            .try_iter()
-            .filter_map(|j| match j {
-                Job::Line(l) => Some(l),
-                Job::Flush(_) => None,
-            })
-            .collect();
-        assert_eq!(lines.len(), QUEUE_LINES);
+        let taken = lines(&queued);
+        assert_eq!(taken.len(), QUEUE_LINES);
         assert_eq!(
-            lines[QUEUE_LINES - 1],
+            taken[QUEUE_LINES - 1],
             format!("T line {}\n", QUEUE_LINES - 1)
         );
         assert_eq!(queue.write("U ", "again"), None);
-        let next: Vec<String> = queued
-            .try_iter()
-            .filter_map(|j| match j {
-                Job::Line(l) => Some(l),
-                Job::Flush(_) => None,
-            })
-            .collect();
         assert_eq!(
-            next,
+            lines(&queued),
             [
                 "U 5 lines dropped: the log file's system did not keep up\n",
                 "U again\n"
             ]
         );
+        *writer() = None;
+    }
+
+    /// The writer's threads of this process, by name.
+    fn writers() -> usize {
+        std::fs::read_dir("/proc/self/task")
+            .unwrap()
+            .flatten()
+            .filter_map(|t| std::fs::read_to_string(t.path().join("comm")).ok())
+            .filter(|n| n.trim() == "contrastxr-log-file")
+            .count()
+    }
+
+    /// The writer writes the lines in order, ends once idle (no thread of the layer's stays
+    /// after the app's last line), and the next line starts another that appends to the file.
+    #[test]
+    fn the_writer_ends_when_idle_and_the_next_line_starts_another() {
+        let _one = one_writer();
+        let dir = temp_dir("log-idle");
+        let path = dir.join("layer.log");
+        let mut queue = FileQueue::new(path.clone(), |line| panic!("said: {line}"));
+        assert_eq!(queue.write("A ", "one"), None);
+        assert_eq!(queue.write("A ", "two"), None);
+        assert!(flush(Duration::from_secs(5)));
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "A one\nA two\n");
+        let since = Instant::now();
+        while (writer().is_some() || writers() > 0) && since.elapsed() < Duration::from_secs(5) {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        assert!(writer().is_none(), "the writer did not end");
+        assert_eq!(writers(), 0, "its thread is still running");
+        assert_eq!(queue.write("B ", "three"), None);
+        assert!(flush(Duration::from_secs(5)));
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text, "A one\nA two\nB three\n");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
