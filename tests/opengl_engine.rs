@@ -1022,16 +1022,16 @@ fn enhanced_again(gl: &mut GlOffline, a: &AppGl, view: GlView, after: &str) {
         .unwrap_or_else(|e| panic!("{after}: {e}"));
     assert_eq!(read_state(a), before, "{after}: the app's GL state changed");
     // SAFETY: glGetError takes no arguments.
-    assert_eq!(
-        unsafe { (a.get_error)() },
-        0,
-        "{after}: an error was raised"
-    );
+    let error = unsafe { (a.get_error)() };
+    assert_eq!(error, 0, "{after}: an error was raised");
     let out = gl
         .read_texture(view.texture, SRGB8_ALPHA8, (40, 24))
         .unwrap();
     assert_ne!(out, texels, "{after}: frames are not enhanced again");
 }
+
+/// Binds an object (a name) to one binding point, or lets go of it (0).
+type Bind = fn(&AppGl, u32);
 
 /// An object the app bound, deleted through another context sharing its objects (its loading
 /// thread's) before the call: the binding alone keeps it alive, the recipe's own binding would
@@ -1041,7 +1041,7 @@ struct DeletedElsewhere {
     what: &'static str,
     make: fn(&AppGl) -> u32,
     delete: fn(&AppGl, u32),
-    bindings: &'static [(&'static str, fn(&AppGl, u32))],
+    bindings: &'static [(&'static str, Bind)],
 }
 
 fn deleted_elsewhere_passes_frames_through(case: DeletedElsewhere) {
@@ -1057,11 +1057,8 @@ fn deleted_elsewhere_passes_frames_through(case: DeletedElsewhere) {
         bind(&a, name);
         in_shared_context(|| (case.delete)(&a, name));
         // SAFETY: glGetError takes no arguments.
-        assert_eq!(
-            unsafe { (a.get_error)() },
-            0,
-            "{binding}: the set-up raised an error"
-        );
+        let error = unsafe { (a.get_error)() };
+        assert_eq!(error, 0, "{binding}: the set-up raised an error");
         refused_untouched(&mut gl, &a, (view, &texels), (case.what, binding));
         bind(&a, 0);
         enhanced_again(&mut gl, &a, view, binding);
