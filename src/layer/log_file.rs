@@ -4,9 +4,10 @@
 //! stamped lines through a queue of [`QUEUE_LINES`], never waiting: a file system that hangs (a
 //! network or FUSE mount), at the first open or at any line after it, holds the writer, never
 //! the app. Lines the queue cannot take are dropped and counted, said once on stderr, and the
-//! count is written in the file when the queue takes lines again. The writer ends after
-//! [`IDLE`] without a line (the next line starts another), so no thread of the layer's stays
-//! once the app stops using it.
+//! count is written in the file when the queue takes lines again. The writer ends when told
+//! to at `xrDestroyInstance` ([`end_writer`]), once it has written what was queued, and the
+//! next line starts another: no thread of the layer's stays after the app's last instance. The
+//! file stays open between writers, so the process holds one descriptor of it throughout.
 //!
 //! The file is opened non-blocking, a regular file only, never through a symlink; it is capped
 //! at [`MAX_BYTES`]: past that it becomes `layer.log.1` (replacing the previous one) and a new
@@ -16,7 +17,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError, SyncSender, TrySendError};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -36,26 +37,28 @@ pub fn rotated(path: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// How long the writer waits for a line before it ends (the next line starts another): no
-/// thread of the layer's stays once the app stops using it.
-const IDLE: Duration = Duration::from_millis(200);
-
 /// What the writer is handed.
 enum Job {
     /// A whole line, its newline included.
     Line(String),
     /// Answered once every line queued before it is written.
     Flush(SyncSender<()>),
+    /// Ends the writer once the lines queued before it are written, unless more came after.
+    End,
 }
 
 /// The running writer's queue and the process that started it (a forked child has no writer);
-/// None when none runs. Lines and flushes are queued only under this lock, and a writer that
-/// ends takes it to see its queue empty and clear it: nothing is queued to a writer that ended.
+/// None when none runs. Lines, flushes and the end are queued only under this lock, which a
+/// writer that ends takes to see its queue empty and clear it: nothing is queued to a writer
+/// that ended, and a flush after it has nothing to wait for.
 static WRITER: Mutex<Option<(SyncSender<Job>, u32)>> = Mutex::new(None);
 
 fn writer() -> std::sync::MutexGuard<'static, Option<(SyncSender<Job>, u32)>> {
     WRITER.lock().unwrap_or_else(|p| p.into_inner())
 }
+
+/// The file as the last writer left it, open, for the next one.
+static OPEN: Mutex<Option<std::fs::File>> = Mutex::new(None);
 
 /// Why the file cannot be written has been said on stderr (once per process).
 static SAID: AtomicBool = AtomicBool::new(false);
@@ -171,6 +174,15 @@ pub fn flush(limit: Duration) -> bool {
         .is_ok()
 }
 
+/// Tells the writer to end once it has written the lines queued so far, without waiting (the
+/// next line starts another): at `xrDestroyInstance`, so that no thread of the layer's stays
+/// after the app's last instance.
+pub fn end_writer() {
+    if let Some((jobs, _)) = writer().as_ref() {
+        let _ = jobs.try_send(Job::End);
+    }
+}
+
 extern "C" fn flush_at_exit() {
     // A panic must not cross into libc's exit.
     let _ = std::panic::catch_unwind(|| flush(EXIT_WAIT));
@@ -186,12 +198,30 @@ struct Writer {
 impl Writer {
     fn run(mut self, jobs: Receiver<Job>) {
         let body = std::panic::AssertUnwindSafe(|| {
-            self.file = self.open();
-            while let Some(job) = next(&jobs) {
+            let kept = OPEN.lock().unwrap_or_else(|p| p.into_inner()).take();
+            self.file = kept.or_else(|| self.open());
+            let mut next = jobs.recv().ok();
+            while let Some(job) = next.take() {
                 match job {
                     Job::Line(line) => self.write(&line),
                     Job::Flush(done) => drop(done.send(())),
+                    Job::End => {
+                        let mut writer = writer();
+                        match jobs.try_recv() {
+                            // Lines came after the end: the writer goes on.
+                            Ok(job) => next = Some(job),
+                            // Kept open for the next writer, which starts only once this
+                            // lock is let go.
+                            Err(_) => {
+                                *OPEN.lock().unwrap_or_else(|p| p.into_inner()) = self.file.take();
+                                *writer = None;
+                                break;
+                            }
+                        }
+                        continue;
+                    }
                 }
+                next = jobs.recv().ok();
             }
         });
         // A panic ends the writer (the next line starts another).
@@ -218,10 +248,13 @@ impl Writer {
         let ours = self.file.as_ref().and_then(|f| f.metadata().ok());
         let at_path = crate::user_file::metadata(&self.path).ok();
         let same = matches!((&ours, &at_path), (Some(a), Some(b)) if a.ino() == b.ino() && a.dev() == b.dev());
+        // The old file is closed before the new one opens: one descriptor at any moment.
         if at_path.as_ref().is_some_and(|m| m.len() >= MAX_BYTES) {
             let _ = std::fs::rename(&self.path, rotated(&self.path));
+            self.file = None;
             self.file = self.open();
         } else if !same {
+            self.file = None;
             self.file = self.open();
         }
     }
@@ -230,25 +263,6 @@ impl Writer {
         self.keep_in_bounds();
         if let Some(f) = self.file.as_mut() {
             let _ = f.write_all(line.as_bytes());
-        }
-    }
-}
-
-/// The writer's next job; None once it has waited [`IDLE`] for one, the queue then seen empty
-/// under the writer's lock and the writer cleared (the next line starts another).
-fn next(jobs: &Receiver<Job>) -> Option<Job> {
-    match jobs.recv_timeout(IDLE) {
-        Ok(job) => Some(job),
-        Err(RecvTimeoutError::Disconnected) => None,
-        Err(RecvTimeoutError::Timeout) => {
-            let mut writer = writer();
-            match jobs.try_recv() {
-                Ok(job) => Some(job),
-                Err(_) => {
-                    *writer = None;
-                    None
-                }
-            }
         }
     }
 }
@@ -318,7 +332,7 @@ mod tests {
             .try_iter()
             .filter_map(|j| match j {
                 Job::Line(l) => Some(l),
-                Job::Flush(_) => None,
+                Job::Flush(_) | Job::End => None,
             })
             .collect()
     }
@@ -378,10 +392,29 @@ mod tests {
             .count()
     }
 
-    /// The writer writes the lines in order, ends once idle (no thread of the layer's stays
-    /// after the app's last line), and the next line starts another that appends to the file.
+    /// The descriptors of this process open on `path`.
+    fn open_on(path: &Path) -> usize {
+        std::fs::read_dir("/proc/self/fd")
+            .unwrap()
+            .flatten()
+            .filter(|fd| std::fs::read_link(fd.path()).is_ok_and(|p| p == path))
+            .count()
+    }
+
+    /// Waits up to 5 s for the writer to have ended; whether it did.
+    fn ended() -> bool {
+        let since = Instant::now();
+        while (writer().is_some() || writers() > 0) && since.elapsed() < Duration::from_secs(5) {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        writer().is_none() && writers() == 0
+    }
+
+    /// The writer writes the lines in order and ends when told to (`end_writer`, after the
+    /// lines queued before, without waiting for them), and the next line starts another that
+    /// appends to the file; the file stays open, once, between writers.
     #[test]
-    fn the_writer_ends_when_idle_and_the_next_line_starts_another() {
+    fn the_writer_ends_when_told_and_the_next_line_starts_another() {
         let _one = one_writer();
         let dir = temp_dir("log-idle");
         let path = dir.join("layer.log");
@@ -390,16 +423,19 @@ mod tests {
         assert_eq!(queue.write("A ", "two"), None);
         assert!(flush(Duration::from_secs(5)));
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "A one\nA two\n");
-        let since = Instant::now();
-        while (writer().is_some() || writers() > 0) && since.elapsed() < Duration::from_secs(5) {
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        assert!(writer().is_none(), "the writer did not end");
-        assert_eq!(writers(), 0, "its thread is still running");
+        assert_eq!(open_on(&path), 1);
         assert_eq!(queue.write("B ", "three"), None);
+        end_writer();
+        assert!(ended(), "the writer did not end when told");
+        assert_eq!(open_on(&path), 1, "the file was closed with the writer");
+        assert_eq!(queue.write("C ", "four"), None);
         assert!(flush(Duration::from_secs(5)));
         let text = std::fs::read_to_string(&path).unwrap();
-        assert_eq!(text, "A one\nA two\nB three\n");
+        assert_eq!(text, "A one\nA two\nB three\nC four\n");
+        assert_eq!(open_on(&path), 1);
+        end_writer();
+        assert!(ended());
+        *OPEN.lock().unwrap() = None;
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
