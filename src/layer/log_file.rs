@@ -4,10 +4,11 @@
 //! stamped lines through a queue of [`QUEUE_LINES`], never waiting: a file system that hangs (a
 //! network or FUSE mount), at the first open or at any line after it, holds the writer, never
 //! the app. Lines the queue cannot take are dropped and counted, said once on stderr, and the
-//! count is written in the file when the queue takes lines again. The writer ends when told
-//! to at `xrDestroyInstance` ([`end_writer`]), once it has written what was queued, and the
-//! next line starts another: no thread of the layer's stays after the app's last instance. The
-//! file stays open between writers, so the process holds one descriptor of it throughout.
+//! count is written in the file when the queue takes lines again. The writer ends after
+//! [`IDLE`] without a line, and when told to at `xrDestroyInstance` ([`end_writer`]) once it
+//! has written what was queued; the next line starts another: no thread of the layer's stays
+//! once the app has stopped logging. The file stays open between writers, so the process holds
+//! one descriptor of it throughout.
 //!
 //! The file is opened non-blocking, a regular file only, never through a symlink; it is capped
 //! at [`MAX_BYTES`]: past that it becomes `layer.log.1` (replacing the previous one) and a new
@@ -17,7 +18,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{sync_channel, Receiver, SyncSender, TrySendError};
+use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError, SyncSender, TrySendError};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -36,6 +37,9 @@ pub fn rotated(path: &Path) -> PathBuf {
     name.push(".1");
     PathBuf::from(name)
 }
+
+/// How long the writer waits for a line before it ends (the next line starts another).
+const IDLE: Duration = Duration::from_millis(250);
 
 /// What the writer is handed.
 enum Job {
@@ -200,28 +204,30 @@ impl Writer {
         let body = std::panic::AssertUnwindSafe(|| {
             let kept = OPEN.lock().unwrap_or_else(|p| p.into_inner()).take();
             self.file = kept.or_else(|| self.open());
-            let mut next = jobs.recv().ok();
-            while let Some(job) = next.take() {
-                match job {
-                    Job::Line(line) => self.write(&line),
-                    Job::Flush(done) => drop(done.send(())),
-                    Job::End => {
+            loop {
+                let job = match jobs.recv_timeout(IDLE) {
+                    Ok(Job::End) | Err(RecvTimeoutError::Timeout) => {
+                        // Told to end, or idle: unless a job came meanwhile, it ends, seeing
+                        // its queue empty under the writer's lock; the file is kept open for
+                        // the next writer, which starts only once that lock is let go.
                         let mut writer = writer();
                         match jobs.try_recv() {
-                            // Lines came after the end: the writer goes on.
-                            Ok(job) => next = Some(job),
-                            // Kept open for the next writer, which starts only once this
-                            // lock is let go.
+                            Ok(job) => job,
                             Err(_) => {
                                 *OPEN.lock().unwrap_or_else(|p| p.into_inner()) = self.file.take();
                                 *writer = None;
                                 break;
                             }
                         }
-                        continue;
                     }
+                    Ok(job) => job,
+                    Err(RecvTimeoutError::Disconnected) => break,
+                };
+                match job {
+                    Job::Line(line) => self.write(&line),
+                    Job::Flush(done) => drop(done.send(())),
+                    Job::End => {}
                 }
-                next = jobs.recv().ok();
             }
         });
         // A panic ends the writer (the next line starts another).
@@ -410,11 +416,12 @@ mod tests {
         writer().is_none() && writers() == 0
     }
 
-    /// The writer writes the lines in order and ends when told to (`end_writer`, after the
-    /// lines queued before, without waiting for them), and the next line starts another that
-    /// appends to the file; the file stays open, once, between writers.
+    /// The writer writes the lines in order and ends when idle, or sooner when told to
+    /// (`end_writer`, after the lines queued before, without waiting for them), and the next
+    /// line starts another that appends to the file; the file stays open, once, between
+    /// writers.
     #[test]
-    fn the_writer_ends_when_told_and_the_next_line_starts_another() {
+    fn the_writer_ends_when_idle_or_told_and_the_next_line_starts_another() {
         let _one = one_writer();
         let dir = temp_dir("log-idle");
         let path = dir.join("layer.log");
@@ -424,9 +431,17 @@ mod tests {
         assert!(flush(Duration::from_secs(5)));
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "A one\nA two\n");
         assert_eq!(open_on(&path), 1);
+        assert!(ended(), "the writer did not end when idle");
+        assert_eq!(open_on(&path), 1, "the file was closed with the writer");
         assert_eq!(queue.write("B ", "three"), None);
+        let t = Instant::now();
         end_writer();
         assert!(ended(), "the writer did not end when told");
+        assert!(
+            t.elapsed() < IDLE,
+            "it ended only when idle: {:?}",
+            t.elapsed()
+        );
         assert_eq!(open_on(&path), 1, "the file was closed with the writer");
         assert_eq!(queue.write("C ", "four"), None);
         assert!(flush(Duration::from_secs(5)));
