@@ -161,6 +161,14 @@ app_gl! {
     create_shader_programv = c"glCreateShaderProgramv": fn(u32, i32, *const *const i8) -> u32;
     use_program = c"glUseProgram": fn(u32);
     delete_program = c"glDeleteProgram": fn(u32);
+    delete_textures = c"glDeleteTextures": fn(i32, *const u32);
+    delete_buffers = c"glDeleteBuffers": fn(i32, *const u32);
+    delete_samplers = c"glDeleteSamplers": fn(i32, *const u32);
+    bind_buffer_base = c"glBindBufferBase": fn(u32, u32, u32);
+    begin_transform_feedback = c"glBeginTransformFeedback": fn(u32);
+    pause_transform_feedback = c"glPauseTransformFeedback": fn();
+    resume_transform_feedback = c"glResumeTransformFeedback": fn();
+    end_transform_feedback = c"glEndTransformFeedback": fn();
     create_program_pipelines = c"glCreateProgramPipelines": fn(i32, *mut u32);
     bind_program_pipeline = c"glBindProgramPipeline": fn(u32);
     create_framebuffers = c"glCreateFramebuffers": fn(i32, *mut u32);
@@ -930,6 +938,309 @@ fn a_program_kept_only_by_its_binding_passes_the_frame_through() {
     gl.enhance_views(&[view], &params).unwrap();
     let again = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
     assert_ne!(again, before, "frames are not enhanced again");
+}
+
+/// A second context sharing the current one's objects (as the context of an app's loading
+/// thread does) is current while `f` runs; the first one is current again after it.
+fn in_shared_context(f: impl FnOnce()) {
+    use std::ptr::null_mut;
+    type GetCurrent = unsafe extern "C" fn() -> *mut c_void;
+    type Create =
+        unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, *const i32) -> *mut c_void;
+    type MakeCurrent =
+        unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, *mut c_void) -> u32;
+    type Destroy = unsafe extern "C" fn(*mut c_void, *mut c_void) -> u32;
+    // SAFETY: the libEGL the offline context opened (RTLD_NOLOAD: its handle, never another).
+    let lib = unsafe { libc::dlopen(c"libEGL.so.1".as_ptr(), libc::RTLD_NOW | libc::RTLD_NOLOAD) };
+    assert!(!lib.is_null(), "libEGL.so.1 is not loaded");
+    let symbol = |name: &CStr| {
+        // SAFETY: a handle dlopen returned; a NUL-terminated name.
+        let p = unsafe { libc::dlsym(lib, name.as_ptr()) };
+        assert!(!p.is_null(), "{name:?}");
+        p
+    };
+    // SAFETY: libEGL's functions of these names have these C types.
+    let (display, context, create, make_current, destroy) = unsafe {
+        use std::mem::transmute;
+        (
+            transmute::<*mut c_void, GetCurrent>(symbol(c"eglGetCurrentDisplay")),
+            transmute::<*mut c_void, GetCurrent>(symbol(c"eglGetCurrentContext")),
+            transmute::<*mut c_void, Create>(symbol(c"eglCreateContext")),
+            transmute::<*mut c_void, MakeCurrent>(symbol(c"eglMakeCurrent")),
+            transmute::<*mut c_void, Destroy>(symbol(c"eglDestroyContext")),
+        )
+    };
+    // An OpenGL 4.5 core context (major, minor, profile mask: core), EGL_NONE-terminated.
+    let attributes = [0x3098, 4, 0x30FB, 5, 0x30FD, 1, 0x3038];
+    // SAFETY: the offline context is current on this thread (OpenGL bound as its API); the new
+    // context has no config (EGL_KHR_no_config_context, as the offline one) and no surfaces.
+    unsafe {
+        let (display, first) = (display(), context());
+        assert!(!first.is_null(), "no context is current");
+        let second = create(display, null_mut(), first, attributes.as_ptr());
+        assert!(!second.is_null(), "EGL made no shared context");
+        assert_eq!(make_current(display, null_mut(), null_mut(), second), 1);
+        f();
+        assert_eq!(make_current(display, null_mut(), null_mut(), first), 1);
+        destroy(display, second);
+    }
+}
+
+/// Enhances `view`, whose texels were `texels`, with a binding of the app's that could not be
+/// put back (made after they were read: reading them binds no pack buffer): the call is refused
+/// before anything changes, with one line naming `what`, and the app finds every binding
+/// (`read_state`), its error flag (none) and the texture as it left them.
+fn refused_untouched(
+    gl: &mut GlOffline,
+    a: &AppGl,
+    (view, texels): (GlView, &[u8]),
+    (what, binding): (&str, &str),
+) {
+    use contrastxr::gpu::opengl::GlError;
+    let before = read_state(a);
+    let r = gl.enhance_views(&[view], &Params::default());
+    let after = read_state(a);
+    // SAFETY: glGetError takes no arguments.
+    let error = unsafe { (a.get_error)() };
+    let kept = after == before;
+    let said = format!("{r:?}; then the app's error {error:#x}, its state kept: {kept}");
+    let line = match r {
+        Err(e @ GlError::Unrestorable(_)) => e.to_string(),
+        _ => panic!("{binding}: the call was not refused: {said}"),
+    };
+    assert!(line.contains(what) && line.lines().count() == 1, "{line}");
+    assert!(kept, "{binding}: the app's GL state changed: {said}");
+    assert_eq!(error, 0, "{binding}: an error was left in the app's flag");
+    let out = gl
+        .read_texture(view.texture, SRGB8_ALPHA8, (40, 24))
+        .unwrap();
+    assert_eq!(
+        out, texels,
+        "{binding}: the frame was not passed through untouched"
+    );
+}
+
+/// Enhances `view` and holds that it changed and left no error: the app let go of what held the
+/// frames back.
+fn enhanced_again(gl: &mut GlOffline, a: &AppGl, view: GlView, after: &str) {
+    let texels = gl
+        .read_texture(view.texture, SRGB8_ALPHA8, (40, 24))
+        .unwrap();
+    let before = read_state(a);
+    gl.enhance_views(&[view], &Params::default())
+        .unwrap_or_else(|e| panic!("{after}: {e}"));
+    assert_eq!(read_state(a), before, "{after}: the app's GL state changed");
+    // SAFETY: glGetError takes no arguments.
+    let error = unsafe { (a.get_error)() };
+    assert_eq!(error, 0, "{after}: an error was raised");
+    let out = gl
+        .read_texture(view.texture, SRGB8_ALPHA8, (40, 24))
+        .unwrap();
+    assert_ne!(out, texels, "{after}: frames are not enhanced again");
+}
+
+/// Binds an object (a name) to one binding point, or lets go of it (0).
+type Bind = fn(&AppGl, u32);
+
+/// An object the app bound, deleted through another context sharing its objects (its loading
+/// thread's) before the call: the binding alone keeps it alive, the recipe's own binding would
+/// free it and binding its name again would be an error. Each of `bindings` binds an object
+/// made by `make` (deleted by `delete`), and lets go of it when given 0.
+struct DeletedElsewhere {
+    what: &'static str,
+    make: fn(&AppGl) -> u32,
+    delete: fn(&AppGl, u32),
+    bindings: &'static [(&'static str, Bind)],
+}
+
+fn deleted_elsewhere_passes_frames_through(case: DeletedElsewhere) {
+    let mut gl = context();
+    let a = app_gl(&gl);
+    let params = Params::default();
+    let (view, _) = built_srgb_view(&mut gl, (11, 12), &params);
+    for (binding, bind) in case.bindings {
+        let texels = gl
+            .read_texture(view.texture, SRGB8_ALPHA8, (40, 24))
+            .unwrap();
+        let name = (case.make)(&a);
+        bind(&a, name);
+        in_shared_context(|| (case.delete)(&a, name));
+        // SAFETY: glGetError takes no arguments.
+        let error = unsafe { (a.get_error)() };
+        assert_eq!(error, 0, "{binding}: the set-up raised an error");
+        refused_untouched(&mut gl, &a, (view, &texels), (case.what, binding));
+        bind(&a, 0);
+        enhanced_again(&mut gl, &a, view, binding);
+    }
+}
+
+/// A texture bound on the unit the recipe samples its background on, or to the image unit it
+/// stores through, deleted through a shared context.
+#[test]
+fn a_texture_deleted_through_a_shared_context_passes_the_frame_through() {
+    deleted_elsewhere_passes_frames_through(DeletedElsewhere {
+        what: "a texture the app has bound is deleted",
+        make: |a| {
+            let mut t = 0;
+            // SAFETY: the context is current on this thread; a 4x4 GL_RGBA8 2D texture.
+            unsafe {
+                (a.create_textures)(0x0DE1, 1, &mut t);
+                (a.texture_storage_2d)(t, 1, RGBA8, 4, 4);
+            }
+            t
+        },
+        // SAFETY: deleting a name is always valid.
+        delete: |a, t| unsafe { (a.delete_textures)(1, &t) },
+        bindings: &[
+            ("GL_TEXTURE_2D of unit 5", |a, t| {
+                // SAFETY: unit 5, then the app's active unit (0) again; a texture or 0.
+                unsafe {
+                    (a.active_texture)(0x84C0 + 5);
+                    (a.bind_texture)(0x0DE1, t);
+                    (a.active_texture)(0x84C0);
+                }
+            }),
+            ("image unit 6", |a, t| {
+                // SAFETY: image unit 6 (< 8), read-write GL_RGBA8, or unbound with GL's
+                // defaults (read-only, GL_R8).
+                unsafe {
+                    match t {
+                        0 => (a.bind_image_texture)(6, 0, 0, 0, 0, 0x88B8, 0x8229),
+                        t => (a.bind_image_texture)(6, t, 0, 0, 0, 0x88BA, RGBA8),
+                    }
+                }
+            }),
+        ],
+    });
+}
+
+/// A buffer bound to each buffer binding the recipe uses (storage slots 2 and 3 with a range,
+/// the generic storage binding, pixel pack and unpack, dispatch indirect), deleted through a
+/// shared context.
+#[test]
+fn a_buffer_deleted_through_a_shared_context_passes_the_frame_through() {
+    deleted_elsewhere_passes_frames_through(DeletedElsewhere {
+        what: "a buffer the app has bound is deleted",
+        make: |a| {
+            let mut b = 0;
+            // SAFETY: the context is current on this thread; 1 KiB of GL_DYNAMIC_DRAW data.
+            unsafe {
+                (a.gen)(1, &mut b);
+                (a.named_buffer_data)(b, 1024, std::ptr::null(), 0x88E8);
+            }
+            b
+        },
+        // SAFETY: deleting a name is always valid.
+        delete: |a, b| unsafe { (a.delete_buffers)(1, &b) },
+        bindings: &[
+            // SAFETY: a buffer (256 bytes from 256) or 0 bound to storage slot 2.
+            ("storage slot 2", |a, b| unsafe {
+                match b {
+                    0 => (a.bind_buffer_base)(0x90D2, 2, 0),
+                    b => (a.bind_buffer_range)(0x90D2, 2, b, 256, 256),
+                }
+            }),
+            // SAFETY: a buffer or 0 bound to storage slot 3.
+            ("storage slot 3", |a, b| unsafe {
+                (a.bind_buffer_base)(0x90D2, 3, b)
+            }),
+            // SAFETY: a buffer or 0 bound to GL_SHADER_STORAGE_BUFFER.
+            ("the generic storage binding", |a, b| unsafe {
+                (a.bind_buffer)(0x90D2, b)
+            }),
+            // SAFETY: a buffer or 0 bound to GL_PIXEL_PACK_BUFFER.
+            ("pixel pack", |a, b| unsafe { (a.bind_buffer)(0x88EB, b) }),
+            // SAFETY: a buffer or 0 bound to GL_PIXEL_UNPACK_BUFFER.
+            ("pixel unpack", |a, b| unsafe { (a.bind_buffer)(0x88EC, b) }),
+            // SAFETY: a buffer or 0 bound to GL_DISPATCH_INDIRECT_BUFFER.
+            ("dispatch indirect", |a, b| unsafe {
+                (a.bind_buffer)(0x90EE, b)
+            }),
+        ],
+    });
+}
+
+/// A sampler bound on the unit the recipe samples its background on, deleted through a shared
+/// context.
+#[test]
+fn a_sampler_deleted_through_a_shared_context_passes_the_frame_through() {
+    deleted_elsewhere_passes_frames_through(DeletedElsewhere {
+        what: "a sampler the app has bound is deleted",
+        make: |a| {
+            let mut s = 0;
+            // SAFETY: the context is current on this thread.
+            unsafe { (a.create_samplers)(1, &mut s) };
+            s
+        },
+        // SAFETY: deleting a name is always valid.
+        delete: |a, s| unsafe { (a.delete_samplers)(1, &s) },
+        // SAFETY: a sampler or 0 bound to unit 5.
+        bindings: &[("unit 5", |a, s| unsafe { (a.bind_sampler)(5, s) })],
+    });
+}
+
+/// Transform feedback active (begun and not paused) at the call: glUseProgram is an error then,
+/// so the recipe could neither make its programs current nor the app's again. The frame passes
+/// through untouched with transform feedback still active; paused, the frame is enhanced and
+/// the app finds it paused, its program current.
+#[test]
+fn active_transform_feedback_passes_the_frame_through() {
+    const TRANSFORM_FEEDBACK_ACTIVE: u32 = 0x8E24;
+    const TRANSFORM_FEEDBACK_PAUSED: u32 = 0x8E23;
+    let mut gl = context();
+    let a = app_gl(&gl);
+    let params = Params::default();
+    let (view, _) = built_srgb_view(&mut gl, (13, 14), &params);
+    let texels = gl
+        .read_texture(view.texture, SRGB8_ALPHA8, (40, 24))
+        .unwrap();
+    let source = c"#version 450
+layout(xfb_buffer = 0, xfb_offset = 0) out float written;
+void main() { written = 1.0; }
+";
+    // SAFETY: the context is current on this thread; a vertex program capturing one float into
+    // a buffer bound at transform feedback index 0, current when transform feedback begins
+    // (GL_POINTS).
+    unsafe {
+        let program = (a.create_shader_programv)(0x8B31, 1, &source.as_ptr());
+        let mut buffer = 0;
+        (a.gen)(1, &mut buffer);
+        (a.named_buffer_data)(buffer, 1024, std::ptr::null(), 0x88E8);
+        (a.bind_buffer_base)(0x8C8E, 0, buffer);
+        (a.use_program)(program);
+        (a.begin_transform_feedback)(0);
+        assert_eq!((a.get_error)(), 0, "the test's own set-up raised an error");
+    }
+    let state = |q| {
+        let mut v = 0;
+        // SAFETY: a single-valued query into a valid i32.
+        unsafe { (a.get_integerv)(q, &mut v) };
+        v
+    };
+    let what = ("transform feedback is active", "transform feedback");
+    refused_untouched(&mut gl, &a, (view, &texels), what);
+    assert_eq!(state(TRANSFORM_FEEDBACK_ACTIVE), 1, "no longer active");
+    // SAFETY: transform feedback is active and not paused.
+    unsafe { (a.pause_transform_feedback)() };
+    enhanced_again(&mut gl, &a, view, "transform feedback paused");
+    assert_eq!(
+        (
+            state(TRANSFORM_FEEDBACK_ACTIVE),
+            state(TRANSFORM_FEEDBACK_PAUSED)
+        ),
+        (1, 1),
+        "transform feedback is no longer active and paused"
+    );
+    // SAFETY: transform feedback is paused; then active again, and ended.
+    unsafe {
+        (a.resume_transform_feedback)();
+        (a.end_transform_feedback)();
+        assert_eq!(
+            (a.get_error)(),
+            0,
+            "the app's transform feedback was disturbed"
+        );
+    }
 }
 
 /// In a compatibility-profile context the app's pixel-transfer state (a red scale, a green bias

@@ -3,7 +3,7 @@
 
 use super::args::{Args, Opt};
 use super::error::{print, CliError};
-use contrastxr::layer::log;
+use contrastxr::layer::{log, log_file};
 
 pub const OPTIONS: &[Opt] = &[Opt::flag("--all"), Opt::flag("--path")];
 
@@ -27,13 +27,13 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         print(&format!("{}\n", path.display()));
         return Ok(());
     }
-    // The layer caps each file at log::MAX_BYTES; anything else there is not read whole.
+    // The layer caps each file at log_file::MAX_BYTES; anything else there is not read whole.
     let read = |p: &std::path::Path| {
-        contrastxr::user_file::read(p, 2 * log::MAX_BYTES)
+        contrastxr::user_file::read(p, 2 * log_file::MAX_BYTES)
             .map(|b| String::from_utf8_lossy(&b).into_owned())
             .unwrap_or_default()
     };
-    let text = read(&log::rotated(&path)) + &read(&path);
+    let text = read(&log_file::rotated(&path)) + &read(&path);
     if text.is_empty() {
         return Err(CliError::Failure(format!(
             "no layer log at {}: no app has run with the layer yet",

@@ -345,6 +345,9 @@ unsafe extern "system" fn destroy_instance(instance: xr::Instance) -> xr::Result
             if let Some((name, n)) = crate::fault::reached().filter(|(_, n)| *n > 0) {
                 log::info(&format!("fault point {name} reached {n} times"));
             }
+            // The log file's writer ends once it has written what was queued (never waited
+            // for); a later line starts another.
+            super::log_file::end_writer();
             // SAFETY: forwarding the app's call.
             Ok(unsafe { (state.next.destroy_instance)(instance) })
         },

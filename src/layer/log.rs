@@ -1,35 +1,30 @@
 //! The layer's log: start-up lines (on or off, the config file, every setting with its origin)
 //! and a few per session, then only changes and warnings, each once. Lines go to
 //! stderr and to `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state`), each with
-//! an RFC 3339 UTC timestamp and the process id. The file is capped at [`MAX_BYTES`]: past that
-//! it becomes `layer.log.1` (replacing the previous one) and a new file starts, so two files
-//! at most. The first line a process writes is a [`LOADED`] marker, which is how
+//! an RFC 3339 UTC timestamp and the process id; `log_file.rs` keeps the file (two files at
+//! most, each capped). The first line a process writes is a [`LOADED`] marker, which is how
 //! `contrastxr log` finds the last app's lines. `CONTRASTXR_LOG=debug` adds debug lines.
 //!
 //! Logging never blocks an app's call: a line stderr cannot take at once (a pipe read slowly,
 //! or by nobody) waits in a bounded backlog that a thread of the log's own writes in order;
-//! past [`BACKLOG_LINES`] lines are dropped and counted. The file is opened non-blocking, a
-//! regular file only, never through a symlink, the first time on a helper thread waited for
-//! [`FIRST_OPEN`] at most: a log folder on a hung file system (a network or FUSE mount) costs
-//! the app's thread that once, and the log then keeps to stderr for the process. A log file
-//! that cannot be written is said once on stderr.
+//! past [`BACKLOG_LINES`] lines are dropped and counted. The file is written by a thread of its
+//! own, which does every file-system operation (open, look-up, rotation, write): the app's
+//! thread only queues the line, so a log folder on a hung file system (a network or FUSE
+//! mount) never holds it. A log file that cannot be written is said once on stderr.
 
 use std::collections::HashSet;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{sync_channel, SyncSender};
 use std::sync::{Mutex, OnceLock};
 use std::time::{SystemTime, UNIX_EPOCH};
 
+use super::log_file::FileQueue;
+
 /// Lines waiting for a slow stderr; past this many, lines are dropped and counted.
 pub const BACKLOG_LINES: usize = 256;
 
-/// How long the app's thread waits at most for the log file's first open.
-pub const FIRST_OPEN: std::time::Duration = std::time::Duration::from_millis(250);
-
-/// Size past which the log file is rotated.
-pub const MAX_BYTES: u64 = 1 << 20;
 /// The file-only line each process writes first: `[pid N] layer loaded into EXE`.
 pub const LOADED: &str = "layer loaded into ";
 /// The line each session writes at xrCreateSession, then the binding's API ("Vulkan",
@@ -38,16 +33,12 @@ pub const LOADED: &str = "layer loaded into ";
 pub const GRAPHICS_API: &str = "graphics API of this session: ";
 
 struct Log {
-    path: Option<PathBuf>,
-    file: Option<std::fs::File>,
+    /// The file's queue to its writer; None without a file.
+    file: Option<FileQueue>,
     seen: HashSet<String>,
     debug: bool,
     /// Lines stderr could not take without blocking, not yet reported there.
     dropped: u64,
-    /// Why the file cannot be written has been said on stderr.
-    said_unwritable: bool,
-    /// The first open did not return in time: the file is never touched again.
-    stalled: bool,
 }
 
 /// `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state/...`).
@@ -65,69 +56,6 @@ pub fn path() -> Option<PathBuf> {
 #[cfg(test)]
 pub fn path() -> Option<PathBuf> {
     None
-}
-
-/// The rotated file beside `path`: `layer.log.1`.
-pub fn rotated(path: &Path) -> PathBuf {
-    let mut name = path.as_os_str().to_owned();
-    name.push(".1");
-    PathBuf::from(name)
-}
-
-/// Opens the log file for appending without blocking (a FIFO there fails at once), only a
-/// regular file and never through a symlink at its last component; the error names the path.
-fn open_file(path: &Path) -> Result<std::fs::File, String> {
-    use std::os::unix::fs::OpenOptionsExt;
-    crate::user_file::stall();
-    let dir = path.parent().unwrap_or(Path::new("/"));
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .custom_flags(libc::O_NONBLOCK | libc::O_CLOEXEC | libc::O_NOFOLLOW)
-        .open(path)
-        .map_err(|e| format!("cannot open {}: {e}", path.display()))?;
-    match file.metadata() {
-        Ok(m) if m.is_file() => Ok(file),
-        Ok(_) => Err(format!("{} is not a regular file", path.display())),
-        Err(e) => Err(format!("cannot read {}: {e}", path.display())),
-    }
-}
-
-/// The file's first open, on a helper thread waited for [`FIRST_OPEN`] at most; past that the
-/// log keeps to stderr for the process (said once), never touching the file again.
-fn open_first(log: &mut Log, path: &Path) -> Option<std::fs::File> {
-    let (tx, rx) = sync_channel(1);
-    let p = path.to_path_buf();
-    // A thread of the log's own, not counted among user_file's stuck readers: one per process.
-    let opener = std::thread::Builder::new().name("contrastxr-log-open".into());
-    match opener.spawn(move || tx.send(open_file(&p))) {
-        Ok(_) => match rx.recv_timeout(FIRST_OPEN) {
-            Ok(Ok(f)) => Some(f),
-            Ok(Err(_)) => open_or_say(log, path),
-            Err(_) => {
-                (log.stalled, log.said_unwritable) = (true, true);
-                let ms = FIRST_OPEN.as_millis();
-                let why = format!("log file not written: {} took more than {ms} ms to open (a stalled file system?): the log keeps to stderr", path.display());
-                write_stderr(log, &why);
-                None
-            }
-        },
-        Err(_) => open_or_say(log, path),
-    }
-}
-
-/// The file, or None after saying once on stderr why it cannot be written.
-fn open_or_say(log: &mut Log, path: &Path) -> Option<std::fs::File> {
-    match open_file(path) {
-        Ok(f) => Some(f),
-        Err(e) => {
-            if !std::mem::replace(&mut log.said_unwritable, true) {
-                write_stderr(log, &format!("log file not written: {e}"));
-            }
-            None
-        }
-    }
 }
 
 /// Days since 1970-01-01 to (year, month, day) in the proleptic Gregorian calendar
@@ -165,17 +93,13 @@ static LOG: OnceLock<Mutex<Log>> = OnceLock::new();
 
 fn log() -> &'static Mutex<Log> {
     LOG.get_or_init(|| {
-        let path = path();
         let mut log = Log {
             file: None,
-            path: path.clone(),
             seen: HashSet::new(),
             debug: std::env::var("CONTRASTXR_LOG").is_ok_and(|v| v == "debug"),
             dropped: 0,
-            said_unwritable: false,
-            stalled: false,
         };
-        log.file = path.and_then(|p| open_first(&mut log, &p));
+        log.file = path().map(|p| FileQueue::new(p, say_on_stderr));
         let exe = std::env::current_exe()
             .map_or("an unknown program".into(), |p| p.display().to_string());
         write_file(&mut log, &format!("{LOADED}{exe}"));
@@ -183,31 +107,25 @@ fn log() -> &'static Mutex<Log> {
     })
 }
 
-/// Rotates when the file at the path is over the cap, and follows a rotation another process
-/// did (the path then names a different file than ours).
-fn keep_in_bounds(log: &mut Log) {
-    use std::os::unix::fs::MetadataExt;
-    let Some(path) = log.path.clone().filter(|_| !log.stalled) else {
+/// Queues the line for the file's writer (never waiting), and says on stderr when the queue
+/// first drops lines.
+fn write_file(log: &mut Log, line: &str) {
+    let Some(file) = log.file.as_mut() else {
         return;
     };
-    let ours = log.file.as_ref().and_then(|f| f.metadata().ok());
-    let at_path = std::fs::metadata(&path).ok();
-    let same =
-        matches!((&ours, &at_path), (Some(a), Some(b)) if a.ino() == b.ino() && a.dev() == b.dev());
-    if at_path.as_ref().is_some_and(|m| m.len() >= MAX_BYTES) {
-        let _ = std::fs::rename(&path, rotated(&path));
-        log.file = open_or_say(log, &path);
-    } else if !same {
-        log.file = open_or_say(log, &path);
+    let prefix = format!(
+        "{} [pid {}] ",
+        rfc3339(SystemTime::now()),
+        std::process::id()
+    );
+    if let Some(behind) = file.write(&prefix, line) {
+        write_stderr(log, &behind);
     }
 }
 
-fn write_file(log: &mut Log, line: &str) {
-    keep_in_bounds(log);
-    if let Some(f) = log.file.as_mut() {
-        let stamp = rfc3339(SystemTime::now());
-        let _ = writeln!(f, "{stamp} [pid {}] {line}", std::process::id());
-    }
+/// A line on stderr alone: the file's writer says with it why the file cannot be written.
+fn say_on_stderr(line: &str) {
+    write_stderr(&mut lock(), line);
 }
 
 /// Writes `bytes` to `fd` only if that cannot block: poll first, and at most `PIPE_BUF` bytes,
@@ -385,37 +303,6 @@ mod tests {
         assert_eq!(rfc3339(t), "2026-11-22T19:04:05.000Z");
     }
 
-    #[test]
-    fn the_file_is_rotated_at_the_cap() {
-        let dir = std::env::temp_dir().join(format!("contrastxr-log-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        let path = dir.join("layer.log");
-        let mut log = Log {
-            file: open_file(&path).ok(),
-            path: Some(path.clone()),
-            seen: HashSet::new(),
-            debug: false,
-            dropped: 0,
-            said_unwritable: false,
-            stalled: false,
-        };
-        let line = "x".repeat(1000);
-        for _ in 0..1100 {
-            write_file(&mut log, &line);
-        }
-        let size = |p: &Path| std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
-        let (current, old) = (size(&path), size(&rotated(&path)));
-        assert!((MAX_BYTES..MAX_BYTES + 1100).contains(&old), "{old}");
-        assert!(current > 0 && current < MAX_BYTES, "{current}");
-        // Every line is kept across the two files.
-        assert_eq!(
-            (current + old) as usize,
-            1100 * (line.len() + "2026-01-01T00:00:00.000Z [pid ] \n".len())
-                + 1100 * std::process::id().to_string().len()
-        );
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
     /// A pipe's two ends, the write end filled until it takes no more.
     fn full_pipe() -> (i32, i32) {
         let mut fds = [0; 2];
@@ -447,33 +334,6 @@ mod tests {
         assert!(write_now(write, b"contrastxr: a line\n"));
         // SAFETY: both ends are ours.
         unsafe { (libc::close(read), libc::close(write)) };
-    }
-
-    #[test]
-    fn an_unwritable_log_file_is_named_with_why() {
-        let dir = std::env::temp_dir().join(format!("contrastxr-log-open-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let under_dev_null = Path::new("/dev/null/contrastxr/layer.log");
-        let e = open_file(under_dev_null).unwrap_err();
-        assert!(
-            e.contains("/dev/null/contrastxr") && e.contains("Not a directory"),
-            "{e}"
-        );
-        // A FIFO nobody reads fails at once instead of blocking the open.
-        let fifo = dir.join("fifo.log");
-        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
-        // SAFETY: a valid NUL-terminated path.
-        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-        assert!(open_file(&fifo).unwrap_err().contains("fifo.log"));
-        // A symlink at the last component is not followed.
-        let target = dir.join("elsewhere.log");
-        let link = dir.join("link.log");
-        std::os::unix::fs::symlink(&target, &link).unwrap();
-        assert!(open_file(&link).unwrap_err().contains("link.log"));
-        assert!(!target.exists());
-        assert!(open_file(&dir.join("layer.log")).is_ok());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -21,6 +21,7 @@ pub mod indicator;
 pub mod installed_files;
 pub mod live_settings;
 pub mod log;
+pub mod log_file;
 mod motion;
 mod reach_advice;
 pub mod session;

@@ -3,7 +3,7 @@
 
 use super::finding::{doc, Finding};
 use contrastxr::config::{self, Env, Source};
-use contrastxr::layer::log;
+use contrastxr::layer::{log, log_file};
 use std::path::{Path, PathBuf};
 
 /// A problem sentence without the list of known keys that follows an unknown one.
@@ -150,15 +150,15 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
 impl LastApp {
     pub fn read() -> LastApp {
         let path = log::path();
-        // The layer caps each file at log::MAX_BYTES; anything else there is not read whole.
+        // The layer caps each file at log_file::MAX_BYTES; anything else there is not read whole.
         let read = |p: &Path| {
-            contrastxr::user_file::read(p, 2 * log::MAX_BYTES)
+            contrastxr::user_file::read(p, 2 * log_file::MAX_BYTES)
                 .map(|b| String::from_utf8_lossy(&b).into_owned())
                 .unwrap_or_default()
         };
         let text = path
             .as_deref()
-            .map_or(String::new(), |p| read(&log::rotated(p)) + &read(p));
+            .map_or(String::new(), |p| read(&log_file::rotated(p)) + &read(p));
         let lines = log::last_app(&text)
             .into_iter()
             .map(str::to_string)

@@ -26,4 +26,4 @@ pub use conv::GlFormat;
 pub use device::{Gl, GlError};
 pub use frame::{GlFrameRunner, GlTarget, GlView, Outcome, StoreThrough};
 pub use offline::GlOffline;
-pub use pipelines::{gl_sources_id, BinaryCache};
+pub use pipelines::{gl_sources_id, BinaryCache, ProgramBinaries};

@@ -34,7 +34,7 @@ use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
-use crate::gpu::opengl::pipelines::{self, Programs};
+use crate::gpu::opengl::pipelines::{self, ProgramBinaries, Programs};
 use crate::gpu::opengl::texels::TexelBuffers;
 
 /// What a call did.
@@ -318,8 +318,8 @@ impl GlFrameRunner {
     }
 
     /// Whether the programs views of `internal_format`, `width` texels wide, need for
-    /// `params` are linked, linking those the program binary cache holds (read again first:
-    /// another process may have written it); nothing is compiled. Views are taken to be of
+    /// `params` are linked, linking those the program binary cache holds (as read, or taken
+    /// in since); nothing is compiled. Views are taken to be of
     /// immutable textures (a runtime's are), so in place wherever the format allows.
     ///
     /// # Safety
@@ -337,8 +337,24 @@ impl GlFrameRunner {
             return Ok(true);
         }
         let ids = self.shape_program_ids(internal_format, width, params)?;
-        self.programs.reload_cache();
         self.programs.ready_from_cache(&self.gl, &ids)
+    }
+
+    /// Reads the program binary cache's file again (another process may have written it): on
+    /// a helper thread within 1 s, so for loading-time calls, never a frame call.
+    pub fn reload_program_cache(&mut self) {
+        self.programs.reload_cache();
+    }
+
+    /// The binaries of the programs `ids` this engine holds, for another engine of its driver.
+    pub fn program_binaries(&self, ids: &[usize]) -> ProgramBinaries {
+        self.programs.binaries(ids)
+    }
+
+    /// Takes in binaries another engine of the driver built (where this one has none), for
+    /// `ready_from_cache` to link.
+    pub fn take_program_binaries(&mut self, binaries: ProgramBinaries) {
+        self.programs.take_binaries(binaries);
     }
 
     /// Whether the programs `views` need are built: one more is built (or its parallel build

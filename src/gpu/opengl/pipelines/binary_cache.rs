@@ -14,6 +14,11 @@ use std::collections::HashMap;
 /// and per entry: source hash (u64), binary format (u32), length (u32), bytes.
 const MAGIC: &[u8; 8] = b"CXRGLPB1";
 
+/// Binaries of some programs (source hash, binary format, bytes), handed from one engine to
+/// another of the same driver: from a build thread's context to the app's, in memory.
+#[derive(Debug, Default)]
+pub struct ProgramBinaries(Vec<(u64, u32, Vec<u8>)>);
+
 pub struct BinaryCache {
     driver: String,
     /// Whether the driver gives binaries at all.
@@ -124,6 +129,22 @@ impl BinaryCache {
 
     pub fn get(&self, hash: u64) -> Option<(u32, &[u8])> {
         self.entries.get(&hash).map(|(f, b)| (*f, b.as_slice()))
+    }
+
+    /// The entries of `hashes` this cache holds.
+    pub fn binaries(&self, hashes: impl Iterator<Item = u64>) -> ProgramBinaries {
+        let held = hashes.filter_map(|h| self.entries.get(&h).map(|(f, b)| (h, *f, b.clone())));
+        ProgramBinaries(held.collect())
+    }
+
+    /// Takes in `binaries` where this cache has none of its own, as a read of the file would
+    /// (they are not written again by this cache's next save).
+    pub fn take_in(&mut self, binaries: ProgramBinaries) {
+        for (hash, format, bytes) in binaries.0 {
+            if self.enabled {
+                self.entries.entry(hash).or_insert((format, bytes));
+            }
+        }
     }
 
     /// Drops an entry the driver refused.

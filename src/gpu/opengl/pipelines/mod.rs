@@ -4,6 +4,6 @@
 pub mod binary_cache;
 mod programs;
 
-pub use binary_cache::BinaryCache;
+pub use binary_cache::{BinaryCache, ProgramBinaries};
 pub(in crate::gpu::opengl) use programs::{classify, enhance, GL_FINISH_TILES};
 pub use programs::{gl_sources_id, Program, Programs};

@@ -9,7 +9,7 @@
 //! one program per call: the work is sliced across frames. A linked program's binary (glGetProgramBinary) goes into the
 //! binary cache (binary_cache.rs), from which a later process links it without compiling.
 
-use super::binary_cache::{source_hash, BinaryCache};
+use super::binary_cache::{source_hash, BinaryCache, ProgramBinaries};
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
@@ -291,6 +291,17 @@ impl Programs {
     /// Takes in the binaries another process wrote to the cache's file since it was read.
     pub fn reload_cache(&mut self) {
         self.cache.reload();
+    }
+
+    /// The binaries the cache holds of the programs `ids`.
+    pub fn binaries(&self, ids: &[usize]) -> ProgramBinaries {
+        let hashes = ids.iter().map(|&id| source_hash(GL_MODULES[id].1));
+        self.cache.binaries(hashes)
+    }
+
+    /// Takes in binaries another engine of the driver built, where the cache has none.
+    pub fn take_binaries(&mut self, binaries: ProgramBinaries) {
+        self.cache.take_in(binaries);
     }
 
     /// Writes the binary cache's file where programs were added (see binary_cache.rs).

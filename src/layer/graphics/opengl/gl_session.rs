@@ -12,7 +12,7 @@ use crate::algorithm::params::Params;
 use crate::config::InPlace;
 use crate::gpu::core::blurred_texels::BlurredTexels;
 use crate::gpu::core::{BackgroundInput, OverlayPixels};
-use crate::gpu::opengl::{GlFormat, GlFrameRunner, GlView};
+use crate::gpu::opengl::{GlFormat, GlFrameRunner, GlView, ProgramBinaries};
 use crate::gpu::PixelFormat;
 use crate::layer::graphics::session_graphics::{
     CapturedImage, NotDone, SessionGraphics, ViewImage,
@@ -136,9 +136,11 @@ enum Prepared {
 
 impl GlSession {
     /// For a view shape (internal format, width, settings) not met before: links its programs
-    /// from the caches, or leaves them to a driver that compiles off the calling thread, or
+    /// from the caches (the binary cache's file read again first at a `loading` call, never in
+    /// a frame call), or leaves them to a driver that compiles off the calling thread, or
     /// starts their build on a thread of the layer's own (one build per set of programs).
-    fn prepare_shape(&mut self, internal: u32, width: u32, params: &Params) -> Prepared {
+    fn prepare_shape(&mut self, shape: (u32, u32), params: &Params, loading: bool) -> Prepared {
+        let (internal, width) = shape;
         // Every frame call asks: the settings are cloned only for a shape not met before.
         let seen = |(i, w, p): &(u32, u32, Params)| (*i, *w) == (internal, width) && p == params;
         if self.warmed.iter().any(seen) {
@@ -149,6 +151,9 @@ impl GlSession {
             let ids = engine
                 .shape_program_ids(internal, width, params)
                 .map_err(failed)?;
+            if loading {
+                engine.reload_program_cache();
+            }
             // SAFETY: inside `in_context`: the app's context is current on this thread.
             let cached = unsafe { engine.ready_from_cache(internal, width, params) };
             let caps = engine.caps();
@@ -222,11 +227,15 @@ impl GlSession {
         }
     }
 
-    /// A build ended: its programs are linked from the binary cache it wrote and run once in
-    /// the app's context (milliseconds). What is not there (the build failed, or the driver
+    /// A build ended: its programs are linked from the binaries it handed back (no file is
+    /// read in the frame call) and run once in the app's context (milliseconds). What is not there (the build failed, or the driver
     /// refused a binary) is left to the frame calls, one program per call, frames passing
     /// through meanwhile: no frame call compiles a whole set.
-    fn builder_ended(&mut self, builder: ProgramBuilder, outcome: Result<Duration, String>) {
+    fn builder_ended(
+        &mut self,
+        builder: ProgramBuilder,
+        outcome: Result<(Duration, ProgramBinaries), String>,
+    ) {
         let (internal, width, params) = builder.shape.clone();
         drop(builder);
         let name = self.format_name(i64::from(internal));
@@ -236,9 +245,10 @@ impl GlSession {
             ));
             return;
         }
-        let took = outcome.unwrap_or_default();
+        let (took, binaries) = outcome.unwrap_or_default();
         self.beside_time = self.beside_time.max(took);
         let linked = self.in_context(|engine, _| {
+            engine.take_program_binaries(binaries);
             // SAFETY: inside `in_context`: the app's context is current.
             unsafe { engine.ready_from_cache(internal, width, &params) }.map_err(failed)
         });
@@ -324,7 +334,7 @@ impl SessionGraphics for GlSession {
         else {
             return;
         };
-        match self.prepare_shape(internal, width, params) {
+        match self.prepare_shape((internal, width), params, true) {
             Prepared::Cached => {}
             Prepared::NoBuilder(why) => log::debug(&format!(
                 "OpenGL programs built in the app's context: {why}"
@@ -353,7 +363,7 @@ impl SessionGraphics for GlSession {
         // off the app's threads too where it can be.
         for v in views {
             let (internal, width) = (v.api_format as u32, v.key.extent.0);
-            if let Prepared::NoBuilder(why) = self.prepare_shape(internal, width, params) {
+            if let Prepared::NoBuilder(why) = self.prepare_shape((internal, width), params, false) {
                 log::debug(&format!(
                     "OpenGL programs built in frame calls on the app's context: {why}"
                 ));

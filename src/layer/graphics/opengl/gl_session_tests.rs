@@ -117,3 +117,96 @@ fn sessions_ended_with_their_context_elsewhere_leave_a_bounded_number_of_objects
     assert!(left_engines::waiting() <= 1, "{}", left_engines::waiting());
     offline.delete_texture(texture);
 }
+
+/// A build off the app's threads that ended is linked in a frame call from the binaries the
+/// build thread handed back, never by reading the program binary cache's file in that call:
+/// with every file operation stalled 2 s (`stalled-file-system`, a cache folder on a slow
+/// network or FUSE mount, so the build's own write fails too), no frame call takes 500 ms, from
+/// the first after the build's thread ended (and every read it started has returned) to the
+/// one after which the programs are ready. Run in a child process of this test binary, where
+/// the fault is armed, with an empty cache folder.
+#[test]
+fn a_finished_build_is_linked_without_reading_the_cache_in_a_frame_call() {
+    const NAME: &str = "layer::graphics::opengl::gl_session::tests::a_finished_build_is_linked_without_reading_the_cache_in_a_frame_call";
+    if std::env::var_os("CONTRASTXR_FAULT").is_none() {
+        let cache =
+            std::env::temp_dir().join(format!("contrastxr-gl-frame-read-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&cache);
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["--exact", NAME, "--nocapture", "--test-threads=1"])
+            .env("CONTRASTXR_FAULT", "stalled-file-system")
+            .env("XDG_CACHE_HOME", &cache)
+            .output()
+            .expect("run the child");
+        let _ = std::fs::remove_dir_all(&cache);
+        let text = String::from_utf8_lossy(&out.stderr).into_owned()
+            + &String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success() && text.contains("1 passed"), "{text}");
+        return;
+    }
+    let mut offline = GlOffline::new().expect("an OpenGL context");
+    let rgba8 = crate::gpu::opengl::device::functions::RGBA8;
+    let (w, h) = (48u32, 32u32);
+    let texture = offline
+        .create_texture(rgba8, (w, h), &vec![128; (w * h * 4) as usize])
+        .unwrap();
+    let params = Params::default();
+    let format = GlFormat::of(rgba8).unwrap();
+    let view = ViewImage {
+        key: ViewKey {
+            swapchain: 1,
+            offset: (0, 0),
+            extent: (w, h),
+            array_index: 0,
+        },
+        image: u64::from(texture),
+        api_format: i64::from(rgba8),
+        format: format.pixel,
+        layered: false,
+        in_place: false,
+        mapping: params.camera_mapping(),
+    };
+    let context = TestContext {
+        elsewhere: Rc::new(Cell::new(false)),
+    };
+    let mut session = Box::new(GlSession::new("OpenGL (test)", Box::new(context)));
+    // Swapchain creation: the caches are read (bounded), the build starts on its thread.
+    session.request_shaders(&params, format.pixel, w, false);
+    assert!(!session.builders.is_empty(), "no build started");
+    let views = [view];
+    let since = Instant::now();
+    let building = || {
+        std::fs::read_dir("/proc/self/task")
+            .unwrap()
+            .flatten()
+            .filter_map(|t| std::fs::read_to_string(t.path().join("comm")).ok())
+            .any(|n| n.trim() == "contrastxr-gl-b")
+    };
+    while building() {
+        assert!(since.elapsed() < Duration::from_secs(300), "never built");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    // Every read of the cache's file the build started has returned (each stalls 2 s).
+    std::thread::sleep(Duration::from_millis(2500));
+    let mut calls = Vec::new();
+    loop {
+        let t = Instant::now();
+        let ready = session.ready(&views, &params, false);
+        calls.push(t.elapsed());
+        match ready {
+            Ok(()) => break,
+            Err(NotDone::Pending) => {}
+            Err(e) => panic!("{e:?}"),
+        }
+        assert!(since.elapsed() < Duration::from_secs(300), "never ready");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let longest = calls.iter().max().copied().unwrap_or_default();
+    eprintln!("{} frame calls, the longest {longest:?}", calls.len());
+    assert!(
+        longest < Duration::from_millis(500),
+        "a frame call took {longest:?}"
+    );
+    assert!(session.finish().is_ok());
+    offline.delete_texture(texture);
+}

@@ -5,15 +5,16 @@
 //! with, nor current on, any of the app's contexts), checks that it runs on the app's driver
 //! (vendor, renderer and version; a profile does not matter), builds the programs, runs them
 //! once so that the driver's shader cache holds their machine code, and writes the program
-//! binary cache. The app's context then links them from that cache (glProgramBinary) in
-//! milliseconds, in a frame call. No process is started from the app: a child would stay
+//! binary cache; the thread hands their binaries back with its end, so that the app's context
+//! links them (glProgramBinary) in milliseconds in a frame call without reading the cache's
+//! file there. No process is started from the app: a child would stay
 //! inside Steam's container or a Flatpak sandbox, with their libraries, and a setuid host would
 //! run a file found beside a library. A build cannot be stopped midway: a session that ends
 //! first leaves the thread to end on its own.
 
 use crate::algorithm::params::Params;
 use crate::gpu::opengl::device::caps::same_driver;
-use crate::gpu::opengl::GlOffline;
+use crate::gpu::opengl::{GlOffline, ProgramBinaries};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -25,7 +26,7 @@ const BUILD_NICENESS: i32 = 10;
 
 /// A build of the programs of one view shape.
 pub struct ProgramBuilder {
-    thread: Option<JoinHandle<Result<(), String>>>,
+    thread: Option<JoinHandle<Result<ProgramBinaries, String>>>,
     pub since: Instant,
     pub shape: (u32, u32, Params),
     /// The programs it builds (the engine's ids), so that a shape needing the same ones does
@@ -36,8 +37,8 @@ pub struct ProgramBuilder {
 /// Where a build stands.
 pub enum Built {
     Running,
-    /// Ended: Ok with the time it took, or why it did not build.
-    Ended(Result<Duration, String>),
+    /// Ended: Ok with the time it took and the programs' binaries, or why it did not build.
+    Ended(Result<(Duration, ProgramBinaries), String>),
 }
 
 impl ProgramBuilder {
@@ -56,7 +57,7 @@ impl ProgramBuilder {
         let (driver, wanted) = (driver.to_string(), params.clone());
         let thread = std::thread::Builder::new()
             .name("contrastxr-gl-build".into())
-            .spawn(move || build(&driver, (internal_format, width, in_place), &wanted))
+            .spawn(move || build(&driver, (internal_format, width, in_place), &wanted, ids))
             .map_err(|e| format!("no build thread: {e}"))?;
         Ok(ProgramBuilder {
             thread: Some(thread),
@@ -81,7 +82,7 @@ impl ProgramBuilder {
         let thread = self.thread.take().expect("checked above");
         // The thread has ended: joining it does not wait.
         Built::Ended(match thread.join() {
-            Ok(Ok(())) => Ok(self.since.elapsed()),
+            Ok(Ok(binaries)) => Ok((self.since.elapsed(), binaries)),
             Ok(Err(why)) => Err(why),
             Err(_) => Err("the build thread panicked".into()),
         })
@@ -89,12 +90,13 @@ impl ProgramBuilder {
 }
 
 /// The build, on its own thread: an offline context, the driver checked, the programs built
-/// and run once, the binaries written.
+/// and run once, the binaries written; the binaries of `ids`.
 fn build(
     driver: &str,
     (internal_format, width, in_place): (u32, u32, bool),
     params: &Params,
-) -> Result<(), String> {
+    ids: [usize; 3],
+) -> Result<ProgramBinaries, String> {
     crate::camera::priority::lower_this_thread(BUILD_NICENESS);
     if crate::fault::hit("gl-program-build") {
         return Err("the build failed (fault point)".into());
@@ -113,5 +115,5 @@ fn build(
         return Err(format!("not built within {} s", LIMIT.as_secs()));
     }
     gl.engine().save_program_cache();
-    Ok(())
+    Ok(gl.engine().program_binaries(&ids))
 }
