@@ -165,6 +165,7 @@ fn a_finished_build_is_linked_without_reading_the_cache_in_a_frame_call() {
         layered: false,
         in_place: false,
         mapping: params.camera_mapping(),
+        pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
     let context = TestContext {
         elsewhere: Rc::new(Cell::new(false)),
