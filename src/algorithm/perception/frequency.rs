@@ -186,14 +186,14 @@ pub fn view_frequencies(params: &Params, blur: &BlurGeometry) -> Frequencies {
 /// `params` for one view of blur `blur`: its `frequency` setting, where `blur`, replaced by the
 /// number of cycles per degree the view's blur gives, so that every pixel of the view (on the
 /// GPU and in the CPU reference) is judged at the same frequency.
-/// The frequency is rounded to a step of 2^(1/1024) (0.07 %), far below what moves c', so that
+/// The frequency is rounded to a step of 2^(1/16384) (0.004 %), far below what moves c', so that
 /// a view whose field of view jitters from frame to frame keeps its model (and the GPU tables
 /// made from it).
 pub fn for_view(params: &Params, blur: &BlurGeometry) -> Params {
     let mut out = params.clone();
     if let Frequency::Blur = params.perceptual.frequency {
-        let steps = (blur.halving_cpd().log2() * 1024.0).round();
-        out.perceptual.frequency = Frequency::Cpd((steps / 1024.0).exp2());
+        let steps = (blur.halving_cpd().log2() * 16384.0).round();
+        out.perceptual.frequency = Frequency::Cpd((steps / 16384.0).exp2());
     }
     out
 }
@@ -286,7 +286,7 @@ mod tests {
         let Frequency::Cpd(f) = for_view(&p, &view).perceptual.frequency else {
             panic!("blur not resolved");
         };
-        assert!((f / view.halving_cpd() - 1.0).abs() < 4e-4, "{f}");
+        assert!((f / view.halving_cpd() - 1.0).abs() < 3e-5, "{f}");
         // A view a hair wider keeps the same frequency.
         let wider = BlurGeometry {
             pixels_per_degree: view.pixels_per_degree * (1.0 + 1e-7),
