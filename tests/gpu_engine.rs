@@ -742,11 +742,12 @@ fn image_copy_conforms_to_the_cpu_reference() {
         let (w, h) = extent;
         let bg =
             contrastxr::background_preparation::prepare_mapped(&camera, w, h, &mapping, &params);
+        let view = common::conformance::reference_params(&params, &mapping, w, camera.width);
         let mut bad = 0;
         for (i, d) in display.pixels.iter().enumerate() {
             let (x, y) = (i as u32 % w, i as u32 / w);
             let word = out[((size.1 + offset.1 + y) * size.0 + offset.0 + x) as usize];
-            let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &params);
+            let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &view);
             bad += usize::from(!conformant(&trace, word.to_le_bytes()));
         }
         assert_eq!(bad, 0, "{method:?}: {bad} of {} pixels differ", w * h);
