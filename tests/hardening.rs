@@ -858,12 +858,25 @@ fn hundred_session_cycles_leak_nothing() {
     // validation layer at all). So the bound is 2 MiB: 28 KiB per session. Leaks of the
     // layer's own objects are also caught by the validation layer's undestroyed-object report
     // (`sync_validation_and_leak_reports_are_on`) and by the file descriptor check below.
+    // A leak grows with every session; a one-off step does not (seen in CI: 4.8 MiB once,
+    // between two sessions, then flat: a thread's new malloc arena or a cache's first fill, on
+    // the layer's side or the driver's). So the growth is counted without its largest single
+    // step, which must itself stay well below the memory of one session's engine.
     let (warm, end) = (sessions[24], sessions[99]);
+    let largest_step = sessions[24..]
+        .windows(2)
+        .map(|w| w[1].0.saturating_sub(w[0].0))
+        .max()
+        .unwrap_or(0);
     eprintln!(
-        "cycles: rss {} KiB after 25 sessions, {} KiB after 100",
+        "cycles: rss {} KiB after 25 sessions, {} KiB after 100, largest step {largest_step} KiB",
         warm.0, end.0
     );
-    assert!(end.0 < warm.0 + 2048, "resident memory grew: {sessions:?}");
+    assert!(
+        end.0 < warm.0 + 2048 + largest_step,
+        "resident memory grew: {sessions:?}"
+    );
+    assert!(largest_step < 8192, "resident memory jumped: {sessions:?}");
     assert!(
         sessions.iter().all(|s| s.1 == sessions[0].1),
         "file descriptors: {sessions:?}"
