@@ -406,8 +406,9 @@ fn every_format_matches_cpu_for_every_method() {
             let bg = contrastxr::background_preparation::prepare_mapped(
                 &camera, w, h, &mapping, &params,
             );
-            let view = reference_params(&params, &mapping, w, camera.width);
+            let mut view = reference_params(&params, &mapping, w, camera.width);
             for format in b.pixel_formats() {
+                view.stored = format.stored();
                 let words = (format.bytes_per_pixel() / 4) as usize;
                 let raw: Vec<u32> = display
                     .pixels

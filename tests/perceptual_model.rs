@@ -16,7 +16,7 @@ use contrastxr::algorithm::perception::tables::{
     PerceptualTables, SensitivityTable, LOG_LUMINANCE_MAX, LOG_LUMINANCE_MIN,
 };
 use contrastxr::algorithm::perceptual_settings::PerceptualSettings;
-use contrastxr::algorithm::{enhance_linear, Params};
+use contrastxr::algorithm::{enhance_linear, Params, Stored};
 use contrastxr::colour;
 use glam::{DVec3, Vec3};
 
@@ -442,9 +442,23 @@ fn change(a: DVec3, b: DVec3) -> f64 {
     colour::delta_e(colour::linear_to_lab(a), colour::linear_to_lab(b))
 }
 
-/// Random content pixels over random backgrounds, with the paper's output and the method's.
+/// Random content pixels over random backgrounds, with the paper's output and the method's
+/// (its output kept exact: the spec's method).
 fn sampled(world: f64, target: f64, n: usize, seed: u64) -> Vec<(DVec3, DVec3, DVec3, Outcome)> {
-    let params = Params::default();
+    sampled_as(Stored::Exact, world, target, n, seed)
+}
+
+fn sampled_as(
+    stored: Stored,
+    world: f64,
+    target: f64,
+    n: usize,
+    seed: u64,
+) -> Vec<(DVec3, DVec3, DVec3, Outcome)> {
+    let params = Params {
+        stored,
+        ..Params::default()
+    };
     let m = model(world, target);
     let mut rng = Rng(seed);
     (0..n)
@@ -599,6 +613,43 @@ fn the_bisection_reaches_the_target_with_the_least_change_to_one_256th() {
     assert!(
         checked > 100,
         "only {checked} pixels brought to target and checked"
+    );
+}
+
+/// In 8-bit sRGB, as an image stores it: every pixel brought to the target is shown at the
+/// target, its output a stored colour, changed no more than the paper's change and one code
+/// value. Judged before rounding (the exact method, then rounded), many would not be.
+#[test]
+fn a_pixel_brought_to_target_is_at_target_as_stored() {
+    let target = 0.05;
+    let m = model(500.0, target);
+    let exact = sampled(500.0, target, 12000, 23);
+    let stored = sampled_as(Stored::Srgb8, 500.0, target, 12000, 23);
+    let (mut brought, mut short_if_exact) = (0, 0);
+    for ((d, b, e, x), (_, _, _, out)) in exact.iter().zip(&stored) {
+        if out.class != Class::BroughtToTarget {
+            continue;
+        }
+        brought += 1;
+        let shown = colour::linear_to_srgb8(out.output).map(colour::code_to_linear);
+        assert_eq!(out.output.to_array(), shown, "D {d} over B {b}");
+        let after = m.perceived_contrast(out.output, *b);
+        assert!(after >= target, "D {d} over B {b}: c' {after} as stored");
+        assert_eq!(out.perceived_after, after);
+        let one_code = colour::linear_to_srgb8(*e).map(|c| c.saturating_add(1));
+        let slack = change(*e, DVec3::from_array(one_code.map(colour::code_to_linear)));
+        assert!(
+            change(*d, out.output) <= change(*d, *e) + slack,
+            "D {d} over B {b}"
+        );
+        let rounded =
+            DVec3::from_array(colour::linear_to_srgb8(x.output).map(colour::code_to_linear));
+        short_if_exact += usize::from(m.perceived_contrast(rounded, *b) < target);
+    }
+    assert!(brought > 150, "only {brought} pixels brought to target");
+    assert!(
+        short_if_exact * 5 > brought,
+        "judged before rounding, {short_if_exact} of {brought} fall short as stored"
     );
 }
 

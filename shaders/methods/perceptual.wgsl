@@ -3,9 +3,10 @@
 // file) spent where the eye gains most. A pixel already seen at the target contrast is left
 // alone; otherwise the most visible of the paper's colour and the colours r away in 18 fixed
 // CIELAB directions (clipped; dropped if clipping lengthened the change), then back toward the
-// display colour to the least change that reaches the target (8 halvings). c' is the model's
-// perceived contrast, evaluated from the view's tables in `perceptual` (PERCEPTUAL_* in
-// src/gpu/core/interface.rs), as src/algorithm/perception/tables.rs does in f32.
+// display colour to the least change that reaches the target as the image stores it (8
+// halvings). c' is the model's perceived contrast, evaluated from the view's tables in
+// `perceptual` (PERCEPTUAL_* in src/gpu/core/interface.rs), as
+// src/algorithm/perception/tables.rs does in f32.
 
 // How far a candidate's CIELAB change may pass r and still count as within it (the CPU
 // reference's BUDGET_SLACK).
@@ -212,7 +213,9 @@ fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perce
         for (var step = 0u; step < BISECTION_STEPS; step++) {
             let mid = 0.5 * (lo + hi);
             let colour = clip(scaled_to_linear(d + per_pixel(mid, span)));
-            let ok = perceived_from(colour, world, vec4<f32>(goal)) >= vec4<f32>(goal);
+            // Judged as stored, so that the pixel shown reaches the target.
+            let shown = decode_stored(quantised(encode_stored(colour)));
+            let ok = perceived_from(shown, world, vec4<f32>(goal)) >= vec4<f32>(goal);
             hi = select(hi, mid, ok);
             lo = select(mid, lo, ok);
             out = pick(out, colour, ok);

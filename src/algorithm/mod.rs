@@ -16,9 +16,11 @@ pub mod reference_fn;
 pub mod registration;
 pub mod reprojection;
 mod scaled;
+pub mod stored;
 
 pub use conformance::{conformant, corner_cases, PixelTrace, NEAR_ROUNDING, NEAR_THRESHOLD};
 pub use mapping::CameraMapping;
 pub use params::{Method, Params, ViewMode};
 pub use pixel::{enhance_linear, enhance_srgb8, enhance_srgb8_trace};
 pub use scaled::{enhance_scaled, enhance_scaled_traced, ScaledOutcome};
+pub use stored::Stored;

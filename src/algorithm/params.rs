@@ -2,6 +2,7 @@
 
 pub use super::method::Method;
 use super::perceptual_settings::PerceptualSettings;
+use super::stored::Stored;
 
 /// What the layer shows (docs/control.md, Modes). `Enhance` is the product; the others are for
 /// comparison and calibration while wearing the headset. Comparison methods are `Method`s.
@@ -83,6 +84,9 @@ pub struct Params {
     /// (docs/algorithm.md, *The perceptual method*). f64, as the model's CPU reference takes
     /// them.
     pub perceptual: PerceptualSettings,
+    /// How the image stores the output: the perceptual method judges the colour as stored. The
+    /// GPU engine takes it from the image's format; the CPU reference from here.
+    pub stored: Stored,
 }
 
 /// Background chroma (scaled a'b' length, ~10 a*b* units) below which it counts as near grey.
@@ -105,6 +109,7 @@ impl Default for Params {
             achromatic_boost: 0.0,
             luminance_cap: 0.0,
             perceptual: PerceptualSettings::default(),
+            stored: Stored::Srgb8,
         }
     }
 }

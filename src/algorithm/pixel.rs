@@ -45,11 +45,14 @@ fn is_skipped(display_linear: DVec3, alpha: f64) -> bool {
     alpha == 0.0 || display_linear == DVec3::ZERO
 }
 
+/// The method on one content pixel; `traced`: with the margins the conformance trace needs
+/// (otherwise `margin` may be left infinite).
 fn enhance_linear_traced(
     display_linear: DVec3,
     bg_linear: DVec3,
     bg_scaled: DVec3,
     params: &Params,
+    traced: bool,
 ) -> LinearOutcome {
     if let Reference::Linear(method) = params.method.entry().reference {
         let unclipped = method(display_linear, bg_linear, params);
@@ -77,7 +80,8 @@ fn enhance_linear_traced(
         // The paper's output is this method's budget (enhance_scaled_traced ran the paper).
         Reference::Perceptual(method) => {
             let mut m = Margin(scaled.margin);
-            let out = method(display_linear, bg_linear, scaled.linear(), params, &mut m);
+            let trace = traced.then_some(&mut m);
+            let out = method(display_linear, bg_linear, scaled.linear(), params, trace);
             LinearOutcome {
                 unclipped: out,
                 margin: m.0,
@@ -110,7 +114,7 @@ pub fn enhance_linear(
     if is_skipped(display_linear, alpha) {
         return None;
     }
-    Some(enhance_linear_traced(display_linear, bg_linear, bg_scaled, params).linear())
+    Some(enhance_linear_traced(display_linear, bg_linear, bg_scaled, params, false).linear())
 }
 
 /// The method on one 8-bit RGBA pixel; alpha passes through, a skipped pixel comes back as is.
@@ -120,15 +124,26 @@ pub fn enhance_srgb8(
     bg_scaled: DVec3,
     params: &Params,
 ) -> [u8; 4] {
-    enhance_srgb8_trace(display, bg_linear, bg_scaled, params).out
+    srgb8_outcome(display, bg_linear, bg_scaled, params, false).out
 }
 
 /// `enhance_srgb8` with what the GPU conformance test needs to judge a difference.
+/// `params.stored` should be `Stored::Srgb8` (the default), as the pixel is.
 pub fn enhance_srgb8_trace(
     display: [u8; 4],
     bg_linear: DVec3,
     bg_scaled: DVec3,
     params: &Params,
+) -> PixelTrace {
+    srgb8_outcome(display, bg_linear, bg_scaled, params, true)
+}
+
+fn srgb8_outcome(
+    display: [u8; 4],
+    bg_linear: DVec3,
+    bg_scaled: DVec3,
+    params: &Params,
+    traced: bool,
 ) -> PixelTrace {
     let display_linear = colour::srgb8_to_linear([display[0], display[1], display[2]]);
     let unchanged = || PixelTrace {
@@ -140,7 +155,7 @@ pub fn enhance_srgb8_trace(
     if is_skipped(display_linear, f64::from(display[3])) {
         return unchanged();
     }
-    let out = enhance_linear_traced(display_linear, bg_linear, bg_scaled, params);
+    let out = enhance_linear_traced(display_linear, bg_linear, bg_scaled, params, traced);
     let near_threshold = out.margin < NEAR_THRESHOLD;
     if out.unclipped == display_linear {
         return PixelTrace {

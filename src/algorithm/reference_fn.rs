@@ -18,8 +18,9 @@ pub enum Reference {
     Linear(fn(DVec3, DVec3, &Params) -> DVec3),
     /// The output, clipped to [0, 1], from the display, the (unattenuated) background and the
     /// paper method's output (clipped), linear light: a method that spends the paper's colour
-    /// change its own way. `Margin` records how close each decision came to flipping.
-    Perceptual(fn(DVec3, DVec3, DVec3, &Params, &mut Margin) -> DVec3),
+    /// change its own way. A `Margin`, where one is given, records how close each decision
+    /// came to flipping (the conformance trace; without it the reference skips that work).
+    Perceptual(fn(DVec3, DVec3, DVec3, &Params, Option<&mut Margin>) -> DVec3),
 }
 
 impl std::fmt::Debug for Reference {

@@ -5,7 +5,9 @@
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::perception::frequency::{view_params, ViewGeometry};
 use contrastxr::algorithm::perceptual_settings::{Frequency, PerceptualSettings};
-use contrastxr::algorithm::{conformant, enhance_linear, enhance_srgb8_trace, Method, Params};
+use contrastxr::algorithm::{
+    conformant, enhance_linear, enhance_srgb8_trace, Method, Params, Stored,
+};
 use contrastxr::background_preparation::{prepare, PreparedBackground};
 use contrastxr::image::RgbaImage;
 use glam::DVec3;
@@ -215,6 +217,16 @@ fn linear_tolerance(format: &str, v: f64) -> f64 {
     }
 }
 
+/// How a captured format stores the output (the perceptual method judges it so).
+fn stored_of(format: &str, srgb: bool) -> Stored {
+    match format {
+        _ if srgb => Stored::Srgb8,
+        "R16G16B16A16_UNORM" | "GL_RGBA16" => Stored::Unorm(65535),
+        "R16G16B16A16_SFLOAT" | "GL_RGBA16F" => Stored::Exact,
+        _ => Stored::Unorm(255),
+    }
+}
+
 /// Checks one captured view against the CPU reference; returns how many pixels the method
 /// changed (so callers can insist that it did something).
 pub fn check_view(c: &Captured) -> usize {
@@ -224,7 +236,8 @@ pub fn check_view(c: &Captured) -> usize {
         c.json["rect"]["width"].as_u64().unwrap() as u32,
         c.json["rect"]["height"].as_u64().unwrap() as u32,
     );
-    let params = view_params_of(&c.json, c.camera.width);
+    let mut params = view_params_of(&c.json, c.camera.width);
+    params.stored = stored_of(&format, srgb);
     let bg: PreparedBackground = prepare(&c.camera, w, h, &params);
     let bpp = c.json["bytes_per_pixel"].as_u64().unwrap() as usize;
     assert_eq!(

@@ -9,10 +9,11 @@ use glam::DVec3;
 
 use super::directions::DIRECTIONS;
 use super::perceived_contrast::Model;
-use crate::algorithm::conformance::NEAR_THRESHOLD;
+use crate::algorithm::conformance::{NEAR_ROUNDING, NEAR_THRESHOLD};
 use crate::algorithm::constraints::Margin;
 use crate::algorithm::params::{Method, Params};
 use crate::algorithm::pixel::enhance_linear;
+use crate::algorithm::stored::Stored;
 use crate::colour;
 
 /// Bisection steps from the kept candidate back toward the original colour.
@@ -79,7 +80,8 @@ fn lab_to_clipped_linear(lab: DVec3) -> DVec3 {
 
 /// The perceptual method on linear display colour `display` (alpha `alpha`) over the linear,
 /// unattenuated background `background`, given the paper method's output for the pixel
-/// (`paper_output`, linear, as the paper's reference returns it: clipped to [0, 1]).
+/// (`paper_output`, linear, as the paper's reference returns it: clipped to [0, 1]), its output
+/// kept exact ([`Stored::Exact`]).
 pub fn perceptual(
     display: DVec3,
     alpha: f64,
@@ -87,26 +89,32 @@ pub fn perceptual(
     paper_output: DVec3,
     model: &Model,
 ) -> Outcome {
-    perceptual_traced(
+    let pixel = Pixel {
         display,
         alpha,
         background,
         paper_output,
-        model,
-        &mut Margin::new(),
-    )
+    };
+    perceptual_traced(&pixel, model, Stored::Exact, &mut Margin::new())
 }
 
-/// [`perceptual`], recording in `m` how close each of its decisions came to going the other
-/// way.
-fn perceptual_traced(
+/// One pixel's inputs: the display colour, its alpha, the background and the paper's output.
+struct Pixel {
     display: DVec3,
     alpha: f64,
     background: DVec3,
     paper_output: DVec3,
-    model: &Model,
-    m: &mut Margin,
-) -> Outcome {
+}
+
+/// [`perceptual`] with the output as `stored` reads it back (the bisection judges that colour),
+/// recording in `m` how close each of its decisions came to going the other way.
+fn perceptual_traced(px: &Pixel, model: &Model, stored: Stored, m: &mut Margin) -> Outcome {
+    let Pixel {
+        display,
+        alpha,
+        background,
+        paper_output,
+    } = *px;
     if alpha == 0.0 || display == DVec3::ZERO {
         return Outcome {
             output: display,
@@ -168,14 +176,22 @@ fn perceptual_traced(
         };
     }
     // Back toward D on the straight CIELAB line to the kept candidate: c'(D) < target <= c'(1).
+    // Each point is judged as stored, so that the pixel shown reaches the target.
     let (mut lo, mut hi) = (0.0, 1.0);
     let (mut out, mut after) = (best.colour, best.perceived);
     for _ in 0..BISECTION_STEPS {
         let mid = 0.5 * (lo + hi);
         let colour = lab_to_clipped_linear(d_lab + mid * (best.lab - d_lab));
-        let c = model.perceived_contrast(colour, background);
+        // In the scaled units of NEAR_THRESHOLD: NEAR_ROUNDING code values from a rounding
+        // boundary is at it (float32 may store the other code, and judge it the other way).
+        m.note(
+            stored.rounding_margin(colour) * NEAR_THRESHOLD / NEAR_ROUNDING,
+            0.0,
+        );
+        let shown = stored.read_back(colour);
+        let c = model.perceived_contrast(shown, background);
         if c >= target {
-            (hi, out, after) = (mid, colour, c);
+            (hi, out, after) = (mid, shown, c);
         } else {
             lo = mid;
         }
@@ -223,32 +239,48 @@ pub fn perceptual_over_paper(
         ..params.clone()
     };
     let bg_scaled = colour::linear_to_scaled(f64::from(params.transmittance) * background);
-    let paper =
+    let paper_output =
         enhance_linear(display, alpha, background, bg_scaled, &paper_params).unwrap_or(display);
-    perceptual(display, alpha, background, paper, model)
+    let pixel = Pixel {
+        display,
+        alpha,
+        background,
+        paper_output,
+    };
+    perceptual_traced(&pixel, model, params.stored, &mut Margin::new())
 }
 
 /// The method's CPU reference as its entry in the method table names it
 /// (`Reference::Perceptual`): the output for linear display colour `display` over the linear,
 /// unattenuated background `background`, given the paper method's output `paper` (clipped),
-/// with the model of `params` ([`Model::of_params`]).
-/// Records in `m` the candidates' decisions near the budget and, as at its threshold, a pixel
-/// whose output the GPU tables' tolerance may change ([`THRESHOLD_TOLERANCE`]).
+/// with the model of `params` ([`Model::of_params`]), as `params.stored` reads it back.
+/// Traced (`m` given), records in `m` the candidates' decisions near the budget, bisection
+/// points near a rounding boundary and, as at its threshold, a pixel whose output the GPU
+/// tables' tolerance may change ([`THRESHOLD_TOLERANCE`]).
 pub fn perceptual_step(
     display: DVec3,
     background: DVec3,
     paper: DVec3,
     params: &Params,
-    m: &mut Margin,
+    m: Option<&mut Margin>,
 ) -> DVec3 {
     let model = Model::of_params(params);
-    let out = perceptual_traced(display, 1.0, background, paper, &model, m).output;
+    let pixel = Pixel {
+        display,
+        alpha: 1.0,
+        background,
+        paper_output: paper,
+    };
+    let Some(m) = m else {
+        return perceptual_traced(&pixel, &model, params.stored, &mut Margin::new()).output;
+    };
+    let out = perceptual_traced(&pixel, &model, params.stored, m).output;
     for scale in [1.0 - THRESHOLD_TOLERANCE, 1.0 + THRESHOLD_TOLERANCE] {
         let varied = Model {
             threshold_scale: scale,
             ..model
         };
-        let other = perceptual_traced(display, 1.0, background, paper, &varied, &mut Margin::new());
+        let other = perceptual_traced(&pixel, &varied, params.stored, &mut Margin::new());
         // Every output is a candidate or a bisection step: any difference is a decision that
         // went the other way.
         if other.output != out {

@@ -3,6 +3,7 @@
 //! values, UNORM and float formats hold linear light).
 
 use super::interface::{self, FORMAT_SRGB_BIT};
+use crate::algorithm::Stored;
 
 /// Byte layout of one pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,5 +61,17 @@ impl PixelFormat {
     /// The code of the format a shader variant is built for (`FORMAT` in the shaders).
     pub fn shader_code(self) -> u32 {
         self.layout.shader_code() | if self.srgb { FORMAT_SRGB_BIT } else { 0 }
+    }
+
+    /// How the format stores an output colour, as the shaders' `quantised()` reads it back:
+    /// what the CPU reference needs to judge it the same way.
+    pub fn stored(self) -> Stored {
+        match (self.layout, self.srgb) {
+            (PixelLayout::Rgba8 | PixelLayout::Bgra8, true) => Stored::Srgb8,
+            (PixelLayout::Rgba8 | PixelLayout::Bgra8, false) => Stored::Unorm(255),
+            (PixelLayout::A2b10g10r10, _) => Stored::Unorm(1023),
+            (PixelLayout::Rgba16Unorm, _) => Stored::Unorm(65535),
+            (PixelLayout::Rgba16Float, _) => Stored::Exact,
+        }
     }
 }
