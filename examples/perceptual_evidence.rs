@@ -12,7 +12,7 @@ use std::path::Path;
 use contrastxr::algorithm::perception::frame_report::{frame_report, FrameReport, ReportPixel};
 use contrastxr::algorithm::perception::perceptual_pixel::perceptual_over_paper;
 use contrastxr::algorithm::perceptual_settings::PerceptualSettings;
-use contrastxr::algorithm::{enhance_linear, Params};
+use contrastxr::algorithm::{enhance_linear, Params, Stored};
 use contrastxr::background_preparation::prepare;
 use contrastxr::colour;
 use contrastxr::evaluate::perception_report::{model, offline_frequencies};
@@ -168,6 +168,8 @@ fn params_at(world: f64, target: f64) -> Params {
             ..PerceptualSettings::default()
         },
         transmittance: 0.4,
+        // Outputs in linear light, not quantised: the methods themselves.
+        stored: Stored::Exact,
         ..Params::default()
     }
 }
