@@ -183,8 +183,18 @@ impl Rig {
     /// One frame: image `i`'s view enhanced against `camera` (camera frame `sequence`), with
     /// its texels prepared on the CPU or not. Does not wait for the GPU.
     fn frame(&mut self, i: usize, camera: &RgbaImage, prepared: bool, sequence: u64) {
-        let params = Params::default();
-        let texels = BlurredTexels::prepare(camera, BlurTaps::of(&params));
+        self.frame_with(i, camera, (prepared, sequence), &Params::default());
+    }
+
+    /// `frame` with `params`.
+    fn frame_with(
+        &mut self,
+        i: usize,
+        camera: &RgbaImage,
+        (prepared, sequence): (bool, u64),
+        params: &Params,
+    ) {
+        let texels = BlurredTexels::prepare(camera, BlurTaps::of(params));
         let background = BackgroundInput {
             image: camera,
             prepared: prepared.then_some(&texels),
@@ -194,17 +204,17 @@ impl Rig {
             capture: false,
             wait_for_pipelines: true,
         };
-        let views = [self.view(i, &params)];
+        let views = [self.view(i, params)];
         let source = self.path.writer != Writer::Frame;
         if source && prepared {
             self.engine.texel_sink().offer(&texels);
         }
         let out = self
             .engine
-            .pipelines_ready(&views, &params, options.wait_for_pipelines)
+            .pipelines_ready(&views, params, options.wait_for_pipelines)
             .and_then(|ready| {
                 self.engine
-                    .process(ready, &views, background, &params, None, options)
+                    .process(ready, &views, background, params, None, options)
             });
         assert!(out.is_ok(), "frame {sequence}: {:?}", out.err());
         *self.sink.lock().unwrap() = Some(self.engine.texel_sink());
@@ -224,9 +234,18 @@ impl Rig {
 /// What the offline engine makes of `display` against `camera`, with the texels prepared on
 /// the CPU (`prepared`) or by the GPU passes.
 fn expected(display: &RgbaImage, camera: &RgbaImage, prepared: bool) -> Vec<u8> {
+    expected_with(display, camera, prepared, &Params::default())
+}
+
+/// `expected` with `params`.
+fn expected_with(
+    display: &RgbaImage,
+    camera: &RgbaImage,
+    prepared: bool,
+    params: &Params,
+) -> Vec<u8> {
     let mut e = VkOffline::with_options(&OPTIONS).unwrap();
     e.set_cpu_background(prepared);
-    let params = Params::default();
     let words: Vec<u32> = display
         .pixels
         .iter()
@@ -238,7 +257,7 @@ fn expected(display: &RgbaImage, camera: &RgbaImage, prepared: bool) -> Vec<u8> 
             (REGION, FORMAT),
             camera,
             &params.camera_mapping(),
-            &params,
+            params,
         )
         .unwrap();
     assert_eq!(e.validation_errors(), 0);
@@ -353,4 +372,48 @@ fn consecutive_live_frames_each_get_their_own_background() {
             assert_ne!(distinct[a], distinct[b], "cameras {a} and {b}");
         }
     }
+}
+
+/// The perceptual method's model, uploaded into a view's buffer only when it changes, follows
+/// every change of the settings: frames alternating between two world luminances (and one
+/// repeated) each give what an engine that uploads every time gives.
+#[test]
+fn the_perceptual_model_follows_each_change_of_the_settings() {
+    use contrastxr::algorithm::Method;
+    let display = noise(REGION.0, REGION.1, 31);
+    let camera = noise(CAMERA.0, CAMERA.1, 32);
+    let at = |world: f64| {
+        let mut p = Params {
+            method: Method::Perceptual,
+            ..Params::default()
+        };
+        p.perceptual.world_nits = world;
+        p
+    };
+    let (office, outdoors) = (at(500.0), at(5000.0));
+    let want_office = expected_with(&display, &camera, true, &office);
+    let want_outdoors = expected_with(&display, &camera, true, &outdoors);
+    assert_ne!(
+        want_office, want_outdoors,
+        "the two settings give one output"
+    );
+    let mut rig = Rig::new(Path {
+        direct: false,
+        writer: Writer::Frame,
+    });
+    let frames = [&office, &outdoors, &outdoors, &office, &outdoors];
+    for (n, params) in frames.into_iter().enumerate() {
+        rig.put(&display);
+        rig.frame_with(0, &camera, (true, 1), params);
+        let want = match params.perceptual.world_nits == 500.0 {
+            true => &want_office,
+            false => &want_outdoors,
+        };
+        assert!(
+            rig.get(0) == *want,
+            "frame {n}: {} cd/m²",
+            params.perceptual.world_nits
+        );
+    }
+    rig.finish();
 }

@@ -1,7 +1,7 @@
 //! A view's `perceptual` buffer (src/gpu/core/interface.rs, PERCEPTUAL_*): the perceptual
 //! model of its frame as the `perceptual` method's shader reads it, the f32 tables of
 //! src/algorithm/perception/tables.rs laid out in words. Both backends upload these words as
-//! they are; a view's words are made again only when its model changes.
+//! they are; a view's words are made and uploaded again only when its model changes.
 
 use crate::algorithm::params::{Method, Params};
 use crate::algorithm::perception::frequency::{view_params, ViewGeometry};
@@ -45,22 +45,36 @@ pub fn model_words(model: &Model) -> Vec<u32> {
 }
 
 /// The last model's words, kept: a view's model changes only with the settings or the view.
+/// The view's buffer is uploaded again only when they change.
 #[derive(Default)]
 pub struct PerceptualWords {
     last: Option<(Model, Vec<u32>)>,
+    /// The view's buffer holds `last`'s words (its backend said so once the upload was sure).
+    held: bool,
 }
 
 impl PerceptualWords {
-    /// The words a view of `params` at `view` needs; None unless its method is `perceptual`.
-    pub fn of_view(&mut self, params: &Params, view: &ViewGeometry) -> Option<&[u32]> {
+    /// The words a view of `params` at `view` needs where its buffer does not hold them yet;
+    /// None unless its method is `perceptual`, or when the buffer already holds them.
+    pub fn to_upload(&mut self, params: &Params, view: &ViewGeometry) -> Option<&[u32]> {
         if params.method != Method::Perceptual {
             return None;
         }
         let model = Model::of_params(&view_params(params, view));
         if self.last.as_ref().map(|(m, _)| m) != Some(&model) {
             self.last = Some((model, model_words(&model)));
+            self.held = false;
         }
-        self.last.as_ref().map(|(_, w)| w.as_slice())
+        match self.held {
+            true => None,
+            false => self.last.as_ref().map(|(_, w)| w.as_slice()),
+        }
+    }
+
+    /// The view's buffer now holds the words `to_upload` returned last: the upload ran, or
+    /// was submitted to the queue.
+    pub fn set_held(&mut self) {
+        self.held = self.last.is_some();
     }
 }
 
@@ -114,16 +128,22 @@ mod tests {
             pixels_per_degree: 20.0,
         };
         let mut words = PerceptualWords::default();
-        assert!(words.of_view(&Params::default(), &view).is_none());
+        assert!(words.to_upload(&Params::default(), &view).is_none());
         let mut params = Params {
             method: Method::Perceptual,
             ..Params::default()
         };
-        let first = words.of_view(&params, &view).unwrap().to_vec();
+        let first = words.to_upload(&params, &view).unwrap().to_vec();
+        // Not yet said to be held (a recording that was never submitted): again.
+        assert_eq!(words.to_upload(&params, &view).unwrap(), first);
+        words.set_held();
+        assert!(words.to_upload(&params, &view).is_none());
         params.perceptual.world_nits = 5000.0;
-        let second = words.of_view(&params, &view).unwrap().to_vec();
+        let second = words.to_upload(&params, &view).unwrap().to_vec();
         assert_ne!(first, second);
         let at = PERCEPTUAL_AT_WORLD as usize;
         assert_eq!(f32::from_bits(second[at]), 2000.0);
+        words.set_held();
+        assert!(words.to_upload(&params, &view).is_none());
     }
 }

@@ -83,7 +83,8 @@ impl GlFrameRunner {
     }
 
     /// Uploads the view's perceptual model (src/gpu/core/perceptual_words.rs) into slot `k`'s
-    /// buffer where its method reads one (the buffer made on first use).
+    /// buffer where its method reads one and the buffer does not hold it yet (the buffer made
+    /// on first use).
     pub(super) fn upload_model(
         &mut self,
         k: usize,
@@ -99,7 +100,7 @@ impl GlFrameRunner {
             camera_width: bg_size.0,
             pixels_per_degree: v.pixels_per_degree,
         };
-        let Some(words) = slot.perceptual_words.of_view(params, &geometry) else {
+        let Some(words) = slot.perceptual_words.to_upload(params, &geometry) else {
             return Ok(());
         };
         let bytes = std::mem::size_of_val(words);
@@ -111,6 +112,7 @@ impl GlFrameRunner {
         unsafe {
             (g.named_buffer_sub_data)(slot.perceptual, 0, bytes as isize, words.as_ptr().cast())
         };
+        slot.perceptual_words.set_held();
         Ok(())
     }
 

@@ -408,6 +408,11 @@ impl FrameRunner {
         }
         let recorded = self.record(items, params, overlay, &staging);
         let submitted = recorded.and_then(|_| self.submit());
+        if submitted.is_ok() {
+            items
+                .iter()
+                .for_each(|i| self.views[&i.key].target.model_submitted());
+        }
         let result = submitted.and_then(|_| {
             if capture {
                 self.wait_idle()?;

@@ -245,8 +245,9 @@ impl Recorder {
     }
 
     /// Records the upload of the view's perceptual model (src/gpu/core/perceptual_words.rs)
-    /// where its method reads one, ordered after earlier passes' reads of it and before the
-    /// enhancement's.
+    /// where its method reads one and the view's buffer does not hold it yet (the caller says
+    /// when the submission made it held: `ViewTarget::model_submitted`), ordered after earlier
+    /// passes' reads of it and before the enhancement's.
     fn record_model(
         &self,
         gpu: &GpuDevice,
@@ -265,7 +266,7 @@ impl Recorder {
             .perceptual_words
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
-        let Some(words) = words.of_view(params, &geometry) else {
+        let Some(words) = words.to_upload(params, &geometry) else {
             return;
         };
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_ne_bytes()).collect();

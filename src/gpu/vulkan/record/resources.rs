@@ -133,6 +133,15 @@ pub fn rows_aligned(width: u32, format: PixelFormat) -> bool {
 }
 
 impl ViewTarget {
+    /// The frame's commands that recorded this view's enhancement were submitted: its
+    /// `perceptual` buffer holds the model they uploaded, and later frames need not again.
+    pub fn model_submitted(&self) {
+        self.perceptual_words
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .set_held();
+    }
+
     pub fn shape(&self) -> ViewShape {
         ViewShape {
             format: self.format,
