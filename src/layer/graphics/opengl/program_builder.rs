@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 /// How long the layer waits for a build before it goes on without it.
 const LIMIT: Duration = Duration::from_secs(60);
 
-/// The nice value of a build thread: below the app's threads and its driver's.
+/// The nice value added to a build thread: below the app's threads and its driver's.
 const BUILD_NICENESS: i32 = 10;
 
 /// A build of the programs of one view shape.
