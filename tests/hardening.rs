@@ -877,8 +877,14 @@ fn hundred_session_cycles_leak_nothing() {
         "resident memory grew: {sessions:?}"
     );
     assert!(largest_step < 8192, "resident memory jumped: {sessions:?}");
+    // A sample may count a file held for a moment (the log's writer thread keeps the log file
+    // open until 200 ms after its last line, src/layer/log_file.rs; seen: 12 once among 11s).
+    // A leak leaves every later sample higher; a file held for a moment does not.
+    let first = sessions[0].1;
+    let late = sessions[90..].iter().map(|s| s.1).min();
+    assert_eq!(late, Some(first), "file descriptors leaked: {sessions:?}");
     assert!(
-        sessions.iter().all(|s| s.1 == sessions[0].1),
+        sessions.iter().all(|s| s.1 <= first + 1),
         "file descriptors: {sessions:?}"
     );
 }
