@@ -298,7 +298,7 @@ fn enhance_linear(display: Colours, bg: Background) -> Perceived {
     let scaled = Enhanced(cap_luminance(display, clip(scaled_to_linear(s))), changed);
     if (METHOD_PERCEPTUAL) {
         // The paper's change spent by perception (shaders/methods/, `method_perceptual`).
-        return method_perceptual(display, bg, scaled);
+        return method_perceptual(display, d, bg, scaled);
     }
     return Perceived(scaled, vec4<u32>(0u));
 }

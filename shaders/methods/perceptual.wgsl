@@ -14,31 +14,54 @@ const BUDGET_SLACK: f32 = 1e-6;
 const BISECTION_STEPS: u32 = 8u;
 const LOG10_E: f32 = 0.4342944819;
 
-fn model(at: u32) -> f32 {
-    return perceptual[at / 4u][at % 4u];
+// The view's model, the header of `perceptual` (PERCEPTUAL_AT_*), read once per invocation:
+// constant indices into the fixed-size table are proved in range, so no load is checked or
+// repeated.
+struct Model {
+    // Linear RGB -> LMS, by rows, and RGB -> luminance.
+    lms_0: vec3<f32>,
+    lms_1: vec3<f32>,
+    lms_2: vec3<f32>,
+    luminance: vec3<f32>,
+    half_peak: f32,
+    world: f32,
+    log_min_luminance: f32,
+    goal: f32,
+    frequencies: u32,
+    log_y_first: f32,
+    entries_per_log_y: f32,
 }
 
-// A row of one of the header's matrices times each pixel's colour.
-fn model_row(at: u32, c: Colours) -> vec4<f32> {
-    return model(at) * c[0] + model(at + 1u) * c[1] + model(at + 2u) * c[2];
+const_assert PERCEPTUAL_AT_RGB_TO_LMS == 0u && PERCEPTUAL_AT_RGB_TO_LUMINANCE == 9u;
+const_assert PERCEPTUAL_AT_HALF_PEAK == 12u && PERCEPTUAL_AT_WORLD == 13u && PERCEPTUAL_AT_LOG_MIN_LUMINANCE == 14u;
+const_assert PERCEPTUAL_AT_TARGET == 15u && PERCEPTUAL_AT_FREQUENCIES == 16u;
+const_assert PERCEPTUAL_AT_LOG_Y_FIRST == 17u && PERCEPTUAL_AT_ENTRIES_PER_LOG_Y == 18u;
+
+fn read_model() -> Model {
+    let h0 = perceptual[0];
+    let h1 = perceptual[1];
+    let h2 = perceptual[2];
+    let h3 = perceptual[3];
+    let h4 = perceptual[4];
+    return Model(h0.xyz, vec3<f32>(h0.w, h1.xy), vec3<f32>(h1.zw, h2.x), h2.yzw, h3.x, h3.y, h3.z, h3.w, u32(h4.x), h4.y, h4.z);
 }
 
-fn cone_responses(c: Colours) -> Colours {
-    let m = PERCEPTUAL_AT_RGB_TO_LMS;
-    return Colours(model_row(m, c), model_row(m + 3u, c), model_row(m + 6u, c));
+fn cone_responses(m: Model, c: Colours) -> Colours {
+    return Colours(row_times(m.lms_0, c), row_times(m.lms_1, c), row_times(m.lms_2, c));
 }
 
 // The world's light behind four pixels as it reaches the eye (t W): its cone responses and
-// luminance, the same for every candidate colour.
+// luminance, the same for every candidate colour, and the model.
 struct World {
     lms: Colours,
     luminance: vec4<f32>,
+    model: Model,
 }
 
-fn world_of(background: Colours) -> World {
-    let tw = model(PERCEPTUAL_AT_WORLD);
-    let lms = cone_responses(background);
-    return World(Colours(tw * lms[0], tw * lms[1], tw * lms[2]), tw * model_row(PERCEPTUAL_AT_RGB_TO_LUMINANCE, background));
+fn world_of(m: Model, background: Colours) -> World {
+    let tw = m.world;
+    let lms = cone_responses(m, background);
+    return World(Colours(tw * lms[0], tw * lms[1], tw * lms[2]), tw * row_times(m.luminance, background), m);
 }
 
 // The three channels' sensitivities of frequency f at table position i + t (linear between
@@ -50,7 +73,9 @@ struct Sensitivities {
 }
 
 fn entry(f: u32, i: u32, t: f32) -> vec3<f32> {
-    let at = PERCEPTUAL_HEADER_WORDS / 4u + f * PERCEPTUAL_TABLE_LEN + i;
+    // In range already (f < PERCEPTUAL_MAX_FREQUENCIES, i < PERCEPTUAL_TABLE_LEN - 1); the
+    // min lets the compiler drop the bounds check.
+    let at = min(PERCEPTUAL_HEADER_WORDS / 4u + f * PERCEPTUAL_TABLE_LEN + i, PERCEPTUAL_WORDS / 4u - 2u);
     let lo = perceptual[at].xyz;
     return lo + t * (perceptual[at + 1u].xyz - lo);
 }
@@ -76,11 +101,12 @@ struct Pattern {
 }
 
 fn pattern(display: Colours, world: World) -> Pattern {
-    let half_peak = model(PERCEPTUAL_AT_HALF_PEAK);
-    let lms = cone_responses(display);
+    let m = world.model;
+    let half_peak = m.half_peak;
+    let lms = cone_responses(m, display);
     let amp = Colours(half_peak * lms[0], half_peak * lms[1], half_peak * lms[2]);
     let mean = world.lms + amp;
-    let y = world.luminance + half_peak * model_row(PERCEPTUAL_AT_RGB_TO_LUMINANCE, display);
+    let y = world.luminance + half_peak * row_times(m.luminance, display);
     let k0 = ratio(amp[0], mean[0]);
     let k1 = ratio(amp[1], mean[1]);
     let k2 = ratio(amp[2], mean[2]);
@@ -90,11 +116,11 @@ fn pattern(display: Colours, world: World) -> Pattern {
 // c' of four patterns: c less its threshold, by castleCSF at the pattern's mean luminance,
 // averaged over the frame's frequencies. Only where `wanted`: where no pixel wants it, 0
 // without the tables (a caller that knows c' cannot matter there, from c, skips the lookups).
-fn perceived_of(p: Pattern, wanted: vec4<bool>) -> vec4<f32> {
+fn perceived_of(p: Pattern, m: Model, wanted: vec4<bool>) -> vec4<f32> {
     if (!any(wanted)) {
         return vec4<f32>(0.0);
     }
-    let log_y = max(LOG10_E * log(max(p.luminance, vec4<f32>(1e-30))), vec4<f32>(model(PERCEPTUAL_AT_LOG_MIN_LUMINANCE)));
+    let log_y = max(LOG10_E * log(max(p.luminance, vec4<f32>(1e-30))), vec4<f32>(m.log_min_luminance));
     // The opponent channels (castleCSF's K), each against the achromatic mean.
     let amp = p.amp;
     let m1 = abs(p.mean[0] + p.mean[1]);
@@ -103,10 +129,10 @@ fn perceived_of(p: Pattern, wanted: vec4<bool>) -> vec4<f32> {
     let d2 = abs(amp[0] - 2.3112 * amp[1]) * inv_m1;
     let d3 = abs(50.9875 * amp[2] - amp[0] - amp[1]) * inv_m1;
     let last = f32(PERCEPTUAL_TABLE_LEN - 1u);
-    let x = clamp((log_y - model(PERCEPTUAL_AT_LOG_Y_FIRST)) * model(PERCEPTUAL_AT_ENTRIES_PER_LOG_Y), vec4<f32>(0.0), vec4<f32>(last));
+    let x = clamp((log_y - m.log_y_first) * m.entries_per_log_y, vec4<f32>(0.0), vec4<f32>(last));
     let i = min(vec4<u32>(x), vec4<u32>(PERCEPTUAL_TABLE_LEN - 2u));
     let t = x - vec4<f32>(i);
-    let n = u32(model(PERCEPTUAL_AT_FREQUENCIES));
+    let n = m.frequencies;
     var sum = vec4<f32>(0.0);
     for (var f = 0u; f < n; f++) {
         let s = sensitivities(f, i, t);
@@ -124,7 +150,7 @@ fn perceived_of(p: Pattern, wanted: vec4<bool>) -> vec4<f32> {
 fn perceived_from(display: Colours, world: World, at_least: vec4<f32>) -> vec4<f32> {
     let p = pattern(display, world);
     let may = p.c >= at_least;
-    return select(vec4<f32>(-1.0), perceived_of(p, may), may);
+    return select(vec4<f32>(-1.0), perceived_of(p, world.model, may), may);
 }
 
 // The 18 directions, unit vectors in CIELAB (L*, a*, b*): the 6 axes, the 8 diagonals of the
@@ -165,11 +191,10 @@ fn keep_better(best: Best, colour: Colours, scaled: Colours, change: vec4<f32>, 
     return Best(pick(best.colour, colour, better), pick(best.scaled, scaled, better), select(best.change, change, better), select(best.perceived, perceived, better));
 }
 
-fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perceived {
-    let world = world_of(bg.linear);
-    let goal = model(PERCEPTUAL_AT_TARGET);
+fn method_perceptual(display: Colours, d: Colours, bg: Background, paper: Enhanced) -> Perceived {
+    let world = world_of(read_model(), bg.linear);
+    let goal = world.model.goal;
     let before = perceived_from(display, world, vec4<f32>(goal));
-    let d = linear_to_scaled(display);
     let paper_scaled = linear_to_scaled(paper.linear);
     // The paper's change; none where the paper leaves the pixel.
     let budget = select(vec4<f32>(0.0), delta_e(d, paper_scaled), paper.changed);
@@ -200,7 +225,7 @@ fn method_perceptual(display: Colours, bg: Background, paper: Enhanced) -> Perce
         }
         let valid = change <= budget + BUDGET_SLACK;
         let wanted = may & valid;
-        let perceived = select(vec4<f32>(-1.0), perceived_of(p, wanted), wanted);
+        let perceived = select(vec4<f32>(-1.0), perceived_of(p, world.model, wanted), wanted);
         best = keep_better(best, colour, scaled, change, perceived, valid);
     }
     let reached = best.perceived >= vec4<f32>(goal);
