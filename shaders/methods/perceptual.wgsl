@@ -73,9 +73,7 @@ struct Sensitivities {
 }
 
 fn entry(f: u32, i: u32, t: f32) -> vec3<f32> {
-    // In range already (f < PERCEPTUAL_MAX_FREQUENCIES, i < PERCEPTUAL_TABLE_LEN - 1); the
-    // min lets the compiler drop the bounds check.
-    let at = min(PERCEPTUAL_HEADER_WORDS / 4u + f * PERCEPTUAL_TABLE_LEN + i, PERCEPTUAL_WORDS / 4u - 2u);
+    let at = PERCEPTUAL_HEADER_WORDS / 4u + f * PERCEPTUAL_TABLE_LEN + i;
     let lo = perceptual[at].xyz;
     return lo + t * (perceptual[at + 1u].xyz - lo);
 }

@@ -141,8 +141,8 @@ pub const BINDINGS: [Binding; 8] = [
         number: BINDING_PERCEPTUAL,
         name: "perceptual",
         kind: BindingKind::StorageBuffer,
-        // Fixed-size (the buffer is always PERCEPTUAL_WORDS words): naga then proves the header's
-        // constant indices in range and checks nothing at run time.
+        // Fixed-size (the buffer is always PERCEPTUAL_WORDS words), so that naga proves the
+        // header's constant indices in range: a run-time-sized array's are checked at run time.
         wgsl: |_, _| always("<storage, read> perceptual: array<vec4<f32>, PERCEPTUAL_WORDS / 4u>"),
     },
 ];
