@@ -70,7 +70,7 @@ pub fn method_wgsl(code: u32) -> String {
         s += &read(by_code(paper_code()).wgsl);
     }
     if !perceptual {
-        s += "fn method_perceptual(display: Colours, d: Colours, bg: Background, paper: Enhanced) -> Perceived {\n    return Perceived(paper, vec4<u32>(0u));\n}\n";
+        s += "fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived {\n    return Perceived(Enhanced(display, vec4<bool>(false)), vec4<u32>(0u));\n}\n";
     }
     if linear {
         s += "fn method_scaled(s: Step) -> Colours {\n    return s.d;\n}\n";

@@ -293,14 +293,19 @@ fn enhance_linear(display: Colours, bg: Background) -> Perceived {
         return Perceived(Enhanced(cap_luminance(display, clip(out)), vec4<bool>(true)), vec4<u32>(0u));
     }
     let d = linear_to_scaled(display);
+    if (METHOD_PERCEPTUAL) {
+        // The paper's change spent by perception (shaders/methods/, `method_perceptual`), which
+        // runs the paper's method (`scaled_output`) only where it needs its budget.
+        return method_perceptual(display, d, bg);
+    }
+    return Perceived(scaled_output(display, d, b), vec4<u32>(0u));
+}
+
+// The scaled method's output for display pixels whose scaled colour is `d`, over B `b`.
+fn scaled_output(display: Colours, d: Colours, b: Colours) -> Enhanced {
     let s = enhance_scaled(d, b);
     let changed = (s[0] != d[0]) | (s[1] != d[1]) | (s[2] != d[2]);
-    let scaled = Enhanced(cap_luminance(display, clip(scaled_to_linear(s))), changed);
-    if (METHOD_PERCEPTUAL) {
-        // The paper's change spent by perception (shaders/methods/, `method_perceptual`).
-        return method_perceptual(display, d, bg, scaled);
-    }
-    return Perceived(scaled, vec4<u32>(0u));
+    return Enhanced(cap_luminance(display, clip(scaled_to_linear(s))), changed);
 }
 
 // Unscaled CIE76 Delta E*ab between scaled-space colours.

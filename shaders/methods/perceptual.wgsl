@@ -1,6 +1,6 @@
 // `perceptual` (docs/algorithm.md, The perceptual method; beyond the paper): the paper's
 // colour change r (its output, `paper`, from the paper's method_scaled, appended after this
-// file) spent where the eye gains most. A pixel already seen at the target contrast is left
+// file, run only for groups of pixels not all at the target) spent where the eye gains most. A pixel already seen at the target contrast is left
 // alone; otherwise the most visible of the paper's colour and the colours r away in 18 fixed
 // CIELAB directions (clipped; dropped if clipping lengthened the change), then back toward the
 // display colour to the least change that reaches the target as the image stores it (8
@@ -189,16 +189,21 @@ fn keep_better(best: Best, colour: Colours, scaled: Colours, change: vec4<f32>, 
     return Best(pick(best.colour, colour, better), pick(best.scaled, scaled, better), select(best.change, change, better), select(best.perceived, perceived, better));
 }
 
-fn method_perceptual(display: Colours, d: Colours, bg: Background, paper: Enhanced) -> Perceived {
+fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived {
     let world = world_of(read_model(), bg.linear);
     let goal = world.model.goal;
     let before = perceived_from(display, world, vec4<f32>(goal));
+    let unchanged = Enhanced(display, vec4<bool>(false));
+    if (all(before >= vec4<f32>(goal))) {
+        // Seen at the target already: the paper's budget is not needed.
+        return Perceived(unchanged, vec4<u32>(PERCEIVED_LEFT_ALONE));
+    }
+    let paper = scaled_output(display, d, bg.scaled);
     let paper_scaled = linear_to_scaled(paper.linear);
     // The paper's change; none where the paper leaves the pixel.
     let budget = select(vec4<f32>(0.0), delta_e(d, paper_scaled), paper.changed);
     let alone = before >= vec4<f32>(goal);
     let none = !alone & (budget == vec4<f32>(0.0));
-    let unchanged = Enhanced(display, vec4<bool>(false));
     let kind = select(select(vec4<u32>(0u), vec4<u32>(PERCEIVED_OUT_OF_REACH), none), vec4<u32>(PERCEIVED_LEFT_ALONE), alone);
     if (all(alone | none)) {
         return Perceived(unchanged, kind);

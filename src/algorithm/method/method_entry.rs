@@ -251,7 +251,7 @@ mod tests {
                     "fn method_linear(display: Colours, bg: Background) -> Colours"
                 }
                 Reference::Perceptual(_) => {
-                    "fn method_perceptual(display: Colours, d: Colours, bg: Background, paper: Enhanced) -> Perceived"
+                    "fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived"
                 }
             };
             assert!(wgsl.contains(wanted), "{} lacks `{wanted}`", e.wgsl);

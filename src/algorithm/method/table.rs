@@ -26,7 +26,7 @@
 //   and the paper method's output in linear light, returning the clipped output;
 // - `wgsl`: its shader file, which defines `method_scaled(s: Step) -> Colours` (Scaled) or
 //   `method_linear(display: Colours, bg: Background) -> Colours` (Linear) or
-//   `method_perceptual(display: Colours, d: Colours, bg: Background, paper: Enhanced) -> Perceived`
+//   `method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived`
 //   (Perceptual, which runs after the paper's `method_scaled`), see shaders/enhance.wgsl;
 // - `settings`: the config keys it reads (beyond the shared background preparation);
 // - `push`: the push-constant fields (src/gpu/core/interface.rs, PARAMS) its WGSL reads;
