@@ -1,12 +1,12 @@
 // `perceptual` (docs/algorithm.md, The perceptual method; beyond the paper): the paper's
 // colour change r (its output, `paper`, from the paper's method_scaled, appended after this
-// file, run only for groups of pixels not all at the target) spent where the eye gains most. A pixel already seen at the target contrast is left
-// alone; otherwise the most visible of the paper's colour and the colours r away in 18 fixed
-// CIELAB directions (clipped; dropped if clipping lengthened the change), then back toward the
-// display colour to the least change that reaches the target as the image stores it (8
-// halvings). c' is the model's perceived contrast, evaluated from the view's tables in
-// `perceptual` (PERCEPTUAL_* in src/gpu/core/interface.rs), as
-// src/algorithm/perception/tables.rs does in f32.
+// file, run only for groups of pixels not all at the target) spent where the eye gains most.
+// A pixel already seen at the target contrast is left alone; otherwise the most visible of
+// the paper's colour and the colours r away in 18 fixed CIELAB directions (clipped; dropped if
+// clipping lengthened the change), then back toward the display colour to the least change
+// that reaches the target as the image stores it (8 halvings). c' is the model's perceived
+// contrast, evaluated from the view's tables in `perceptual` (PERCEPTUAL_* in
+// src/gpu/core/interface.rs), as src/algorithm/perception/tables.rs does in f32.
 
 // How far a candidate's CIELAB change may pass r and still count as within it (the CPU
 // reference's BUDGET_SLACK).
@@ -194,7 +194,8 @@ fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived 
     let goal = world.model.goal;
     let before = perceived_from(display, world, vec4<f32>(goal));
     let unchanged = Enhanced(display, vec4<bool>(false));
-    if (all(before >= vec4<f32>(goal))) {
+    let alone = before >= vec4<f32>(goal);
+    if (all(alone)) {
         // Seen at the target already: the paper's budget is not needed.
         return Perceived(unchanged, vec4<u32>(PERCEIVED_LEFT_ALONE));
     }
@@ -202,7 +203,6 @@ fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived 
     let paper_scaled = linear_to_scaled(paper.linear);
     // The paper's change; none where the paper leaves the pixel.
     let budget = select(vec4<f32>(0.0), delta_e(d, paper_scaled), paper.changed);
-    let alone = before >= vec4<f32>(goal);
     let none = !alone & (budget == vec4<f32>(0.0));
     let kind = select(select(vec4<u32>(0u), vec4<u32>(PERCEIVED_OUT_OF_REACH), none), vec4<u32>(PERCEIVED_LEFT_ALONE), alone);
     if (all(alone | none)) {
