@@ -33,15 +33,14 @@ impl Stored {
 
     /// Linear `c` (each channel in [0, 1]) as it reads back once stored.
     pub fn read_back(self, c: DVec3) -> DVec3 {
-        let Some(codes) = self.codes(c) else {
-            return c;
-        };
-        let rounded = (codes + 0.5).floor();
         match self {
             Stored::Srgb8 => {
-                DVec3::from_array(rounded.to_array().map(|v| colour::code_to_linear(v as u8)))
+                DVec3::from_array(colour::linear_to_srgb8(c).map(colour::code_to_linear))
             }
-            Stored::Unorm(levels) => rounded / f64::from(levels),
+            Stored::Unorm(levels) => {
+                let levels = f64::from(levels);
+                (levels * c.clamp(DVec3::ZERO, DVec3::ONE) + 0.5).floor() / levels
+            }
             Stored::Exact => c,
         }
     }
