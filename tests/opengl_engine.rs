@@ -1437,8 +1437,6 @@ fn debug_output_child() {
 /// repeated) on one engine each give what a new engine gives.
 #[test]
 fn the_perceptual_model_follows_each_change_of_the_settings() {
-    let camera = noise(64, 40, 41);
-    let display = noise(40, 24, 42);
     let at = |world: f64| {
         let mut p = Params {
             method: contrastxr::algorithm::Method::Perceptual,
@@ -1448,41 +1446,29 @@ fn the_perceptual_model_follows_each_change_of_the_settings() {
         p
     };
     let (office, outdoors) = (at(500.0), at(5000.0));
-    let fresh = |params: &Params| {
-        let out = context()
-            .enhance_mapped(&display, &camera, &params.camera_mapping(), params)
-            .unwrap();
-        bottom_first(&out)
+    // The same view and camera each time (built_srgb_view's seeds), enhanced by `gl`.
+    let frame = |gl: &mut GlOffline, params: &Params| {
+        let (view, _) = built_srgb_view(gl, (41, 42), params);
+        gl.read_texture(view.texture, SRGB8_ALPHA8, (40, 24))
+            .unwrap()
     };
-    let (want_office, want_outdoors) = (fresh(&office), fresh(&outdoors));
+    let want_office = frame(&mut context(), &office);
+    let want_outdoors = frame(&mut context(), &outdoors);
     assert_ne!(
         want_office, want_outdoors,
         "the two settings give one output"
     );
     let mut gl = context();
-    gl.set_camera(&camera, &office).unwrap();
-    let bytes = bottom_first(&display);
     for (n, params) in [&office, &outdoors, &outdoors, &office, &outdoors]
         .into_iter()
         .enumerate()
     {
-        let texture = gl.create_texture(SRGB8_ALPHA8, (40, 24), &bytes).unwrap();
-        let view = GlView {
-            texture,
-            target: GlTarget::Texture2D,
-            internal_format: SRGB8_ALPHA8,
-            rect: (0, 0, 40, 24),
-            mapping: params.camera_mapping(),
-            pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
-        };
-        gl.enhance_views(&[view], params).unwrap();
-        let out = gl.read_texture(texture, SRGB8_ALPHA8, (40, 24)).unwrap();
         let want = match params.perceptual.world_nits == 500.0 {
             true => &want_office,
             false => &want_outdoors,
         };
         assert!(
-            out == *want,
+            frame(&mut gl, params) == *want,
             "frame {n}: {} cd/m²",
             params.perceptual.world_nits
         );
