@@ -153,8 +153,8 @@ fn main() {
         let source = format!(
             "{}\n{}{body}{general}{}",
             prefix(v.pixels.access, format),
-            specialise((paper_code(), 0, format), false),
-            method_wgsl(paper_code())
+            specialise((v.method, 0, format), false),
+            method_wgsl(v.method)
         );
         let parsed = write(&file, "enhance", &source, "classify");
         let id = table.add(&file, "classify", false, v.pixels.in_place());

@@ -37,6 +37,16 @@ pub const METHODS: &[BuildMethod] = with_methods!(build_methods);
 
 /// The code of the method the single passes and the background mode are built with (their
 /// METHOD is never read; `paper`'s).
+/// The code of the perceptual method, whose own `classify` variants skip the tiles it leaves
+/// alone.
+pub fn perceptual_code() -> u32 {
+    METHODS
+        .iter()
+        .find(|m| m.space == "Perceptual")
+        .expect("perceptual")
+        .code
+}
+
 pub fn paper_code() -> u32 {
     METHODS
         .iter()

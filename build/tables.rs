@@ -76,8 +76,8 @@ impl Table {
         s += "/// (method, mode, format, access, extras, shared fetches, id) of each `enhance`\n/// variant.\n";
         s += "pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[\n";
         s += &enhance_rows(&self.enhance);
-        s += "];\n/// (format, access, id) of each `classify` variant.\n";
-        s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, usize)] = &[\n";
+        s += "];\n/// (format, access, method, id) of each `classify` variant.\n";
+        s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n";
         s += &classify_rows(&self.classify);
         s + "];\n"
     }
@@ -146,7 +146,7 @@ impl GlTable {
             enhance_rows(&self.enhance)
         );
         s += &format!(
-            "/// (format, access, id) of each `classify` GLSL variant.\npub static GL_CLASSIFY_VARIANTS: &[(u32, u32, usize)] = &[\n{}];\n",
+            "/// (format, access, method, id) of each `classify` GLSL variant.\npub static GL_CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n{}];\n",
             classify_rows(&self.classify)
         );
         s
@@ -166,10 +166,13 @@ fn enhance_rows(variants: &[(Enhance, usize)]) -> String {
         .collect()
 }
 
-/// The rows of a `classify` table: (format, access, id).
+/// The rows of a `classify` table: (format, access, method, id).
 fn classify_rows(variants: &[(Classify, usize)]) -> String {
     variants
         .iter()
-        .map(|(v, id)| format!("    ({}, {}, {id}),\n", v.pixels.format, v.pixels.access))
+        .map(|(v, id)| {
+            let (f, a, m) = (v.pixels.format, v.pixels.access, v.method);
+            format!("    ({f}, {a}, {m}, {id}),\n")
+        })
         .collect()
 }

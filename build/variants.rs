@@ -10,7 +10,7 @@
 //! switch: a variant without them for when both are off, the default.
 
 use crate::interface::*;
-use crate::methods::{paper_code, METHODS};
+use crate::methods::{paper_code, perceptual_code, METHODS};
 
 /// A pixel access (ACCESS_*) and FORMAT code a per-pixel pass is built for.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -125,23 +125,38 @@ pub fn enhance_variants() -> Vec<Enhance> {
     pixel_accesses().into_iter().flat_map(enhance_of).collect()
 }
 
-/// One `classify` variant (built with the paper's method, mode 0, extras off).
+/// One `classify` variant (mode 0, extras off): built with the paper's method, which lists
+/// every tile with content, or the perceptual method's, which lists only tiles with a pixel
+/// below its target (it leaves the others as they are).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 pub struct Classify {
     pub pixels: PixelAccess,
+    /// The method's code: paper_code() or perceptual_code().
+    pub method: u32,
 }
 
 impl Classify {
     /// The SPIR-V (and GLSL) file's name, without its extension.
     pub fn file(&self) -> String {
-        format!("classify_f{}_a{}", self.pixels.format, self.pixels.access)
+        let own = if self.method == paper_code() {
+            ""
+        } else {
+            "_perceptual"
+        };
+        format!(
+            "classify_f{}_a{}{own}",
+            self.pixels.format, self.pixels.access
+        )
     }
 }
 
-/// Every `classify` variant, one per pixel access, in the table's order.
+/// Every `classify` variant, two per pixel access (the paper's, the perceptual method's), in
+/// the table's order.
 pub fn classify_variants() -> Vec<Classify> {
     pixel_accesses()
         .into_iter()
-        .map(|pixels| Classify { pixels })
+        .flat_map(|pixels| {
+            [paper_code(), perceptual_code()].map(|method| Classify { pixels, method })
+        })
         .collect()
 }

@@ -71,6 +71,7 @@ pub fn method_wgsl(code: u32) -> String {
     }
     if !perceptual {
         s += "fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived {\n    return Perceived(Enhanced(display, vec4<bool>(false)), vec4<u32>(0u));\n}\n";
+        s += "fn perceptual_may_change(display: Colours, bg: Background) -> vec4<bool> {\n    return vec4<bool>(true);\n}\n";
     }
     if linear {
         s += "fn method_scaled(s: Step) -> Colours {\n    return s.d;\n}\n";

@@ -406,6 +406,16 @@ fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id
     }
 }
 
+// Of pixels x..x+3 of row y (words w), those the method may change: all, but in the perceptual
+// method's own `classify` variant (built for its enhance and split modes) only those below its
+// target, so that the tiles it leaves alone are not listed at all.
+fn may_change(x: u32, y: u32, w: Words) -> vec4<bool> {
+    if (!METHOD_PERCEPTUAL) {
+        return vec4<bool>(true);
+    }
+    return perceptual_may_change(decode_stored(stored_colours(w)), sampled_background(x, y));
+}
+
 // Whether a tile needs the enhancement pass in the current mode.
 fn tile_wanted(tx: u32, ty: u32) -> bool {
     let x0 = tx * TILE;
@@ -425,21 +435,46 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
     }
     // Row by row, stopping at the first row with a foreground pixel (a full frame reads one
     // row per tile). Pixels outside the region or left of the split divider are masked.
-    var found = false;
-    for (var dy = 0u; dy < TILE && !found; dy++) {
-        let y = y0 + dy;
-        if (y >= pc.region_size.y) {
+    var first_row = TILE;
+    for (var dy = 0u; dy < TILE && first_row == TILE; dy++) {
+        if (y0 + dy >= pc.region_size.y) {
             break;
         }
         for (var c = 0u; c < TILE; c += 4u) {
-            let x = x0 + c;
-            let xs = vec4<u32>(x) + vec4<u32>(0u, 1u, 2u, 3u);
-            let w = load_group(select(0u, y * width + x, x < width));
-            let inside = (xs < vec4<u32>(width)) & (xs >= vec4<u32>(first_x));
-            found = found || any(inside & !see_through(w));
+            if (any(foreground(x0 + c, y0 + dy, first_x, false))) {
+                first_row = dy;
+            }
         }
     }
+    if (!METHOD_PERCEPTUAL) {
+        return first_row < TILE;
+    }
+    // The perceptual method's own variant: from that row on, four pixels at a time, until one
+    // it may change. A tile without foreground runs no group of it (a CPU driver, whose SIMD
+    // lanes are neighbouring tiles, may still run one under an empty mask).
+    var found = false;
+    for (var g = first_row * (TILE / 4u); g < TILE * (TILE / 4u) && !found; g++) {
+        let y = y0 + g / (TILE / 4u);
+        if (y >= pc.region_size.y) {
+            break;
+        }
+        found = any(foreground(x0 + (g % (TILE / 4u)) * 4u, y, first_x, true));
+    }
     return found;
+}
+
+// Of pixels x..x+3 of row y: those in the region, at or right of first_x and foreground, and,
+// where `changing`, of those the ones the method may change.
+fn foreground(x: u32, y: u32, first_x: u32, changing: bool) -> vec4<bool> {
+    let width = pc.region_size.x;
+    let xs = vec4<u32>(x) + vec4<u32>(0u, 1u, 2u, 3u);
+    let w = load_group(select(0u, y * width + x, x < width));
+    let inside = (xs < vec4<u32>(width)) & (xs >= vec4<u32>(first_x));
+    var wanted = inside & !see_through(w);
+    if (changing) {
+        wanted = wanted & may_change(x, y, w);
+    }
+    return wanted;
 }
 
 // One invocation per tile: lists the tiles with any foreground pixel, a row of tiles per

@@ -266,8 +266,8 @@ fn opengl_gets_every_variant_but_the_bgra_ones_and_the_shared_fetches() {
             (v.pixels.access == ACCESS_IN_PLACE).then_some(v.pixels.format)
         );
     }
-    // classify: one per pixel access.
-    assert_eq!(classify_variants().len(), pixel_accesses().len());
+    // classify: two per pixel access, the paper's and the perceptual method's.
+    assert_eq!(classify_variants().len(), 2 * pixel_accesses().len());
 }
 
 // --- The interface checks ---
@@ -593,7 +593,7 @@ fn the_table_lists_modules_singles_and_variants_with_their_ids() {
     };
     let id = t.add(&v.file(), "enhance", false, pixels.in_place());
     t.enhance.push((v, id));
-    let c = variants::Classify { pixels };
+    let c = variants::Classify { pixels, method: 0 };
     let id = t.add(&c.file(), "classify", false, pixels.in_place());
     t.classify.push((c, id));
     assert_eq!(
@@ -615,9 +615,9 @@ pub static DECODE_BLUR: &[usize] = &[1];
 pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[
     (0, 2, 0, 2, true, false, 2),
 ];
-/// (format, access, id) of each `classify` variant.
-pub static CLASSIFY_VARIANTS: &[(u32, u32, usize)] = &[
-    (0, 2, 3),
+/// (format, access, method, id) of each `classify` variant.
+pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[
+    (0, 2, 0, 3),
 ];
 "
     );

@@ -189,6 +189,14 @@ fn keep_better(best: Best, colour: Colours, scaled: Colours, change: vec4<f32>, 
     return Best(pick(best.colour, colour, better), pick(best.scaled, scaled, better), select(best.change, change, better), select(best.perceived, perceived, better));
 }
 
+// The pixels the method may change: those not seen at the target already (`alone` below, to
+// the bit: the same functions of the same values).
+fn perceptual_may_change(display: Colours, bg: Background) -> vec4<bool> {
+    let world = world_of(read_model(), bg.linear);
+    let goal = world.model.goal;
+    return !(perceived_from(display, world, vec4<f32>(goal)) >= vec4<f32>(goal));
+}
+
 fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived {
     let world = world_of(read_model(), bg.linear);
     let goal = world.model.goal;

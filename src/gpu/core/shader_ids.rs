@@ -75,12 +75,13 @@ fn enhance_variant(
         .map(|&(.., k)| ShaderId(k))
 }
 
-/// The `classify` shader for a pixel format (shader code) and pixel access.
-pub fn classify(format: u32, access: u32) -> Result<ShaderId, NoShader> {
+/// The `classify` shader for a pixel format (shader code), pixel access and the method code
+/// it lists tiles for (`VariantKey::classify_method`).
+pub fn classify(format: u32, access: u32, method: u32) -> Result<ShaderId, NoShader> {
     modules::CLASSIFY_VARIANTS
         .iter()
-        .find(|&&(f, a, _)| f == format && a == access)
-        .map(|&(_, _, k)| ShaderId(k))
+        .find(|&&(f, a, m, _)| (f, a, m) == (format, access, method))
+        .map(|&(.., k)| ShaderId(k))
         .ok_or(NoShader)
 }
 
@@ -93,6 +94,8 @@ pub fn in_place_format(ShaderId(k): ShaderId) -> Option<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::algorithm::params::Method;
+    use crate::gpu::core::codes::method_code;
     use crate::gpu::core::interface::ACCESS_IN_PLACE;
 
     /// The ids name the shaders they stand for in `modules::all()`.
@@ -119,7 +122,7 @@ mod tests {
         // The defaults have a shared-fetch variant for every format and access; the others
         // none.
         let (paper, enhance_mode) = (0, mode_code(ViewMode::Enhance));
-        for &(f, w, _) in modules::CLASSIFY_VARIANTS {
+        for &(f, w, ..) in modules::CLASSIFY_VARIANTS {
             assert!(enhance_shared((paper, enhance_mode, f), w, false).is_some());
             assert!(enhance_shared((paper, enhance_mode, f), w, true).is_none());
             assert!(enhance_shared((1, enhance_mode, f), w, false).is_none());
@@ -127,17 +130,31 @@ mod tests {
                 enhance_shared((paper, mode_code(ViewMode::Background), f), w, false).is_none()
             );
         }
-        for &(f, w, k) in modules::CLASSIFY_VARIANTS {
-            assert_eq!(classify(f, w).unwrap(), ShaderId(k));
-            assert_eq!(name(ShaderId(k)), format!("classify_f{f}_a{w}"));
+        // Two per format and access: the paper's and the perceptual method's.
+        let perceptual = method_code(Method::Perceptual);
+        for &(f, w, m, k) in modules::CLASSIFY_VARIANTS {
+            assert_eq!(classify(f, w, m).unwrap(), ShaderId(k));
+            let own = if m == perceptual { "_perceptual" } else { "" };
+            assert_eq!(name(ShaderId(k)), format!("classify_f{f}_a{w}{own}"));
+            assert!(m == perceptual || m == paper);
         }
+        let counted = |m| {
+            modules::CLASSIFY_VARIANTS
+                .iter()
+                .filter(|v| v.2 == m)
+                .count()
+        };
+        assert_eq!(counted(perceptual), counted(paper));
         assert!(reads_camera(decode_blur(7).unwrap()) && reads_camera(DECODE_CAMERA));
         let rgba8 = crate::gpu::core::interface::LAYOUT_RGBA8;
         assert_eq!(
-            in_place_format(classify(rgba8, ACCESS_IN_PLACE).unwrap()),
+            in_place_format(classify(rgba8, ACCESS_IN_PLACE, paper).unwrap()),
             Some(rgba8)
         );
-        assert_eq!(in_place_format(classify(rgba8, 0).unwrap()), None);
+        assert_eq!(
+            in_place_format(classify(rgba8, 0, perceptual).unwrap()),
+            None
+        );
         assert_eq!(in_place_format(FINISH_TILES), None);
         assert!(!reads_camera(FINISH_TILES));
     }

@@ -2,8 +2,9 @@
 //! derived from the settings once for every backend.
 
 use super::codes::{method_code, mode_code};
+use super::interface::{MODE_ENHANCE, MODE_SPLIT};
 use super::pixel_format::PixelFormat;
-use crate::algorithm::params::Params;
+use crate::algorithm::params::{Method, Params};
 
 /// The specialisation of a view's `classify` and `enhance`: the method, the view mode, the pixel
 /// format, how the pixels are reached (interface.rs ACCESS_*) and whether the method's extra
@@ -28,6 +29,19 @@ impl VariantKey {
             format: format.shader_code(),
             access,
             extras: params.achromatic_boost > 0.0 || params.luminance_cap > 0.0,
+        }
+    }
+
+    /// The method code of the view's `classify` variant: the perceptual method's own, which
+    /// lists only tiles with a pixel below its target, where it leaves every other pixel as
+    /// it is (its enhance and split modes; its heatmap paints every content pixel); the
+    /// paper's, which lists every tile with content, for every other method and mode.
+    pub fn classify_method(self) -> u32 {
+        let perceptual = method_code(Method::Perceptual);
+        let leaves_alone = self.mode == MODE_ENHANCE || self.mode == MODE_SPLIT;
+        match self.method == perceptual && leaves_alone {
+            true => perceptual,
+            false => method_code(Method::Paper),
         }
     }
 

@@ -311,7 +311,8 @@ impl GlFrameRunner {
         let key = VariantKey::of(params, format.pixel, access);
         let missing = || GlError::Format(internal_format);
         Ok([
-            pipelines::classify(key.format, key.access).ok_or_else(missing)?,
+            pipelines::classify(key.format, key.access, key.classify_method())
+                .ok_or_else(missing)?,
             pipelines::GL_FINISH_TILES,
             pipelines::enhance(key.codes(), key.access, key.extras).ok_or_else(missing)?,
         ])

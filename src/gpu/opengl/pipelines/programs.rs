@@ -379,11 +379,12 @@ impl Program {
     }
 }
 
-/// The `classify` program of a FORMAT code and access; None where none is built.
-pub fn classify(format: u32, access: u32) -> Option<usize> {
+/// The `classify` program of a FORMAT code, access and the method code it lists tiles for
+/// (`VariantKey::classify_method`); None where none is built.
+pub fn classify(format: u32, access: u32, method: u32) -> Option<usize> {
     GL_CLASSIFY_VARIANTS
         .iter()
-        .find(|&&(f, a, _)| (f, a) == (format, access))
+        .find(|&&(f, a, m, _)| (f, a, m) == (format, access, method))
         .map(|&(.., id)| id)
 }
 

@@ -234,8 +234,11 @@ impl Recorder {
             view,
             push: &push,
             pipelines: [
-                self.pipelines
-                    .get(shader_ids::classify(key.format, key.access)?)?,
+                self.pipelines.get(shader_ids::classify(
+                    key.format,
+                    key.access,
+                    key.classify_method(),
+                )?)?,
                 self.pipelines.get(shader_ids::FINISH_TILES)?,
                 self.enhance_pipeline(view, key, mapping)?,
             ],

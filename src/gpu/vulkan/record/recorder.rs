@@ -391,7 +391,9 @@ impl Recorder {
             let key = VariantKey::of(params, view.format, view.access());
             for pass in passes {
                 let id = match pass {
-                    Pass::Classify => shader_ids::classify(key.format, key.access)?,
+                    Pass::Classify => {
+                        shader_ids::classify(key.format, key.access, key.classify_method())?
+                    }
                     Pass::FinishTiles => continue,
                     Pass::Enhance => shader_ids::enhance(key.codes(), key.access, key.extras)?,
                 };
