@@ -3,7 +3,8 @@
 
 use super::args::Args;
 use super::error::CliError;
-use contrastxr::algorithm::{Method, Params};
+use super::options::{self, method_usage};
+use contrastxr::algorithm::Params;
 use contrastxr::gpu::core::bench::{BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::opengl::GlOffline;
 use contrastxr::gpu::{DeviceOptions, VkOffline};
@@ -13,8 +14,8 @@ const DEFAULT_SIZES: &str = "1268x720,1920x1080,2064x2208,3840x3840";
 pub fn usage() -> String {
     format!(
         "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
-         \x20                       [--method NAME] [--content typical,full] [--path P]\n\
-         \x20                       [--engine vulkan|opengl]\n\n\
+         \x20                       [--content typical,full] [--path P] [--engine vulkan|opengl]\n\
+         \x20                       [method options]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
@@ -41,10 +42,13 @@ pub fn usage() -> String {
          is glCopyImageSubData of the regions (no copy16), frame goes through a buffer object,\n\
          img copy is that buffer path's copies alone, in place stores through an image unit\n\
          (enh is the same figure: nothing else runs around the passes), bg is the upload of a\n\
-         camera frame's texels (their blur runs on the source's CPU thread, not timed).\n",
+         camera frame's texels (their blur runs on the source's CPU thread, not timed).\n\
+         The method options set what is timed (--method perceptual, --world-nits 5000, ...); the\n\
+         config file and the environment do not.\n\n{}",
         contrastxr::gpu::core::bench::WARM_UP_RUNS,
         contrastxr::gpu::core::bench::CAMERA_SIZE.0,
         contrastxr::gpu::core::bench::CAMERA_SIZE.1,
+        method_usage()
     )
 }
 
@@ -89,12 +93,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .parse()
             .map_err(|_| CliError::Usage(format!("--device must be an index, got '{d}'")))?,
     };
-    let method = match args.value(&["--method"])? {
-        None => Method::Paper,
-        Some(m) => {
-            Method::parse(&m).ok_or_else(|| CliError::Usage(format!("unknown method '{m}'")))?
-        }
-    };
+    let params: Params = options::params(args)?;
     let contents = match args.value(&["--content"])? {
         None => Content::ALL.to_vec(),
         Some(list) => list
@@ -125,10 +124,6 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     };
     let json = args.flag("--json");
     args.finish()?;
-    let params = Params {
-        method,
-        ..Params::default()
-    };
     let cases = sizes
         .iter()
         .flat_map(|&region| {

@@ -26,7 +26,6 @@ const BENCH_OPTIONS: &[Opt] = &[
     Opt::value("--views", "N"),
     Opt::value("--runs", "N"),
     Opt::value("--device", "N"),
-    Opt::value("--method", "NAME"),
     Opt::value("--content", "typical,full"),
     Opt::value("--path", "copy|in-place|both|image-copy|all"),
     Opt::value("--engine", "vulkan|opengl"),
@@ -89,7 +88,7 @@ pub const COMMANDS: &[Subcommand] = &[
         summary: "time the enhancement against a plain copy on a Vulkan device",
         usage: bench::usage,
         run: bench::run,
-        options: &[BENCH_OPTIONS],
+        options: &[BENCH_OPTIONS, options::METHOD_OPTIONS],
         positionals: None,
     },
     Subcommand {
