@@ -477,8 +477,8 @@ fn foreground(x: u32, y: u32, first_x: u32, changing: bool) -> vec4<bool> {
     return wanted;
 }
 
-// One invocation per tile: lists the tiles with any foreground pixel, a row of tiles per
-// workgroup (CLASSIFY_WORKGROUP in src/gpu/core/interface.rs) so that the list runs in row order.
+// One invocation per tile: lists the tiles with any foreground pixel (in the perceptual method's
+// own variant, any it may change), a row of tiles per workgroup (CLASSIFY_WORKGROUP in src/gpu/core/interface.rs) so that the list runs in row order.
 @compute @workgroup_size(CLASSIFY_WORKGROUP_X, CLASSIFY_WORKGROUP_Y)
 fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     let rows = (pc.region_size.y + TILE - 1u) / TILE;

@@ -189,8 +189,8 @@ fn keep_better(best: Best, colour: Colours, scaled: Colours, change: vec4<f32>, 
     return Best(pick(best.colour, colour, better), pick(best.scaled, scaled, better), select(best.change, change, better), select(best.perceived, perceived, better));
 }
 
-// The pixels the method may change: those not seen at the target already (`alone` below, to
-// the bit: the same functions of the same values).
+// The pixels the method may change: those not seen at the target already (`alone` in
+// method_perceptual below: the same functions of the same values), for its `classify`.
 fn perceptual_may_change(display: Colours, bg: Background) -> vec4<bool> {
     let world = world_of(read_model(), bg.linear);
     let goal = world.model.goal;

@@ -54,7 +54,31 @@ impl VariantKey {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::algorithm::params::ViewMode;
     use crate::gpu::core::interface::{ACCESS_IN_PLACE, FORMAT_SRGB_BIT, LAYOUT_RGBA8};
+
+    /// Only the perceptual method's enhance and split modes, where it leaves a pixel at the
+    /// target as it is, list tiles by its own classify.
+    #[test]
+    fn the_perceptual_classify_serves_only_the_modes_that_leave_pixels_alone() {
+        let classify = |method, mode| {
+            let params = Params {
+                method,
+                mode,
+                ..Params::default()
+            };
+            VariantKey::of(&params, PixelFormat::SRGB8, ACCESS_IN_PLACE).classify_method()
+        };
+        let (paper, perceptual) = (method_code(Method::Paper), method_code(Method::Perceptual));
+        assert_eq!(classify(Method::Perceptual, ViewMode::Enhance), perceptual);
+        assert_eq!(classify(Method::Perceptual, ViewMode::Split), perceptual);
+        assert_eq!(classify(Method::Perceptual, ViewMode::Heatmap), paper);
+        assert_eq!(classify(Method::Perceptual, ViewMode::Background), paper);
+        for method in Method::ALL.into_iter().filter(|&m| m != Method::Perceptual) {
+            assert_eq!(classify(method, ViewMode::Enhance), paper);
+            assert_eq!(classify(method, ViewMode::Split), paper);
+        }
+    }
 
     #[test]
     fn the_extras_follow_either_setting() {
