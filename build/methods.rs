@@ -35,8 +35,6 @@ macro_rules! build_methods {
 /// Every method of the table.
 pub const METHODS: &[BuildMethod] = with_methods!(build_methods);
 
-/// The code of the method the single passes and the background mode are built with (their
-/// METHOD is never read; `paper`'s).
 /// The code of the perceptual method, whose own `classify` variants skip the tiles it leaves
 /// alone.
 pub fn perceptual_code() -> u32 {
@@ -47,6 +45,8 @@ pub fn perceptual_code() -> u32 {
         .code
 }
 
+/// The code of the method the single passes and the background mode are built with (their
+/// METHOD is never read; `paper`'s).
 pub fn paper_code() -> u32 {
     METHODS
         .iter()

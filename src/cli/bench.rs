@@ -93,7 +93,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .parse()
             .map_err(|_| CliError::Usage(format!("--device must be an index, got '{d}'")))?,
     };
-    let params: Params = options::params(args)?;
+    let params = options::params(args)?;
     let contents = match args.value(&["--content"])? {
         None => Content::ALL.to_vec(),
         Some(list) => list
