@@ -149,7 +149,7 @@ fn fault_client(tag: &str, point: &str, mode: Pipelines) -> Option<LayerRun> {
     let cache = scratch_dir(&format!("{tag}-cache"));
     let cache = cache.to_string_lossy().into_owned();
     let mut env = vec![("CONTRASTXR_FAULT", point)];
-    let mut args = [CHECKED, &["--timing"][..]].concat();
+    let mut args = [CHECKED, &["--timing", "--exit-marker"][..]].concat();
     if mode == Pipelines::Building {
         env.push(("CONTRASTXR_PIPELINES", "background"));
         match after_build {
@@ -169,7 +169,30 @@ fn fault_client(tag: &str, point: &str, mode: Pipelines) -> Option<LayerRun> {
         r.report["timing"]["calls"]
     );
     assert_teardown_bounded(&tag, &r.report);
+    r.run.assert_success();
+    assert_exit_waits_first(&tag, &r.run.stderr);
     Some(r)
+}
+
+/// The line the layer writes when the app's exit waited for its driver work.
+const EXIT_WAITED: &str = "contrastxr: the app's exit waited";
+
+/// Where the app's exit waited for driver work of the layer's, it did so before the exit
+/// handler the client registered last (`--exit-marker`), and so before any destructor a driver
+/// registered during the session: a compile still running must not outlive them.
+fn assert_exit_waits_first(tag: &str, stderr: &str) {
+    let waited = stderr.find(EXIT_WAITED);
+    let marker = stderr.find("contrastxr-xr-client: exit handler ran");
+    assert!(
+        marker.is_some(),
+        "{tag}: the client's exit handler did not run"
+    );
+    if let Some(waited) = waited {
+        assert!(
+            waited < marker.unwrap(),
+            "{tag}: exit waited after the handlers: {stderr}"
+        );
+    }
 }
 
 /// xrDestroySession and xrDestroyInstance each returned within [`TEARDOWN_MS`].
@@ -328,7 +351,8 @@ fn destroy_calls_reach_the_runtime_after_a_panic() {
 /// A shader compile that outlasts every wait of the session's end (`slow-build`: each warm-up
 /// compile takes 5 s more) from an empty cache: the session ends after 20 frames while the
 /// first compile runs, xrDestroySession and xrDestroyInstance return within 1 s (the compile
-/// finishes on a thread of its own), the app exits 0 with its frames untouched.
+/// finishes on a thread of its own), the app's exit waits for it first of all (said once),
+/// and the app exits 0 with its frames untouched.
 #[test]
 fn teardown_with_a_build_in_flight_is_bounded() {
     let tag = "fault-slow-build";
@@ -344,6 +368,8 @@ fn teardown_with_a_build_in_flight_is_bounded() {
         "{:#?}",
         r.lines
     );
+    let waited = r.lines_with("the app's exit waited");
+    assert_eq!(waited.len(), 1, "{:#?}", r.lines);
 }
 
 /// A CPU driver's warm-up device that cannot be made is tried once per session, not in every

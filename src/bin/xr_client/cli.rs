@@ -74,6 +74,9 @@ usage: contrastxr-xr-client [options]
   --linger-ms N           after the last xrDestroyInstance, run on N ms, then report the
                           layer's threads still running and whether its library is mapped
                           (`after_instances`)
+  --exit-marker           at the end, register an exit handler that writes
+                          `contrastxr-xr-client: exit handler ran` on stderr: it runs before
+                          every handler registered earlier, and after none registered later
   --stderr-full           run the frame loop with stderr a full pipe nobody reads: a layer
                           that writes to it must not block the app's calls
   --check-untouched       read each swapchain image back when it is acquired again and report
@@ -170,6 +173,8 @@ pub struct Options {
     pub after_device_ms: u64,
     pub idle_ms: u64,
     pub stderr_full: bool,
+    /// Register a late exit handler that says when it runs (--exit-marker).
+    pub exit_marker: bool,
     pub instances: u32,
     /// Milliseconds to run on after the last xrDestroyInstance (None: report nothing).
     pub linger_ms: Option<u64>,
@@ -211,6 +216,7 @@ impl Default for Options {
             after_device_ms: 0,
             idle_ms: 0,
             stderr_full: false,
+            exit_marker: false,
             instances: 1,
             linger_ms: None,
             check_gl_state: false,
@@ -274,6 +280,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
                 )
             }
             "--stderr-full" => options.stderr_full = true,
+            "--exit-marker" => options.exit_marker = true,
             "--check-untouched" => options.check_untouched = true,
             "--check-gl-state" => options.check_gl_state = true,
             "--x-errors-elsewhere" => options.x_errors_elsewhere = true,

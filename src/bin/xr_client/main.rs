@@ -107,11 +107,21 @@ fn main() -> ExitCode {
             && stats.frames_submitted >= options.frames * options.sessions * options.instances);
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     print(&report, &options);
+    if options.exit_marker {
+        // SAFETY: a plain function of this program, registered once.
+        unsafe { libc::atexit(say_exit_handler_ran) };
+    }
     if report.ok {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
     }
+}
+
+/// `--exit-marker`'s handler: newest first, so it runs before every earlier one, such as a
+/// driver's destructors registered during the session.
+extern "C" fn say_exit_handler_ran() {
+    eprintln!("contrastxr-xr-client: exit handler ran");
 }
 
 /// The summary line (and with --timing the timing lines after it) on stdout, or on stderr

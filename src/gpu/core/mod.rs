@@ -21,6 +21,7 @@ pub mod perceptual_words;
 pub mod pixel_codec;
 mod pixel_format;
 pub mod plan;
+pub mod process_exit;
 pub mod push_constants;
 pub mod shader_ids;
 mod shared_fetch;

@@ -308,16 +308,18 @@ impl WarmUp {
 }
 
 /// At the process's exit: waits (until `deadline`) for the dispatches of left-over warm-up
-/// devices, so that no compile runs under the driver's static destructors, and leaves the
-/// devices to the exit (other exit handlers may already have torn the driver down).
-fn wait_for_left_over(deadline: Instant) {
+/// devices, so that no compile runs under the driver's destructors, and leaves the devices to
+/// the exit. Whether there were any.
+fn wait_for_left_over(deadline: Instant) -> bool {
     let mut left = left_over();
     for w in left.iter_mut() {
         while !w.finished_within(WAIT_SLICE_NS).unwrap_or(true) && Instant::now() < deadline {}
     }
+    let any = !left.is_empty();
     std::mem::take(&mut *left)
         .into_iter()
         .for_each(std::mem::forget);
+    any
 }
 
 impl WarmUp {

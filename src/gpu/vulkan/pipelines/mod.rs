@@ -4,9 +4,8 @@
 
 pub mod pipeline_cache;
 mod pipeline_set;
-mod process_exit;
 
+pub(crate) use crate::gpu::core::process_exit::on_exit;
 pub use pipeline_cache::Origin;
 pub(crate) use pipeline_set::binding_count;
 pub use pipeline_set::{BuildMode, BuildReport, Pipelines, WarmUpHook};
-pub(crate) use process_exit::on_exit;

@@ -8,9 +8,9 @@
 //! build on first use ([`BuildMode::Inline`]).
 
 use super::pipeline_cache::{self, Origin, PipelineCache};
-use super::process_exit;
 use crate::gpu::core::interface::{BindingKind, BINDINGS};
 use crate::gpu::core::modules::{self, ShaderModule};
+use crate::gpu::core::process_exit;
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids::ShaderId;
 use crate::gpu::vulkan::device::{DeviceKind, GpuDevice, GpuError, VkResultExt};
@@ -397,7 +397,7 @@ fn build_requests(shared: &Shared, mut warm_up: Option<WarmUpHook>) {
                 st = shared.changed.wait(st).unwrap_or_else(|p| p.into_inner());
             }
         };
-        // Nothing starts once the process is exiting (see gpu/vulkan/pipelines/process_exit.rs).
+        // Nothing starts once the process is exiting (see gpu/core/process_exit.rs).
         let Some(_busy) = process_exit::Busy::begin() else {
             return;
         };

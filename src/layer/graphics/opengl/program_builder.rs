@@ -10,9 +10,11 @@
 //! file there. No process is started from the app: a child would stay
 //! inside Steam's container or a Flatpak sandbox, with their libraries, and a setuid host would
 //! run a file found beside a library. A build cannot be stopped midway: a session that ends
-//! first leaves the thread to end on its own.
+//! first leaves the thread to end on its own, and the process's exit waits for it
+//! (gpu/core/process_exit.rs).
 
 use crate::algorithm::params::Params;
+use crate::gpu::core::process_exit;
 use crate::gpu::opengl::device::caps::same_driver;
 use crate::gpu::opengl::{GlOffline, ProgramBinaries};
 use std::thread::JoinHandle;
@@ -55,6 +57,7 @@ impl ProgramBuilder {
             return Err("the build thread could not start (fault point)".into());
         }
         let (driver, wanted) = (driver.to_string(), params.clone());
+        process_exit::watch();
         let thread = std::thread::Builder::new()
             .name("contrastxr-gl-build".into())
             .spawn(move || build(&driver, (internal_format, width, in_place), &wanted, ids))
@@ -97,6 +100,10 @@ fn build(
     params: &Params,
     ids: [usize; 3],
 ) -> Result<ProgramBinaries, String> {
+    // Counted until the offline context is gone (dropped before `_busy`).
+    let Some(_busy) = process_exit::Busy::begin() else {
+        return Err("the app is exiting".into());
+    };
     crate::camera::priority::lower_this_thread(BUILD_NICENESS);
     if crate::fault::hit("gl-program-build") {
         return Err("the build failed (fault point)".into());
