@@ -369,3 +369,33 @@ fn a_failed_build_leaves_the_programs_to_the_frame_calls_one_at_a_time() {
         assert!(check_view(c) > 1000, "{what}");
     }
 }
+
+/// An OpenGL app that exits while the layer's program build still runs in the driver (an empty
+/// cache, frames not waiting for it, 4 frames): the exit waits for the build before the exit
+/// handler the app registered last (`--exit-marker`), and so before any destructor the driver
+/// registered during the build; it says so once, and the app exits 0.
+#[test]
+fn an_opengl_app_that_exits_during_the_build_waits_for_it_first() {
+    let cache = capture_dir("opengl-exit-during-build-cache");
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_PIPELINES", "background"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("XDG_CACHE_HOME", &*cache.to_string_lossy()),
+    ];
+    let extra = ["--exit-marker"];
+    let Some(run) = gl_client::client_opengl("R8G8B8A8_UNORM", 4, &env, &extra, 120) else {
+        return;
+    };
+    run.assert_success();
+    let lines = layer_lines(&run);
+    let building = "built on a thread of the layer's own";
+    assert!(!lines.iter().any(|l| l.contains(building)), "{lines:#?}");
+    let waited: Vec<_> = lines.iter().filter(|l| l.contains("exit waited")).collect();
+    assert_eq!(waited.len(), 1, "{lines:#?}");
+    let waited = run.stderr.find("contrastxr: the app's exit waited");
+    let marker = run.stderr.find("contrastxr-xr-client: exit handler ran");
+    assert!(marker.is_some() && waited < marker, "{}", run.stderr);
+}
