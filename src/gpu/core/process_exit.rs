@@ -65,7 +65,9 @@ pub fn watch() {
         unsafe { libc::atexit(at_exit) };
     });
     if is_main_thread() {
-        MAIN_THREAD_EXIT.with(|_| ());
+        // try_with: an app may end its session from an exit handler, after the main thread's
+        // destructors ran (the handler has then run already).
+        let _ = MAIN_THREAD_EXIT.try_with(|_| ());
     }
 }
 
