@@ -170,29 +170,8 @@ fn fault_client(tag: &str, point: &str, mode: Pipelines) -> Option<LayerRun> {
     );
     assert_teardown_bounded(&tag, &r.report);
     r.run.assert_success();
-    assert_exit_waits_first(&tag, &r.run.stderr);
+    common::assert_exit_waits_first(&tag, &r.run.stderr);
     Some(r)
-}
-
-/// The line the layer writes when the app's exit waited for its driver work.
-const EXIT_WAITED: &str = "contrastxr: the app's exit waited";
-
-/// Where the app's exit waited for driver work of the layer's, it did so before the exit
-/// handler the client registered last (`--exit-marker`), and so before any destructor a driver
-/// registered during the session: a compile still running must not outlive them.
-fn assert_exit_waits_first(tag: &str, stderr: &str) {
-    let waited = stderr.find(EXIT_WAITED);
-    let marker = stderr.find("contrastxr-xr-client: exit handler ran");
-    assert!(
-        marker.is_some(),
-        "{tag}: the client's exit handler did not run"
-    );
-    if let Some(waited) = waited {
-        assert!(
-            waited < marker.unwrap(),
-            "{tag}: exit waited after the handlers: {stderr}"
-        );
-    }
 }
 
 /// xrDestroySession and xrDestroyInstance each returned within [`TEARDOWN_MS`].

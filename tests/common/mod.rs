@@ -391,6 +391,27 @@ pub fn layer_lines(run: &SandboxRun) -> Vec<String> {
         .collect()
 }
 
+/// The line the layer writes when the app's exit waited for its driver work.
+pub const EXIT_WAITED: &str = "contrastxr: the app's exit waited";
+
+/// Where the app's exit waited for driver work of the layer's, it did so before the exit
+/// handler the client registered last (`--exit-marker`), and so before any destructor a driver
+/// registered during the session: a compile still running must not outlive them.
+pub fn assert_exit_waits_first(tag: &str, stderr: &str) {
+    let waited = stderr.find(EXIT_WAITED);
+    let marker = stderr.find("contrastxr-xr-client: exit handler ran");
+    assert!(
+        marker.is_some(),
+        "{tag}: the client's exit handler did not run"
+    );
+    if let Some(waited) = waited {
+        assert!(
+            waited < marker.unwrap(),
+            "{tag}: exit waited after the handlers: {stderr}"
+        );
+    }
+}
+
 /// Turns on the Vulkan validation layer's synchronisation validation (the app enables the
 /// layer itself; this is its documented settings variable).
 pub const SYNC_VALIDATION: (&str, &str) = ("VK_KHRONOS_VALIDATION_VALIDATE_SYNC", "true");

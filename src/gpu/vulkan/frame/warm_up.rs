@@ -16,6 +16,7 @@
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
+use crate::gpu::core::process_exit::on_exit;
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids;
 use crate::gpu::core::shader_ids::ShaderId;
@@ -24,7 +25,7 @@ use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::device::{
     record_first_layout, Commands, DeviceKind, GpuDevice, GpuError, StorageImage,
 };
-use crate::gpu::vulkan::pipelines::{on_exit, BuildMode, WarmUpHook};
+use crate::gpu::vulkan::pipelines::{BuildMode, WarmUpHook};
 use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
 use ash::vk;
 use std::collections::HashSet;

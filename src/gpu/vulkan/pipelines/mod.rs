@@ -5,7 +5,6 @@
 pub mod pipeline_cache;
 mod pipeline_set;
 
-pub(crate) use crate::gpu::core::process_exit::on_exit;
 pub use pipeline_cache::Origin;
 pub(crate) use pipeline_set::binding_count;
 pub use pipeline_set::{BuildMode, BuildReport, Pipelines, WarmUpHook};
