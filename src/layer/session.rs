@@ -92,7 +92,7 @@ pub fn forget(session: xr::Session) {
     if let Some(s) = removed {
         let mut s = lock(&s);
         // On the app's thread, inside xrDestroySession or xrDestroyInstance: the pipeline
-        // threads end and the warm-up devices are destroyed here.
+        // threads end here (a CPU driver's warm-up device is the process's and stays).
         s.end_engines();
         // Closes the camera (controls restored) before the app may exit: it is open only
         // while a session runs.

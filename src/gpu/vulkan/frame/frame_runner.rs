@@ -7,7 +7,7 @@
 use super::app_views::AppImageViews;
 use super::frame_view::{CapturedView, FrameView, ViewKey, ViewPath};
 use super::overlay_copies::Overlays;
-use super::warm_up::{WarmUp, WarmUpSlot};
+use super::warm_up::{WarmUp, WarmUpMade};
 use crate::algorithm::params::Params;
 use crate::gpu::core::shader_ids::ShaderId;
 use crate::gpu::core::BackgroundInput;
@@ -92,9 +92,9 @@ pub struct FrameRunner {
     pub(super) app_views: AppImageViews,
     /// Set once the engine's objects were destroyed (or left alive after a GPU failure).
     torn_down: bool,
-    /// The warm-up device (CPU drivers), ended on the app's thread after the pipeline thread
-    /// that uses it has ended ([`WarmUp::end`]).
-    warm_up: Option<WarmUpSlot>,
+    /// What making the process's warm-up device (CPU drivers) gave, when this session's
+    /// start made or tried to make one; taken by [`FrameRunner::warm_up_made`].
+    warm_up_made: Option<WarmUpMade>,
     // Last: dropped after everything above was destroyed in Drop.
     pub gpu: GpuDevice,
 }
@@ -103,7 +103,8 @@ impl FrameRunner {
     /// Sets up the engine on the session's device; its pipelines start building at once on
     /// the engine's own thread, `first` first.
     pub fn new(gpu: GpuDevice, first: &[ShaderId]) -> Result<FrameRunner, GpuError> {
-        let (warm_up, hook) = WarmUp::slot(&gpu).unzip();
+        // Here, inside the app's xrCreateSession: never in a later call (gpu/vulkan/frame/warm_up.rs).
+        let (hook, warm_up_made) = WarmUp::for_session(&gpu);
         let mut engine = Recorder::new(&gpu, MAX_VIEWS, BuildMode::Background, hook)?;
         let commands = match Commands::new(&gpu) {
             Ok(c) => c,
@@ -126,7 +127,7 @@ impl FrameRunner {
             overlays: Overlays::default(),
             app_views: AppImageViews::default(),
             torn_down: false,
-            warm_up,
+            warm_up_made,
             gpu,
         };
         frame_runner.request(first);
@@ -140,18 +141,15 @@ impl FrameRunner {
     }
 
     /// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
-    /// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device
-    /// is made here when one of them needs it, never on the pipeline thread (gpu/vulkan/frame/warm_up.rs).
-    /// Returns what became of the warm-up device, when this call tried to make one.
-    pub fn request(&self, ids: &[ShaderId]) -> Option<Result<(), GpuError>> {
-        let warm_up = self.prepare_warm_up(ids);
+    /// swapchain's format becomes known).
+    pub fn request(&self, ids: &[ShaderId]) {
         self.engine.request(ids);
-        warm_up
     }
 
-    /// Makes the warm-up device (CPU drivers) if one of `ids` needs it and it does not exist.
-    fn prepare_warm_up(&self, ids: &[ShaderId]) -> Option<Result<(), GpuError>> {
-        WarmUp::prepare(self.warm_up.as_ref()?, &self.gpu, ids)
+    /// What making the process's warm-up device gave, when the session's start made (or tried
+    /// to make) one; None afterwards.
+    pub fn warm_up_made(&mut self) -> Option<WarmUpMade> {
+        self.warm_up_made.take()
     }
 
     pub fn build_report(&self) -> Option<BuildReport> {
@@ -168,8 +166,6 @@ impl FrameRunner {
         wait: bool,
     ) -> Result<PipelinesReady, GpuError> {
         let ids = Recorder::shaders_for(params, views.iter().map(FrameView::shape))?;
-        // A failed warm-up device only means slower first dispatches.
-        let _ = self.prepare_warm_up(&ids);
         match self.engine.ready(&ids)? {
             true => Ok(PipelinesReady(())),
             false if wait => self
@@ -190,9 +186,7 @@ impl FrameRunner {
         if ids.is_empty() {
             return;
         }
-        // A failed warm-up device only means a slower first dispatch; a failed build, the
-        // general variant.
-        let _ = self.prepare_warm_up(&ids);
+        // A failed build only means the general variant.
         let _ = self.engine.ready(&ids);
     }
 
@@ -468,9 +462,6 @@ impl FrameRunner {
         // stops at once unless it is creating a pipeline on the app's device (a warm-up in
         // flight is not waited for: see gpu/vulkan/frame/warm_up.rs).
         self.engine.join_building();
-        if let Some(slot) = self.warm_up.take() {
-            WarmUp::end(slot);
-        }
         if let Err(e) = idle {
             self.gpu.abandon();
             return Err(e);

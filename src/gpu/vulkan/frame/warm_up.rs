@@ -2,20 +2,24 @@
 //! on llvmpipe) compiles a compute shader to machine code at its first dispatch, not at
 //! vkCreateComputePipelines: on the app's queue that would be seconds inside the app's
 //! xrEndFrame. So the building thread first dispatches each shader once on a device of the
-//! layer's own (the app's instance and physical device, its own queue): the compile happens
+//! layer's own (the app's physical device, its own instance and queue): the compile happens
 //! there, and the driver's shader disk cache hands the result to the app's device.
 //!
-//! That device is made on the app's thread (in a frame call that requests a shader still to be
-//! warmed up), never on the building thread, on an instance of its own made through the app's
-//! Vulkan loader: nothing of it belongs to the app's device or instance. The building thread
-//! only records, submits and waits on the warm-up device's own objects, and stops waiting when
-//! the session ends. At the session's end a compile still in flight is not waited for: the
-//! device is left to the driver until the compile (which no driver can stop) has finished, and
-//! then destroyed with its instance on an app's thread, at the next session's warm-up or end
-//! (see [`WarmUp::end`]); the process's exit waits for the compile.
+//! That device is the process's, one per kind of device. It is made inside the app's
+//! xrCreateSession, on the app's thread, before the session exists for any other thread of
+//! the app, on an instance of its own made through the app's Vulkan loader: nothing of it
+//! belongs to the app's device or instance. The sessions that follow share it, and it lives
+//! until the process exits: a Vulkan instance is never created or destroyed while the app
+//! may call into Vulkan from other threads (making one inside a later frame or swapchain
+//! call, while a thread of the app made a swapchain through the runtime, crashed the app on
+//! lavapipe). The building threads only record, submit and wait on the device's objects, one
+//! at a time, and stop waiting when their session ends: a compile still in flight (which no
+//! driver can stop) finishes on its own, the next session's warm-up waits for it first, and
+//! the process's exit waits for it.
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
+use crate::gpu::core::modules;
 use crate::gpu::core::process_exit::on_exit;
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids;
@@ -28,12 +32,12 @@ use crate::gpu::vulkan::device::{
 use crate::gpu::vulkan::pipelines::{BuildMode, WarmUpHook};
 use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewTarget};
 use ash::vk;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::{Arc, Mutex, Once, OnceLock};
 use std::time::{Duration, Instant};
 
 /// The shaders warmed up in this process, per device kind: the driver's disk cache has them,
-/// so later sessions skip them (and make no device of their own at all).
+/// so later sessions skip them.
 fn warmed() -> std::sync::MutexGuard<'static, HashSet<(DeviceKind, ShaderId)>> {
     static WARMED: OnceLock<Mutex<HashSet<(DeviceKind, ShaderId)>>> = OnceLock::new();
     let m = WARMED.get_or_init(Default::default);
@@ -41,13 +45,12 @@ fn warmed() -> std::sync::MutexGuard<'static, HashSet<(DeviceKind, ShaderId)>> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Warm-up devices of ended sessions whose last dispatch (a compile, which no driver can
-/// interrupt) was still running: destroyed on an app's thread once it has finished (at the
-/// next session's warm-up or end), waited for by the process's exit.
-fn left_over() -> std::sync::MutexGuard<'static, Vec<WarmUp>> {
-    static LEFT: Mutex<Vec<WarmUp>> = Mutex::new(Vec::new());
-    // Only pushes and takes happen under this lock.
-    LEFT.lock().unwrap_or_else(|p| p.into_inner())
+/// The process's warm-up devices, by device kind (see the module's comment).
+fn devices() -> std::sync::MutexGuard<'static, HashMap<DeviceKind, Shared>> {
+    static DEVICES: OnceLock<Mutex<HashMap<DeviceKind, Shared>>> = OnceLock::new();
+    let m = DEVICES.get_or_init(Default::default);
+    // Only look-ups and inserts happen under this lock.
+    m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
 /// Side of the camera frame and view the warm-up dispatches work on.
@@ -56,8 +59,7 @@ const SIZE: (u32, u32) = (8, 8);
 const TIMEOUT: Duration = Duration::from_secs(120);
 /// The slices the building thread waits for a dispatch in, looking at the session's end.
 const WAIT_SLICE_NS: u64 = 20_000_000;
-/// How long dropping the device waits for work still in flight where no thread can be left
-/// to wait for it (none, unless a dispatch timed out).
+/// How long dropping a device (one whose making failed part-way) waits for work in flight.
 const DROP_WAIT_NS: u64 = 1_000_000_000;
 /// What the `slow-build` fault point adds to a warm-up dispatch: a driver whose compile takes
 /// longer than any wait of the session's end.
@@ -78,74 +80,57 @@ pub struct WarmUp {
     gpu: GpuDevice,
 }
 
-/// A session's warm-up device, shared by the app's thread (which makes it when a shader that
-/// still needs a warm-up is requested, and drops it after the building thread has ended) and
-/// the building thread (which dispatches on it). Empty until needed.
-pub type WarmUpSlot = Arc<Mutex<Device>>;
+/// A warm-up device, shared by the sessions' building threads (one dispatch at a time).
+type Shared = Arc<Mutex<WarmUp>>;
 
-/// The warm-up device of a session, and whether making it was tried: a device that could not
-/// be made is not tried again in that session (that would be a vkCreateDevice per frame).
-#[derive(Default)]
-pub struct Device {
-    warm_up: Option<WarmUp>,
-    tried: bool,
+fn lock(device: &Shared) -> std::sync::MutexGuard<'_, WarmUp> {
+    // A panic while holding it leaves a usable device (a dispatch in flight is waited for).
+    device.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-fn lock(slot: &WarmUpSlot) -> std::sync::MutexGuard<'_, Device> {
-    // A panic while holding it leaves a usable slot.
-    slot.lock().unwrap_or_else(|p| p.into_inner())
-}
+/// What making the process's warm-up device gave, when a session's start made (or tried to
+/// make) one: the time it took, or why there is none.
+pub type WarmUpMade = Result<Duration, GpuError>;
 
 impl WarmUp {
-    /// An empty slot and the hook that warms each shader up on the device in it (if any)
-    /// before it is built for `gpu`; None where `gpu`'s driver compiles at pipeline creation.
-    pub fn slot(gpu: &GpuDevice) -> Option<(WarmUpSlot, WarmUpHook)> {
-        if !WarmUp::needed(gpu) {
-            return None;
+    /// The hook that warms each shader up on the process's warm-up device of `app`'s kind
+    /// before it is built for `app`; None where `app`'s driver compiles at pipeline creation,
+    /// where every shader is warmed up already, or where no warm-up device can be made. The
+    /// device is made here, on the caller's thread (the app's, inside xrCreateSession), the
+    /// first time a session needs it; with what making it gave. Failures are not fatal: the
+    /// compile then happens at first dispatch on the app's queue, and the next session tries
+    /// again.
+    pub fn for_session(app: &GpuDevice) -> (Option<WarmUpHook>, Option<WarmUpMade>) {
+        if !WarmUp::needed(app) {
+            return (None, None);
         }
-        let slot: WarmUpSlot = Default::default();
-        let kind = DeviceKind::of(gpu);
-        let shared = slot.clone();
-        let hook: WarmUpHook = Box::new(move |id, stopped| {
-            if let Some(w) = lock(&shared).warm_up.as_mut() {
-                w.once(kind, id, stopped);
-            }
-        });
-        Some((slot, hook))
-    }
-
-    /// Makes the warm-up device in `slot`, on the caller's thread (the app's, before it asks
-    /// for `ids` to be built), when one of them still needs a warm-up in this process.
-    /// Failures are not fatal: the compile then happens at first dispatch on the app's queue.
-    /// Returns what making the device gave, when this call made (or tried to make) one: at
-    /// most once per slot.
-    pub fn prepare(
-        slot: &WarmUpSlot,
-        app: &GpuDevice,
-        ids: &[ShaderId],
-    ) -> Option<Result<(), GpuError>> {
         let kind = DeviceKind::of(app);
-        if ids.iter().all(|&id| warmed().contains(&(kind, id))) {
-            return None;
-        }
-        // Held by the building thread: it is dispatching on the device, which thus exists
-        // (never wait here for its compile).
-        let mut slot = match slot.try_lock() {
-            Ok(slot) => slot,
-            Err(std::sync::TryLockError::Poisoned(p)) => p.into_inner(),
-            Err(std::sync::TryLockError::WouldBlock) => return None,
+        let all_warmed = {
+            let warmed = warmed();
+            (0..modules::all().len()).all(|k| warmed.contains(&(kind, ShaderId(k))))
         };
-        if std::mem::replace(&mut slot.tried, true) {
-            return None;
+        if all_warmed {
+            return (None, None);
         }
-        WarmUp::destroy_left_over();
-        match WarmUp::new(app) {
-            Ok(w) => {
-                slot.warm_up = Some(w);
-                Some(Ok(()))
+        let mut devices = devices();
+        let (device, made) = match devices.get(&kind) {
+            Some(device) => (device.clone(), None),
+            None => {
+                let t = Instant::now();
+                match WarmUp::new(app) {
+                    Ok(w) => {
+                        let device = Arc::new(Mutex::new(w));
+                        devices.insert(kind, device.clone());
+                        static AT_EXIT: Once = Once::new();
+                        AT_EXIT.call_once(|| on_exit(wait_at_exit));
+                        (device, Some(Ok(t.elapsed())))
+                    }
+                    Err(e) => return (None, Some(Err(e))),
+                }
             }
-            Err(e) => Some(Err(e)),
-        }
+        };
+        let hook: WarmUpHook = Box::new(move |id, stopped| lock(&device).once(kind, id, stopped));
+        (Some(hook), made)
     }
 
     /// Whether a device compiles at first dispatch (a CPU driver).
@@ -226,6 +211,8 @@ impl WarmUp {
     /// Dispatches one workgroup of the shader and waits for it (its compile) until it is
     /// done or `stopped`; a dispatch left running is waited for by [`WarmUp::end`].
     pub fn run(&mut self, id: ShaderId, stopped: &dyn Fn() -> bool) -> Result<(), GpuError> {
+        // An ended session's dispatch may still be compiling.
+        self.wait_until_finished(stopped)?;
         let pipeline = self.engine.pipelines().get(id)?;
         self.commands.begin(&self.gpu)?;
         let cmd = self.commands.cmd;
@@ -250,6 +237,12 @@ impl WarmUp {
         if crate::fault::hit("slow-build") {
             self.slow_until = Some(Instant::now() + SLOW_BUILD);
         }
+        self.wait_until_finished(stopped)
+    }
+
+    /// Waits for the last dispatch (none: returns at once) until it is done, `stopped` or
+    /// the dispatch's time is up.
+    fn wait_until_finished(&mut self, stopped: &dyn Fn() -> bool) -> Result<(), GpuError> {
         let deadline = Instant::now() + TIMEOUT;
         while !self.finished_within(WAIT_SLICE_NS)? {
             if stopped() || Instant::now() > deadline {
@@ -274,52 +267,23 @@ impl WarmUp {
             Err(e) => Err(e),
         }
     }
-
-    /// Destroys, on the caller's thread (an app's), the left-over warm-up devices whose last
-    /// dispatch has finished.
-    pub fn destroy_left_over() {
-        let mut finished = Vec::new();
-        let mut left = left_over();
-        let mut k = 0;
-        while k < left.len() {
-            match left[k].finished_within(0).unwrap_or(true) {
-                true => finished.push(left.swap_remove(k)),
-                false => k += 1,
-            }
-        }
-        drop(left);
-        drop(finished);
-    }
-
-    /// Ends a session's warm-up device, on the app's thread after the building thread has
-    /// ended: dropped here when its last dispatch has finished, else left in the driver's
-    /// hands until it has ([`WarmUp::destroy_left_over`]; the process's exit waits for it).
-    pub fn end(slot: WarmUpSlot) {
-        WarmUp::destroy_left_over();
-        let Some(mut warm_up) = lock(&slot).warm_up.take() else {
-            return;
-        };
-        if warm_up.finished_within(0).unwrap_or(true) {
-            return;
-        }
-        static AT_EXIT: Once = Once::new();
-        AT_EXIT.call_once(|| on_exit(wait_for_left_over));
-        left_over().push(warm_up);
-    }
 }
 
-/// At the process's exit: waits (until `deadline`) for the dispatches of left-over warm-up
-/// devices, so that no compile runs under the driver's destructors, and leaves the devices to
-/// the exit. Whether there were any.
-fn wait_for_left_over(deadline: Instant) -> bool {
-    let mut left = left_over();
-    for w in left.iter_mut() {
+/// At the process's exit: waits (until `deadline`) for the last dispatch of each warm-up
+/// device, so that no compile runs under the driver's destructors; the devices are left to
+/// the exit. Whether there was a dispatch to wait for. (The building threads stop waiting
+/// and let go of the devices once the exit has begun.)
+fn wait_at_exit(deadline: Instant) -> bool {
+    let devices: Vec<Shared> = devices().values().cloned().collect();
+    let mut any = false;
+    for device in devices {
+        let mut w = lock(&device);
+        if w.finished_within(0).unwrap_or(true) {
+            continue;
+        }
+        any = true;
         while !w.finished_within(WAIT_SLICE_NS).unwrap_or(true) && Instant::now() < deadline {}
     }
-    let any = !left.is_empty();
-    std::mem::take(&mut *left)
-        .into_iter()
-        .for_each(std::mem::forget);
     any
 }
 

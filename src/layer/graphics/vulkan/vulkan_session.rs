@@ -4,7 +4,6 @@
 
 use super::{app_vulkan, in_place};
 use crate::algorithm::params::Params;
-use crate::gpu::core::shader_ids::ShaderId;
 use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::frame::{copy_path, FrameOptions, FrameRunner, PipelinesReady};
@@ -18,7 +17,6 @@ use crate::layer::log;
 use ash::vk::{self, Handle};
 use openxr_sys as xr;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 pub struct VulkanSession {
     engine: FrameRunner,
@@ -72,9 +70,8 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<Frame
     // The background preparation's shaders first: the views' ones need a swapchain's format.
     let first = Recorder::shaders_for(&settings.params, []).unwrap_or_default();
     gpu.queue_has_compute()?;
-    let engine = FrameRunner::new(gpu, &[])?;
-    // Through request_shaders: a warm-up device that cannot be made is said here.
-    request_shaders(&engine, &first);
+    let mut engine = FrameRunner::new(gpu, &first)?;
+    log_warm_up_device(&mut engine);
     log::info(&format!(
         "session on Vulkan device {:?}, background {}: enhancing",
         engine.gpu.name, settings.background
@@ -82,15 +79,13 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<Frame
     Ok(engine)
 }
 
-/// Queues shaders to build ahead of earlier requests (at xrCreateSession, and when a
-/// swapchain's format becomes known). On the app's thread: a CPU driver's warm-up device is
-/// made here when one of them needs it, never on the pipeline thread (gpu/vulkan/frame/warm_up.rs).
-fn request_shaders(engine: &FrameRunner, ids: &[ShaderId]) {
-    let t = Instant::now();
-    match engine.request(ids) {
-        Some(Ok(())) => log::debug(&format!(
+/// Says what making the process's warm-up device (CPU drivers, made inside xrCreateSession
+/// when a session first needs it) gave.
+fn log_warm_up_device(engine: &mut FrameRunner) {
+    match engine.warm_up_made() {
+        Some(Ok(took)) => log::debug(&format!(
             "warm-up device made on the app's thread in {:.3} s",
-            t.elapsed().as_secs_f64()
+            took.as_secs_f64()
         )),
         Some(Err(e)) => log::info(&format!(
             "no warm-up device ({e}): shaders compile at their first dispatch; not tried again in this session"
@@ -199,7 +194,7 @@ impl SessionGraphics for VulkanSession {
             in_place: in_place || image_copy,
         };
         if let Ok(ids) = Recorder::shaders_for(params, [shape]) {
-            request_shaders(&self.engine, &ids);
+            self.engine.request(&ids);
         }
     }
 
