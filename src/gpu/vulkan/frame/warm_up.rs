@@ -209,7 +209,7 @@ impl WarmUp {
     }
 
     /// Dispatches one workgroup of the shader and waits for it (its compile) until it is
-    /// done or `stopped`; a dispatch left running is waited for by [`WarmUp::end`].
+    /// done or `stopped`; a dispatch left running is waited for by the next one (or the exit).
     pub fn run(&mut self, id: ShaderId, stopped: &dyn Fn() -> bool) -> Result<(), GpuError> {
         // An ended session's dispatch may still be compiling.
         self.wait_until_finished(stopped)?;
