@@ -10,9 +10,9 @@
 //! the app, on an instance of its own made through the app's Vulkan loader: nothing of it
 //! belongs to the app's device or instance. The sessions that follow share it, and it lives
 //! until the process exits: a Vulkan instance is never created or destroyed while the app
-//! may call into Vulkan from other threads (making one inside a later frame or swapchain
-//! call, while a thread of the app made a swapchain through the runtime, crashed the app on
-//! lavapipe). The building threads only record, submit and wait on the device's objects, one
+//! may call into Vulkan from other threads (the loader's vkEnumeratePhysicalDevices for a new
+//! instance unloads libraries: made inside a later swapchain call, it crashed the app's
+//! thread that had the runtime make a swapchain meanwhile, inside the loader). The building threads only record, submit and wait on the device's objects, one
 //! at a time, and stop waiting when their session ends: a compile still in flight (which no
 //! driver can stop) finishes on its own, the next session's warm-up waits for it first, and
 //! the process's exit waits for it.
