@@ -41,8 +41,15 @@ fn contrastxr(args: &[&str]) -> Output {
         .expect("run contrastxr")
 }
 
+/// A path in this test binary's scratch folder, inside the target directory (never the
+/// system's temporary folder, where each run would leave its files): emptied once per run,
+/// before its first use.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("contrastxr-cli-{}", std::process::id()));
+    static EMPTIED: std::sync::Once = std::sync::Once::new();
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli");
+    EMPTIED.call_once(|| {
+        let _ = std::fs::remove_dir_all(&dir);
+    });
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
 }

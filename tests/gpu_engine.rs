@@ -36,8 +36,7 @@ fn assert_clean(e: &VkOffline) {
 
 #[test]
 fn every_embedded_shader_passes_spirv_val() {
-    let dir = std::env::temp_dir().join(format!("contrastxr-spv-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch_dir("gpu-engine-spirv-val");
     for shader in contrastxr::gpu::core::modules::all() {
         let path = dir.join(format!("{}.spv", shader.name));
         std::fs::write(&path, shader.bytes()).unwrap();
@@ -350,8 +349,7 @@ fn cli(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
 
 #[test]
 fn cli_gpu_and_cpu_engines_agree_on_a_sample_scene() {
-    let dir = std::env::temp_dir().join(format!("contrastxr-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch_dir("gpu-engine-cli");
     let samples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
     let display = samples.join("display-text-swatches.png");
     let background = samples.join("background-blue-sky.png");

@@ -416,8 +416,7 @@ fn a_program_that_fails_to_link_leaves_the_texture_untouched() {
 /// agrees with the CPU reference within one code value on a sample scene.
 #[test]
 fn cli_opengl_and_cpu_engines_agree_on_a_sample_scene() {
-    let dir = std::env::temp_dir().join(format!("contrastxr-cli-gl-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch_dir("opengl-engine-cli");
     let samples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
     let display = samples.join("display-text-swatches.png");
     let background = samples.join("background-blue-sky.png");
