@@ -12,10 +12,11 @@
 //! until the process exits: a Vulkan instance is never created or destroyed while the app
 //! may call into Vulkan from other threads (the loader's vkEnumeratePhysicalDevices for a new
 //! instance unloads libraries: made inside a later swapchain call, it crashed the app's
-//! thread that had the runtime make a swapchain meanwhile, inside the loader). The building threads only record, submit and wait on the device's objects, one
-//! at a time, and stop waiting when their session ends: a compile still in flight (which no
-//! driver can stop) finishes on its own, the next session's warm-up waits for it first, and
-//! the process's exit waits for it.
+//! thread that had the runtime make a swapchain meanwhile, inside the loader). The building
+//! threads only record, submit and wait on the device's objects, one at a time, and stop
+//! waiting when their session ends: a compile still in flight (which no driver can stop)
+//! finishes on its own, the next session's warm-up waits for it first, and the process's exit
+//! waits for it.
 
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
@@ -59,7 +60,8 @@ const SIZE: (u32, u32) = (8, 8);
 const TIMEOUT: Duration = Duration::from_secs(120);
 /// The slices the building thread waits for a dispatch in, looking at the session's end.
 const WAIT_SLICE_NS: u64 = 20_000_000;
-/// How long dropping a device (one whose making failed part-way) waits for work in flight.
+/// How long dropping a warm-up device waits for work in flight (the process's devices are
+/// left to its exit; Drop stays sound for any other).
 const DROP_WAIT_NS: u64 = 1_000_000_000;
 /// What the `slow-build` fault point adds to a warm-up dispatch: a driver whose compile takes
 /// longer than any wait of the session's end.
