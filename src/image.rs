@@ -463,8 +463,7 @@ mod tests {
 
     #[test]
     fn a_png_shrinks_row_by_row_as_it_would_whole() {
-        let dir = std::env::temp_dir().join(format!("contrastxr-image-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::scratch::ScratchDir::new("image");
         let path = dir.join("scene.png");
         let img = scene(301, 207);
         img.save_png(&path).unwrap();

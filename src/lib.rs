@@ -18,4 +18,6 @@ pub mod gpu;
 pub mod image;
 pub mod layer;
 pub mod reference;
+#[cfg(test)]
+pub(crate) mod scratch;
 pub mod user_file;

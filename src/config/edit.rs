@@ -218,16 +218,16 @@ pub fn toggle(
 mod tests {
     use super::*;
 
-    fn temp(name: &str) -> std::path::PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("contrastxr-edit-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        dir.join("config.toml")
+    /// A config file's path in a scratch folder of its own (gone with the guard).
+    fn temp(name: &str) -> (crate::scratch::ScratchDir, std::path::PathBuf) {
+        let dir = crate::scratch::ScratchDir::new(&format!("edit-{name}"));
+        let path = dir.join("config.toml");
+        (dir, path)
     }
 
     #[test]
     fn set_keeps_comments_and_adds_app_tables() {
-        let path = temp("set");
+        let (_dir, path) = temp("set");
         write_atomically(&path, "# mine\nlambda_e = 0.4 # why\n").unwrap();
         let k = key("lambda_e").unwrap();
         set(&path, None, None, k, &Value::Float(0.6)).unwrap();
@@ -242,7 +242,7 @@ mod tests {
 
     #[test]
     fn toggle_flips_between_off_and_the_mode() {
-        let path = temp("toggle");
+        let (_dir, path) = temp("toggle");
         assert_eq!(toggle(&path, None, None, "split").unwrap(), "off");
         assert_eq!(toggle(&path, None, None, "split").unwrap(), "split");
         assert_eq!(
@@ -253,7 +253,7 @@ mod tests {
 
     #[test]
     fn entry_and_unset_put_a_key_back() {
-        let path = temp("entry");
+        let (_dir, path) = temp("entry");
         write_atomically(&path, "mode = \"split\"\n[app.\"a\"]\nlambda_e = 0.5\n").unwrap();
         let mode = key("mode").unwrap();
         let lambda = key("lambda_e").unwrap();
@@ -290,7 +290,7 @@ mod tests {
 
     #[test]
     fn a_broken_file_is_not_overwritten() {
-        let path = temp("broken");
+        let (_dir, path) = temp("broken");
         write_atomically(&path, "lambda_e = \n").unwrap();
         let k = key("lambda_e").unwrap();
         assert!(set(&path, None, None, k, &Value::Float(0.6)).is_err());

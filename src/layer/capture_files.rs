@@ -275,14 +275,8 @@ mod tests {
         }
     }
 
-    fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!(
-            "contrastxr-capture-files-{name}-{}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    fn temp_dir(name: &str) -> crate::scratch::ScratchDir {
+        crate::scratch::ScratchDir::new(&format!("capture-files-{name}"))
     }
 
     /// A link planted at a capture's name is replaced, not written through: the file it
@@ -322,7 +316,7 @@ mod tests {
             assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
         }
         let (tx, rx) = std::sync::mpsc::channel();
-        let writing = dir.clone();
+        let writing = dir.to_path_buf();
         std::thread::spawn(move || {
             let _ = tx.send(job(&writing).write());
         });

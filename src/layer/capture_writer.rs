@@ -217,8 +217,9 @@ mod tests {
     /// capture thread ends on its own once idle.
     #[test]
     fn captures_are_written_by_a_thread_that_ends_when_idle() {
-        let dir = std::env::temp_dir().join(format!("contrastxr-writer-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let scratch = crate::scratch::ScratchDir::new("writer");
+        // A folder the writer makes.
+        let dir = scratch.join("captures");
         write(CaptureJob {
             dir: Some(dir.clone()),
             stem: "frame-0-view-0".into(),
@@ -242,6 +243,5 @@ mod tests {
         assert_eq!(capture_threads(), 1);
         std::thread::sleep(IDLE_END + Duration::from_millis(500));
         assert_eq!(capture_threads(), 0, "the capture thread outlived its use");
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

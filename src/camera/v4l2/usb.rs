@@ -51,15 +51,11 @@ pub fn usb_video_nodes(sysfs: &Path) -> Vec<(String, UsbId)> {
 #[cfg(test)]
 pub mod fake {
     use super::UsbId;
-    use std::path::{Path, PathBuf};
+    use std::path::Path;
 
-    /// A fresh folder for one test.
-    pub fn root(name: &str) -> PathBuf {
-        let pid = std::process::id();
-        let dir = std::env::temp_dir().join(format!("contrastxr-sysfs-{pid}-{name}"));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A fresh folder for one test, removed with the guard.
+    pub fn root(name: &str) -> crate::scratch::ScratchDir {
+        crate::scratch::ScratchDir::new(&format!("sysfs-{name}"))
     }
 
     /// `class/video4linux/NODE/device` -> `devices/.../usb1/1-PORT/1-PORT:1.0`, with the USB
