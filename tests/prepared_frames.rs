@@ -417,3 +417,49 @@ fn the_perceptual_model_follows_each_change_of_the_settings() {
     }
     rig.finish();
 }
+
+/// The layer's submits on an app's queue wait while a forwarded runtime call that may submit on
+/// it (xrCreateSwapchain) holds the app-queue lock; a device of the engine's own does not.
+#[test]
+fn submits_on_the_apps_queue_wait_for_the_runtimes_swapchain_calls() {
+    use contrastxr::gpu::vulkan::device::app_queue;
+    use std::sync::mpsc;
+    let own = GpuDevice::create(&OPTIONS).unwrap();
+    // SAFETY: `own`'s handles, valid while `own` lives, which outlives `apps`.
+    let apps = unsafe {
+        GpuDevice::borrow(
+            own.entry.clone(),
+            own.instance.handle(),
+            own.physical,
+            own.device.handle(),
+            own.queue_family,
+            0,
+        )
+    }
+    .unwrap();
+    assert!(apps.is_the_apps() && !own.is_the_apps());
+    for (gpu, waits) in [(&own, false), (&apps, true)] {
+        let released = Arc::new(AtomicBool::new(false));
+        let (held_tx, held_rx) = mpsc::channel();
+        let holder = {
+            let released = released.clone();
+            std::thread::spawn(move || {
+                let queue = app_queue::hold();
+                held_tx.send(()).unwrap();
+                std::thread::sleep(std::time::Duration::from_millis(300));
+                released.store(true, Ordering::SeqCst);
+                drop(queue);
+            })
+        };
+        held_rx.recv().unwrap();
+        let mut c = Commands::new(gpu).unwrap();
+        c.begin(gpu).unwrap();
+        c.submit(gpu).unwrap();
+        let after_release = released.load(Ordering::SeqCst);
+        c.destroy(gpu).unwrap();
+        holder.join().unwrap();
+        assert_eq!(after_release, waits, "app's device: {waits}");
+    }
+    drop(apps);
+    assert_eq!(own.validation_errors(), 0);
+}

@@ -67,8 +67,19 @@ unsafe extern "system" fn end_frame(s: xr::Session, _: *const xr::FrameEndInfo) 
     record(s.into_raw(), "end_frame")
 }
 
+/// A call that may submit on the app's queue (Monado's do), as the layer must forward it: with
+/// the app-queue lock held (`app_queue`).
+fn queue_call(held: &'static str, free: &'static str) -> &'static str {
+    if crate::gpu::vulkan::device::app_queue::is_held() {
+        held
+    } else {
+        free
+    }
+}
+
 unsafe extern "system" fn destroy_swapchain(sc: xr::Swapchain) -> xr::Result {
-    record(sc.into_raw(), "destroy_swapchain")
+    let call = queue_call("destroy_swapchain", "destroy_swapchain, queue not held");
+    record(sc.into_raw(), call)
 }
 
 unsafe extern "system" fn create_swapchain(
@@ -78,7 +89,8 @@ unsafe extern "system" fn create_swapchain(
 ) -> xr::Result {
     // SAFETY: the layer forwards the app's handle pointer, valid in these tests.
     unsafe { *swapchain = xr::Swapchain::from_raw(fresh_handle()) };
-    record(s.into_raw(), "create_swapchain")
+    let call = queue_call("create_swapchain", "create_swapchain, queue not held");
+    record(s.into_raw(), call)
 }
 
 unsafe extern "system" fn destroy_session(s: xr::Session) -> xr::Result {

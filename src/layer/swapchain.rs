@@ -5,12 +5,15 @@
 //! release the runtime would accept; anything that needs the runtime to see the app's own state
 //! (another acquire, another release) hands a held release over first, enhanced, so each call
 //! gets the runtime's own answer. Queue work happens only in calls the spec lets use the app's
-//! queue: xrAcquireSwapchainImage, xrReleaseSwapchainImage, xrEndFrame.
+//! queue: xrAcquireSwapchainImage, xrReleaseSwapchainImage, xrEndFrame; and never at once with
+//! a forwarded xrCreateSwapchain or xrDestroySwapchain, where a runtime may submit on it too
+//! (`app_queue`).
 
 use super::ffi::{contain, guard, LayerError};
 use super::image_states::{ImageStates, ReleasePlan};
 use super::log;
 use super::state::{self, lock, SessionState, SwapchainInfo, SwapchainState};
+use crate::gpu::vulkan::device::app_queue;
 use crate::gpu::PixelFormat;
 use openxr_sys as xr;
 use std::sync::{Arc, Mutex};
@@ -90,6 +93,22 @@ fn path_line(
     )
 }
 
+/// The runtime's xrCreateSwapchain, never at once with the layer's submits on an app's queue
+/// (Monado submits the new images' layout change on it).
+///
+/// # Safety
+/// The arguments of an xrCreateSwapchain call.
+unsafe fn create_downstream(
+    create: xr::pfn::CreateSwapchain,
+    session: xr::Session,
+    info: *const xr::SwapchainCreateInfo,
+    swapchain: *mut xr::Swapchain,
+) -> xr::Result {
+    let _queue = app_queue::hold();
+    // SAFETY: guaranteed by the caller.
+    unsafe { create(session, info, swapchain) }
+}
+
 /// # Safety
 /// Called by the OpenXR loader with the arguments the app passed to xrCreateSwapchain.
 pub(crate) unsafe extern "system" fn create_swapchain(
@@ -106,7 +125,9 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             // SAFETY: the app's create info (null is left for the runtime to reject).
             let Some(app_info) = (unsafe { info.as_ref() }) else {
                 // SAFETY: forwarding the app's arguments.
-                return Ok(unsafe { (next.create_swapchain)(session, info, swapchain) });
+                return Ok(unsafe {
+                    create_downstream(next.create_swapchain, session, info, swapchain)
+                });
             };
             let format = app_info.format;
             // Pass-through sessions never have images held or touched.
@@ -123,7 +144,9 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 let mut wanted = *app_info;
                 wanted.usage_flags |= needed | extra;
                 // SAFETY: the app's create info with more usage bits.
-                result = unsafe { (next.create_swapchain)(session, &wanted, swapchain) };
+                result = unsafe {
+                    create_downstream(next.create_swapchain, session, &wanted, swapchain)
+                };
                 in_place = result.into_raw() >= 0;
                 usage_granted |= in_place;
                 if !in_place {
@@ -138,7 +161,9 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 let mut wanted = *app_info;
                 wanted.usage_flags |= needed;
                 // SAFETY: the app's create info with the usage bits the layer needs.
-                result = unsafe { (next.create_swapchain)(session, &wanted, swapchain) };
+                result = unsafe {
+                    create_downstream(next.create_swapchain, session, &wanted, swapchain)
+                };
                 usage_granted = result.into_raw() >= 0;
                 if !usage_granted {
                     log::once(&format!("no-transfer-{format}"), &format!(
@@ -148,7 +173,8 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             }
             if result.into_raw() < 0 {
                 // SAFETY: forwarding the app's arguments unchanged.
-                result = unsafe { (next.create_swapchain)(session, info, swapchain) };
+                result =
+                    unsafe { create_downstream(next.create_swapchain, session, info, swapchain) };
             }
             // Every swapchain is tracked (with its session's dispatch); only processable ones are touched.
             if result.into_raw() >= 0 {
@@ -215,6 +241,7 @@ pub(crate) unsafe extern "system" fn destroy_swapchain(swapchain: xr::Swapchain)
                 forget(&sc, swapchain);
                 Ok(xr::Result::SUCCESS)
             });
+            let _queue = app_queue::hold();
             // SAFETY: forwarding the app's call.
             Ok(unsafe { (next.destroy_swapchain)(swapchain) })
         },

@@ -103,8 +103,10 @@ impl Commands {
     pub fn submit(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
         let cmds = [self.cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        // An app's queue: never at once with a runtime call the layer forwards that may submit.
+        let _queue = gpu.is_the_apps().then(super::app_queue::hold);
         // SAFETY: recorded since `begin`; the caller is entitled to use the queue now (its own,
-        // or an app's inside an OpenXR call that gives the runtime the queue).
+        // or an app's inside an OpenXR call that gives the runtime the queue, and the lock).
         unsafe {
             gpu.device
                 .end_command_buffer(self.cmd)

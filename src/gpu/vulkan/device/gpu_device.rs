@@ -225,6 +225,12 @@ impl GpuDevice {
         props.device_type == vk::PhysicalDeviceType::CPU
     }
 
+    /// Whether this is the app's device and queue (borrowed), whose submits the runtime's
+    /// share (`app_queue`).
+    pub fn is_the_apps(&self) -> bool {
+        self.owned.is_none()
+    }
+
     /// Creates an instance and a device of its own (Vulkan 1.1, one compute queue).
     pub fn create(options: &DeviceOptions) -> Result<GpuDevice, GpuError> {
         GpuDevice::create_with(load_entry()?, options)

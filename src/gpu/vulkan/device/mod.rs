@@ -2,6 +2,7 @@
 //! buffers and images the engine allocates, command buffers, barriers and image copies. The only
 //! room whose public types hold raw Vulkan handles in public fields.
 
+pub mod app_queue;
 mod barrier;
 mod buffer;
 mod commands;
