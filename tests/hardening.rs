@@ -869,7 +869,10 @@ fn hundred_session_cycles_leak_nothing() {
     // its largest step discounted). So the sessions from 25 to 100 are counted in three parts
     // of 25: a leak of 28 KiB per session or more grows each part by 700 KiB, one-off steps grow
     // at most two of them, and the settling heap grows the last part least. The largest single
-    // step must itself stay well below the memory of one session's engine.
+    // step must itself stay below the memory of one session's engine (the first sessions each
+    // add about 20 MiB here, lavapipe's compiled pipelines): a one-off step of 10,424 KiB was
+    // seen once in a run with both cores busy with other work (between sessions 26 and 27, then
+    // flat for 73 sessions).
     let (warm, end) = (sessions[24], sessions[99]);
     let parts: Vec<u64> = [24, 49, 74, 99]
         .windows(2)
@@ -890,7 +893,7 @@ fn hundred_session_cycles_leak_nothing() {
         least < 700,
         "resident memory grew in every 25 sessions ({parts:?} KiB): {sessions:?}"
     );
-    assert!(largest_step < 8192, "resident memory jumped: {sessions:?}");
+    assert!(largest_step < 16384, "resident memory jumped: {sessions:?}");
     // A sample may count a file held for a moment (the log's writer thread keeps the log file
     // open until 200 ms after its last line, src/layer/log_file.rs; seen: 12 once among 11s).
     // A leak leaves every later sample higher; a file held for a moment does not.
