@@ -30,6 +30,7 @@ mod sources;
 mod spaces;
 mod state;
 mod swapchain;
+mod swapchain_plan;
 mod timespec;
 mod view_mappings;
 
