@@ -4,6 +4,7 @@
 
 use super::log;
 use super::state::SessionState;
+use crate::config::InPlace;
 use crate::gpu::PixelFormat;
 use openxr_sys as xr;
 
@@ -44,6 +45,9 @@ pub(super) fn plan(s: &SessionState, info: &xr::SwapchainCreateInfo) -> Option<P
         needed: graphics.needed_usage(),
         in_place: graphics.in_place_usage(pixel, info, &s.settings),
         copy_path: graphics.copy_path(pixel, &s.settings),
+        per_frame: graphics
+            .path_chosen_per_frame()
+            .then_some(s.settings.in_place),
         format_name: graphics.format_name(info.format),
     })
 }
@@ -54,6 +58,8 @@ pub(super) struct Plan {
     pub(super) in_place: Option<xr::SwapchainUsageFlags>,
     /// The path's name for views not enhanced in place (`SessionGraphics::copy_path`).
     pub(super) copy_path: &'static str,
+    /// The `in_place` setting where the path is chosen at each frame (OpenGL).
+    pub(super) per_frame: Option<InPlace>,
     pub(super) format_name: String,
 }
 
@@ -64,6 +70,16 @@ pub(super) fn path_line(
     in_place: bool,
     refused: Option<xr::Result>,
 ) -> String {
+    let swapchain = format!(
+        "swapchain of format {} ({}x{}, {} layer(s))",
+        plan.format_name, info.width, info.height, info.array_size
+    );
+    if let Some(setting) = plan.per_frame {
+        return format!(
+            "{swapchain}: views enhanced in place through an image unit where the texture and the driver allow it, else through a buffer copy, chosen at each frame (in_place = {}; under auto a CPU driver takes the buffer copy; the first enhanced frame's line says which)",
+            setting.name()
+        );
+    }
     let path = match in_place {
         true => "in-place",
         false => plan.copy_path,
@@ -76,10 +92,7 @@ pub(super) fn path_line(
         }
         (false, None, true) => "storage usage not granted".to_string(),
     };
-    format!(
-        "swapchain of format {} ({}x{}, {} layer(s)): views enhanced through path {path}; {why}",
-        plan.format_name, info.width, info.height, info.array_size
-    )
+    format!("{swapchain}: views enhanced through path {path}; {why}")
 }
 
 #[cfg(test)]
@@ -114,5 +127,44 @@ mod tests {
         assert!(!enhanceable(&info(srgb, colour, 4)));
         assert!(!enhanceable(&info(srgb, depth, 1)));
         assert!(!enhanceable(&info(srgb, colour | depth, 1)));
+    }
+
+    fn srgb_plan(per_frame: Option<InPlace>) -> Plan {
+        Plan {
+            pixel: PixelFormat {
+                layout: crate::gpu::PixelLayout::Rgba8,
+                srgb: true,
+            },
+            needed: xr::SwapchainUsageFlags::TRANSFER_SRC,
+            in_place: Some(xr::SwapchainUsageFlags::UNORDERED_ACCESS),
+            copy_path: "image-copy",
+            format_name: "R8G8B8A8_SRGB".into(),
+            per_frame,
+        }
+    }
+
+    /// The line names the path a swapchain's views take: the runtime's answer where usage
+    /// decides it (Vulkan), the per-frame choice where nothing at creation does (OpenGL).
+    #[test]
+    fn the_swapchain_line_names_the_path_taken() {
+        let colour = info(FORMAT, xr::SwapchainUsageFlags::COLOR_ATTACHMENT, 1);
+        let refused = Some(xr::Result::ERROR_FEATURE_UNSUPPORTED);
+        assert_eq!(
+            path_line(&colour, &srgb_plan(None), false, refused),
+            "swapchain of format R8G8B8A8_SRGB (64x48, 2 layer(s)): views enhanced through path image-copy; the runtime refused storage usage (ERROR_FEATURE_UNSUPPORTED)"
+        );
+        let granted = path_line(&colour, &srgb_plan(None), true, None);
+        assert!(
+            granted.ends_with("path in-place; the runtime granted storage usage"),
+            "{granted}"
+        );
+        let gl = path_line(&colour, &srgb_plan(Some(InPlace::Auto)), false, None);
+        let per_frame = "swapchain of format R8G8B8A8_SRGB (64x48, 2 layer(s)): views enhanced in place through an image unit where";
+        assert!(gl.starts_with(per_frame), "{gl}");
+        assert!(
+            gl.contains("chosen at each frame (in_place = auto;"),
+            "{gl}"
+        );
+        assert!(!gl.contains("through path"), "{gl}");
     }
 }

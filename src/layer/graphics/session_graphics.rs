@@ -77,6 +77,11 @@ pub trait SessionGraphics: Send {
     fn copy_path(&self, _format: PixelFormat, _settings: &Settings) -> &'static str {
         "copy"
     }
+    /// Whether the engine chooses the path of a swapchain's views at each frame (OpenGL: in
+    /// place through an image unit where the texture and the driver allow it), not the usage.
+    fn path_chosen_per_frame(&self) -> bool {
+        false
+    }
     /// The image handles of an enumeration the runtime filled (None: not this API's structs).
     ///
     /// # Safety

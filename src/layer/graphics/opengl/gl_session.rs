@@ -305,6 +305,10 @@ impl SessionGraphics for GlSession {
         None
     }
 
+    fn path_chosen_per_frame(&self) -> bool {
+        true
+    }
+
     unsafe fn images(
         &self,
         images: *const xr::SwapchainImageBaseHeader,
