@@ -208,19 +208,20 @@ mod tests {
             assert!(text.contains("1 passed"), "{text}");
             return;
         }
-        let path = std::env::temp_dir().join(format!("contrastxr-stalled-{}", std::process::id()));
+        let scratch = crate::scratch::ScratchDir::new("stalled");
+        let path = scratch.join("pipelines-x.bin");
         std::fs::write(&path, b"cache").unwrap();
         let t = std::time::Instant::now();
         let read = super::read_file(&path);
         let took = t.elapsed();
-        let _ = std::fs::remove_file(&path);
         assert!(
             took < std::time::Duration::from_millis(1500),
             "took {took:?}"
         );
         assert_eq!(read.unwrap_err(), "took more than 1000 ms to read");
         // A write too.
-        let dir = std::env::temp_dir().join(format!("contrastxr-stalled-w-{}", std::process::id()));
+        // Into a folder not yet there, as before a session's first save.
+        let dir = scratch.join("w");
         let t = std::time::Instant::now();
         let written = super::write_atomically(&dir, "pipelines-x.bin", b"cache");
         let took = t.elapsed();
@@ -229,7 +230,7 @@ mod tests {
             "took {took:?}"
         );
         assert_eq!(written.unwrap_err(), "took more than 250 ms to write");
+        // The scratch folder goes once the stalled write is over.
         std::thread::sleep(std::time::Duration::from_millis(1500));
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

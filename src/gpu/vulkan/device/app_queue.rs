@@ -16,8 +16,9 @@ pub fn hold() -> MutexGuard<'static, ()> {
     APP_QUEUE.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
-/// Whether someone holds it now (for tests).
-pub fn is_held() -> bool {
+/// Whether someone holds it now (the fake runtime's check).
+#[cfg(test)]
+pub(crate) fn is_held() -> bool {
     matches!(
         APP_QUEUE.try_lock(),
         Err(std::sync::TryLockError::WouldBlock)
