@@ -75,7 +75,8 @@ fn main() {
     let mut table = Table::default();
     let mut gl = GlTable::default();
     // The table's order: the single shaders (decode_camera, finish_tiles, copy_pixels,
-    // copy_rows), the background passes, the `enhance` and then the `classify` variants.
+    // copy_rows), the background passes, the `enhance`, the `classify` and the benchmark's ablated
+    // variants.
     table.single("DECODE_CAMERA", "decode_camera", "decode", true);
     for (stage, entries) in STAGES {
         let path = format!("shaders/{stage}.wgsl");
@@ -164,6 +165,19 @@ fn main() {
             let id = gl.add(&file, uniforms);
             gl.classify.push((v, id));
         }
+    }
+    // The benchmark's ablations (Vulkan only), after the variants the layer runs.
+    for v in variants::ablated_variants() {
+        let file = v.file();
+        let source = format!(
+            "{}\n{}{body}{shared_fetch}{}",
+            prefix(v.pixels.access, v.pixels.format),
+            wgsl::specialise_ablated(v.codes(), false, v.ablate),
+            method_wgsl(paper_code())
+        );
+        let _ = write(&file, "enhance", &source, "enhance");
+        let id = table.add(&file, "enhance", false, v.pixels.in_place());
+        table.ablated.push((v, id));
     }
     fs::write(out.join("shader_table.rs"), table.source()).unwrap();
     fs::write(out.join("gl_shader_table.rs"), gl.source()).unwrap();

@@ -4,7 +4,7 @@
 //! module, the Params uniforms, the variants). An id is an index in the module list, written
 //! here with the list, never counted by hand.
 
-use crate::variants::{Classify, Enhance};
+use crate::variants::{Ablated, Classify, Enhance};
 
 /// One embedded shader as the table lists it.
 pub struct Module {
@@ -28,6 +28,8 @@ pub struct Table {
     pub decode_blur: Vec<usize>,
     pub enhance: Vec<(Enhance, usize)>,
     pub classify: Vec<(Classify, usize)>,
+    /// The benchmark's ablated `enhance` variants.
+    pub ablated: Vec<(Ablated, usize)>,
 }
 
 impl Table {
@@ -79,6 +81,12 @@ impl Table {
         s += "];\n/// (format, access, method, id) of each `classify` variant.\n";
         s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n";
         s += &classify_rows(&self.classify);
+        s +=
+            "];\n/// (access, ablations, id) of each ablated `enhance` variant of the benchmark.\n";
+        s += "pub static ENHANCE_ABLATED: &[(u32, u32, usize)] = &[\n";
+        for (v, id) in &self.ablated {
+            s += &format!("    ({}, {}, {id}),\n", v.pixels.access, v.ablate);
+        }
         s + "];\n"
     }
 }

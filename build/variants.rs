@@ -125,6 +125,41 @@ pub fn enhance_variants() -> Vec<Enhance> {
     pixel_accesses().into_iter().flat_map(enhance_of).collect()
 }
 
+/// One ablated `enhance` variant of the benchmark (`contrastxr bench --ablate`): the paper's
+/// method in mode enhance, extras off, with shared fetches (what the bench's views take
+/// otherwise), RGBA8 sRGB, some parts taken out (interface.rs ABLATE_*).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct Ablated {
+    pub pixels: PixelAccess,
+    /// The ABLATE_* bits.
+    pub ablate: u32,
+}
+
+impl Ablated {
+    /// The method, mode and FORMAT codes it is specialised on.
+    pub fn codes(&self) -> (u32, u32, u32) {
+        (paper_code(), MODE_ENHANCE, self.pixels.format)
+    }
+
+    /// The SPIR-V file's name, without its extension.
+    pub fn file(&self) -> String {
+        format!(
+            "enhance_ablated_f{}_a{}_x{}",
+            self.pixels.format, self.pixels.access, self.ablate
+        )
+    }
+}
+
+/// Every ablated variant: each of ABLATIONS for each pixel access of RGBA8 sRGB (Vulkan only).
+pub fn ablated_variants() -> Vec<Ablated> {
+    let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
+    pixel_accesses()
+        .into_iter()
+        .filter(|p| p.format == srgb8)
+        .flat_map(|pixels| ABLATIONS.map(|ablate| Ablated { pixels, ablate }))
+        .collect()
+}
+
 /// One `classify` variant (mode 0, extras off): built with the paper's method, which lists
 /// every tile with content, or the perceptual method's, which lists only tiles with a pixel
 /// below its target (it leaves the others as they are).

@@ -46,10 +46,19 @@ pub fn prefix(common: &str, access_code: u32, format: u32) -> String {
         + &access(access_code, format)
 }
 
-/// A variant's constants: its method, view mode, FORMAT code and extras.
-pub fn specialise((method, mode, format): (u32, u32, u32), extras: bool) -> String {
+/// A variant's constants: its method, view mode, FORMAT code and extras; no ablation.
+pub fn specialise(codes: (u32, u32, u32), extras: bool) -> String {
+    specialise_ablated(codes, extras, 0)
+}
+
+/// A variant's constants with the benchmark's ablations `ablate` (interface.rs ABLATE_*).
+pub fn specialise_ablated(
+    (method, mode, format): (u32, u32, u32),
+    extras: bool,
+    ablate: u32,
+) -> String {
     format!(
-        "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\n"
+        "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\nconst ABLATE: u32 = {ablate}u;\n"
     )
 }
 

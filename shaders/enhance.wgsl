@@ -154,8 +154,14 @@ fn quantised(v: Colours) -> Colours {
     return (1.0 / levels) * q;
 }
 
+// Whether the benchmark's ablation `part` (ABLATE_*; build.rs's constant ABLATE, 0 in every
+// shader the layer runs) takes that part out of this variant.
+fn ablated(part: u32) -> bool {
+    return (ABLATE & part) != 0u;
+}
+
 fn is_srgb() -> bool {
-    return (FORMAT & FORMAT_SRGB_BIT) != 0u;
+    return (FORMAT & FORMAT_SRGB_BIT) != 0u && !ablated(ABLATE_CODEC);
 }
 
 // Linear light of stored values (only the 8-bit formats are sRGB-encoded).
@@ -292,6 +298,9 @@ fn enhance_linear(display: Colours, bg: Background) -> Perceived {
         let out = method_linear(display, bg);
         return Perceived(Enhanced(cap_luminance(display, clip(out)), vec4<bool>(true)), vec4<u32>(0u));
     }
+    if (ablated(ABLATE_METHOD)) {
+        return Perceived(Enhanced(display, vec4<bool>(true)), vec4<u32>(0u));
+    }
     let d = linear_to_scaled(display);
     if (METHOD_PERCEPTUAL) {
         // The paper's change spent by perception (shaders/methods/, `method_perceptual`), which
@@ -381,7 +390,7 @@ fn enhance_group(x: u32, w: Words, bg: Background) -> Words {
 @compute @workgroup_size(TILE, TILE)
 fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
     let k = (group.y * INDIRECT_ROW_GROUPS + group.x) * TILE + local.x;
-    if (k >= tiles.total) {
+    if (k >= tiles.total || ablated(ABLATE_ENHANCE_PASS)) {
         return;
     }
     let tile = tiles.index[k];
@@ -398,12 +407,22 @@ fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id
     let w_first = load_group(row);
     let w_second = load_group(second);
     let x_second = x0 + select(0u, 4u, valid > 4u);
-    let b_first = sampled_background(x0, y);
-    let b_second = sampled_background(x_second, y);
+    let b_first = background_at(x0, y);
+    let b_second = background_at(x_second, y);
     store_group(row, enhance_group(x0, w_first, b_first), min(valid, 4u));
     if (valid > 4u) {
         store_group(second, enhance_group(x_second, w_second, b_second), valid - 4u);
     }
+}
+
+// The background of pixels x..x+3 of row y: sampled, or a constant mid grey where the
+// benchmark ablates the sampling.
+fn background_at(x: u32, y: u32) -> Background {
+    if (ablated(ABLATE_BACKGROUND)) {
+        let grey = Colours(vec4<f32>(0.5), vec4<f32>(0.5), vec4<f32>(0.5));
+        return Background(grey, linear_to_scaled(pc.transmittance * grey));
+    }
+    return sampled_background(x, y);
 }
 
 // Of pixels x..x+3 of row y (words w), those the method may change: all, but in the perceptual

@@ -950,3 +950,118 @@ fn mappings_the_shared_fetches_cannot_serve_take_the_general_variant() {
     }
     assert_clean(&e);
 }
+
+/// The benchmark's ablations (`contrastxr bench --ablate`) take out what they name: without
+/// the method (alone or with the background and the codec) or without the enhance pass, every
+/// pixel keeps its words; without the codec, the sRGB words are enhanced as UNORM words are;
+/// with a constant background, the camera no longer matters. Wide and narrow rows, and in place.
+#[test]
+fn bench_ablations_take_out_what_they_name() {
+    use contrastxr::gpu::core::interface::{
+        ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_ENHANCE_PASS, ABLATE_METHOD,
+    };
+    let mut e = engine();
+    let (camera, other_camera) = (noise(64, 40, 23), noise(64, 40, 29));
+    let params = Params::default();
+    let unorm8 = PixelFormat {
+        layout: PixelLayout::Rgba8,
+        srgb: false,
+    };
+    for width in [96, 97] {
+        let region = (width, 9);
+        let raw: Vec<u32> = noise(width, 9, 41 + width)
+            .pixels
+            .iter()
+            .map(|p| u32::from_le_bytes(*p))
+            .collect();
+        let run = |e: &mut VkOffline, ablate, format, camera: &RgbaImage| {
+            e.set_ablation(ablate);
+            let out = e.enhance_raw(&raw, region, format, camera, &params);
+            e.set_ablation(0);
+            out.unwrap_or_else(|err| panic!("ablation {ablate}: {err}"))
+        };
+        let enhanced = run(&mut e, 0, PixelFormat::SRGB8, &camera);
+        assert_ne!(enhanced, raw, "{width}: nothing changed");
+        let all_three = ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC;
+        for ablate in [ABLATE_METHOD, all_three, ABLATE_ENHANCE_PASS] {
+            let out = run(&mut e, ablate, PixelFormat::SRGB8, &camera);
+            assert_eq!(differing(&out, &raw), 0, "{width}: ablation {ablate}");
+        }
+        let without_codec = run(&mut e, ABLATE_CODEC, PixelFormat::SRGB8, &camera);
+        let as_unorm = run(&mut e, 0, unorm8, &camera);
+        assert_ne!(without_codec, enhanced, "{width}: the codec still ran");
+        let bytes = |w: &[u32]| channels(&w.iter().map(|x| x.to_le_bytes()).collect::<Vec<_>>());
+        let what = format!("{width}: no codec against UNORM");
+        assert_shared_fetch_contract(&e, &bytes(&without_codec), &bytes(&as_unorm), &what);
+        let grey = run(&mut e, ABLATE_BACKGROUND, PixelFormat::SRGB8, &camera);
+        let grey_too = run(&mut e, ABLATE_BACKGROUND, PixelFormat::SRGB8, &other_camera);
+        let other = run(&mut e, 0, PixelFormat::SRGB8, &other_camera);
+        assert_ne!(other, enhanced, "{width}: the camera made no difference");
+        assert_ne!(grey, raw, "{width}: no enhancement over the grey");
+        assert_eq!(grey, grey_too, "{width}: the camera still read");
+    }
+    // In place, in the app's image.
+    let raw: Vec<u32> = noise(48, 9, 43)
+        .pixels
+        .iter()
+        .map(|p| u32::from_le_bytes(*p))
+        .collect();
+    let format = ash::vk::Format::R8G8B8A8_SRGB;
+    e.set_ablation(ABLATE_METHOD);
+    let out = e.enhance_raw_in_place(&raw, ((48, 9), format), &camera, &params);
+    e.set_ablation(0);
+    assert_eq!(out.unwrap(), raw, "in place without the method");
+    // Built for the paper's method on RGBA8 sRGB only: other methods and formats are refused.
+    e.set_ablation(ABLATE_METHOD);
+    let luminance = Params {
+        method: Method::Luminance,
+        ..Params::default()
+    };
+    let refused = e.enhance_raw(&raw, (48, 9), PixelFormat::SRGB8, &camera, &luminance);
+    let refused_unorm = e.enhance_raw(&raw, (48, 9), unorm8, &camera, &params);
+    e.set_ablation(0);
+    for r in [refused, refused_unorm] {
+        let err = r.expect_err("no ablated variant").to_string();
+        assert!(err.contains("paper's method on RGBA8 sRGB only"), "{err}");
+    }
+    assert_clean(&e);
+}
+
+/// `--ablate` gives each case a row per ablation, the baseline first; unknown names and the
+/// OpenGL engine are refused.
+#[test]
+fn bench_ablations_are_rows_of_their_own() {
+    let o = cli(
+        &[
+            "bench",
+            "--sizes",
+            "64x40",
+            "--views",
+            "1",
+            "--runs",
+            "3",
+            "--content",
+            "full",
+            "--ablate",
+            "enhance-pass,method",
+            "--json",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let results = v["results"].as_array().unwrap();
+    let names: Vec<&str> = results
+        .iter()
+        .map(|r| r["ablation"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["none", "enhance-pass", "method"]);
+    let enh = |k: usize| results[k]["enhance_ms"].as_f64().unwrap();
+    assert!(enh(0) > 0.0 && enh(1) > 0.0 && enh(2) > 0.0);
+    let bad = cli(&["bench", "--ablate", "blur"], &[]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("'blur' is not none, method"));
+    let gl = cli(&["bench", "--engine", "opengl", "--ablate", "method"], &[]);
+    assert_eq!(gl.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&gl.stderr).contains("Vulkan engine only"));
+}

@@ -198,6 +198,18 @@ const NOT_RUN: &[(&str, &str)] = &[
         "contrastxr bench --sizes 1268x720,2064x2208 --runs 10 --path both",
         "minutes",
     ),
+    (
+        "contrastxr bench --ablate",
+        "a mention; tests/gpu_engine.rs runs --ablate",
+    ),
+    (
+        "contrastxr bench --sizes 1268x720,2064x2208 --runs 10 --path copy",
+        "minutes",
+    ),
+    (
+        "contrastxr bench --sizes 2064x2208 --runs 10 --path all --ablate all",
+        "minutes; tests/gpu_engine.rs runs --ablate",
+    ),
 ];
 
 /// The markdown files whose commands are checked.

@@ -5,7 +5,7 @@ use super::args::Args;
 use super::error::CliError;
 use super::options::{self, method_usage};
 use contrastxr::algorithm::Params;
-use contrastxr::gpu::core::bench::{BenchCase, BenchResult, Content, CAMERA_SIZE};
+use contrastxr::gpu::core::bench::{Ablation, BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::opengl::GlOffline;
 use contrastxr::gpu::{DeviceOptions, VkOffline};
 
@@ -15,7 +15,7 @@ pub fn usage() -> String {
     format!(
         "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
          \x20                       [--content typical,full] [--path P] [--engine vulkan|opengl]\n\
-         \x20                       [method options]\n\n\
+         \x20                       [--ablate LIST] [method options]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
@@ -44,7 +44,15 @@ pub fn usage() -> String {
          (enh is the same figure: nothing else runs around the passes), bg is the upload of a\n\
          camera frame's texels (their blur runs on the source's CPU thread, not timed).\n\
          The method options set what is timed (--method perceptual, --world-nits 5000, ...); the\n\
-         config file and the environment do not.\n\n{}",
+         config file and the environment do not.\n\
+         --ablate LIST (Vulkan only; each case once per item, after none) takes one part out of\n\
+         the enhancement to show what it costs, in every column that runs it (the output is\n\
+         then no enhancement; the paper's method on the bench's RGBA8 sRGB only): method (no\n\
+         CIELAB conversion or method, the display colour kept), background (a constant grey,\n\
+         no camera texel reads), codec (no sRGB decode or encode), per-pixel (the three: loads,\n\
+         quantisation and stores left), enhance-pass (the enhance pass returns at once:\n\
+         classify, finish_tiles, the indirect dispatch), shared-fetch (the general background\n\
+         sampling instead of shared fetches), all (every one).\n\n{}",
         contrastxr::gpu::core::bench::WARM_UP_RUNS,
         contrastxr::gpu::core::bench::CAMERA_SIZE.0,
         contrastxr::gpu::core::bench::CAMERA_SIZE.1,
@@ -67,6 +75,36 @@ fn parse_content(s: &str) -> Result<Content, CliError> {
         .into_iter()
         .find(|c| c.name() == s.trim())
         .ok_or_else(|| CliError::Usage(format!("content '{s}' is not typical or full")))
+}
+
+/// The ablations asked for, `none` first (the baseline each is read against); `all` for every
+/// one.
+fn parse_ablations(list: Option<String>) -> Result<Vec<Ablation>, CliError> {
+    let Some(list) = list else {
+        return Ok(vec![Ablation::None]);
+    };
+    let mut out = vec![Ablation::None];
+    for item in list.split(',').map(str::trim) {
+        let found: Vec<Ablation> = match item {
+            "all" => Ablation::ALL.to_vec(),
+            _ => Ablation::ALL
+                .into_iter()
+                .filter(|a| a.name() == item)
+                .collect(),
+        };
+        if found.is_empty() {
+            return Err(CliError::Usage(format!(
+                "--ablate: '{item}' is not none, method, background, codec, per-pixel, enhance-pass, shared-fetch or all"
+            )));
+        }
+        out.extend(
+            found
+                .into_iter()
+                .filter(|a| !out.contains(a))
+                .collect::<Vec<_>>(),
+        );
+    }
+    Ok(out)
 }
 
 fn parse_count(what: &str, s: Option<String>, default: u32) -> Result<u32, CliError> {
@@ -122,21 +160,30 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             )))
         }
     };
+    let ablations = parse_ablations(args.value(&["--ablate"])?)?;
     let json = args.flag("--json");
     args.finish()?;
-    let cases = sizes
-        .iter()
-        .flat_map(|&region| {
-            contents.iter().map(move |&content| BenchCase {
-                region,
-                views,
-                content,
-                runs,
-                in_place,
-                image_copy,
-            })
-        })
-        .collect::<Vec<_>>();
+    if opengl && ablations.len() > 1 {
+        return Err(CliError::Usage(
+            "--ablate: the ablations are built for the Vulkan engine only".into(),
+        ));
+    }
+    let mut cases = Vec::new();
+    for &region in &sizes {
+        for &content in &contents {
+            for &ablation in &ablations {
+                cases.push(BenchCase {
+                    region,
+                    views,
+                    content,
+                    runs,
+                    in_place,
+                    image_copy,
+                    ablation,
+                });
+            }
+        }
+    }
     if opengl {
         return run_opengl(&cases, &params, json);
     }
@@ -191,7 +238,7 @@ fn report(
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13}",
         "size",
         "views",
         "content",
@@ -213,14 +260,15 @@ fn header() -> String {
         "img path ms",
         "ic copies ms",
         "ic/frame",
-        "ic/ip"
+        "ic/ip",
+        "ablation"
     )
 }
 
 fn row(r: &BenchResult) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
@@ -243,6 +291,7 @@ fn row(r: &BenchResult) -> String {
         optional(r.image_copy_copies_ms, 3),
         optional(r.image_copy_frame_ratio(), 2),
         optional(r.image_copy_in_place_ratio(), 2),
+        r.case.ablation.name(),
     )
 }
 
@@ -260,6 +309,7 @@ fn to_json(device: &str, results: &[BenchResult]) -> String {
                 "height": r.case.region.1,
                 "views": r.case.views,
                 "content": r.case.content.name(),
+                "ablation": r.case.ablation.name(),
                 "foreground_fraction": r.foreground,
                 "runs": r.case.runs,
                 "copy_ms": r.copy_ms,

@@ -29,6 +29,10 @@ const BENCH_OPTIONS: &[Opt] = &[
     Opt::value("--content", "typical,full"),
     Opt::value("--path", "copy|in-place|both|image-copy|all"),
     Opt::value("--engine", "vulkan|opengl"),
+    Opt::value(
+        "--ablate",
+        "method|background|codec|per-pixel|enhance-pass|shared-fetch|all,...",
+    ),
     Opt::flag("--json"),
 ];
 

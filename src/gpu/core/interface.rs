@@ -252,10 +252,33 @@ pub const MODE_BACKGROUND: u32 = 4;
 /// one variant of its own).
 pub const ENHANCE_MODES: [u32; 3] = [MODE_ENHANCE, MODE_SPLIT, MODE_HEATMAP];
 
+/// The benchmark's ablations (`contrastxr bench --ablate`), bits of the WGSL constant ABLATE:
+/// each takes one part of the enhancement out, to show what it costs. 0 in every shader the
+/// layer and the offline tools run; the ablated `enhance` variants are built for the paper's
+/// method on RGBA8 sRGB only (build/variants.rs). Their output is not an enhancement.
+/// No scaled-space conversion and no method: each pixel's output is its display colour.
+pub const ABLATE_METHOD: u32 = 1;
+/// A constant mid-grey background: no camera texel reads (its conversion to the scaled space
+/// kept).
+pub const ABLATE_BACKGROUND: u32 = 2;
+/// No sRGB decode or encode: the stored values are taken as linear.
+pub const ABLATE_CODEC: u32 = 4;
+/// The enhance pass returns at once: classify, finish_tiles and an empty indirect dispatch.
+pub const ABLATE_ENHANCE_PASS: u32 = 8;
+/// The ablations an `enhance` variant is built for: each part alone, the three per-pixel parts
+/// together (only the loads, the quantisation and the stores left), the pass.
+pub const ABLATIONS: [u32; 5] = [
+    ABLATE_METHOD,
+    ABLATE_BACKGROUND,
+    ABLATE_CODEC,
+    ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC,
+    ABLATE_ENHANCE_PASS,
+];
+
 // The method codes are the method table's (src/algorithm/method/table.rs, `code`).
 
 /// The codes written into every shader as WGSL constants, by name.
-pub const CODES: [(&str, u32); 36] = [
+pub const CODES: [(&str, u32); 40] = [
     ("TILE", TILE),
     ("DECODE_ROWS", DECODE_ROWS),
     ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
@@ -301,6 +324,10 @@ pub const CODES: [(&str, u32); 36] = [
         PERCEPTUAL_AT_ENTRIES_PER_LOG_Y,
     ),
     ("PERCEPTUAL_WORDS", PERCEPTUAL_WORDS),
+    ("ABLATE_METHOD", ABLATE_METHOD),
+    ("ABLATE_BACKGROUND", ABLATE_BACKGROUND),
+    ("ABLATE_CODEC", ABLATE_CODEC),
+    ("ABLATE_ENHANCE_PASS", ABLATE_ENHANCE_PASS),
 ];
 
 /// The blurred background packs each texel's linear R, G, B into 21 bits each (two texels per

@@ -39,8 +39,8 @@ macro_rules! spirv {
 }
 
 // MODULES (every shader; a ShaderId is an index there), the single shaders' ids (ID_*) and
-// the families' tables with their ids (DECODE_BLUR, ENHANCE_VARIANTS, CLASSIFY_VARIANTS), all
-// written together by build.rs from src/gpu/core/interface.rs.
+// the families' tables with their ids (DECODE_BLUR, ENHANCE_VARIANTS, CLASSIFY_VARIANTS,
+// ENHANCE_ABLATED), all written together by build.rs from src/gpu/core/interface.rs.
 include!(concat!(env!("OUT_DIR"), "/shader_table.rs"));
 
 /// Every embedded shader (for spirv-val in the tests), in id order.

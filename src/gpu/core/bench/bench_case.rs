@@ -1,6 +1,10 @@
 //! What the benchmark (gpu/vulkan/offline/bench.rs) times: its cases, the display content and the camera
 //! frame.
 
+use crate::gpu::core::interface::{
+    ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_ENHANCE_PASS, ABLATE_METHOD,
+};
+
 /// The camera frame size the background preparation is timed with (a common camera mode).
 pub const CAMERA_SIZE: (u32, u32) = (1280, 720);
 /// Runs before the timed ones (pipeline warm-up, caches, clocks).
@@ -27,6 +31,65 @@ impl Content {
     }
 }
 
+/// What the benchmark takes out of the enhancement, to show what that part costs
+/// (`contrastxr bench --ablate`, Vulkan only); with any but `None` the views' output is not an
+/// enhancement. The ablated variants are built for the paper's method on RGBA8 sRGB, the
+/// bench's format (src/gpu/core/interface.rs ABLATE_*).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ablation {
+    /// The enhancement as the layer runs it.
+    None,
+    /// No scaled-space conversion and no method: each pixel's output is its display colour.
+    Method,
+    /// A constant mid-grey background instead of the camera texels' reads.
+    Background,
+    /// No sRGB decode or encode: the stored values taken as linear.
+    Codec,
+    /// The three above together: the pass's loads, quantisation and stores left.
+    PerPixel,
+    /// The enhance pass returns at once: classify, finish_tiles and an empty indirect dispatch.
+    EnhancePass,
+    /// The general background sampling instead of the shared fetches.
+    SharedFetch,
+}
+
+impl Ablation {
+    pub const ALL: [Ablation; 7] = [
+        Ablation::None,
+        Ablation::Method,
+        Ablation::Background,
+        Ablation::Codec,
+        Ablation::PerPixel,
+        Ablation::EnhancePass,
+        Ablation::SharedFetch,
+    ];
+
+    /// Its name on the command line and in the bench's output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ablation::None => "none",
+            Ablation::Method => "method",
+            Ablation::Background => "background",
+            Ablation::Codec => "codec",
+            Ablation::PerPixel => "per-pixel",
+            Ablation::EnhancePass => "enhance-pass",
+            Ablation::SharedFetch => "shared-fetch",
+        }
+    }
+
+    /// The ABLATE_* bits of its `enhance` variant (0: the layer's own).
+    pub fn bits(self) -> u32 {
+        match self {
+            Ablation::None | Ablation::SharedFetch => 0,
+            Ablation::Method => ABLATE_METHOD,
+            Ablation::Background => ABLATE_BACKGROUND,
+            Ablation::Codec => ABLATE_CODEC,
+            Ablation::PerPixel => ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC,
+            Ablation::EnhancePass => ABLATE_ENHANCE_PASS,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct BenchCase {
     /// Per view.
@@ -42,6 +105,7 @@ pub struct BenchCase {
     /// image of the engine's own with storage usage, enhanced there by the in-place shaders,
     /// copied back), where the device can store to its format.
     pub image_copy: bool,
+    pub ablation: Ablation,
 }
 
 /// One RGBA8 pixel (R in the low byte) of the given content at (x, y) of a w x h region.

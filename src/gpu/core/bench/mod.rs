@@ -4,5 +4,7 @@
 mod bench_case;
 mod bench_result;
 
-pub use bench_case::{camera_frame, content_pixel, BenchCase, Content, CAMERA_SIZE, WARM_UP_RUNS};
+pub use bench_case::{
+    camera_frame, content_pixel, Ablation, BenchCase, Content, CAMERA_SIZE, WARM_UP_RUNS,
+};
 pub use bench_result::{median, BenchResult};

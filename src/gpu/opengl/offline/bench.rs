@@ -14,7 +14,8 @@ use super::gl_offline::GlOffline;
 use crate::algorithm::params::Params;
 use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::bench::{
-    camera_frame, content_pixel, median, BenchCase, BenchResult, Content, CAMERA_SIZE, WARM_UP_RUNS,
+    camera_frame, content_pixel, median, Ablation, BenchCase, BenchResult, Content, CAMERA_SIZE,
+    WARM_UP_RUNS,
 };
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
 use crate::gpu::opengl::conv::GlFormat;
@@ -63,6 +64,11 @@ impl GlOffline {
     /// timed, and OpenGL has no image-copy path).
     pub fn bench(&mut self, case: &BenchCase, params: &Params) -> Result<BenchResult, GlError> {
         params.validate().map_err(GlError::Input)?;
+        if case.ablation != Ablation::None {
+            return Err(GlError::Input(
+                "the ablations are built for the Vulkan engine only".into(),
+            ));
+        }
         let internal = gl::SRGB8_ALPHA8;
         let (texels, foreground) = content_texels(case.content, case.region);
         let mut rig = GlRig {

@@ -7,7 +7,7 @@
 use super::bench_rig::Rig;
 use super::vk_offline::VkOffline;
 use crate::algorithm::params::Params;
-use crate::gpu::core::bench::{median, BenchCase, BenchResult, WARM_UP_RUNS};
+use crate::gpu::core::bench::{median, Ablation, BenchCase, BenchResult, WARM_UP_RUNS};
 use crate::gpu::core::CameraRect;
 use crate::gpu::vulkan::device::{
     barrier, record_first_layout, record_image_region_copy, record_layout_barriers,
@@ -49,7 +49,12 @@ impl VkOffline {
             own_images: Vec::new(),
             queries: vk::QueryPool::null(),
         };
+        let ablation = case.ablation;
+        self.set_ablation(ablation.bits());
+        self.set_shared_fetch(ablation != Ablation::SharedFetch);
         let result = self.bench_with(&mut rig, case, params);
+        self.set_ablation(0);
+        self.set_shared_fetch(true);
         self.destroy_rig(rig);
         result
     }

@@ -80,6 +80,13 @@ impl VkOffline {
         self.engine.set_shared_fetch(on);
     }
 
+    /// The benchmark's ablations (interface.rs ABLATE_*; 0 for none): from now on views take
+    /// the ablated `enhance` (the paper's method on RGBA8 sRGB only), whose output is not an
+    /// enhancement.
+    pub fn set_ablation(&mut self, ablate: u32) {
+        self.engine.set_ablation(ablate);
+    }
+
     pub fn device_name(&self) -> &str {
         &self.gpu.name
     }

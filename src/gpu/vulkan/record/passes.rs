@@ -3,14 +3,15 @@
 //! benchmark's floor).
 
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::params::{Params, ViewMode};
+use crate::algorithm::params::{Method, Params, ViewMode};
 use crate::algorithm::perception::frequency::ViewGeometry;
 use crate::gpu::core::blurred_texels::TEXEL_BYTES;
-use crate::gpu::core::interface::{DECODE_ROWS, TILE};
+use crate::gpu::core::codes::method_code;
+use crate::gpu::core::interface::{DECODE_ROWS, MODE_ENHANCE, TILE};
 use crate::gpu::core::plan::{encode, view_steps, Encoder, Grid, NoPlan, Reads, Shader};
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids;
-use crate::gpu::core::{shares_fetches, VariantKey};
+use crate::gpu::core::{shares_fetches, PixelFormat, VariantKey};
 use crate::gpu::vulkan::device::{barrier, layout_change, GpuBuffer, GpuDevice, GpuError};
 use ash::vk;
 
@@ -293,6 +294,9 @@ impl Recorder {
         mapping: &CameraMapping,
     ) -> Result<vk::Pipeline, GpuError> {
         let (codes, access, extras) = (key.codes(), key.access, key.extras);
+        if self.ablate != 0 {
+            return self.ablated_pipeline(key);
+        }
         let shared = shader_ids::enhance_shared(codes, access, extras).filter(|_| {
             self.shared_fetch && shares_fetches(mapping, view.region, view.camera_size)
         });
@@ -302,6 +306,23 @@ impl Recorder {
                 .pipelines
                 .get(shader_ids::enhance(codes, access, extras)?),
         }
+    }
+
+    /// The benchmark's ablated `enhance` for the view's variant, where one is built.
+    fn ablated_pipeline(&self, key: VariantKey) -> Result<vk::Pipeline, GpuError> {
+        let built = (
+            method_code(Method::Paper),
+            MODE_ENHANCE,
+            PixelFormat::SRGB8.shader_code(),
+        );
+        let id = shader_ids::enhance_ablated(key.access, self.ablate)
+            .filter(|_| key.codes() == built && !key.extras)
+            .ok_or_else(|| {
+                GpuError::Unsupported(
+                    "the ablations are built for the paper's method on RGBA8 sRGB only".into(),
+                )
+            })?;
+        self.pipelines.get(id)
     }
 
     /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source

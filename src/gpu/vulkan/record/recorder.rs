@@ -47,6 +47,9 @@ pub struct Recorder {
     /// Take the shared-fetch variant where a view's mapping allows it (gpu/core/shared_fetch.rs);
     /// off only to compare it with the general one.
     pub(super) shared_fetch: bool,
+    /// The benchmark's ablations (interface.rs ABLATE_*): 0, but for `contrastxr bench
+    /// --ablate`.
+    pub(super) ablate: u32,
 }
 
 pub(super) const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
@@ -83,6 +86,7 @@ impl Recorder {
                 pipelines,
                 pool,
                 shared_fetch: true,
+                ablate: 0,
             }),
             Err(result) => {
                 pipelines.destroy(gpu);
@@ -148,6 +152,13 @@ impl Recorder {
     /// default); off, every view takes the general one, to compare them.
     pub fn set_shared_fetch(&mut self, on: bool) {
         self.shared_fetch = on;
+    }
+
+    /// The benchmark's ablations (interface.rs ABLATE_*; 0, the default, for none): views then
+    /// take the ablated `enhance`, built for the paper's method in mode enhance on RGBA8 sRGB
+    /// only. Their output is not an enhancement.
+    pub fn set_ablation(&mut self, ablate: u32) {
+        self.ablate = ablate;
     }
 
     pub(crate) fn background_parts(bg: &CameraResources) -> (vk::DescriptorSet, vk::Image) {
