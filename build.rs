@@ -170,10 +170,11 @@ fn main() {
     for v in variants::ablated_variants() {
         let file = v.file();
         let source = format!(
-            "{}\n{}{body}{shared_fetch}{}",
+            "{}\n{}{body}{}{}",
             prefix(v.pixels.access, v.pixels.format),
             wgsl::specialise_ablated(v.codes(), false, v.ablate),
-            method_wgsl(paper_code())
+            if v.shared() { &shared_fetch } else { &general },
+            method_wgsl(v.method)
         );
         let _ = write(&file, "enhance", &source, "enhance");
         let id = table.add(&file, "enhance", false, v.pixels.in_place());

@@ -81,11 +81,11 @@ impl Table {
         s += "];\n/// (format, access, method, id) of each `classify` variant.\n";
         s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n";
         s += &classify_rows(&self.classify);
-        s +=
-            "];\n/// (access, ablations, id) of each ablated `enhance` variant of the benchmark.\n";
-        s += "pub static ENHANCE_ABLATED: &[(u32, u32, usize)] = &[\n";
+        s += "];\n/// (method, access, ablations, id) of each ablated `enhance` variant of the\n/// benchmark.\n";
+        s += "pub static ENHANCE_ABLATED: &[(u32, u32, u32, usize)] = &[\n";
         for (v, id) in &self.ablated {
-            s += &format!("    ({}, {}, {id}),\n", v.pixels.access, v.ablate);
+            let (m, a, x) = (v.method, v.pixels.access, v.ablate);
+            s += &format!("    ({m}, {a}, {x}, {id}),\n");
         }
         s + "];\n"
     }

@@ -125,11 +125,14 @@ pub fn enhance_variants() -> Vec<Enhance> {
     pixel_accesses().into_iter().flat_map(enhance_of).collect()
 }
 
-/// One ablated `enhance` variant of the benchmark (`contrastxr bench --ablate`): the paper's
-/// method in mode enhance, extras off, with shared fetches (what the bench's views take
-/// otherwise), RGBA8 sRGB, some parts taken out (interface.rs ABLATE_*).
+/// One ablated `enhance` variant of the benchmark (`contrastxr bench --ablate`): the paper's or
+/// the perceptual method in mode enhance, extras off, RGBA8 sRGB, with the sampling the bench's
+/// views take otherwise (the paper's: shared fetches; the perceptual method has no such
+/// variant), some parts taken out (interface.rs ABLATE_*).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 pub struct Ablated {
+    /// paper_code() or perceptual_code().
+    pub method: u32,
     pub pixels: PixelAccess,
     /// The ABLATE_* bits.
     pub ablate: u32,
@@ -138,25 +141,47 @@ pub struct Ablated {
 impl Ablated {
     /// The method, mode and FORMAT codes it is specialised on.
     pub fn codes(&self) -> (u32, u32, u32) {
-        (paper_code(), MODE_ENHANCE, self.pixels.format)
+        (self.method, MODE_ENHANCE, self.pixels.format)
+    }
+
+    /// With shared fetches (shaders/sample_shared.wgsl): the paper's.
+    pub fn shared(&self) -> bool {
+        self.method == paper_code()
     }
 
     /// The SPIR-V file's name, without its extension.
     pub fn file(&self) -> String {
         format!(
-            "enhance_ablated_f{}_a{}_x{}",
-            self.pixels.format, self.pixels.access, self.ablate
+            "enhance_ablated_m{}_f{}_a{}_x{}",
+            self.method, self.pixels.format, self.pixels.access, self.ablate
         )
     }
 }
 
-/// Every ablated variant: each of ABLATIONS for each pixel access of RGBA8 sRGB (Vulkan only).
+/// Every ablated variant: the paper's ABLATIONS and the perceptual method's
+/// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB (Vulkan only).
 pub fn ablated_variants() -> Vec<Ablated> {
     let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
-    pixel_accesses()
+    let methods = [
+        (paper_code(), ABLATIONS),
+        (perceptual_code(), PERCEPTUAL_ABLATIONS),
+    ];
+    let accesses: Vec<PixelAccess> = pixel_accesses()
         .into_iter()
         .filter(|p| p.format == srgb8)
-        .flat_map(|pixels| ABLATIONS.map(|ablate| Ablated { pixels, ablate }))
+        .collect();
+    methods
+        .into_iter()
+        .flat_map(|(method, ablations)| {
+            let accesses = &accesses;
+            ablations.into_iter().flat_map(move |ablate| {
+                accesses.iter().map(move |&pixels| Ablated {
+                    method,
+                    pixels,
+                    ablate,
+                })
+            })
+        })
         .collect()
 }
 

@@ -29,7 +29,7 @@ use std::panic::{catch_unwind, UnwindSafe};
 
 use check::{Global, Member, ShaderFacts};
 use interface::*;
-use methods::{paper_code, METHODS};
+use methods::{paper_code, perceptual_code, METHODS};
 use spirv_patch::storage_buffers_to_vulkan10;
 use tables::{GlTable, GlUniform, Table};
 use variants::{
@@ -256,8 +256,8 @@ fn every_variant_has_a_file_of_its_own() {
     assert_eq!(shared.file(), "enhance_m0_v0_f256_a1_e0_s");
 }
 
-/// The benchmark's ablations: each of ABLATIONS once for each access of RGBA8 sRGB, the paper's
-/// method in mode enhance.
+/// The benchmark's ablations: the paper's ABLATIONS (with shared fetches) and the perceptual
+/// method's PERCEPTUAL_ABLATIONS, each once for each access of RGBA8 sRGB, in mode enhance.
 #[test]
 fn the_ablated_variants_are_each_ablation_for_each_srgb8_access() {
     let all = ablated_variants();
@@ -269,24 +269,38 @@ fn the_ablated_variants_are_each_ablation_for_each_srgb8_access() {
     assert_eq!(accesses.len(), 3, "narrow, wide and in place");
     let set: HashSet<Ablated> = all.iter().copied().collect();
     assert_eq!(set.len(), all.len());
-    assert_eq!(all.len(), accesses.len() * ABLATIONS.len());
-    for pixels in accesses {
-        for ablate in ABLATIONS {
-            assert!(set.contains(&Ablated { pixels, ablate }));
+    let methods = [
+        (paper_code(), ABLATIONS),
+        (perceptual_code(), PERCEPTUAL_ABLATIONS),
+    ];
+    assert_eq!(all.len(), accesses.len() * 2 * ABLATIONS.len());
+    for (method, ablations) in methods {
+        for &pixels in &accesses {
+            for ablate in ablations {
+                let v = Ablated {
+                    method,
+                    pixels,
+                    ablate,
+                };
+                assert!(set.contains(&v), "{v:?}");
+                assert_eq!(v.codes(), (method, MODE_ENHANCE, srgb8));
+                assert_eq!(v.shared(), method == paper_code());
+            }
         }
     }
-    for v in &all {
-        assert_ne!(v.ablate, 0);
-        assert_eq!(v.codes(), (paper_code(), MODE_ENHANCE, srgb8));
-    }
+    assert!(all.iter().all(|v| v.ablate != 0));
     let v = Ablated {
+        method: perceptual_code(),
         pixels: PixelAccess {
             access: ACCESS_IN_PLACE,
             format: srgb8,
         },
-        ablate: ABLATE_CODEC,
+        ablate: ABLATE_BISECTION,
     };
-    assert_eq!(v.file(), "enhance_ablated_f256_a2_x4");
+    assert_eq!(
+        v.file(),
+        format!("enhance_ablated_m{}_f256_a2_x32", perceptual_code())
+    );
 }
 
 #[test]
@@ -634,7 +648,11 @@ fn the_table_lists_modules_singles_and_variants_with_their_ids() {
     let c = variants::Classify { pixels, method: 0 };
     let id = t.add(&c.file(), "classify", false, pixels.in_place());
     t.classify.push((c, id));
-    let a = variants::Ablated { pixels, ablate: 5 };
+    let a = variants::Ablated {
+        method: 0,
+        pixels,
+        ablate: 5,
+    };
     let id = t.add(&a.file(), "enhance", false, pixels.in_place());
     t.ablated.push((a, id));
     assert_eq!(
@@ -646,7 +664,7 @@ pub static MODULES: &[ShaderModule] = &[
     spirv!(\"decode_blur_0\", \"decode_blur\", true, None),
     spirv!(\"enhance_m0_v2_f0_a2_e1\", \"enhance\", false, Some(0)),
     spirv!(\"classify_f0_a2\", \"classify\", false, Some(0)),
-    spirv!(\"enhance_ablated_f0_a2_x5\", \"enhance\", false, Some(0)),
+    spirv!(\"enhance_ablated_m0_f0_a2_x5\", \"enhance\", false, Some(0)),
 ];
 /// The id of `decode_camera`.
 pub const ID_DECODE_CAMERA: usize = 0;
@@ -661,9 +679,10 @@ pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[
 pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[
     (0, 2, 0, 3),
 ];
-/// (access, ablations, id) of each ablated `enhance` variant of the benchmark.
-pub static ENHANCE_ABLATED: &[(u32, u32, usize)] = &[
-    (2, 5, 4),
+/// (method, access, ablations, id) of each ablated `enhance` variant of the
+/// benchmark.
+pub static ENHANCE_ABLATED: &[(u32, u32, u32, usize)] = &[
+    (0, 2, 5, 4),
 ];
 "
     );

@@ -1022,8 +1022,71 @@ fn bench_ablations_take_out_what_they_name() {
     e.set_ablation(0);
     for r in [refused, refused_unorm] {
         let err = r.expect_err("no ablated variant").to_string();
-        assert!(err.contains("paper's method on RGBA8 sRGB only"), "{err}");
+        assert!(
+            err.contains("paper's and the perceptual method on RGBA8 sRGB"),
+            "{err}"
+        );
     }
+    assert_clean(&e);
+}
+
+/// The perceptual method's ablations: without its directions and with every pixel below the
+/// target (target_contrast 1), its output is the paper's; without its bisection it is its own
+/// where no pixel reaches the target, and not at the default target; listing tiles by the
+/// paper's classify changes nothing (each pixel is judged again).
+#[test]
+fn perceptual_ablations_take_out_what_they_name() {
+    use contrastxr::gpu::core::interface::{ABLATE_BISECTION, ABLATE_DIRECTIONS};
+    let mut e = engine();
+    let camera = noise(64, 40, 31);
+    let raw: Vec<u32> = noise(96, 9, 37)
+        .pixels
+        .iter()
+        .map(|p| u32::from_le_bytes(*p))
+        .collect();
+    let perceptual = |target_contrast| {
+        let mut p = Params {
+            method: Method::Perceptual,
+            ..Params::default()
+        };
+        p.perceptual.target_contrast = target_contrast;
+        p
+    };
+    let run = |e: &mut VkOffline, ablate, params: &Params| {
+        e.set_ablation(ablate);
+        let out = e.enhance_raw(&raw, (96, 9), PixelFormat::SRGB8, &camera, params);
+        e.set_ablation(0);
+        out.unwrap_or_else(|err| panic!("ablation {ablate}: {err}"))
+    };
+    let bytes = |w: &[u32]| channels(&w.iter().map(|x| x.to_le_bytes()).collect::<Vec<_>>());
+    let (never, default) = (
+        perceptual(1.0),
+        perceptual(Params::default().perceptual.target_contrast),
+    );
+    let paper = run(&mut e, 0, &Params::default());
+    let full = run(&mut e, 0, &never);
+    assert_ne!(full, paper, "the directions changed nothing");
+    let paper_only = run(&mut e, ABLATE_DIRECTIONS, &never);
+    let what = "no directions against the paper";
+    assert_shared_fetch_contract(&e, &bytes(&paper_only), &bytes(&paper), what);
+    let unreached = run(&mut e, ABLATE_BISECTION, &never);
+    assert_shared_fetch_contract(
+        &e,
+        &bytes(&unreached),
+        &bytes(&full),
+        "no bisection, target 1",
+    );
+    let own = run(&mut e, 0, &default);
+    assert_ne!(own, raw, "nothing below the default target");
+    assert_ne!(
+        run(&mut e, ABLATE_BISECTION, &default),
+        own,
+        "no bisection ran"
+    );
+    e.set_own_classify(false);
+    let all_tiles = run(&mut e, 0, &default);
+    e.set_own_classify(true);
+    assert_shared_fetch_contract(&e, &bytes(&all_tiles), &bytes(&own), "the paper's classify");
     assert_clean(&e);
 }
 

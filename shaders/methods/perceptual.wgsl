@@ -217,7 +217,9 @@ fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived 
         return Perceived(unchanged, kind);
     }
     var best = Best(paper.linear, paper_scaled, budget, perceived_from(paper.linear, world, vec4<f32>(0.0)));
-    for (var k = 0u; k < 18u; k++) {
+    // The benchmark's ablation of the directions leaves the paper's colour alone.
+    let directions = select(18u, 0u, ablated(ABLATE_DIRECTIONS));
+    for (var k = 0u; k < directions; k++) {
         let lab = d + scaled_step(direction(k), budget);
         let unclipped = scaled_to_linear(lab);
         let colour = clip(unclipped);
@@ -241,7 +243,7 @@ fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived 
     }
     let reached = best.perceived >= vec4<f32>(goal);
     var out = best.colour;
-    if (any(reached & !alone & !none)) {
+    if (any(reached & !alone & !none) && !ablated(ABLATE_BISECTION)) {
         // Back toward D on the straight CIELAB line: c'(D) < target <= c'(1).
         var lo = vec4<f32>(0.0);
         var hi = vec4<f32>(1.0);

@@ -4,7 +4,7 @@
 use super::args::Args;
 use super::error::CliError;
 use super::options::{self, method_usage};
-use contrastxr::algorithm::Params;
+use contrastxr::algorithm::{Method, Params};
 use contrastxr::gpu::core::bench::{Ablation, BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::opengl::GlOffline;
 use contrastxr::gpu::{DeviceOptions, VkOffline};
@@ -47,12 +47,15 @@ pub fn usage() -> String {
          config file and the environment do not.\n\
          --ablate LIST (Vulkan only; each case once per item, after none) takes one part out of\n\
          the enhancement to show what it costs, in every column that runs it (the output is\n\
-         then no enhancement; the paper's method on the bench's RGBA8 sRGB only): method (no\n\
+         then no enhancement; on the bench's RGBA8 sRGB). For --method paper: method (no\n\
          CIELAB conversion or method, the display colour kept), background (a constant grey,\n\
          no camera texel reads), codec (no sRGB decode or encode), per-pixel (the three: loads,\n\
          quantisation and stores left), enhance-pass (the enhance pass returns at once:\n\
          classify, finish_tiles, the indirect dispatch), shared-fetch (the general background\n\
-         sampling instead of shared fetches), all (every one).\n\n{}",
+         sampling instead of shared fetches). For --method perceptual: method, background,\n\
+         directions (the paper's colour the only candidate), bisection (none back toward the\n\
+         display colour), search (both), classify (the paper's classify, which lists every tile\n\
+         with content, instead of the method's own). all: every one the method has.\n\n{}",
         contrastxr::gpu::core::bench::WARM_UP_RUNS,
         contrastxr::gpu::core::bench::CAMERA_SIZE.0,
         contrastxr::gpu::core::bench::CAMERA_SIZE.1,
@@ -78,23 +81,34 @@ fn parse_content(s: &str) -> Result<Content, CliError> {
 }
 
 /// The ablations asked for, `none` first (the baseline each is read against); `all` for every
-/// one.
-fn parse_ablations(list: Option<String>) -> Result<Vec<Ablation>, CliError> {
+/// one `method` has.
+fn parse_ablations(list: Option<String>, method: Method) -> Result<Vec<Ablation>, CliError> {
     let Some(list) = list else {
         return Ok(vec![Ablation::None]);
     };
     let mut out = vec![Ablation::None];
     for item in list.split(',').map(str::trim) {
         let found: Vec<Ablation> = match item {
-            "all" => Ablation::ALL.to_vec(),
+            "all" => Ablation::ALL
+                .into_iter()
+                .filter(|a| a.applies_to(method))
+                .collect(),
             _ => Ablation::ALL
                 .into_iter()
                 .filter(|a| a.name() == item)
                 .collect(),
         };
-        if found.is_empty() {
+        let Some(&first) = found.first() else {
+            let names: Vec<&str> = Ablation::ALL.iter().map(|a| a.name()).collect();
             return Err(CliError::Usage(format!(
-                "--ablate: '{item}' is not none, method, background, codec, per-pixel, enhance-pass, shared-fetch or all"
+                "--ablate: '{item}' is not {} or all",
+                names.join(", ")
+            )));
+        };
+        if !first.applies_to(method) {
+            return Err(CliError::Usage(format!(
+                "--ablate: {item} is not built for the method {}",
+                method.name()
             )));
         }
         out.extend(
@@ -160,7 +174,7 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             )))
         }
     };
-    let ablations = parse_ablations(args.value(&["--ablate"])?)?;
+    let ablations = parse_ablations(args.value(&["--ablate"])?, params.method)?;
     let json = args.flag("--json");
     args.finish()?;
     if opengl && ablations.len() > 1 {

@@ -255,7 +255,8 @@ pub const ENHANCE_MODES: [u32; 3] = [MODE_ENHANCE, MODE_SPLIT, MODE_HEATMAP];
 /// The benchmark's ablations (`contrastxr bench --ablate`), bits of the WGSL constant ABLATE:
 /// each takes one part of the enhancement out, to show what it costs. 0 in every shader the
 /// layer and the offline tools run; the ablated `enhance` variants are built for the paper's
-/// method on RGBA8 sRGB only (build/variants.rs). Their output is not an enhancement.
+/// and the perceptual method on RGBA8 sRGB only (build/variants.rs). Their output is not an
+/// enhancement.
 /// No scaled-space conversion and no method: each pixel's output is its display colour.
 pub const ABLATE_METHOD: u32 = 1;
 /// A constant mid-grey background: no camera texel reads (its conversion to the scaled space
@@ -265,7 +266,11 @@ pub const ABLATE_BACKGROUND: u32 = 2;
 pub const ABLATE_CODEC: u32 = 4;
 /// The enhance pass returns at once: classify, finish_tiles and an empty indirect dispatch.
 pub const ABLATE_ENHANCE_PASS: u32 = 8;
-/// The ablations an `enhance` variant is built for: each part alone, the three per-pixel parts
+/// The perceptual method without its 18 directions: the paper's colour the only candidate.
+pub const ABLATE_DIRECTIONS: u32 = 16;
+/// The perceptual method without its bisection back toward the display colour.
+pub const ABLATE_BISECTION: u32 = 32;
+/// The ablations the paper's `enhance` is built for: each part alone, the three per-pixel parts
 /// together (only the loads, the quantisation and the stores left), the pass.
 pub const ABLATIONS: [u32; 5] = [
     ABLATE_METHOD,
@@ -274,11 +279,20 @@ pub const ABLATIONS: [u32; 5] = [
     ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC,
     ABLATE_ENHANCE_PASS,
 ];
+/// The ablations the perceptual method's `enhance` is built for: the method, the background,
+/// its search's two parts alone and together.
+pub const PERCEPTUAL_ABLATIONS: [u32; 5] = [
+    ABLATE_METHOD,
+    ABLATE_BACKGROUND,
+    ABLATE_DIRECTIONS,
+    ABLATE_BISECTION,
+    ABLATE_DIRECTIONS | ABLATE_BISECTION,
+];
 
 // The method codes are the method table's (src/algorithm/method/table.rs, `code`).
 
 /// The codes written into every shader as WGSL constants, by name.
-pub const CODES: [(&str, u32); 40] = [
+pub const CODES: [(&str, u32); 42] = [
     ("TILE", TILE),
     ("DECODE_ROWS", DECODE_ROWS),
     ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
@@ -328,6 +342,8 @@ pub const CODES: [(&str, u32); 40] = [
     ("ABLATE_BACKGROUND", ABLATE_BACKGROUND),
     ("ABLATE_CODEC", ABLATE_CODEC),
     ("ABLATE_ENHANCE_PASS", ABLATE_ENHANCE_PASS),
+    ("ABLATE_DIRECTIONS", ABLATE_DIRECTIONS),
+    ("ABLATE_BISECTION", ABLATE_BISECTION),
 ];
 
 /// The blurred background packs each texel's linear R, G, B into 21 bits each (two texels per

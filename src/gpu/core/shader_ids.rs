@@ -75,13 +75,13 @@ fn enhance_variant(
         .map(|&(.., k)| ShaderId(k))
 }
 
-/// The benchmark's `enhance` with the ablations `ablate` (interface.rs ABLATE_*), reaching
-/// the pixels by `access`: the paper's method in mode enhance on RGBA8 sRGB, with shared
-/// fetches; None for ablations not built.
-pub fn enhance_ablated(access: u32, ablate: u32) -> Option<ShaderId> {
+/// The benchmark's `enhance` of a method (its code) with the ablations `ablate`
+/// (interface.rs ABLATE_*), reaching the pixels by `access`: the paper's method (with shared
+/// fetches) or the perceptual method, in mode enhance on RGBA8 sRGB; None for the others.
+pub fn enhance_ablated(method: u32, access: u32, ablate: u32) -> Option<ShaderId> {
     modules::ENHANCE_ABLATED
         .iter()
-        .find(|&&(a, x, _)| (a, x) == (access, ablate))
+        .find(|&&(m, a, x, _)| (m, a, x) == (method, access, ablate))
         .map(|&(.., k)| ShaderId(k))
 }
 
@@ -166,18 +166,19 @@ mod tests {
             None
         );
         assert_eq!(in_place_format(FINISH_TILES), None);
-        // Each ablation for each access of RGBA8 sRGB, in place in its texel.
-        let srgb8 = rgba8 | crate::gpu::core::interface::FORMAT_SRGB_BIT;
-        for &(access, ablate, k) in modules::ENHANCE_ABLATED {
-            assert_eq!(enhance_ablated(access, ablate), Some(ShaderId(k)));
-            let file = format!("enhance_ablated_f{srgb8}_a{access}_x{ablate}");
+        // Each method's ablations for each access of RGBA8 sRGB, in place in its texel.
+        use crate::gpu::core::interface::{ABLATIONS, FORMAT_SRGB_BIT, PERCEPTUAL_ABLATIONS};
+        let srgb8 = rgba8 | FORMAT_SRGB_BIT;
+        for &(m, access, ablate, k) in modules::ENHANCE_ABLATED {
+            assert_eq!(enhance_ablated(m, access, ablate), Some(ShaderId(k)));
+            let file = format!("enhance_ablated_m{m}_f{srgb8}_a{access}_x{ablate}");
             assert_eq!(name(ShaderId(k)), file);
             let in_place = (access == ACCESS_IN_PLACE).then_some(srgb8);
             assert_eq!(in_place_format(ShaderId(k)), in_place);
         }
-        let ablations = crate::gpu::core::interface::ABLATIONS;
-        assert_eq!(modules::ENHANCE_ABLATED.len(), 3 * ablations.len());
-        assert_eq!(enhance_ablated(ACCESS_IN_PLACE, 0), None);
+        let ablations = ABLATIONS.len() + PERCEPTUAL_ABLATIONS.len();
+        assert_eq!(modules::ENHANCE_ABLATED.len(), 3 * ablations);
+        assert_eq!(enhance_ablated(paper, ACCESS_IN_PLACE, 0), None);
         assert!(!reads_camera(FINISH_TILES));
     }
 }

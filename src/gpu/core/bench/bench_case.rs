@@ -1,8 +1,10 @@
 //! What the benchmark (gpu/vulkan/offline/bench.rs) times: its cases, the display content and the camera
 //! frame.
 
+use crate::algorithm::params::Method;
 use crate::gpu::core::interface::{
-    ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_ENHANCE_PASS, ABLATE_METHOD,
+    ABLATE_BACKGROUND, ABLATE_BISECTION, ABLATE_CODEC, ABLATE_DIRECTIONS, ABLATE_ENHANCE_PASS,
+    ABLATE_METHOD, ABLATIONS, PERCEPTUAL_ABLATIONS,
 };
 
 /// The camera frame size the background preparation is timed with (a common camera mode).
@@ -33,8 +35,9 @@ impl Content {
 
 /// What the benchmark takes out of the enhancement, to show what that part costs
 /// (`contrastxr bench --ablate`, Vulkan only); with any but `None` the views' output is not an
-/// enhancement. The ablated variants are built for the paper's method on RGBA8 sRGB, the
-/// bench's format (src/gpu/core/interface.rs ABLATE_*).
+/// enhancement. The ablated variants are built for the paper's and the perceptual method on
+/// RGBA8 sRGB, the bench's format (src/gpu/core/interface.rs ABLATE_*), each ablation for the
+/// methods `applies_to` names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ablation {
     /// The enhancement as the layer runs it.
@@ -51,10 +54,18 @@ pub enum Ablation {
     EnhancePass,
     /// The general background sampling instead of the shared fetches.
     SharedFetch,
+    /// The perceptual method's 18 directions: the paper's colour the only candidate.
+    Directions,
+    /// The perceptual method's bisection back toward the display colour.
+    Bisection,
+    /// The perceptual method's whole search: its directions and its bisection.
+    Search,
+    /// The perceptual method's own `classify`: the paper's lists every tile with content.
+    Classify,
 }
 
 impl Ablation {
-    pub const ALL: [Ablation; 7] = [
+    pub const ALL: [Ablation; 11] = [
         Ablation::None,
         Ablation::Method,
         Ablation::Background,
@@ -62,6 +73,10 @@ impl Ablation {
         Ablation::PerPixel,
         Ablation::EnhancePass,
         Ablation::SharedFetch,
+        Ablation::Directions,
+        Ablation::Bisection,
+        Ablation::Search,
+        Ablation::Classify,
     ];
 
     /// Its name on the command line and in the bench's output.
@@ -74,18 +89,41 @@ impl Ablation {
             Ablation::PerPixel => "per-pixel",
             Ablation::EnhancePass => "enhance-pass",
             Ablation::SharedFetch => "shared-fetch",
+            Ablation::Directions => "directions",
+            Ablation::Bisection => "bisection",
+            Ablation::Search => "search",
+            Ablation::Classify => "classify",
+        }
+    }
+
+    /// Whether it is built for `method` (interface.rs ABLATIONS for the paper's,
+    /// PERCEPTUAL_ABLATIONS for the perceptual method; only the paper's has shared fetches,
+    /// only the perceptual method a `classify` of its own).
+    pub fn applies_to(self, method: Method) -> bool {
+        let bits = self.bits();
+        match (method, self) {
+            (_, Ablation::None) => true,
+            (Method::Paper, Ablation::SharedFetch) => true,
+            (Method::Perceptual, Ablation::Classify) => true,
+            (_, Ablation::SharedFetch | Ablation::Classify) => false,
+            (Method::Paper, _) => ABLATIONS.contains(&bits),
+            (Method::Perceptual, _) => PERCEPTUAL_ABLATIONS.contains(&bits),
+            _ => false,
         }
     }
 
     /// The ABLATE_* bits of its `enhance` variant (0: the layer's own).
     pub fn bits(self) -> u32 {
         match self {
-            Ablation::None | Ablation::SharedFetch => 0,
+            Ablation::None | Ablation::SharedFetch | Ablation::Classify => 0,
             Ablation::Method => ABLATE_METHOD,
             Ablation::Background => ABLATE_BACKGROUND,
             Ablation::Codec => ABLATE_CODEC,
             Ablation::PerPixel => ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC,
             Ablation::EnhancePass => ABLATE_ENHANCE_PASS,
+            Ablation::Directions => ABLATE_DIRECTIONS,
+            Ablation::Bisection => ABLATE_BISECTION,
+            Ablation::Search => ABLATE_DIRECTIONS | ABLATE_BISECTION,
         }
     }
 }
@@ -151,4 +189,33 @@ pub fn camera_frame(size: (u32, u32)) -> Vec<[u8; 4]> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::core::codes::method_code;
+    use crate::gpu::core::interface::ACCESS_WIDE;
+    use crate::gpu::core::shader_ids;
+
+    /// An ablation of the shader applies to a method exactly where its variant is built; the
+    /// two that pick another production variant, only to the method that has what they drop.
+    #[test]
+    fn an_ablation_applies_where_its_variant_is_built() {
+        for a in Ablation::ALL {
+            for m in Method::ALL {
+                let built = shader_ids::enhance_ablated(method_code(m), ACCESS_WIDE, a.bits());
+                let applies = match a {
+                    Ablation::None => true,
+                    Ablation::SharedFetch => m == Method::Paper,
+                    Ablation::Classify => m == Method::Perceptual,
+                    _ => built.is_some(),
+                };
+                assert_eq!(a.applies_to(m), applies, "{} {}", a.name(), m.name());
+            }
+        }
+        let names: std::collections::HashSet<&str> = Ablation::ALL.map(Ablation::name).into();
+        assert_eq!(names.len(), Ablation::ALL.len());
+        assert!(!names.contains("all"));
+    }
 }

@@ -52,9 +52,11 @@ impl VkOffline {
         let ablation = case.ablation;
         self.set_ablation(ablation.bits());
         self.set_shared_fetch(ablation != Ablation::SharedFetch);
+        self.set_own_classify(ablation != Ablation::Classify);
         let result = self.bench_with(&mut rig, case, params);
         self.set_ablation(0);
         self.set_shared_fetch(true);
+        self.set_own_classify(true);
         self.destroy_rig(rig);
         result
     }

@@ -87,6 +87,12 @@ impl VkOffline {
         self.engine.set_ablation(ablate);
     }
 
+    /// Whether the perceptual method lists tiles by its own `classify` (on by default); off,
+    /// by the paper's, which lists every tile with content.
+    pub fn set_own_classify(&mut self, on: bool) {
+        self.engine.set_own_classify(on);
+    }
+
     pub fn device_name(&self) -> &str {
         &self.gpu.name
     }

@@ -5,6 +5,7 @@
 mod passes;
 mod recorder;
 mod resources;
+mod variant_pipelines;
 
 pub use recorder::Recorder;
 pub(crate) use resources::TEXELS_FORMAT;

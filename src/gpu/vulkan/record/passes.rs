@@ -3,15 +3,14 @@
 //! benchmark's floor).
 
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::params::{Method, Params, ViewMode};
+use crate::algorithm::params::{Params, ViewMode};
 use crate::algorithm::perception::frequency::ViewGeometry;
 use crate::gpu::core::blurred_texels::TEXEL_BYTES;
-use crate::gpu::core::codes::method_code;
-use crate::gpu::core::interface::{DECODE_ROWS, MODE_ENHANCE, TILE};
+use crate::gpu::core::interface::{DECODE_ROWS, TILE};
 use crate::gpu::core::plan::{encode, view_steps, Encoder, Grid, NoPlan, Reads, Shader};
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::core::shader_ids;
-use crate::gpu::core::{shares_fetches, PixelFormat, VariantKey};
+use crate::gpu::core::VariantKey;
 use crate::gpu::vulkan::device::{barrier, layout_change, GpuBuffer, GpuDevice, GpuError};
 use ash::vk;
 
@@ -238,7 +237,7 @@ impl Recorder {
                 self.pipelines.get(shader_ids::classify(
                     key.format,
                     key.access,
-                    key.classify_method(),
+                    self.classify_method(key),
                 )?)?,
                 self.pipelines.get(shader_ids::FINISH_TILES)?,
                 self.enhance_pipeline(view, key, mapping)?,
@@ -283,46 +282,6 @@ impl Recorder {
                 .cmd_update_buffer(cmd, view.perceptual.raw, 0, &bytes)
         };
         barrier(gpu, cmd, transfer, COMPUTE);
-    }
-
-    /// The `enhance` pipeline for a view: the shared-fetch variant where the view's mapping
-    /// allows it and it is built, else the general one (the same output).
-    fn enhance_pipeline(
-        &self,
-        view: &ViewTarget,
-        key: VariantKey,
-        mapping: &CameraMapping,
-    ) -> Result<vk::Pipeline, GpuError> {
-        let (codes, access, extras) = (key.codes(), key.access, key.extras);
-        if self.ablate != 0 {
-            return self.ablated_pipeline(key);
-        }
-        let shared = shader_ids::enhance_shared(codes, access, extras).filter(|_| {
-            self.shared_fetch && shares_fetches(mapping, view.region, view.camera_size)
-        });
-        match shared.map(|id| self.pipelines.get(id)) {
-            Some(Ok(p)) => Ok(p),
-            _ => self
-                .pipelines
-                .get(shader_ids::enhance(codes, access, extras)?),
-        }
-    }
-
-    /// The benchmark's ablated `enhance` for the view's variant, where one is built.
-    fn ablated_pipeline(&self, key: VariantKey) -> Result<vk::Pipeline, GpuError> {
-        let built = (
-            method_code(Method::Paper),
-            MODE_ENHANCE,
-            PixelFormat::SRGB8.shader_code(),
-        );
-        let id = shader_ids::enhance_ablated(key.access, self.ablate)
-            .filter(|_| key.codes() == built && !key.extras)
-            .ok_or_else(|| {
-                GpuError::Unsupported(
-                    "the ablations are built for the paper's method on RGBA8 sRGB only".into(),
-                )
-            })?;
-        self.pipelines.get(id)
     }
 
     /// Records the benchmark's floor: a plain per-pixel copy of the view's bound source

@@ -50,6 +50,9 @@ pub struct Recorder {
     /// The benchmark's ablations (interface.rs ABLATE_*): 0, but for `contrastxr bench
     /// --ablate`.
     pub(super) ablate: u32,
+    /// The perceptual method lists tiles by its own `classify` (VariantKey::classify_method);
+    /// off only for `contrastxr bench --ablate classify`, which lists every tile with content.
+    pub(super) own_classify: bool,
 }
 
 pub(super) const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
@@ -87,6 +90,7 @@ impl Recorder {
                 pool,
                 shared_fetch: true,
                 ablate: 0,
+                own_classify: true,
             }),
             Err(result) => {
                 pipelines.destroy(gpu);
@@ -159,6 +163,12 @@ impl Recorder {
     /// only. Their output is not an enhancement.
     pub fn set_ablation(&mut self, ablate: u32) {
         self.ablate = ablate;
+    }
+
+    /// Whether the perceptual method lists tiles by its own `classify` (on by default); off,
+    /// by the paper's (every tile with content), to compare them.
+    pub fn set_own_classify(&mut self, on: bool) {
+        self.own_classify = on;
     }
 
     pub(crate) fn background_parts(bg: &CameraResources) -> (vk::DescriptorSet, vk::Image) {

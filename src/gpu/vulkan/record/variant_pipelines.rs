@@ -1,0 +1,63 @@
+//! Which pipeline a view's per-pixel passes take: its `classify` and its `enhance` variant,
+//! the shared-fetch one where its mapping allows it, or the benchmark's ablated one.
+
+use super::recorder::Recorder;
+use super::resources::ViewTarget;
+use crate::algorithm::mapping::CameraMapping;
+use crate::algorithm::params::Method;
+use crate::gpu::core::codes::method_code;
+use crate::gpu::core::interface::MODE_ENHANCE;
+use crate::gpu::core::shader_ids;
+use crate::gpu::core::{shares_fetches, PixelFormat, VariantKey};
+use crate::gpu::vulkan::device::GpuError;
+use ash::vk;
+
+impl Recorder {
+    /// The `enhance` pipeline for a view: the shared-fetch variant where the view's mapping
+    /// allows it and it is built, else the general one (the same output).
+    pub(super) fn enhance_pipeline(
+        &self,
+        view: &ViewTarget,
+        key: VariantKey,
+        mapping: &CameraMapping,
+    ) -> Result<vk::Pipeline, GpuError> {
+        let (codes, access, extras) = (key.codes(), key.access, key.extras);
+        if self.ablate != 0 {
+            return self.ablated_pipeline(key);
+        }
+        let shared = shader_ids::enhance_shared(codes, access, extras).filter(|_| {
+            self.shared_fetch && shares_fetches(mapping, view.region, view.camera_size)
+        });
+        match shared.map(|id| self.pipelines.get(id)) {
+            Some(Ok(p)) => Ok(p),
+            _ => self
+                .pipelines
+                .get(shader_ids::enhance(codes, access, extras)?),
+        }
+    }
+
+    /// The method code of the view's `classify`: its own (`VariantKey::classify_method`), or
+    /// the paper's where the benchmark ablates the perceptual method's own.
+    pub(super) fn classify_method(&self, key: VariantKey) -> u32 {
+        match self.own_classify {
+            true => key.classify_method(),
+            false => method_code(Method::Paper),
+        }
+    }
+
+    /// The benchmark's ablated `enhance` for the view's variant, where one is built.
+    fn ablated_pipeline(&self, key: VariantKey) -> Result<vk::Pipeline, GpuError> {
+        let (method, mode, format) = key.codes();
+        let built = (mode, format) == (MODE_ENHANCE, PixelFormat::SRGB8.shader_code());
+        let id = shader_ids::enhance_ablated(method, key.access, self.ablate)
+            .filter(|_| built && !key.extras)
+            .ok_or_else(|| {
+                GpuError::Unsupported(format!(
+                    "no ablated variant {} of this method and format: they are built for the \
+                     paper's and the perceptual method on RGBA8 sRGB (contrastxr bench --help)",
+                    self.ablate
+                ))
+            })?;
+        self.pipelines.get(id)
+    }
+}
