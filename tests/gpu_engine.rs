@@ -424,25 +424,19 @@ fn with_mode(mode: ViewMode) -> Params {
     }
 }
 
+/// `contrastxr bench` of one 64x40 view, full content, 3 runs, with `extra` options: its JSON.
+fn small_bench(extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["bench", "--sizes", "64x40", "--views", "1", "--runs", "3"];
+    args.extend(["--content", "full", "--json"]);
+    args.extend(extra);
+    let o = cli(&args, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).expect("one JSON object")
+}
+
 #[test]
 fn bench_reports_every_figure_for_the_contents_asked_for() {
-    let o = cli(
-        &[
-            "bench",
-            "--sizes",
-            "64x40",
-            "--views",
-            "1",
-            "--runs",
-            "3",
-            "--content",
-            "full",
-            "--json",
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let v = small_bench(&[]);
     assert!(v["device"].as_str().is_some_and(|d| !d.is_empty()));
     let results = v["results"].as_array().unwrap();
     assert_eq!(results.len(), 1, "only the full content was asked for");
@@ -477,25 +471,7 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     assert!((ms("ratio_wide") - ms("enhance_ms") / ms("copy_wide_ms")).abs() < 1e-9 * ratio);
     // The default (both) leaves the image-copy path out; all times it beside the others.
     assert!(r["frame_image_copy_ms"].is_null(), "{r}");
-    let o = cli(
-        &[
-            "bench",
-            "--sizes",
-            "64x40",
-            "--views",
-            "1",
-            "--runs",
-            "3",
-            "--content",
-            "full",
-            "--path",
-            "all",
-            "--json",
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let v = small_bench(&["--path", "all"]);
     let r = &v["results"][0];
     let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
     for k in [
@@ -1094,25 +1070,7 @@ fn perceptual_ablations_take_out_what_they_name() {
 /// OpenGL engine are refused.
 #[test]
 fn bench_ablations_are_rows_of_their_own() {
-    let o = cli(
-        &[
-            "bench",
-            "--sizes",
-            "64x40",
-            "--views",
-            "1",
-            "--runs",
-            "3",
-            "--content",
-            "full",
-            "--ablate",
-            "enhance-pass,method",
-            "--json",
-        ],
-        &[],
-    );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let v = small_bench(&["--ablate", "enhance-pass,method"]);
     let results = v["results"].as_array().unwrap();
     let names: Vec<&str> = results
         .iter()
