@@ -81,8 +81,8 @@ impl VkOffline {
     }
 
     /// The benchmark's ablations (interface.rs ABLATE_*; 0 for none): from now on views take
-    /// the ablated `enhance` (the paper's method on RGBA8 sRGB only), whose output is not an
-    /// enhancement.
+    /// the ablated `enhance` (the paper's or the perceptual method on RGBA8 sRGB only), whose
+    /// output is not an enhancement.
     pub fn set_ablation(&mut self, ablate: u32) {
         self.engine.set_ablation(ablate);
     }

@@ -159,8 +159,8 @@ impl Recorder {
     }
 
     /// The benchmark's ablations (interface.rs ABLATE_*; 0, the default, for none): views then
-    /// take the ablated `enhance`, built for the paper's method in mode enhance on RGBA8 sRGB
-    /// only. Their output is not an enhancement.
+    /// take the ablated `enhance`, built for the paper's and the perceptual method in mode
+    /// enhance on RGBA8 sRGB only. Their output is not an enhancement.
     pub fn set_ablation(&mut self, ablate: u32) {
         self.ablate = ablate;
     }
