@@ -799,6 +799,15 @@ fn channels(pixels: &[[u8; 4]]) -> Vec<u32> {
     pixels.iter().flatten().map(|&c| u32::from(c)).collect()
 }
 
+/// The channels of RGBA8 words.
+fn rgba8_channels(words: &[u32]) -> Vec<u32> {
+    words
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .map(u32::from)
+        .collect()
+}
+
 fn halves(words: &[u32]) -> Vec<u32> {
     words.iter().flat_map(|w| [w & 0xffff, w >> 16]).collect()
 }
@@ -886,14 +895,9 @@ fn shared_fetches_in_place_match_the_general_variant() {
         let general = run(&mut e);
         e.set_shared_fetch(true);
         assert_ne!(general, raw, "{region:?}");
-        let bytes = |w: &[u32]| -> Vec<u32> {
-            w.iter()
-                .flat_map(|x| x.to_le_bytes())
-                .map(u32::from)
-                .collect()
-        };
         let what = format!("in place {region:?}");
-        assert_shared_fetch_contract(&e, &bytes(&shared), &bytes(&general), &what);
+        let (shared, general) = (rgba8_channels(&shared), rgba8_channels(&general));
+        assert_shared_fetch_contract(&e, &shared, &general, &what);
     }
     assert_clean(&e);
 }
@@ -945,11 +949,7 @@ fn bench_ablations_take_out_what_they_name() {
     };
     for width in [96, 97] {
         let region = (width, 9);
-        let raw: Vec<u32> = noise(width, 9, 41 + width)
-            .pixels
-            .iter()
-            .map(|p| u32::from_le_bytes(*p))
-            .collect();
+        let raw = raw_words(PixelFormat::SRGB8, &noise(width, 9, 41 + width));
         let run = |e: &mut VkOffline, ablate, format, camera: &RgbaImage| {
             e.set_ablation(ablate);
             let out = e.enhance_raw(&raw, region, format, camera, &params);
@@ -966,9 +966,13 @@ fn bench_ablations_take_out_what_they_name() {
         let without_codec = run(&mut e, ABLATE_CODEC, PixelFormat::SRGB8, &camera);
         let as_unorm = run(&mut e, 0, unorm8, &camera);
         assert_ne!(without_codec, enhanced, "{width}: the codec still ran");
-        let bytes = |w: &[u32]| channels(&w.iter().map(|x| x.to_le_bytes()).collect::<Vec<_>>());
         let what = format!("{width}: no codec against UNORM");
-        assert_shared_fetch_contract(&e, &bytes(&without_codec), &bytes(&as_unorm), &what);
+        assert_shared_fetch_contract(
+            &e,
+            &rgba8_channels(&without_codec),
+            &rgba8_channels(&as_unorm),
+            &what,
+        );
         let grey = run(&mut e, ABLATE_BACKGROUND, PixelFormat::SRGB8, &camera);
         let grey_too = run(&mut e, ABLATE_BACKGROUND, PixelFormat::SRGB8, &other_camera);
         let other = run(&mut e, 0, PixelFormat::SRGB8, &other_camera);
@@ -977,11 +981,7 @@ fn bench_ablations_take_out_what_they_name() {
         assert_eq!(grey, grey_too, "{width}: the camera still read");
     }
     // In place, in the app's image.
-    let raw: Vec<u32> = noise(48, 9, 43)
-        .pixels
-        .iter()
-        .map(|p| u32::from_le_bytes(*p))
-        .collect();
+    let raw = raw_words(PixelFormat::SRGB8, &noise(48, 9, 43));
     let format = ash::vk::Format::R8G8B8A8_SRGB;
     e.set_ablation(ABLATE_METHOD);
     let out = e.enhance_raw_in_place(&raw, ((48, 9), format), &camera, &params);
@@ -1015,11 +1015,7 @@ fn perceptual_ablations_take_out_what_they_name() {
     use contrastxr::gpu::core::interface::{ABLATE_BISECTION, ABLATE_DIRECTIONS};
     let mut e = engine();
     let camera = noise(64, 40, 31);
-    let raw: Vec<u32> = noise(96, 9, 37)
-        .pixels
-        .iter()
-        .map(|p| u32::from_le_bytes(*p))
-        .collect();
+    let raw = raw_words(PixelFormat::SRGB8, &noise(96, 9, 37));
     let perceptual = |target_contrast| {
         let mut p = Params {
             method: Method::Perceptual,
@@ -1034,7 +1030,6 @@ fn perceptual_ablations_take_out_what_they_name() {
         e.set_ablation(0);
         out.unwrap_or_else(|err| panic!("ablation {ablate}: {err}"))
     };
-    let bytes = |w: &[u32]| channels(&w.iter().map(|x| x.to_le_bytes()).collect::<Vec<_>>());
     let (never, default) = (
         perceptual(1.0),
         perceptual(Params::default().perceptual.target_contrast),
@@ -1044,12 +1039,17 @@ fn perceptual_ablations_take_out_what_they_name() {
     assert_ne!(full, paper, "the directions changed nothing");
     let paper_only = run(&mut e, ABLATE_DIRECTIONS, &never);
     let what = "no directions against the paper";
-    assert_shared_fetch_contract(&e, &bytes(&paper_only), &bytes(&paper), what);
+    assert_shared_fetch_contract(
+        &e,
+        &rgba8_channels(&paper_only),
+        &rgba8_channels(&paper),
+        what,
+    );
     let unreached = run(&mut e, ABLATE_BISECTION, &never);
     assert_shared_fetch_contract(
         &e,
-        &bytes(&unreached),
-        &bytes(&full),
+        &rgba8_channels(&unreached),
+        &rgba8_channels(&full),
         "no bisection, target 1",
     );
     let own = run(&mut e, 0, &default);
@@ -1062,7 +1062,12 @@ fn perceptual_ablations_take_out_what_they_name() {
     e.set_own_classify(false);
     let all_tiles = run(&mut e, 0, &default);
     e.set_own_classify(true);
-    assert_shared_fetch_contract(&e, &bytes(&all_tiles), &bytes(&own), "the paper's classify");
+    assert_shared_fetch_contract(
+        &e,
+        &rgba8_channels(&all_tiles),
+        &rgba8_channels(&own),
+        "the paper's classify",
+    );
     assert_clean(&e);
 }
 
