@@ -1084,6 +1084,12 @@ fn bench_ablations_are_rows_of_their_own() {
     assert_eq!(names, ["none", "enhance-pass", "method"]);
     let enh = |k: usize| results[k]["enhance_ms"].as_f64().unwrap();
     assert!(enh(0) > 0.0 && enh(1) > 0.0 && enh(2) > 0.0);
+    // Each ablation against the baseline measured just before it.
+    assert!(results[0]["enhance_vs_none"].is_null());
+    for k in [1, 2] {
+        let ratio = results[k]["enhance_vs_none"].as_f64().unwrap();
+        assert!((ratio - enh(k) / enh(0)).abs() < 1e-9 * ratio, "{ratio}");
+    }
     let bad = cli(&["bench", "--ablate", "blur"], &[]);
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("'blur' is not none, method"));

@@ -46,8 +46,9 @@ pub fn usage() -> String {
          The method options set what is timed (--method perceptual, --world-nits 5000, ...); the\n\
          config file and the environment do not.\n\
          --ablate LIST (Vulkan only; each case once per item, after none) takes one part out of\n\
-         the enhancement to show what it costs, in every column that runs it (the output is\n\
-         then no enhancement; on the bench's RGBA8 sRGB). For --method paper: method (no\n\
+         the enhancement to show what it costs, in every column that runs it (enh/none: its\n\
+         enhancement over the case's none; the output is then no enhancement; on the bench's\n\
+         RGBA8 sRGB). For --method paper: method (no\n\
          CIELAB conversion or method, the display colour kept), background (a constant grey,\n\
          no camera texel reads), codec (no sRGB decode or encode), per-pixel (the three: loads,\n\
          quantisation and stores left), enhance-pass (the enhance pass returns at once:\n\
@@ -237,12 +238,18 @@ fn report(
         super::error::print(&format!("device: {device}\n{}\n", header()));
     }
     let mut results = Vec::new();
+    let mut baseline = f64::NAN;
     for case in cases {
         let r = bench(case)?;
-        if !json {
-            super::error::print(&row(&r));
+        if r.case.ablation == Ablation::None {
+            baseline = r.enhance_ms;
         }
-        results.push(r);
+        // An ablation's enhancement over its case's baseline, measured just before it.
+        let vs_none = (r.case.ablation != Ablation::None).then_some(r.enhance_ms / baseline);
+        if !json {
+            super::error::print(&row(&r, vs_none));
+        }
+        results.push((r, vs_none));
     }
     if json {
         super::error::print(&format!("{}\n", to_json(device, &results)));
@@ -252,7 +259,7 @@ fn report(
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13} {:>8}",
         "size",
         "views",
         "content",
@@ -275,14 +282,15 @@ fn header() -> String {
         "ic copies ms",
         "ic/frame",
         "ic/ip",
-        "ablation"
+        "ablation",
+        "enh/none"
     )
 }
 
-fn row(r: &BenchResult) -> String {
+fn row(r: &BenchResult, vs_none: Option<f64>) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13} {:>8}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
@@ -306,6 +314,7 @@ fn row(r: &BenchResult) -> String {
         optional(r.image_copy_frame_ratio(), 2),
         optional(r.image_copy_in_place_ratio(), 2),
         r.case.ablation.name(),
+        optional(vs_none, 2),
     )
 }
 
@@ -314,16 +323,17 @@ fn optional(v: Option<f64>, decimals: usize) -> String {
     v.map_or_else(|| "-".into(), |v| format!("{v:.decimals$}"))
 }
 
-fn to_json(device: &str, results: &[BenchResult]) -> String {
+fn to_json(device: &str, results: &[(BenchResult, Option<f64>)]) -> String {
     let rows: Vec<serde_json::Value> = results
         .iter()
-        .map(|r| {
+        .map(|(r, vs_none)| {
             serde_json::json!({
                 "width": r.case.region.0,
                 "height": r.case.region.1,
                 "views": r.case.views,
                 "content": r.case.content.name(),
                 "ablation": r.case.ablation.name(),
+                "enhance_vs_none": vs_none,
                 "foreground_fraction": r.foreground,
                 "runs": r.case.runs,
                 "copy_ms": r.copy_ms,
