@@ -166,19 +166,31 @@ fn main() {
             gl.classify.push((v, id));
         }
     }
-    // The benchmark's ablations (Vulkan only), after the variants the layer runs.
+    // The benchmark's ablations, after the variants the layer runs.
     for v in variants::ablated_variants() {
         let file = v.file();
-        let source = format!(
-            "{}\n{}{body}{}{}",
-            prefix(v.pixels.access, v.pixels.format),
-            wgsl::specialise_ablated(v.codes(), false, v.ablate),
-            if v.shared() { &shared_fetch } else { &general },
-            method_wgsl(v.method)
-        );
-        let _ = write(&file, "enhance", &source, "enhance");
+        let source = |sampling: &str| {
+            format!(
+                "{}\n{}{body}{sampling}{}",
+                prefix(v.pixels.access, v.pixels.format),
+                wgsl::specialise_ablated(v.codes(), false, v.ablate),
+                method_wgsl(v.method)
+            )
+        };
+        let sampling = if v.shared() { &shared_fetch } else { &general };
+        let parsed = write(&file, "enhance", &source(sampling), "enhance");
         let id = table.add(&file, "enhance", false, v.pixels.in_place());
         table.ablated.push((v, id));
+        if v.pixels.gl() {
+            // OpenGL has no shared fetches: its variants sample as its own `enhance` does.
+            let parsed = match v.shared() {
+                true => parse("enhance", &source(&general)),
+                false => parsed,
+            };
+            let uniforms = glsl::write_glsl(&out, &file, &parsed, "enhance");
+            let id = gl.add(&file, uniforms);
+            gl.ablated.push((v, id));
+        }
     }
     fs::write(out.join("shader_table.rs"), table.source()).unwrap();
     fs::write(out.join("gl_shader_table.rs"), gl.source()).unwrap();

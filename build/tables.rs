@@ -83,10 +83,7 @@ impl Table {
         s += &classify_rows(&self.classify);
         s += "];\n/// (method, access, ablations, id) of each ablated `enhance` variant of the\n/// benchmark.\n";
         s += "pub static ENHANCE_ABLATED: &[(u32, u32, u32, usize)] = &[\n";
-        for (v, id) in &self.ablated {
-            let (m, a, x) = (v.method, v.pixels.access, v.ablate);
-            s += &format!("    ({m}, {a}, {x}, {id}),\n");
-        }
+        s += &ablated_rows(&self.ablated);
         s + "];\n"
     }
 }
@@ -111,6 +108,8 @@ pub struct GlTable {
     pub finish_tiles: Option<usize>,
     pub enhance: Vec<(Enhance, usize)>,
     pub classify: Vec<(Classify, usize)>,
+    /// The benchmark's ablated `enhance` variants (with the general sampling).
+    pub ablated: Vec<(Ablated, usize)>,
 }
 
 impl GlTable {
@@ -157,6 +156,10 @@ impl GlTable {
             "/// (format, access, method, id) of each `classify` GLSL variant.\npub static GL_CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n{}];\n",
             classify_rows(&self.classify)
         );
+        s += &format!(
+            "/// (method, access, ablations, id) of each ablated `enhance` GLSL variant of the\n/// benchmark.\npub static GL_ENHANCE_ABLATED: &[(u32, u32, u32, usize)] = &[\n{}];\n",
+            ablated_rows(&self.ablated)
+        );
         s
     }
 }
@@ -170,6 +173,17 @@ fn enhance_rows(variants: &[(Enhance, usize)]) -> String {
                 "    ({}, {}, {}, {}, {}, {}, {id}),\n",
                 v.method, v.mode, v.pixels.format, v.pixels.access, v.extras, v.shared
             )
+        })
+        .collect()
+}
+
+/// The rows of an ablated `enhance` table: (method, access, ablations, id).
+fn ablated_rows(variants: &[(Ablated, usize)]) -> String {
+    variants
+        .iter()
+        .map(|(v, id)| {
+            let (m, a, x) = (v.method, v.pixels.access, v.ablate);
+            format!("    ({m}, {a}, {x}, {id}),\n")
         })
         .collect()
 }

@@ -159,7 +159,8 @@ impl Ablated {
 }
 
 /// Every ablated variant: the paper's ABLATIONS and the perceptual method's
-/// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB (Vulkan only).
+/// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB (each in GLSL too, with the
+/// general sampling).
 pub fn ablated_variants() -> Vec<Ablated> {
     let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
     let methods = [

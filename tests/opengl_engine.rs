@@ -875,6 +875,139 @@ fn bench_times_the_opengl_engine() {
         String::from_utf8_lossy(&o.stderr)
     );
     assert!(String::from_utf8_lossy(&o.stderr).contains("--engine must be vulkan or opengl"));
+    // Ablations: a row each after the baseline; no shared fetches to ablate in OpenGL.
+    let o = bench(&["--engine", "opengl", "--ablate", "enhance-pass"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    let names: Vec<&str> = v["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["ablation"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["none", "enhance-pass", "none", "enhance-pass"]);
+    let o = bench(&["--engine", "opengl", "--ablate", "shared-fetch"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("on the OpenGL engine"));
+}
+
+/// Two outputs' 8-bit channels: the same on a CPU driver, which compiles both programs'
+/// arithmetic alike; elsewhere within one step (a GPU compiler may contract one program's
+/// multiply-adds and not the other's).
+fn assert_same_arithmetic(gl: &GlOffline, a: &[u32], b: &[u32], what: &str) {
+    let channels = |w: &[u32]| -> Vec<u8> { w.iter().flat_map(|x| x.to_le_bytes()).collect() };
+    let (a, b) = (channels(a), channels(b));
+    assert_eq!(a.len(), b.len(), "{what}");
+    let worst = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0);
+    let bound = if gl.on_cpu() { 0 } else { 1 };
+    assert!(worst <= bound, "{what}: channels differ by up to {worst}");
+}
+
+/// The benchmark's ablations in the OpenGL engine take out what they name, through a buffer
+/// and in place: without the method (alone or with the background and the codec) or the
+/// enhance pass every word comes back unchanged; without the codec the sRGB words come out as
+/// RGBA8 words do; with the constant background the camera no longer matters; the perceptual
+/// method without its directions, every pixel below the target, gives the paper's output, and
+/// through the paper's classify its own.
+#[test]
+fn opengl_ablations_take_out_what_they_name() {
+    use contrastxr::algorithm::Method;
+    use contrastxr::gpu::core::interface::{
+        ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_DIRECTIONS, ABLATE_ENHANCE_PASS, ABLATE_METHOD,
+    };
+    let mut gl = context();
+    let (camera, other_camera) = (noise(64, 40, 23), noise(64, 40, 29));
+    let raw: Vec<u32> = noise(96, 9, 43)
+        .pixels
+        .iter()
+        .map(|p| u32::from_le_bytes(*p))
+        .collect();
+    let run = |gl: &mut GlOffline, ablate, format, camera: &RgbaImage, params: &Params| {
+        gl.engine().set_ablation(ablate);
+        let out = gl.enhance_raw(&raw, (96, 9), format, camera, params);
+        gl.engine().set_ablation(0);
+        out.unwrap_or_else(|err| panic!("ablation {ablate}: {err}"))
+    };
+    let paper = Params::default();
+    for in_place in [false, true] {
+        gl.engine().set_in_place(in_place);
+        let enhanced = run(&mut gl, 0, SRGB8_ALPHA8, &camera, &paper);
+        assert_ne!(enhanced, raw, "in place {in_place}: nothing changed");
+        let all_three = ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC;
+        for ablate in [ABLATE_METHOD, all_three, ABLATE_ENHANCE_PASS] {
+            let out = run(&mut gl, ablate, SRGB8_ALPHA8, &camera, &paper);
+            assert_eq!(out, raw, "in place {in_place}: ablation {ablate}");
+        }
+        let without_codec = run(&mut gl, ABLATE_CODEC, SRGB8_ALPHA8, &camera, &paper);
+        let as_unorm = run(&mut gl, 0, RGBA8, &camera, &paper);
+        assert_ne!(
+            without_codec, enhanced,
+            "in place {in_place}: the codec ran"
+        );
+        let what = format!("in place {in_place}: no codec against RGBA8");
+        assert_same_arithmetic(&gl, &without_codec, &as_unorm, &what);
+        let grey = run(&mut gl, ABLATE_BACKGROUND, SRGB8_ALPHA8, &camera, &paper);
+        let grey_too = run(
+            &mut gl,
+            ABLATE_BACKGROUND,
+            SRGB8_ALPHA8,
+            &other_camera,
+            &paper,
+        );
+        assert_ne!(
+            grey, raw,
+            "in place {in_place}: no enhancement over the grey"
+        );
+        assert_eq!(grey, grey_too, "in place {in_place}: the camera still read");
+        assert_ne!(
+            run(&mut gl, 0, SRGB8_ALPHA8, &other_camera, &paper),
+            enhanced,
+            "in place {in_place}: the camera made no difference"
+        );
+    }
+    gl.engine().set_in_place(false);
+    let mut never = Params {
+        method: Method::Perceptual,
+        ..Params::default()
+    };
+    never.perceptual.target_contrast = 1.0;
+    let paper_out = run(&mut gl, 0, SRGB8_ALPHA8, &camera, &paper);
+    let paper_only = run(&mut gl, ABLATE_DIRECTIONS, SRGB8_ALPHA8, &camera, &never);
+    assert_ne!(run(&mut gl, 0, SRGB8_ALPHA8, &camera, &never), paper_out);
+    assert_same_arithmetic(
+        &gl,
+        &paper_only,
+        &paper_out,
+        "no directions against the paper",
+    );
+    let default = Params {
+        method: Method::Perceptual,
+        ..Params::default()
+    };
+    let own = run(&mut gl, 0, SRGB8_ALPHA8, &camera, &default);
+    gl.engine().set_own_classify(false);
+    let all_tiles = run(&mut gl, 0, SRGB8_ALPHA8, &camera, &default);
+    gl.engine().set_own_classify(true);
+    assert_ne!(own, raw);
+    assert_same_arithmetic(&gl, &all_tiles, &own, "the paper's classify");
+    // Other methods and formats have none.
+    gl.engine().set_ablation(ABLATE_METHOD);
+    let luminance = Params {
+        method: Method::Luminance,
+        ..Params::default()
+    };
+    let refused = gl.enhance_raw(&raw, (96, 9), SRGB8_ALPHA8, &camera, &luminance);
+    let refused_rgba8 = gl.enhance_raw(&raw, (96, 9), RGBA8, &camera, &paper);
+    gl.engine().set_ablation(0);
+    for r in [refused, refused_rgba8] {
+        let err = r.expect_err("no ablated variant").to_string();
+        assert!(err.contains("paper's and the perceptual method"), "{err}");
+    }
 }
 
 /// The app's reset status is the app's: a robust context reports a reset once, so the engine

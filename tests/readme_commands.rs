@@ -210,6 +210,10 @@ const NOT_RUN: &[(&str, &str)] = &[
         "contrastxr bench --sizes 2064x2208 --runs 10 --path all --ablate all",
         "minutes; tests/gpu_engine.rs runs --ablate",
     ),
+    (
+        "contrastxr bench --engine opengl --sizes 2064x2208 --runs 10 --ablate all",
+        "minutes; tests/opengl_engine.rs runs --ablate",
+    ),
 ];
 
 /// The markdown files whose commands are checked.

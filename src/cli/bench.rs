@@ -45,7 +45,7 @@ pub fn usage() -> String {
          camera frame's texels (their blur runs on the source's CPU thread, not timed).\n\
          The method options set what is timed (--method perceptual, --world-nits 5000, ...); the\n\
          config file and the environment do not.\n\
-         --ablate LIST (Vulkan only; each case once per item, after none) takes one part out of\n\
+         --ablate LIST (each case once per item, after none; either engine) takes one part out of\n\
          the enhancement to show what it costs, in every column that runs it (enh/none: its\n\
          enhancement over the case's none; the output is then no enhancement; on the bench's\n\
          RGBA8 sRGB). For --method paper: method (no\n\
@@ -53,7 +53,7 @@ pub fn usage() -> String {
          no camera texel reads), codec (no sRGB decode or encode), per-pixel (the three: loads,\n\
          quantisation and stores left), enhance-pass (the enhance pass returns at once:\n\
          classify, finish_tiles, the indirect dispatch), shared-fetch (the general background\n\
-         sampling instead of shared fetches). For --method perceptual: method, background,\n\
+         sampling instead of shared fetches; Vulkan only). For --method perceptual: method, background,\n\
          directions (the paper's colour the only candidate), bisection (none back toward the\n\
          display colour), search (both), classify (the paper's classify, which lists every tile\n\
          with content, instead of the method's own). all: every one the method has.\n\n{}",
@@ -83,17 +83,20 @@ fn parse_content(s: &str) -> Result<Content, CliError> {
 
 /// The ablations asked for, `none` first (the baseline each is read against); `all` for every
 /// one `method` has.
-fn parse_ablations(list: Option<String>, method: Method) -> Result<Vec<Ablation>, CliError> {
+fn parse_ablations(
+    list: Option<String>,
+    method: Method,
+    opengl: bool,
+) -> Result<Vec<Ablation>, CliError> {
+    // The OpenGL engine has no shared fetches.
+    let applies = |a: Ablation| a.applies_to(method) && !(opengl && a == Ablation::SharedFetch);
     let Some(list) = list else {
         return Ok(vec![Ablation::None]);
     };
     let mut out = vec![Ablation::None];
     for item in list.split(',').map(str::trim) {
         let found: Vec<Ablation> = match item {
-            "all" => Ablation::ALL
-                .into_iter()
-                .filter(|a| a.applies_to(method))
-                .collect(),
+            "all" => Ablation::ALL.into_iter().filter(|&a| applies(a)).collect(),
             _ => Ablation::ALL
                 .into_iter()
                 .filter(|a| a.name() == item)
@@ -106,9 +109,10 @@ fn parse_ablations(list: Option<String>, method: Method) -> Result<Vec<Ablation>
                 names.join(", ")
             )));
         };
-        if !first.applies_to(method) {
+        if !applies(first) {
+            let engine = if opengl { "OpenGL" } else { "Vulkan" };
             return Err(CliError::Usage(format!(
-                "--ablate: {item} is not built for the method {}",
+                "--ablate: {item} is not built for the method {} on the {engine} engine",
                 method.name()
             )));
         }
@@ -175,14 +179,9 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             )))
         }
     };
-    let ablations = parse_ablations(args.value(&["--ablate"])?, params.method)?;
+    let ablations = parse_ablations(args.value(&["--ablate"])?, params.method, opengl)?;
     let json = args.flag("--json");
     args.finish()?;
-    if opengl && ablations.len() > 1 {
-        return Err(CliError::Usage(
-            "--ablate: the ablations are built for the Vulkan engine only".into(),
-        ));
-    }
     let mut cases = Vec::new();
     for &region in &sizes {
         for &content in &contents {

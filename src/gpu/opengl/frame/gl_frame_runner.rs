@@ -26,15 +26,15 @@ use super::gl_view::GlView;
 use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};
-use crate::gpu::core::interface::{in_place_texel, ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
+use crate::gpu::core::interface::in_place_texel;
 use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::plan::{view_steps, NoPlan};
-use crate::gpu::core::{CameraRect, VariantKey};
+use crate::gpu::core::CameraRect;
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
-use crate::gpu::opengl::pipelines::{self, ProgramBinaries, Programs};
+use crate::gpu::opengl::pipelines::{ProgramBinaries, Programs};
 use crate::gpu::opengl::texels::TexelBuffers;
 
 /// What a call did.
@@ -109,6 +109,10 @@ pub struct GlFrameRunner {
     pub(super) in_place: bool,
     /// Which of the last enhanced views were stored in place (the others through a buffer).
     pub(super) last_in_place: Vec<bool>,
+    /// The benchmark's ablations (interface.rs ABLATE_*) and tile list (variant_programs.rs):
+    /// 0 and true but for `contrastxr bench --ablate`.
+    pub(super) ablate: u32,
+    pub(super) own_classify: bool,
 }
 
 /// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
@@ -177,6 +181,8 @@ impl GlFrameRunner {
             framebuffer,
             label,
             last_in_place: Vec::new(),
+            ablate: 0,
+            own_classify: true,
         })
     }
 
@@ -285,37 +291,6 @@ impl GlFrameRunner {
             return Err(GlError::ContextLost);
         }
         Ok(())
-    }
-
-    /// The programs a (checked) view needs: classify, finish_tiles, enhance.
-    fn view_programs(&self, view: &GlView, params: &Params) -> Result<[usize; 3], GlError> {
-        let in_place = self.store_through(view).is_some();
-        Self::shape_programs(view.internal_format, view.rect.2, params, in_place)
-    }
-
-    /// The programs views of `internal_format`, `width` texels wide, need, in place or not.
-    fn shape_programs(
-        internal_format: u32,
-        width: u32,
-        params: &Params,
-        in_place: bool,
-    ) -> Result<[usize; 3], GlError> {
-        let format = GlFormat::of(internal_format)?;
-        let access = if in_place {
-            ACCESS_IN_PLACE
-        } else if rows_aligned(width, format.pixel.bytes_per_pixel()) {
-            ACCESS_WIDE
-        } else {
-            ACCESS_NARROW
-        };
-        let key = VariantKey::of(params, format.pixel, access);
-        let missing = || GlError::Format(internal_format);
-        Ok([
-            pipelines::classify(key.format, key.access, key.classify_method())
-                .ok_or_else(missing)?,
-            pipelines::GL_FINISH_TILES,
-            pipelines::enhance(key.codes(), key.access, key.extras).ok_or_else(missing)?,
-        ])
     }
 
     /// Whether the programs views of `internal_format`, `width` texels wide, need for

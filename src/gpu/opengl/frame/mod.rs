@@ -7,6 +7,7 @@ mod gl_view;
 mod program_warm_up;
 mod region;
 pub mod state_guard;
+mod variant_programs;
 mod view_check;
 mod view_pixels;
 mod view_recipe;

@@ -64,9 +64,9 @@ impl GlOffline {
     /// timed, and OpenGL has no image-copy path).
     pub fn bench(&mut self, case: &BenchCase, params: &Params) -> Result<BenchResult, GlError> {
         params.validate().map_err(GlError::Input)?;
-        if case.ablation != Ablation::None {
+        if case.ablation == Ablation::SharedFetch {
             return Err(GlError::Input(
-                "the ablations are built for the Vulkan engine only".into(),
+                "the OpenGL engine has no shared fetches to ablate".into(),
             ));
         }
         let internal = gl::SRGB8_ALPHA8;
@@ -94,7 +94,12 @@ impl GlOffline {
             rig.scratch
                 .push(self.create_texture(internal, case.region, &texels)?);
         }
+        let engine = self.engine();
+        engine.set_ablation(case.ablation.bits());
+        engine.set_own_classify(case.ablation != Ablation::Classify);
         let result = self.bench_with(&mut rig, case, params, texels.len(), foreground);
+        self.engine().set_ablation(0);
+        self.engine().set_own_classify(true);
         self.destroy_rig(rig);
         result
     }

@@ -388,6 +388,16 @@ pub fn classify(format: u32, access: u32, method: u32) -> Option<usize> {
         .map(|&(.., id)| id)
 }
 
+/// The benchmark's ablated `enhance` program of a method (its code), access and ablations
+/// (interface.rs ABLATE_*): the paper's or the perceptual method in mode enhance on RGBA8 sRGB;
+/// None for the others.
+pub fn enhance_ablated(method: u32, access: u32, ablate: u32) -> Option<usize> {
+    GL_ENHANCE_ABLATED
+        .iter()
+        .find(|&&(m, a, x, _)| (m, a, x) == (method, access, ablate))
+        .map(|&(.., id)| id)
+}
+
 /// The `enhance` program of (method, mode, format) codes, access and extras (MODE_BACKGROUND
 /// has one variant whatever the method and extras).
 pub fn enhance(

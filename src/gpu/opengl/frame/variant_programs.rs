@@ -1,0 +1,108 @@
+//! Which programs a view's passes take: the variants of its format, access and settings
+//! (`VariantKey`), or the benchmark's ablated ones (`contrastxr bench --ablate`).
+
+use super::gl_frame_runner::{rows_aligned, GlFrameRunner};
+use super::gl_view::GlView;
+use crate::algorithm::params::{Method, Params};
+use crate::gpu::core::codes::method_code;
+use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE, MODE_ENHANCE};
+use crate::gpu::core::{PixelFormat, VariantKey};
+use crate::gpu::opengl::conv::GlFormat;
+use crate::gpu::opengl::device::GlError;
+use crate::gpu::opengl::pipelines;
+
+impl GlFrameRunner {
+    /// The programs a (checked) view needs: classify, finish_tiles, enhance (those of the
+    /// benchmark's ablations where it sets them).
+    pub(super) fn view_programs(
+        &self,
+        view: &GlView,
+        params: &Params,
+    ) -> Result<[usize; 3], GlError> {
+        let in_place = self.store_through(view).is_some();
+        let format = view.internal_format;
+        let key = Self::shape_key(format, view.rect.2, params, in_place)?;
+        self.ablated(key, Self::key_programs(key, format)?)
+    }
+
+    /// The programs views of `internal_format`, `width` texels wide, need, in place or not.
+    pub(super) fn shape_programs(
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+        in_place: bool,
+    ) -> Result<[usize; 3], GlError> {
+        let key = Self::shape_key(internal_format, width, params, in_place)?;
+        Self::key_programs(key, internal_format)
+    }
+
+    /// The variant views of `internal_format`, `width` texels wide, take, in place or not.
+    fn shape_key(
+        internal_format: u32,
+        width: u32,
+        params: &Params,
+        in_place: bool,
+    ) -> Result<VariantKey, GlError> {
+        let format = GlFormat::of(internal_format)?;
+        let access = if in_place {
+            ACCESS_IN_PLACE
+        } else if rows_aligned(width, format.pixel.bytes_per_pixel()) {
+            ACCESS_WIDE
+        } else {
+            ACCESS_NARROW
+        };
+        Ok(VariantKey::of(params, format.pixel, access))
+    }
+
+    /// The programs of a variant (views of `internal_format`).
+    fn key_programs(key: VariantKey, internal_format: u32) -> Result<[usize; 3], GlError> {
+        let missing = || GlError::Format(internal_format);
+        Ok([
+            pipelines::classify(key.format, key.access, key.classify_method())
+                .ok_or_else(missing)?,
+            pipelines::GL_FINISH_TILES,
+            pipelines::enhance(key.codes(), key.access, key.extras).ok_or_else(missing)?,
+        ])
+    }
+
+    /// The benchmark's ablations (interface.rs ABLATE_*; 0, the default, for none): views then
+    /// take the ablated `enhance`, built for the paper's and the perceptual method in mode
+    /// enhance on RGBA8 sRGB only. Their output is not an enhancement.
+    pub fn set_ablation(&mut self, ablate: u32) {
+        self.ablate = ablate;
+    }
+
+    /// Whether the perceptual method lists tiles by its own `classify` (on by default); off,
+    /// by the paper's (every tile with content), to compare them.
+    pub fn set_own_classify(&mut self, on: bool) {
+        self.own_classify = on;
+    }
+
+    /// The view's programs as the benchmark's ablations and tile list change them.
+    fn ablated(
+        &self,
+        key: VariantKey,
+        [classify, finish, enhance]: [usize; 3],
+    ) -> Result<[usize; 3], GlError> {
+        let classify = match self.own_classify {
+            true => classify,
+            false => pipelines::classify(key.format, key.access, method_code(Method::Paper))
+                .unwrap_or(classify),
+        };
+        if self.ablate == 0 {
+            return Ok([classify, finish, enhance]);
+        }
+        let (method, mode, format) = key.codes();
+        let built = (mode, format) == (MODE_ENHANCE, PixelFormat::SRGB8.shader_code());
+        let enhance = pipelines::enhance_ablated(method, key.access, self.ablate)
+            .filter(|_| built && !key.extras)
+            .ok_or_else(|| {
+                GlError::Input(format!(
+                    "no ablated variant {} of this method and format: they are built for the \
+                     paper's and the perceptual method on RGBA8 sRGB (contrastxr bench --help)",
+                    self.ablate
+                ))
+            })?;
+        Ok([classify, finish, enhance])
+    }
+}
