@@ -48,15 +48,15 @@ pub fn usage() -> String {
          --ablate LIST (each case once per item, after none; either engine) takes one part out of\n\
          the enhancement to show what it costs, in every column that runs it (enh/none: its\n\
          enhancement over the case's none; the output is then no enhancement; on the bench's\n\
-         RGBA8 sRGB). For --method paper: method (no\n\
-         CIELAB conversion or method, the display colour kept), background (a constant grey,\n\
-         no camera texel reads), codec (no sRGB decode or encode), per-pixel (the three: loads,\n\
-         quantisation and stores left), enhance-pass (the enhance pass returns at once:\n\
-         classify, finish_tiles, the indirect dispatch), shared-fetch (the general background\n\
-         sampling instead of shared fetches; Vulkan only). For --method perceptual: method, background,\n\
-         directions (the paper's colour the only candidate), bisection (none back toward the\n\
-         display colour), search (both), classify (the paper's classify, which lists every tile\n\
-         with content, instead of the method's own). all: every one the method has.\n\n{}",
+         RGBA8 sRGB). For --method paper: method (no CIELAB conversion or method, the display\n\
+         colour kept), background (a constant grey, no camera texel reads), codec (no sRGB decode\n\
+         or encode), per-pixel (the three: loads, quantisation and stores left), enhance-pass\n\
+         (the enhance pass returns at once: classify, finish_tiles, the indirect dispatch),\n\
+         shared-fetch (the general background sampling instead of shared fetches; Vulkan only).\n\
+         For --method perceptual: method, background, directions (the paper's colour the only\n\
+         candidate), bisection (none back toward the display colour), search (both), classify\n\
+         (the paper's classify, which lists every tile with content, instead of the method's\n\
+         own). all: every one the method has.\n\n{}",
         contrastxr::gpu::core::bench::WARM_UP_RUNS,
         contrastxr::gpu::core::bench::CAMERA_SIZE.0,
         contrastxr::gpu::core::bench::CAMERA_SIZE.1,

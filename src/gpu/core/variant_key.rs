@@ -45,10 +45,27 @@ impl VariantKey {
         }
     }
 
+    /// Whether the benchmark's ablated `enhance` variants can stand for this one: they are
+    /// built in mode enhance on RGBA8 sRGB, extras off (for the paper's and the perceptual
+    /// method: the backend's table says which ablations).
+    pub fn has_ablated_variants(self) -> bool {
+        let srgb8 = PixelFormat::SRGB8.shader_code();
+        (self.mode, self.format, self.extras) == (MODE_ENHANCE, srgb8, false)
+    }
+
     /// (method, mode, format): the codes the variant tables are keyed by.
     pub fn codes(self) -> (u32, u32, u32) {
         (self.method, self.mode, self.format)
     }
+}
+
+/// Why a view has no ablated variant for the ablations `ablate` (interface.rs ABLATE_*): the
+/// backends' error text.
+pub fn no_ablated_variant(ablate: u32) -> String {
+    format!(
+        "no ablated variant {ablate} of this method and format: they are built for the paper's \
+         and the perceptual method on RGBA8 sRGB (contrastxr bench --help)"
+    )
 }
 
 #[cfg(test)]
@@ -78,6 +95,28 @@ mod tests {
             assert_eq!(classify(method, ViewMode::Enhance), paper);
             assert_eq!(classify(method, ViewMode::Split), paper);
         }
+    }
+
+    /// The ablated variants stand only for mode enhance on RGBA8 sRGB with the extras off.
+    #[test]
+    fn ablated_variants_stand_for_srgb8_in_mode_enhance_without_extras() {
+        let key = |mode, format, boost| {
+            let params = Params {
+                mode,
+                achromatic_boost: boost,
+                ..Params::default()
+            };
+            VariantKey::of(&params, format, ACCESS_IN_PLACE)
+        };
+        let unorm8 = PixelFormat {
+            srgb: false,
+            ..PixelFormat::SRGB8
+        };
+        assert!(key(ViewMode::Enhance, PixelFormat::SRGB8, 0.0).has_ablated_variants());
+        assert!(!key(ViewMode::Split, PixelFormat::SRGB8, 0.0).has_ablated_variants());
+        assert!(!key(ViewMode::Enhance, unorm8, 0.0).has_ablated_variants());
+        assert!(!key(ViewMode::Enhance, PixelFormat::SRGB8, 0.2).has_ablated_variants());
+        assert!(no_ablated_variant(16).starts_with("no ablated variant 16 "));
     }
 
     #[test]

@@ -5,8 +5,8 @@ use super::gl_frame_runner::{rows_aligned, GlFrameRunner};
 use super::gl_view::GlView;
 use crate::algorithm::params::{Method, Params};
 use crate::gpu::core::codes::method_code;
-use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE, MODE_ENHANCE};
-use crate::gpu::core::{PixelFormat, VariantKey};
+use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
+use crate::gpu::core::{no_ablated_variant, VariantKey};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::GlError;
 use crate::gpu::opengl::pipelines;
@@ -92,17 +92,9 @@ impl GlFrameRunner {
         if self.ablate == 0 {
             return Ok([classify, finish, enhance]);
         }
-        let (method, mode, format) = key.codes();
-        let built = (mode, format) == (MODE_ENHANCE, PixelFormat::SRGB8.shader_code());
-        let enhance = pipelines::enhance_ablated(method, key.access, self.ablate)
-            .filter(|_| built && !key.extras)
-            .ok_or_else(|| {
-                GlError::Input(format!(
-                    "no ablated variant {} of this method and format: they are built for the \
-                     paper's and the perceptual method on RGBA8 sRGB (contrastxr bench --help)",
-                    self.ablate
-                ))
-            })?;
+        let enhance = pipelines::enhance_ablated(key.method, key.access, self.ablate)
+            .filter(|_| key.has_ablated_variants())
+            .ok_or_else(|| GlError::Input(no_ablated_variant(self.ablate)))?;
         Ok([classify, finish, enhance])
     }
 }

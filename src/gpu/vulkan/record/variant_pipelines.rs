@@ -6,9 +6,8 @@ use super::resources::ViewTarget;
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Method;
 use crate::gpu::core::codes::method_code;
-use crate::gpu::core::interface::MODE_ENHANCE;
 use crate::gpu::core::shader_ids;
-use crate::gpu::core::{shares_fetches, PixelFormat, VariantKey};
+use crate::gpu::core::{no_ablated_variant, shares_fetches, VariantKey};
 use crate::gpu::vulkan::device::GpuError;
 use ash::vk;
 
@@ -47,17 +46,9 @@ impl Recorder {
 
     /// The benchmark's ablated `enhance` for the view's variant, where one is built.
     fn ablated_pipeline(&self, key: VariantKey) -> Result<vk::Pipeline, GpuError> {
-        let (method, mode, format) = key.codes();
-        let built = (mode, format) == (MODE_ENHANCE, PixelFormat::SRGB8.shader_code());
-        let id = shader_ids::enhance_ablated(method, key.access, self.ablate)
-            .filter(|_| built && !key.extras)
-            .ok_or_else(|| {
-                GpuError::Unsupported(format!(
-                    "no ablated variant {} of this method and format: they are built for the \
-                     paper's and the perceptual method on RGBA8 sRGB (contrastxr bench --help)",
-                    self.ablate
-                ))
-            })?;
+        let id = shader_ids::enhance_ablated(key.method, key.access, self.ablate)
+            .filter(|_| key.has_ablated_variants())
+            .ok_or_else(|| GpuError::Unsupported(no_ablated_variant(self.ablate)))?;
         self.pipelines.get(id)
     }
 }
