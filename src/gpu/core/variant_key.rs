@@ -45,6 +45,15 @@ impl VariantKey {
         }
     }
 
+    /// `classify_method`, or the paper's where `own` is off (the benchmark's `classify`
+    /// ablation: every tile with content listed).
+    pub fn classify_method_if(self, own: bool) -> u32 {
+        match own {
+            true => self.classify_method(),
+            false => method_code(Method::Paper),
+        }
+    }
+
     /// Whether the benchmark's ablated `enhance` variants can stand for this one: they are
     /// built in mode enhance on RGBA8 sRGB, extras off (for the paper's and the perceptual
     /// method: the backend's table says which ablations).
@@ -117,6 +126,23 @@ mod tests {
         assert!(!key(ViewMode::Enhance, unorm8, 0.0).has_ablated_variants());
         assert!(!key(ViewMode::Enhance, PixelFormat::SRGB8, 0.2).has_ablated_variants());
         assert!(no_ablated_variant(16).starts_with("no ablated variant 16 "));
+        // The benchmark's classify ablation lists every tile, as the paper's classify does.
+        let perceptual = VariantKey::of(
+            &Params {
+                method: Method::Perceptual,
+                ..Params::default()
+            },
+            PixelFormat::SRGB8,
+            ACCESS_IN_PLACE,
+        );
+        assert_eq!(
+            perceptual.classify_method_if(true),
+            perceptual.classify_method()
+        );
+        assert_eq!(
+            perceptual.classify_method_if(false),
+            method_code(Method::Paper)
+        );
     }
 
     #[test]

@@ -34,8 +34,8 @@ impl Content {
 }
 
 /// What the benchmark takes out of the enhancement, to show what that part costs
-/// (`contrastxr bench --ablate`, Vulkan only); with any but `None` the views' output is not an
-/// enhancement. The ablated variants are built for the paper's and the perceptual method on
+/// (`contrastxr bench --ablate`, either engine; `SharedFetch` Vulkan only); with any but `None`
+/// the views' output is not an enhancement. The ablated variants are built for the paper's and the perceptual method on
 /// RGBA8 sRGB, the bench's format (src/gpu/core/interface.rs ABLATE_*), each ablation for the
 /// methods `applies_to` names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -3,8 +3,7 @@
 
 use super::gl_frame_runner::{rows_aligned, GlFrameRunner};
 use super::gl_view::GlView;
-use crate::algorithm::params::{Method, Params};
-use crate::gpu::core::codes::method_code;
+use crate::algorithm::params::Params;
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
 use crate::gpu::core::{no_ablated_variant, VariantKey};
 use crate::gpu::opengl::conv::GlFormat;
@@ -84,11 +83,8 @@ impl GlFrameRunner {
         key: VariantKey,
         [classify, finish, enhance]: [usize; 3],
     ) -> Result<[usize; 3], GlError> {
-        let classify = match self.own_classify {
-            true => classify,
-            false => pipelines::classify(key.format, key.access, method_code(Method::Paper))
-                .unwrap_or(classify),
-        };
+        let method = key.classify_method_if(self.own_classify);
+        let classify = pipelines::classify(key.format, key.access, method).unwrap_or(classify);
         if self.ablate == 0 {
             return Ok([classify, finish, enhance]);
         }

@@ -237,7 +237,7 @@ impl Recorder {
                 self.pipelines.get(shader_ids::classify(
                     key.format,
                     key.access,
-                    self.classify_method(key),
+                    key.classify_method_if(self.own_classify),
                 )?)?,
                 self.pipelines.get(shader_ids::FINISH_TILES)?,
                 self.enhance_pipeline(view, key, mapping)?,

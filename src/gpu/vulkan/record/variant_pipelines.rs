@@ -4,8 +4,6 @@
 use super::recorder::Recorder;
 use super::resources::ViewTarget;
 use crate::algorithm::mapping::CameraMapping;
-use crate::algorithm::params::Method;
-use crate::gpu::core::codes::method_code;
 use crate::gpu::core::shader_ids;
 use crate::gpu::core::{no_ablated_variant, shares_fetches, VariantKey};
 use crate::gpu::vulkan::device::GpuError;
@@ -32,15 +30,6 @@ impl Recorder {
             _ => self
                 .pipelines
                 .get(shader_ids::enhance(codes, access, extras)?),
-        }
-    }
-
-    /// The method code of the view's `classify`: its own (`VariantKey::classify_method`), or
-    /// the paper's where the benchmark ablates the perceptual method's own.
-    pub(super) fn classify_method(&self, key: VariantKey) -> u32 {
-        match self.own_classify {
-            true => key.classify_method(),
-            false => method_code(Method::Paper),
         }
     }
 
