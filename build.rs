@@ -47,6 +47,8 @@ mod tables;
 mod variants;
 #[path = "build/wgsl.rs"]
 mod wgsl;
+#[path = "build/write_back.rs"]
+mod write_back;
 
 use interface::*;
 use methods::paper_code;
@@ -192,6 +194,25 @@ fn main() {
             gl.ablated.push((v, id));
         }
     }
+    write_back_stages(&out);
     fs::write(out.join("shader_table.rs"), table.source()).unwrap();
     fs::write(out.join("gl_shader_table.rs"), gl.source()).unwrap();
+}
+
+/// The image-copy path's write-back (shaders/write_back.wgsl): its vertex stage once, its
+/// fragment stage per format, and their table.
+fn write_back_stages(out: &std::path::Path) {
+    use naga::ShaderStage::{Fragment, Vertex};
+    let body = wgsl::read("shaders/write_back.wgsl");
+    for (i, format) in write_back::formats().into_iter().enumerate() {
+        let source = write_back::declarations(format) + &body;
+        let parsed = parse::parse_own("write_back", &source);
+        if i == 0 {
+            let entry = ("write_back_vertex", Vertex);
+            spirv::write_spirv_stage(out, write_back::VERTEX_FILE, &parsed, entry);
+        }
+        let file = write_back::fragment_file(format);
+        spirv::write_spirv_stage(out, &file, &parsed, ("write_back_fragment", Fragment));
+    }
+    fs::write(out.join("write_back_table.rs"), write_back::table_source()).unwrap();
 }

@@ -102,7 +102,8 @@ pub fn check_params(here: &str, block: Option<&(Vec<Member>, u32)>) {
     );
 }
 
-/// The tile list's header against TILE_LIST_DISPATCH_OFFSET and TILE_LIST_HEADER_WORDS.
+/// The tile list's header against TILE_LIST_DISPATCH_OFFSET, TILE_LIST_DRAW_OFFSET and
+/// TILE_LIST_HEADER_WORDS.
 pub fn check_tile_list(here: &str, members: Option<&[Member]>) {
     let Some(members) = members else {
         panic!("{here}: TileList is not a struct");
@@ -114,6 +115,8 @@ pub fn check_tile_list(here: &str, members: Option<&[Member]>) {
     };
     let groups = u64::from(offset("groups"));
     assert_eq!(groups, TILE_LIST_DISPATCH_OFFSET, "{here}: TileList.groups at byte {groups} in the shader, TILE_LIST_DISPATCH_OFFSET {TILE_LIST_DISPATCH_OFFSET}");
+    let draw = u64::from(offset("draw"));
+    assert_eq!(draw, TILE_LIST_DRAW_OFFSET, "{here}: TileList.draw at byte {draw} in the shader, TILE_LIST_DRAW_OFFSET {TILE_LIST_DRAW_OFFSET}");
     let index = u64::from(offset("index"));
     assert_eq!(index, TILE_LIST_HEADER_WORDS * 4, "{here}: TileList.index at byte {index} in the shader, TILE_LIST_HEADER_WORDS {TILE_LIST_HEADER_WORDS} words");
 }

@@ -23,6 +23,13 @@ pub const BOUNDS: naga::proc::BoundsCheckPolicies = naga::proc::BoundsCheckPolic
 
 /// Parses and validates `source` (`name`.wgsl in messages) and checks it against the interface.
 pub fn parse(name: &str, source: &str) -> Parsed {
+    let parsed = parse_own(name, source);
+    check_interface(name, &facts(&parsed.module));
+    parsed
+}
+
+/// Parses and validates a shader with bindings of its own (not the compute passes' interface).
+pub fn parse_own(name: &str, source: &str) -> Parsed {
     let module = naga::front::wgsl::parse_str(source)
         .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
     let info = naga::valid::Validator::new(
@@ -32,7 +39,6 @@ pub fn parse(name: &str, source: &str) -> Parsed {
     )
     .validate(&module)
     .unwrap_or_else(|e| panic!("{name}.wgsl: {}\n{e:?}", e.emit_to_string(source)));
-    check_interface(name, &facts(&module));
     Parsed {
         name: name.to_string(),
         module,

@@ -6,8 +6,8 @@ use std::{fs, path::Path};
 use crate::parse::{Parsed, BOUNDS};
 use crate::spirv_patch::storage_buffers_to_vulkan10;
 
-/// The SPIR-V words of `entry`, as naga writes them.
-pub fn spirv(parsed: &Parsed, entry: &str) -> Vec<u32> {
+/// The SPIR-V words of `entry` of `stage`, as naga writes them.
+pub fn spirv_stage(parsed: &Parsed, entry: &str, stage: naga::ShaderStage) -> Vec<u32> {
     let options = naga::back::spv::Options {
         // SPIR-V 1.0: apps may create Vulkan 1.0 instances (hello_xr does).
         lang_version: (1, 0),
@@ -17,16 +17,26 @@ pub fn spirv(parsed: &Parsed, entry: &str) -> Vec<u32> {
         ..Default::default()
     };
     let pipeline = naga::back::spv::PipelineOptions {
-        shader_stage: naga::ShaderStage::Compute,
+        shader_stage: stage,
         entry_point: entry.to_string(),
     };
     naga::back::spv::write_vec(&parsed.module, &parsed.info, &options, Some(&pipeline))
         .unwrap_or_else(|e| panic!("{}.wgsl entry {entry}: {e}", parsed.name))
 }
 
-/// Writes `out/<file>.spv`: `entry` of the parsed shader in the Vulkan 1.0 form.
+/// Writes `out/<file>.spv`: the compute entry point `entry` in the Vulkan 1.0 form.
 pub fn write_spirv(out: &Path, file: &str, parsed: &Parsed, entry: &str) {
-    let words = storage_buffers_to_vulkan10(spirv(parsed, entry));
+    write_spirv_stage(out, file, parsed, (entry, naga::ShaderStage::Compute));
+}
+
+/// Writes `out/<file>.spv`: `entry` of `stage` in the Vulkan 1.0 form.
+pub fn write_spirv_stage(
+    out: &Path,
+    file: &str,
+    parsed: &Parsed,
+    (entry, stage): (&str, naga::ShaderStage),
+) {
+    let words = storage_buffers_to_vulkan10(spirv_stage(parsed, entry, stage));
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
     fs::write(out.join(format!("{file}.spv")), bytes).unwrap();
 }

@@ -509,8 +509,9 @@ fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 // Turns the tile count into the enhancement's indirect dispatch: TILE tiles per workgroup, at
-// most 32768 workgroups per row (maxComputeWorkGroupCount is only guaranteed to be 65535).
-// Zeroes the count for the next frame.
+// most 32768 workgroups per row (maxComputeWorkGroupCount is only guaranteed to be 65535); and
+// into the write-back's indirect draw (shaders/write_back.wgsl): six vertices per tile. Zeroes
+// the count for the next frame.
 @compute @workgroup_size(1)
 fn finish_tiles() {
     let n = atomicExchange(&tiles.count, 0u);
@@ -519,4 +520,5 @@ fn finish_tiles() {
     tiles.groups[0] = min(groups, INDIRECT_ROW_GROUPS);
     tiles.groups[1] = (groups + (INDIRECT_ROW_GROUPS - 1u)) / INDIRECT_ROW_GROUPS;
     tiles.groups[2] = 1u;
+    tiles.draw = array<u32, 4>(6u, n, 0u, 0u);
 }

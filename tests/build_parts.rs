@@ -359,6 +359,7 @@ fn agreeing() -> ShaderFacts {
             member("groups", TILE_LIST_DISPATCH_OFFSET as u32),
             member("total", 16),
             member("pad", 20),
+            member("draw", TILE_LIST_DRAW_OFFSET as u32),
             member("index", TILE_LIST_HEADER_WORDS as u32 * 4),
         ])],
         entry_points: WORKGROUPS
@@ -464,10 +465,17 @@ fn a_tile_list_out_of_step_fails_naming_both_sides() {
         f.tile_lists[0].as_mut().unwrap().pop();
     });
     assert_eq!(m, format!("{HERE}: TileList has no `index`"));
-    let m = check_failure(|f| f.tile_lists[0].as_mut().unwrap()[4].offset = 36);
+    let m = check_failure(|f| f.tile_lists[0].as_mut().unwrap()[4].offset = 28);
     assert!(
         m.contains(&format!(
-            "{HERE}: TileList.index at byte 36 in the shader, TILE_LIST_HEADER_WORDS 8 words"
+            "{HERE}: TileList.draw at byte 28 in the shader, TILE_LIST_DRAW_OFFSET 32"
+        )),
+        "{m}"
+    );
+    let m = check_failure(|f| f.tile_lists[0].as_mut().unwrap()[5].offset = 36);
+    assert!(
+        m.contains(&format!(
+            "{HERE}: TileList.index at byte 36 in the shader, TILE_LIST_HEADER_WORDS 12 words"
         )),
         "{m}"
     );

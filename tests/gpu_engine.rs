@@ -11,6 +11,7 @@ use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec::half_from_f32;
 use contrastxr::gpu::vulkan::offline::AppImage;
+use contrastxr::gpu::vulkan::record::CopyBack;
 use contrastxr::gpu::vulkan::VkFormat;
 use contrastxr::gpu::OfflineBackend;
 use contrastxr::gpu::{DeviceOptions, PixelFormat, PixelLayout, VkOffline};
@@ -37,9 +38,18 @@ fn assert_clean(e: &VkOffline) {
 #[test]
 fn every_embedded_shader_passes_spirv_val() {
     let dir = common::scratch_dir("gpu-engine-spirv-val");
-    for shader in contrastxr::gpu::core::modules::all() {
-        let path = dir.join(format!("{}.spv", shader.name));
-        std::fs::write(&path, shader.bytes()).unwrap();
+    let compute = contrastxr::gpu::core::modules::all()
+        .into_iter()
+        .map(|m| (m.name.to_string(), m.bytes()));
+    let write_back = contrastxr::gpu::vulkan::pipelines::write_back_modules();
+    assert_eq!(
+        write_back.len(),
+        8,
+        "the vertex stage and 7 formats' fragment stages"
+    );
+    for (name, bytes) in compute.chain(write_back) {
+        let path = dir.join(format!("{name}.spv"));
+        std::fs::write(&path, bytes).unwrap();
         let out = Command::new("spirv-val")
             .args(["--target-env", "vulkan1.0"])
             .arg(&path)
@@ -47,8 +57,7 @@ fn every_embedded_shader_passes_spirv_val() {
             .expect("spirv-val not found: run scripts/install-deps (package spirv-tools)");
         assert!(
             out.status.success(),
-            "{}: {}",
-            shader.entry,
+            "{name}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
     }
@@ -619,21 +628,39 @@ fn raw_words(format: PixelFormat, image: &RgbaImage) -> Vec<u32> {
 }
 
 /// The image-copy path (the region copied out of an image without storage usage into an
-/// image of the engine's own, enhanced there by the in-place shaders, copied back) gives the
-/// words of the path through a buffer in every format the layer enhances, on a sub-rectangle
-/// of either layer of a 2-layer image, at widths with and without 16-byte aligned rows; every
-/// word outside the region is left as it was.
+/// image of the engine's own, enhanced there by the in-place shaders, copied back whole, or
+/// its listed tiles drawn back) gives the words of the path through a buffer in every format
+/// the layer enhances, on a sub-rectangle of either layer of a 2-layer image, at widths with
+/// and without 16-byte aligned rows, with see-through tiles (left out of the draw) and
+/// without; every word outside the region is left as it was.
 #[test]
 fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
     let mut e = engine();
     let camera = noise(24, 16, 7);
     let params = Params::default();
+    let cases = [
+        ((16, 8), (5, 3), 1, false),
+        ((13, 5), (0, 6), 0, false),
+        ((21, 11), (1, 2), 1, true),
+    ];
     for (vk_format, format) in every_format() {
         let wpp = (format.bytes_per_pixel() / 4) as usize;
-        for (extent, offset, layer) in [((16, 8), (5, 3), 1), ((13, 5), (0, 6), 0)] {
+        for ((extent, offset, layer, sparse), back) in cases
+            .into_iter()
+            .flat_map(|c| [CopyBack::Region, CopyBack::Tiles].map(|b| (c, b)))
+        {
             let size = (23, 13);
             let layers = 2;
-            let image = noise(size.0, size.1 * layers, extent.0 * 7 + layer);
+            let mut image = noise(size.0, size.1 * layers, extent.0 * 7 + layer);
+            if sparse {
+                // Black (see-through) pixels but for the region's second tile column.
+                for (i, p) in image.pixels.iter_mut().enumerate() {
+                    let x = i as u32 % size.0;
+                    if !(offset.0 as u32 + 8..offset.0 as u32 + 16).contains(&x) {
+                        *p = [0, 0, 0, 0];
+                    }
+                }
+            }
             let words = raw_words(format, &image);
             // The region's words, rows tightly packed.
             let at = |x: u32, y: u32, l: u32| ((l * size.1 + y) * size.0 + x) as usize * wpp;
@@ -655,8 +682,8 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
                 layer,
             };
             let out = e
-                .enhance_raw_image_copy(&words, (vk_format, app), &camera, &params)
-                .unwrap_or_else(|err| panic!("{vk_format:?}: {err}"));
+                .enhance_raw_image_copy_back(&words, (vk_format, app), (&camera, &params), back)
+                .unwrap_or_else(|err| panic!("{vk_format:?} {back:?}: {err}"));
             assert_eq!(out.len(), words.len(), "{vk_format:?}");
             let mut expected = words.clone();
             for y in 0..extent.1 {
@@ -668,7 +695,7 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
             let differ = differing(&out, &expected);
             assert_eq!(
                 differ, 0,
-                "{vk_format:?} {extent:?} at {offset:?} layer {layer}"
+                "{vk_format:?} {extent:?} at {offset:?} layer {layer}, {back:?}"
             );
         }
     }

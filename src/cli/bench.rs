@@ -34,8 +34,10 @@ pub fn usage() -> String {
          into an image of the layer's own with storage usage, enhanced there by the in-place\n\
          shaders, copied back, what the layer does for images it may not store to, such as\n\
          sRGB swapchains without storage usage; its copies alone, ic copies ms; ic/frame and\n\
-         ic/ip: its ratio to the frame through buffer copies and in place; with image-copy\n\
-         and all). all times the three.\n\
+         ic/ip: its ratio to the frame through buffer copies and in place; img tiles ms: the\n\
+         same path with only the tiles the enhancement listed drawn back into the app's image\n\
+         instead of the whole region copied back, it/ip its ratio to the frame in place; with\n\
+         image-copy and all). all times the three.\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n\
          --engine opengl (default vulkan) times the OpenGL engine on an EGL context of its own\n\
          (GL_TIME_ELAPSED queries; --device and --path do not apply) in the same columns: copy\n\
@@ -258,7 +260,7 @@ fn report(
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13} {:>8}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>12} {:>6} {:>13} {:>8}",
         "size",
         "views",
         "content",
@@ -281,6 +283,8 @@ fn header() -> String {
         "ic copies ms",
         "ic/frame",
         "ic/ip",
+        "img tiles ms",
+        "it/ip",
         "ablation",
         "enh/none"
     )
@@ -289,7 +293,7 @@ fn header() -> String {
 fn row(r: &BenchResult, vs_none: Option<f64>) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>13} {:>8}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>12} {:>6} {:>13} {:>8}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
@@ -312,6 +316,8 @@ fn row(r: &BenchResult, vs_none: Option<f64>) -> String {
         optional(r.image_copy_copies_ms, 3),
         optional(r.image_copy_frame_ratio(), 2),
         optional(r.image_copy_in_place_ratio(), 2),
+        optional(r.frame_image_copy_tiles_ms, 3),
+        optional(r.image_copy_tiles_in_place_ratio(), 2),
         r.case.ablation.name(),
         optional(vs_none, 2),
     )
@@ -350,6 +356,8 @@ fn to_json(device: &str, results: &[(BenchResult, Option<f64>)]) -> String {
                 "image_copy_copies_ms": r.image_copy_copies_ms,
                 "image_copy_frame_ratio": r.image_copy_frame_ratio(),
                 "image_copy_in_place_ratio": r.image_copy_in_place_ratio(),
+                "frame_image_copy_tiles_ms": r.frame_image_copy_tiles_ms,
+                "image_copy_tiles_in_place_ratio": r.image_copy_tiles_in_place_ratio(),
                 "live_frame_ms": r.live_frame_ms(),
                 "live_ratio": r.live_frame_ms() / r.copy_ms,
                 "camera_width": CAMERA_SIZE.0,

@@ -199,12 +199,18 @@ pub const WORKGROUPS: [(&str, [u32; 3]); 7] = [
 ];
 
 /// Words (u32) of the tile list before the tile indices: the count, the indirect dispatch's
-/// three workgroup counts, the total and padding (struct TileList).
-pub const TILE_LIST_HEADER_WORDS: u64 = 8;
+/// three workgroup counts, the total, padding and the indirect draw's four arguments (struct
+/// TileList).
+pub const TILE_LIST_HEADER_WORDS: u64 = 12;
 /// Byte offset of the indirect dispatch's arguments in the tile list.
 pub const TILE_LIST_DISPATCH_OFFSET: u64 = 4;
+/// Byte offset of the indirect draw's arguments (vkCmdDrawIndirect: six vertices per listed
+/// tile, one instance each) in the tile list: the image-copy path's write-back draws the
+/// listed tiles (shaders/write_back.wgsl).
+pub const TILE_LIST_DRAW_OFFSET: u64 = 32;
 /// The tile list's declaration; its header must be TILE_LIST_HEADER_WORDS words and hold the
-/// dispatch arguments at TILE_LIST_DISPATCH_OFFSET (checked by build.rs).
+/// dispatch arguments at TILE_LIST_DISPATCH_OFFSET and the draw's at TILE_LIST_DRAW_OFFSET
+/// (checked by build.rs).
 pub const TILE_LIST_WGSL: &str = "struct TileList {
     // Tiles found so far by classify; finish_tiles moves it to `total` and zeroes it.
     count: atomic<u32>,
@@ -212,6 +218,8 @@ pub const TILE_LIST_WGSL: &str = "struct TileList {
     groups: array<u32, 3>,
     total: u32,
     pad: array<u32, 3>,
+    // vkCmdDrawIndirect arguments: vertices, instances, first vertex, first instance.
+    draw: array<u32, 4>,
     // Tile index (row * tile_columns + column) of each listed tile.
     index: array<u32>,
 }

@@ -25,6 +25,10 @@ pub struct BenchResult {
     pub frame_image_copy_ms: Option<f64>,
     /// The same without the enhancement: the image-copy path's copies alone.
     pub image_copy_copies_ms: Option<f64>,
+    /// The image-copy path with only the tiles the enhancement listed drawn back into the
+    /// app's images (a render pass) instead of the whole regions copied back (None where
+    /// `frame_image_copy_ms` is, and on OpenGL).
+    pub frame_image_copy_tiles_ms: Option<f64>,
     /// Per camera frame: decode and blur on the camera grid (once, whatever the views).
     pub background_ms: f64,
     /// Fraction of pixels that are foreground (neither black nor alpha 0).
@@ -55,6 +59,11 @@ impl BenchResult {
     /// The frame through the image-copy path over the frame in place.
     pub fn image_copy_in_place_ratio(&self) -> Option<f64> {
         Some(self.frame_image_copy_ms? / self.frame_in_place_ms?)
+    }
+
+    /// The image-copy path with the tiles drawn back over the frame in place.
+    pub fn image_copy_tiles_in_place_ratio(&self) -> Option<f64> {
+        Some(self.frame_image_copy_tiles_ms? / self.frame_in_place_ms?)
     }
 
     /// The frame through the image-copy path over the frame through buffer copies.

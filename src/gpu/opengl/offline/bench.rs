@@ -160,6 +160,7 @@ impl GlOffline {
             frame_in_place_ms: Some(ms[IN_PLACE]),
             frame_image_copy_ms: None,
             image_copy_copies_ms: None,
+            frame_image_copy_tiles_ms: None,
             background_ms: ms[UPLOAD],
             foreground,
         })

@@ -68,10 +68,14 @@ pub fn record_layout_barriers(
 ) {
     let mut seen = HashSet::new();
     let any = vk::AccessFlags::MEMORY_WRITE | vk::AccessFlags::MEMORY_READ;
+    // The layer's accesses: copies, the in-place passes and the image-copy path's write-back
+    // draw (a colour attachment in GENERAL).
     let transfer = vk::AccessFlags::TRANSFER_READ
         | vk::AccessFlags::TRANSFER_WRITE
         | vk::AccessFlags::SHADER_READ
-        | vk::AccessFlags::SHADER_WRITE;
+        | vk::AccessFlags::SHADER_WRITE
+        | vk::AccessFlags::COLOR_ATTACHMENT_READ
+        | vk::AccessFlags::COLOR_ATTACHMENT_WRITE;
     let attachment = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
     let general = vk::ImageLayout::GENERAL;
     let ((old, new), (src, dst)) = if to_general {
@@ -95,7 +99,9 @@ pub fn record_layout_barriers(
         })
         .collect();
     let all = vk::PipelineStageFlags::ALL_COMMANDS;
-    let transfer = vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER;
+    let transfer = vk::PipelineStageFlags::TRANSFER
+        | vk::PipelineStageFlags::COMPUTE_SHADER
+        | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
     let (src, dst) = if to_general {
         (all, transfer)
     } else {

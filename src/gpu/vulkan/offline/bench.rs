@@ -13,7 +13,7 @@ use crate::gpu::vulkan::device::{
     barrier, record_first_layout, record_image_region_copy, record_layout_barriers,
     record_region_copy, GpuError, ImageRegion, VkResultExt,
 };
-use crate::gpu::vulkan::record::ViewTarget;
+use crate::gpu::vulkan::record::{record_write_back, record_write_back_barrier, ViewTarget};
 use ash::vk;
 
 /// The spans timed in each run, in `timed_run`'s order of recording (a start and an end
@@ -29,8 +29,9 @@ enum Span {
     FrameInPlace,
     FrameImageCopy,
     ImageCopyCopies,
+    FrameImageCopyTiles,
 }
-const SPANS: usize = 9;
+const SPANS: usize = 10;
 const QUERIES: u32 = 2 * SPANS as u32;
 
 impl VkOffline {
@@ -47,6 +48,8 @@ impl VkOffline {
             storage_views: Vec::new(),
             image_copy: Vec::new(),
             own_images: Vec::new(),
+            write_back: None,
+            write_back_draws: Vec::new(),
             queries: vk::QueryPool::null(),
         };
         let ablation = case.ablation;
@@ -95,6 +98,8 @@ impl VkOffline {
                 .then_some(ms[Span::FrameImageCopy as usize]),
             image_copy_copies_ms: (!rig.image_copy.is_empty())
                 .then_some(ms[Span::ImageCopyCopies as usize]),
+            frame_image_copy_tiles_ms: (!rig.write_back_draws.is_empty())
+                .then_some(ms[Span::FrameImageCopyTiles as usize]),
             background_ms: ms[Span::Background as usize],
             foreground,
         })
@@ -154,16 +159,16 @@ impl VkOffline {
 
     /// What the layer records per display frame through the image-copy path
     /// (gpu/vulkan/frame/frame_record.rs's `record` for such views, less the background and captures):
-    /// with `enhance`, the passes between the copies. Nothing without image-copy views.
+    /// with `enhance`, the passes between the copies; with `tiles` (and `enhance`), the listed
+    /// tiles drawn back instead of the regions copied back. Nothing without image-copy views.
     fn record_frame_image_copy(
         &self,
         cmd: vk::CommandBuffer,
         rig: &Rig,
-        regions: &[ImageRegion],
-        params: &Params,
-        enhance: bool,
+        (regions, params): (&[ImageRegion], &Params),
+        (enhance, tiles): (bool, bool),
     ) -> Result<(), GpuError> {
-        if rig.image_copy.is_empty() {
+        if rig.image_copy.is_empty() || (tiles && rig.write_back_draws.is_empty()) {
             return Ok(());
         }
         use vk::PipelineStageFlags as S;
@@ -180,6 +185,15 @@ impl VkOffline {
             let mapping = params.camera_mapping();
             for v in &rig.image_copy {
                 self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+            }
+            if tiles {
+                let pipelines = rig.write_back.as_ref().expect("made with the draws");
+                record_write_back_barrier(gpu, cmd);
+                for (draw, _) in &rig.write_back_draws {
+                    record_write_back(gpu, cmd, pipelines, draw);
+                }
+                record_layout_barriers(gpu, cmd, regions, false);
+                return Ok(());
             }
             barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
         }
@@ -205,7 +219,8 @@ impl VkOffline {
 
     /// One run: background, 16-byte copy, copy (which also restores the pristine pixels),
     /// enhancement, then (after restoring the app images' content, untimed) the layer's whole
-    /// frame and its image copies alone. Returns each Span's GPU time in milliseconds (the
+    /// frame and its image copies alone, in place, through the image-copy path (with its
+    /// copies alone) and through the image-copy path with the tiles drawn back. Returns each Span's GPU time in milliseconds (the
     /// 16-byte copy's is 0 where the rows do not allow it).
     fn timed_run(&mut self, rig: &Rig, params: &Params) -> Result<[f64; SPANS], GpuError> {
         let all = vk::PipelineStageFlags::ALL_COMMANDS;
@@ -261,11 +276,17 @@ impl VkOffline {
             })?;
             barrier(gpu, cmd, all, all);
             self.restore_images(cmd, rig, &regions);
+            let image_copy = (regions.as_slice(), params);
             timed(Span::FrameImageCopy, &mut || {
-                self.record_frame_image_copy(cmd, rig, &regions, params, true)
+                self.record_frame_image_copy(cmd, rig, image_copy, (true, false))
             })?;
             timed(Span::ImageCopyCopies, &mut || {
-                self.record_frame_image_copy(cmd, rig, &regions, params, false)
+                self.record_frame_image_copy(cmd, rig, image_copy, (false, false))
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            timed(Span::FrameImageCopyTiles, &mut || {
+                self.record_frame_image_copy(cmd, rig, image_copy, (true, true))
             })
         })?;
         let mut ticks = [0u64; QUERIES as usize];

@@ -13,7 +13,10 @@ use crate::gpu::vulkan::device::{
 };
 use crate::gpu::vulkan::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError, VkResultExt};
 use crate::gpu::vulkan::frame::{can_store, copy_path, storage_view, ViewPath};
-use crate::gpu::vulkan::record::{CameraResources, Placement, ViewShape, ViewTarget};
+use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
+use crate::gpu::vulkan::record::{
+    CameraResources, Placement, ViewShape, ViewTarget, WriteBackDraw,
+};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -34,6 +37,10 @@ pub(super) struct Rig {
     /// them and the device can store the format), each bound to its image in `own_images`.
     pub(super) image_copy: Vec<ViewTarget>,
     pub(super) own_images: Vec<StorageImage>,
+    /// The image-copy views' write-back by drawing (with them), each view's draw and the
+    /// attachment of its app image.
+    pub(super) write_back: Option<WriteBackPipelines>,
+    pub(super) write_back_draws: Vec<(WriteBackDraw, WriteBackAttachment)>,
     pub(super) queries: vk::QueryPool,
 }
 
@@ -88,6 +95,36 @@ impl VkOffline {
             let own = rig.own_images.last().expect("pushed above");
             self.engine.bind_app_image(gpu, &target, own.view);
             rig.image_copy.push(target);
+        }
+        self.add_write_back_draws(rig, case)
+    }
+
+    /// The image-copy views' write-back by drawing: a draw per view into its app image.
+    fn add_write_back_draws(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<(), GpuError> {
+        let gpu = &self.gpu;
+        let regions = rig.regions(case.region);
+        let pipelines = rig.write_back.insert(WriteBackPipelines::new(gpu)?);
+        let vk_format = vk::Format::R8G8B8A8_SRGB;
+        let pass = pipelines.pass(gpu, (vk_format, PixelFormat::SRGB8))?;
+        for ((region, view), own) in regions.iter().zip(&rig.image_copy).zip(&rig.own_images) {
+            let layer = (region.image, vk_format, 0);
+            let mut attachment =
+                WriteBackAttachment::new(gpu, pass.render_pass, layer, case.region)?;
+            let set = match pipelines.view_set(gpu, view.tiles.raw, own.view) {
+                Ok(set) => set,
+                Err(e) => {
+                    attachment.destroy(gpu);
+                    return Err(e);
+                }
+            };
+            let draw = WriteBackDraw {
+                pass,
+                framebuffer: attachment.framebuffer,
+                set,
+                tiles: view.tiles.raw,
+                region: *region,
+            };
+            rig.write_back_draws.push((draw, attachment));
         }
         Ok(())
     }
@@ -238,6 +275,13 @@ impl VkOffline {
         }
         for mut v in rig.image_copy.drain(..) {
             self.engine.destroy_view(gpu, &mut v);
+        }
+        if let Some(mut pipelines) = rig.write_back.take() {
+            for (_, mut attachment) in rig.write_back_draws.drain(..) {
+                attachment.destroy(gpu);
+            }
+            // Its pool frees the views' sets.
+            pipelines.destroy(gpu);
         }
         rig.own_images.iter_mut().for_each(|i| i.destroy(gpu));
         for v in rig.storage_views.drain(..) {

@@ -15,7 +15,10 @@ use crate::gpu::vulkan::device::{
     GpuBuffer, GpuError, ImageRegion, StorageImage,
 };
 use crate::gpu::vulkan::frame::{copy_path, ViewPath};
-use crate::gpu::vulkan::record::ViewShape;
+use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
+use crate::gpu::vulkan::record::{
+    record_write_back, record_write_back_barrier, CopyBack, ViewShape, ViewTarget, WriteBackDraw,
+};
 use crate::image::RgbaImage;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -53,16 +56,36 @@ fn all_layers(
         )
 }
 
+/// The image-copy path's run: the image, its formats and the write-back's pipelines (None:
+/// the region is copied back whole).
+type RunImageCopy<'a> = (
+    AppImage,
+    (vk::Format, PixelFormat),
+    Option<&'a mut WriteBackPipelines>,
+);
+
 impl VkOffline {
     /// The image-copy path on `app`, an image of `vk_format`: `image_words` is the whole image's raw words (layer after
     /// layer, rows tightly packed); the region is enhanced through an image of the engine's
-    /// own and the whole image is read back, every layer.
+    /// own, copied back whole, and the whole image is read back, every layer.
     pub fn enhance_raw_image_copy(
         &mut self,
         image_words: &[u32],
         (vk_format, app): (vk::Format, AppImage),
         camera: &RgbaImage,
         params: &Params,
+    ) -> Result<Vec<u32>, GpuError> {
+        let image = (vk_format, app);
+        self.enhance_raw_image_copy_back(image_words, image, (camera, params), CopyBack::Region)
+    }
+
+    /// `enhance_raw_image_copy` with the enhanced pixels brought back as `back` says.
+    pub fn enhance_raw_image_copy_back(
+        &mut self,
+        image_words: &[u32],
+        (vk_format, app): (vk::Format, AppImage),
+        (camera, params): (&RgbaImage, &Params),
+        back: CopyBack,
     ) -> Result<Vec<u32>, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
         let format = PixelFormat::from_vk(vk_format)
@@ -85,7 +108,12 @@ impl VkOffline {
             | vk::ImageUsageFlags::COLOR_ATTACHMENT;
         let mut image = DeviceImage::layered(&self.gpu, app.size, app.layers, vk_format, usage)?;
         let own = StorageImage::for_copies(&self.gpu, app.extent, own_format);
-        let mut own = match own {
+        let write_back = match back {
+            CopyBack::Region => Ok(None),
+            CopyBack::Tiles => WriteBackPipelines::new(&self.gpu).map(Some),
+        };
+        let own = own.and_then(|o| write_back.map(|w| (o, w)));
+        let (mut own, mut write_back) = match own {
             Ok(o) => o,
             Err(e) => {
                 image.destroy(&self.gpu);
@@ -102,7 +130,8 @@ impl VkOffline {
         let result = staging.and_then(|mut staging| {
             let bytes: Vec<u8> = image_words.iter().flat_map(|w| w.to_le_bytes()).collect();
             let run = staging.write(&bytes).and_then(|_| {
-                self.run_image_copy(&image, &own, &staging, (app, format), camera, params)
+                let run = (app, (vk_format, format), write_back.as_mut());
+                self.run_image_copy(&image, &own, &staging, run, (camera, params))
             });
             let out = run.and_then(|_| {
                 let mapped = staging.mapped().ok_or_else(|| {
@@ -116,21 +145,24 @@ impl VkOffline {
             staging.destroy(&self.gpu);
             out
         });
+        if let Some(w) = write_back.as_mut() {
+            w.destroy(&self.gpu);
+        }
         own.destroy(&self.gpu);
         image.destroy(&self.gpu);
         result
     }
 
     /// Uploads every layer, prepares the background, runs the image-copy path on the region
-    /// and reads every layer back, in one submission.
+    /// (copied back whole, or its tiles drawn back with `write_back`) and reads every layer
+    /// back, in one submission.
     fn run_image_copy(
         &self,
         image: &DeviceImage,
         own: &StorageImage,
         staging: &GpuBuffer,
-        (app, format): (AppImage, PixelFormat),
-        camera: &RgbaImage,
-        params: &Params,
+        (app, (vk_format, format), write_back): RunImageCopy,
+        (camera, params): (&RgbaImage, &Params),
     ) -> Result<(), GpuError> {
         let gpu = &self.gpu;
         let shape = ViewShape {
@@ -146,6 +178,17 @@ impl VkOffline {
             array_index: app.layer,
             offset: app.offset,
             extent: app.extent,
+        };
+        let drawn = match write_back {
+            Some(w) => match self.write_back_draw(w, (vk_format, format), region, (&view, own)) {
+                Ok(d) => Some((&*w, d)),
+                Err(e) => {
+                    self.engine.destroy_view(gpu, &mut view);
+                    bg.destroy(gpu);
+                    return Err(e);
+                }
+            },
+            None => None,
         };
         let whole = vk::BufferImageCopy::default()
             .image_subresource(
@@ -201,8 +244,16 @@ impl VkOffline {
                 .record_background(gpu, cmd, &bg, params, &rect)?;
             self.engine
                 .record_enhance(gpu, cmd, &view, params, &mapping)?;
-            barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
-            record_image_region_copy(gpu, cmd, &region, own.image.raw, false);
+            match &drawn {
+                Some((w, (draw, _))) => {
+                    record_write_back_barrier(gpu, cmd);
+                    record_write_back(gpu, cmd, w, draw);
+                }
+                None => {
+                    barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
+                    record_image_region_copy(gpu, cmd, &region, own.image.raw, false);
+                }
+            }
             record_layout_barriers(gpu, cmd, &[region], false);
             // Read every layer back.
             layout(
@@ -214,8 +265,46 @@ impl VkOffline {
             unsafe { d.cmd_copy_image_to_buffer(cmd, image.raw, general, staging.raw, &[whole]) };
             Ok(())
         });
+        if let Some((w, (draw, mut attachment))) = drawn {
+            w.free_set(gpu, draw.set);
+            attachment.destroy(gpu);
+        }
         self.engine.destroy_view(gpu, &mut view);
         bg.destroy(gpu);
         done
+    }
+
+    /// The write-back's draw of a view on `image` and the attachment it draws into.
+    fn write_back_draw(
+        &self,
+        pipelines: &mut WriteBackPipelines,
+        (vk_format, format): (vk::Format, PixelFormat),
+        region: ImageRegion,
+        (view, own): (&ViewTarget, &StorageImage),
+    ) -> Result<(WriteBackDraw, WriteBackAttachment), GpuError> {
+        let gpu = &self.gpu;
+        let pass = pipelines.pass(gpu, (vk_format, format))?;
+        let far = (
+            region.offset.0 as u32 + region.extent.0,
+            region.offset.1 as u32 + region.extent.1,
+        );
+        let layer = (region.image, vk_format, region.array_index);
+        let mut attachment = WriteBackAttachment::new(gpu, pass.render_pass, layer, far)?;
+        match pipelines.view_set(gpu, view.tiles.raw, own.view) {
+            Ok(set) => Ok((
+                WriteBackDraw {
+                    pass,
+                    framebuffer: attachment.framebuffer,
+                    set,
+                    tiles: view.tiles.raw,
+                    region,
+                },
+                attachment,
+            )),
+            Err(e) => {
+                attachment.destroy(gpu);
+                Err(e)
+            }
+        }
     }
 }

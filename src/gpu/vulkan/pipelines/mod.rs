@@ -4,7 +4,11 @@
 
 pub mod pipeline_cache;
 mod pipeline_set;
+mod write_back;
 
 pub use pipeline_cache::Origin;
 pub(crate) use pipeline_set::binding_count;
 pub use pipeline_set::{BuildMode, BuildReport, Pipelines, WarmUpHook};
+pub use write_back::{
+    write_back_modules, WriteBackAttachment, WriteBackConstants, WriteBackPass, WriteBackPipelines,
+};

@@ -6,7 +6,9 @@ mod passes;
 mod recorder;
 mod resources;
 mod variant_pipelines;
+mod write_back;
 
 pub use recorder::Recorder;
 pub(crate) use resources::TEXELS_FORMAT;
 pub use resources::{CameraResources, Placement, ViewShape, ViewTarget};
+pub use write_back::{record_write_back, record_write_back_barrier, CopyBack, WriteBackDraw};
