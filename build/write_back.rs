@@ -1,7 +1,7 @@
 //! The image-copy path's write-back (shaders/write_back.wgsl): its declarations per FORMAT
 //! code, the conversion of the engine's storage texel into the value the app's attachment
 //! encodes back to the same words, and the table `write_back_table.rs`
-//! (src/gpu/vulkan/pipelines/write_back.rs includes it). Its bindings are its own (a
+//! (src/gpu/vulkan/pipelines/write_back_pipelines.rs includes it). Its bindings are its own (a
 //! descriptor set of two), not the compute passes' interface.
 
 use crate::interface::*;

@@ -207,6 +207,61 @@ fn wide_views_with_shared_texel_reads_conform() {
     }
 }
 
+/// `copy_back = "tiles"` on sRGB swapchains (Monado refuses them storage usage, so their views
+/// go through an image of the layer's own): only the tiles the enhancement listed are drawn
+/// back into the app's images, on the app's device under validation. The captures read the
+/// regions back from the app's images after the draw (`"path": "image-copy-tiles"`), so what
+/// the check holds to the CPU reference is what reached the app's images; `pipelines = "wait"`
+/// has every frame drawn.
+#[test]
+fn listed_tiles_drawn_back_reach_the_app_images() {
+    for (format, layout) in [
+        ("R8G8B8A8_SRGB", "array"),
+        ("B8G8R8A8_SRGB", "side-by-side"),
+    ] {
+        let tag = format!("layer-tiles-{format}");
+        let dir = capture_dir(&tag);
+        let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+        for (k, v) in [
+            ("CONTRASTXR_IN_PLACE", "on"),
+            ("CONTRASTXR_COPY_BACK", "tiles"),
+            ("CONTRASTXR_PIPELINES", "wait"),
+        ] {
+            env.push((k.into(), v.into()));
+        }
+        let cmd = [
+            XR_CLIENT,
+            "--validation",
+            "--json",
+            "--frames",
+            "8",
+            "--size",
+            "160x120",
+            "--format",
+            format,
+            "--layout",
+            layout,
+        ];
+        let line = "processing frames (2 views per frame)";
+        let Some(run) = run_clean(&tag, &cmd, &as_refs(&env), line) else {
+            return;
+        };
+        assert!(
+            run.stderr
+                .contains("2 of them with the listed tiles drawn back"),
+            "{}",
+            run.describe()
+        );
+        let views = captures(&dir);
+        assert_eq!(views.len(), 4, "2 frames x 2 views in {}", dir.display());
+        for c in &views {
+            assert_eq!(c.json["path"], "image-copy-tiles", "{format}");
+            let changed = check_view(c);
+            assert!(changed > 1000, "{format}: only {changed} pixels changed");
+        }
+    }
+}
+
 /// `in_place = "auto"` (the default) on lavapipe, a CPU driver: the copy path, even where the
 /// runtime would grant storage usage.
 #[test]

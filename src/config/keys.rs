@@ -2,7 +2,7 @@
 //! writes [`Settings`]. The file, the environment, `config print` and `contrastxr set` all go
 //! through this table.
 
-use super::settings::{InPlace, Settings};
+use super::settings::{CopyBack, InPlace, Settings};
 use super::value::{short_f64, Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
 use crate::algorithm::perceptual_settings::Frequency;
@@ -737,6 +737,21 @@ pub const KEYS: &[Key] = &[
             Ok(())
         },
         get: |s| Value::Text(s.in_place.name().into()),
+    },
+    Key {
+        name: "copy_back",
+        env: "CONTRASTXR_COPY_BACK",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "Vulkan, for a view enhanced through an image of the layer's own (the runtime refused storage usage, as on sRGB swapchains): region: the whole region copied back into the app's image; tiles: only the tiles the enhancement listed drawn back (a render pass), the rest of the image left as the app rendered it",
+        set: |s, v| {
+            s.copy_back = match v {
+                Value::Text(t) => CopyBack::parse(&t).ok_or(format!("{t:?} is not region or tiles"))?,
+                other => return Err(format!("{other} is not region or tiles")),
+            };
+            Ok(())
+        },
+        get: |s| Value::Text(s.copy_back.name().into()),
     },
     Key {
         name: "capture_dir",

@@ -31,6 +31,9 @@ pub struct Settings {
     pub quad_layers: bool,
     /// Whether the app's images are enhanced in place (read when a swapchain is created).
     pub in_place: InPlace,
+    /// How the image-copy path brings a view back into the app's image (read when a swapchain
+    /// is created).
+    pub copy_back: CopyBack,
     /// `pipelines = "wait"`: the first frame that needs a pipeline waits for its build instead
     /// of passing through.
     pub wait_for_pipelines: bool,
@@ -89,6 +92,33 @@ impl InPlace {
     }
 }
 
+/// How a view enhanced through an image of the layer's own comes back into the app's image
+/// (`copy_back`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CopyBack {
+    /// The whole region copied back (vkCmdCopyImage).
+    Region,
+    /// Only the tiles the enhancement listed, drawn into the app's image (a render pass).
+    Tiles,
+}
+
+impl CopyBack {
+    pub fn parse(text: &str) -> Option<CopyBack> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "region" => Some(CopyBack::Region),
+            "tiles" => Some(CopyBack::Tiles),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            CopyBack::Region => "region",
+            CopyBack::Tiles => "tiles",
+        }
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -98,6 +128,7 @@ impl Default for Settings {
             colour_camera: true,
             quad_layers: false,
             in_place: InPlace::Auto,
+            copy_back: CopyBack::Region,
             wait_for_pipelines: false,
             params: Params::default(),
             background: "v4l2:auto".into(),

@@ -132,6 +132,7 @@ fn work_item(
         format,
         layered: sc.info.array_size > 1,
         in_place: sc.info.in_place,
+        attachment: sc.info.attachment,
         mapping,
         pixels_per_degree: region
             .pixels_per_degree

@@ -134,6 +134,9 @@ pub struct SwapchainInfo {
     /// The layer also got storage usage (and, for sRGB, mutable format): views of this
     /// swapchain are enhanced in place.
     pub in_place: bool,
+    /// The app made it with colour-attachment usage: the image-copy path may draw its tiles
+    /// back into it (`copy_back = "tiles"`).
+    pub attachment: bool,
 }
 
 impl SwapchainInfo {
@@ -153,6 +156,9 @@ impl SwapchainInfo {
             array_size: app_info.array_size,
             usage_granted,
             in_place,
+            attachment: app_info
+                .usage_flags
+                .contains(xr::SwapchainUsageFlags::COLOR_ATTACHMENT),
         }
     }
 

@@ -22,6 +22,8 @@ pub struct ViewImage {
     pub layered: bool,
     /// Enhanced in place in the app's image, else through a copy of the region.
     pub in_place: bool,
+    /// The image has colour-attachment usage (the image-copy path may draw into it).
+    pub attachment: bool,
     /// Display uv (v from the view's top edge) to camera uv.
     pub mapping: CameraMapping,
     /// The view's display pixels per degree, from its field of view and width

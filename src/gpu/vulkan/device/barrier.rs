@@ -22,6 +22,9 @@ fn accesses(stages: vk::PipelineStageFlags) -> vk::AccessFlags {
     if stages.contains(S::DRAW_INDIRECT) {
         access |= A::INDIRECT_COMMAND_READ;
     }
+    if stages.contains(S::COLOR_ATTACHMENT_OUTPUT) {
+        access |= A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE;
+    }
     access
 }
 

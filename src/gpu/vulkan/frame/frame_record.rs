@@ -12,6 +12,7 @@ use crate::gpu::vulkan::device::{
     barrier, record_buffer_copy, record_first_layout, record_image_region_copy,
     record_layout_barriers, record_region_copy, GpuBuffer, GpuError, ImageRegion,
 };
+use crate::gpu::vulkan::record::{record_write_back, record_write_back_barrier};
 use ash::vk;
 
 impl FrameRunner {
@@ -33,7 +34,7 @@ impl FrameRunner {
         let cmd = self.commands.cmd;
         match (item.path, &view.own) {
             (ViewPath::InPlace, _) => {}
-            (ViewPath::ImageCopy, Some(own)) => {
+            (p, Some(own)) if p.copies_into_own_image() => {
                 record_image_region_copy(&self.gpu, cmd, &item.region(), own.image.raw, out)
             }
             _ => record_region_copy(&self.gpu, cmd, &item.region(), &view.target.pixels, out),
@@ -46,7 +47,7 @@ impl FrameRunner {
     fn work_region(&self, item: &FrameView) -> Option<ImageRegion> {
         match (item.path, &self.views[&item.key].own) {
             (ViewPath::InPlace, _) => Some(item.region()),
-            (ViewPath::ImageCopy, Some(own)) => Some(ImageRegion {
+            (p, Some(own)) if p.copies_into_own_image() => Some(ImageRegion {
                 image: own.image.raw,
                 array_index: 0,
                 offset: (0, 0),
@@ -74,7 +75,7 @@ impl FrameRunner {
     fn own_image_barriers(&self, items: &[FrameView]) {
         let images: Vec<vk::Image> = items
             .iter()
-            .filter(|i| i.path == ViewPath::ImageCopy)
+            .filter(|i| i.path.copies_into_own_image())
             .filter_map(|i| self.views[&i.key].own.as_ref().map(|o| o.image.raw))
             .collect();
         if images.is_empty() {
@@ -167,12 +168,81 @@ impl FrameRunner {
             // The capture and the copy back read what the indicator wrote.
             barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::TRANSFER);
         }
+        // A view whose tiles are drawn back is captured after its draw, from the app's image.
+        let mut later = Vec::new();
         for (i, (_, after)) in items.iter().zip(staging) {
-            self.copy_to_capture(i, after);
+            let drawn = self.drawn_back(i);
+            if !drawn {
+                self.copy_to_capture(i, after);
+            }
+            later.push(drawn.then_some(after));
         }
-        items.iter().for_each(|i| self.copy_region(i, false));
+        items
+            .iter()
+            .filter(|i| !self.drawn_back(i))
+            .for_each(|i| self.copy_region(i, false));
+        self.record_tile_write_backs(items, overlay, &later)?;
         self.image_barriers(items, false);
         barrier(&self.gpu, self.commands.cmd, S::TRANSFER, S::HOST);
+        Ok(())
+    }
+}
+
+impl FrameRunner {
+    /// Whether `item`'s tiles are drawn back this frame (its copy back is then left out).
+    pub(super) fn drawn_back(&self, item: &FrameView) -> bool {
+        self.tiles.draws.contains_key(&item.key)
+    }
+
+    /// `item` with the path this frame took: a view whose tiles are to be drawn back was
+    /// copied back whole while the draw's pipeline was being built.
+    pub(super) fn as_taken(&self, item: &FrameView) -> FrameView {
+        let mut view = item.clone();
+        if view.path == ViewPath::ImageCopyTiles && !self.drawn_back(item) {
+            view.path = ViewPath::ImageCopy;
+        }
+        view
+    }
+
+    /// Draws the listed tiles of the views drawn back into the app's images, then copies the
+    /// overlay into those regions and, for a capture, reads them back from the app's image
+    /// (`after`, by item): what reached the app. After the enhancement and the other views'
+    /// copies back; the images are in GENERAL.
+    pub(super) fn record_tile_write_backs(
+        &mut self,
+        items: &[FrameView],
+        overlay: Option<&OverlayPixels>,
+        after: &[Option<&GpuBuffer>],
+    ) -> Result<(), GpuError> {
+        use vk::PipelineStageFlags as S;
+        let drawn: Vec<(usize, &FrameView)> = items
+            .iter()
+            .enumerate()
+            .filter(|(_, i)| self.drawn_back(i))
+            .collect();
+        if drawn.is_empty() {
+            return Ok(());
+        }
+        let (gpu, cmd) = (&self.gpu, self.commands.cmd);
+        record_write_back_barrier(gpu, cmd);
+        let pipelines = self.tiles.pipelines.as_ref().expect("made with the draws");
+        for (_, i) in &drawn {
+            record_write_back(gpu, cmd, pipelines, &self.tiles.draws[&i.key]);
+        }
+        barrier(gpu, cmd, S::COLOR_ATTACHMENT_OUTPUT, S::TRANSFER);
+        // The draw wrote only the listed tiles: the overlay also goes into the app's image.
+        let in_app = drawn
+            .iter()
+            .map(|(_, i)| (i.key, &self.views[&i.key].target, i.region()));
+        if self.overlays.record(gpu, cmd, overlay, in_app)? {
+            barrier(gpu, cmd, S::TRANSFER, S::TRANSFER);
+        }
+        for (k, i) in &drawn {
+            if let Some(dst) = after.get(*k).copied().flatten() {
+                let region = i.region();
+                record_region_copy(gpu, cmd, &region, dst, true);
+            }
+        }
         Ok(())
     }
 }

@@ -7,6 +7,8 @@
 use super::app_views::AppImageViews;
 use super::frame_view::{CapturedView, FrameView, ViewKey, ViewPath};
 use super::overlay_copies::Overlays;
+use super::prepared_view::PreparedView;
+use super::tile_write_back::TileWriteBack;
 use super::warm_up::{WarmUp, WarmUpMade};
 use crate::algorithm::params::Params;
 use crate::gpu::core::shader_ids::ShaderId;
@@ -35,25 +37,6 @@ const END_WAIT_NS: u64 = 250_000_000;
 
 /// Most view regions a session keeps buffers for (2 eyes x a few swapchains and quads).
 const MAX_VIEWS: u32 = 16;
-
-pub(super) struct PreparedView {
-    pub(super) target: ViewTarget,
-    pub(super) last_frame: u64,
-    /// The image view bound as the view's `blurred_texels`.
-    pub(super) texels: vk::ImageView,
-    /// The image-copy path's image (`ViewPath::ImageCopy`): the region is copied into it,
-    /// enhanced there (bound as the view's `app_image`, at its origin) and copied back.
-    pub(super) own: Option<StorageImage>,
-}
-
-impl PreparedView {
-    fn destroy(&mut self, engine: &Recorder, gpu: &GpuDevice) {
-        engine.destroy_view(gpu, &mut self.target);
-        if let Some(mut own) = self.own.take() {
-            own.destroy(gpu);
-        }
-    }
-}
 
 /// What a frame asks for besides the enhancement.
 #[derive(Clone, Copy, Default)]
@@ -90,6 +73,8 @@ pub struct FrameRunner {
     pub(super) overlays: Overlays,
     /// Storage views of the app's image layers enhanced in place.
     pub(super) app_views: AppImageViews,
+    /// The image-copy path's tiles drawn back: pipelines, attachments, the frame's draws.
+    pub(super) tiles: TileWriteBack,
     /// Set once the engine's objects were destroyed (or left alive after a GPU failure).
     torn_down: bool,
     /// What making the process's warm-up device (CPU drivers) gave, when this session's
@@ -126,6 +111,7 @@ impl FrameRunner {
             frame: 0,
             overlays: Overlays::default(),
             app_views: AppImageViews::default(),
+            tiles: TileWriteBack::default(),
             torn_down: false,
             warm_up_made,
             gpu,
@@ -239,7 +225,7 @@ impl FrameRunner {
     /// Makes the view of `item` exist, evicting the least recently used view that is not one
     /// of `in_use` (the items of this submission) when the engine holds MAX_VIEWS already.
     fn ensure_view(&mut self, item: &FrameView, in_use: &[FrameView]) -> Result<(), GpuError> {
-        let image_copy = item.path == ViewPath::ImageCopy;
+        let image_copy = item.path.copies_into_own_image();
         if self
             .views
             .get(&item.key)
@@ -279,6 +265,7 @@ impl FrameRunner {
                 last_frame: self.frame,
                 texels,
                 own,
+                write_back_set: None,
             },
         );
         Ok(())
@@ -335,6 +322,7 @@ impl FrameRunner {
             }
         }
         self.app_views.forget(&self.gpu, swapchain);
+        self.tiles.forget(&self.gpu, swapchain);
         Ok(())
     }
 
@@ -363,7 +351,7 @@ impl FrameRunner {
         // More regions than the engine holds views for: one submission per MAX_VIEWS.
         let mut captured = Vec::new();
         for part in views.chunks(MAX_VIEWS as usize) {
-            captured.extend(self.process_part(part, params, overlay, options.capture)?);
+            captured.extend(self.process_part(part, params, overlay, options)?);
         }
         Ok(captured)
     }
@@ -374,8 +362,9 @@ impl FrameRunner {
         items: &[FrameView],
         params: &Params,
         overlay: Option<&OverlayPixels>,
-        capture: bool,
+        options: FrameOptions,
     ) -> Result<Vec<CapturedView>, GpuError> {
+        let capture = options.capture;
         self.frame += 1;
         self.wait_idle()?;
         for item in items {
@@ -385,6 +374,9 @@ impl FrameRunner {
             self.bind_app_image(item)?;
         }
         self.bind_texels(items);
+        let wait = options.wait_for_pipelines;
+        self.tiles
+            .prepare(&self.gpu, (items, wait), &mut self.views)?;
         let mut staging = Vec::new();
         if capture {
             for item in items {
@@ -423,7 +415,7 @@ impl FrameRunner {
         for (item, (mut before, mut after)) in items.iter().zip(staging) {
             if result.is_ok() {
                 captured.push(CapturedView {
-                    view: item.clone(),
+                    view: self.as_taken(item),
                     display: before.mapped().unwrap_or_default().to_vec(),
                     output: after.mapped().unwrap_or_default().to_vec(),
                 });
@@ -475,6 +467,7 @@ impl FrameRunner {
         self.overlays.destroy(&self.gpu);
         self.ring.destroy(&self.gpu);
         self.app_views.destroy(&self.gpu);
+        self.tiles.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
         // Waited for above: this wait cannot fail.
         let _ = self.commands.destroy(&self.gpu);

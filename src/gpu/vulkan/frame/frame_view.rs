@@ -80,6 +80,10 @@ pub enum ViewPath {
     /// size-compatible format with storage usage (`PixelFormat::image_copy_format`), enhanced
     /// there by the in-place shaders, and copied back: for images the layer may not store to.
     ImageCopy,
+    /// The image-copy path with only the tiles the enhancement listed drawn back into the
+    /// app's image (a render pass, `copy_back = "tiles"`) instead of the whole region copied
+    /// back; the region is copied back whole while the draw's pipeline is being built.
+    ImageCopyTiles,
     /// Copied into a buffer of the engine's own, enhanced there and copied back: where the
     /// device cannot store to the image-copy path's format.
     BufferCopy,
@@ -87,13 +91,20 @@ pub enum ViewPath {
 
 impl ViewPath {
     /// Its name in the log and in a capture's JSON (`"path"`): `in-place`, `image-copy`,
-    /// `copy` (the buffer path's name since before the image-copy path).
+    /// `image-copy-tiles`, `copy` (the buffer path's name since before the image-copy path).
     pub fn name(self) -> &'static str {
         match self {
             ViewPath::InPlace => "in-place",
             ViewPath::ImageCopy => "image-copy",
+            ViewPath::ImageCopyTiles => "image-copy-tiles",
             ViewPath::BufferCopy => "copy",
         }
+    }
+
+    /// Whether the region is copied into an image of the engine's own (the image-copy path,
+    /// whichever way it comes back).
+    pub fn copies_into_own_image(self) -> bool {
+        matches!(self, ViewPath::ImageCopy | ViewPath::ImageCopyTiles)
     }
 
     /// Whether its passes are the in-place variants (on the app's image or on the engine's

@@ -9,6 +9,8 @@ mod frame_runner;
 mod frame_view;
 mod overlay_copies;
 mod prepared_background;
+mod prepared_view;
+mod tile_write_back;
 mod warm_up;
 
 pub(crate) use app_views::storage_view;

@@ -109,7 +109,7 @@ impl VkOffline {
         for ((region, view), own) in regions.iter().zip(&rig.image_copy).zip(&rig.own_images) {
             let layer = (region.image, vk_format, 0);
             let mut attachment =
-                WriteBackAttachment::new(gpu, pass.render_pass, layer, case.region)?;
+                WriteBackAttachment::new(gpu, pass.render_pass(), layer, case.region)?;
             let set = match pipelines.view_set(gpu, view.tiles.raw, own.view) {
                 Ok(set) => set,
                 Err(e) => {
@@ -117,13 +117,11 @@ impl VkOffline {
                     return Err(e);
                 }
             };
-            let draw = WriteBackDraw {
-                pass,
-                framebuffer: attachment.framebuffer,
-                set,
-                tiles: view.tiles.raw,
-                region: *region,
-            };
+            let draw = WriteBackDraw::new(
+                (pass, attachment.framebuffer()),
+                (set, view.tiles.raw),
+                *region,
+            );
             rig.write_back_draws.push((draw, attachment));
         }
         Ok(())

@@ -266,7 +266,7 @@ impl VkOffline {
             Ok(())
         });
         if let Some((w, (draw, mut attachment))) = drawn {
-            w.free_set(gpu, draw.set);
+            w.free_set(gpu, draw.set());
             attachment.destroy(gpu);
         }
         self.engine.destroy_view(gpu, &mut view);
@@ -289,16 +289,14 @@ impl VkOffline {
             region.offset.1 as u32 + region.extent.1,
         );
         let layer = (region.image, vk_format, region.array_index);
-        let mut attachment = WriteBackAttachment::new(gpu, pass.render_pass, layer, far)?;
+        let mut attachment = WriteBackAttachment::new(gpu, pass.render_pass(), layer, far)?;
         match pipelines.view_set(gpu, view.tiles.raw, own.view) {
             Ok(set) => Ok((
-                WriteBackDraw {
-                    pass,
-                    framebuffer: attachment.framebuffer,
-                    set,
-                    tiles: view.tiles.raw,
+                WriteBackDraw::new(
+                    (pass, attachment.framebuffer()),
+                    (set, view.tiles.raw),
                     region,
-                },
+                ),
                 attachment,
             )),
             Err(e) => {

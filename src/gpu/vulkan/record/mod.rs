@@ -6,9 +6,9 @@ mod passes;
 mod recorder;
 mod resources;
 mod variant_pipelines;
-mod write_back;
+mod write_back_draw;
 
 pub use recorder::Recorder;
 pub(crate) use resources::TEXELS_FORMAT;
 pub use resources::{CameraResources, Placement, ViewShape, ViewTarget};
-pub use write_back::{record_write_back, record_write_back_barrier, CopyBack, WriteBackDraw};
+pub use write_back_draw::{record_write_back, record_write_back_barrier, CopyBack, WriteBackDraw};

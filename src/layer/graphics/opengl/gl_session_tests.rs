@@ -86,6 +86,7 @@ fn sessions_ended_with_their_context_elsewhere_leave_a_bounded_number_of_objects
         format: format.pixel,
         layered: false,
         in_place: false,
+        attachment: true,
         mapping: params.camera_mapping(),
         pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
@@ -164,6 +165,7 @@ fn a_finished_build_is_linked_without_reading_the_cache_in_a_frame_call() {
         format: format.pixel,
         layered: false,
         in_place: false,
+        attachment: true,
         mapping: params.camera_mapping(),
         pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };

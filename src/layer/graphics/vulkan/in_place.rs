@@ -6,7 +6,7 @@
 //! device cannot store to that image's format. `in_place = "auto"` leaves CPU drivers on the
 //! buffer path: there a copy is a memcpy and storage-image access costs more.
 
-use crate::config::InPlace;
+use crate::config::{CopyBack, InPlace};
 use crate::gpu::vulkan::frame::can_store;
 use crate::gpu::{GpuDevice, PixelFormat, ViewPath};
 use crate::layer::ffi::find_in_chain;
@@ -30,9 +30,18 @@ pub fn wanted(gpu: &GpuDevice, settings: &Settings) -> bool {
 /// can store to the format's image-copy format, else through a buffer.
 pub fn copy_path(gpu: &GpuDevice, settings: &Settings, format: PixelFormat) -> ViewPath {
     match wanted(gpu, settings) {
-        true => crate::gpu::vulkan::frame::copy_path(gpu, format),
+        true => match crate::gpu::vulkan::frame::copy_path(gpu, format) {
+            ViewPath::ImageCopy if tiles_wanted(settings) => ViewPath::ImageCopyTiles,
+            path => path,
+        },
         false => ViewPath::BufferCopy,
     }
+}
+
+/// Whether the image-copy path draws back only the tiles the enhancement listed
+/// (`copy_back = "tiles"`), on swapchains the app made with colour-attachment usage.
+pub fn tiles_wanted(settings: &Settings) -> bool {
+    settings.copy_back == CopyBack::Tiles
 }
 
 /// The usage bits to add for in place on a swapchain of `format`, if the session's settings,

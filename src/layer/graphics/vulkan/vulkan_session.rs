@@ -26,6 +26,9 @@ pub struct VulkanSession {
     /// their format allows it (`in_place::wanted` at the last swapchain's creation), else
     /// through a buffer.
     image_copy: AtomicBool,
+    /// Whether the image-copy path draws its listed tiles back (`copy_back = "tiles"` at the
+    /// last swapchain's creation) rather than copying the region back.
+    tiles: AtomicBool,
 }
 
 /// The session's graphics for a Vulkan binding (None: not one).
@@ -41,6 +44,7 @@ pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bo
     Some(match set_up(b, settings) {
         Ok(engine) => Bound::Enhanced(Box::new(VulkanSession {
             image_copy: AtomicBool::new(in_place::wanted(&engine.gpu, settings)),
+            tiles: AtomicBool::new(in_place::tiles_wanted(settings)),
             engine,
             ready: None,
         })),
@@ -100,7 +104,12 @@ impl VulkanSession {
     fn path(&self, v: &ViewImage) -> ViewPath {
         match (v.in_place, self.image_copy.load(Ordering::Relaxed)) {
             (true, _) => ViewPath::InPlace,
-            (false, true) => copy_path(&self.engine.gpu, v.format),
+            (false, true) => match copy_path(&self.engine.gpu, v.format) {
+                ViewPath::ImageCopy if v.attachment && self.tiles.load(Ordering::Relaxed) => {
+                    ViewPath::ImageCopyTiles
+                }
+                path => path,
+            },
             (false, false) => ViewPath::BufferCopy,
         }
     }
@@ -154,6 +163,8 @@ impl SessionGraphics for VulkanSession {
     ) -> Option<xr::SwapchainUsageFlags> {
         let wanted = in_place::wanted(&self.engine.gpu, settings);
         self.image_copy.store(wanted, Ordering::Relaxed);
+        let tiles = in_place::tiles_wanted(settings);
+        self.tiles.store(tiles, Ordering::Relaxed);
         in_place::added_usage(&self.engine.gpu, settings, format, info)
     }
 
@@ -295,10 +306,11 @@ impl SessionGraphics for VulkanSession {
         lines.push((
             "first-frame-path",
             format!(
-                "views enhanced in place: {} of {} (the others through a copy: {} through an image of the layer's own, {} through a buffer)",
+                "views enhanced in place: {} of {} (the others through a copy: {} through an image of the layer's own, {} of them with the listed tiles drawn back; {} through a buffer)",
                 count(ViewPath::InPlace),
                 views.len(),
-                count(ViewPath::ImageCopy),
+                count(ViewPath::ImageCopy) + count(ViewPath::ImageCopyTiles),
+                count(ViewPath::ImageCopyTiles),
                 count(ViewPath::BufferCopy),
             ),
         ));

@@ -10,6 +10,8 @@ use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::device::{GpuDevice, GpuError, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
 
 mod table {
     include!(concat!(env!("OUT_DIR"), "/write_back_table.rs"));
@@ -46,15 +48,31 @@ const MAX_SETS: u32 = 64;
 /// A format's render pass and pipeline.
 #[derive(Clone, Copy, Debug)]
 pub struct WriteBackPass {
-    pub render_pass: vk::RenderPass,
-    pub pipeline: vk::Pipeline,
+    render_pass: vk::RenderPass,
+    pipeline: vk::Pipeline,
 }
 
+impl WriteBackPass {
+    pub fn render_pass(&self) -> vk::RenderPass {
+        self.render_pass
+    }
+
+    pub fn pipeline(&self) -> vk::Pipeline {
+        self.pipeline
+    }
+}
+
+/// Each attachment format's pass, built or failed (its message).
+type Passes = HashMap<vk::Format, Result<WriteBackPass, String>>;
+
 pub struct WriteBackPipelines {
-    pub set_layout: vk::DescriptorSetLayout,
-    pub layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+    layout: vk::PipelineLayout,
     pool: vk::DescriptorPool,
-    passes: HashMap<vk::Format, WriteBackPass>,
+    passes: Arc<Mutex<Passes>>,
+    /// Formats whose pass a thread of the engine's own is building or has built.
+    requested: Vec<vk::Format>,
+    builders: Vec<JoinHandle<()>>,
 }
 
 /// Every SPIR-V module of the write-back, named (for spirv-val in the tests).
@@ -106,7 +124,9 @@ impl WriteBackPipelines {
             set_layout,
             layout: vk::PipelineLayout::null(),
             pool: vk::DescriptorPool::null(),
-            passes: HashMap::new(),
+            passes: Arc::default(),
+            requested: Vec::new(),
+            builders: Vec::new(),
         };
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(S::VERTEX)
@@ -147,34 +167,83 @@ impl WriteBackPipelines {
         }
     }
 
-    /// The render pass and pipeline that write back into images of `vk_format`, built on
-    /// first use.
+    /// The pipeline layout of every format's pipeline.
+    pub fn layout(&self) -> vk::PipelineLayout {
+        self.layout
+    }
+
+    /// The pool the views' sets come from (FREE_DESCRIPTOR_SET).
+    pub fn pool(&self) -> vk::DescriptorPool {
+        self.pool
+    }
+
+    fn passes(&self) -> MutexGuard<'_, Passes> {
+        // Plain data: a panic while holding it leaves a usable map.
+        self.passes.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// The render pass and pipeline that write back into images of `vk_format`, built here
+    /// on first use (the offline tools).
     pub fn pass(
         &mut self,
         gpu: &GpuDevice,
         (vk_format, format): (vk::Format, PixelFormat),
     ) -> Result<WriteBackPass, GpuError> {
-        if let Some(p) = self.passes.get(&vk_format) {
-            return Ok(*p);
+        if let Some(p) = self.passes().get(&vk_format) {
+            return p.clone().map_err(GpuError::Unsupported);
         }
-        let spv = fragment(format.shader_code())
-            .ok_or_else(|| GpuError::Unsupported(format!("no write-back for {vk_format:?}")))?;
-        let render_pass = render_pass(gpu, vk_format)?;
-        match pipeline(gpu, self.layout, render_pass, spv) {
-            Ok(pipeline) => {
-                let p = WriteBackPass {
-                    render_pass,
-                    pipeline,
-                };
-                self.passes.insert(vk_format, p);
-                Ok(p)
-            }
+        let built = build_pass(&gpu.device, self.layout, (vk_format, format));
+        let kept = built.as_ref().map(|p| *p).map_err(|e| e.to_string());
+        self.passes().insert(vk_format, kept);
+        built
+    }
+
+    /// Starts building the pass of `vk_format` on a thread of its own, unless it was asked
+    /// for before (the layer: no pipeline is built inside a call an app makes). `ready` gives
+    /// it once built.
+    pub fn request(&mut self, gpu: &GpuDevice, (vk_format, format): (vk::Format, PixelFormat)) {
+        if self.requested.contains(&vk_format) {
+            return;
+        }
+        self.requested.push(vk_format);
+        let (device, layout, passes) = (gpu.device.clone(), self.layout, self.passes.clone());
+        let builder = std::thread::Builder::new()
+            .name("contrastxr-write-back".into())
+            .spawn(move || {
+                let built = std::panic::catch_unwind(|| {
+                    build_pass(&device, layout, (vk_format, format)).map_err(|e| e.to_string())
+                })
+                .unwrap_or_else(|_| Err("the write-back's build panicked".into()));
+                let mut passes = passes.lock().unwrap_or_else(|p| p.into_inner());
+                passes.insert(vk_format, built);
+            });
+        match builder {
+            Ok(handle) => self.builders.push(handle),
             Err(e) => {
-                // SAFETY: our own render pass, used by nothing.
-                unsafe { gpu.device.destroy_render_pass(render_pass, None) };
-                Err(e)
+                let why = format!("no thread to build the write-back: {e}");
+                self.passes().insert(vk_format, Err(why));
             }
         }
+    }
+
+    /// The pass of `vk_format` if it is built; None while it is being built, or when it
+    /// failed (`failure` says why).
+    pub fn ready(&self, vk_format: vk::Format) -> Option<WriteBackPass> {
+        self.passes().get(&vk_format)?.clone().ok()
+    }
+
+    /// Waits at most `timeout` for the pass of `vk_format` (requested before) to be built or
+    /// to fail.
+    pub fn wait_for(&self, vk_format: vk::Format, timeout: std::time::Duration) {
+        let start = std::time::Instant::now();
+        while !self.passes().contains_key(&vk_format) && start.elapsed() < timeout {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+    }
+
+    /// Why the pass of `vk_format` could not be built, if it could not.
+    pub fn failure(&self, vk_format: vk::Format) -> Option<String> {
+        self.passes().get(&vk_format)?.clone().err()
     }
 
     /// A descriptor set of a view: its tile list and the engine's image it is enhanced in.
@@ -222,11 +291,17 @@ impl WriteBackPipelines {
 
     /// Destroys everything. The GPU must be done with it.
     pub fn destroy(&mut self, gpu: &GpuDevice) {
+        // The builders use the device: they end before anything is destroyed.
+        for b in self.builders.drain(..) {
+            let _ = b.join();
+        }
         let d = &gpu.device;
+        let passes: Vec<WriteBackPass> =
+            self.passes().drain().filter_map(|(_, p)| p.ok()).collect();
         // SAFETY: our own objects; the GPU no longer uses them (the caller's contract); null
         // handles are ignored.
         unsafe {
-            for (_, p) in self.passes.drain() {
+            for p in passes {
                 d.destroy_pipeline(p.pipeline, None);
                 d.destroy_render_pass(p.render_pass, None);
             }
@@ -240,10 +315,33 @@ impl WriteBackPipelines {
     }
 }
 
+/// The render pass and pipeline of `vk_format` (read as `format`).
+fn build_pass(
+    d: &ash::Device,
+    layout: vk::PipelineLayout,
+    (vk_format, format): (vk::Format, PixelFormat),
+) -> Result<WriteBackPass, GpuError> {
+    crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
+    let spv = fragment(format.shader_code())
+        .ok_or_else(|| GpuError::Unsupported(format!("no write-back for {vk_format:?}")))?;
+    let render_pass = render_pass(d, vk_format)?;
+    match pipeline(d, layout, render_pass, spv) {
+        Ok(pipeline) => Ok(WriteBackPass {
+            render_pass,
+            pipeline,
+        }),
+        Err(e) => {
+            // SAFETY: our own render pass, used by nothing.
+            unsafe { d.destroy_render_pass(render_pass, None) };
+            Err(e)
+        }
+    }
+}
+
 /// One colour attachment of `format`, loaded and stored, in GENERAL throughout: the app's
 /// image stays in the layout of the copies around it, and the barriers around the pass are the
 /// caller's.
-fn render_pass(gpu: &GpuDevice, format: vk::Format) -> Result<vk::RenderPass, GpuError> {
+fn render_pass(d: &ash::Device, format: vk::Format) -> Result<vk::RenderPass, GpuError> {
     let general = vk::ImageLayout::GENERAL;
     let attachments = [vk::AttachmentDescription::default()
         .format(format)
@@ -264,16 +362,15 @@ fn render_pass(gpu: &GpuDevice, format: vk::Format) -> Result<vk::RenderPass, Gp
         .attachments(&attachments)
         .subpasses(&subpasses);
     // SAFETY: valid create info on a valid device.
-    unsafe { gpu.device.create_render_pass(&info, None) }.vk("vkCreateRenderPass")
+    unsafe { d.create_render_pass(&info, None) }.vk("vkCreateRenderPass")
 }
 
 fn pipeline(
-    gpu: &GpuDevice,
+    d: &ash::Device,
     layout: vk::PipelineLayout,
     render_pass: vk::RenderPass,
     fragment_spv: &[u8],
 ) -> Result<vk::Pipeline, GpuError> {
-    let d = &gpu.device;
     let mut modules = Vec::new();
     for spv in [table::VERTEX, fragment_spv] {
         let code = words(spv);
@@ -352,59 +449,4 @@ fn graphics_pipeline(
             call: "vkCreateGraphicsPipelines",
             result,
         })
-}
-
-/// The app's image layer as the write-back's attachment: a view in its own format and a
-/// framebuffer reaching the region's far corner.
-pub struct WriteBackAttachment {
-    pub view: vk::ImageView,
-    pub framebuffer: vk::Framebuffer,
-}
-
-impl WriteBackAttachment {
-    pub fn new(
-        gpu: &GpuDevice,
-        render_pass: vk::RenderPass,
-        (image, vk_format, layer): (vk::Image, vk::Format, u32),
-        size: (u32, u32),
-    ) -> Result<Self, GpuError> {
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .level_count(1)
-            .base_array_layer(layer)
-            .layer_count(1);
-        let info = vk::ImageViewCreateInfo::default()
-            .image(image)
-            .view_type(vk::ImageViewType::TYPE_2D)
-            .format(vk_format)
-            .subresource_range(range);
-        let d = &gpu.device;
-        // SAFETY: a view of one layer of a colour image in its own format.
-        let view = unsafe { d.create_image_view(&info, None) }.vk("vkCreateImageView")?;
-        let views = [view];
-        let info = vk::FramebufferCreateInfo::default()
-            .render_pass(render_pass)
-            .attachments(&views)
-            .width(size.0)
-            .height(size.1)
-            .layers(1);
-        // SAFETY: the view and render pass are valid and agree in format.
-        match unsafe { d.create_framebuffer(&info, None) }.vk("vkCreateFramebuffer") {
-            Ok(framebuffer) => Ok(WriteBackAttachment { view, framebuffer }),
-            Err(e) => {
-                // SAFETY: our own view, used by nothing.
-                unsafe { d.destroy_image_view(view, None) };
-                Err(e)
-            }
-        }
-    }
-
-    /// Destroys the framebuffer and view. The GPU must be done with them.
-    pub fn destroy(&mut self, gpu: &GpuDevice) {
-        // SAFETY: our own objects, no longer in use (the caller's contract).
-        unsafe {
-            gpu.device.destroy_framebuffer(self.framebuffer, None);
-            gpu.device.destroy_image_view(self.view, None);
-        }
-    }
 }

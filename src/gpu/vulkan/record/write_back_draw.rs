@@ -1,4 +1,4 @@
-//! Recording the image-copy path's write-back by drawing (src/gpu/vulkan/pipelines/write_back.rs):
+//! Recording the image-copy path's write-back by drawing (src/gpu/vulkan/pipelines/write_back_pipelines.rs):
 //! the tiles the view's enhancement listed, drawn from the engine's image into the app's image,
 //! instead of copying the whole region back.
 
@@ -19,14 +19,36 @@ pub enum CopyBack {
 /// What one view's write-back draws with.
 #[derive(Clone, Copy, Debug)]
 pub struct WriteBackDraw {
-    pub pass: WriteBackPass,
-    pub framebuffer: vk::Framebuffer,
+    pass: WriteBackPass,
+    framebuffer: vk::Framebuffer,
     /// The view's set: its tile list and the engine's image.
-    pub set: vk::DescriptorSet,
+    set: vk::DescriptorSet,
     /// The view's tile list (its draw arguments at TILE_LIST_DRAW_OFFSET).
-    pub tiles: vk::Buffer,
+    tiles: vk::Buffer,
     /// The view's region in the app's image.
-    pub region: ImageRegion,
+    region: ImageRegion,
+}
+
+impl WriteBackDraw {
+    /// The draw of a view's listed tiles (`tiles`, the view's tile list) with `pass` into
+    /// `framebuffer` (the app's image layer), reading through `set`, into `region`.
+    pub fn new(
+        (pass, framebuffer): (WriteBackPass, vk::Framebuffer),
+        (set, tiles): (vk::DescriptorSet, vk::Buffer),
+        region: ImageRegion,
+    ) -> Self {
+        WriteBackDraw {
+            pass,
+            framebuffer,
+            set,
+            tiles,
+            region,
+        }
+    }
+
+    pub fn set(&self) -> vk::DescriptorSet {
+        self.set
+    }
 }
 
 /// The barrier between the enhancement (and the copy out) and the draw: the tile list's
@@ -90,7 +112,7 @@ pub fn record_write_back(
         pad: 0,
     };
     let begin = vk::RenderPassBeginInfo::default()
-        .render_pass(draw.pass.render_pass)
+        .render_pass(draw.pass.render_pass())
         .framebuffer(draw.framebuffer)
         .render_area(rect);
     let graphics = vk::PipelineBindPoint::GRAPHICS;
@@ -99,11 +121,11 @@ pub fn record_write_back(
     // arguments lie in the tile list at TILE_LIST_DRAW_OFFSET (finish_tiles wrote them).
     unsafe {
         d.cmd_begin_render_pass(cmd, &begin, vk::SubpassContents::INLINE);
-        d.cmd_bind_pipeline(cmd, graphics, draw.pass.pipeline);
-        d.cmd_bind_descriptor_sets(cmd, graphics, pipelines.layout, 0, &[draw.set], &[]);
+        d.cmd_bind_pipeline(cmd, graphics, draw.pass.pipeline());
+        d.cmd_bind_descriptor_sets(cmd, graphics, pipelines.layout(), 0, &[draw.set], &[]);
         d.cmd_push_constants(
             cmd,
-            pipelines.layout,
+            pipelines.layout(),
             vk::ShaderStageFlags::VERTEX,
             0,
             &constants.bytes(),
