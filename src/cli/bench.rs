@@ -26,7 +26,7 @@ pub fn usage() -> String {
          frame, once whatever the views; live = frame + bg, a display frame that also brings\n\
          a new camera frame). Sizes are per view (default {DEFAULT_SIZES}), --views 2; each size\n\
          with typical content (mostly black: panels and an object) and full frames\n\
-         (--content picks one or both). --path copy|in-place|both|image-copy|all (default\n\
+         (--content picks one or both). --path copy|in-place|both|image-copy|all|tiles (default\n\
          both): the layer's frame through buffer copies (frame, always timed), in place (in\n\
          place: the app-like images made with storage usage and enhanced through storage\n\
          views, no copies; ip/frame: its ratio to the frame through buffer copies; with\n\
@@ -37,7 +37,10 @@ pub fn usage() -> String {
          ic/ip: its ratio to the frame through buffer copies and in place; img tiles ms: the\n\
          same path with only the tiles the enhancement listed drawn back into the app's image\n\
          instead of the whole region copied back, it/ip its ratio to the frame in place; with\n\
-         image-copy and all). all times the three.\n\
+         image-copy and all). all times the three. tiles: all, with img tiles also on a CPU\n\
+         driver, which all and image-copy leave it out on: once a draw has run there,\n\
+         lavapipe's timestamps no longer bracket compute work, so the other columns of a tiles\n\
+         run on a CPU driver are not to be read.\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n\
          --engine opengl (default vulkan) times the OpenGL engine on an EGL context of its own\n\
          (GL_TIME_ELAPSED queries; --device and --path do not apply) in the same columns: copy\n\
@@ -160,15 +163,17 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .map(parse_content)
             .collect::<Result<_, _>>()?,
     };
-    // (in place, image copy); the frame through buffer copies is always timed.
-    let (in_place, image_copy) = match args.value(&["--path"])?.as_deref() {
-        None | Some("both") | Some("in-place") => (true, false),
-        Some("copy") => (false, false),
-        Some("image-copy") => (false, true),
-        Some("all") => (true, true),
+    // (in place, image copy, tiles: None where it depends on the device); the frame through
+    // buffer copies is always timed.
+    let (in_place, image_copy, tiles) = match args.value(&["--path"])?.as_deref() {
+        None | Some("both") | Some("in-place") => (true, false, Some(false)),
+        Some("copy") => (false, false, Some(false)),
+        Some("image-copy") => (false, true, None),
+        Some("all") => (true, true, None),
+        Some("tiles") => (true, true, Some(true)),
         Some(p) => {
             return Err(CliError::Usage(format!(
-                "--path must be copy, in-place, both, image-copy or all, got '{p}'"
+                "--path must be copy, in-place, both, image-copy, all or tiles, got '{p}'"
             )))
         }
     };
@@ -184,24 +189,16 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let ablations = parse_ablations(args.value(&["--ablate"])?, params.method, opengl)?;
     let json = args.flag("--json");
     args.finish()?;
-    let mut cases = Vec::new();
-    for &region in &sizes {
-        for &content in &contents {
-            for &ablation in &ablations {
-                cases.push(BenchCase {
-                    region,
-                    views,
-                    content,
-                    runs,
-                    in_place,
-                    image_copy,
-                    ablation,
-                });
-            }
-        }
-    }
+    let cases = |tiles: bool| {
+        bench_cases(
+            &sizes,
+            (views, runs),
+            (&contents, &ablations),
+            (in_place, image_copy, tiles),
+        )
+    };
     if opengl {
-        return run_opengl(&cases, &params, json);
+        return run_opengl(&cases(false), &params, json);
     }
     let options = DeviceOptions {
         index: device,
@@ -211,11 +208,39 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     let mut engine =
         VkOffline::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
     let device = engine.device_name().to_string();
+    let cases = cases(tiles.unwrap_or(!engine.gpu.is_cpu()));
     report(&device, json, &cases, |case| {
         engine
             .bench(case, &params)
             .map_err(|e| CliError::Failure(e.to_string()))
     })
+}
+
+/// Every case: each size, content and ablation.
+fn bench_cases(
+    sizes: &[(u32, u32)],
+    (views, runs): (u32, u32),
+    (contents, ablations): (&[Content], &[Ablation]),
+    (in_place, image_copy, tiles): (bool, bool, bool),
+) -> Vec<BenchCase> {
+    let mut cases = Vec::new();
+    for &region in sizes {
+        for &content in contents {
+            for &ablation in ablations {
+                cases.push(BenchCase {
+                    region,
+                    views,
+                    content,
+                    runs,
+                    in_place,
+                    image_copy,
+                    tiles: image_copy && tiles,
+                    ablation,
+                });
+            }
+        }
+    }
+    cases
 }
 
 /// The cases on the OpenGL engine's own EGL context.

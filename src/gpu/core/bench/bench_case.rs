@@ -143,6 +143,11 @@ pub struct BenchCase {
     /// image of the engine's own with storage usage, enhanced there by the in-place shaders,
     /// copied back), where the device can store to its format.
     pub image_copy: bool,
+    /// Also time the image-copy path with only the listed tiles drawn back (a render pass)
+    /// instead of the regions copied back. On a CPU driver a draw leaves the timestamps of
+    /// later compute work unreliable (lavapipe bins them with its rasteriser's scene), so the
+    /// CLI asks for it there only with `--path tiles`.
+    pub tiles: bool,
     pub ablation: Ablation,
 }
 

@@ -96,7 +96,10 @@ impl VkOffline {
             self.engine.bind_app_image(gpu, &target, own.view);
             rig.image_copy.push(target);
         }
-        self.add_write_back_draws(rig, case)
+        match case.tiles {
+            true => self.add_write_back_draws(rig, case),
+            false => Ok(()),
+        }
     }
 
     /// The image-copy views' write-back by drawing: a draw per view into its app image.
