@@ -713,6 +713,61 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
     assert_clean(&e);
 }
 
+/// The listed tiles drawn back bring every 8-bit code back exactly through the sRGB
+/// attachment's encoding (the fragment stage returns the code's linear value): with no change
+/// to spend (`lambda_e` 0) a region holding all 256 codes in each channel comes back as it was,
+/// as through the buffer path.
+#[test]
+fn tiles_drawn_back_keep_every_srgb_code() {
+    let mut e = engine();
+    let camera = noise(24, 16, 7);
+    let params = Params {
+        lambda_e: 0.0,
+        ..Params::default()
+    };
+    let (size, extent) = ((16, 16), (16, 16));
+    let codes: Vec<[u8; 4]> = (0..=255u8)
+        .map(|i| [i, 255 - i, i.wrapping_mul(7), 255])
+        .collect();
+    let image = RgbaImage {
+        width: size.0,
+        height: size.1,
+        pixels: codes,
+        ..noise(size.0, size.1, 1)
+    };
+    let app = AppImage {
+        size,
+        layers: 1,
+        offset: (0, 0),
+        extent,
+        layer: 0,
+    };
+    for vk_format in [
+        ash::vk::Format::R8G8B8A8_SRGB,
+        ash::vk::Format::B8G8R8A8_SRGB,
+    ] {
+        let format = PixelFormat::from_vk(vk_format).unwrap();
+        let words = raw_words(format, &image);
+        let copy = e
+            .enhance_raw(&words, extent, format, &camera, &params)
+            .unwrap();
+        assert_eq!(
+            copy, words,
+            "{vk_format:?}: lambda_e 0 changed the buffer path's pixels"
+        );
+        let tiles = e
+            .enhance_raw_image_copy_back(
+                &words,
+                (vk_format, app),
+                (&camera, &params),
+                CopyBack::Tiles,
+            )
+            .unwrap();
+        assert_eq!(differing(&tiles, &words), 0, "{vk_format:?}");
+    }
+    assert_clean(&e);
+}
+
 /// The image-copy path holds the CPU reference's contract (±1 code value, docs/algorithm.md)
 /// for every method, on a region of the second layer of an 8-bit sRGB image.
 #[test]
