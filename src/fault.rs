@@ -8,14 +8,14 @@
 //! `destroy-bookkeeping`, `warm-up-device`, `device-lost`, `swapchain-wait`, `slow-build`,
 //! `gl-program-link`, `gl-make-current`, `gl-old-context`, `gl-context-lost`,
 //! `gl-program-thread`, `gl-program-build`, `gl-recipe-panic`, `gl-driver-message`,
-//! `stalled-file-system`, `short-minute`
+//! `stalled-file-system`, `short-minute`, `write-back-build`
 //! (see [`POINTS`]). This module must not depend on anything else in the crate.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 /// Every fault point, with where it fires.
-pub const POINTS: [(&str, &str); 24] = [
+pub const POINTS: [(&str, &str); 25] = [
     (
         "device-setup",
         "wrapping the app's Vulkan device (GpuDevice::borrow)",
@@ -98,6 +98,10 @@ pub const POINTS: [(&str, &str); 24] = [
     (
         "end-frame",
         "a panic in the layer's xrEndFrame after the frame's images were enhanced and held",
+    ),
+    (
+        "write-back-build",
+        "building the image-copy path's write-back (copy_back = \"tiles\") for a format",
     ),
     (
         "short-minute",

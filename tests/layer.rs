@@ -219,31 +219,7 @@ fn listed_tiles_drawn_back_reach_the_app_images() {
         ("R8G8B8A8_SRGB", "array"),
         ("B8G8R8A8_SRGB", "side-by-side"),
     ] {
-        let tag = format!("layer-tiles-{format}");
-        let dir = capture_dir(&tag);
-        let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
-        for (k, v) in [
-            ("CONTRASTXR_IN_PLACE", "on"),
-            ("CONTRASTXR_COPY_BACK", "tiles"),
-            ("CONTRASTXR_PIPELINES", "wait"),
-        ] {
-            env.push((k.into(), v.into()));
-        }
-        let cmd = [
-            XR_CLIENT,
-            "--validation",
-            "--json",
-            "--frames",
-            "8",
-            "--size",
-            "160x120",
-            "--format",
-            format,
-            "--layout",
-            layout,
-        ];
-        let line = "processing frames (2 views per frame)";
-        let Some(run) = run_clean(&tag, &cmd, &as_refs(&env), line) else {
+        let Some(run) = tiles_run(format, layout, None) else {
             return;
         };
         assert!(
@@ -252,14 +228,70 @@ fn listed_tiles_drawn_back_reach_the_app_images() {
             "{}",
             run.describe()
         );
-        let views = captures(&dir);
-        assert_eq!(views.len(), 4, "2 frames x 2 views in {}", dir.display());
-        for c in &views {
-            assert_eq!(c.json["path"], "image-copy-tiles", "{format}");
-            let changed = check_view(c);
-            assert!(changed > 1000, "{format}: only {changed} pixels changed");
-        }
     }
+}
+
+/// A write-back that cannot be built (fault point `write-back-build`): the views copy the
+/// region back (`"path": "image-copy"`, still enhanced and conforming), and the layer says
+/// why in one line.
+#[test]
+fn tiles_that_cannot_be_drawn_back_copy_the_region_back() {
+    let Some(run) = tiles_run("R8G8B8A8_SRGB", "array", Some("write-back-build")) else {
+        return;
+    };
+    let about = run
+        .stderr
+        .lines()
+        .filter(|l| l.contains("the listed tiles cannot be drawn back"))
+        .count();
+    assert_eq!(about, 1, "{}", run.describe());
+    assert!(run.stderr.contains("fault injected at write-back-build"));
+}
+
+/// A run with `copy_back = "tiles"` (and `fault`), its four captured views (2 frames x 2
+/// views) checked against the CPU reference, each having taken `image-copy-tiles`, or
+/// `image-copy` under a fault.
+fn tiles_run(format: &str, layout: &str, fault: Option<&str>) -> Option<SandboxRun> {
+    let tag = format!("layer-tiles-{format}-{}", fault.unwrap_or("none"));
+    let dir = capture_dir(&tag);
+    let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
+    for (k, v) in [
+        ("CONTRASTXR_IN_PLACE", "on"),
+        ("CONTRASTXR_COPY_BACK", "tiles"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+    ] {
+        env.push((k.into(), v.into()));
+    }
+    if let Some(point) = fault {
+        env.push(("CONTRASTXR_FAULT".into(), point.into()));
+    }
+    let cmd = [
+        XR_CLIENT,
+        "--validation",
+        "--json",
+        "--frames",
+        "8",
+        "--size",
+        "160x120",
+        "--format",
+        format,
+        "--layout",
+        layout,
+    ];
+    let line = "processing frames (2 views per frame)";
+    let run = run_clean(&tag, &cmd, &as_refs(&env), line)?;
+    let views = captures(&dir);
+    assert_eq!(views.len(), 4, "2 frames x 2 views in {}", dir.display());
+    let path = match fault {
+        None => "image-copy-tiles",
+        Some(_) => "image-copy",
+    };
+    for c in &views {
+        assert_eq!(c.json["path"], path, "{format}");
+        let changed = check_view(c);
+        assert!(changed > 1000, "{format}: only {changed} pixels changed");
+    }
+    Some(run)
 }
 
 /// `in_place = "auto"` (the default) on lavapipe, a CPU driver: the copy path, even where the

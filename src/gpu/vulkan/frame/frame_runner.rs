@@ -142,6 +142,12 @@ impl FrameRunner {
         self.engine.build_report()
     }
 
+    /// Why the tiles of a format cannot be drawn back (`ViewPath::ImageCopyTiles`; its views
+    /// copy the region back), if they cannot.
+    pub fn write_back_failure(&self) -> Option<String> {
+        self.tiles.failure()
+    }
+
     /// Whether the pipelines these items need are built: if not, they are requested and,
     /// with `wait`, waited for; without it the frame is [`GpuError::Pending`]. A frame's one
     /// check: `process` takes what it gives.

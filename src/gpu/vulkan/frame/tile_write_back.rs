@@ -26,6 +26,8 @@ pub struct TileWriteBack {
     attachments: HashMap<Layer, WriteBackAttachment>,
     /// The frame being recorded: the draw of each view whose pass is built.
     pub(super) draws: HashMap<ViewKey, WriteBackDraw>,
+    /// The attachment formats asked for so far.
+    requested: Vec<vk::Format>,
 }
 
 impl TileWriteBack {
@@ -45,6 +47,9 @@ impl TileWriteBack {
                 none => none.insert(WriteBackPipelines::new(gpu)?),
             };
             pipelines.request(gpu, (item.vk_format, item.format));
+            if !self.requested.contains(&item.vk_format) {
+                self.requested.push(item.vk_format);
+            }
             if wait {
                 pipelines.wait_for(item.vk_format, WAIT);
             }
@@ -85,6 +90,15 @@ impl TileWriteBack {
             self.draws.insert(item.key, draw);
         }
         Ok(())
+    }
+
+    /// Why the write-back could not be built for a format a frame asked for, if it could not
+    /// (its views then copy the region back).
+    pub(super) fn failure(&self) -> Option<String> {
+        let pipelines = self.pipelines.as_ref()?;
+        self.requested
+            .iter()
+            .find_map(|&f| pipelines.failure(f).map(|e| format!("{f:?}: {e}")))
     }
 
     /// Destroys the attachments of a swapchain's images. The GPU must be done with them.

@@ -321,7 +321,7 @@ fn build_pass(
     layout: vk::PipelineLayout,
     (vk_format, format): (vk::Format, PixelFormat),
 ) -> Result<WriteBackPass, GpuError> {
-    crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
+    crate::fault::check("write-back-build").map_err(GpuError::Unsupported)?;
     let spv = fragment(format.shader_code())
         .ok_or_else(|| GpuError::Unsupported(format!("no write-back for {vk_format:?}")))?;
     let render_pass = render_pass(d, vk_format)?;

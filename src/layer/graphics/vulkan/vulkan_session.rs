@@ -301,6 +301,12 @@ impl SessionGraphics for VulkanSession {
         if self.engine.texels_from_source().0 > 0 {
             lines.push(("source-texels", "live frames' texels are written into mapped memory on the camera's thread, before the frame call".to_string()));
         }
+        if let Some(why) = self.engine.write_back_failure() {
+            let line = format!(
+                "the listed tiles cannot be drawn back ({why}): those views copy the region back"
+            );
+            lines.push(("write-back-failed", line));
+        }
         let paths: Vec<ViewPath> = views.iter().map(|v| self.path(v)).collect();
         let count = |p: ViewPath| paths.iter().filter(|&&q| q == p).count();
         lines.push((
