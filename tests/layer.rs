@@ -87,17 +87,46 @@ fn client_through_layer(format: &str, layout: &str, in_place: Option<&str>) {
         "layer-{format}-{layout}-{path}-{}",
         in_place.unwrap_or("auto")
     );
-    let dir = capture_dir(&tag);
+    let extra: Vec<(&str, &str)> = in_place
+        .map(|v| ("CONTRASTXR_IN_PLACE", v))
+        .into_iter()
+        .collect();
+    let Some((_, views)) = small_client_run(&tag, (format, layout, "12"), &extra, path) else {
+        return;
+    };
+    // The two views are different images (view 1's pattern differs) at their own rects/layers.
+    let key = |c: &Captured| {
+        (
+            c.json["rect"]["x"].as_i64(),
+            c.json["image_array_index"].as_u64(),
+        )
+    };
+    assert_ne!(
+        key(&views[0]),
+        key(&views[1]),
+        "both views captured from the same region"
+    );
+}
+
+/// The client through the layer under validation for `frames` frames of two 160x120 views of
+/// `format` in `layout`, with `extra` variables, capturing two frames: its run and the four
+/// captured views, each of which took `path` and conforms to the CPU reference with over 1000
+/// pixels changed.
+fn small_client_run(
+    tag: &str,
+    (format, layout, frames): (&str, &str, &str),
+    extra: &[(&str, &str)],
+    path: &str,
+) -> Option<(SandboxRun, Vec<Captured>)> {
+    let dir = capture_dir(tag);
     let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
-    if let Some(value) = in_place {
-        env.push(("CONTRASTXR_IN_PLACE".into(), value.into()));
-    }
+    env.extend(extra.iter().map(|(k, v)| (k.to_string(), v.to_string())));
     let cmd = [
         XR_CLIENT,
         "--validation",
         "--json",
         "--frames",
-        "12",
+        frames,
         "--size",
         "160x120",
         "--format",
@@ -105,15 +134,8 @@ fn client_through_layer(format: &str, layout: &str, in_place: Option<&str>) {
         "--layout",
         layout,
     ];
-    let run = run_clean(
-        &tag,
-        &cmd,
-        &as_refs(&env),
-        "processing frames (2 views per frame)",
-    );
-    if run.is_none() {
-        return;
-    }
+    let line = "processing frames (2 views per frame)";
+    let run = run_clean(tag, &cmd, &as_refs(&env), line)?;
     let views = captures(&dir);
     assert_eq!(
         views.len(),
@@ -129,18 +151,7 @@ fn client_through_layer(format: &str, layout: &str, in_place: Option<&str>) {
             "{format} {layout}: the method changed only {changed} pixels"
         );
     }
-    // The two views are different images (view 1's pattern differs) at their own rects/layers.
-    let key = |c: &Captured| {
-        (
-            c.json["rect"]["x"].as_i64(),
-            c.json["image_array_index"].as_u64(),
-        )
-    };
-    assert_ne!(
-        key(&views[0]),
-        key(&views[1]),
-        "both views captured from the same region"
-    );
+    Some((run, views))
 }
 
 /// One test per format (they run in parallel), each through both layouts and both paths
@@ -248,50 +259,21 @@ fn tiles_that_cannot_be_drawn_back_copy_the_region_back() {
     assert!(run.stderr.contains("fault injected at write-back-build"));
 }
 
-/// A run with `copy_back = "tiles"` (and `fault`), its four captured views (2 frames x 2
-/// views) checked against the CPU reference, each having taken `image-copy-tiles`, or
-/// `image-copy` under a fault.
+/// A run with `copy_back = "tiles"` (and `fault`), its four captured views checked against the
+/// CPU reference, each having taken `image-copy-tiles`, or `image-copy` under a fault.
 fn tiles_run(format: &str, layout: &str, fault: Option<&str>) -> Option<SandboxRun> {
     let tag = format!("layer-tiles-{format}-{}", fault.unwrap_or("none"));
-    let dir = capture_dir(&tag);
-    let mut env = layer_env(&dir, &format!("image:{}", sample("background-meadow.png")));
-    for (k, v) in [
+    let mut extra = vec![
         ("CONTRASTXR_IN_PLACE", "on"),
         ("CONTRASTXR_COPY_BACK", "tiles"),
         ("CONTRASTXR_PIPELINES", "wait"),
-    ] {
-        env.push((k.into(), v.into()));
-    }
-    if let Some(point) = fault {
-        env.push(("CONTRASTXR_FAULT".into(), point.into()));
-    }
-    let cmd = [
-        XR_CLIENT,
-        "--validation",
-        "--json",
-        "--frames",
-        "8",
-        "--size",
-        "160x120",
-        "--format",
-        format,
-        "--layout",
-        layout,
     ];
-    let line = "processing frames (2 views per frame)";
-    let run = run_clean(&tag, &cmd, &as_refs(&env), line)?;
-    let views = captures(&dir);
-    assert_eq!(views.len(), 4, "2 frames x 2 views in {}", dir.display());
+    extra.extend(fault.map(|point| ("CONTRASTXR_FAULT", point)));
     let path = match fault {
         None => "image-copy-tiles",
         Some(_) => "image-copy",
     };
-    for c in &views {
-        assert_eq!(c.json["path"], path, "{format}");
-        let changed = check_view(c);
-        assert!(changed > 1000, "{format}: only {changed} pixels changed");
-    }
-    Some(run)
+    small_client_run(&tag, (format, layout, "8"), &extra, path).map(|(run, _)| run)
 }
 
 /// `in_place = "auto"` (the default) on lavapipe, a CPU driver: the copy path, even where the
