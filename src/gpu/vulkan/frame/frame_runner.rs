@@ -382,7 +382,7 @@ impl FrameRunner {
         self.bind_texels(items);
         let wait = options.wait_for_pipelines;
         self.tiles
-            .prepare(&self.gpu, (items, wait), &mut self.views)?;
+            .prepare(&self.gpu, (items, wait), &mut self.views);
         let mut staging = Vec::new();
         if capture {
             for item in items {

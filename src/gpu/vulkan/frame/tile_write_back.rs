@@ -28,73 +28,93 @@ pub struct TileWriteBack {
     pub(super) draws: HashMap<ViewKey, WriteBackDraw>,
     /// The attachment formats asked for so far.
     requested: Vec<vk::Format>,
+    /// The first draw that could not be made (its set or attachment), by format.
+    failed: Option<String>,
 }
 
 impl TileWriteBack {
     /// The draws of this frame's `items` whose tiles are drawn back, where their format's
-    /// pass is built (else it is requested and, with `wait`, waited for). The GPU must be
-    /// done with the previous frame.
+    /// pass is built (else it is requested and, with `wait`, waited for). A view whose draw
+    /// cannot be made (its set, its attachment) copies the region back, and `failure` says why.
+    /// The GPU must be done with the previous frame.
     pub(super) fn prepare(
         &mut self,
         gpu: &GpuDevice,
         (items, wait): (&[FrameView], bool),
         views: &mut HashMap<ViewKey, PreparedView>,
-    ) -> Result<(), GpuError> {
+    ) {
         self.draws.clear();
         for item in items.iter().filter(|i| i.path == ViewPath::ImageCopyTiles) {
-            let pipelines = match &mut self.pipelines {
-                Some(p) => p,
-                none => none.insert(WriteBackPipelines::new(gpu)?),
-            };
-            pipelines.request(gpu, (item.vk_format, item.format));
-            if !self.requested.contains(&item.vk_format) {
-                self.requested.push(item.vk_format);
-            }
-            if wait {
-                pipelines.wait_for(item.vk_format, WAIT);
-            }
-            let Some(pass) = pipelines.ready(item.vk_format) else {
-                continue;
-            };
             let view = views.get_mut(&item.key).expect("ensured before");
-            let Some(own) = view.own.as_ref() else {
-                continue;
-            };
-            let set = match view.write_back_set {
-                Some((_, set)) => set,
-                None => {
-                    let set = pipelines.view_set(gpu, view.target.tiles.raw, own.view)?;
-                    view.write_back_set = Some((pipelines.pool(), set));
-                    set
+            match self.draw(gpu, (item, wait), view) {
+                Ok(Some(draw)) => {
+                    self.draws.insert(item.key, draw);
                 }
-            };
-            let region = item.region();
-            let far = (
-                region.offset.0 as u32 + region.extent.0,
-                region.offset.1 as u32 + region.extent.1,
-            );
-            let layer = (item.key.swapchain, item.image, item.key.array_index, far);
-            let attachment = match self.attachments.get(&layer) {
-                Some(a) => a,
-                None => {
-                    let image = (item.image, item.vk_format, item.key.array_index);
-                    let made = WriteBackAttachment::new(gpu, pass.render_pass(), image, far)?;
-                    self.attachments.entry(layer).or_insert(made)
+                Ok(None) => {}
+                Err(e) => {
+                    self.failed
+                        .get_or_insert_with(|| format!("{:?}: {e}", item.vk_format));
                 }
-            };
-            let draw = WriteBackDraw::new(
-                (pass, attachment.framebuffer()),
-                (set, view.target.tiles.raw),
-                region,
-            );
-            self.draws.insert(item.key, draw);
+            }
         }
-        Ok(())
     }
 
-    /// Why the write-back could not be built for a format a frame asked for, if it could not
+    /// `item`'s draw, None while its pass is being built or where it could not be.
+    fn draw(
+        &mut self,
+        gpu: &GpuDevice,
+        (item, wait): (&FrameView, bool),
+        view: &mut PreparedView,
+    ) -> Result<Option<WriteBackDraw>, GpuError> {
+        let pipelines = match &mut self.pipelines {
+            Some(p) => p,
+            none => none.insert(WriteBackPipelines::new(gpu)?),
+        };
+        pipelines.request(gpu, (item.vk_format, item.format));
+        if !self.requested.contains(&item.vk_format) {
+            self.requested.push(item.vk_format);
+        }
+        if wait {
+            pipelines.wait_for(item.vk_format, WAIT);
+        }
+        let (Some(pass), Some(own)) = (pipelines.ready(item.vk_format), view.own.as_ref()) else {
+            return Ok(None);
+        };
+        let set = match view.write_back_set {
+            Some((_, set)) => set,
+            None => {
+                let set = pipelines.view_set(gpu, view.target.tiles.raw, own.view)?;
+                view.write_back_set = Some((pipelines.pool(), set));
+                set
+            }
+        };
+        let region = item.region();
+        let far = (
+            region.offset.0 as u32 + region.extent.0,
+            region.offset.1 as u32 + region.extent.1,
+        );
+        let layer = (item.key.swapchain, item.image, item.key.array_index, far);
+        let attachment = match self.attachments.get(&layer) {
+            Some(a) => a,
+            None => {
+                let image = (item.image, item.vk_format, item.key.array_index);
+                let made = WriteBackAttachment::new(gpu, pass.render_pass(), image, far)?;
+                self.attachments.entry(layer).or_insert(made)
+            }
+        };
+        Ok(Some(WriteBackDraw::new(
+            (pass, attachment.framebuffer()),
+            (set, view.target.tiles.raw),
+            region,
+        )))
+    }
+
+    /// Why the write-back could not be made for a format a frame asked for, if it could not
     /// (its views then copy the region back).
     pub(super) fn failure(&self) -> Option<String> {
+        if let Some(why) = &self.failed {
+            return Some(why.clone());
+        }
         let pipelines = self.pipelines.as_ref()?;
         self.requested
             .iter()
