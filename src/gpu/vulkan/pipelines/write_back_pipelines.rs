@@ -6,7 +6,7 @@
 //! swapchain image), and the draw's indirect arguments come from the tile count on the GPU.
 //! Pipelines are built on first use (a graphics pipeline of two small stages).
 
-use crate::gpu::core::PixelFormat;
+use crate::gpu::core::{process_exit, PixelFormat};
 use crate::gpu::vulkan::device::{GpuDevice, GpuError, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
@@ -210,10 +210,15 @@ impl WriteBackPipelines {
         let builder = std::thread::Builder::new()
             .name("contrastxr-write-back".into())
             .spawn(move || {
-                let built = std::panic::catch_unwind(|| {
-                    build_pass(&device, layout, (vk_format, format)).map_err(|e| e.to_string())
-                })
-                .unwrap_or_else(|_| Err("the write-back's build panicked".into()));
+                // Counted as a build in progress, so that the process's exit waits for it
+                // before the driver's destructors run (gpu/core/process_exit.rs).
+                let built = match process_exit::Busy::begin() {
+                    None => Err("the process is exiting".to_string()),
+                    Some(_busy) => std::panic::catch_unwind(|| {
+                        build_pass(&device, layout, (vk_format, format)).map_err(|e| e.to_string())
+                    })
+                    .unwrap_or_else(|_| Err("the write-back's build panicked".into())),
+                };
                 let mut passes = passes.lock().unwrap_or_else(|p| p.into_inner());
                 passes.insert(vk_format, built);
             });
