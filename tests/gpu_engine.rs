@@ -11,10 +11,9 @@ use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec::half_from_f32;
 use contrastxr::gpu::vulkan::offline::AppImage;
-use contrastxr::gpu::vulkan::record::CopyBack;
 use contrastxr::gpu::vulkan::VkFormat;
 use contrastxr::gpu::OfflineBackend;
-use contrastxr::gpu::{DeviceOptions, PixelFormat, PixelLayout, VkOffline};
+use contrastxr::gpu::{DeviceOptions, PixelFormat, PixelLayout, ViewPath, VkOffline};
 use contrastxr::image::RgbaImage;
 use std::process::Command;
 
@@ -658,7 +657,7 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
         let wpp = (format.bytes_per_pixel() / 4) as usize;
         for ((extent, offset, layer, sparse), back) in cases
             .into_iter()
-            .flat_map(|c| [CopyBack::Region, CopyBack::Tiles].map(|b| (c, b)))
+            .flat_map(|c| [ViewPath::ImageCopy, ViewPath::ImageCopyTiles].map(|b| (c, b)))
         {
             let size = (23, 13);
             let layers = 2;
@@ -760,7 +759,7 @@ fn tiles_drawn_back_keep_every_srgb_code() {
                 &words,
                 (vk_format, app),
                 (&camera, &params),
-                CopyBack::Tiles,
+                ViewPath::ImageCopyTiles,
             )
             .unwrap();
         assert_eq!(differing(&tiles, &words), 0, "{vk_format:?}");

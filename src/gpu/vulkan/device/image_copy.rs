@@ -18,6 +18,14 @@ pub struct ImageRegion {
 }
 
 impl ImageRegion {
+    /// The image's size up to the region's far corner (what a framebuffer over it needs).
+    pub fn far_corner(&self) -> (u32, u32) {
+        (
+            self.offset.0 as u32 + self.extent.0,
+            self.offset.1 as u32 + self.extent.1,
+        )
+    }
+
     /// The copy of a rectangle at `(x, y)` inside the region (`size` pixels) from or to a
     /// buffer at `buffer_offset`, rows tightly packed.
     pub fn copy_of(

@@ -89,10 +89,7 @@ impl TileWriteBack {
             }
         };
         let region = item.region();
-        let far = (
-            region.offset.0 as u32 + region.extent.0,
-            region.offset.1 as u32 + region.extent.1,
-        );
+        let far = region.far_corner();
         let layer = (item.key.swapchain, item.image, item.key.array_index, far);
         let attachment = match self.attachments.get(&layer) {
             Some(a) => a,

@@ -186,19 +186,20 @@ impl VkOffline {
             for v in &rig.image_copy {
                 self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
             }
-            if tiles {
-                let pipelines = rig.write_back.as_ref().expect("made with the draws");
-                record_write_back_barrier(gpu, cmd);
-                for (draw, _) in &rig.write_back_draws {
-                    record_write_back(gpu, cmd, pipelines, draw);
-                }
-                record_layout_barriers(gpu, cmd, regions, false);
-                return Ok(());
-            }
-            barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
         }
-        for (r, o) in regions.iter().zip(&own) {
-            record_image_region_copy(gpu, cmd, r, *o, false);
+        if enhance && tiles {
+            let pipelines = rig.write_back.as_ref().expect("made with the draws");
+            record_write_back_barrier(gpu, cmd);
+            for (draw, _) in &rig.write_back_draws {
+                record_write_back(gpu, cmd, pipelines, draw);
+            }
+        } else {
+            if enhance {
+                barrier(gpu, cmd, S::COMPUTE_SHADER, S::TRANSFER);
+            }
+            for (r, o) in regions.iter().zip(&own) {
+                record_image_region_copy(gpu, cmd, r, *o, false);
+            }
         }
         record_layout_barriers(gpu, cmd, regions, false);
         Ok(())

@@ -104,28 +104,13 @@ impl VkOffline {
 
     /// The image-copy views' write-back by drawing: a draw per view into its app image.
     fn add_write_back_draws(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<(), GpuError> {
-        let gpu = &self.gpu;
         let regions = rig.regions(case.region);
-        let pipelines = rig.write_back.insert(WriteBackPipelines::new(gpu)?);
-        let vk_format = vk::Format::R8G8B8A8_SRGB;
-        let pass = pipelines.pass(gpu, (vk_format, PixelFormat::SRGB8))?;
-        for ((region, view), own) in regions.iter().zip(&rig.image_copy).zip(&rig.own_images) {
-            let layer = (region.image, vk_format, 0);
-            let mut attachment =
-                WriteBackAttachment::new(gpu, pass.render_pass(), layer, case.region)?;
-            let set = match pipelines.view_set(gpu, view.tiles.raw, own.view) {
-                Ok(set) => set,
-                Err(e) => {
-                    attachment.destroy(gpu);
-                    return Err(e);
-                }
-            };
-            let draw = WriteBackDraw::new(
-                (pass, attachment.framebuffer()),
-                (set, view.tiles.raw),
-                *region,
-            );
-            rig.write_back_draws.push((draw, attachment));
+        let pipelines = rig.write_back.insert(WriteBackPipelines::new(&self.gpu)?);
+        let formats = (vk::Format::R8G8B8A8_SRGB, PixelFormat::SRGB8);
+        let views = rig.image_copy.iter().zip(&rig.own_images);
+        for (region, view) in regions.into_iter().zip(views) {
+            let draw = self.write_back_draw(pipelines, formats, region, view)?;
+            rig.write_back_draws.push(draw);
         }
         Ok(())
     }

@@ -17,7 +17,7 @@ use crate::gpu::vulkan::device::{
 use crate::gpu::vulkan::frame::{copy_path, ViewPath};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
 use crate::gpu::vulkan::record::{
-    record_write_back, record_write_back_barrier, CopyBack, ViewShape, ViewTarget, WriteBackDraw,
+    record_write_back, record_write_back_barrier, ViewShape, ViewTarget, WriteBackDraw,
 };
 use crate::image::RgbaImage;
 use ash::vk;
@@ -76,18 +76,26 @@ impl VkOffline {
         params: &Params,
     ) -> Result<Vec<u32>, GpuError> {
         let image = (vk_format, app);
-        self.enhance_raw_image_copy_back(image_words, image, (camera, params), CopyBack::Region)
+        self.enhance_raw_image_copy_back(image_words, image, (camera, params), ViewPath::ImageCopy)
     }
 
-    /// `enhance_raw_image_copy` with the enhanced pixels brought back as `back` says.
+    /// `enhance_raw_image_copy` with the enhanced pixels brought back as `path` says: the
+    /// region copied back (`ViewPath::ImageCopy`) or its listed tiles drawn back
+    /// (`ViewPath::ImageCopyTiles`); any other path is refused.
     pub fn enhance_raw_image_copy_back(
         &mut self,
         image_words: &[u32],
         (vk_format, app): (vk::Format, AppImage),
         (camera, params): (&RgbaImage, &Params),
-        back: CopyBack,
+        path: ViewPath,
     ) -> Result<Vec<u32>, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
+        if !path.copies_into_own_image() {
+            return Err(GpuError::Unsupported(format!(
+                "{} is not the image-copy path",
+                path.name()
+            )));
+        }
         let format = PixelFormat::from_vk(vk_format)
             .ok_or_else(|| GpuError::Unsupported(format!("{vk_format:?}")))?;
         if copy_path(&self.gpu, format) != ViewPath::ImageCopy {
@@ -108,9 +116,9 @@ impl VkOffline {
             | vk::ImageUsageFlags::COLOR_ATTACHMENT;
         let mut image = DeviceImage::layered(&self.gpu, app.size, app.layers, vk_format, usage)?;
         let own = StorageImage::for_copies(&self.gpu, app.extent, own_format);
-        let write_back = match back {
-            CopyBack::Region => Ok(None),
-            CopyBack::Tiles => WriteBackPipelines::new(&self.gpu).map(Some),
+        let write_back = match path {
+            ViewPath::ImageCopyTiles => WriteBackPipelines::new(&self.gpu).map(Some),
+            _ => Ok(None),
         };
         let own = own.and_then(|o| write_back.map(|w| (o, w)));
         let (mut own, mut write_back) = match own {
@@ -274,8 +282,9 @@ impl VkOffline {
         done
     }
 
-    /// The write-back's draw of a view on `image` and the attachment it draws into.
-    fn write_back_draw(
+    /// The write-back's draw of `view` (enhanced in `own`) into `region` of an image of
+    /// `vk_format`, and the attachment it draws into.
+    pub(super) fn write_back_draw(
         &self,
         pipelines: &mut WriteBackPipelines,
         (vk_format, format): (vk::Format, PixelFormat),
@@ -284,11 +293,8 @@ impl VkOffline {
     ) -> Result<(WriteBackDraw, WriteBackAttachment), GpuError> {
         let gpu = &self.gpu;
         let pass = pipelines.pass(gpu, (vk_format, format))?;
-        let far = (
-            region.offset.0 as u32 + region.extent.0,
-            region.offset.1 as u32 + region.extent.1,
-        );
         let layer = (region.image, vk_format, region.array_index);
+        let far = region.far_corner();
         let mut attachment = WriteBackAttachment::new(gpu, pass.render_pass(), layer, far)?;
         match pipelines.view_set(gpu, view.tiles.raw, own.view) {
             Ok(set) => Ok((

@@ -11,4 +11,4 @@ mod write_back_draw;
 pub use recorder::Recorder;
 pub(crate) use resources::TEXELS_FORMAT;
 pub use resources::{CameraResources, Placement, ViewShape, ViewTarget};
-pub use write_back_draw::{record_write_back, record_write_back_barrier, CopyBack, WriteBackDraw};
+pub use write_back_draw::{record_write_back, record_write_back_barrier, WriteBackDraw};

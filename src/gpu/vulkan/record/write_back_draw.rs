@@ -7,15 +7,6 @@ use crate::gpu::vulkan::device::{GpuDevice, ImageRegion};
 use crate::gpu::vulkan::pipelines::{WriteBackConstants, WriteBackPass, WriteBackPipelines};
 use ash::vk;
 
-/// How the image-copy path brings a view's enhanced pixels back into the app's image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CopyBack {
-    /// vkCmdCopyImage of the whole region.
-    Region,
-    /// A draw of the tiles the enhancement listed (`record_write_back`).
-    Tiles,
-}
-
 /// What one view's write-back draws with.
 #[derive(Clone, Copy, Debug)]
 pub struct WriteBackDraw {
