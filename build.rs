@@ -142,7 +142,7 @@ fn main() {
             method_wgsl(v.method)
         );
         let parsed = write(&file, "enhance", &source, "enhance");
-        let id = table.add(&file, "enhance", false, v.pixels.in_place());
+        let id = table.add(&file, "enhance", false, Some(v.pixels));
         table.enhance.push((v, id));
         if v.gl() {
             let uniforms = glsl::write_glsl(&out, &file, &parsed, "enhance");
@@ -160,7 +160,7 @@ fn main() {
             method_wgsl(v.method)
         );
         let parsed = write(&file, "enhance", &source, "classify");
-        let id = table.add(&file, "classify", false, v.pixels.in_place());
+        let id = table.add(&file, "classify", false, Some(v.pixels));
         table.classify.push((v, id));
         if v.pixels.gl() {
             let uniforms = glsl::write_glsl(&out, &file, &parsed, "classify");
@@ -181,7 +181,7 @@ fn main() {
         };
         let sampling = if v.shared() { &shared_fetch } else { &general };
         let parsed = write(&file, "enhance", &source(sampling), "enhance");
-        let id = table.add(&file, "enhance", false, v.pixels.in_place());
+        let id = table.add(&file, "enhance", false, Some(v.pixels));
         table.ablated.push((v, id));
         if v.pixels.gl() {
             // OpenGL has no shared fetches: its variants sample as its own `enhance` does.

@@ -4,7 +4,7 @@
 //! module, the Params uniforms, the variants). An id is an index in the module list, written
 //! here with the list, never counted by hand.
 
-use crate::variants::{Ablated, Classify, Enhance};
+use crate::variants::{Ablated, Classify, Enhance, PixelAccess};
 
 /// One embedded shader as the table lists it.
 pub struct Module {
@@ -13,8 +13,10 @@ pub struct Module {
     pub entry: &'static str,
     /// Works on the camera frame (the background's descriptor set) rather than on a view.
     pub camera: bool,
-    /// The FORMAT code of an in-place variant (it reads and writes `app_image`).
+    /// The FORMAT code of a variant that writes `app_image` (PixelAccess::in_place).
     pub in_place: Option<u32>,
+    /// Reads the app's image through `app_texels` (ACCESS_SAMPLED).
+    pub sampled: bool,
 }
 
 /// The SPIR-V table: every module once in MODULES (a ShaderId is an index there), the single
@@ -39,13 +41,14 @@ impl Table {
         file: &str,
         entry: &'static str,
         camera: bool,
-        in_place: Option<u32>,
+        pixels: Option<PixelAccess>,
     ) -> usize {
         self.modules.push(Module {
             file: file.to_string(),
             entry,
             camera,
-            in_place,
+            in_place: pixels.and_then(PixelAccess::in_place),
+            sampled: pixels.is_some_and(|p| p.access == crate::interface::ACCESS_SAMPLED),
         });
         self.modules.len() - 1
     }
@@ -63,8 +66,8 @@ impl Table {
         s += "pub static MODULES: &[ShaderModule] = &[\n";
         for m in &self.modules {
             s += &format!(
-                "    spirv!(\"{}\", \"{}\", {}, {:?}),\n",
-                m.file, m.entry, m.camera, m.in_place
+                "    spirv!(\"{}\", \"{}\", {}, {:?}, {}),\n",
+                m.file, m.entry, m.camera, m.in_place, m.sampled
             );
         }
         s += "];\n";

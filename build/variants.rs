@@ -20,9 +20,10 @@ pub struct PixelAccess {
 }
 
 impl PixelAccess {
-    /// The FORMAT code of an in-place variant (it reads and writes `app_image`).
+    /// The FORMAT code of a variant that writes `app_image` (in place, or read through a
+    /// sampled view); None for the buffer accesses.
     pub fn in_place(self) -> Option<u32> {
-        (self.access == ACCESS_IN_PLACE).then_some(self.format)
+        (self.access == ACCESS_IN_PLACE || self.access == ACCESS_SAMPLED).then_some(self.format)
     }
 
     /// Whether the OpenGL backend gets a GLSL variant for it: every format but the BGRA ones
@@ -30,12 +31,14 @@ impl PixelAccess {
     /// and, for the formats with a storage texel format, in place through an image unit.
     pub fn gl(self) -> bool {
         let in_place_ok = self.access != ACCESS_IN_PLACE || in_place_texel(self.format).is_some();
-        in_place_ok && self.format & !FORMAT_SRGB_BIT != LAYOUT_BGRA8
+        let vulkan_only = self.access == ACCESS_SAMPLED;
+        in_place_ok && !vulkan_only && self.format & !FORMAT_SRGB_BIT != LAYOUT_BGRA8
     }
 }
 
 /// Every (pixel access, FORMAT code) a per-pixel pass is built for: both buffer accesses for
-/// every format, in place for the formats that have a storage texel format.
+/// every format, in place for the formats that have a storage texel format, and read through a
+/// sampled view for the 8-bit sRGB ones (Vulkan only).
 pub fn pixel_accesses() -> Vec<PixelAccess> {
     let buffers = [ACCESS_WIDE, ACCESS_NARROW]
         .into_iter()
@@ -47,7 +50,14 @@ pub fn pixel_accesses() -> Vec<PixelAccess> {
             access: ACCESS_IN_PLACE,
             format,
         });
-    buffers.chain(in_place).collect()
+    let sampled = FORMAT_CODES
+        .into_iter()
+        .filter(|&f| sampled_read(f) && in_place_texel(f).is_some())
+        .map(|format| PixelAccess {
+            access: ACCESS_SAMPLED,
+            format,
+        });
+    buffers.chain(in_place).chain(sampled).collect()
 }
 
 /// One `enhance` variant.
@@ -159,8 +169,8 @@ impl Ablated {
 }
 
 /// Every ablated variant: the paper's ABLATIONS and the perceptual method's
-/// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB (each in GLSL too, with the
-/// general sampling).
+/// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB but the sampled read (each in
+/// GLSL too, with the general sampling).
 pub fn ablated_variants() -> Vec<Ablated> {
     let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
     let methods = [
@@ -169,7 +179,7 @@ pub fn ablated_variants() -> Vec<Ablated> {
     ];
     let accesses: Vec<PixelAccess> = pixel_accesses()
         .into_iter()
-        .filter(|p| p.format == srgb8)
+        .filter(|p| p.format == srgb8 && p.access != ACCESS_SAMPLED)
         .collect();
     methods
         .into_iter()

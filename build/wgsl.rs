@@ -92,16 +92,19 @@ pub fn method_wgsl(code: u32) -> String {
 
 /// Pixel access (shaders/access_*.wgsl, ACCESS_*): wide for regions whose rows are 16-byte
 /// aligned, narrow otherwise and for the passes outside the per-pixel hot path, in place in the
-/// app's image.
+/// app's image, or read through a sampled view of it and written to the layer's image.
 pub fn access(access: u32, format: u32) -> String {
-    let name = match access {
-        ACCESS_WIDE => "wide",
-        ACCESS_NARROW => "narrow",
-        _ => "in_place",
+    let (name, texels) = match access {
+        ACCESS_WIDE => ("wide", None),
+        ACCESS_NARROW => ("narrow", None),
+        ACCESS_SAMPLED => ("in_place", Some("sampled")),
+        _ => ("in_place", Some("in_place")),
     };
     let source = read(&format!("shaders/access_{name}.wgsl"));
-    match (access, in_place_texel(format)) {
-        (ACCESS_IN_PLACE, Some(texel)) => texel_codec(texel) + &source,
+    match (texels, in_place_texel(format)) {
+        (Some(texels), Some(texel)) => {
+            texel_codec(texel) + &read(&format!("shaders/texels_{texels}.wgsl")) + &source
+        }
         _ => source,
     }
 }

@@ -3,7 +3,8 @@
 // layout (the copy path's buffer) is read from and written to the pixel it stands for, so the
 // per-pixel code is the same on both paths. The texel conversions (`texel_words`,
 // `words_texel`, written in front of this file by build.rs for the variant's texel format) are
-// exact both ways.
+// exact both ways. Where a pixel is read and written (`load_at`, `store_at`) is the access's
+// own file in front of this one: shaders/texels_in_place.wgsl or texels_sampled.wgsl.
 
 // The image position of pixel p of the region, and whether p lies in the region.
 fn pixel_position(p: u32) -> vec2<u32> {
@@ -13,11 +14,6 @@ fn pixel_position(p: u32) -> vec2<u32> {
 
 fn in_region(p: u32) -> bool {
     return p < pc.region_size.x * pc.region_size.y;
-}
-
-// The words of the pixel at image position `at` (the second only for 2-word formats).
-fn load_at(at: vec2<u32>) -> vec2<u32> {
-    return texel_words(textureLoad(app_image, at));
 }
 
 // Pixel p's words; 0 outside the region.
@@ -32,7 +28,7 @@ fn store_pixel(p: u32, w: vec2<u32>) {
     if (!in_region(p)) {
         return;
     }
-    textureStore(app_image, pixel_position(p), words_texel(w));
+    store_at(pixel_position(p), w);
 }
 
 // Words w..w+3 of the region (w a multiple of WORDS). Pixels of one row, the usual case, take

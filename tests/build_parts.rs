@@ -158,7 +158,7 @@ fn every_built_spirv_module_is_in_the_vulkan_1_0_form() {
 // --- The variants ---
 
 #[test]
-fn pixel_accesses_are_both_buffer_accesses_for_every_format_and_in_place_where_it_can() {
+fn pixel_accesses_are_both_buffer_accesses_for_every_format_in_place_and_sampled_where_they_can() {
     let all = pixel_accesses();
     let set: HashSet<PixelAccess> = all.iter().copied().collect();
     assert_eq!(set.len(), all.len(), "a pixel access twice: {all:?}");
@@ -171,6 +171,11 @@ fn pixel_accesses_are_both_buffer_accesses_for_every_format_and_in_place_where_i
             format,
         };
         assert_eq!(set.contains(&in_place), in_place_texel(format).is_some());
+        let sampled = PixelAccess {
+            access: ACCESS_SAMPLED,
+            format,
+        };
+        assert_eq!(set.contains(&sampled), sampled_read(format));
     }
     assert_eq!(
         all.len(),
@@ -179,6 +184,7 @@ fn pixel_accesses_are_both_buffer_accesses_for_every_format_and_in_place_where_i
                 .iter()
                 .filter(|&&f| in_place_texel(f).is_some())
                 .count()
+            + FORMAT_CODES.iter().filter(|&&f| sampled_read(f)).count()
     );
 }
 
@@ -257,14 +263,15 @@ fn every_variant_has_a_file_of_its_own() {
 }
 
 /// The benchmark's ablations: the paper's ABLATIONS (with shared fetches) and the perceptual
-/// method's PERCEPTUAL_ABLATIONS, each once for each access of RGBA8 sRGB, in mode enhance.
+/// method's PERCEPTUAL_ABLATIONS, each once for each access of RGBA8 sRGB but the sampled
+/// read, in mode enhance.
 #[test]
 fn the_ablated_variants_are_each_ablation_for_each_srgb8_access() {
     let all = ablated_variants();
     let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
     let accesses: Vec<PixelAccess> = pixel_accesses()
         .into_iter()
-        .filter(|p| p.format == srgb8)
+        .filter(|p| p.format == srgb8 && p.access != ACCESS_SAMPLED)
         .collect();
     assert_eq!(accesses.len(), 3, "narrow, wide and in place");
     let set: HashSet<Ablated> = all.iter().copied().collect();
@@ -304,19 +311,30 @@ fn the_ablated_variants_are_each_ablation_for_each_srgb8_access() {
 }
 
 #[test]
-fn opengl_gets_every_variant_but_the_bgra_ones_and_the_shared_fetches() {
+fn opengl_gets_every_variant_but_the_bgra_ones_the_shared_fetches_and_the_sampled_reads() {
     for v in enhance_variants() {
         let bgra = v.pixels.format & !FORMAT_SRGB_BIT == LAYOUT_BGRA8;
-        assert_eq!(v.gl(), !bgra && !v.shared, "{v:?}");
+        let sampled = v.pixels.access == ACCESS_SAMPLED;
+        assert_eq!(v.gl(), !bgra && !v.shared && !sampled, "{v:?}");
     }
     for v in classify_variants() {
         let bgra = v.pixels.format & !FORMAT_SRGB_BIT == LAYOUT_BGRA8;
-        assert_eq!(v.pixels.gl(), !bgra, "{v:?}");
+        let sampled = v.pixels.access == ACCESS_SAMPLED;
+        assert_eq!(v.pixels.gl(), !bgra && !sampled, "{v:?}");
+        let writes_app_image = v.pixels.access == ACCESS_IN_PLACE || sampled;
         assert_eq!(
             v.pixels.in_place(),
-            (v.pixels.access == ACCESS_IN_PLACE).then_some(v.pixels.format)
+            writes_app_image.then_some(v.pixels.format)
         );
     }
+    // The sampled read: the two 8-bit sRGB formats.
+    let sampled: Vec<u32> = pixel_accesses()
+        .into_iter()
+        .filter(|p| p.access == ACCESS_SAMPLED)
+        .map(|p| p.format)
+        .collect();
+    let srgb = [LAYOUT_RGBA8, LAYOUT_BGRA8].map(|l| l | FORMAT_SRGB_BIT);
+    assert_eq!(sampled, srgb);
     // classify: two per pixel access, the paper's and the perceptual method's.
     assert_eq!(classify_variants().len(), 2 * pixel_accesses().len());
 }
@@ -581,9 +599,11 @@ fn the_interface_declarations_name_every_params_field_and_the_access_bindings() 
         }
         let app_image = s.contains("var app_image: texture_storage_2d<");
         assert_eq!(app_image, p.in_place().is_some(), "{p:?}");
+        let app_texels = s.contains("var app_texels: texture_2d<f32>");
+        assert_eq!(app_texels, p.access == ACCESS_SAMPLED, "{p:?}");
         assert_eq!(
             s.contains("var<storage, read_write> pixels"),
-            p.access != ACCESS_IN_PLACE
+            p.in_place().is_none()
         );
     }
 }
@@ -651,28 +671,28 @@ fn the_table_lists_modules_singles_and_variants_with_their_ids() {
         extras: true,
         shared: false,
     };
-    let id = t.add(&v.file(), "enhance", false, pixels.in_place());
+    let id = t.add(&v.file(), "enhance", false, Some(pixels));
     t.enhance.push((v, id));
     let c = variants::Classify { pixels, method: 0 };
-    let id = t.add(&c.file(), "classify", false, pixels.in_place());
+    let id = t.add(&c.file(), "classify", false, Some(pixels));
     t.classify.push((c, id));
     let a = variants::Ablated {
         method: 0,
         pixels,
         ablate: 5,
     };
-    let id = t.add(&a.file(), "enhance", false, pixels.in_place());
+    let id = t.add(&a.file(), "enhance", false, Some(pixels));
     t.ablated.push((a, id));
     assert_eq!(
         t.source(),
         "// Generated by build.rs.
 /// Every embedded shader; a ShaderId is an index into this list.
 pub static MODULES: &[ShaderModule] = &[
-    spirv!(\"decode_camera\", \"decode\", true, None),
-    spirv!(\"decode_blur_0\", \"decode_blur\", true, None),
-    spirv!(\"enhance_m0_v2_f0_a2_e1\", \"enhance\", false, Some(0)),
-    spirv!(\"classify_f0_a2\", \"classify\", false, Some(0)),
-    spirv!(\"enhance_ablated_m0_f0_a2_x5\", \"enhance\", false, Some(0)),
+    spirv!(\"decode_camera\", \"decode\", true, None, false),
+    spirv!(\"decode_blur_0\", \"decode_blur\", true, None, false),
+    spirv!(\"enhance_m0_v2_f0_a2_e1\", \"enhance\", false, Some(0), false),
+    spirv!(\"classify_f0_a2\", \"classify\", false, Some(0), false),
+    spirv!(\"enhance_ablated_m0_f0_a2_x5\", \"enhance\", false, Some(0), false),
 ];
 /// The id of `decode_camera`.
 pub const ID_DECODE_CAMERA: usize = 0;

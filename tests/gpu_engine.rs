@@ -639,8 +639,9 @@ fn raw_words(format: PixelFormat, image: &RgbaImage) -> Vec<u32> {
 
 /// The image-copy path (the region copied out of an image without storage usage into an
 /// image of the engine's own, enhanced there by the in-place shaders, copied back whole, or
-/// its listed tiles drawn back) gives the words of the path through a buffer in every format
-/// the layer enhances, on a sub-rectangle of either layer of a 2-layer image, at widths with
+/// its listed tiles drawn back), and for the 8-bit sRGB formats the sampled read (the region
+/// read through a sampled view, its listed tiles drawn back), gives the words of the path
+/// through a buffer in every format the layer enhances, on a sub-rectangle of either layer of a 2-layer image, at widths with
 /// and without 16-byte aligned rows, with see-through tiles (left out of the draw) and
 /// without; every word outside the region is left as it was.
 #[test]
@@ -655,9 +656,14 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
     ];
     for (vk_format, format) in every_format() {
         let wpp = (format.bytes_per_pixel() / 4) as usize;
+        let sampled = format.srgb && format.bytes_per_pixel() == 4;
+        let paths: Vec<ViewPath> = [ViewPath::ImageCopy, ViewPath::ImageCopyTiles]
+            .into_iter()
+            .chain(sampled.then_some(ViewPath::SampledTiles))
+            .collect();
         for ((extent, offset, layer, sparse), back) in cases
             .into_iter()
-            .flat_map(|c| [ViewPath::ImageCopy, ViewPath::ImageCopyTiles].map(|b| (c, b)))
+            .flat_map(|c| paths.iter().map(move |&b| (c, b)))
         {
             let size = (23, 13);
             let layers = 2;
@@ -713,9 +719,10 @@ fn image_copy_matches_the_copy_path_bit_for_bit_on_any_region_and_layer() {
 }
 
 /// The listed tiles drawn back bring every 8-bit code back exactly through the sRGB
-/// attachment's encoding (the fragment stage returns the code's linear value): with no change
-/// to spend (`lambda_e` 0) a region holding all 256 codes in each channel comes back as it was,
-/// as through the buffer path.
+/// attachment's encoding (the fragment stage returns the code's linear value), and the sampled
+/// read reads every code exactly through the sampler's sRGB decode: with no change to spend
+/// (`lambda_e` 0) a region holding all 256 codes in each channel comes back as it was, as
+/// through the buffer path.
 #[test]
 fn tiles_drawn_back_keep_every_srgb_code() {
     let mut e = engine();
@@ -754,15 +761,12 @@ fn tiles_drawn_back_keep_every_srgb_code() {
             copy, words,
             "{vk_format:?}: lambda_e 0 changed the buffer path's pixels"
         );
-        let tiles = e
-            .enhance_raw_image_copy_back(
-                &words,
-                (vk_format, app),
-                (&camera, &params),
-                ViewPath::ImageCopyTiles,
-            )
-            .unwrap();
-        assert_eq!(differing(&tiles, &words), 0, "{vk_format:?}");
+        for path in [ViewPath::ImageCopyTiles, ViewPath::SampledTiles] {
+            let tiles = e
+                .enhance_raw_image_copy_back(&words, (vk_format, app), (&camera, &params), path)
+                .unwrap();
+            assert_eq!(differing(&tiles, &words), 0, "{vk_format:?} {path:?}");
+        }
     }
     assert_clean(&e);
 }

@@ -2,16 +2,18 @@
 //! and reads back: which units, buffer targets, pixel-store parameters and capabilities, and
 //! the values the check sets them to.
 
-use contrastxr::gpu::core::interface::BINDINGS;
+use contrastxr::gpu::core::interface::{BINDINGS, BINDING_APP_TEXELS};
 
 pub type Enum = u32;
 
 /// Units checked for textures, samplers and image units, and indices for indexed buffer
-/// bindings: 0 up to the highest binding number of the layer's shaders.
+/// bindings: 0 up to the highest binding number of the layer's OpenGL programs (every binding
+/// but the sampled read's, which only Vulkan has).
 pub const UNITS: usize = {
     let (mut n, mut i) = (1, 0);
     while i < BINDINGS.len() {
-        if BINDINGS[i].number as usize + 1 > n {
+        let gl = BINDINGS[i].number != BINDING_APP_TEXELS;
+        if gl && BINDINGS[i].number as usize + 1 > n {
             n = BINDINGS[i].number as usize + 1;
         }
         i += 1;

@@ -12,7 +12,7 @@
 pub enum BindingKind {
     /// A storage buffer (in the shader: `var<storage, read>` or `read_write`).
     StorageBuffer,
-    /// A sampled image (in the shader: `texture_2d<u32>`).
+    /// A sampled image (in the shader: `texture_2d<u32>` or `texture_2d<f32>`).
     SampledImage,
     /// A storage image (in the shader: `texture_storage_2d<..., read_write>`).
     StorageImage,
@@ -25,6 +25,22 @@ pub const ACCESS_NARROW: u32 = 0;
 pub const ACCESS_WIDE: u32 = 1;
 /// The app's image itself, through a storage view `app_image` (shaders/access_in_place.wgsl):
 pub const ACCESS_IN_PLACE: u32 = 2;
+/// Read from the app's image through a sampled view `app_texels` (the sampler decodes sRGB; the
+/// shader encodes it back to the stored codes), written to an image of the layer's own,
+/// `app_image`, at the pixel's place in the region (shaders/access_sampled.wgsl): no copy of
+/// the region into the layer's image before the enhancement. For the formats `sampled_read`
+/// names.
+pub const ACCESS_SAMPLED: u32 = 3;
+
+/// Whether views of a pixel format (a FORMAT code) can be read through a sampled view
+/// (ACCESS_SAMPLED): the 8-bit sRGB formats, whose runtimes refuse storage usage, so that they
+/// take the image-copy path. The shader's encode (within 0.002 of a code) rounds the
+/// sampler's decode of a code back to that code wherever the decode errs by less than 0.4 of
+/// a code; tests/gpu_engine.rs holds every code to it on the device at hand.
+pub const fn sampled_read(format: u32) -> bool {
+    let layout = format & !FORMAT_SRGB_BIT;
+    format & FORMAT_SRGB_BIT != 0 && (layout == LAYOUT_RGBA8 || layout == LAYOUT_BGRA8)
+}
 
 /// The storage texel format through which a pixel format (a FORMAT code) is enhanced in place
 /// (ACCESS_IN_PLACE); None where it is only enhanced through a buffer. Only formats every
@@ -75,13 +91,15 @@ pub const BINDING_APP_IMAGE: u32 = 6;
 /// The perceptual model of the view's frame (PERCEPTUAL_* below), which the `perceptual`
 /// method reads: f32 words.
 pub const BINDING_PERCEPTUAL: u32 = 7;
+/// The app's image layer through a sampled view of its own format (ACCESS_SAMPLED).
+pub const BINDING_APP_TEXELS: u32 = 8;
 
 fn always(decl: &str) -> Option<String> {
     Some(decl.to_string())
 }
 
 /// Every binding, in binding order.
-pub const BINDINGS: [Binding; 8] = [
+pub const BINDINGS: [Binding; 9] = [
     Binding {
         number: BINDING_CAMERA,
         name: "camera",
@@ -131,7 +149,7 @@ pub const BINDINGS: [Binding; 8] = [
         name: "app_image",
         kind: BindingKind::StorageImage,
         wgsl: |access, format| match (access, in_place_texel(format)) {
-            (ACCESS_IN_PLACE, Some(texel)) => Some(format!(
+            (ACCESS_IN_PLACE | ACCESS_SAMPLED, Some(texel)) => Some(format!(
                 " app_image: texture_storage_2d<{texel}, read_write>"
             )),
             _ => None,
@@ -144,6 +162,15 @@ pub const BINDINGS: [Binding; 8] = [
         // Fixed-size (the buffer is always PERCEPTUAL_WORDS words), so that naga proves the
         // header's constant indices in range: a run-time-sized array's are checked at run time.
         wgsl: |_, _| always("<storage, read> perceptual: array<vec4<f32>, PERCEPTUAL_WORDS / 4u>"),
+    },
+    Binding {
+        number: BINDING_APP_TEXELS,
+        name: "app_texels",
+        kind: BindingKind::SampledImage,
+        wgsl: |access, format| match access == ACCESS_SAMPLED && sampled_read(format) {
+            true => always(" app_texels: texture_2d<f32>"),
+            false => None,
+        },
     },
 ];
 
@@ -300,7 +327,7 @@ pub const PERCEPTUAL_ABLATIONS: [u32; 5] = [
 // The method codes are the method table's (src/algorithm/method/table.rs, `code`).
 
 /// The codes written into every shader as WGSL constants, by name.
-pub const CODES: [(&str, u32); 42] = [
+pub const CODES: [(&str, u32); 43] = [
     ("TILE", TILE),
     ("DECODE_ROWS", DECODE_ROWS),
     ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
@@ -324,6 +351,7 @@ pub const CODES: [(&str, u32); 42] = [
     ("ACCESS_NARROW", ACCESS_NARROW),
     ("ACCESS_WIDE", ACCESS_WIDE),
     ("ACCESS_IN_PLACE", ACCESS_IN_PLACE),
+    ("ACCESS_SAMPLED", ACCESS_SAMPLED),
     ("PERCEPTUAL_HEADER_WORDS", PERCEPTUAL_HEADER_WORDS),
     ("PERCEPTUAL_TABLE_LEN", PERCEPTUAL_TABLE_LEN),
     ("PERCEPTUAL_MAX_FREQUENCIES", PERCEPTUAL_MAX_FREQUENCIES),

@@ -7,8 +7,11 @@ pub struct ShaderModule {
     pub entry: &'static str,
     /// Works on the camera frame (the background's descriptor set) rather than on a view.
     pub camera: bool,
-    /// The FORMAT code of an in-place variant (it reads and writes `app_image`).
+    /// The FORMAT code of a variant that writes `app_image` (in place, or read through a
+    /// sampled view).
     pub in_place: Option<u32>,
+    /// Reads the app's image through `app_texels` (interface.rs ACCESS_SAMPLED).
+    pub sampled: bool,
     bytes: &'static [u8],
 }
 
@@ -27,12 +30,13 @@ impl ShaderModule {
 }
 
 macro_rules! spirv {
-    ($name:literal, $entry:literal, $camera:literal, $in_place:expr) => {
+    ($name:literal, $entry:literal, $camera:literal, $in_place:expr, $sampled:literal) => {
         ShaderModule {
             name: $name,
             entry: $entry,
             camera: $camera,
             in_place: $in_place,
+            sampled: $sampled,
             bytes: include_bytes!(concat!(env!("OUT_DIR"), "/", $name, ".spv")),
         }
     };

@@ -95,10 +95,16 @@ pub fn classify(format: u32, access: u32, method: u32) -> Result<ShaderId, NoSha
         .ok_or(NoShader)
 }
 
-/// The FORMAT code of an in-place variant (it reads and writes `app_image`); None for the
-/// others.
+/// The FORMAT code of a variant that writes `app_image` (in place, or read through a sampled
+/// view); None for the others.
 pub fn in_place_format(ShaderId(k): ShaderId) -> Option<u32> {
     modules::MODULES.get(k)?.in_place
+}
+
+/// Whether a variant reads the app's image through a sampled view (`app_texels`,
+/// interface.rs ACCESS_SAMPLED).
+pub fn reads_sampled(ShaderId(k): ShaderId) -> bool {
+    modules::MODULES.get(k).is_some_and(|m| m.sampled)
 }
 
 #[cfg(test)]

@@ -81,6 +81,29 @@ pub fn storage_view(
     unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")
 }
 
+/// A sampled view of layer `layer` of `image`, in the image's own format `vk_format` (the
+/// sampler decodes sRGB): what the sampled read (`ViewPath::SampledTiles`) reads. The image
+/// must have sampled usage.
+pub fn sampled_view(
+    gpu: &GpuDevice,
+    image: vk::Image,
+    layer: u32,
+    vk_format: vk::Format,
+) -> Result<vk::ImageView, GpuError> {
+    let range = vk::ImageSubresourceRange::default()
+        .aspect_mask(vk::ImageAspectFlags::COLOR)
+        .level_count(1)
+        .base_array_layer(layer)
+        .layer_count(1);
+    let info = vk::ImageViewCreateInfo::default()
+        .image(image)
+        .view_type(vk::ImageViewType::TYPE_2D)
+        .format(vk_format)
+        .subresource_range(range);
+    // SAFETY: a valid create info for a live image of this device (the caller's contract).
+    unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")
+}
+
 /// Whether `gpu` can store to images of `format` through its in-place storage view (and so
 /// the layer asks the runtime for storage usage on its swapchains).
 pub fn can_store(gpu: &GpuDevice, format: PixelFormat) -> bool {

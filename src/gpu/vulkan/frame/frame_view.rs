@@ -57,6 +57,7 @@ impl FrameView {
             format: self.format,
             width: self.key.extent.0,
             in_place: self.path.runs_in_place_shaders(),
+            sampled: self.path.reads_sampled(),
         }
     }
 
@@ -84,6 +85,11 @@ pub enum ViewPath {
     /// app's image (a render pass, `copy_back = "tiles"`) instead of the whole region copied
     /// back; the region is copied back whole while the draw's pipeline is being built.
     ImageCopyTiles,
+    /// Read through a sampled view of the app's image (8-bit sRGB formats, whose runtimes
+    /// refuse storage usage; the swapchain needs sampled usage), enhanced into an image of the
+    /// engine's own as in the image-copy path, and the listed tiles drawn back: no copy of the
+    /// region in either direction.
+    SampledTiles,
     /// Copied into a buffer of the engine's own, enhanced there and copied back: where the
     /// device cannot store to the image-copy path's format.
     BufferCopy,
@@ -91,12 +97,14 @@ pub enum ViewPath {
 
 impl ViewPath {
     /// Its name in the log and in a capture's JSON (`"path"`): `in-place`, `image-copy`,
-    /// `image-copy-tiles`, `copy` (the buffer path's name since before the image-copy path).
+    /// `image-copy-tiles`, `sampled-tiles`, `copy` (the buffer path's name since before the
+    /// image-copy path).
     pub fn name(self) -> &'static str {
         match self {
             ViewPath::InPlace => "in-place",
             ViewPath::ImageCopy => "image-copy",
             ViewPath::ImageCopyTiles => "image-copy-tiles",
+            ViewPath::SampledTiles => "sampled-tiles",
             ViewPath::BufferCopy => "copy",
         }
     }
@@ -105,6 +113,22 @@ impl ViewPath {
     /// whichever way it comes back).
     pub fn copies_into_own_image(self) -> bool {
         matches!(self, ViewPath::ImageCopy | ViewPath::ImageCopyTiles)
+    }
+
+    /// Whether the enhancement writes an image of the engine's own (the image-copy path and
+    /// the sampled read) rather than the app's image or a buffer.
+    pub fn writes_own_image(self) -> bool {
+        self.copies_into_own_image() || self == ViewPath::SampledTiles
+    }
+
+    /// Whether the tiles the enhancement listed are drawn back into the app's image.
+    pub fn draws_tiles_back(self) -> bool {
+        matches!(self, ViewPath::ImageCopyTiles | ViewPath::SampledTiles)
+    }
+
+    /// Whether its passes read the app's image through a sampled view (ACCESS_SAMPLED).
+    pub fn reads_sampled(self) -> bool {
+        self == ViewPath::SampledTiles
     }
 
     /// Whether its passes are the in-place variants (on the app's image or on the engine's

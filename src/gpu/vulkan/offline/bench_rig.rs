@@ -84,6 +84,7 @@ impl VkOffline {
             format,
             width: case.region.0,
             in_place: true,
+            sampled: false,
         };
         for _ in &rig.images {
             rig.own_images
@@ -123,6 +124,7 @@ impl VkOffline {
             format: PixelFormat::SRGB8,
             width: case.region.0,
             in_place: true,
+            sampled: false,
         };
         for image in &rig.images {
             let view = storage_view(gpu, image.raw, 0, PixelFormat::SRGB8)?;

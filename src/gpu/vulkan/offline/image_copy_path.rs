@@ -7,6 +7,7 @@
 
 use super::vk_offline::VkOffline;
 use crate::algorithm::params::Params;
+use crate::gpu::core::interface::sampled_read;
 use crate::gpu::core::CameraRect;
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::conv::VkFormat;
@@ -14,7 +15,7 @@ use crate::gpu::vulkan::device::{
     barrier, record_first_layout, record_image_region_copy, record_layout_barriers, DeviceImage,
     GpuBuffer, GpuError, ImageRegion, StorageImage,
 };
-use crate::gpu::vulkan::frame::{copy_path, ViewPath};
+use crate::gpu::vulkan::frame::{copy_path, sampled_view, ViewPath};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
 use crate::gpu::vulkan::record::{
     record_write_back, record_write_back_barrier, ViewShape, ViewTarget, WriteBackDraw,
@@ -56,12 +57,14 @@ fn all_layers(
         )
 }
 
-/// The image-copy path's run: the image, its formats and the write-back's pipelines (None:
-/// the region is copied back whole).
+/// The image-copy path's run: the image, its formats, the write-back's pipelines (None: the
+/// region is copied back whole) and the sampled view of the image's layer the sampled read
+/// reads (None: the region is copied in).
 type RunImageCopy<'a> = (
     AppImage,
     (vk::Format, PixelFormat),
     Option<&'a mut WriteBackPipelines>,
+    Option<vk::ImageView>,
 );
 
 impl VkOffline {
@@ -79,9 +82,11 @@ impl VkOffline {
         self.enhance_raw_image_copy_back(image_words, image, (camera, params), ViewPath::ImageCopy)
     }
 
-    /// `enhance_raw_image_copy` with the enhanced pixels brought back as `path` says: the
-    /// region copied back (`ViewPath::ImageCopy`) or its listed tiles drawn back
-    /// (`ViewPath::ImageCopyTiles`); any other path is refused.
+    /// `enhance_raw_image_copy` with the enhanced pixels brought in and back as `path` says:
+    /// the region copied back (`ViewPath::ImageCopy`) or its listed tiles drawn back
+    /// (`ViewPath::ImageCopyTiles`), or the region read through a sampled view instead of
+    /// copied in, and its listed tiles drawn back (`ViewPath::SampledTiles`, 8-bit sRGB
+    /// formats); any other path is refused.
     pub fn enhance_raw_image_copy_back(
         &mut self,
         image_words: &[u32],
@@ -90,7 +95,7 @@ impl VkOffline {
         path: ViewPath,
     ) -> Result<Vec<u32>, GpuError> {
         params.validate().map_err(GpuError::Unsupported)?;
-        if !path.copies_into_own_image() {
+        if !path.writes_own_image() {
             return Err(GpuError::Unsupported(format!(
                 "{} is not the image-copy path",
                 path.name()
@@ -98,6 +103,11 @@ impl VkOffline {
         }
         let format = PixelFormat::from_vk(vk_format)
             .ok_or_else(|| GpuError::Unsupported(format!("{vk_format:?}")))?;
+        if path.reads_sampled() && !sampled_read(format.shader_code()) {
+            return Err(GpuError::Unsupported(format!(
+                "{vk_format:?} is not read through a sampled view"
+            )));
+        }
         if copy_path(&self.gpu, format) != ViewPath::ImageCopy {
             return Err(GpuError::Unsupported(format!(
                 "{vk_format:?} is not enhanced through an image copy on this device"
@@ -113,17 +123,31 @@ impl VkOffline {
         let own_format = format.image_copy_format().expect("checked by copy_path");
         let usage = vk::ImageUsageFlags::TRANSFER_SRC
             | vk::ImageUsageFlags::TRANSFER_DST
-            | vk::ImageUsageFlags::COLOR_ATTACHMENT;
+            | vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::SAMPLED;
         let mut image = DeviceImage::layered(&self.gpu, app.size, app.layers, vk_format, usage)?;
         let own = StorageImage::for_copies(&self.gpu, app.extent, own_format);
-        let write_back = match path {
-            ViewPath::ImageCopyTiles => WriteBackPipelines::new(&self.gpu).map(Some),
-            _ => Ok(None),
+        let write_back = match path.draws_tiles_back() {
+            true => WriteBackPipelines::new(&self.gpu).map(Some),
+            false => Ok(None),
         };
         let own = own.and_then(|o| write_back.map(|w| (o, w)));
         let (mut own, mut write_back) = match own {
             Ok(o) => o,
             Err(e) => {
+                image.destroy(&self.gpu);
+                return Err(e);
+            }
+        };
+        let sampled = match path.reads_sampled() {
+            true => sampled_view(&self.gpu, image.raw, app.layer, vk_format).map(Some),
+            false => Ok(None),
+        };
+        let sampled = match sampled {
+            Ok(v) => v,
+            Err(e) => {
+                write_back.iter_mut().for_each(|w| w.destroy(&self.gpu));
+                own.destroy(&self.gpu);
                 image.destroy(&self.gpu);
                 return Err(e);
             }
@@ -138,7 +162,7 @@ impl VkOffline {
         let result = staging.and_then(|mut staging| {
             let bytes: Vec<u8> = image_words.iter().flat_map(|w| w.to_le_bytes()).collect();
             let run = staging.write(&bytes).and_then(|_| {
-                let run = (app, (vk_format, format), write_back.as_mut());
+                let run = (app, (vk_format, format), write_back.as_mut(), sampled);
                 self.run_image_copy(&image, &own, &staging, run, (camera, params))
             });
             let out = run.and_then(|_| {
@@ -156,20 +180,24 @@ impl VkOffline {
         if let Some(w) = write_back.as_mut() {
             w.destroy(&self.gpu);
         }
+        if let Some(v) = sampled {
+            // SAFETY: made above; the submission that used it has finished.
+            unsafe { self.gpu.device.destroy_image_view(v, None) };
+        }
         own.destroy(&self.gpu);
         image.destroy(&self.gpu);
         result
     }
 
     /// Uploads every layer, prepares the background, runs the image-copy path on the region
-    /// (copied back whole, or its tiles drawn back with `write_back`) and reads every layer
-    /// back, in one submission.
+    /// (copied in, or read through `sampled`; copied back whole, or its tiles drawn back with
+    /// `write_back`) and reads every layer back, in one submission.
     fn run_image_copy(
         &self,
         image: &DeviceImage,
         own: &StorageImage,
         staging: &GpuBuffer,
-        (app, (vk_format, format), write_back): RunImageCopy,
+        (app, (vk_format, format), write_back, sampled): RunImageCopy,
         (camera, params): (&RgbaImage, &Params),
     ) -> Result<(), GpuError> {
         let gpu = &self.gpu;
@@ -177,9 +205,16 @@ impl VkOffline {
             format,
             width: app.extent.0,
             in_place: true,
+            sampled: sampled.is_some(),
         };
         let (mut bg, mut view) = self.stage_shaped(camera, (shape, app.extent.1))?;
         self.engine.bind_app_image(gpu, &view, own.view);
+        if let Some(texels) = sampled {
+            self.engine.bind_app_texels(gpu, &view, texels);
+            // The shaders read the app's image at the region's place, and write the engine's
+            // image at the pixel's place in the region.
+            view.origin = (app.offset.0 as u32, app.offset.1 as u32);
+        }
         let mapping = params.camera_mapping();
         let region = ImageRegion {
             image: image.raw,
@@ -243,10 +278,18 @@ impl VkOffline {
             );
             // What the layer records for a view through the image-copy path.
             record_layout_barriers(gpu, cmd, &[region], true);
-            let write = (S::TRANSFER, A::TRANSFER_WRITE);
-            record_first_layout(gpu, cmd, &[own.image.raw], general, write);
-            record_image_region_copy(gpu, cmd, &region, own.image.raw, true);
-            barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+            match sampled {
+                Some(_) => {
+                    let write = (S::COMPUTE_SHADER, A::SHADER_READ | A::SHADER_WRITE);
+                    record_first_layout(gpu, cmd, &[own.image.raw], general, write);
+                }
+                None => {
+                    let write = (S::TRANSFER, A::TRANSFER_WRITE);
+                    record_first_layout(gpu, cmd, &[own.image.raw], general, write);
+                    record_image_region_copy(gpu, cmd, &region, own.image.raw, true);
+                    barrier(gpu, cmd, S::TRANSFER, S::COMPUTE_SHADER | S::TRANSFER);
+                }
+            }
             let rect = CameraRect::sampled_by(&[mapping], bg.size);
             self.engine
                 .record_background(gpu, cmd, &bg, params, &rect)?;

@@ -119,6 +119,7 @@ impl VkOffline {
             format,
             width: region.0,
             in_place: true,
+            sampled: false,
         };
         let (mut bg, mut view) = self.stage_shaped(camera, (shape, region.1))?;
         self.engine.bind_app_image(gpu, &view, storage);

@@ -131,6 +131,7 @@ impl VkOffline {
             format,
             width: region.0,
             in_place: false,
+            sampled: false,
         };
         self.stage_shaped(camera, (shape, region.1))
     }

@@ -11,9 +11,9 @@ use crate::algorithm::params::{Params, ViewMode};
 use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::interface::TILE;
 use crate::gpu::core::interface::{
-    in_place_texel, BindingKind, BINDING_APP_IMAGE, BINDING_BLURRED, BINDING_BLURRED_TEXELS,
-    BINDING_CAMERA, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_SOURCE, BINDING_TILES,
-    PERCEPTUAL_WORDS, TILE_LIST_HEADER_WORDS,
+    in_place_texel, BindingKind, BINDING_APP_IMAGE, BINDING_APP_TEXELS, BINDING_BLURRED,
+    BINDING_BLURRED_TEXELS, BINDING_CAMERA, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_SOURCE,
+    BINDING_TILES, PERCEPTUAL_WORDS, TILE_LIST_HEADER_WORDS,
 };
 use crate::gpu::core::shader_ids::{self, ShaderId};
 use crate::gpu::core::shares_fetches;
@@ -224,6 +224,7 @@ impl Recorder {
             format,
             width: region.0,
             in_place: false,
+            sampled: false,
         };
         self.create_shaped_view(gpu, (shape, region.1), background, placement)
     }
@@ -280,6 +281,7 @@ impl Recorder {
             region,
             format,
             in_place: shape.in_place,
+            sampled: shape.in_place && shape.sampled,
             origin: (0, 0),
             pixels,
             tiles,
@@ -332,6 +334,23 @@ impl Recorder {
         }
         self.bind_texels(gpu, view, background.texels_view);
         view.camera_size = background.size;
+    }
+
+    /// Binds the app's image layer a sampled view reads (ACCESS_SAMPLED): a view in the
+    /// image's own format with sampled usage, in GENERAL while the enhancement runs. The set
+    /// must not be in use.
+    pub fn bind_app_texels(&self, gpu: &GpuDevice, view: &ViewTarget, image_view: vk::ImageView) {
+        let image = [vk::DescriptorImageInfo::default()
+            .image_view(image_view)
+            .image_layout(vk::ImageLayout::GENERAL)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(view.set)
+            .dst_binding(BINDING_APP_TEXELS)
+            .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+            .image_info(&image);
+        // SAFETY: the set and the image view are valid; the caller guarantees the set is not
+        // in use.
+        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
     }
 
     /// Points a view's `blurred_texels` at `texels` (the background frame's image, or a mapped

@@ -2,7 +2,7 @@
 //! buffers and as a sampled image), a view's target (its pixels and tile list), where they
 //! live, and how they are allocated and freed.
 
-use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
+use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_SAMPLED, ACCESS_WIDE};
 use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError};
@@ -88,12 +88,16 @@ pub struct ViewShape {
     pub format: PixelFormat,
     pub width: u32,
     pub in_place: bool,
+    /// In place, read through a sampled view of the app's image and written to the layer's
+    /// (ACCESS_SAMPLED; bound with `Recorder::bind_app_texels` beside `bind_app_image`).
+    pub sampled: bool,
 }
 
 impl ViewShape {
     /// The pixel access of its per-pixel passes (interface.rs ACCESS_*).
     pub fn access(&self) -> u32 {
         match (self.in_place, rows_aligned(self.width, self.format)) {
+            (true, _) if self.sampled => ACCESS_SAMPLED,
             (true, _) => ACCESS_IN_PLACE,
             (false, true) => ACCESS_WIDE,
             (false, false) => ACCESS_NARROW,
@@ -108,6 +112,9 @@ pub struct ViewTarget {
     /// Enhanced in place: the shaders read and write the app's image (bound with
     /// `Recorder::bind_app_image`, at `origin` in it), and `pixels` is a stand-in.
     pub in_place: bool,
+    /// Read through a sampled view of the app's image (`in_place` too): the shaders write the
+    /// layer's image bound as the app's, and read the app's (`Recorder::bind_app_texels`).
+    pub sampled: bool,
     /// Where the region starts in the app's image (in place only).
     pub origin: (u32, u32),
     /// The region's raw pixels in `format`, rows tightly packed (the copy path).
@@ -147,6 +154,7 @@ impl ViewTarget {
             format: self.format,
             width: self.region.0,
             in_place: self.in_place,
+            sampled: self.sampled,
         }
     }
 

@@ -203,6 +203,7 @@ impl SessionGraphics for VulkanSession {
             format,
             width,
             in_place: in_place || image_copy,
+            sampled: false,
         };
         if let Ok(ids) = Recorder::shaders_for(params, [shape]) {
             self.engine.request(&ids);
