@@ -498,6 +498,7 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     // of later compute work); on a GPU it times them; tiles times them everywhere.
     let cpu = v["device"].as_str().is_some_and(|d| d.contains("llvmpipe"));
     assert_eq!(r["frame_image_copy_tiles_ms"].is_null(), cpu, "{r}");
+    assert_eq!(r["frame_sampled_tiles_ms"].is_null(), cpu, "{r}");
     let v = small_bench(&["--path", "tiles"]);
     let r = &v["results"][0];
     let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
@@ -505,6 +506,10 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     let tiles_over_in_place = ms("frame_image_copy_tiles_ms") / ms("frame_in_place_ms");
     let ratio = ms("image_copy_tiles_in_place_ratio");
     assert!((ratio - tiles_over_in_place).abs() < 1e-9 * ratio);
+    assert!(ms("frame_sampled_tiles_ms") > 0.0, "{r}");
+    let sampled_over_in_place = ms("frame_sampled_tiles_ms") / ms("frame_in_place_ms");
+    let ratio = ms("sampled_tiles_in_place_ratio");
+    assert!((ratio - sampled_over_in_place).abs() < 1e-9 * ratio);
     let bad = cli(&["bench", "--path", "buffer"], &[]);
     assert_eq!(bad.status.code(), Some(2));
     let bad = cli(&["bench", "--content", "sparse"], &[]);

@@ -36,9 +36,12 @@ pub fn usage() -> String {
          sRGB swapchains without storage usage; its copies alone, ic copies ms; ic/frame and\n\
          ic/ip: its ratio to the frame through buffer copies and in place; img tiles ms: the\n\
          same path with only the tiles the enhancement listed drawn back into the app's image\n\
-         instead of the whole region copied back, it/ip its ratio to the frame in place; with\n\
-         image-copy and all). all times the three. tiles: all, with img tiles also on a CPU\n\
-         driver, which all and image-copy leave it out on: once a draw has run there,\n\
+         instead of the whole region copied back, it/ip its ratio to the frame in place; smp\n\
+         tiles ms: the region read through a sampled view of the app's image instead of copied\n\
+         in, enhanced into the layer's image and its listed tiles drawn back, st/ip its ratio\n\
+         to the frame in place; with image-copy and all). all times the three. tiles: all,\n\
+         with img tiles and smp tiles also on a CPU driver, which all and image-copy leave\n\
+         them out on: once a draw has run there,\n\
          lavapipe's timestamps no longer bracket compute work, so the other columns of a tiles\n\
          run on a CPU driver are not to be read.\n\
          Validation is off (CONTRASTXR_VK_VALIDATION is ignored: it would distort the timing).\n\
@@ -285,7 +288,7 @@ fn report(
 
 fn header() -> String {
     format!(
-        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>12} {:>6} {:>13} {:>8}",
+        "{:>11} {:>5} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9} {:>11} {:>9} {:>9} {:>7} {:>10} {:>7} {:>9} {:>6} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>12} {:>6} {:>12} {:>6} {:>13} {:>8}",
         "size",
         "views",
         "content",
@@ -310,6 +313,8 @@ fn header() -> String {
         "ic/ip",
         "img tiles ms",
         "it/ip",
+        "smp tiles ms",
+        "st/ip",
         "ablation",
         "enh/none"
     )
@@ -318,7 +323,7 @@ fn header() -> String {
 fn row(r: &BenchResult, vs_none: Option<f64>) -> String {
     let (w, h) = r.case.region;
     format!(
-        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>12} {:>6} {:>13} {:>8}\n",
+        "{:>11} {:>5} {:>8} {:>6.1} {:>9.3} {:>9} {:>9.3} {:>9.3} {:>11.3} {:>9.3} {:>9.3} {:>7.2} {:>10} {:>7.2} {:>9.0} {:>6.2} {:>11} {:>8} {:>11} {:>13} {:>8} {:>6} {:>12} {:>6} {:>12} {:>6} {:>13} {:>8}\n",
         format!("{w}x{h}"),
         r.case.views,
         r.case.content.name(),
@@ -343,6 +348,8 @@ fn row(r: &BenchResult, vs_none: Option<f64>) -> String {
         optional(r.image_copy_in_place_ratio(), 2),
         optional(r.frame_image_copy_tiles_ms, 3),
         optional(r.image_copy_tiles_in_place_ratio(), 2),
+        optional(r.frame_sampled_tiles_ms, 3),
+        optional(r.sampled_tiles_in_place_ratio(), 2),
         r.case.ablation.name(),
         optional(vs_none, 2),
     )
@@ -383,6 +390,8 @@ fn to_json(device: &str, results: &[(BenchResult, Option<f64>)]) -> String {
                 "image_copy_in_place_ratio": r.image_copy_in_place_ratio(),
                 "frame_image_copy_tiles_ms": r.frame_image_copy_tiles_ms,
                 "image_copy_tiles_in_place_ratio": r.image_copy_tiles_in_place_ratio(),
+                "frame_sampled_tiles_ms": r.frame_sampled_tiles_ms,
+                "sampled_tiles_in_place_ratio": r.sampled_tiles_in_place_ratio(),
                 "live_frame_ms": r.live_frame_ms(),
                 "live_ratio": r.live_frame_ms() / r.copy_ms,
                 "camera_width": CAMERA_SIZE.0,

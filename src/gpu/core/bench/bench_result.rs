@@ -29,6 +29,10 @@ pub struct BenchResult {
     /// app's images (a render pass) instead of the whole regions copied back (None where
     /// `frame_image_copy_ms` is, and on OpenGL).
     pub frame_image_copy_tiles_ms: Option<f64>,
+    /// The sampled read: each region read through a sampled view of the app's image (no copy
+    /// in), enhanced into the engine's image and its listed tiles drawn back (None where
+    /// `frame_image_copy_tiles_ms` is).
+    pub frame_sampled_tiles_ms: Option<f64>,
     /// Per camera frame: decode and blur on the camera grid (once, whatever the views).
     pub background_ms: f64,
     /// Fraction of pixels that are foreground (neither black nor alpha 0).
@@ -64,6 +68,11 @@ impl BenchResult {
     /// The image-copy path with the tiles drawn back over the frame in place.
     pub fn image_copy_tiles_in_place_ratio(&self) -> Option<f64> {
         Some(self.frame_image_copy_tiles_ms? / self.frame_in_place_ms?)
+    }
+
+    /// The sampled read with the tiles drawn back over the frame in place.
+    pub fn sampled_tiles_in_place_ratio(&self) -> Option<f64> {
+        Some(self.frame_sampled_tiles_ms? / self.frame_in_place_ms?)
     }
 
     /// The frame through the image-copy path over the frame through buffer copies.

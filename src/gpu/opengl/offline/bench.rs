@@ -161,6 +161,7 @@ impl GlOffline {
             frame_image_copy_ms: None,
             image_copy_copies_ms: None,
             frame_image_copy_tiles_ms: None,
+            frame_sampled_tiles_ms: None,
             background_ms: ms[UPLOAD],
             foreground,
         })

@@ -30,8 +30,9 @@ enum Span {
     FrameImageCopy,
     ImageCopyCopies,
     FrameImageCopyTiles,
+    FrameSampledTiles,
 }
-const SPANS: usize = 10;
+const SPANS: usize = 11;
 const QUERIES: u32 = 2 * SPANS as u32;
 
 impl VkOffline {
@@ -50,6 +51,9 @@ impl VkOffline {
             own_images: Vec::new(),
             write_back: None,
             write_back_draws: Vec::new(),
+            sampled: Vec::new(),
+            sampled_views: Vec::new(),
+            sampled_draws: Vec::new(),
             queries: vk::QueryPool::null(),
         };
         let ablation = case.ablation;
@@ -100,6 +104,8 @@ impl VkOffline {
                 .then_some(ms[Span::ImageCopyCopies as usize]),
             frame_image_copy_tiles_ms: (!rig.write_back_draws.is_empty())
                 .then_some(ms[Span::FrameImageCopyTiles as usize]),
+            frame_sampled_tiles_ms: (!rig.sampled_draws.is_empty())
+                .then_some(ms[Span::FrameSampledTiles as usize]),
             background_ms: ms[Span::Background as usize],
             foreground,
         })
@@ -205,6 +211,37 @@ impl VkOffline {
         Ok(())
     }
 
+    /// What the layer records per display frame through the sampled read: each region read
+    /// through a sampled view of its app image, enhanced into the engine's image and its listed
+    /// tiles drawn back. Nothing without such views.
+    fn record_frame_sampled(
+        &self,
+        cmd: vk::CommandBuffer,
+        rig: &Rig,
+        (regions, params): (&[ImageRegion], &Params),
+    ) -> Result<(), GpuError> {
+        if rig.sampled_draws.is_empty() {
+            return Ok(());
+        }
+        use vk::{AccessFlags as A, PipelineStageFlags as S};
+        let gpu = &self.gpu;
+        record_layout_barriers(gpu, cmd, regions, true);
+        let own: Vec<vk::Image> = rig.own_images.iter().map(|i| i.image.raw).collect();
+        let write = (S::COMPUTE_SHADER, A::SHADER_READ | A::SHADER_WRITE);
+        record_first_layout(gpu, cmd, &own, vk::ImageLayout::GENERAL, write);
+        let mapping = params.camera_mapping();
+        for v in &rig.sampled {
+            self.engine.record_enhance(gpu, cmd, v, params, &mapping)?;
+        }
+        let pipelines = rig.write_back.as_ref().expect("made with the draws");
+        record_write_back_barrier(gpu, cmd);
+        for (draw, _) in &rig.sampled_draws {
+            record_write_back(gpu, cmd, pipelines, draw);
+        }
+        record_layout_barriers(gpu, cmd, regions, false);
+        Ok(())
+    }
+
     fn timestamp(&self, cmd: vk::CommandBuffer, pool: vk::QueryPool, query: u32) {
         // SAFETY: cmd is recording; the query was reset in this command buffer. BOTTOM_OF_PIPE:
         // written once all earlier commands are complete.
@@ -221,8 +258,9 @@ impl VkOffline {
     /// One run: background, 16-byte copy, copy (which also restores the pristine pixels),
     /// enhancement, then (after restoring the app images' content, untimed) the layer's whole
     /// frame and its image copies alone, in place, through the image-copy path (with its
-    /// copies alone) and through the image-copy path with the tiles drawn back. Returns each Span's GPU time in milliseconds (the
-    /// 16-byte copy's is 0 where the rows do not allow it).
+    /// copies alone), through the image-copy path with the tiles drawn back and through the
+    /// sampled read. Returns each Span's GPU time in milliseconds (the 16-byte copy's is 0
+    /// where the rows do not allow it).
     fn timed_run(&mut self, rig: &Rig, params: &Params) -> Result<[f64; SPANS], GpuError> {
         let all = vk::PipelineStageFlags::ALL_COMMANDS;
         let views: Vec<&ViewTarget> = rig.views.iter().collect();
@@ -288,6 +326,11 @@ impl VkOffline {
             self.restore_images(cmd, rig, &regions);
             timed(Span::FrameImageCopyTiles, &mut || {
                 self.record_frame_image_copy(cmd, rig, image_copy, (true, true))
+            })?;
+            barrier(gpu, cmd, all, all);
+            self.restore_images(cmd, rig, &regions);
+            timed(Span::FrameSampledTiles, &mut || {
+                self.record_frame_sampled(cmd, rig, image_copy)
             })
         })?;
         let mut ticks = [0u64; QUERIES as usize];

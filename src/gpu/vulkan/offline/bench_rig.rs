@@ -12,7 +12,7 @@ use crate::gpu::vulkan::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use crate::gpu::vulkan::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError, VkResultExt};
-use crate::gpu::vulkan::frame::{can_store, copy_path, storage_view, ViewPath};
+use crate::gpu::vulkan::frame::{can_store, copy_path, sampled_view, storage_view, ViewPath};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
 use crate::gpu::vulkan::record::{
     CameraResources, Placement, ViewShape, ViewTarget, WriteBackDraw,
@@ -41,6 +41,11 @@ pub(super) struct Rig {
     /// attachment of its app image.
     pub(super) write_back: Option<WriteBackPipelines>,
     pub(super) write_back_draws: Vec<(WriteBackDraw, WriteBackAttachment)>,
+    /// Views through the sampled read (with the draws: one per app image, reading a sampled
+    /// view of it in `sampled_views` and writing its image in `own_images`), and their draws.
+    pub(super) sampled: Vec<ViewTarget>,
+    pub(super) sampled_views: Vec<vk::ImageView>,
+    pub(super) sampled_draws: Vec<(WriteBackDraw, WriteBackAttachment)>,
     pub(super) queries: vk::QueryPool,
 }
 
@@ -58,12 +63,15 @@ impl Rig {
 
 /// An app-like image of the bench's format (R8G8B8A8_SRGB, as the content); with storage
 /// usage and a mutable format when the case times the frame in place, as the layer asks of the
-/// runtime for its swapchains.
+/// runtime for its swapchains, and sampled usage when it times the sampled read.
 fn app_image(gpu: &GpuDevice, case: &BenchCase) -> Result<DeviceImage, GpuError> {
     let mut usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
         | vk::ImageUsageFlags::TRANSFER_SRC
         | vk::ImageUsageFlags::TRANSFER_DST;
     let mut flags = vk::ImageCreateFlags::empty();
+    if case.tiles {
+        usage |= vk::ImageUsageFlags::SAMPLED;
+    }
     if case.in_place && can_store(gpu, PixelFormat::SRGB8) {
         usage |= vk::ImageUsageFlags::STORAGE;
         flags |= vk::ImageCreateFlags::MUTABLE_FORMAT | vk::ImageCreateFlags::EXTENDED_USAGE;
@@ -103,15 +111,38 @@ impl VkOffline {
         }
     }
 
-    /// The image-copy views' write-back by drawing: a draw per view into its app image.
+    /// The image-copy views' write-back by drawing: a draw per view into its app image; and
+    /// the sampled read's views with theirs.
     fn add_write_back_draws(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<(), GpuError> {
         let regions = rig.regions(case.region);
         let pipelines = rig.write_back.insert(WriteBackPipelines::new(&self.gpu)?);
         let formats = (vk::Format::R8G8B8A8_SRGB, PixelFormat::SRGB8);
         let views = rig.image_copy.iter().zip(&rig.own_images);
-        for (region, view) in regions.into_iter().zip(views) {
-            let draw = self.write_back_draw(pipelines, formats, region, view)?;
+        for (region, view) in regions.iter().zip(views) {
+            let draw = self.write_back_draw(pipelines, formats, *region, view)?;
             rig.write_back_draws.push(draw);
+        }
+        let background = rig.background.as_ref().expect("made before");
+        let shape = ViewShape {
+            format: PixelFormat::SRGB8,
+            width: case.region.0,
+            in_place: true,
+            sampled: true,
+        };
+        for (region, own) in regions.into_iter().zip(&rig.own_images) {
+            let gpu = &self.gpu;
+            let texels = sampled_view(gpu, region.image, 0, formats.0)?;
+            rig.sampled_views.push(texels);
+            let target = (shape, case.region.1);
+            let target =
+                self.engine
+                    .create_shaped_view(gpu, target, background, Placement::DEVICE)?;
+            self.engine.bind_app_image(gpu, &target, own.view);
+            self.engine.bind_app_texels(gpu, &target, texels);
+            rig.sampled.push(target);
+            let view = rig.sampled.last().expect("pushed above");
+            let draw = self.write_back_draw(pipelines, formats, region, (view, own))?;
+            rig.sampled_draws.push(draw);
         }
         Ok(())
     }
@@ -261,18 +292,23 @@ impl VkOffline {
         for mut v in rig.in_place.drain(..) {
             self.engine.destroy_view(gpu, &mut v);
         }
-        for mut v in rig.image_copy.drain(..) {
+        for mut v in rig.image_copy.drain(..).chain(rig.sampled.drain(..)) {
             self.engine.destroy_view(gpu, &mut v);
         }
         if let Some(mut pipelines) = rig.write_back.take() {
-            for (_, mut attachment) in rig.write_back_draws.drain(..) {
+            let draws = rig.write_back_draws.drain(..);
+            for (_, mut attachment) in draws.chain(rig.sampled_draws.drain(..)) {
                 attachment.destroy(gpu);
             }
             // Its pool frees the views' sets.
             pipelines.destroy(gpu);
         }
         rig.own_images.iter_mut().for_each(|i| i.destroy(gpu));
-        for v in rig.storage_views.drain(..) {
+        for v in rig
+            .storage_views
+            .drain(..)
+            .chain(rig.sampled_views.drain(..))
+        {
             // SAFETY: made by this rig on this device; every submission was waited for.
             unsafe { gpu.device.destroy_image_view(v, None) };
         }
