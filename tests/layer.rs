@@ -242,6 +242,52 @@ fn listed_tiles_drawn_back_reach_the_app_images() {
     }
 }
 
+/// `copy_in = "sampled"` on sRGB swapchains: the layer adds sampled usage to them, reads each
+/// region through a sampled view of the app's image instead of copying it in, and draws the
+/// listed tiles back, on the app's device under validation; the captures
+/// (`"path": "sampled-tiles"`, read back from the app's images after the draw) conform to the
+/// CPU reference.
+#[test]
+fn sampled_reads_reach_the_app_images() {
+    for (format, layout) in [
+        ("R8G8B8A8_SRGB", "side-by-side"),
+        ("B8G8R8A8_SRGB", "array"),
+    ] {
+        let tag = format!("layer-sampled-{format}");
+        let extra = [
+            ("CONTRASTXR_IN_PLACE", "on"),
+            ("CONTRASTXR_COPY_IN", "sampled"),
+            ("CONTRASTXR_PIPELINES", "wait"),
+        ];
+        let Some((run, _)) = small_client_run(&tag, (format, layout, "8"), &extra, "sampled-tiles")
+        else {
+            return;
+        };
+        let line =
+            "2 of them with the listed tiles drawn back, 2 of those read through a sampled view";
+        assert!(run.stderr.contains(line), "{}", run.describe());
+    }
+}
+
+/// A sampled read whose tiles cannot be drawn back (fault point `write-back-build`) copies the
+/// region in and back, as the image-copy path does (`"path": "image-copy"`, still enhanced
+/// and conforming).
+#[test]
+fn sampled_reads_that_cannot_draw_back_copy_the_region_in_and_back() {
+    let extra = [
+        ("CONTRASTXR_IN_PLACE", "on"),
+        ("CONTRASTXR_COPY_IN", "sampled"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_FAULT", "write-back-build"),
+    ];
+    let tag = "layer-sampled-fault";
+    let format = ("R8G8B8A8_SRGB", "array", "8");
+    let Some((run, _)) = small_client_run(tag, format, &extra, "image-copy") else {
+        return;
+    };
+    assert!(run.stderr.contains("the listed tiles cannot be drawn back"));
+}
+
 /// A write-back that cannot be built (fault point `write-back-build`): the views copy the
 /// region back (`"path": "image-copy"`, still enhanced and conforming), and the layer says
 /// why in one line.

@@ -2,7 +2,7 @@
 //! writes [`Settings`]. The file, the environment, `config print` and `contrastxr set` all go
 //! through this table.
 
-use super::settings::{CopyBack, InPlace, Settings};
+use super::settings::{CopyBack, CopyIn, InPlace, Settings};
 use super::value::{short_f64, Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
 use crate::algorithm::perceptual_settings::Frequency;
@@ -752,6 +752,21 @@ pub const KEYS: &[Key] = &[
             Ok(())
         },
         get: |s| Value::Text(s.copy_back.name().into()),
+    },
+    Key {
+        name: "copy_in",
+        env: "CONTRASTXR_COPY_IN",
+        env_negated: false,
+        kind: Kind::Text,
+        doc: "Vulkan, for a view enhanced through an image of the layer's own: region: the region copied into it first; sampled: on 8-bit sRGB swapchains (sampled usage added to them), the region read through a sampled view of the app's image instead, and only the tiles the enhancement listed drawn back, whatever copy_back says",
+        set: |s, v| {
+            s.copy_in = match v {
+                Value::Text(t) => CopyIn::parse(&t).ok_or(format!("{t:?} is not region or sampled"))?,
+                other => return Err(format!("{other} is not region or sampled")),
+            };
+            Ok(())
+        },
+        get: |s| Value::Text(s.copy_in.name().into()),
     },
     Key {
         name: "capture_dir",

@@ -26,6 +26,6 @@ pub use load::{load, load_for};
 pub use origin::{Origin, Table};
 pub use path::Env;
 pub use resolve::{check, is_off, resolve, resolve_for, resolve_with, Resolved, Source, Who};
-pub use settings::{Capture, CopyBack, InPlace, Registration, Settings, EYES};
+pub use settings::{Capture, CopyBack, CopyIn, InPlace, Registration, Settings, EYES};
 pub use value::{Kind, Value};
 pub use watch::Live;

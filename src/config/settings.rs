@@ -34,6 +34,7 @@ pub struct Settings {
     /// How the image-copy path brings a view back into the app's image (read when a swapchain
     /// is created).
     pub copy_back: CopyBack,
+    pub copy_in: CopyIn,
     /// `pipelines = "wait"`: the first frame that needs a pipeline waits for its build instead
     /// of passing through.
     pub wait_for_pipelines: bool,
@@ -119,6 +120,33 @@ impl CopyBack {
     }
 }
 
+/// How a view enhanced through an image of the layer's own gets the app's pixels (`copy_in`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CopyIn {
+    /// The region copied into the layer's image first (vkCmdCopyImage).
+    Region,
+    /// Read through a sampled view of the app's image (8-bit sRGB), the listed tiles drawn
+    /// back.
+    Sampled,
+}
+
+impl CopyIn {
+    pub fn parse(text: &str) -> Option<CopyIn> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "region" => Some(CopyIn::Region),
+            "sampled" => Some(CopyIn::Sampled),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            CopyIn::Region => "region",
+            CopyIn::Sampled => "sampled",
+        }
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -129,6 +157,7 @@ impl Default for Settings {
             quad_layers: false,
             in_place: InPlace::Auto,
             copy_back: CopyBack::Region,
+            copy_in: CopyIn::Region,
             wait_for_pipelines: false,
             params: Params::default(),
             background: "v4l2:auto".into(),

@@ -133,6 +133,7 @@ fn work_item(
         layered: sc.info.array_size > 1,
         in_place: sc.info.in_place,
         attachment: sc.info.attachment,
+        sampled: sc.info.sampled,
         mapping,
         pixels_per_degree: region
             .pixels_per_degree

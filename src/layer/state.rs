@@ -137,6 +137,9 @@ pub struct SwapchainInfo {
     /// The app made it with colour-attachment usage: the image-copy path may draw its tiles
     /// back into it (`copy_back = "tiles"`).
     pub attachment: bool,
+    /// The app made it with sampled usage, or the layer added it (`copy_in = "sampled"`): the
+    /// image-copy path may read it through a sampled view.
+    pub sampled: bool,
 }
 
 impl SwapchainInfo {
@@ -159,6 +162,9 @@ impl SwapchainInfo {
             attachment: app_info
                 .usage_flags
                 .contains(xr::SwapchainUsageFlags::COLOR_ATTACHMENT),
+            sampled: app_info
+                .usage_flags
+                .contains(xr::SwapchainUsageFlags::SAMPLED),
         }
     }
 

@@ -83,6 +83,23 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                     ));
                 }
             }
+            let mut sampled = false;
+            let sampled_usage = plan.as_ref().and_then(|p| p.sampled);
+            if let Some(extra) = sampled_usage.filter(|_| result.into_raw() < 0) {
+                let mut wanted = *app_info;
+                wanted.usage_flags |= needed | extra;
+                // SAFETY: the app's create info with more usage bits.
+                result = unsafe {
+                    create_downstream(next.create_swapchain, session, &wanted, swapchain)
+                };
+                sampled = result.into_raw() >= 0;
+                usage_granted |= sampled;
+                if !sampled {
+                    log::once(&format!("no-sampled-{format}"), &format!(
+                        "the runtime refused sampled usage on swapchains of format {format} ({result:?}): their views are copied into the layer's image (copy_in = \"sampled\" needs it)"
+                    ));
+                }
+            }
             if pixel.is_some() && !usage_granted {
                 let mut wanted = *app_info;
                 wanted.usage_flags |= needed;
@@ -104,11 +121,9 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             }
             // Every swapchain is tracked (with its session's dispatch); only processable ones are touched.
             if result.into_raw() >= 0 {
-                let state = SwapchainState::new(
-                    session,
-                    next,
-                    SwapchainInfo::new(app_info, pixel, usage_granted, in_place),
-                );
+                let mut info = SwapchainInfo::new(app_info, pixel, usage_granted, in_place);
+                info.sampled |= sampled;
+                let state = SwapchainState::new(session, next, info);
                 // SAFETY: written by the successful create call.
                 let handle = unsafe { *swapchain };
                 state::registry()

@@ -44,6 +44,7 @@ pub(super) fn plan(s: &SessionState, info: &xr::SwapchainCreateInfo) -> Option<P
         pixel,
         needed: graphics.needed_usage(),
         in_place: graphics.in_place_usage(pixel, info, &s.settings),
+        sampled: graphics.sampled_usage(pixel, &s.settings),
         copy_path: graphics.copy_path(pixel, &s.settings),
         per_frame: graphics
             .path_chosen_per_frame()
@@ -56,6 +57,8 @@ pub(super) struct Plan {
     pub(super) pixel: PixelFormat,
     pub(super) needed: xr::SwapchainUsageFlags,
     pub(super) in_place: Option<xr::SwapchainUsageFlags>,
+    /// Usage to add where in place is refused, for the sampled read.
+    pub(super) sampled: Option<xr::SwapchainUsageFlags>,
     /// The path's name for views not enhanced in place (`SessionGraphics::copy_path`).
     pub(super) copy_path: &'static str,
     /// The `in_place` setting where the path is chosen at each frame (OpenGL).
@@ -137,6 +140,7 @@ mod tests {
             },
             needed: xr::SwapchainUsageFlags::TRANSFER_SRC,
             in_place: Some(xr::SwapchainUsageFlags::UNORDERED_ACCESS),
+            sampled: None,
             copy_path: "image-copy",
             format_name: "R8G8B8A8_SRGB".into(),
             per_frame,

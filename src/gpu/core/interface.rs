@@ -27,7 +27,7 @@ pub const ACCESS_WIDE: u32 = 1;
 pub const ACCESS_IN_PLACE: u32 = 2;
 /// Read from the app's image through a sampled view `app_texels` (the sampler decodes sRGB; the
 /// shader encodes it back to the stored codes), written to an image of the layer's own,
-/// `app_image`, at the pixel's place in the region (shaders/access_sampled.wgsl): no copy of
+/// `app_image`, at the pixel's place in the region (shaders/texels_sampled.wgsl): no copy of
 /// the region into the layer's image before the enhancement. For the formats `sampled_read`
 /// names.
 pub const ACCESS_SAMPLED: u32 = 3;

@@ -24,6 +24,8 @@ pub struct ViewImage {
     pub in_place: bool,
     /// The image has colour-attachment usage (the image-copy path may draw into it).
     pub attachment: bool,
+    /// The image has sampled usage (the image-copy path may read it through a sampled view).
+    pub sampled: bool,
     /// Display uv (v from the view's top edge) to camera uv.
     pub mapping: CameraMapping,
     /// The view's display pixels per degree, from its field of view and width
@@ -73,6 +75,15 @@ pub trait SessionGraphics: Send {
         info: &xr::SwapchainCreateInfo,
         settings: &Settings,
     ) -> Option<xr::SwapchainUsageFlags>;
+    /// Usage to add, where in place is refused, so views of a swapchain are read through a
+    /// sampled view (Vulkan, `copy_in = "sampled"`; None: not wanted).
+    fn sampled_usage(
+        &self,
+        _format: PixelFormat,
+        _settings: &Settings,
+    ) -> Option<xr::SwapchainUsageFlags> {
+        None
+    }
     /// How views of a swapchain of `format` that is not enhanced in place are enhanced, by
     /// the name of its path (`copy`: through a buffer; `image-copy`: through an image of the
     /// layer's own), with `settings` as at the swapchain's creation.

@@ -1,6 +1,7 @@
-//! Storage views of the app's image layers that views are enhanced in place in: made at a
-//! layer's first in-place frame, kept while its swapchain lives (the images are the
-//! swapchain's), destroyed with it or with the engine.
+//! Views of the app's image layers: storage views that views are enhanced in place in, and
+//! sampled views that the sampled read reads (`ViewPath::SampledTiles`): made at a layer's
+//! first such frame, kept while its swapchain lives (the images are the swapchain's),
+//! destroyed with it or with the engine.
 
 use super::frame_view::{FrameView, ViewPath};
 use crate::gpu::core::PixelFormat;
@@ -9,12 +10,13 @@ use crate::gpu::vulkan::device::{GpuDevice, GpuError, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
 
-/// (swapchain, image, array layer): one storage view each.
+/// (swapchain, image, array layer): one view of each kind each.
 type Layer = (u64, vk::Image, u32);
 
 #[derive(Default)]
 pub struct AppImageViews {
     views: HashMap<Layer, vk::ImageView>,
+    sampled: HashMap<Layer, vk::ImageView>,
 }
 
 impl AppImageViews {
@@ -29,20 +31,37 @@ impl AppImageViews {
         Ok(v)
     }
 
+    /// The sampled view of `view`'s image layer, in the image's own format.
+    pub fn get_sampled(
+        &mut self,
+        gpu: &GpuDevice,
+        view: &FrameView,
+    ) -> Result<vk::ImageView, GpuError> {
+        let layer = (view.key.swapchain, view.image, view.key.array_index);
+        if let Some(&v) = self.sampled.get(&layer) {
+            return Ok(v);
+        }
+        let v = sampled_view(gpu, view.image, view.key.array_index, view.vk_format)?;
+        self.sampled.insert(layer, v);
+        Ok(v)
+    }
+
     /// Destroys the views of a swapchain's images. The GPU must be done with them.
     pub fn forget(&mut self, gpu: &GpuDevice, swapchain: u64) {
-        self.views.retain(|&(s, _, _), &mut v| {
-            if s == swapchain {
-                // SAFETY: made by `get` on this device; the GPU no longer uses it.
-                unsafe { gpu.device.destroy_image_view(v, None) };
-            }
-            s != swapchain
-        });
+        for views in [&mut self.views, &mut self.sampled] {
+            views.retain(|&(s, _, _), &mut v| {
+                if s == swapchain {
+                    // SAFETY: made by `get` on this device; the GPU no longer uses it.
+                    unsafe { gpu.device.destroy_image_view(v, None) };
+                }
+                s != swapchain
+            });
+        }
     }
 
     /// Destroys every view. The GPU must be done with them.
     pub fn destroy(&mut self, gpu: &GpuDevice) {
-        for (_, v) in self.views.drain() {
+        for (_, v) in self.views.drain().chain(self.sampled.drain()) {
             // SAFETY: made by `get` on this device; the GPU no longer uses it.
             unsafe { gpu.device.destroy_image_view(v, None) };
         }

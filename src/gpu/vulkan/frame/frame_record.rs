@@ -28,13 +28,15 @@ impl FrameRunner {
     }
 
     /// Copies the region into its view's buffer or image, or back (`out` false; views
-    /// through a copy only).
+    /// through a copy only, and a sampled read's only while its tiles cannot be drawn back:
+    /// it then takes the image-copy path).
     fn copy_region(&self, item: &FrameView, out: bool) {
         let view = &self.views[&item.key];
         let cmd = self.commands.cmd;
         match (item.path, &view.own) {
             (ViewPath::InPlace, _) => {}
-            (p, Some(own)) if p.copies_into_own_image() => {
+            (ViewPath::SampledTiles, _) if self.drawn_back(item) => {}
+            (p, Some(own)) if p.writes_own_image() => {
                 record_image_region_copy(&self.gpu, cmd, &item.region(), own.image.raw, out)
             }
             _ => record_region_copy(&self.gpu, cmd, &item.region(), &view.target.pixels, out),
@@ -42,12 +44,12 @@ impl FrameRunner {
     }
 
     /// Where the view's pixels are while its passes run, for the images among them: the
-    /// app's image in place, the engine's own image on the image-copy path (the region at
-    /// its origin); None for a view through a buffer.
+    /// app's image in place, the engine's own image on the image-copy path and the sampled
+    /// read (the region at its origin); None for a view through a buffer.
     fn work_region(&self, item: &FrameView) -> Option<ImageRegion> {
         match (item.path, &self.views[&item.key].own) {
             (ViewPath::InPlace, _) => Some(item.region()),
-            (p, Some(own)) if p.copies_into_own_image() => Some(ImageRegion {
+            (p, Some(own)) if p.writes_own_image() => Some(ImageRegion {
                 image: own.image.raw,
                 array_index: 0,
                 offset: (0, 0),
@@ -58,10 +60,16 @@ impl FrameRunner {
     }
 
     /// Copies the view's current pixels (the image its passes run on, else the view's
-    /// buffer) into a capture buffer.
-    fn copy_to_capture(&self, item: &FrameView, dst: &GpuBuffer) {
+    /// buffer) into a capture buffer; before the enhancement (`before`), a sampled read's
+    /// from the app's image, which its passes read.
+    fn copy_to_capture(&self, item: &FrameView, dst: &GpuBuffer, before: bool) {
         let cmd = self.commands.cmd;
-        if let Some(region) = self.work_region(item) {
+        let sampled = item.path == ViewPath::SampledTiles && self.drawn_back(item);
+        let region = match before && sampled {
+            true => Some(item.region()),
+            false => self.work_region(item),
+        };
+        if let Some(region) = region {
             record_region_copy(&self.gpu, cmd, &region, dst, true);
             return;
         }
@@ -75,7 +83,7 @@ impl FrameRunner {
     fn own_image_barriers(&self, items: &[FrameView]) {
         let images: Vec<vk::Image> = items
             .iter()
-            .filter(|i| i.path.copies_into_own_image())
+            .filter(|i| i.path.writes_own_image())
             .filter_map(|i| self.views[&i.key].own.as_ref().map(|o| o.image.raw))
             .collect();
         if images.is_empty() {
@@ -134,7 +142,7 @@ impl FrameRunner {
             S::COMPUTE_SHADER | S::TRANSFER,
         );
         for (i, (before, _)) in items.iter().zip(staging) {
-            self.copy_to_capture(i, before);
+            self.copy_to_capture(i, before, true);
         }
         if !staging.is_empty() {
             // The capture copies read `pixels` before the enhancement writes it.
@@ -173,7 +181,7 @@ impl FrameRunner {
         for (i, (_, after)) in items.iter().zip(staging) {
             let drawn = self.drawn_back(i);
             if !drawn {
-                self.copy_to_capture(i, after);
+                self.copy_to_capture(i, after, false);
             }
             later.push(drawn.then_some(after));
         }
@@ -195,10 +203,11 @@ impl FrameRunner {
     }
 
     /// `item` with the path this frame took: a view whose tiles are to be drawn back was
-    /// copied back whole while the draw's pipeline was being built.
+    /// copied back whole (a sampled read's also copied in) while the draw's pipeline was
+    /// being built.
     pub(super) fn as_taken(&self, item: &FrameView) -> FrameView {
         let mut view = item.clone();
-        if view.path == ViewPath::ImageCopyTiles && !self.drawn_back(item) {
+        if view.path.draws_tiles_back() && !self.drawn_back(item) {
             view.path = ViewPath::ImageCopy;
         }
         view

@@ -71,7 +71,8 @@ pub struct FrameRunner {
     pub(super) frame: u64,
     /// Lit pixels drawn over the views after the enhancement.
     pub(super) overlays: Overlays,
-    /// Storage views of the app's image layers enhanced in place.
+    /// Views of the app's image layers: storage views for in place, sampled views for the
+    /// sampled read.
     pub(super) app_views: AppImageViews,
     /// The image-copy path's tiles drawn back: pipelines, attachments, the frame's draws.
     pub(super) tiles: TileWriteBack,
@@ -231,7 +232,7 @@ impl FrameRunner {
     /// Makes the view of `item` exist, evicting the least recently used view that is not one
     /// of `in_use` (the items of this submission) when the engine holds MAX_VIEWS already.
     fn ensure_view(&mut self, item: &FrameView, in_use: &[FrameView]) -> Result<(), GpuError> {
-        let image_copy = item.path.copies_into_own_image();
+        let image_copy = item.path.writes_own_image();
         if self
             .views
             .get(&item.key)
@@ -298,16 +299,6 @@ impl FrameRunner {
         if let Some(mut v) = oldest.and_then(|k| self.views.remove(&k)) {
             v.destroy(&self.engine, &self.gpu);
         }
-    }
-
-    /// Points an in-place view at this frame's image of its swapchain (the GPU is idle).
-    fn bind_app_image(&mut self, item: &FrameView) -> Result<(), GpuError> {
-        let image_view = self.app_views.get(&self.gpu, item)?;
-        let target = &mut self.views.get_mut(&item.key).expect("ensured").target;
-        // Inside the image: the layer checked the region against the swapchain's size.
-        target.origin = (item.key.offset.0 as u32, item.key.offset.1 as u32);
-        self.engine.bind_app_image(&self.gpu, target, image_view);
-        Ok(())
     }
 
     /// Drops the buffers of a destroyed swapchain's views.
@@ -378,6 +369,9 @@ impl FrameRunner {
         }
         for item in items.iter().filter(|i| i.path == ViewPath::InPlace) {
             self.bind_app_image(item)?;
+        }
+        for item in items.iter().filter(|i| i.path.reads_sampled()) {
+            self.bind_app_texels(item)?;
         }
         self.bind_texels(items);
         let wait = options.wait_for_pipelines;

@@ -3,6 +3,7 @@
 //! the captures, on the app's device and queue; and the pipelines' warm-up on CPU drivers, which
 //! runs frames.
 
+mod app_bindings;
 mod app_views;
 mod frame_record;
 mod frame_runner;

@@ -4,7 +4,7 @@
 //! whole: the same pixels), each view's descriptor set and each app image layer's attachment.
 //! The frame's draws are recorded in frame_record.rs.
 
-use super::frame_view::{FrameView, ViewKey, ViewPath};
+use super::frame_view::{FrameView, ViewKey};
 use super::prepared_view::PreparedView;
 use crate::gpu::vulkan::device::{GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
@@ -44,7 +44,7 @@ impl TileWriteBack {
         views: &mut HashMap<ViewKey, PreparedView>,
     ) {
         self.draws.clear();
-        for item in items.iter().filter(|i| i.path == ViewPath::ImageCopyTiles) {
+        for item in items.iter().filter(|i| i.path.draws_tiles_back()) {
             let view = views.get_mut(&item.key).expect("ensured before");
             match self.draw(gpu, (item, wait), view) {
                 Ok(Some(draw)) => {

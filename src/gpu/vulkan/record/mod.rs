@@ -2,6 +2,7 @@
 //! background resources and records the passes (decode and blur of the background, classify,
 //! finish_tiles, enhance) into a command buffer its caller owns.
 
+mod image_bindings;
 mod passes;
 mod recorder;
 mod resources;

@@ -11,9 +11,8 @@ use crate::algorithm::params::{Params, ViewMode};
 use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::interface::TILE;
 use crate::gpu::core::interface::{
-    in_place_texel, BindingKind, BINDING_APP_IMAGE, BINDING_APP_TEXELS, BINDING_BLURRED,
-    BINDING_BLURRED_TEXELS, BINDING_CAMERA, BINDING_PERCEPTUAL, BINDING_PIXELS, BINDING_SOURCE,
-    BINDING_TILES, PERCEPTUAL_WORDS, TILE_LIST_HEADER_WORDS,
+    in_place_texel, BindingKind, BINDING_BLURRED, BINDING_CAMERA, BINDING_PERCEPTUAL,
+    BINDING_PIXELS, BINDING_SOURCE, BINDING_TILES, PERCEPTUAL_WORDS, TILE_LIST_HEADER_WORDS,
 };
 use crate::gpu::core::shader_ids::{self, ShaderId};
 use crate::gpu::core::shares_fetches;
@@ -302,22 +301,6 @@ impl Recorder {
         Ok(view)
     }
 
-    /// Binds the app's image layer a view in place is enhanced in (a storage view of it, in
-    /// GENERAL while the enhancement runs). The set must not be in use.
-    pub fn bind_app_image(&self, gpu: &GpuDevice, view: &ViewTarget, image_view: vk::ImageView) {
-        let image = [vk::DescriptorImageInfo::default()
-            .image_view(image_view)
-            .image_layout(vk::ImageLayout::GENERAL)];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(view.set)
-            .dst_binding(BINDING_APP_IMAGE)
-            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-            .image_info(&image);
-        // SAFETY: the set and the image view are valid; the caller guarantees the set is not
-        // in use.
-        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
-    }
-
     /// Points a view's descriptor set at a (new) background frame. The set must not be in use.
     pub fn bind(&self, gpu: &GpuDevice, view: &mut ViewTarget, background: &CameraResources) {
         let buffers = [
@@ -334,38 +317,6 @@ impl Recorder {
         }
         self.bind_texels(gpu, view, background.texels_view);
         view.camera_size = background.size;
-    }
-
-    /// Binds the app's image layer a sampled view reads (ACCESS_SAMPLED): a view in the
-    /// image's own format with sampled usage, in GENERAL while the enhancement runs. The set
-    /// must not be in use.
-    pub fn bind_app_texels(&self, gpu: &GpuDevice, view: &ViewTarget, image_view: vk::ImageView) {
-        let image = [vk::DescriptorImageInfo::default()
-            .image_view(image_view)
-            .image_layout(vk::ImageLayout::GENERAL)];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(view.set)
-            .dst_binding(BINDING_APP_TEXELS)
-            .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
-            .image_info(&image);
-        // SAFETY: the set and the image view are valid; the caller guarantees the set is not
-        // in use.
-        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
-    }
-
-    /// Points a view's `blurred_texels` at `texels` (the background frame's image, or a mapped
-    /// one of its size, in GENERAL). The set must not be in use.
-    pub fn bind_texels(&self, gpu: &GpuDevice, view: &ViewTarget, texels: vk::ImageView) {
-        let image = [vk::DescriptorImageInfo::default()
-            .image_view(texels)
-            .image_layout(vk::ImageLayout::GENERAL)];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(view.set)
-            .dst_binding(BINDING_BLURRED_TEXELS)
-            .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
-            .image_info(&image);
-        // SAFETY: the set and the view are valid; the caller guarantees the set is not in use.
-        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
     }
 
     /// Points a view's copy source (used only by `record_copy`) at `source`.

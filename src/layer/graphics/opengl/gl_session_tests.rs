@@ -87,6 +87,7 @@ fn sessions_ended_with_their_context_elsewhere_leave_a_bounded_number_of_objects
         layered: false,
         in_place: false,
         attachment: true,
+        sampled: true,
         mapping: params.camera_mapping(),
         pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };
@@ -166,6 +167,7 @@ fn a_finished_build_is_linked_without_reading_the_cache_in_a_frame_call() {
         layered: false,
         in_place: false,
         attachment: true,
+        sampled: true,
         mapping: params.camera_mapping(),
         pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
     };

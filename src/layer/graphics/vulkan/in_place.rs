@@ -6,7 +6,8 @@
 //! device cannot store to that image's format. `in_place = "auto"` leaves CPU drivers on the
 //! buffer path: there a copy is a memcpy and storage-image access costs more.
 
-use crate::config::{CopyBack, InPlace};
+use crate::config::{CopyBack, CopyIn, InPlace};
+use crate::gpu::core::interface::sampled_read;
 use crate::gpu::vulkan::frame::can_store;
 use crate::gpu::{GpuDevice, PixelFormat, ViewPath};
 use crate::layer::ffi::find_in_chain;
@@ -31,6 +32,7 @@ pub fn wanted(gpu: &GpuDevice, settings: &Settings) -> bool {
 pub fn copy_path(gpu: &GpuDevice, settings: &Settings, format: PixelFormat) -> ViewPath {
     match wanted(gpu, settings) {
         true => match crate::gpu::vulkan::frame::copy_path(gpu, format) {
+            ViewPath::ImageCopy if sampled_wanted(settings, format) => ViewPath::SampledTiles,
             ViewPath::ImageCopy if tiles_wanted(settings) => ViewPath::ImageCopyTiles,
             path => path,
         },
@@ -42,6 +44,13 @@ pub fn copy_path(gpu: &GpuDevice, settings: &Settings, format: PixelFormat) -> V
 /// (`copy_back = "tiles"`), on swapchains the app made with colour-attachment usage.
 pub fn tiles_wanted(settings: &Settings) -> bool {
     settings.copy_back == CopyBack::Tiles
+}
+
+/// Whether the image-copy path reads views of `format` through a sampled view of the app's
+/// image and draws their listed tiles back (`copy_in = "sampled"`, 8-bit sRGB formats), on
+/// swapchains with sampled and colour-attachment usage.
+pub fn sampled_wanted(settings: &Settings, format: PixelFormat) -> bool {
+    settings.copy_in == CopyIn::Sampled && sampled_read(format.shader_code())
 }
 
 /// The usage bits to add for in place on a swapchain of `format`, if the session's settings,

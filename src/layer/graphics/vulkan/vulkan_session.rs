@@ -4,6 +4,7 @@
 
 use super::{app_vulkan, in_place};
 use crate::algorithm::params::Params;
+use crate::gpu::core::interface::sampled_read;
 use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::frame::{copy_path, FrameOptions, FrameRunner, PipelinesReady};
@@ -29,6 +30,9 @@ pub struct VulkanSession {
     /// Whether the image-copy path draws its listed tiles back (`copy_back = "tiles"` at the
     /// last swapchain's creation) rather than copying the region back.
     tiles: AtomicBool,
+    /// Whether the image-copy path reads 8-bit sRGB views through a sampled view
+    /// (`copy_in = "sampled"` at the last swapchain's creation).
+    sampled: AtomicBool,
 }
 
 /// The session's graphics for a Vulkan binding (None: not one).
@@ -45,6 +49,7 @@ pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bo
         Ok(engine) => Bound::Enhanced(Box::new(VulkanSession {
             image_copy: AtomicBool::new(in_place::wanted(&engine.gpu, settings)),
             tiles: AtomicBool::new(in_place::tiles_wanted(settings)),
+            sampled: AtomicBool::new(settings.copy_in == crate::config::CopyIn::Sampled),
             engine,
             ready: None,
         })),
@@ -105,6 +110,11 @@ impl VulkanSession {
         match (v.in_place, self.image_copy.load(Ordering::Relaxed)) {
             (true, _) => ViewPath::InPlace,
             (false, true) => match copy_path(&self.engine.gpu, v.format) {
+                ViewPath::ImageCopy
+                    if v.attachment && v.sampled && self.reads_sampled(v.format) =>
+                {
+                    ViewPath::SampledTiles
+                }
                 ViewPath::ImageCopy if v.attachment && self.tiles.load(Ordering::Relaxed) => {
                     ViewPath::ImageCopyTiles
                 }
@@ -112,6 +122,12 @@ impl VulkanSession {
             },
             (false, false) => ViewPath::BufferCopy,
         }
+    }
+
+    /// Whether views of `format` are read through a sampled view where their swapchain
+    /// allows it.
+    fn reads_sampled(&self, format: PixelFormat) -> bool {
+        self.sampled.load(Ordering::Relaxed) && sampled_read(format.shader_code())
     }
 
     fn frame_view(&self, v: &ViewImage) -> FrameView {
@@ -165,7 +181,18 @@ impl SessionGraphics for VulkanSession {
         self.image_copy.store(wanted, Ordering::Relaxed);
         let tiles = in_place::tiles_wanted(settings);
         self.tiles.store(tiles, Ordering::Relaxed);
+        let sampled = settings.copy_in == crate::config::CopyIn::Sampled;
+        self.sampled.store(sampled, Ordering::Relaxed);
         in_place::added_usage(&self.engine.gpu, settings, format, info)
+    }
+
+    fn sampled_usage(
+        &self,
+        format: PixelFormat,
+        settings: &Settings,
+    ) -> Option<xr::SwapchainUsageFlags> {
+        let path = in_place::copy_path(&self.engine.gpu, settings, format);
+        (path == ViewPath::SampledTiles).then_some(xr::SwapchainUsageFlags::SAMPLED)
     }
 
     fn copy_path(&self, format: PixelFormat, settings: &Settings) -> &'static str {
@@ -203,7 +230,7 @@ impl SessionGraphics for VulkanSession {
             format,
             width,
             in_place: in_place || image_copy,
-            sampled: false,
+            sampled: !in_place && image_copy && self.reads_sampled(format),
         };
         if let Ok(ids) = Recorder::shaders_for(params, [shape]) {
             self.engine.request(&ids);
@@ -310,14 +337,16 @@ impl SessionGraphics for VulkanSession {
         }
         let paths: Vec<ViewPath> = views.iter().map(|v| self.path(v)).collect();
         let count = |p: ViewPath| paths.iter().filter(|&&q| q == p).count();
+        let tiles = count(ViewPath::ImageCopyTiles) + count(ViewPath::SampledTiles);
         lines.push((
             "first-frame-path",
             format!(
-                "views enhanced in place: {} of {} (the others through a copy: {} through an image of the layer's own, {} of them with the listed tiles drawn back; {} through a buffer)",
+                "views enhanced in place: {} of {} (the others through a copy: {} through an image of the layer's own, {} of them with the listed tiles drawn back, {} of those read through a sampled view instead of copied in; {} through a buffer)",
                 count(ViewPath::InPlace),
                 views.len(),
-                count(ViewPath::ImageCopy) + count(ViewPath::ImageCopyTiles),
-                count(ViewPath::ImageCopyTiles),
+                count(ViewPath::ImageCopy) + tiles,
+                tiles,
+                count(ViewPath::SampledTiles),
                 count(ViewPath::BufferCopy),
             ),
         ));
