@@ -101,7 +101,7 @@ pub const POINTS: [(&str, &str); 25] = [
     ),
     (
         "write-back-build",
-        "building the image-copy path's write-back (copy_back = \"tiles\") for a format",
+        "building the image-copy path's write-back (copy_back = \"tiles\", copy_in = \"sampled\") for a format",
     ),
     (
         "short-minute",

@@ -144,7 +144,9 @@ impl CaptureJob {
             "rect": {"x": item.key.offset.0, "y": item.key.offset.1, "width": w, "height": h},
             "image_array_index": item.key.array_index,
             // How the view was enhanced: "in-place" in the app's image, "image-copy" (out into an
-            // image of the layer's own and back), or "copy" (out into a buffer and back).
+            // image of the layer's own and back), "image-copy-tiles" (its listed tiles drawn
+            // back), "sampled-tiles" (read through a sampled view, its listed tiles drawn
+            // back), or "copy" (out into a buffer and back).
             "path": captured.path,
             "camera_mapping": item.mapping.rows,
             "pixels_per_degree": item.pixels_per_degree,

@@ -10,6 +10,7 @@ mod device_image;
 mod error;
 mod gpu_device;
 mod image_copy;
+mod layer_view;
 mod physical_devices;
 mod pinned_libraries;
 mod storage_image;
@@ -24,5 +25,6 @@ pub use image_copy::{
     record_first_layout, record_image_region_copy, record_layout_barriers, record_region_copy,
     ImageRegion,
 };
+pub use layer_view::layer_view;
 pub use physical_devices::{physical_devices, PhysicalDeviceInfo};
 pub(crate) use storage_image::StorageImage;

@@ -6,7 +6,7 @@
 use super::frame_view::{FrameView, ViewPath};
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::conv::VkFormat;
-use crate::gpu::vulkan::device::{GpuDevice, GpuError, VkResultExt};
+use crate::gpu::vulkan::device::{layer_view, GpuDevice, GpuError, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
 
@@ -41,7 +41,8 @@ impl AppImageViews {
         if let Some(&v) = self.sampled.get(&layer) {
             return Ok(v);
         }
-        let v = sampled_view(gpu, view.image, view.key.array_index, view.vk_format)?;
+        // In the image's own format: the sampler decodes sRGB.
+        let v = layer_view(gpu, view.image, view.key.array_index, view.vk_format)?;
         self.sampled.insert(layer, v);
         Ok(v)
     }
@@ -96,29 +97,6 @@ pub fn storage_view(
         true => info.push_next(&mut usage),
         false => info,
     };
-    // SAFETY: a valid create info for a live image of this device (the caller's contract).
-    unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")
-}
-
-/// A sampled view of layer `layer` of `image`, in the image's own format `vk_format` (the
-/// sampler decodes sRGB): what the sampled read (`ViewPath::SampledTiles`) reads. The image
-/// must have sampled usage.
-pub fn sampled_view(
-    gpu: &GpuDevice,
-    image: vk::Image,
-    layer: u32,
-    vk_format: vk::Format,
-) -> Result<vk::ImageView, GpuError> {
-    let range = vk::ImageSubresourceRange::default()
-        .aspect_mask(vk::ImageAspectFlags::COLOR)
-        .level_count(1)
-        .base_array_layer(layer)
-        .layer_count(1);
-    let info = vk::ImageViewCreateInfo::default()
-        .image(image)
-        .view_type(vk::ImageViewType::TYPE_2D)
-        .format(vk_format)
-        .subresource_range(range);
     // SAFETY: a valid create info for a live image of this device (the caller's contract).
     unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")
 }

@@ -15,7 +15,7 @@ mod tile_write_back;
 mod warm_up;
 
 pub(crate) use app_views::storage_view;
-pub use app_views::{can_store, copy_path, sampled_view};
+pub use app_views::{can_store, copy_path};
 pub use frame_runner::{FrameOptions, FrameRunner, PipelinesReady};
 
 pub use frame_view::{CapturedView, FrameView, ViewKey, ViewPath};

@@ -7,12 +7,12 @@ use super::vk_offline::VkOffline;
 use crate::gpu::core::bench::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE};
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::conv::VkFormat;
-use crate::gpu::vulkan::device::StorageImage;
+use crate::gpu::vulkan::device::{layer_view, StorageImage};
 use crate::gpu::vulkan::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use crate::gpu::vulkan::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError, VkResultExt};
-use crate::gpu::vulkan::frame::{can_store, copy_path, sampled_view, storage_view, ViewPath};
+use crate::gpu::vulkan::frame::{can_store, copy_path, storage_view, ViewPath};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
 use crate::gpu::vulkan::record::{
     CameraResources, Placement, ViewShape, ViewTarget, WriteBackDraw,
@@ -131,7 +131,7 @@ impl VkOffline {
         };
         for (region, own) in regions.into_iter().zip(&rig.own_images) {
             let gpu = &self.gpu;
-            let texels = sampled_view(gpu, region.image, 0, formats.0)?;
+            let texels = layer_view(gpu, region.image, 0, formats.0)?;
             rig.sampled_views.push(texels);
             let target = (shape, case.region.1);
             let target =

@@ -12,10 +12,10 @@ use crate::gpu::core::CameraRect;
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::device::{
-    barrier, record_first_layout, record_image_region_copy, record_layout_barriers, DeviceImage,
-    GpuBuffer, GpuError, ImageRegion, StorageImage,
+    barrier, layer_view, record_first_layout, record_image_region_copy, record_layout_barriers,
+    DeviceImage, GpuBuffer, GpuError, ImageRegion, StorageImage,
 };
-use crate::gpu::vulkan::frame::{copy_path, sampled_view, ViewPath};
+use crate::gpu::vulkan::frame::{copy_path, ViewPath};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
 use crate::gpu::vulkan::record::{
     record_write_back, record_write_back_barrier, ViewShape, ViewTarget, WriteBackDraw,
@@ -140,7 +140,7 @@ impl VkOffline {
             }
         };
         let sampled = match path.reads_sampled() {
-            true => sampled_view(&self.gpu, image.raw, app.layer, vk_format).map(Some),
+            true => layer_view(&self.gpu, image.raw, app.layer, vk_format).map(Some),
             false => Ok(None),
         };
         let sampled = match sampled {

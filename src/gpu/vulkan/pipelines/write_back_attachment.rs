@@ -2,7 +2,7 @@
 //! its own format and a framebuffer of the write-back's render pass
 //! (src/gpu/vulkan/pipelines/write_back_pipelines.rs).
 
-use crate::gpu::vulkan::device::{GpuDevice, GpuError, VkResultExt};
+use crate::gpu::vulkan::device::{layer_view, GpuDevice, GpuError, VkResultExt};
 use ash::vk;
 
 /// The app's image layer as the write-back's attachment: a view in its own format and a
@@ -23,19 +23,8 @@ impl WriteBackAttachment {
         (image, vk_format, layer): (vk::Image, vk::Format, u32),
         size: (u32, u32),
     ) -> Result<Self, GpuError> {
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .level_count(1)
-            .base_array_layer(layer)
-            .layer_count(1);
-        let info = vk::ImageViewCreateInfo::default()
-            .image(image)
-            .view_type(vk::ImageViewType::TYPE_2D)
-            .format(vk_format)
-            .subresource_range(range);
         let d = &gpu.device;
-        // SAFETY: a view of one layer of a colour image in its own format.
-        let view = unsafe { d.create_image_view(&info, None) }.vk("vkCreateImageView")?;
+        let view = layer_view(gpu, image, layer, vk_format)?;
         let views = [view];
         let info = vk::FramebufferCreateInfo::default()
             .render_pass(render_pass)
