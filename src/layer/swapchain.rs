@@ -63,19 +63,24 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 .as_ref()
                 .map_or(xr::SwapchainUsageFlags::EMPTY, |p| p.needed);
             let mut usage_granted = app_info.usage_flags.contains(needed);
-            let mut in_place = false;
-            let mut refused = None;
+            // The app's create info with more usage bits; whether the runtime made it.
             let mut result = xr::Result::ERROR_RUNTIME_FAILURE;
-            if let Some(extra) = plan.as_ref().and_then(|p| p.in_place) {
+            let mut create_with = |extra: xr::SwapchainUsageFlags| {
                 let mut wanted = *app_info;
                 wanted.usage_flags |= needed | extra;
                 // SAFETY: the app's create info with more usage bits.
                 result = unsafe {
                     create_downstream(next.create_swapchain, session, &wanted, swapchain)
                 };
-                in_place = result.into_raw() >= 0;
-                usage_granted |= in_place;
-                if !in_place {
+                (result.into_raw() >= 0, result)
+            };
+            let mut in_place = false;
+            let mut refused = None;
+            if let Some(extra) = plan.as_ref().and_then(|p| p.in_place) {
+                let (made, result) = create_with(extra);
+                in_place = made;
+                usage_granted |= made;
+                if !made {
                     refused = Some(result);
                     let path = plan.as_ref().map_or("copy", |p| p.copy_path);
                     log::once(&format!("no-storage-{format}"), &format!(
@@ -84,31 +89,20 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 }
             }
             let mut sampled = false;
-            let sampled_usage = plan.as_ref().and_then(|p| p.sampled);
-            if let Some(extra) = sampled_usage.filter(|_| result.into_raw() < 0) {
-                let mut wanted = *app_info;
-                wanted.usage_flags |= needed | extra;
-                // SAFETY: the app's create info with more usage bits.
-                result = unsafe {
-                    create_downstream(next.create_swapchain, session, &wanted, swapchain)
-                };
-                sampled = result.into_raw() >= 0;
-                usage_granted |= sampled;
-                if !sampled {
+            if let Some(extra) = plan.as_ref().and_then(|p| p.sampled).filter(|_| !in_place) {
+                let (made, result) = create_with(extra);
+                sampled = made;
+                usage_granted |= made;
+                if !made {
                     log::once(&format!("no-sampled-{format}"), &format!(
                         "the runtime refused sampled usage on swapchains of format {format} ({result:?}): their views are copied into the layer's image (copy_in = \"sampled\" needs it)"
                     ));
                 }
             }
             if pixel.is_some() && !usage_granted {
-                let mut wanted = *app_info;
-                wanted.usage_flags |= needed;
-                // SAFETY: the app's create info with the usage bits the layer needs.
-                result = unsafe {
-                    create_downstream(next.create_swapchain, session, &wanted, swapchain)
-                };
-                usage_granted = result.into_raw() >= 0;
-                if !usage_granted {
+                let (made, result) = create_with(xr::SwapchainUsageFlags::EMPTY);
+                usage_granted = made;
+                if !made {
                     log::once(&format!("no-transfer-{format}"), &format!(
                     "the runtime refused transfer usage on swapchains of format {format} ({result:?}): those pass through"
                 ));
