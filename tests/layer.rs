@@ -8,7 +8,7 @@ mod common;
 use common::capture_check::{
     assert_follows_the_video, capture_dir, captures, check_view, sample, video_dir, Captured,
 };
-use common::{sandbox, scratch_file, ApiDump, SandboxRun, Validation, XR_CLIENT};
+use common::{sandbox, scratch_file, ApiDump, SandboxRun, Validation, SYNC_VALIDATION, XR_CLIENT};
 use contrastxr::image::RgbaImage;
 use std::path::{Path, PathBuf};
 
@@ -244,7 +244,7 @@ fn listed_tiles_drawn_back_reach_the_app_images() {
 
 /// `copy_in = "sampled"` on sRGB swapchains: the layer adds sampled usage to them, reads each
 /// region through a sampled view of the app's image instead of copying it in, and draws the
-/// listed tiles back, on the app's device under validation; the captures
+/// listed tiles back, on the app's device under validation (synchronisation too); the captures
 /// (`"path": "sampled-tiles"`, read back from the app's images after the draw) conform to the
 /// CPU reference.
 #[test]
@@ -258,6 +258,7 @@ fn sampled_reads_reach_the_app_images() {
             ("CONTRASTXR_IN_PLACE", "on"),
             ("CONTRASTXR_COPY_IN", "sampled"),
             ("CONTRASTXR_PIPELINES", "wait"),
+            SYNC_VALIDATION,
         ];
         let Some((run, _)) = small_client_run(&tag, (format, layout, "8"), &extra, "sampled-tiles")
         else {
