@@ -2,7 +2,8 @@
 //! push constants, codes, tile and workgroup sizes, in `interface`), the settings' codes, the
 //! push-constant block, the shaders' ids and the embedded modules build.rs compiles, pixel
 //! formats and their codec, the camera rectangle a frame samples, the texel slots a source
-//! fills, overlay runs and a frame's background. Nothing here calls a graphics API (a test
+//! fills, overlay runs, a frame's background, and the threads the builds keep between
+//! sessions. Nothing here calls a graphics API (a test
 //! holds it).
 
 #[cfg(test)]
@@ -14,6 +15,7 @@ mod camera_rect;
 pub mod codes;
 mod frame_input;
 pub mod interface;
+pub mod kept_threads;
 pub mod modules;
 mod offline_backend;
 mod overlay;

@@ -9,6 +9,7 @@
 
 use super::pipeline_cache::{self, Origin, PipelineCache};
 use crate::gpu::core::interface::{BindingKind, BINDINGS};
+use crate::gpu::core::kept_threads::{self, JobDone};
 use crate::gpu::core::modules::{self, ShaderModule};
 use crate::gpu::core::process_exit;
 use crate::gpu::core::push_constants::PushConstants;
@@ -18,7 +19,7 @@ use ash::vk;
 use std::collections::VecDeque;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
-use std::thread::JoinHandle;
+
 use std::time::{Duration, Instant};
 
 /// Runs a shader once, on the building thread, before it is built for the engine's device: a
@@ -119,7 +120,7 @@ pub struct Pipelines {
     mode: BuildMode,
     shared: Option<Arc<Shared>>,
     cache: Option<PipelineCache>,
-    builder: Option<JoinHandle<()>>,
+    builder: Option<JobDone>,
 }
 
 impl Pipelines {
@@ -187,9 +188,10 @@ impl Pipelines {
         self.shared = Some(shared.clone());
         if self.mode == BuildMode::Background {
             process_exit::watch();
-            let spawned = std::thread::Builder::new()
-                .name("contrastxr-pipelines".into())
-                .spawn(move || build_requests(&shared, warm_up));
+            // A thread kept between sessions: see gpu/core/kept_threads.rs.
+            let spawned = kept_threads::run("contrastxr-pipelines", move || {
+                build_requests(&shared, warm_up)
+            });
             self.builder = Some(spawned.map_err(|e| {
                 GpuError::Unsupported(format!("cannot start the pipeline thread: {e}"))
             })?);
@@ -335,7 +337,7 @@ impl Pipelines {
     pub fn join(&mut self) {
         self.stop();
         if let Some(builder) = self.builder.take() {
-            let _ = builder.join();
+            builder.join();
         }
     }
 
