@@ -22,13 +22,9 @@ pub struct AppImageViews {
 impl AppImageViews {
     /// The storage view of `view`'s image layer, in the format its shaders declare.
     pub fn get(&mut self, gpu: &GpuDevice, view: &FrameView) -> Result<vk::ImageView, GpuError> {
-        let layer = (view.key.swapchain, view.image, view.key.array_index);
-        if let Some(&v) = self.views.get(&layer) {
-            return Ok(v);
-        }
-        let v = storage_view(gpu, view.image, view.key.array_index, view.format)?;
-        self.views.insert(layer, v);
-        Ok(v)
+        cached(&mut self.views, view, || {
+            storage_view(gpu, view.image, view.key.array_index, view.format)
+        })
     }
 
     /// The sampled view of `view`'s image layer, in the image's own format.
@@ -37,14 +33,10 @@ impl AppImageViews {
         gpu: &GpuDevice,
         view: &FrameView,
     ) -> Result<vk::ImageView, GpuError> {
-        let layer = (view.key.swapchain, view.image, view.key.array_index);
-        if let Some(&v) = self.sampled.get(&layer) {
-            return Ok(v);
-        }
         // In the image's own format: the sampler decodes sRGB.
-        let v = layer_view(gpu, view.image, view.key.array_index, view.vk_format)?;
-        self.sampled.insert(layer, v);
-        Ok(v)
+        cached(&mut self.sampled, view, || {
+            layer_view(gpu, view.image, view.key.array_index, view.vk_format)
+        })
     }
 
     /// Destroys the views of a swapchain's images. The GPU must be done with them.
@@ -67,6 +59,21 @@ impl AppImageViews {
             unsafe { gpu.device.destroy_image_view(v, None) };
         }
     }
+}
+
+/// `view`'s image layer's view in `views`, made by `make` the first time.
+fn cached(
+    views: &mut HashMap<Layer, vk::ImageView>,
+    view: &FrameView,
+    make: impl FnOnce() -> Result<vk::ImageView, GpuError>,
+) -> Result<vk::ImageView, GpuError> {
+    let layer = (view.key.swapchain, view.image, view.key.array_index);
+    if let Some(&v) = views.get(&layer) {
+        return Ok(v);
+    }
+    let v = make()?;
+    views.insert(layer, v);
+    Ok(v)
 }
 
 /// A storage view of layer `layer` of `image` (of `format`), in the format its in-place

@@ -31,26 +31,38 @@ pub fn wanted(gpu: &GpuDevice, settings: &Settings) -> bool {
 /// can store to the format's image-copy format, else through a buffer.
 pub fn copy_path(gpu: &GpuDevice, settings: &Settings, format: PixelFormat) -> ViewPath {
     match wanted(gpu, settings) {
-        true => match crate::gpu::vulkan::frame::copy_path(gpu, format) {
-            ViewPath::ImageCopy if sampled_wanted(settings, format) => ViewPath::SampledTiles,
-            ViewPath::ImageCopy if tiles_wanted(settings) => ViewPath::ImageCopyTiles,
-            path => path,
-        },
+        true => {
+            let path = crate::gpu::vulkan::frame::copy_path(gpu, format);
+            image_copy_way(path, format, ways(settings), (true, true))
+        }
         false => ViewPath::BufferCopy,
     }
 }
 
-/// Whether the image-copy path draws back only the tiles the enhancement listed
-/// (`copy_back = "tiles"`), on swapchains the app made with colour-attachment usage.
-pub fn tiles_wanted(settings: &Settings) -> bool {
-    settings.copy_back == CopyBack::Tiles
+/// The ways the settings ask of the image-copy path: the listed tiles drawn back
+/// (`copy_back = "tiles"`), the region read through a sampled view (`copy_in = "sampled"`).
+pub fn ways(settings: &Settings) -> (bool, bool) {
+    (
+        settings.copy_back == CopyBack::Tiles,
+        settings.copy_in == CopyIn::Sampled,
+    )
 }
 
-/// Whether the image-copy path reads views of `format` through a sampled view of the app's
-/// image and draws their listed tiles back (`copy_in = "sampled"`, 8-bit sRGB formats), on
-/// swapchains with sampled and colour-attachment usage.
-pub fn sampled_wanted(settings: &Settings, format: PixelFormat) -> bool {
-    settings.copy_in == CopyIn::Sampled && sampled_read(format.shader_code())
+/// `path` (a view's copy path) with the way `ways` asks of the image-copy path, where the
+/// swapchain allows it (`usage`: colour-attachment usage, sampled usage): the sampled read
+/// (8-bit sRGB formats), else the tiles drawn back, else the region copied back.
+pub fn image_copy_way(
+    path: ViewPath,
+    format: PixelFormat,
+    (tiles, sampled): (bool, bool),
+    (attachment, sampled_usage): (bool, bool),
+) -> ViewPath {
+    let sampled = sampled && sampled_usage && sampled_read(format.shader_code());
+    match path {
+        ViewPath::ImageCopy if attachment && sampled => ViewPath::SampledTiles,
+        ViewPath::ImageCopy if attachment && tiles => ViewPath::ImageCopyTiles,
+        path => path,
+    }
 }
 
 /// The usage bits to add for in place on a swapchain of `format`, if the session's settings,

@@ -4,7 +4,6 @@
 
 use super::{app_vulkan, in_place};
 use crate::algorithm::params::Params;
-use crate::gpu::core::interface::sampled_read;
 use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::frame::{copy_path, FrameOptions, FrameRunner, PipelinesReady};
@@ -48,8 +47,8 @@ pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bo
     Some(match set_up(b, settings) {
         Ok(engine) => Bound::Enhanced(Box::new(VulkanSession {
             image_copy: AtomicBool::new(in_place::wanted(&engine.gpu, settings)),
-            tiles: AtomicBool::new(in_place::tiles_wanted(settings)),
-            sampled: AtomicBool::new(settings.copy_in == crate::config::CopyIn::Sampled),
+            tiles: AtomicBool::new(in_place::ways(settings).0),
+            sampled: AtomicBool::new(in_place::ways(settings).1),
             engine,
             ready: None,
         })),
@@ -109,25 +108,21 @@ impl VulkanSession {
     fn path(&self, v: &ViewImage) -> ViewPath {
         match (v.in_place, self.image_copy.load(Ordering::Relaxed)) {
             (true, _) => ViewPath::InPlace,
-            (false, true) => match copy_path(&self.engine.gpu, v.format) {
-                ViewPath::ImageCopy
-                    if v.attachment && v.sampled && self.reads_sampled(v.format) =>
-                {
-                    ViewPath::SampledTiles
-                }
-                ViewPath::ImageCopy if v.attachment && self.tiles.load(Ordering::Relaxed) => {
-                    ViewPath::ImageCopyTiles
-                }
-                path => path,
-            },
+            (false, true) => self.image_copy_way(v.format, (v.attachment, v.sampled)),
             (false, false) => ViewPath::BufferCopy,
         }
     }
 
-    /// Whether views of `format` are read through a sampled view where their swapchain
-    /// allows it.
-    fn reads_sampled(&self, format: PixelFormat) -> bool {
-        self.sampled.load(Ordering::Relaxed) && sampled_read(format.shader_code())
+    /// The copy path of views of `format` on a swapchain with `usage` (colour-attachment,
+    /// sampled), with the image-copy path's way as the settings asked at the last swapchain's
+    /// creation.
+    fn image_copy_way(&self, format: PixelFormat, usage: (bool, bool)) -> ViewPath {
+        let ways = (
+            self.tiles.load(Ordering::Relaxed),
+            self.sampled.load(Ordering::Relaxed),
+        );
+        let path = copy_path(&self.engine.gpu, format);
+        in_place::image_copy_way(path, format, ways, usage)
     }
 
     fn frame_view(&self, v: &ViewImage) -> FrameView {
@@ -179,9 +174,8 @@ impl SessionGraphics for VulkanSession {
     ) -> Option<xr::SwapchainUsageFlags> {
         let wanted = in_place::wanted(&self.engine.gpu, settings);
         self.image_copy.store(wanted, Ordering::Relaxed);
-        let tiles = in_place::tiles_wanted(settings);
+        let (tiles, sampled) = in_place::ways(settings);
         self.tiles.store(tiles, Ordering::Relaxed);
-        let sampled = settings.copy_in == crate::config::CopyIn::Sampled;
         self.sampled.store(sampled, Ordering::Relaxed);
         in_place::added_usage(&self.engine.gpu, settings, format, info)
     }
@@ -230,7 +224,9 @@ impl SessionGraphics for VulkanSession {
             format,
             width,
             in_place: in_place || image_copy,
-            sampled: !in_place && image_copy && self.reads_sampled(format),
+            sampled: !in_place
+                && image_copy
+                && self.image_copy_way(format, (true, true)) == ViewPath::SampledTiles,
         };
         if let Ok(ids) = Recorder::shaders_for(params, [shape]) {
             self.engine.request(&ids);
