@@ -17,4 +17,4 @@ pub use self::core::{BackgroundInput, CameraRect, OfflineBackend, PixelFormat, P
 pub use vulkan::device::{DeviceOptions, GpuDevice, GpuError};
 pub use vulkan::frame::{CapturedView, FrameOptions, FrameRunner, FrameView, ViewKey, ViewPath};
 pub use vulkan::offline::VkOffline;
-pub use vulkan::record::{CameraResources, Placement, Recorder, ViewShape, ViewTarget};
+pub use vulkan::record::{CameraResources, PixelsIn, Placement, Recorder, ViewShape, ViewTarget};

@@ -4,7 +4,7 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::device::ImageRegion;
-use crate::gpu::vulkan::record::ViewShape;
+use crate::gpu::vulkan::record::{PixelsIn, ViewShape};
 use ash::vk;
 
 /// One region of an app's image to enhance.
@@ -56,8 +56,7 @@ impl FrameView {
         ViewShape {
             format: self.format,
             width: self.key.extent.0,
-            in_place: self.path.runs_in_place_shaders(),
-            sampled: self.path.reads_sampled(),
+            pixels_in: self.path.pixels_in(),
         }
     }
 
@@ -131,10 +130,14 @@ impl ViewPath {
         self == ViewPath::SampledTiles
     }
 
-    /// Whether its passes are the in-place variants (on the app's image or on the engine's
-    /// copy of the region).
-    pub fn runs_in_place_shaders(self) -> bool {
-        self != ViewPath::BufferCopy
+    /// Where its passes read and write the pixels: the app's image or the engine's copy of
+    /// the region (`Image`), read through a sampled view (`SampledImage`), or a buffer.
+    pub fn pixels_in(self) -> PixelsIn {
+        match self {
+            ViewPath::BufferCopy => PixelsIn::Buffer,
+            ViewPath::SampledTiles => PixelsIn::SampledImage,
+            _ => PixelsIn::Image,
+        }
     }
 }
 

@@ -134,7 +134,7 @@ impl Overlays {
                 },
             };
             // The overlay buffer is host-written before this submission.
-            match target.in_place {
+            match target.pixels_in.in_image() {
                 true => record_into_image(gpu, cmd, o, &region),
                 false => record_buffer_copy(gpu, cmd, (&o.buffer, &target.pixels), &o.copies),
             }

@@ -15,7 +15,7 @@ use crate::gpu::vulkan::device::{DeviceImage, GpuBuffer, GpuDevice, GpuError, Vk
 use crate::gpu::vulkan::frame::{can_store, copy_path, storage_view, ViewPath};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
 use crate::gpu::vulkan::record::{
-    CameraResources, Placement, ViewShape, ViewTarget, WriteBackDraw,
+    CameraResources, PixelsIn, Placement, ViewShape, ViewTarget, WriteBackDraw,
 };
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -91,8 +91,7 @@ impl VkOffline {
         let shape = ViewShape {
             format,
             width: case.region.0,
-            in_place: true,
-            sampled: false,
+            pixels_in: PixelsIn::Image,
         };
         for _ in &rig.images {
             rig.own_images
@@ -126,8 +125,7 @@ impl VkOffline {
         let shape = ViewShape {
             format: PixelFormat::SRGB8,
             width: case.region.0,
-            in_place: true,
-            sampled: true,
+            pixels_in: PixelsIn::SampledImage,
         };
         for (region, own) in regions.into_iter().zip(&rig.own_images) {
             let gpu = &self.gpu;
@@ -154,8 +152,7 @@ impl VkOffline {
         let shape = ViewShape {
             format: PixelFormat::SRGB8,
             width: case.region.0,
-            in_place: true,
-            sampled: false,
+            pixels_in: PixelsIn::Image,
         };
         for image in &rig.images {
             let view = storage_view(gpu, image.raw, 0, PixelFormat::SRGB8)?;

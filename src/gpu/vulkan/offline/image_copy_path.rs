@@ -18,7 +18,7 @@ use crate::gpu::vulkan::device::{
 use crate::gpu::vulkan::frame::{copy_path, ViewPath};
 use crate::gpu::vulkan::pipelines::{WriteBackAttachment, WriteBackPipelines};
 use crate::gpu::vulkan::record::{
-    record_write_back, record_write_back_barrier, ViewShape, ViewTarget, WriteBackDraw,
+    record_write_back, record_write_back_barrier, PixelsIn, ViewShape, ViewTarget, WriteBackDraw,
 };
 use crate::image::RgbaImage;
 use ash::vk;
@@ -204,8 +204,10 @@ impl VkOffline {
         let shape = ViewShape {
             format,
             width: app.extent.0,
-            in_place: true,
-            sampled: sampled.is_some(),
+            pixels_in: match sampled {
+                Some(_) => PixelsIn::SampledImage,
+                None => PixelsIn::Image,
+            },
         };
         let (mut bg, mut view) = self.stage_shaped(camera, (shape, app.extent.1))?;
         self.engine.bind_app_image(gpu, &view, own.view);

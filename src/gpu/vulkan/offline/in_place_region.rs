@@ -12,7 +12,7 @@ use crate::gpu::vulkan::device::{
     record_first_layout, record_layout_barriers, record_region_copy, ImageRegion,
 };
 use crate::gpu::vulkan::frame::{can_store, storage_view};
-use crate::gpu::vulkan::record::ViewShape;
+use crate::gpu::vulkan::record::{PixelsIn, ViewShape};
 use crate::image::RgbaImage;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -118,8 +118,7 @@ impl VkOffline {
         let shape = ViewShape {
             format,
             width: region.0,
-            in_place: true,
-            sampled: false,
+            pixels_in: PixelsIn::Image,
         };
         let (mut bg, mut view) = self.stage_shaped(camera, (shape, region.1))?;
         self.engine.bind_app_image(gpu, &view, storage);

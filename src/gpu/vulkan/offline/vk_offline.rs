@@ -8,7 +8,9 @@ use crate::gpu::core::CameraRect;
 use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
-use crate::gpu::vulkan::record::{CameraResources, Placement, Recorder, ViewShape, ViewTarget};
+use crate::gpu::vulkan::record::{
+    CameraResources, PixelsIn, Placement, Recorder, ViewShape, ViewTarget,
+};
 use crate::gpu::vulkan::texels::staging_buffer;
 use crate::image::RgbaImage;
 use ash::vk;
@@ -130,8 +132,7 @@ impl VkOffline {
         let shape = ViewShape {
             format,
             width: region.0,
-            in_place: false,
-            sampled: false,
+            pixels_in: PixelsIn::Buffer,
         };
         self.stage_shaped(camera, (shape, region.1))
     }

@@ -11,5 +11,5 @@ mod write_back_draw;
 
 pub use recorder::Recorder;
 pub(crate) use resources::TEXELS_FORMAT;
-pub use resources::{CameraResources, Placement, ViewShape, ViewTarget};
+pub use resources::{CameraResources, PixelsIn, Placement, ViewShape, ViewTarget};
 pub use write_back_draw::{record_write_back, record_write_back_barrier, WriteBackDraw};

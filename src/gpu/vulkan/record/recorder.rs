@@ -26,8 +26,8 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::resources::{
-    alloc_all, camera_stride, free_set, transfer_storage, CameraResources, Placement, ViewShape,
-    ViewTarget, STORAGE, TEXELS_FORMAT,
+    alloc_all, camera_stride, free_set, transfer_storage, CameraResources, PixelsIn, Placement,
+    ViewShape, ViewTarget, STORAGE, TEXELS_FORMAT,
 };
 
 /// The per-pixel passes' workgroups are TILE x TILE (src/gpu/core/interface.rs, WORKGROUPS).
@@ -222,8 +222,7 @@ impl Recorder {
         let shape = ViewShape {
             format,
             width: region.0,
-            in_place: false,
-            sampled: false,
+            pixels_in: PixelsIn::Buffer,
         };
         self.create_shaped_view(gpu, (shape, region.1), background, placement)
     }
@@ -241,12 +240,12 @@ impl Recorder {
         if region.0 == 0 || region.1 == 0 {
             return Err(GpuError::Unsupported("empty display region".into()));
         }
-        if shape.in_place && in_place_texel(format.shader_code()).is_none() {
+        if shape.pixels_in.in_image() && in_place_texel(format.shader_code()).is_none() {
             return Err(GpuError::Unsupported(format!(
                 "{format:?} is not enhanced in place"
             )));
         }
-        let px = match shape.in_place {
+        let px = match shape.pixels_in.in_image() {
             true => 16 / u64::from(format.bytes_per_pixel()),
             false => u64::from(region.0) * u64::from(region.1),
         };
@@ -279,8 +278,7 @@ impl Recorder {
         let mut view = ViewTarget {
             region,
             format,
-            in_place: shape.in_place,
-            sampled: shape.in_place && shape.sampled,
+            pixels_in: shape.pixels_in,
             origin: (0, 0),
             pixels,
             tiles,

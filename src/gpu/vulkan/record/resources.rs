@@ -82,25 +82,43 @@ pub(super) fn free_set(gpu: &GpuDevice, pool: vk::DescriptorPool, set: &mut vk::
     }
 }
 
-/// What decides a view's shaders: its pixel format, width and whether it is enhanced in place.
+/// Where a view's per-pixel passes read and write its pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PixelsIn {
+    /// A buffer of the engine's holding a copy of the region (`ViewTarget::pixels`).
+    Buffer,
+    /// An image, through a storage view bound with `Recorder::bind_app_image` at `origin`:
+    /// the app's image, or the engine's copy of the region; `pixels` is then a stand-in.
+    Image,
+    /// Read through a sampled view of the app's image (`Recorder::bind_app_texels`) and
+    /// written to the engine's image bound with `bind_app_image` (ACCESS_SAMPLED).
+    SampledImage,
+}
+
+impl PixelsIn {
+    /// Whether the passes are the image variants (`Image` or `SampledImage`), whose pixels
+    /// are bound per frame rather than held in `pixels`.
+    pub fn in_image(self) -> bool {
+        self != PixelsIn::Buffer
+    }
+}
+
+/// What decides a view's shaders: its pixel format, width and where its pixels are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ViewShape {
     pub format: PixelFormat,
     pub width: u32,
-    pub in_place: bool,
-    /// In place, read through a sampled view of the app's image and written to the layer's
-    /// (ACCESS_SAMPLED; bound with `Recorder::bind_app_texels` beside `bind_app_image`).
-    pub sampled: bool,
+    pub pixels_in: PixelsIn,
 }
 
 impl ViewShape {
     /// The pixel access of its per-pixel passes (interface.rs ACCESS_*).
     pub fn access(&self) -> u32 {
-        match (self.in_place, rows_aligned(self.width, self.format)) {
-            (true, _) if self.sampled => ACCESS_SAMPLED,
-            (true, _) => ACCESS_IN_PLACE,
-            (false, true) => ACCESS_WIDE,
-            (false, false) => ACCESS_NARROW,
+        match self.pixels_in {
+            PixelsIn::SampledImage => ACCESS_SAMPLED,
+            PixelsIn::Image => ACCESS_IN_PLACE,
+            PixelsIn::Buffer if rows_aligned(self.width, self.format) => ACCESS_WIDE,
+            PixelsIn::Buffer => ACCESS_NARROW,
         }
     }
 }
@@ -109,13 +127,9 @@ impl ViewShape {
 pub struct ViewTarget {
     pub region: (u32, u32),
     pub format: PixelFormat,
-    /// Enhanced in place: the shaders read and write the app's image (bound with
-    /// `Recorder::bind_app_image`, at `origin` in it), and `pixels` is a stand-in.
-    pub in_place: bool,
-    /// Read through a sampled view of the app's image (`in_place` too): the shaders write the
-    /// layer's image bound as the app's, and read the app's (`Recorder::bind_app_texels`).
-    pub sampled: bool,
-    /// Where the region starts in the app's image (in place only).
+    /// Where its per-pixel passes read and write its pixels.
+    pub pixels_in: PixelsIn,
+    /// Where the region starts in the image (`PixelsIn::Image`, `SampledImage` only).
     pub origin: (u32, u32),
     /// The region's raw pixels in `format`, rows tightly packed (the copy path).
     pub pixels: GpuBuffer,
@@ -153,8 +167,7 @@ impl ViewTarget {
         ViewShape {
             format: self.format,
             width: self.region.0,
-            in_place: self.in_place,
-            sampled: self.sampled,
+            pixels_in: self.pixels_in,
         }
     }
 

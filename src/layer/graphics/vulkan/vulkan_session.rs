@@ -106,9 +106,15 @@ impl VulkanSession {
     /// The path of `v`: in place where its swapchain has storage usage, else through an image
     /// of the engine's own or a buffer.
     fn path(&self, v: &ViewImage) -> ViewPath {
-        match (v.in_place, self.image_copy.load(Ordering::Relaxed)) {
+        self.path_of(v.format, v.in_place, (v.attachment, v.sampled))
+    }
+
+    /// The path of views of `format`, on a swapchain with storage usage (`in_place`) or with
+    /// `usage` (colour-attachment, sampled).
+    fn path_of(&self, format: PixelFormat, in_place: bool, usage: (bool, bool)) -> ViewPath {
+        match (in_place, self.image_copy.load(Ordering::Relaxed)) {
             (true, _) => ViewPath::InPlace,
-            (false, true) => self.image_copy_way(v.format, (v.attachment, v.sampled)),
+            (false, true) => self.image_copy_way(format, usage),
             (false, false) => ViewPath::BufferCopy,
         }
     }
@@ -218,15 +224,12 @@ impl SessionGraphics for VulkanSession {
         width: u32,
         in_place: bool,
     ) {
-        let image_copy = self.image_copy.load(Ordering::Relaxed)
-            && copy_path(&self.engine.gpu, format) == ViewPath::ImageCopy;
+        // The path of its views where the swapchain has every usage the layer may add.
+        let path = self.path_of(format, in_place, (true, true));
         let shape = ViewShape {
             format,
             width,
-            in_place: in_place || image_copy,
-            sampled: !in_place
-                && image_copy
-                && self.image_copy_way(format, (true, true)) == ViewPath::SampledTiles,
+            pixels_in: path.pixels_in(),
         };
         if let Ok(ids) = Recorder::shaders_for(params, [shape]) {
             self.engine.request(&ids);
