@@ -6,12 +6,11 @@
 //! swapchain image), and the draw's indirect arguments come from the tile count on the GPU.
 //! Pipelines are built on first use (a graphics pipeline of two small stages).
 
-use crate::gpu::core::{process_exit, PixelFormat};
+use crate::gpu::core::{kept_threads, process_exit, PixelFormat};
 use crate::gpu::vulkan::device::{GpuDevice, GpuError, VkResultExt};
 use ash::vk;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::thread::JoinHandle;
 
 mod table {
     include!(concat!(env!("OUT_DIR"), "/write_back_table.rs"));
@@ -72,7 +71,7 @@ pub struct WriteBackPipelines {
     passes: Arc<Mutex<Passes>>,
     /// Formats whose pass a thread of the engine's own is building or has built.
     requested: Vec<vk::Format>,
-    builders: Vec<JoinHandle<()>>,
+    builders: Vec<kept_threads::JobDone>,
 }
 
 /// Every SPIR-V module of the write-back, named (for spirv-val in the tests).
@@ -207,9 +206,8 @@ impl WriteBackPipelines {
         }
         self.requested.push(vk_format);
         let (device, layout, passes) = (gpu.device.clone(), self.layout, self.passes.clone());
-        let builder = std::thread::Builder::new()
-            .name("contrastxr-write-back".into())
-            .spawn(move || {
+        // A thread kept between sessions, as the pipelines' (gpu/core/kept_threads.rs).
+        let builder = kept_threads::run("contrastxr-write-back", move || {
                 // Counted as a build in progress, so that the process's exit waits for it
                 // before the driver's destructors run (gpu/core/process_exit.rs).
                 let built = match process_exit::Busy::begin() {
@@ -221,7 +219,7 @@ impl WriteBackPipelines {
                 };
                 let mut passes = passes.lock().unwrap_or_else(|p| p.into_inner());
                 passes.insert(vk_format, built);
-            });
+        });
         match builder {
             Ok(handle) => self.builders.push(handle),
             Err(e) => {
@@ -298,7 +296,7 @@ impl WriteBackPipelines {
     pub fn destroy(&mut self, gpu: &GpuDevice) {
         // The builders use the device: they end before anything is destroyed.
         for b in self.builders.drain(..) {
-            let _ = b.join();
+            b.join();
         }
         let d = &gpu.device;
         let passes: Vec<WriteBackPass> =
