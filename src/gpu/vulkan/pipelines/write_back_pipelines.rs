@@ -208,17 +208,17 @@ impl WriteBackPipelines {
         let (device, layout, passes) = (gpu.device.clone(), self.layout, self.passes.clone());
         // A thread kept between sessions, as the pipelines' (gpu/core/kept_threads.rs).
         let builder = kept_threads::run("contrastxr-write-back", move || {
-                // Counted as a build in progress, so that the process's exit waits for it
-                // before the driver's destructors run (gpu/core/process_exit.rs).
-                let built = match process_exit::Busy::begin() {
-                    None => Err("the process is exiting".to_string()),
-                    Some(_busy) => std::panic::catch_unwind(|| {
-                        build_pass(&device, layout, (vk_format, format)).map_err(|e| e.to_string())
-                    })
-                    .unwrap_or_else(|_| Err("the write-back's build panicked".into())),
-                };
-                let mut passes = passes.lock().unwrap_or_else(|p| p.into_inner());
-                passes.insert(vk_format, built);
+            // Counted as a build in progress, so that the process's exit waits for it
+            // before the driver's destructors run (gpu/core/process_exit.rs).
+            let built = match process_exit::Busy::begin() {
+                None => Err("the process is exiting".to_string()),
+                Some(_busy) => std::panic::catch_unwind(|| {
+                    build_pass(&device, layout, (vk_format, format)).map_err(|e| e.to_string())
+                })
+                .unwrap_or_else(|_| Err("the write-back's build panicked".into())),
+            };
+            let mut passes = passes.lock().unwrap_or_else(|p| p.into_inner());
+            passes.insert(vk_format, built);
         });
         match builder {
             Ok(handle) => self.builders.push(handle),
