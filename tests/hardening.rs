@@ -11,8 +11,8 @@
 mod common;
 
 use common::{
-    layer_lines, sandbox, scratch_dir, wait_for, ApiDump, SandboxRun, Validation, CLI,
-    SYNC_VALIDATION, XR_CLIENT,
+    layer_lines, sandbox, scratch_dir, session_memory, wait_for, ApiDump, SandboxRun, Validation,
+    CLI, SYNC_VALIDATION, XR_CLIENT,
 };
 use contrastxr::config::{self, Env, Source, KEYS};
 use contrastxr::image::RgbaImage;
@@ -806,15 +806,6 @@ fn soak_frames() -> String {
     std::env::var("CONTRASTXR_SOAK_FRAMES").unwrap_or_else(|_| "1000".into())
 }
 
-fn samples(report: &Value, field: &str) -> Vec<(u64, u64)> {
-    report[field]
-        .as_array()
-        .expect("samples")
-        .iter()
-        .map(|s| (s["rss_kb"].as_u64().unwrap(), s["fds"].as_u64().unwrap()))
-        .collect()
-}
-
 #[test]
 fn soak_with_vulkan_sync_and_openxr_validation() {
     let tag = "soak";
@@ -827,14 +818,17 @@ fn soak_with_vulkan_sync_and_openxr_validation() {
     assert_eq!(r.lines_with("processing frames").len(), 1, "{:#?}", r.lines);
     assert!(r.lines_with("passing").is_empty(), "{:#?}", r.lines);
     // Warm-up: the first 200 frames.
-    let memory = samples(&r.report, "memory");
+    let memory = session_memory::samples(&r.report, "memory");
     let (warm, end) = (memory[3], *memory.last().unwrap());
     eprintln!(
-        "soak: rss {} KiB after 200 frames, {} KiB at the end",
-        warm.0, end.0
+        "soak: rss {} KiB after 200 frames, {} KiB at the end; heap in use {} and {} KiB",
+        warm.rss_kb, end.rss_kb, warm.heap_kb, end.heap_kb
     );
-    assert!(end.0 < warm.0 + 1024, "resident memory grew: {memory:?}");
-    assert_eq!(warm.1, end.1, "file descriptors: {memory:?}");
+    assert!(
+        end.rss_kb < warm.rss_kb + 1024,
+        "resident memory grew: {memory:?}"
+    );
+    assert_eq!(warm.fds, end.fds, "file descriptors: {memory:?}");
 }
 
 #[test]
@@ -846,8 +840,8 @@ fn hundred_session_cycles_leak_nothing() {
     // for 5 to 30 sessions, as new threads (the driver's, the layer's builds) land on unused
     // arenas, then swings by up to 7 MiB between sessions. That hid a leak's growth in noise
     // (CI once counted 13,500 / 2,128 / 1,212 KiB over three runs of 25 sessions on a flat
-    // curve). Two arenas leave the curve flat from the fifth session on (growth of 36-52 KiB
-    // per 25 sessions), and a leak grows it all the same.
+    // curve). Two arenas leave the curve flat from the fifth session on. The heap in use
+    // (tests/common/session_memory.rs) is what tells a leak.
     let env = [SYNC_VALIDATION, ("MALLOC_ARENA_MAX", "2")];
     let Some(r) = client(tag, &no_config(tag), &env, &args) else {
         return;
@@ -859,48 +853,9 @@ fn hundred_session_cycles_leak_nothing() {
         100,
         "the layer ran each time"
     );
-    let sessions = samples(&r.report, "sessions");
-    // Warm-up: 25 sessions. Leaks of the layer's own objects are also caught by the validation
-    // layer's undestroyed-object report (`sync_validation_and_leak_reports_are_on`) and by the
-    // file descriptor check below. A leak grows with every session; a one-off step (a cache's
-    // first fill) does not. So the sessions from 25 to 100 are counted in three parts of 25,
-    // each by its least sample: a leak of 28 KiB per session or more raises each part's floor
-    // by 700 KiB, a one-off step raises one of them.
-    let floors: Vec<u64> = sessions[25..100]
-        .chunks(25)
-        .map(|part| part.iter().map(|s| s.0).min().unwrap_or(0))
-        .collect();
-    let (warm, end) = (sessions[24], sessions[99]);
-    let parts: Vec<u64> = [sessions[24].0, floors[0], floors[1], floors[2]]
-        .windows(2)
-        .map(|w| w[1].saturating_sub(w[0]))
-        .collect();
-    let largest_step = sessions[24..]
-        .windows(2)
-        .map(|w| w[1].0.saturating_sub(w[0].0))
-        .max()
-        .unwrap_or(0);
-    eprintln!(
-        "cycles: rss {} KiB after 25 sessions, {} KiB after 100, floors of 25 sessions \
-         {floors:?} KiB, growth {parts:?} KiB, largest step {largest_step} KiB",
-        warm.0, end.0
-    );
-    let least = parts.iter().copied().min().unwrap_or(0);
-    assert!(
-        least < 700,
-        "resident memory grew in every 25 sessions ({parts:?} KiB): {sessions:?}"
-    );
-    assert!(largest_step < 16384, "resident memory jumped: {sessions:?}");
-    // A sample may count a file held for a moment (the log's writer thread keeps the log file
-    // open until 200 ms after its last line, src/layer/log_file.rs; seen: 12 once among 11s).
-    // A leak leaves every later sample higher; a file held for a moment does not.
-    let first = sessions[0].1;
-    let late = sessions[90..].iter().map(|s| s.1).min();
-    assert_eq!(late, Some(first), "file descriptors leaked: {sessions:?}");
-    assert!(
-        sessions.iter().all(|s| s.1 <= first + 1),
-        "file descriptors: {sessions:?}"
-    );
+    // Leaks of the layer's own objects are also caught by the validation layer's
+    // undestroyed-object report (`sync_validation_and_leak_reports_are_on`).
+    session_memory::assert_flat("cycles", &session_memory::samples(&r.report, "sessions"));
 }
 
 /// The checks above rely on these: synchronisation validation is really on with

@@ -5,7 +5,7 @@
 //! rect (GL's rects count rows from the bottom), and the call-semantics A/B of
 //! tests/call_semantics.rs: with the layer off and on the scripted calls get the same answers,
 //! and the layer enhances the frames the Vulkan cases expect; and swapchains made and destroyed
-//! between frames (`--churn-formats`).
+//! between frames (`--churn-formats`); and 100 session cycles that leak nothing.
 
 mod common;
 
@@ -14,7 +14,7 @@ use common::capture_check::{
 };
 use common::gl_client::{client_opengl, GL_VIEW};
 use common::semantics::{self, assert_same_answers, enhanced_frames, Case};
-use common::{layer_lines, sandbox, scratch_dir, XR_CLIENT};
+use common::{layer_lines, sandbox, scratch_dir, session_memory, XR_CLIENT};
 use std::path::Path;
 
 /// Each view's size in these runs.
@@ -364,4 +364,35 @@ fn opengl_programs_for_a_changed_mode_are_built_off_the_apps_threads() {
         .filter(|c| c.json["params"]["mode"] == "heatmap")
         .count();
     assert!(heatmap > 0, "no heatmap frame captured: {lines:#?}");
+}
+
+/// 100 OpenGL sessions in one process, each with its contexts' objects made and deleted by the
+/// layer (programs, textures, buffers, fences) and its build and background threads: resident
+/// memory and open files stay flat (tests/common/session_memory.rs), as in the Vulkan cycles of
+/// tests/hardening.rs, with two malloc arenas for the same reason.
+#[test]
+fn opengl_session_cycles_leak_nothing() {
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("MALLOC_ARENA_MAX", "2"),
+    ];
+    let cycles = ["--sessions", "100"];
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 2, &env, &cycles, 600) else {
+        return;
+    };
+    run.assert_success();
+    let report = run.client_report();
+    assert_eq!(report["sessions_run"], 100, "{}", run.describe());
+    let sessions = layer_lines(&run)
+        .iter()
+        .filter(|l| l.starts_with("session on the app's OpenGL"))
+        .count();
+    assert_eq!(sessions, 100, "the layer ran each time: {}", run.describe());
+    session_memory::assert_flat(
+        "opengl cycles",
+        &session_memory::samples(&report, "sessions"),
+    );
 }

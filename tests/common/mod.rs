@@ -16,6 +16,7 @@ pub mod gl_client;
 pub mod images;
 pub mod pass_through;
 pub mod semantics;
+pub mod session_memory;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
