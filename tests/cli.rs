@@ -787,7 +787,7 @@ fn install_user_copies_the_library_and_uninstall_removes_it() {
         std::fs::read_to_string(&profiles).unwrap(),
         shipped.unwrap()
     );
-    // The tool beside the copy, where the layer runs it for OpenGL apps: this very tool.
+    // The tool beside the copy (a stable `contrastxr gl-programs`): this very tool.
     let tool = home.join("contrastxr/contrastxr");
     assert_eq!(
         std::fs::read(&tool).unwrap(),

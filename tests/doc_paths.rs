@@ -320,3 +320,35 @@ include!(\"../src/gpu/pipelines/warm_up.rs\"); include!(\"../src/gone.rs\");
         ]
     );
 }
+
+/// The room table of docs/architecture.md names, in each room's row, every public module of
+/// that room (`pub mod` in its `mod.rs` under `src/gpu/`): a room's surface grows in the code
+/// and the table says so.
+#[test]
+fn the_room_table_names_every_public_module() {
+    let root = Path::new(ROOT);
+    let table = std::fs::read_to_string(root.join("docs/architecture.md")).unwrap();
+    let mut rows = 0;
+    let mut missing = Vec::new();
+    for row in table.lines().filter(|l| l.starts_with("| `")) {
+        let Some(room) = row[3..].split('`').next().filter(|r| r.ends_with('/')) else {
+            continue;
+        };
+        let Ok(code) = std::fs::read_to_string(root.join("src/gpu").join(room).join("mod.rs"))
+        else {
+            continue;
+        };
+        rows += 1;
+        let public = code.lines().filter_map(|l| l.strip_prefix("pub mod "));
+        for module in public.map(|m| m.trim_end_matches(';')) {
+            if !row.contains(&format!("`{module}`")) {
+                missing.push(format!("{room}: `{module}`"));
+            }
+        }
+    }
+    assert!(
+        rows >= 10,
+        "only {rows} rooms found: is the table's form changed?"
+    );
+    assert!(missing.is_empty(), "not in the room table: {missing:?}");
+}

@@ -209,9 +209,8 @@ fn deb_installs_in_the_sandbox_and_hello_xr_runs_through_it() {
     assert!(!sandbox_root_has_contrastxr(&sandbox.root()));
 }
 
-/// The package ships the README, every document of docs/ and both licences, and puts the tool
-/// where the layer it installs looks for it (`installed_files::tool_beside`: `/usr/bin` for a
-/// library in `/usr/lib/contrastxr`), which builds OpenGL apps' programs beside them.
+/// The package ships the README, every document of docs/ and both licences, the layer library
+/// in `/usr/lib/contrastxr` and the tool in `/usr/bin` (the layer never runs it).
 fn assert_docs_and_tool_placed(dir: &Path, deb: &Path, listing: &str) {
     let mut wanted: Vec<String> = ["README.md", "CHANGELOG.md", "LICENSE-MIT", "LICENSE-APACHE"]
         .iter()
@@ -241,11 +240,7 @@ fn assert_docs_and_tool_placed(dir: &Path, deb: &Path, listing: &str) {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let library = unpacked.join("usr/lib/contrastxr/libcontrastxr.so");
-    let tool = contrastxr::layer::installed_files::tool_beside(&library);
-    assert_eq!(
-        tool.and_then(|t| t.canonicalize().ok()),
-        unpacked.join("usr/bin/contrastxr").canonicalize().ok(),
-        "the layer would not find the packaged tool"
-    );
+    for file in ["usr/lib/contrastxr/libcontrastxr.so", "usr/bin/contrastxr"] {
+        assert!(unpacked.join(file).is_file(), "{file} not unpacked");
+    }
 }

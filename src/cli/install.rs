@@ -47,7 +47,8 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .map_err(|e| CliError::Failure(format!("cannot find the library {p}: {e}")))?,
         None => installed_files::find_library().map_err(CliError::Failure)?,
     };
-    // The tool goes beside the library: the layer runs it to build OpenGL apps' programs.
+    // A stable copy of this tool beside the library's (its `gl-programs` fills the OpenGL
+    // program caches ahead of time); the layer itself never runs it.
     let tool = std::env::current_exe().ok();
     let done =
         installed_files::install(scope, &library, tool.as_deref()).map_err(CliError::Failure)?;

@@ -1,4 +1,4 @@
-//! The layer library's files: where it was loaded from, the tool beside it, and
+//! The layer library's files: where it was loaded from, and
 //! `contrastxr install` / `uninstall`: a copy of the layer library in a stable place and the
 //! implicit layer manifest naming it, in the XDG OpenXR layer directory. The copy is what keeps
 //! the layer loadable after `cargo clean` or a rebuild of the tree it came from. The template is
@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 const TEMPLATE: &str = include_str!("../../layer-manifest/contrastxr-implicit.json");
 pub const MANIFEST_NAME: &str = "contrastxr.json";
 const LIBRARY_NAME: &str = "libcontrastxr.so";
-/// The tool's name beside the library copy (the layer itself never runs it).
+/// The tool's name beside the library copy (`install` copies it there as a stable
+/// `contrastxr gl-programs`; the layer itself never runs it).
 const TOOL_NAME: &str = "contrastxr";
 /// Where the Debian package puts the library (its manifest, `layer-manifest/deb/`, names it).
 pub const PACKAGED_LIBRARY: &str = "/usr/lib/contrastxr/libcontrastxr.so";
@@ -58,16 +59,6 @@ pub(crate) fn library_file() -> Option<std::ffi::CString> {
     }
     // SAFETY: dli_fname is a NUL-terminated path owned by the dynamic linker.
     Some(unsafe { std::ffi::CStr::from_ptr(info.dli_fname) }.to_owned())
-}
-
-/// The tool that came with the layer's library at `library`: beside it (cargo's output folder,
-/// `install`'s copy) or where the Debian package puts it (`/usr/bin` for `/usr/lib/contrastxr`).
-pub fn tool_beside(library: &Path) -> Option<PathBuf> {
-    let library = library.canonicalize().ok()?;
-    let dir = library.parent()?;
-    [dir.join(TOOL_NAME), dir.join("../../bin").join(TOOL_NAME)]
-        .into_iter()
-        .find(|p| p.is_file())
 }
 
 /// Where `install` keeps its copy of the library: `$XDG_DATA_HOME/contrastxr/` for the user,

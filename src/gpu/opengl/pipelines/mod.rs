@@ -1,7 +1,7 @@
 //! The compute programs: built from the embedded GLSL in the order they are needed, through the
 //! program binary cache on disk.
 
-pub mod binary_cache;
+mod binary_cache;
 mod programs;
 
 pub use binary_cache::{BinaryCache, ProgramBinaries};

@@ -49,8 +49,8 @@ pub enum GlParam {
 
 include!(concat!(env!("OUT_DIR"), "/gl_shader_table.rs"));
 
-/// One id of every program source of this build: the layer's program builder process
-/// (`contrastxr gl-programs`) refuses to build for a layer whose sources differ.
+/// One id of every program source of this build: `contrastxr gl-programs --sources ID`
+/// refuses to fill the caches for a layer whose sources differ.
 pub fn gl_sources_id() -> u64 {
     GL_MODULES
         .iter()
