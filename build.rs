@@ -60,143 +60,201 @@ use wgsl::{method_wgsl, prefix, sampling, specialise};
 const STAGES: &[(&str, &[&str])] = &[("enhance", &["finish_tiles"]), ("copy", &["copy_pixels"])];
 
 fn main() {
-    let out = PathBuf::from(env::var("OUT_DIR").unwrap());
-    let common = fs::read_to_string("shaders/common.wgsl").expect("shaders/common.wgsl");
     println!("cargo:rerun-if-changed=shaders/common.wgsl");
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=src/gpu/core/approx_constants.rs");
     println!("cargo:rerun-if-changed=src/gpu/core/interface.rs");
     println!("cargo:rerun-if-changed=src/algorithm/method/table.rs");
-    let prefix = |access_code: u32, format: u32| prefix(&common, access_code, format);
-    // Parses, checks and writes `file`.spv; the parsed module, for the GLSL.
-    let write = |file: &str, stage: &str, source: &str, entry: &str| -> Parsed {
-        let parsed = parse(stage, source);
-        spirv::write_spirv(&out, file, &parsed, entry);
-        parsed
+    let mut build = Build {
+        out: PathBuf::from(env::var("OUT_DIR").unwrap()),
+        common: fs::read_to_string("shaders/common.wgsl").expect("shaders/common.wgsl"),
+        table: Table::default(),
+        gl: GlTable::default(),
     };
-    let mut table = Table::default();
-    let mut gl = GlTable::default();
     // The table's order: the single shaders (decode_camera, finish_tiles, copy_pixels,
     // copy_rows), the background passes, the `enhance`, the `classify` and the benchmark's ablated
     // variants.
-    table.single("DECODE_CAMERA", "decode_camera", "decode", true);
-    for (stage, entries) in STAGES {
-        let path = format!("shaders/{stage}.wgsl");
-        println!("cargo:rerun-if-changed={path}");
-        let mut body = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-        if *stage == "enhance" {
-            body += &sampling(false);
-            body += &method_wgsl(paper_code());
-        }
-        let source = format!(
-            "{}\n{}{body}",
-            prefix(ACCESS_NARROW, FORMAT_CODES[0]),
-            specialise((0, 0, FORMAT_CODES[0]), false)
-        );
-        for entry in *entries {
-            let parsed = write(entry, stage, &source, entry);
-            table.single(&entry.to_uppercase(), entry, entry, false);
-            if *entry == "finish_tiles" {
-                let uniforms = glsl::write_glsl(&out, entry, &parsed, entry);
-                gl.finish_tiles = Some(gl.add(entry, uniforms));
+    build
+        .table
+        .single("DECODE_CAMERA", "decode_camera", "decode", true);
+    build.stages();
+    build.copy_rows();
+    build.background();
+    let body = fs::read_to_string("shaders/enhance.wgsl").unwrap();
+    build.enhance(&body);
+    build.classify(&body);
+    build.ablated(&body);
+    write_back_stages(&build.out);
+    fs::write(build.out.join("shader_table.rs"), build.table.source()).unwrap();
+    fs::write(build.out.join("gl_shader_table.rs"), build.gl.source()).unwrap();
+}
+
+/// The build's output: the SPIR-V and GLSL files in `out`, and the tables that list them.
+struct Build {
+    out: PathBuf,
+    /// shaders/common.wgsl, which every shader starts with.
+    common: String,
+    table: Table,
+    gl: GlTable,
+}
+
+impl Build {
+    /// A shader's opening: common.wgsl and the interface's declarations for its pixel access
+    /// and format.
+    fn prefix(&self, access_code: u32, format: u32) -> String {
+        prefix(&self.common, access_code, format)
+    }
+
+    /// Parses, checks and writes `file`.spv; the parsed module, for the GLSL.
+    fn write(&self, file: &str, stage: &str, source: &str, entry: &str) -> Parsed {
+        let parsed = parse(stage, source);
+        spirv::write_spirv(&self.out, file, &parsed, entry);
+        parsed
+    }
+
+    /// Writes `file`.glsl from `parsed`; its id in the OpenGL table.
+    fn write_glsl(&mut self, file: &str, parsed: &Parsed, entry: &str) -> usize {
+        let uniforms = glsl::write_glsl(&self.out, file, parsed, entry);
+        self.gl.add(file, uniforms)
+    }
+
+    /// The stage files' single shaders (finish_tiles, copy_pixels), in the narrow access.
+    fn stages(&mut self) {
+        for (stage, entries) in STAGES {
+            let path = format!("shaders/{stage}.wgsl");
+            println!("cargo:rerun-if-changed={path}");
+            let mut body = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+            if *stage == "enhance" {
+                body += &sampling(false);
+                body += &method_wgsl(paper_code());
+            }
+            let source = format!(
+                "{}\n{}{body}",
+                self.prefix(ACCESS_NARROW, FORMAT_CODES[0]),
+                specialise((0, 0, FORMAT_CODES[0]), false)
+            );
+            for entry in *entries {
+                let parsed = self.write(entry, stage, &source, entry);
+                self.table
+                    .single(&entry.to_uppercase(), entry, entry, false);
+                if *entry == "finish_tiles" {
+                    self.gl.finish_tiles = Some(self.write_glsl(entry, &parsed, entry));
+                }
             }
         }
     }
-    println!("cargo:rerun-if-changed=shaders/copy_wide.wgsl");
-    let body = fs::read_to_string("shaders/copy_wide.wgsl").unwrap();
-    let source = format!(
-        "{}\n{}{body}",
-        prefix(ACCESS_WIDE, 0),
-        specialise((0, 0, 0), false)
-    );
-    let _ = write("copy_rows", "copy_wide", &source, "copy_rows");
-    table.single("COPY_ROWS", "copy_rows", "copy_rows", false);
-    // The background pass once per blur half-width (Params::blur_taps: at most 7), so that its
-    // loops have constant trip counts (see shaders/background.wgsl); its half-width 0 source
-    // also holds `decode`, the camera texels' decode.
-    println!("cargo:rerun-if-changed=shaders/background.wgsl");
-    let body = fs::read_to_string("shaders/background.wgsl").unwrap();
-    for half in 0..=MAX_BLUR_HALF {
+
+    /// The benchmark's 16-byte copy (shaders/copy_wide.wgsl).
+    fn copy_rows(&mut self) {
+        println!("cargo:rerun-if-changed=shaders/copy_wide.wgsl");
+        let body = fs::read_to_string("shaders/copy_wide.wgsl").unwrap();
         let source = format!(
-            "{}\n{}const BLUR_HALF: u32 = {half}u;\n{body}",
-            prefix(ACCESS_NARROW, FORMAT_CODES[0]),
-            specialise((0, 0, FORMAT_CODES[0]), false)
+            "{}\n{}{body}",
+            self.prefix(ACCESS_WIDE, 0),
+            specialise((0, 0, 0), false)
         );
-        let file = format!("decode_blur_{half}");
-        let _ = write(&file, "background", &source, "decode_blur");
-        if half == 0 {
-            let _ = write("decode_camera", "background", &source, "decode");
-        }
-        let id = table.add(&file, "decode_blur", true, None);
-        table.decode_blur.push(id);
+        let _ = self.write("copy_rows", "copy_wide", &source, "copy_rows");
+        self.table
+            .single("COPY_ROWS", "copy_rows", "copy_rows", false);
     }
-    let body = fs::read_to_string("shaders/enhance.wgsl").unwrap();
-    let [general, shared_fetch] = [false, true].map(sampling);
-    for v in variants::enhance_variants() {
-        let file = v.file();
-        let source = format!(
-            "{}\n{}{body}{}{}",
-            prefix(v.pixels.access, v.pixels.format),
-            specialise((v.method, v.mode, v.pixels.format), v.extras),
-            if v.shared { &shared_fetch } else { &general },
-            method_wgsl(v.method)
-        );
-        let parsed = write(&file, "enhance", &source, "enhance");
-        let id = table.add(&file, "enhance", false, Some(v.pixels));
-        table.enhance.push((v, id));
-        if v.gl() {
-            let uniforms = glsl::write_glsl(&out, &file, &parsed, "enhance");
-            let id = gl.add(&file, uniforms);
-            gl.enhance.push((v, id));
+
+    /// The background pass once per blur half-width (Params::blur_taps: at most 7), so that its
+    /// loops have constant trip counts (see shaders/background.wgsl); its half-width 0 source
+    /// also holds `decode`, the camera texels' decode.
+    fn background(&mut self) {
+        println!("cargo:rerun-if-changed=shaders/background.wgsl");
+        let body = fs::read_to_string("shaders/background.wgsl").unwrap();
+        for half in 0..=MAX_BLUR_HALF {
+            let source = format!(
+                "{}\n{}const BLUR_HALF: u32 = {half}u;\n{body}",
+                self.prefix(ACCESS_NARROW, FORMAT_CODES[0]),
+                specialise((0, 0, FORMAT_CODES[0]), false)
+            );
+            let file = format!("decode_blur_{half}");
+            let _ = self.write(&file, "background", &source, "decode_blur");
+            if half == 0 {
+                let _ = self.write("decode_camera", "background", &source, "decode");
+            }
+            let id = self.table.add(&file, "decode_blur", true, None);
+            self.table.decode_blur.push(id);
         }
     }
-    for v in variants::classify_variants() {
-        let file = v.file();
-        let format = v.pixels.format;
-        let source = format!(
-            "{}\n{}{body}{general}{}",
-            prefix(v.pixels.access, format),
-            specialise((v.method, 0, format), false),
-            method_wgsl(v.method)
-        );
-        let parsed = write(&file, "enhance", &source, "classify");
-        let id = table.add(&file, "classify", false, Some(v.pixels));
-        table.classify.push((v, id));
-        if v.pixels.gl() {
-            let uniforms = glsl::write_glsl(&out, &file, &parsed, "classify");
-            let id = gl.add(&file, uniforms);
-            gl.classify.push((v, id));
-        }
-    }
-    // The benchmark's ablations, after the variants the layer runs.
-    for v in variants::ablated_variants() {
-        let file = v.file();
-        let source = |sampling: &str| {
-            format!(
-                "{}\n{}{body}{sampling}{}",
-                prefix(v.pixels.access, v.pixels.format),
-                wgsl::specialise_ablated(v.codes(), false, v.ablate),
+
+    /// The `enhance` variants (method, mode, pixels, extras, shared fetches) of `body`
+    /// (shaders/enhance.wgsl).
+    fn enhance(&mut self, body: &str) {
+        let [general, shared_fetch] = [false, true].map(sampling);
+        for v in variants::enhance_variants() {
+            let file = v.file();
+            let source = format!(
+                "{}\n{}{body}{}{}",
+                self.prefix(v.pixels.access, v.pixels.format),
+                specialise((v.method, v.mode, v.pixels.format), v.extras),
+                if v.shared { &shared_fetch } else { &general },
                 method_wgsl(v.method)
-            )
-        };
-        let sampling = if v.shared() { &shared_fetch } else { &general };
-        let parsed = write(&file, "enhance", &source(sampling), "enhance");
-        let id = table.add(&file, "enhance", false, Some(v.pixels));
-        table.ablated.push((v, id));
-        if v.pixels.gl() {
-            // OpenGL has no shared fetches: its variants sample as its own `enhance` does.
-            let parsed = match v.shared() {
-                true => parse("enhance", &source(&general)),
-                false => parsed,
-            };
-            let uniforms = glsl::write_glsl(&out, &file, &parsed, "enhance");
-            let id = gl.add(&file, uniforms);
-            gl.ablated.push((v, id));
+            );
+            let parsed = self.write(&file, "enhance", &source, "enhance");
+            let id = self.table.add(&file, "enhance", false, Some(v.pixels));
+            self.table.enhance.push((v, id));
+            if v.gl() {
+                let id = self.write_glsl(&file, &parsed, "enhance");
+                self.gl.enhance.push((v, id));
+            }
         }
     }
-    write_back_stages(&out);
-    fs::write(out.join("shader_table.rs"), table.source()).unwrap();
-    fs::write(out.join("gl_shader_table.rs"), gl.source()).unwrap();
+
+    /// The `classify` variants (method, pixels) of `body`.
+    fn classify(&mut self, body: &str) {
+        let general = sampling(false);
+        for v in variants::classify_variants() {
+            let file = v.file();
+            let format = v.pixels.format;
+            let source = format!(
+                "{}\n{}{body}{general}{}",
+                self.prefix(v.pixels.access, format),
+                specialise((v.method, 0, format), false),
+                method_wgsl(v.method)
+            );
+            let parsed = self.write(&file, "enhance", &source, "classify");
+            let id = self.table.add(&file, "classify", false, Some(v.pixels));
+            self.table.classify.push((v, id));
+            if v.pixels.gl() {
+                let id = self.write_glsl(&file, &parsed, "classify");
+                self.gl.classify.push((v, id));
+            }
+        }
+    }
+
+    /// The benchmark's ablations of `body`, after the variants the layer runs.
+    fn ablated(&mut self, body: &str) {
+        let [general, shared_fetch] = [false, true].map(sampling);
+        for v in variants::ablated_variants() {
+            let file = v.file();
+            let source = |sampling: &str| {
+                format!(
+                    "{}\n{}{body}{sampling}{}",
+                    self.prefix(v.pixels.access, v.pixels.format),
+                    wgsl::specialise_ablated(v.codes(), false, v.ablate),
+                    method_wgsl(v.method)
+                )
+            };
+            let sampling = if v.shared() { &shared_fetch } else { &general };
+            let source_here = source(sampling);
+            let general_source = v.shared().then(|| source(&general));
+            let parsed = self.write(&file, "enhance", &source_here, "enhance");
+            let id = self.table.add(&file, "enhance", false, Some(v.pixels));
+            self.table.ablated.push((v, id));
+            if v.pixels.gl() {
+                // OpenGL has no shared fetches: its variants sample as its own `enhance` does.
+                let parsed = match general_source {
+                    Some(general_source) => parse("enhance", &general_source),
+                    None => parsed,
+                };
+                let id = self.write_glsl(&file, &parsed, "enhance");
+                self.gl.ablated.push((v, id));
+            }
+        }
+    }
 }
 
 /// The image-copy path's write-back (shaders/write_back.wgsl): its vertex stage once, its
