@@ -1,6 +1,11 @@
 //! The app's EGL context (XR_MNDX_egl_enable) around the layer's GL calls: made current on the
 //! calling thread without a surface when it is not (as the runtime does), what was current
 //! put back after. EGL reports a context current on another thread as a failed call, no more.
+//!
+//! eglGetCurrent* and eglMakeCurrent (when it releases) act on the thread's bound client API
+//! (eglBindAPI), which is EGL_OPENGL_ES_API on a thread that never bound one, and an app may
+//! bind another with its OpenGL context current. So the layer binds EGL_OPENGL_API for its
+//! check and switch, and binds the app's API again when it leaves, on every path.
 
 use super::app_context::{AppContext, Previous as AnyPrevious, NOT_CURRENT};
 use crate::gpu::opengl::{Gl, GlError};
@@ -12,15 +17,27 @@ type GetCurrentContext = unsafe extern "C" fn() -> *mut c_void;
 type GetCurrentDisplay = unsafe extern "C" fn() -> *mut c_void;
 type GetCurrentSurface = unsafe extern "C" fn(i32) -> *mut c_void;
 type MakeCurrent = unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, *mut c_void) -> u32;
+type QueryApi = unsafe extern "C" fn() -> u32;
+type BindApi = unsafe extern "C" fn(u32) -> u32;
+type GetError = unsafe extern "C" fn() -> i32;
 
 const DRAW: i32 = 0x3059;
 const READ: i32 = 0x305A;
+/// The API of the app's context: desktop OpenGL (XR_KHR_opengl_enable; the engine refuses an
+/// OpenGL ES context at its first frame).
+const OPENGL_API: u32 = 0x30A2;
+/// eglQueryAPI's answer on a thread of an EGL without OpenGL ES that never bound an API: it
+/// cannot be bound again (eglBindAPI refuses it), so such a thread keeps EGL_OPENGL_API.
+const NO_API: u32 = 0x3038;
 
 struct Egl {
     get_current_context: GetCurrentContext,
     get_current_display: GetCurrentDisplay,
     get_current_surface: GetCurrentSurface,
     make_current: MakeCurrent,
+    query_api: QueryApi,
+    bind_api: BindApi,
+    get_error: GetError,
 }
 
 /// The app's context from its EGL binding.
@@ -31,7 +48,17 @@ pub struct EglContext {
     context: *mut c_void,
 }
 
+/// What `enter` changed on the thread, to undo in `leave`.
 struct Previous {
+    /// The client API the thread had bound, bound again last.
+    api: u32,
+    /// What was current for OpenGL before the switch to the app's context (None: it was
+    /// current already, nothing switched).
+    current: Option<Current>,
+}
+
+/// The thread's current OpenGL context and surfaces (with EGL_OPENGL_API bound).
+struct Current {
     display: *mut c_void,
     draw: *mut c_void,
     read: *mut c_void,
@@ -72,15 +99,18 @@ impl EglContext {
                 get_current_display: egl!(c"eglGetCurrentDisplay", GetCurrentDisplay),
                 get_current_surface: egl!(c"eglGetCurrentSurface", GetCurrentSurface),
                 make_current: egl!(c"eglMakeCurrent", MakeCurrent),
+                query_api: egl!(c"eglQueryAPI", QueryApi),
+                bind_api: egl!(c"eglBindAPI", BindApi),
+                get_error: egl!(c"eglGetError", GetError),
             },
             display: b.display,
             context: b.context,
         })
     }
-}
 
-impl AppContext for EglContext {
-    fn enter(&self) -> Result<Option<AnyPrevious>, String> {
+    /// With EGL_OPENGL_API bound: the app's context made current if it is not, Ok(Some) with
+    /// what was current; on failure what was current is put back.
+    fn switch(&self) -> Result<Option<Current>, String> {
         let e = &self.egl;
         // SAFETY: EGL queries of this thread's current context, valid with none current.
         let current = unsafe { (e.get_current_context)() };
@@ -90,7 +120,7 @@ impl AppContext for EglContext {
         }
         // SAFETY: as above.
         let previous = unsafe {
-            Previous {
+            Current {
                 display: (e.get_current_display)(),
                 draw: (e.get_current_surface)(DRAW),
                 read: (e.get_current_surface)(READ),
@@ -104,7 +134,7 @@ impl AppContext for EglContext {
         let now = unsafe { (e.get_current_context)() };
         if made == 0 || now != self.context || forced {
             // Whatever the failed switch left, this thread gets back what it had.
-            self.leave(Some(Box::new(previous)));
+            self.make_current(&previous);
             let injected = if forced {
                 " (fault injected at gl-make-current)"
             } else {
@@ -112,20 +142,61 @@ impl AppContext for EglContext {
             };
             return Err(format!("{NOT_CURRENT}{injected}"));
         }
-        Ok(Some(Box::new(previous)))
+        Ok(Some(previous))
+    }
+
+    /// Makes `c` current again (with EGL_OPENGL_API bound, as when it was found).
+    fn make_current(&self, c: &Current) {
+        let display = if c.display.is_null() {
+            self.display
+        } else {
+            c.display
+        };
+        // SAFETY: what this thread had current a moment ago (or nothing).
+        unsafe { (self.egl.make_current)(display, c.draw, c.read, c.context) };
+    }
+
+    /// Binds `api` on this thread, when it differs from EGL_OPENGL_API and can be bound.
+    fn bind_api(&self, api: u32) {
+        if api != OPENGL_API && api != NO_API {
+            // SAFETY: an API this thread had bound, so one the implementation knows.
+            unsafe { (self.egl.bind_api)(api) };
+        }
+    }
+}
+
+impl AppContext for EglContext {
+    fn enter(&self) -> Result<Option<AnyPrevious>, String> {
+        let e = &self.egl;
+        // SAFETY: eglQueryAPI and eglBindAPI change only this thread's bound API.
+        let api = unsafe { (e.query_api)() };
+        if api != OPENGL_API {
+            // SAFETY: as above; an EGL without desktop OpenGL refuses it and keeps the API,
+            // but then the app's context cannot be OpenGL either.
+            unsafe { (e.bind_api)(OPENGL_API) };
+        }
+        match self.switch() {
+            Ok(None) if api == OPENGL_API => Ok(None),
+            Ok(current) => Ok(Some(Box::new(Previous { api, current }))),
+            Err(why) => {
+                self.bind_api(api);
+                // The failed switch's error is the layer's: the app's eglGetError does not
+                // see it.
+                // SAFETY: eglGetError reads and clears this thread's last EGL error.
+                unsafe { (e.get_error)() };
+                Err(why)
+            }
+        }
     }
 
     fn leave(&self, previous: Option<AnyPrevious>) {
         let Some(p) = previous.and_then(|p| p.downcast::<Previous>().ok()) else {
             return;
         };
-        let display = if p.display.is_null() {
-            self.display
-        } else {
-            p.display
-        };
-        // SAFETY: what this thread had current a moment ago (or nothing).
-        unsafe { (self.egl.make_current)(display, p.draw, p.read, p.context) };
+        if let Some(current) = &p.current {
+            self.make_current(current);
+        }
+        self.bind_api(p.api);
     }
 
     fn key(&self) -> (usize, usize) {
@@ -140,3 +211,7 @@ impl AppContext for EglContext {
         })
     }
 }
+
+#[cfg(test)]
+#[path = "egl_context_tests.rs"]
+mod tests;
