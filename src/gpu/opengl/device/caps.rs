@@ -13,6 +13,9 @@ pub struct Caps {
     pub parallel_compile: bool,
     /// glGetProgramBinary gives something (at least one binary format).
     pub program_binaries: bool,
+    /// The binary formats glProgramBinary takes (GL_PROGRAM_BINARY_FORMATS): a cached binary
+    /// of another format is not handed to it.
+    pub binary_formats: Vec<u32>,
     /// GL_VENDOR, GL_RENDERER and GL_VERSION without its profile ("(Core Profile)"), which
     /// name the program binaries' cache file: a core context's binaries serve a
     /// compatibility-profile context of the same driver.
@@ -68,6 +71,19 @@ fn parse_version(v: &str) -> Option<(i32, i32)> {
     Some((parts.next()?.parse().ok()?, parts.next()?.parse().ok()?))
 }
 
+/// The context's program binary formats (GL 4.1 queries; the context is 4.5 by then).
+fn binary_formats(gl: &Gl) -> Vec<u32> {
+    let mut count = 0;
+    // SAFETY: a query of one value into a valid i32.
+    unsafe { (gl.get_integerv)(gl::NUM_PROGRAM_BINARY_FORMATS, &mut count) };
+    let mut formats = vec![0; count.max(0) as usize];
+    if !formats.is_empty() {
+        // SAFETY: GL writes GL_NUM_PROGRAM_BINARY_FORMATS values, the vector's length.
+        unsafe { (gl.get_integerv)(gl::PROGRAM_BINARY_FORMATS, formats.as_mut_ptr()) };
+    }
+    formats.into_iter().map(|f| f as u32).collect()
+}
+
 impl Caps {
     /// The current context's caps, or why the backend cannot run on it: OpenGL ES, a version
     /// before 4.3 (no compute shaders) or before 4.5 (GLSL 4.50, direct state access,
@@ -116,9 +132,7 @@ impl Caps {
             })
             .collect();
         let has = |name: &str| extensions.iter().any(|e| e == name);
-        let mut formats = 0;
-        // SAFETY: GL 4.1 query into a valid i32.
-        unsafe { (gl.get_integerv)(gl::NUM_PROGRAM_BINARY_FORMATS, &mut formats) };
+        let binary_formats = binary_formats(gl);
         let renderer = text(gl, gl::RENDERER);
         let mut profile = 0;
         // SAFETY: GL 3.2 query into a valid i32.
@@ -142,7 +156,8 @@ impl Caps {
             software: is_software(&renderer),
             parallel_compile: has("GL_KHR_parallel_shader_compile")
                 || has("GL_ARB_parallel_shader_compile"),
-            program_binaries: formats > 0,
+            program_binaries: !binary_formats.is_empty(),
+            binary_formats,
             driver: format!(
                 "{} | {renderer} | {}",
                 text(gl, gl::VENDOR),

@@ -171,6 +171,7 @@ pub const CONTEXT_PROFILE_MASK: Enum = 0x9126;
 pub const CONTEXT_ES_PROFILE_BIT: Int = 0x4;
 pub const CONTEXT_COMPATIBILITY_PROFILE_BIT: Int = 0x2;
 pub const NUM_PROGRAM_BINARY_FORMATS: Enum = 0x87FE;
+pub const PROGRAM_BINARY_FORMATS: Enum = 0x87FF;
 pub const MAX_COMPUTE_WORK_GROUP_COUNT: Enum = 0x91BE;
 
 // Shaders and programs.

@@ -76,6 +76,8 @@ pub struct Programs {
     slots: Vec<Slot>,
     parallel: bool,
     cache: BinaryCache,
+    /// The binary formats the context takes (Caps::binary_formats).
+    binary_formats: Vec<u32>,
 }
 
 fn info_log(g: &Gl, object: u32, program: bool) -> String {
@@ -121,6 +123,7 @@ impl Programs {
             slots: GL_MODULES.iter().map(|_| Slot::NotStarted).collect(),
             parallel: caps.parallel_compile,
             cache: BinaryCache::load(&caps.driver, caps.program_binaries),
+            binary_formats: caps.binary_formats.clone(),
         }
     }
 
@@ -269,8 +272,15 @@ impl Programs {
     fn link_cached(&mut self, g: &Gl, source: &str) -> Option<Program> {
         let hash = source_hash(source);
         let (format, bytes) = self.cache.get(hash)?;
-        // SAFETY: a new program; the binary's bytes and length are the cached entry's (a
-        // binary the driver refuses leaves LINK_STATUS false, it raises no error).
+        if !self.binary_formats.contains(&format) {
+            // glProgramBinary raises GL_INVALID_ENUM into the app's flag for a format the
+            // context does not list: the program is built from source, as for a refused one.
+            self.cache.forget(hash);
+            return None;
+        }
+        // SAFETY: a new program; the binary's bytes and length are the cached entry's, in a
+        // format the context lists (a binary the driver refuses leaves LINK_STATUS false, it
+        // raises no error).
         let program = unsafe {
             let program = (g.create_program)();
             (g.program_binary)(program, format, bytes.as_ptr().cast(), bytes.len() as i32);
@@ -412,4 +422,49 @@ pub fn enhance(
             !s && (v, f, a) == (mode, format, access) && (background || (m, e) == (method, extras))
         })
         .map(|&(.., id)| id)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::opengl::GlOffline;
+
+    /// glGetError of the offline context (EGL's loader; the engine itself never calls it).
+    fn get_error() -> unsafe extern "C" fn() -> u32 {
+        type GetProc = unsafe extern "C" fn(*const std::ffi::c_char) -> *mut std::ffi::c_void;
+        // SAFETY: libEGL is loaded (the offline context's); dlsym and eglGetProcAddress only
+        // look names up, and the addresses found have these C types.
+        unsafe {
+            let egl = libc::dlopen(c"libEGL.so.1".as_ptr(), libc::RTLD_NOW | libc::RTLD_NOLOAD);
+            let get: GetProc = std::mem::transmute(libc::dlsym(egl, c"eglGetProcAddress".as_ptr()));
+            std::mem::transmute(get(c"glGetError".as_ptr()))
+        }
+    }
+
+    /// A cached binary in a format the context does not list is never handed to
+    /// glProgramBinary (which would raise GL_INVALID_ENUM into the app's flag): it is
+    /// forgotten and the program built from source.
+    #[test]
+    fn a_binary_of_a_format_the_context_lacks_is_not_loaded() {
+        let _offline = GlOffline::new().expect("an OpenGL context");
+        let g = Gl::from_process().unwrap();
+        let caps = Caps::check(&g).unwrap();
+        if !caps.program_binaries {
+            println!("the driver gives no program binaries: nothing to test");
+            return;
+        }
+        let mut programs = Programs::new(&caps);
+        let format = (1..).find(|f| !caps.binary_formats.contains(f)).unwrap();
+        let (_, source) = GL_MODULES[0];
+        let hash = source_hash(source);
+        programs.cache.keep(hash, format, vec![1, 2, 3, 4]);
+        assert!(programs.cache.get(hash).is_some());
+        let error = get_error();
+        // SAFETY: the offline context is current on this thread.
+        assert_eq!(unsafe { error() }, 0, "an error before the test");
+        assert!(programs.link_cached(&g, source).is_none());
+        // SAFETY: as above.
+        assert_eq!(unsafe { error() }, 0, "loading the binary raised an error");
+        assert!(programs.cache.get(hash).is_none(), "the binary was kept");
+    }
 }
