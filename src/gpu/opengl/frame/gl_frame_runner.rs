@@ -20,7 +20,8 @@
 //! samples the background behind it with no change to the shaders.
 //!
 //! Everything the recipe changes of the app's GL state is put back (state_guard.rs), and it calls no
-//! glGetError (nor anything that would raise an error it would then leave to the app).
+//! glGetError; the only error it can leave to the app is a driver's GL_OUT_OF_MEMORY while it
+//! allocates (state_guard.rs says when).
 
 use super::gl_view::GlView;
 use super::state_guard::{DebugOutputOff, SavedState};

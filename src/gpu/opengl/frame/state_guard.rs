@@ -1,8 +1,13 @@
 //! The app's GL state around the backend's calls: everything the recipe changes is read before
 //! it runs and put back after it, so that the app finds exactly the state it left. The error
 //! flag is not among it: the backend never calls glGetError (which would read and clear the
-//! app's pending error) and makes no call that raises one (object status queries tell it what
-//! failed), so whatever error the app had pending is still pending after the call. A binding
+//! app's pending error, and GL has no call that sets it again) and checks what it is given
+//! before using it, learning what failed from object status queries, so whatever error the
+//! app had pending is still pending after the call. One error it cannot rule out: a driver out
+//! of memory while the engine allocates a buffer or texture (glNamedBufferStorage,
+//! glNamedBufferData, glTextureStorage2D, when an engine, a view size or a background size is
+//! new, not every frame) records GL_OUT_OF_MEMORY, which an app with no error pending then
+//! reads; the engine sees the failure in GL_BUFFER_SIZE or GL_TEXTURE_WIDTH. A binding
 //! that could not be put back (an object alive only through it, active transform feedback) is
 //! found before anything changes, and the call then does nothing (`GlError::Unrestorable`).
 //! In a compatibility-profile context the pixel-transfer state (glPixelTransfer's scales,
