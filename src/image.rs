@@ -27,17 +27,18 @@ impl RgbaImage {
         RgbaImage {
             width,
             height,
-            pixels: vec![fill; (width * height) as usize],
+            // In usize: in u32 the product wraps (65536 x 65536 is 0), a buffer too small.
+            pixels: vec![fill; width as usize * height as usize],
             has_alpha: true,
         }
     }
 
     pub fn get(&self, x: u32, y: u32) -> [u8; 4] {
-        self.pixels[(y * self.width + x) as usize]
+        self.pixels[y as usize * self.width as usize + x as usize]
     }
 
     pub fn set(&mut self, x: u32, y: u32, v: [u8; 4]) {
-        self.pixels[(y * self.width + x) as usize] = v;
+        self.pixels[y as usize * self.width as usize + x as usize] = v;
     }
 
     /// Reads a PNG or a JPEG, told apart by their first bytes (not by the file name). Only a
@@ -79,7 +80,7 @@ impl RgbaImage {
     /// The image shrunk to at most `most` (see [`load_within`](Self::load_within)); itself
     /// when it is not larger.
     pub fn shrunk(self, most: (u32, u32)) -> RgbaImage {
-        let mut shrink = Shrink::new((self.width, self.height), most, self.has_alpha);
+        let mut shrink = Shrink::new((self.width, self.height), most, self.has_alpha, Vec::new());
         if shrink.size() == (self.width, self.height) {
             return self;
         }
@@ -119,10 +120,7 @@ impl RgbaImage {
         let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
         let header = decoder.read_header_info().map_err(unreadable)?;
         user_file::check_dimensions(header.width, header.height)?;
-        // The decoder's own allocation bound, above the largest picture allowed (16-bit RGBA).
-        let side = u64::from(user_file::MAX_SIDE);
-        let most = usize::try_from(side * side * 8).unwrap_or(usize::MAX);
-        decoder.set_limits(png::Limits { bytes: most });
+        decoder.set_limits(png_limits());
         decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
         let mut reader = decoder.read_info().map_err(unreadable)?;
         let mut buf = vec![0; reader.output_buffer_size()];
@@ -203,7 +201,7 @@ fn jpeg_rgba(data: &[u8]) -> Result<(u32, u32, Vec<u8>), String> {
 /// A JPEG decoded whole, then shrunk from its decoded bytes (no second copy of the picture).
 fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, String> {
     let (width, height, pixels) = jpeg_rgba(bytes)?;
-    let mut shrink = Shrink::new((width, height), most, false);
+    let mut shrink = Shrink::new((width, height), most, false, Vec::new());
     if shrink.size() == (width, height) {
         let pixels = pixels
             .chunks_exact(4)
@@ -225,6 +223,13 @@ fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, Strin
     Ok(shrink.finish())
 }
 
+/// The PNG decoder's own allocation bound, above the largest picture allowed (16-bit RGBA).
+fn png_limits() -> png::Limits {
+    let side = u64::from(user_file::MAX_SIDE);
+    let bytes = usize::try_from(side * side * 8).unwrap_or(usize::MAX);
+    png::Limits { bytes }
+}
+
 /// A PNG decoded row by row into a [`Shrink`]; an interlaced one decoded whole, then shrunk.
 fn decode_png_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, String> {
     let unreadable = |e: png::DecodingError| format!("is not a readable PNG: {e}");
@@ -234,15 +239,13 @@ fn decode_png_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, String
     if header.interlaced {
         return RgbaImage::decode_png(bytes).map(|image| image.shrunk(most));
     }
-    let side = u64::from(user_file::MAX_SIDE);
-    let limit = usize::try_from(side * side * 8).unwrap_or(usize::MAX);
-    decoder.set_limits(png::Limits { bytes: limit });
+    decoder.set_limits(png_limits());
     decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
     let mut reader = decoder.read_info().map_err(unreadable)?;
     let (color, _) = reader.output_color_type();
     let (width, height) = (reader.info().width, reader.info().height);
     let has_alpha = matches!(color, png::ColorType::Rgba | png::ColorType::GrayscaleAlpha);
-    let mut shrink = Shrink::new((width, height), most, has_alpha);
+    let mut shrink = Shrink::new((width, height), most, has_alpha, Vec::new());
     let mut rows = 0;
     while let Some(row) = reader.next_row().map_err(unreadable)? {
         let (pixels, _) = rgba_pixels(color, row.data())?;
@@ -264,7 +267,7 @@ fn decode_png_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, String
 /// size, each output pixel the area average (in linear light, alpha as is) of the input pixels
 /// it covers. Positions are counted in units of 1 / (input size x output size) along each
 /// side, so the weights are exact integers.
-struct Shrink {
+pub(crate) struct Shrink {
     from: (u32, u32),
     to: (u32, u32),
     has_alpha: bool,
@@ -300,8 +303,17 @@ fn share(i: u32, from: u32, to: u32) -> [(u32, u32); 2] {
 }
 
 impl Shrink {
-    fn new(from: (u32, u32), most: (u32, u32), has_alpha: bool) -> Shrink {
+    /// The picture is made in `pixels`' memory when it is large enough (a pooled frame's: a
+    /// video's frames are then not each a new allocation).
+    pub(crate) fn new(
+        from: (u32, u32),
+        most: (u32, u32),
+        has_alpha: bool,
+        mut pixels: Vec<[u8; 4]>,
+    ) -> Shrink {
         let to = (from.0.min(most.0.max(1)), from.1.min(most.1.max(1)));
+        pixels.clear();
+        pixels.reserve_exact(to.0 as usize * to.1 as usize);
         let columns = (0..from.0).map(|x| share(x, from.0, to.0)).collect();
         Shrink {
             from,
@@ -311,7 +323,7 @@ impl Shrink {
             columns,
             sums: [vec![0.0; 4 * to.0 as usize], vec![0.0; 4 * to.0 as usize]],
             taken: 0,
-            pixels: Vec::with_capacity(to.0 as usize * to.1 as usize),
+            pixels,
             spread: vec![0.0; 4 * to.0 as usize],
         }
     }
@@ -321,7 +333,7 @@ impl Shrink {
     }
 
     /// Takes the next input row (`from.0` pixels).
-    fn row(&mut self, row: &[[u8; 4]]) {
+    pub(crate) fn row(&mut self, row: &[[u8; 4]]) {
         if self.taken >= self.from.1 {
             return;
         }
@@ -377,7 +389,7 @@ impl Shrink {
         self.sums[1].fill(0.0);
     }
 
-    fn finish(self) -> RgbaImage {
+    pub(crate) fn finish(self) -> RgbaImage {
         RgbaImage {
             width: self.to.0,
             height: self.to.1,
