@@ -15,9 +15,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// The size a still background is used at: the camera size the settings ask for, which the
-/// mapping and the blur work at (a `color:` background's size).
+/// mapping and the blur work at (a `color:` background's size), never over
+/// [`MAX_CAMERA_SIDE`](crate::camera::source::MAX_CAMERA_SIDE) a side.
 fn still_size(cfg: &CaptureConfig) -> (u32, u32) {
-    (cfg.width.max(1), cfg.height.max(1))
+    cfg.frame_size()
 }
 
 /// An `image:` background, shrunk as it loads to at most the camera size
@@ -58,14 +59,19 @@ pub(crate) trait VideoFrames: Send {
 
 struct PngFolder {
     files: Vec<PathBuf>,
+    /// The camera size each frame is shrunk to as it loads, as an `image:` still is.
+    most: (u32, u32),
 }
 
 impl VideoFrames for PngFolder {
     fn count(&self) -> usize {
         self.files.len()
     }
+    /// Frame `index`, shrunk row by row as it decodes (`RgbaImage::load_within`): a folder of
+    /// 8K frames then costs what one of camera-size frames does. (Told apart by their first
+    /// bytes, as `image:` is: a JPEG named `.png` plays too.)
     fn load(&mut self, index: usize, _: RgbaImage) -> Result<RgbaImage, String> {
-        RgbaImage::load_png(&self.files[index])
+        RgbaImage::load_within(&self.files[index], self.most)
     }
 }
 
@@ -107,9 +113,11 @@ pub(crate) fn open_video(
     if path.is_dir() {
         let files = numbered_pngs(path)?;
         let fps = playable_rate(cfg.video_fps)?;
-        Ok((Box::new(PngFolder { files }), fps))
+        let most = still_size(cfg);
+        Ok((Box::new(PngFolder { files, most }), fps))
     } else {
-        let y4m = Y4m::open(path).map_err(|e| CameraError::File(format!("video:{e}")))?;
+        let y4m = Y4m::open(path, still_size(cfg))
+            .map_err(|e| CameraError::File(format!("video:{e}")))?;
         let fps = playable_rate(y4m.fps)?;
         Ok((Box::new(y4m), fps))
     }
@@ -195,6 +203,55 @@ pub(crate) fn play(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::source::MAX_CAMERA_SIDE;
+
+    /// A picture whose shrunk pixels differ from one another.
+    fn scene(w: u32, h: u32) -> RgbaImage {
+        let mut img = RgbaImage::new(w, h, [0, 0, 0, 255]);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            *p = [
+                (i % 251) as u8,
+                (i / 7 % 256) as u8,
+                (i % 13 * 19) as u8,
+                255,
+            ];
+        }
+        img
+    }
+
+    #[test]
+    fn a_colour_is_made_within_the_camera_bound_even_where_u32_wraps() {
+        // 2^31 x 2 is 2^32 pixels: 0 in u32, which made an empty buffer under those sides.
+        let cfg = CaptureConfig {
+            width: 1 << 31,
+            height: 2,
+            ..CaptureConfig::default()
+        };
+        let image = color_frame([1, 2, 3], &cfg).image;
+        assert_eq!((image.width, image.height), (MAX_CAMERA_SIDE, 2));
+        assert_eq!(image.pixels.len(), 2 * MAX_CAMERA_SIDE as usize);
+        assert!(image.pixels.iter().all(|p| *p == [1, 2, 3, 255]));
+    }
+
+    #[test]
+    fn png_video_frames_are_shrunk_to_the_camera_size() {
+        let dir = crate::scratch::ScratchDir::new("video-within");
+        let (big, small) = (scene(301, 207), scene(40, 30));
+        big.save_png(&dir.join("f1.png")).unwrap();
+        small.save_png(&dir.join("f2.png")).unwrap();
+        let cfg = CaptureConfig {
+            width: 64,
+            height: 48,
+            ..CaptureConfig::default()
+        };
+        let (mut frames, _) = open_video(&dir, &cfg).unwrap();
+        let first = frames.load(0, RgbaImage::new(0, 0, [0; 4])).unwrap();
+        assert_eq!((first.width, first.height), (64, 48));
+        assert_eq!(first, big.shrunk((64, 48)));
+        // Not larger than the camera: as it is.
+        assert_eq!(frames.load(1, first).unwrap(), small);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn frames_sort_by_number_not_by_text() {

@@ -35,4 +35,4 @@ pub use error::CameraError;
 pub use log_sink::set_log_sink;
 pub use mailbox::{Frame, SourceStatus};
 pub use rig::{HeadPoses, WorldRig};
-pub use source::{parse_source, CameraControls, CaptureConfig, SourceSpec};
+pub use source::{parse_source, CameraControls, CaptureConfig, SourceSpec, MAX_CAMERA_SIDE};

@@ -59,12 +59,18 @@ fn parse_color(text: &str) -> Result<[u8; 3], String> {
     Ok([byte(0), byte(2), byte(4)])
 }
 
+/// The largest camera width or height a setting may ask for. A file source is made at the
+/// camera size (a `color:` background, a `world:` camera) or shrunk to it (`image:`, `video:`),
+/// so this bounds what one of its frames costs: 8192 x 8192 RGBA is 256 MiB.
+pub const MAX_CAMERA_SIDE: u32 = 8192;
+
 /// How to open and supervise a source. `Default` gives the documented defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CaptureConfig {
     /// Wanted camera width; the smallest offered size at least this wide is chosen (640).
+    /// The settings take at most [`MAX_CAMERA_SIDE`].
     pub width: u32,
-    /// Wanted camera height (480).
+    /// Wanted camera height (480), at most [`MAX_CAMERA_SIDE`] as the width.
     pub height: u32,
     /// Wanted camera rate in frames per second; the lowest offered rate >= this (30).
     pub fps: u32,
@@ -124,6 +130,16 @@ impl Default for CaptureConfig {
             world: None,
             still_blur: None,
         }
+    }
+}
+
+impl CaptureConfig {
+    /// The size a file source's frames are made at or shrunk to: the wanted camera size, each
+    /// side within 1..=[`MAX_CAMERA_SIDE`] also when the config was built by hand, not from
+    /// the settings.
+    pub fn frame_size(&self) -> (u32, u32) {
+        let side = |n: u32| n.clamp(1, MAX_CAMERA_SIDE);
+        (side(self.width), side(self.height))
     }
 }
 

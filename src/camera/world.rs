@@ -38,7 +38,7 @@ pub(crate) fn spawn(
         )
     })?;
     let panorama = RgbaImage::load(path).map_err(|e| CameraError::File(format!("world:{e}")))?;
-    let (width, height) = (cfg.width.max(1), cfg.height.max(1));
+    let (width, height) = cfg.frame_size();
     let fps = cfg.fps.max(1);
     let latency_ns = (f64::from(cfg.world_latency_ms) * 1e6) as i64;
     let text = format!(

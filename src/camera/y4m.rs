@@ -3,7 +3,7 @@
 //! header says `XCOLORRANGE=FULL`.
 
 use crate::camera::convert::{bt601_full_to_rgb, bt601_limited_to_rgb};
-use crate::image::RgbaImage;
+use crate::image::{RgbaImage, Shrink};
 use crate::user_file;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
@@ -28,12 +28,18 @@ pub(crate) struct Y4m {
     full_range: bool,
     /// File offset of each frame's pixel data.
     offsets: Vec<u64>,
-    /// The last frame's YUV bytes: one buffer for every frame read.
+    /// The last frame's YUV bytes: one buffer for every frame read, at the file's size (at
+    /// most `user_file::MAX_SIDE` a side: 384 MiB at 4:2:0), the one full-size copy kept.
     data: Vec<u8>,
+    /// The size frames are delivered at most (the camera size): a larger frame is shrunk row by
+    /// row as it is converted, as an `image:` still is, so the RGBA frames a player keeps
+    /// cost what camera frames do.
+    most: (u32, u32),
 }
 
 impl Y4m {
-    pub(crate) fn open(path: &Path) -> Result<Y4m, String> {
+    /// Opens `path`, whose frames are delivered at most `most` (width, height).
+    pub(crate) fn open(path: &Path, most: (u32, u32)) -> Result<Y4m, String> {
         // Any length (a video), but a regular file: a FIFO or /dev/zero never hangs or floods.
         let file =
             user_file::open(path, u64::MAX).map_err(|why| format!("{} {why}", path.display()))?;
@@ -51,6 +57,7 @@ impl Y4m {
         let mut y4m = parse_header(text.trim_end())
             .map_err(|e| format!("{} is not a usable Y4M file: {e}", path.display()))?;
         y4m.path = path.to_path_buf();
+        y4m.most = most;
         y4m.offsets = index_frames(&mut reader, header.len() as u64, y4m.frame_bytes())
             .map_err(|e| format!("{}: {e}", path.display()))?;
         if y4m.offsets.is_empty() {
@@ -75,7 +82,7 @@ impl Y4m {
 
     fn frame_bytes(&self) -> u64 {
         let (cw, ch) = self.chroma_size();
-        u64::from(self.width * self.height) + 2 * u64::from(cw * ch)
+        u64::from(self.width) * u64::from(self.height) + 2 * u64::from(cw) * u64::from(ch)
     }
 
     /// Frame `index`, converted into `into` (whose buffer is reused when its size matches).
@@ -97,31 +104,49 @@ impl Y4m {
         image
     }
 
+    /// The frame in `data` as RGBA, in `into`'s buffer where it fits: at the file's size, or
+    /// shrunk to at most `most` when larger.
     fn to_rgba(&self, data: &[u8], into: RgbaImage) -> RgbaImage {
         let (w, h) = (self.width, self.height);
+        if w <= self.most.0 && h <= self.most.1 {
+            let mut image = crate::camera::pool::sized(into, w, h);
+            for (y, out) in image.pixels.chunks_exact_mut(w as usize).enumerate() {
+                self.row_rgba(data, y, out);
+            }
+            return image;
+        }
+        let mut shrink = Shrink::new((w, h), self.most, false, into.pixels);
+        let mut row = vec![[0, 0, 0, 255]; w as usize];
+        for y in 0..h as usize {
+            self.row_rgba(data, y, &mut row);
+            shrink.row(&row);
+        }
+        shrink.finish()
+    }
+
+    /// Row `y` of the frame in `data`, converted into `out` (`width` pixels).
+    fn row_rgba(&self, data: &[u8], y: usize, out: &mut [[u8; 4]]) {
+        let w = self.width as usize;
         let (cw, ch) = self.chroma_size();
-        let (luma, chroma) = data.split_at((w * h) as usize);
-        let (cb, cr) = chroma.split_at((cw * ch) as usize);
+        let (luma, chroma) = data.split_at(w * self.height as usize);
+        let (cb, cr) = chroma.split_at(cw as usize * ch as usize);
         let convert = if self.full_range {
             bt601_full_to_rgb
         } else {
             bt601_limited_to_rgb
         };
-        let mut image = crate::camera::pool::sized(into, w, h);
-        for y in 0..h {
-            for x in 0..w {
-                let (u, v) = match self.chroma {
-                    Chroma::Planes { shift_x, shift_y } => {
-                        let i = ((y >> shift_y) * cw + (x >> shift_x)) as usize;
-                        (cb[i], cr[i])
-                    }
-                    Chroma::Mono => (128, 128),
-                };
-                let [r, g, b] = convert(luma[(y * w + x) as usize], u, v);
-                image.set(x, y, [r, g, b, 255]);
-            }
+        let luma = &luma[y * w..(y + 1) * w];
+        for (x, (px, &l)) in out.iter_mut().zip(luma).enumerate() {
+            let (u, v) = match self.chroma {
+                Chroma::Planes { shift_x, shift_y } => {
+                    let i = (y >> shift_y) * cw as usize + (x >> shift_x);
+                    (cb[i], cr[i])
+                }
+                Chroma::Mono => (128, 128),
+            };
+            let [r, g, b] = convert(l, u, v);
+            *px = [r, g, b, 255];
         }
-        image
     }
 }
 
@@ -145,6 +170,7 @@ fn parse_header(line: &str) -> Result<Y4m, String> {
         full_range: false,
         offsets: Vec::new(),
         data: Vec::new(),
+        most: (u32::MAX, u32::MAX),
     };
     for token in tokens.filter(|t| !t.is_empty()) {
         // The first character is the key (the header is untrusted: it may not be ASCII).
@@ -163,7 +189,7 @@ fn parse_header(line: &str) -> Result<Y4m, String> {
     if y4m.width == 0 || y4m.height == 0 {
         return Err("width or height missing".into());
     }
-    // Frame sizes are computed in u32: a bound keeps them exact (and allocations sane).
+    // A bound keeps allocations sane (a header can declare any size).
     user_file::check_dimensions(y4m.width, y4m.height)?;
     Ok(y4m)
 }
@@ -262,5 +288,29 @@ mod tests {
         assert_eq!(y.frame_bytes(), 15 + 12);
         assert!(parse_header("YUV4MPEG2 W5 H3 C420p10").is_err());
         assert!(parse_header("YUV4MPEG W5 H3").is_err());
+    }
+
+    #[test]
+    fn frames_larger_than_the_camera_are_shrunk_into_the_pooled_buffer() {
+        let dir = crate::scratch::ScratchDir::new("y4m-within");
+        let path = dir.join("clip.y4m");
+        let (w, h) = (30u8, 20u8);
+        let mut bytes = format!("YUV4MPEG2 W{w} H{h} F10:1 C444\nFRAME\n").into_bytes();
+        let plane = |f: fn(u8, u8) -> u8| (0..h).flat_map(move |y| (0..w).map(move |x| f(x, y)));
+        bytes.extend(plane(|x, y| 16 + 7 * x + y));
+        bytes.extend(plane(|x, _| 100 + x));
+        bytes.extend(plane(|_, y| 150 - y));
+        std::fs::write(&path, bytes).unwrap();
+        let empty = || RgbaImage::new(0, 0, [0; 4]);
+        let whole = Y4m::open(&path, (30, 20)).unwrap().read_frame(0, empty());
+        let whole = whole.unwrap();
+        assert_eq!((whole.width, whole.height), (30, 20));
+        let mut clip = Y4m::open(&path, (8, 6)).unwrap();
+        let small = clip.read_frame(0, empty()).unwrap();
+        assert_eq!(small, whole.shrunk((8, 6)));
+        let buffer = small.pixels.as_ptr();
+        let again = clip.read_frame(0, small).unwrap();
+        assert_eq!(again.pixels.as_ptr(), buffer, "the pooled buffer is reused");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

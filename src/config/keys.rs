@@ -7,6 +7,7 @@ use super::value::{short_f64, Kind, Value};
 use crate::algorithm::params::{Method, ViewMode};
 use crate::algorithm::perceptual_settings::Frequency;
 use crate::algorithm::registration::Lens;
+use crate::camera::source::MAX_CAMERA_SIDE;
 use crate::camera::usb_id::UsbId;
 use std::path::PathBuf;
 
@@ -57,6 +58,15 @@ fn count(v: Value) -> Result<u64, String> {
     match v {
         Value::Count(n) => Ok(n),
         other => Err(format!("{other} is not a whole number")),
+    }
+}
+
+/// A wanted camera width or height, at most [`MAX_CAMERA_SIDE`]: file backgrounds are made at
+/// this size, so a larger one would cost memory for nothing (100000 x 100000 RGBA is 37 GiB).
+fn camera_side(v: Value) -> Result<u32, String> {
+    match count(v)? {
+        n if n <= u64::from(MAX_CAMERA_SIDE) => Ok(n as u32),
+        n => Err(format!("{n} is not in [0, {MAX_CAMERA_SIDE}]")),
     }
 }
 
@@ -260,9 +270,9 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_WIDTH",
         env_negated: false,
         kind: Kind::Count,
-        doc: "wanted camera width: the smallest offered size at least this wide",
+        doc: "wanted camera width: the smallest offered size at least this wide (at most 8192)",
         set: |s, v| {
-            s.camera.width = u32::try_from(count(v)?).map_err(|_| "too large")?;
+            s.camera.width = camera_side(v)?;
             Ok(())
         },
         get: |s| Value::Count(u64::from(s.camera.width)),
@@ -272,9 +282,9 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_HEIGHT",
         env_negated: false,
         kind: Kind::Count,
-        doc: "wanted camera height",
+        doc: "wanted camera height (at most 8192)",
         set: |s, v| {
-            s.camera.height = u32::try_from(count(v)?).map_err(|_| "too large")?;
+            s.camera.height = camera_side(v)?;
             Ok(())
         },
         get: |s| Value::Count(u64::from(s.camera.height)),
@@ -984,6 +994,26 @@ mod tests {
             assert!(e.contains(says), "{name} = {text}: {e}");
         }
         assert_eq!(s, before, "a refused value leaves the settings unchanged");
+    }
+
+    #[test]
+    fn camera_sizes_are_bounded() {
+        let mut s = Settings::default();
+        for name in ["camera_width", "camera_height"] {
+            let k = key(name).unwrap();
+            // The doc states the bound the setter checks.
+            assert!(
+                k.doc.contains(&format!("at most {MAX_CAMERA_SIDE}")),
+                "{name}"
+            );
+            k.apply(&mut s, Value::Count(u64::from(MAX_CAMERA_SIDE)))
+                .unwrap();
+            for n in [u64::from(MAX_CAMERA_SIDE) + 1, 100_000, 1 << 32] {
+                let e = k.apply(&mut s, Value::Count(n)).unwrap_err();
+                assert_eq!(e, format!("{n} is not in [0, 8192]"), "{name}");
+            }
+        }
+        assert_eq!((s.camera.width, s.camera.height), (8192, 8192));
     }
 
     #[test]

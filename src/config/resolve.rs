@@ -413,6 +413,23 @@ mod tests {
     }
 
     #[test]
+    fn a_huge_camera_size_is_refused_by_name_and_the_default_kept() {
+        let r = with(
+            "camera_width = 100000\n",
+            "",
+            &[("CONTRASTXR_CAMERA_HEIGHT", "4294967296")],
+        );
+        assert_eq!(r.settings.camera, crate::camera::CaptureConfig::default());
+        assert_eq!(
+            r.problems,
+            [
+                "config /c.toml:1: camera_width: 100000 is not in [0, 8192]; camera_width stays 640 (default)",
+                "environment variable CONTRASTXR_CAMERA_HEIGHT: camera_height: 4294967296 is not in [0, 8192]; camera_height stays 480 (default)",
+            ]
+        );
+    }
+
+    #[test]
     fn a_set_manual_mapping_overrides_the_profile() {
         let r = with("camera_fov = [90, 70]\nfov_scale = [0.65, 0.65]\n", "", &[]);
         assert!(!r.settings.manual_mapping_set());
