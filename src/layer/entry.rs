@@ -7,7 +7,7 @@ use super::ffi::{c_str, guard, LayerError};
 use super::graphics;
 use super::live_settings::{self, Settings};
 use super::state::{self, lock, InstanceState};
-use super::{app_spaces, blend, log, session, swapchain, timespec};
+use super::{app_spaces, blend, elevated, log, session, swapchain, timespec};
 use crate::config::{self, Live, KEYS};
 use openxr_sys as xr;
 use openxr_sys::loader::{ApiLayerCreateInfo, XrNegotiateApiLayerRequest, XrNegotiateLoaderInfo};
@@ -115,6 +115,16 @@ unsafe extern "system" fn create_api_layer_instance(
             let mut forwarded = unsafe { *layer_info };
             forwarded.next_info = next.next;
             let gipa = next.next_get_instance_proc_addr;
+            if elevated::elevated() {
+                // SAFETY: forwarding the loader's own arguments to the next layer.
+                let result =
+                    unsafe { (next.next_create_api_layer_instance)(info, &forwarded, instance) };
+                if result.into_raw() >= 0 {
+                    let _ = FIRST_NEXT_GIPA.set(gipa);
+                }
+                log::once("elevated", elevated::LINE);
+                return Ok(result);
+            }
             // SAFETY: the loader passes the app's valid create info (null left to the runtime).
             let extended = unsafe { info.as_ref() }.map(|i| unsafe { timespec::extend(i, gipa) });
             let mut result = match &extended {

@@ -44,6 +44,9 @@ struct Log {
 /// `$XDG_STATE_HOME/contrastxr/layer.log` (default `~/.local/state/...`).
 #[cfg(not(test))]
 pub fn path() -> Option<PathBuf> {
+    if super::elevated::elevated() {
+        return None; // Its environment names the folder: not to be written with privileges.
+    }
     let state = std::env::var_os("XDG_STATE_HOME")
         .filter(|v| !v.is_empty())
         .map(PathBuf::from)

@@ -9,6 +9,7 @@ pub mod capture_files;
 mod capture_report;
 mod capture_writer;
 mod dispatch;
+mod elevated;
 mod end_frame;
 mod entry;
 #[cfg(test)]

@@ -443,6 +443,12 @@ impl Sandbox {
         self.run_with(&[], cmd, env, timeout_s)
     }
 
+    /// [`Sandbox::run`] where the command may change the root (`run --overlay`): its changes
+    /// go to a layer that ends with the run.
+    pub fn run_overlay(&self, cmd: &[&str], env: &[(&str, &str)]) -> SandboxRun {
+        self.run_with(&["--overlay"], cmd, env, u64::from(RUN_TIMEOUT_S))
+    }
+
     /// [`Sandbox::run_for`] with an X server beside the service (`run --x11`), for OpenGL apps.
     pub fn run_x11_for(&self, cmd: &[&str], env: &[(&str, &str)], timeout_s: u64) -> SandboxRun {
         self.run_with(&["--x11"], cmd, env, timeout_s)
