@@ -6,7 +6,8 @@
 //! the app finds the GL state and EGL current surfaces it set before xrEndFrame after it, with
 //! the layer enhancing as without it (`--check-gl-state`); and when the layer cannot make the
 //! app's EGL context current the session passes through with one line, every image as the app
-//! wrote it.
+//! wrote it. An app whose thread has EGL_OPENGL_ES_API bound (EGL's default) while its OpenGL
+//! context is current finds that API bound after every frame the layer enhanced.
 
 mod common;
 
@@ -176,4 +177,42 @@ fn a_failed_egl_context_switch_is_undone() {
     assert!(report["gl_state_checked"].as_u64() >= Some(10), "{what}");
     assert_eq!(report["gl_state_changed"], serde_json::json!([]), "{what}");
     assert_one_pass_through_line(&run, "could not be made current");
+}
+
+/// `--egl-bind-es`: the client binds EGL_OPENGL_ES_API on its thread before each xrEndFrame
+/// with its OpenGL context current (EGL's default API on a thread that never bound one; Monado
+/// binds EGL_OPENGL_API on it before the first frame, hence each frame). eglGetCurrent* and a
+/// releasing eglMakeCurrent act on the bound API's context, so the layer binds EGL_OPENGL_API
+/// for its check and switch and the app's API again after: with the layer enhancing, as
+/// without it, eglQueryAPI answers EGL_OPENGL_ES_API after every xrEndFrame and the app's GL
+/// state and EGL current context and surfaces are as it set them. (Mesa keeps one current
+/// context for all APIs, so here a layer that ignored the API would pass too: the unit tests
+/// of src/layer/graphics/opengl/egl_context.rs hold the switch against an EGL that keeps one
+/// per API.)
+#[test]
+fn the_app_finds_the_egl_api_it_bound_after_enhanced_frames() {
+    let on = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_INDICATOR", "0"),
+        ("CONTRASTXR_PIPELINES", "wait"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let off = [("CONTRASTXR", "0")];
+    for (layer, env) in [(true, &on[..]), (false, &off[..])] {
+        let Some(run) = client_egl(env, &["--egl-bind-es", "--check-gl-state"]) else {
+            return;
+        };
+        let report = run.client_report();
+        let what = format!("layer {layer}: {}", run.describe());
+        assert!(report["egl_api_checked"].as_u64() >= Some(10), "{what}");
+        assert_eq!(report["egl_api_changed"], serde_json::json!([]), "{what}");
+        assert_eq!(report["gl_state_changed"], serde_json::json!([]), "{what}");
+        let lines = layer_lines(&run);
+        let enhanced = lines
+            .iter()
+            .any(|l| l.contains("processing frames (2 views per frame)"));
+        assert_eq!(enhanced, layer, "{what}");
+        assert!(!lines.iter().any(|l| l.contains("passing")), "{what}");
+    }
 }

@@ -24,6 +24,11 @@ usage: contrastxr-xr-client [options]
                           4.5 core context of Mesa's surfaceless platform (libEGL.so.1) current
                           on a 16x16 pbuffer (--check-gl-state's drawables are then EGL
                           pbuffer surfaces)
+  --egl-bind-es           with --gl-binding egl: before every xrEndFrame the client binds
+                          EGL_OPENGL_ES_API on its thread (its OpenGL context stays current:
+                          eglBindAPI changes only which API's context eglGetCurrent* name), and
+                          after it checks that eglQueryAPI still answers that
+                          (`egl_api_checked`, and `egl_api_changed`: the frames it did not)
   --layout array|side-by-side
                           one swapchain with arraySize 2, or one wide swapchain (default array)
   --frames N              frames to submit before ending the session (default 60)
@@ -182,6 +187,9 @@ pub struct Options {
     pub check_gl_state: bool,
     /// Items of gl_state::DISTURBABLE the client changes before xrEndFrame (a test of the check).
     pub disturb_gl_state: Vec<String>,
+    /// With --gl-binding egl: EGL_OPENGL_ES_API bound on the client's thread, checked after
+    /// every xrEndFrame.
+    pub egl_bind_es: bool,
     /// With --graphics opengl (Xlib): X errors made on a second connection, counted by the
     /// client's handler, and xrEndFrame called with the context released.
     pub x_errors_elsewhere: bool,
@@ -221,6 +229,7 @@ impl Default for Options {
             linger_ms: None,
             check_gl_state: false,
             disturb_gl_state: Vec::new(),
+            egl_bind_es: false,
             x_errors_elsewhere: false,
         }
     }
@@ -284,6 +293,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--check-untouched" => options.check_untouched = true,
             "--check-gl-state" => options.check_gl_state = true,
             "--x-errors-elsewhere" => options.x_errors_elsewhere = true,
+            "--egl-bind-es" => options.egl_bind_es = true,
             "--disturb-gl-state" => {
                 for item in value()?.split(',') {
                     if !crate::gl_state::DISTURBABLE.contains(&item) {
@@ -321,6 +331,10 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
     }
     if options.gl_binding == GlBinding::Egl && options.graphics != Graphics::OpenGl {
         return Err("--gl-binding needs --graphics opengl".into());
+    }
+    let egl = options.graphics == Graphics::OpenGl && options.gl_binding == GlBinding::Egl;
+    if options.egl_bind_es && !egl {
+        return Err("--egl-bind-es needs --graphics opengl --gl-binding egl".into());
     }
     let xlib = options.graphics == Graphics::OpenGl && options.gl_binding == GlBinding::Xlib;
     if options.x_errors_elsewhere && !xlib {
@@ -418,6 +432,9 @@ mod tests {
         assert_eq!(o.gl_binding, GlBinding::Xlib);
         let o = parse_str("--graphics opengl --gl-binding egl").unwrap();
         assert_eq!(o.gl_binding, GlBinding::Egl);
+        assert!(!o.egl_bind_es);
+        let o = parse_str("--graphics opengl --gl-binding egl --egl-bind-es").unwrap();
+        assert!(o.egl_bind_es);
     }
 
     #[test]
@@ -441,6 +458,7 @@ mod tests {
             "--graphics opengl --check-gl-state --disturb-gl-state GL_VIEWPORT",
             "--gl-binding egl",
             "--graphics opengl --gl-binding glx",
+            "--graphics opengl --egl-bind-es",
         ] {
             assert!(parse_str(bad).is_err(), "{bad}");
         }

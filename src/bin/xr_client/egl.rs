@@ -1,16 +1,21 @@
 //! `--graphics opengl --gl-binding egl`: an OpenGL 4.5 core context made with EGL, as apps that
 //! use XR_MNDX_egl_enable make one: libEGL.so.1 opened at run time, Mesa's surfaceless platform
 //! (no window system needed), a configuration that renders OpenGL into pbuffers, the context
-//! current on a 16x16 pbuffer of its own. The GL calls are glx.rs's.
+//! current on a 16x16 pbuffer of its own, and the session on it (its binding chained by hand).
+//! With `--egl-bind-es` the thread has EGL_OPENGL_ES_API bound around xrEndFrame. The GL calls
+//! are glx.rs's.
 
 use crate::error::{fail, Result};
 use crate::gl_binding::GlBinding;
 use crate::glx::{self, GetProc, GlContext};
+use openxr as xr;
+use openxr::sys;
 use std::ffi::c_void;
 
 // EGL enums (egl.h, eglext.h).
 const PLATFORM_SURFACELESS_MESA: u32 = 0x31DD;
 const OPENGL_API: u32 = 0x30A2;
+const OPENGL_ES_API: u32 = 0x30A0;
 const SURFACE_TYPE: i32 = 0x3033;
 const PBUFFER_BIT: i32 = 0x0001;
 const RENDERABLE_TYPE: i32 = 0x3040;
@@ -40,6 +45,7 @@ type CreatePbufferSurface =
 type CreateContext =
     unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, *const i32) -> *mut c_void;
 type MakeCurrent = unsafe extern "C" fn(*mut c_void, *mut c_void, *mut c_void, *mut c_void) -> u32;
+type QueryApi = unsafe extern "C" fn() -> u32;
 
 /// Makes an EGL OpenGL 4.5 core context current on this thread (never destroyed: the client
 /// keeps its context for the process, as with GLX).
@@ -127,4 +133,102 @@ pub fn pbuffer(gl: &GlContext) -> Result<u64> {
             surface => Ok(surface as u64),
         }
     }
+}
+
+/// --egl-bind-es: EGL_OPENGL_ES_API bound on the client's thread with its OpenGL context
+/// current, as an app that also draws with OpenGL ES may leave it (EGL's default API on a
+/// thread that never bound one), before every xrEndFrame, and eglQueryAPI read after it.
+pub struct EsBound {
+    bind_api: BindApi,
+    query_api: QueryApi,
+    /// The xrEndFrame calls after which the API was read.
+    pub checked: u32,
+    /// The frames after which it was another API.
+    pub changed: Vec<u32>,
+}
+
+impl EsBound {
+    /// Binds EGL_OPENGL_ES_API on this thread, whose current OpenGL context is `gl`.
+    pub fn bind(gl: &GlContext) -> Result<EsBound> {
+        // SAFETY: eglBindAPI's and eglQueryAPI's types (egl.h); binding an API changes which
+        // API's context eglGetCurrent* name, not which contexts are current.
+        unsafe {
+            let bind_api: BindApi = gl.glx_function(c"eglBindAPI")?;
+            let query_api: QueryApi = gl.glx_function(c"eglQueryAPI")?;
+            if bind_api(OPENGL_ES_API) == 0 || query_api() != OPENGL_ES_API {
+                return fail("eglBindAPI(EGL_OPENGL_ES_API) failed");
+            }
+            Ok(EsBound {
+                bind_api,
+                query_api,
+                checked: 0,
+                changed: Vec::new(),
+            })
+        }
+    }
+
+    /// Binds EGL_OPENGL_ES_API again before xrEndFrame, as an app that draws with OpenGL
+    /// ES between frames leaves it: the runtime's other calls may bind EGL_OPENGL_API on the
+    /// thread (Monado's do, before the first frame), and the check is of xrEndFrame's.
+    pub fn bind_again(&self) {
+        // SAFETY: eglBindAPI of an API this thread bound before.
+        unsafe { (self.bind_api)(OPENGL_ES_API) };
+    }
+
+    /// Reads the bound API after xrEndFrame of `frame`.
+    pub fn check(&mut self, frame: u32) {
+        // SAFETY: eglQueryAPI reads this thread's bound API.
+        let api = unsafe { (self.query_api)() };
+        self.checked += 1;
+        if api != OPENGL_ES_API {
+            self.changed.push(frame);
+        }
+    }
+}
+
+/// The session on an EGL context (XR_MNDX_egl_enable). The openxr crate has no session type for
+/// it: xrCreateSession with the binding chained by hand, the session then used as any OpenGL
+/// one (its swapchain images are XrSwapchainImageOpenGLKHR).
+pub fn create_session(
+    instance: &xr::Instance,
+    system: xr::SystemId,
+    gl: &GlContext,
+) -> Result<(
+    xr::Session<xr::OpenGL>,
+    xr::FrameWaiter,
+    xr::FrameStream<xr::OpenGL>,
+)> {
+    let get_proc = gl.get_proc_address();
+    let binding = sys::GraphicsBindingEGLMNDX {
+        ty: sys::GraphicsBindingEGLMNDX::TYPE,
+        next: std::ptr::null(),
+        // SAFETY: eglGetProcAddress has the C type of PFN_xrEglGetProcAddressMNDX (a name in, a
+        // function pointer or null out).
+        get_proc_address: Some(unsafe {
+            std::mem::transmute::<crate::glx::GetProc, sys::platform::EglGetProcAddressMNDX>(
+                get_proc,
+            )
+        }),
+        display: gl.display,
+        config: gl.fb_config,
+        context: gl.context,
+    };
+    let info = sys::SessionCreateInfo {
+        ty: sys::SessionCreateInfo::TYPE,
+        next: (&binding as *const sys::GraphicsBindingEGLMNDX).cast(),
+        create_flags: sys::SessionCreateFlags::EMPTY,
+        system_id: system,
+    };
+    let mut handle = sys::Session::NULL;
+    // SAFETY: a valid create info whose chain lives across the call; the EGL objects are this
+    // thread's current context and outlive the session.
+    let result = unsafe { (instance.fp().create_session)(instance.as_raw(), &info, &mut handle) };
+    if result.into_raw() < 0 {
+        return fail(format!(
+            "xrCreateSession (XrGraphicsBindingEGLMNDX) failed: {result}"
+        ));
+    }
+    // SAFETY: a session of this instance just created with an OpenGL-family binding, owned by
+    // the returned Session, which destroys it.
+    Ok(unsafe { xr::Session::from_raw(instance.clone(), handle, Box::new(())) })
 }

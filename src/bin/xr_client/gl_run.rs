@@ -9,6 +9,7 @@
 
 use crate::churn::{self, Churner};
 use crate::cli::{Layout, Options};
+use crate::egl::EsBound;
 use crate::error::{fail, Context, Result};
 use crate::frame_loop::{self, projection_views_on, quad_layer_on, Stats};
 use crate::gl_binding::GlBinding;
@@ -71,13 +72,17 @@ pub fn run(
         true => Some(GlStateCheck::new(&gl, &options.disturb_gl_state)?),
         false => None,
     };
+    let mut egl_api = match options.egl_bind_es {
+        true => Some(crate::egl::EsBound::bind(&gl)?),
+        false => None,
+    };
     let x_errors = match options.x_errors_elsewhere {
         true => Some(XErrors::start(&gl)?),
         false => None,
     };
     let mut result = Ok(());
     for _ in 0..options.sessions.max(1) {
-        let session = (&gl, &mut state, x_errors.as_ref());
+        let session = (&gl, (&mut state, &mut egl_api), x_errors.as_ref());
         result = run_session(
             &instance, system, blend_mode, session, options, report, stats,
         );
@@ -100,6 +105,9 @@ pub fn run(
         report.gl_state_checked = state.checked;
         report.gl_state_changed = state.changed;
     }
+    if let Some(api) = egl_api {
+        (report.egl_api_checked, report.egl_api_changed) = (Some(api.checked), Some(api.changed));
+    }
     result?;
     let t = Instant::now();
     drop(instance);
@@ -111,7 +119,7 @@ fn run_session(
     instance: &xr::Instance,
     system: xr::SystemId,
     blend_mode: xr::EnvironmentBlendMode,
-    (gl, state, x_errors): (&GlContext, &mut Option<GlStateCheck>, Option<&XErrors>),
+    (gl, (state, egl_api), x_errors): (&GlContext, Checks<'_>, Option<&XErrors>),
     options: &Options,
     report: &mut Report,
     stats: &mut Stats,
@@ -159,6 +167,7 @@ fn run_session(
         view_size,
         blend_mode,
         state,
+        egl_api,
         churn,
         x_errors,
     };
@@ -243,54 +252,7 @@ fn create_session(
         return unsafe { instance.create_session::<xr::OpenGL>(system, &info) }
             .ctx("xrCreateSession");
     }
-    create_egl_session(instance, system, gl)
-}
-
-/// The session on an EGL context (XR_MNDX_egl_enable). The openxr crate has no session type for
-/// it: xrCreateSession with the binding chained by hand, the session then used as any OpenGL
-/// one (its swapchain images are XrSwapchainImageOpenGLKHR).
-fn create_egl_session(
-    instance: &xr::Instance,
-    system: xr::SystemId,
-    gl: &GlContext,
-) -> Result<(
-    xr::Session<xr::OpenGL>,
-    xr::FrameWaiter,
-    xr::FrameStream<xr::OpenGL>,
-)> {
-    let get_proc = gl.get_proc_address();
-    let binding = sys::GraphicsBindingEGLMNDX {
-        ty: sys::GraphicsBindingEGLMNDX::TYPE,
-        next: std::ptr::null(),
-        // SAFETY: eglGetProcAddress has the C type of PFN_xrEglGetProcAddressMNDX (a name in, a
-        // function pointer or null out).
-        get_proc_address: Some(unsafe {
-            std::mem::transmute::<crate::glx::GetProc, sys::platform::EglGetProcAddressMNDX>(
-                get_proc,
-            )
-        }),
-        display: gl.display,
-        config: gl.fb_config,
-        context: gl.context,
-    };
-    let info = sys::SessionCreateInfo {
-        ty: sys::SessionCreateInfo::TYPE,
-        next: (&binding as *const sys::GraphicsBindingEGLMNDX).cast(),
-        create_flags: sys::SessionCreateFlags::EMPTY,
-        system_id: system,
-    };
-    let mut handle = sys::Session::NULL;
-    // SAFETY: a valid create info whose chain lives across the call; the EGL objects are this
-    // thread's current context and outlive the session.
-    let result = unsafe { (instance.fp().create_session)(instance.as_raw(), &info, &mut handle) };
-    if result.into_raw() < 0 {
-        return fail(format!(
-            "xrCreateSession (XrGraphicsBindingEGLMNDX) failed: {result}"
-        ));
-    }
-    // SAFETY: a session of this instance just created with an OpenGL-family binding, owned by
-    // the returned Session, which destroys it.
-    Ok(unsafe { xr::Session::from_raw(instance.clone(), handle, Box::new(())) })
+    crate::egl::create_session(instance, system, gl)
 }
 
 /// An OpenGL session's frames, on the thread whose context the session was made with.
@@ -307,6 +269,8 @@ struct GlFrames<'s> {
     blend_mode: xr::EnvironmentBlendMode,
     /// With --check-gl-state: the state set right before xrEndFrame, checked right after.
     state: &'s mut Option<GlStateCheck>,
+    /// With --egl-bind-es: the API bound on the thread, checked after xrEndFrame.
+    egl_api: &'s mut Option<EsBound>,
     /// With --churn-swapchains: the swapchains made and destroyed between frames.
     churn: Option<GlChurn>,
     /// With --x-errors-elsewhere: the context is released around xrEndFrame.
@@ -325,13 +289,16 @@ struct GlChurn {
 /// xrEndFrame with `layers`, inside --check-gl-state's set and check (and with
 /// --x-errors-elsewhere with the context released).
 fn end_frame(
-    (stream, state, x_errors): EndFrame<'_>,
+    (stream, (state, egl_api), x_errors): EndFrame<'_>,
     (time, mode): (xr::Time, xr::EnvironmentBlendMode),
     layers: &[&xr::CompositionLayerBase<'_, xr::OpenGL>],
     frame: u32,
 ) -> Result<()> {
     if let Some(check) = state.as_mut() {
         check.before_end_frame(frame)?;
+    }
+    if let Some(api) = egl_api.as_ref() {
+        api.bind_again();
     }
     if let Some(x) = x_errors {
         x.release_context();
@@ -344,15 +311,21 @@ fn end_frame(
     if let Some(check) = state.as_mut() {
         check.after_end_frame()?;
     }
+    if let Some(api) = egl_api.as_mut() {
+        api.check(frame);
+    }
     Ok(())
 }
 
 /// What xrEndFrame goes through: the stream, --check-gl-state's check, --x-errors-elsewhere.
 type EndFrame<'a> = (
     &'a mut xr::FrameStream<xr::OpenGL>,
-    &'a mut Option<GlStateCheck>,
+    Checks<'a>,
     Option<&'a XErrors>,
 );
+
+/// What the app checks around each xrEndFrame: --check-gl-state's state, --egl-bind-es's API.
+type Checks<'a> = (&'a mut Option<GlStateCheck>, &'a mut Option<EsBound>);
 
 impl frame_loop::Frames for GlFrames<'_> {
     type Api = xr::OpenGL;
@@ -383,7 +356,11 @@ impl frame_loop::Frames for GlFrames<'_> {
         stats.frames_ended += 1;
         let (time, frame) = (frame_state.predicted_display_time, stats.frames_ended - 1);
         if !frame_state.should_render || options.script.is_some() {
-            let end = (&mut *self.stream, &mut *self.state, self.x_errors);
+            let end = (
+                &mut *self.stream,
+                (&mut *self.state, &mut *self.egl_api),
+                self.x_errors,
+            );
             return end_frame(end, (time, self.blend_mode), &[], frame);
         }
         let (_, located) = self
@@ -416,7 +393,11 @@ impl frame_loop::Frames for GlFrames<'_> {
                 .map(|q| -> &xr::CompositionLayerBase<'_, xr::OpenGL> { q }),
         );
         let start = Instant::now();
-        let end = (&mut *self.stream, &mut *self.state, self.x_errors);
+        let end = (
+            &mut *self.stream,
+            (&mut *self.state, &mut *self.egl_api),
+            self.x_errors,
+        );
         end_frame(end, (time, self.blend_mode), &layers, frame)?;
         let ended = Instant::now();
         let ms = (ended - start).as_secs_f64() * 1e3;

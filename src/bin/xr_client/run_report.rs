@@ -44,6 +44,13 @@ pub struct Report {
     /// every item one of them changed (empty when all held).
     pub gl_state_checked: u32,
     pub gl_state_changed: Vec<crate::gl_state::Change>,
+    /// With --egl-bind-es: the xrEndFrame calls (EGL_OPENGL_ES_API bound before each) after
+    /// which eglQueryAPI was read, and the frames after which it answered another API (empty
+    /// when it never did).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub egl_api_checked: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub egl_api_changed: Option<Vec<u32>>,
     /// With --x-errors-elsewhere: the X errors the client's thread made, and those its handler
     /// saw.
     #[serde(skip_serializing_if = "Option::is_none")]
