@@ -444,8 +444,6 @@ fn layer_outcome(setting: &Setting, input: &Input) -> Outcome {
     match (setting.name, input.name) {
         // A valid frame under a non-UTF-8 name is read like any other.
         ("video-folder", "non-utf8-path") => Outcome::Ok,
-        // A video folder's frames are PNG files only.
-        ("video-folder", "jpeg-40000") => words("is not a readable PNG"),
         ("video-folder", "unreadable") if is_root() => words("is not a readable PNG"),
         (_, "non-utf8-path") => words(&format!("{} is not UTF-8 text", setting.var)),
         ("y4m", "folder") => words("holds no PNG frames"),
