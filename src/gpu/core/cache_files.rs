@@ -106,6 +106,50 @@ pub fn write_atomically(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), Stri
     })
 }
 
+/// Writes `dir`/`name` as [`write_atomically`] does, with the bytes `merge` makes of the file
+/// as it is at that moment (None: no file, or one that cannot be read), while this process
+/// holds an exclusive lock (flock) on `dir`/`.name.lock`: two processes that each merge their
+/// entries into the file take turns, so neither writes over what the other added since it read.
+/// Within [`WRITE_LIMIT`], waiting for the lock included.
+pub fn merge_atomically(
+    dir: &Path,
+    name: &str,
+    merge: impl FnOnce(Option<Vec<u8>>) -> Vec<u8> + Send + 'static,
+) -> Result<(), String> {
+    let (dir, name) = (dir.to_path_buf(), name.to_string());
+    let key = format!("cache {}", dir.join(&name).display());
+    let limit =
+        std::time::Duration::from_millis(WRITE_LIMIT_MS.load(std::sync::atomic::Ordering::Relaxed));
+    crate::user_file::within_writing(&key, limit, move || {
+        let _lock = lock(&dir, &name)?;
+        let now = read_file_now(&dir.join(&name)).ok().flatten();
+        write_atomically_now(&dir, &name, &merge(now))
+    })
+}
+
+/// The exclusive lock on `dir`/`.name.lock`, held until the file it returns is closed.
+fn lock(dir: &Path, name: &str) -> Result<std::fs::File, String> {
+    use std::os::fd::AsRawFd;
+    let path = dir.join(format!(".{name}.lock"));
+    let fail = |e: std::io::Error| format!("cannot lock {}: {e}", path.display());
+    std::fs::create_dir_all(dir).map_err(fail)?;
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .mode(0o644)
+        .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(&path)
+        .map_err(fail)?;
+    // SAFETY: flock on a file descriptor this function owns; it blocks until the lock is free.
+    if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX) } != 0 {
+        return Err(fail(std::io::Error::last_os_error()));
+    }
+    // Its age is its last use: another driver's lock unused for FOREIGN_MAX_AGE is removed.
+    let _ = file.set_modified(std::time::SystemTime::now());
+    Ok(file)
+}
+
 /// The longest a cache file's write may take inside an app (see [`write_atomically`]): the
 /// writes happen in xrDestroySession, which returns within 1 s in all.
 pub const WRITE_LIMIT: std::time::Duration = std::time::Duration::from_millis(250);
@@ -164,7 +208,8 @@ pub fn remove_old_foreign(dir: &Path, keep: &str) {
         let ours = name.starts_with("pipelines-") || name.starts_with(".pipelines-");
         let Ok(meta) = e.metadata() else { continue };
         let age = meta.modified().ok().and_then(|m| m.elapsed().ok());
-        if ours && name != keep && meta.is_file() && age.is_some_and(|a| a > FOREIGN_MAX_AGE) {
+        let kept = name == keep || name == format!(".{keep}.lock");
+        if ours && !kept && meta.is_file() && age.is_some_and(|a| a > FOREIGN_MAX_AGE) {
             let _ = std::fs::remove_file(e.path());
         }
     }
@@ -232,5 +277,36 @@ mod tests {
         assert_eq!(written.unwrap_err(), "took more than 250 ms to write");
         // The scratch folder goes once the stalled write is over.
         std::thread::sleep(std::time::Duration::from_millis(1500));
+    }
+
+    /// A merge reads the file only once it holds the file's lock: what another holder of the
+    /// lock wrote meanwhile is in what it merges, not written over.
+    #[test]
+    fn a_merge_reads_the_file_once_it_holds_the_lock() {
+        let scratch = crate::scratch::ScratchDir::new("merge");
+        let dir = scratch.join("cache");
+        super::write_atomically_now(&dir, "pipelines-m.bin", b"first").unwrap();
+        // Another process holds the lock (flock: per open file, so also within a process).
+        let held = super::lock(&dir, "pipelines-m.bin").unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let d = dir.clone();
+        let merging = std::thread::spawn(move || {
+            super::merge_atomically(&d, "pipelines-m.bin", move |now| {
+                let _ = tx.send(());
+                [now.unwrap_or_default(), b"+mine".to_vec()].concat()
+            })
+        });
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        assert!(rx.try_recv().is_err(), "merged while another held the lock");
+        super::write_atomically_now(&dir, "pipelines-m.bin", b"second").unwrap();
+        drop(held);
+        // The caller may have given up waiting (WRITE_LIMIT); the merge ends all the same.
+        let _ = merging.join();
+        let path = dir.join("pipelines-m.bin");
+        let since = std::time::Instant::now();
+        while std::fs::read(&path).unwrap() != b"second+mine" {
+            assert!(since.elapsed().as_secs() < 10, "{:?}", std::fs::read(&path));
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
     }
 }

@@ -8,7 +8,7 @@
 
 use crate::gpu::core::cache_files;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The data starts with this, then the driver string's length and bytes, the entry count,
 /// and per entry: source hash (u64), binary format (u32), length (u32), bytes.
@@ -187,24 +187,36 @@ impl BinaryCache {
         }
     }
 
-    /// Writes the file if entries were added (atomically; see gpu/core/cache_files.rs),
-    /// merged with what the file holds now (another process, or a build thread of this one,
-    /// may have written it since it was read), with only the entries `current` names (the
-    /// sources of this build: a changed shader's old binaries are dropped, so the file does not
-    /// grow from build to build).
-    pub fn save(&mut self, current: &dyn Fn(u64) -> bool) {
+    /// Writes the file if entries were added (atomically, under the file's lock; see
+    /// gpu/core/cache_files.rs `merge_atomically`), merged with what the file holds at that
+    /// moment (another process, or a build thread of this one, may have written it since it
+    /// was read; its entries are kept where this cache has none), with only the entries of
+    /// `current` (the sources of this build: a changed shader's old binaries are dropped, so
+    /// the file does not grow from build to build).
+    pub fn save(&mut self, current: HashSet<u64>) {
         if !self.changed {
             return;
         }
         self.changed = false;
-        self.reload();
-        self.entries.retain(|&hash, _| current(hash));
+        self.entries.retain(|hash, _| current.contains(hash));
         let Some(dir) = cache_files::directory() else {
             return;
         };
         let name = file_name(&self.driver);
-        let bytes = cache_files::file_bytes(&data_of(&self.driver, &self.entries));
-        if cache_files::write_atomically(&dir, &name, &bytes).is_ok() {
+        let (driver, mut entries) = (self.driver.clone(), self.entries.clone());
+        let merge = move |now: Option<Vec<u8>>| {
+            let held = now.as_deref().and_then(unwrap_file);
+            for (hash, entry) in held
+                .and_then(|d| parse(d, &driver).ok())
+                .unwrap_or_default()
+            {
+                if current.contains(&hash) {
+                    entries.entry(hash).or_insert(entry);
+                }
+            }
+            cache_files::file_bytes(&data_of(&driver, &entries))
+        };
+        if cache_files::merge_atomically(&dir, &name, merge).is_ok() {
             cache_files::remove_old_foreign(&dir, &name);
         }
     }

@@ -320,7 +320,7 @@ impl Programs {
             .iter()
             .map(|(_, source)| source_hash(source))
             .collect();
-        self.cache.save(&|hash| current.contains(&hash));
+        self.cache.save(current);
     }
 
     /// Deletes every program (the context current).
