@@ -186,6 +186,13 @@ impl EsBound {
     }
 }
 
+/// A session on an OpenGL context, with its frame waiter and stream.
+pub type GlSessionParts = (
+    xr::Session<xr::OpenGL>,
+    xr::FrameWaiter,
+    xr::FrameStream<xr::OpenGL>,
+);
+
 /// The session on an EGL context (XR_MNDX_egl_enable). The openxr crate has no session type for
 /// it: xrCreateSession with the binding chained by hand, the session then used as any OpenGL
 /// one (its swapchain images are XrSwapchainImageOpenGLKHR).
@@ -193,11 +200,7 @@ pub fn create_session(
     instance: &xr::Instance,
     system: xr::SystemId,
     gl: &GlContext,
-) -> Result<(
-    xr::Session<xr::OpenGL>,
-    xr::FrameWaiter,
-    xr::FrameStream<xr::OpenGL>,
-)> {
+) -> Result<GlSessionParts> {
     let get_proc = gl.get_proc_address();
     let binding = sys::GraphicsBindingEGLMNDX {
         ty: sys::GraphicsBindingEGLMNDX::TYPE,

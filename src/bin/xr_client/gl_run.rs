@@ -9,7 +9,7 @@
 
 use crate::churn::{self, Churner};
 use crate::cli::{Layout, Options};
-use crate::egl::EsBound;
+use crate::egl::{EsBound, GlSessionParts};
 use crate::error::{fail, Context, Result};
 use crate::frame_loop::{self, projection_views_on, quad_layer_on, Stats};
 use crate::gl_binding::GlBinding;
@@ -73,7 +73,7 @@ pub fn run(
         false => None,
     };
     let mut egl_api = match options.egl_bind_es {
-        true => Some(crate::egl::EsBound::bind(&gl)?),
+        true => Some(EsBound::bind(&gl)?),
         false => None,
     };
     let x_errors = match options.x_errors_elsewhere {
@@ -235,11 +235,7 @@ fn create_session(
     instance: &xr::Instance,
     system: xr::SystemId,
     gl: &GlContext,
-) -> Result<(
-    xr::Session<xr::OpenGL>,
-    xr::FrameWaiter,
-    xr::FrameStream<xr::OpenGL>,
-)> {
+) -> Result<GlSessionParts> {
     if gl.binding == GlBinding::Xlib {
         let info = xr::opengl::SessionCreateInfo::Xlib {
             x_display: gl.display.cast(),

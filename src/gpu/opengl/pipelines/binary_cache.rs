@@ -101,12 +101,16 @@ fn unwrap_file(bytes: &[u8]) -> Option<&[u8]> {
 fn read_entries(driver: &str, enabled: bool) -> HashMap<u64, (u32, Vec<u8>)> {
     let path = cache_files::directory().map(|d| d.join(file_name(driver)));
     match path.filter(|_| enabled).map(|p| cache_files::read_file(&p)) {
-        Some(Ok(Some(bytes))) => unwrap_file(&bytes)
-            .ok_or_else(|| "damaged (length or checksum wrong)".to_string())
-            .and_then(|data| parse(data, driver))
-            .unwrap_or_default(),
+        Some(Ok(Some(bytes))) => entries_in(&bytes, driver),
         _ => HashMap::new(),
     }
+}
+
+/// The entries of a whole file's `bytes` (none where it is damaged or foreign).
+fn entries_in(bytes: &[u8], driver: &str) -> HashMap<u64, (u32, Vec<u8>)> {
+    unwrap_file(bytes)
+        .and_then(|data| parse(data, driver).ok())
+        .unwrap_or_default()
 }
 
 impl BinaryCache {
@@ -205,11 +209,8 @@ impl BinaryCache {
         let name = file_name(&self.driver);
         let (driver, mut entries) = (self.driver.clone(), self.entries.clone());
         let merge = move |now: Option<Vec<u8>>| {
-            let held = now.as_deref().and_then(unwrap_file);
-            for (hash, entry) in held
-                .and_then(|d| parse(d, &driver).ok())
-                .unwrap_or_default()
-            {
+            let held = now.map(|bytes| entries_in(&bytes, &driver));
+            for (hash, entry) in held.unwrap_or_default() {
                 if current.contains(&hash) {
                     entries.entry(hash).or_insert(entry);
                 }
