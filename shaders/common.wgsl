@@ -121,7 +121,7 @@ fn scaled_to_linear(s: Colours) -> Colours {
 // [0, 1] (21 bits: steps of 4.8e-7, a few f32 ulps near 1; scaled LAB moves by at most 4e-6 per
 // step, in the darkest shades). R in the lowest bits, then G, then B. Two texels per 16-byte
 // entry. The engine unpacks it with the same constants (`unpack_linear` in
-// src/gpu/vulkan/offline/vk_offline.rs).
+// src/gpu/vulkan/offline/offline_engine.rs).
 const LINEAR_G_LOW_BITS: u32 = 32u - LINEAR_BITS;
 const LINEAR_G_HIGH_BITS: u32 = 2u * LINEAR_BITS - 32u;
 

@@ -1,9 +1,9 @@
 //! A frame's work on the app's context (`GlFrameRunner`): the views in place or through a buffer, the
 //! passes, the overlays and captures, with the app's GL state saved and put back.
 
-mod gl_background;
-mod gl_frame_runner;
-mod gl_view;
+mod frame_runner;
+mod frame_view;
+mod prepared_background;
 mod program_warm_up;
 mod region;
 pub mod state_guard;
@@ -12,6 +12,6 @@ mod view_check;
 mod view_pixels;
 mod view_recipe;
 
-pub use gl_frame_runner::{GlFrameRunner, Outcome, StoreThrough};
-pub use gl_view::{GlTarget, GlView};
+pub use frame_runner::{GlFrameRunner, Outcome, StoreThrough};
+pub use frame_view::{GlTarget, GlView};
 pub(in crate::gpu::opengl) use region::{read_region, write_region};

@@ -4,8 +4,8 @@
 //! at its first dispatch (Mesa's llvmpipe: most of a cold start) then does it there, not inside
 //! a frame call, where a late frame makes a runtime lengthen its display period.
 
-use super::gl_frame_runner::{rows_aligned, GlFrameRunner, Outcome};
-use super::gl_view::{GlTarget, GlView};
+use super::frame_runner::{rows_aligned, GlFrameRunner, Outcome};
+use super::frame_view::{GlTarget, GlView};
 use super::state_guard::DebugOutputOff;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;

@@ -2,7 +2,7 @@
 //! pixel pack (read) or unpack (write) point, at an offset. The one place that tells a 2D
 //! texture from a layer of an array texture in a transfer.
 
-use super::gl_view::{GlTarget, GlView};
+use super::frame_view::{GlTarget, GlView};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::Gl;
 use std::ffi::c_void;

@@ -1,8 +1,8 @@
 //! Which programs a view's passes take: the variants of its format, access and settings
 //! (`VariantKey`), or the benchmark's ablated ones (`contrastxr bench --ablate`).
 
-use super::gl_frame_runner::{rows_aligned, GlFrameRunner};
-use super::gl_view::GlView;
+use super::frame_runner::{rows_aligned, GlFrameRunner};
+use super::frame_view::GlView;
 use crate::algorithm::params::Params;
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
 use crate::gpu::core::{no_ablated_variant, VariantKey};

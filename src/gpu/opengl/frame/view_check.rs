@@ -1,8 +1,8 @@
 //! A view checked before anything runs on it: its texture is there, of the target and internal
 //! format the view says, and the region lies inside it; asked with queries that raise no error.
 
-use super::gl_frame_runner::{texture_level_int, GlFrameRunner};
-use super::gl_view::{GlTarget, GlView};
+use super::frame_runner::{texture_level_int, GlFrameRunner};
+use super::frame_view::{GlTarget, GlView};
 use crate::gpu::opengl::device::functions as gl;
 use crate::gpu::opengl::device::GlError;
 

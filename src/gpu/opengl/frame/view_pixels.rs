@@ -2,8 +2,8 @@
 //! the indicator's lit runs written over an enhanced view. Both with the app's state saved and
 //! put back, no buffer bound to the pixel pack/unpack points and the pixel store at defaults.
 
-use super::gl_frame_runner::GlFrameRunner;
-use super::gl_view::GlView;
+use super::frame_runner::GlFrameRunner;
+use super::frame_view::GlView;
 use super::region::{read_region, write_region};
 use super::state_guard::{DebugOutputOff, SavedState};
 use crate::gpu::core::Run;

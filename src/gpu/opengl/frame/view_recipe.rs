@@ -2,8 +2,8 @@
 //! bound in place (an image unit, through a texture view for sRGB) or copied into a buffer, the
 //! view's steps run (src/gpu/opengl/record.rs) and the region copied back.
 
-use super::gl_frame_runner::{rows_from_bottom, GlFrameRunner, StoreThrough};
-use super::gl_view::{GlTarget, GlView};
+use super::frame_runner::{rows_from_bottom, GlFrameRunner, StoreThrough};
+use super::frame_view::{GlTarget, GlView};
 use super::region::{read_region, write_region};
 use crate::algorithm::params::Params;
 use crate::algorithm::perception::frequency::ViewGeometry;

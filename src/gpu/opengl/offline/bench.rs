@@ -10,7 +10,7 @@
 //! immutable storage, as a runtime imports them, restored from a pristine copy before each run
 //! outside the timed spans.
 
-use super::gl_offline::GlOffline;
+use super::offline_engine::GlOffline;
 use crate::algorithm::params::Params;
 use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::bench::{

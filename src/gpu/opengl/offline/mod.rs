@@ -2,6 +2,6 @@
 //! the layer's program builder, and the benchmark (`contrastxr bench --engine opengl`).
 
 mod bench;
-mod gl_offline;
+mod offline_engine;
 
-pub use gl_offline::GlOffline;
+pub use offline_engine::GlOffline;

@@ -5,7 +5,7 @@
 //! background preparation, over the same display regions, on the offline engine's device.
 
 use super::bench_rig::Rig;
-use super::vk_offline::VkOffline;
+use super::offline_engine::VkOffline;
 use crate::algorithm::params::Params;
 use crate::gpu::core::bench::{median, Ablation, BenchCase, BenchResult, WARM_UP_RUNS};
 use crate::gpu::core::CameraRect;

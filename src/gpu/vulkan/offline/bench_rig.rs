@@ -3,7 +3,7 @@
 //! engine's own), the pristine content, the
 //! app-like images and the timestamp queries; and their release.
 
-use super::vk_offline::VkOffline;
+use super::offline_engine::VkOffline;
 use crate::gpu::core::bench::{camera_frame, content_pixel, BenchCase, CAMERA_SIZE};
 use crate::gpu::core::PixelFormat;
 use crate::gpu::vulkan::conv::VkFormat;

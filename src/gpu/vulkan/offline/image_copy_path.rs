@@ -5,7 +5,7 @@
 //! `enhance_raw` (through a buffer) and `enhance_raw_in_place` so that tests can hold the
 //! paths to each other, on any sub-rectangle and array layer.
 
-use super::vk_offline::VkOffline;
+use super::offline_engine::VkOffline;
 use crate::algorithm::params::Params;
 use crate::gpu::core::interface::sampled_read;
 use crate::gpu::core::CameraRect;

@@ -2,7 +2,7 @@
 //! through a storage view of it, as the layer does for swapchains with storage usage; beside
 //! `enhance_raw` (through a buffer) so that tests can hold the two paths to each other.
 
-use super::vk_offline::VkOffline;
+use super::offline_engine::VkOffline;
 use crate::algorithm::params::Params;
 use crate::gpu::core::CameraRect;
 use crate::gpu::core::PixelFormat;

@@ -5,7 +5,7 @@ mod bench;
 mod bench_rig;
 mod image_copy_path;
 mod in_place_region;
-mod vk_offline;
+mod offline_engine;
 
 pub use image_copy_path::AppImage;
-pub use vk_offline::VkOffline;
+pub use offline_engine::VkOffline;

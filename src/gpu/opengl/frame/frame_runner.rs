@@ -23,7 +23,7 @@
 //! glGetError; the only error it can leave to the app is a driver's GL_OUT_OF_MEMORY while it
 //! allocates (state_guard.rs says when).
 
-use super::gl_view::GlView;
+use super::frame_view::GlView;
 use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::{Params, ViewMode};

@@ -2,7 +2,7 @@
 //! prepares), uploaded into the engine's texture from the texel buffers, only the rectangle the
 //! views sample.
 
-use super::gl_frame_runner::{texture_level_int, Background, GlFrameRunner};
+use super::frame_runner::{texture_level_int, Background, GlFrameRunner};
 use super::state_guard::{DebugOutputOff, SavedState};
 use crate::algorithm::mapping::CameraMapping;
 use crate::gpu::core::blurred_texels::{BlurredTexels, TexelSink, TEXEL_BYTES};
