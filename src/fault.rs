@@ -1,6 +1,7 @@
 //! Named fault points for the hardening tests: `CONTRASTXR_FAULT=NAME` (or `NAME@N`, to fire
-//! from the N-th time the point is reached on, counting from 0) makes that point fail as the
-//! real failure would. The variable is read once; with it unset a fault point costs one
+//! from the N-th time the point is reached on, counting from 0, or `NAME@N..M`, to fire from
+//! the N-th time up to the M-th, not included: a failure that passes) makes that point fail as
+//! the real failure would. The variable is read once; with it unset a fault point costs one
 //! atomic load and a branch, so the calls stay in release builds.
 //!
 //! Points: `device-setup`, `pipeline-creation`, `allocation`, `image-capture`, `camera-open`,
@@ -109,24 +110,39 @@ pub const POINTS: [(&str, &str); 25] = [
     ),
 ];
 
-/// The armed point and the hit from which it fires.
+/// The armed point and the hits at which it fires: from `from_hit` up to `until_hit`, not
+/// included.
 struct Armed {
     name: String,
     from_hit: u64,
+    until_hit: u64,
     hits: AtomicU64,
 }
 
 fn parse(spec: &str) -> Option<Armed> {
     let spec = spec.trim();
-    let (name, from_hit) = match spec.split_once('@') {
-        Some((name, n)) => (name, n.trim().parse().ok()?),
-        None => (spec, 0),
+    let (name, hits) = match spec.split_once('@') {
+        Some((name, hits)) => (name, hits.trim()),
+        None => (spec, "0"),
     };
-    (!name.is_empty()).then(|| Armed {
+    let (from_hit, until_hit) = match hits.split_once("..") {
+        Some((from, until)) => (from.trim().parse().ok()?, until.trim().parse().ok()?),
+        None => (hits.parse().ok()?, u64::MAX),
+    };
+    (!name.is_empty() && from_hit < until_hit).then(|| Armed {
         name: name.trim().to_string(),
         from_hit,
+        until_hit,
         hits: AtomicU64::new(0),
     })
+}
+
+impl Armed {
+    /// Counts a hit: whether it is one at which the point fails.
+    fn fires(&self) -> bool {
+        let hit = self.hits.fetch_add(1, Ordering::Relaxed);
+        (self.from_hit..self.until_hit).contains(&hit)
+    }
 }
 
 fn armed() -> Option<&'static Armed> {
@@ -143,7 +159,7 @@ fn armed() -> Option<&'static Armed> {
 /// True when the fault point `name` must fail now.
 pub fn hit(name: &str) -> bool {
     match armed() {
-        Some(a) if a.name == name => a.hits.fetch_add(1, Ordering::Relaxed) >= a.from_hit,
+        Some(a) if a.name == name => a.fires(),
         _ => false,
     }
 }
@@ -187,8 +203,25 @@ mod tests {
     fn parses_name_and_first_hit() {
         let a = parse(" camera-loss@10 ").unwrap();
         assert_eq!((a.name.as_str(), a.from_hit), ("camera-loss", 10));
+        assert_eq!(a.until_hit, u64::MAX);
         assert_eq!(parse("allocation").unwrap().from_hit, 0);
+        let passing = parse("gl-make-current@2..5").unwrap();
+        assert_eq!((passing.from_hit, passing.until_hit), (2, 5));
         assert!(parse("").is_none());
         assert!(parse("x@many").is_none());
+        assert!(parse("x@5..5").is_none());
+        assert!(parse("x@1..").is_none());
+    }
+
+    #[test]
+    fn fires_only_at_the_hits_named() {
+        let fired = |spec: &str| -> Vec<bool> {
+            let a = parse(spec).unwrap();
+            (0..7).map(|_| a.fires()).collect()
+        };
+        let (t, f) = (true, false);
+        assert_eq!(fired("p"), [t, t, t, t, t, t, t]);
+        assert_eq!(fired("p@3"), [f, f, f, t, t, t, t]);
+        assert_eq!(fired("p@2..5"), [f, f, t, t, t, f, f]);
     }
 }

@@ -188,31 +188,35 @@ fn the_check_reports_gl_state_left_changed() {
 /// A run before it fills a cache of its own, so that the programs are linked from it in the
 /// app's context (no build thread meets the fault point first).
 fn kept_and_passed_through(point: &str, says: &[&str]) {
-    let cache = common::scratch_dir(&format!("opengl-state-{point}-cache"));
-    let cache = cache.to_string_lossy().into_owned();
-    let warm = [("XDG_CACHE_HOME", cache.as_str())];
-    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &warm) else {
+    let Some((lines, what)) = kept_with_fault(point) else {
         return;
     };
-    run.assert_success();
-    let fault = [
-        ("XDG_CACHE_HOME", cache.as_str()),
-        ("CONTRASTXR_FAULT", point),
-    ];
-    let Some(run) = client_with("R8G8B8A8_SRGB", true, None, &fault) else {
-        return;
-    };
-    let (report, others, _) = changes(&run);
-    let what = format!("{point}: {}", run.describe());
-    let checked = report["gl_state_checked"].as_u64().unwrap_or(0);
-    assert!(checked >= 10, "{what}");
-    assert_eq!(others, Vec::<Value>::new(), "{what}");
-    let lines = common::layer_lines(&run);
     let passing: Vec<_> = lines.iter().filter(|l| l.contains("passing")).collect();
     assert_eq!(passing.len(), 1, "{what}");
     for said in says {
         assert!(passing[0].contains(said), "{said:?}: {what}");
     }
+}
+
+/// The client's GL state checked around every xrEndFrame of an enhanced session (programs
+/// from a warm cache) with the fault point `point` armed: nothing changed for the app. The
+/// layer's lines and the run's description (None without the sandbox).
+fn kept_with_fault(point: &str) -> Option<(Vec<String>, String)> {
+    let cache = common::scratch_dir(&format!("opengl-state-{point}-cache"));
+    let cache = cache.to_string_lossy().into_owned();
+    let warm = [("XDG_CACHE_HOME", cache.as_str())];
+    client_with("R8G8B8A8_SRGB", true, None, &warm)?.assert_success();
+    let fault = [
+        ("XDG_CACHE_HOME", cache.as_str()),
+        ("CONTRASTXR_FAULT", point),
+    ];
+    let run = client_with("R8G8B8A8_SRGB", true, None, &fault)?;
+    let (report, others, _) = changes(&run);
+    let what = format!("{point}: {}", run.describe());
+    let checked = report["gl_state_checked"].as_u64().unwrap_or(0);
+    assert!(checked >= 10, "{what}");
+    assert_eq!(others, Vec::<Value>::new(), "{what}");
+    Some((common::layer_lines(&run), what))
 }
 
 /// A panic inside the layer's OpenGL work, with its own framebuffer bound in the app's context
@@ -233,10 +237,45 @@ fn a_panic_inside_the_recipe_leaves_the_apps_gl_state_as_it_was() {
 /// A context switch that fails (fault point `gl-make-current`: the layer makes the app's
 /// context current on its own drawable, then counts the switch as failed) is undone: the
 /// thread gets back the drawables and context it had, so the app's check finds nothing changed
-/// around xrEndFrame, and the session passes through with one line.
+/// around xrEndFrame. Such frames pass through with one line and the session keeps its engine:
+/// a context current on another thread may be free again at a later frame.
 #[test]
 fn a_failed_context_switch_is_undone() {
-    kept_and_passed_through("gl-make-current", &["could not be made current"]);
+    let Some((lines, what)) = kept_with_fault("gl-make-current") else {
+        return;
+    };
+    let tries: Vec<_> = lines.iter().filter(|l| l.contains("tries again")).collect();
+    assert_eq!(tries.len(), 1, "{what}");
+    assert!(tries[0].contains("could not be made current"), "{what}");
+    for never in ["passing", "processing frames", "enhancing again"] {
+        assert!(
+            !lines.iter().any(|l| l.contains(never)),
+            "{never:?}: {what}"
+        );
+    }
+}
+
+/// A context that cannot be made current for a few calls only (`gl-make-current@10..12`, in
+/// the frame calls) costs a few frames: they pass through, a later try succeeds, and the
+/// session is enhanced again, with one line when the frames began to pass and one when
+/// enhancement resumed, and the app's GL state kept throughout.
+#[test]
+fn a_context_free_again_is_enhanced_again() {
+    let Some((lines, what)) = kept_with_fault("gl-make-current@10..12") else {
+        return;
+    };
+    for (line, count) in [
+        ("tries again", 1),
+        ("enhancing again after", 1),
+        ("passing", 0),
+    ] {
+        let seen = lines.iter().filter(|l| l.contains(line)).count();
+        assert_eq!(seen, count, "{line:?}: {what}");
+    }
+    assert!(
+        lines.iter().any(|l| l.contains("processing frames")),
+        "{what}"
+    );
 }
 
 /// The app's X errors are the app's: a thread of the client keeps making X errors on a second

@@ -315,6 +315,10 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
         sources::close_when_idle(s);
         return;
     }
+    // After a try that could not reach the graphics, some frames pass through without one.
+    if !s.retry.due() {
+        return;
+    }
     sources::open_when_needed(s);
     if let (Some(bg), Some(graphics)) = (&s.background, &s.graphics) {
         // Live frames come prepared for these settings from the source's thread (and, where
@@ -358,6 +362,7 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
                 }
             }
             s.processed += 1;
+            s.retry.enhanced();
             log::once(
                 "first-frame",
                 &format!("processing frames ({} views per frame)", items.len()),
@@ -369,6 +374,7 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
         Err(NotDone::Pending) => log::once("pipelines-pending", graphics.pending_line()),
         Err(NotDone::Skipped(why)) => log::once(&format!("skipped: {why}"), &why),
         Err(NotDone::Failed(e)) => s.pass_through(&e),
+        Err(NotDone::Unreachable(why)) => s.retry.failed(&why),
     }
 }
 

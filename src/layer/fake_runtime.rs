@@ -195,6 +195,7 @@ impl Rig {
             regions_seen: false,
             motion: Default::default(),
             frame_in_use: None,
+            retry: Default::default(),
         };
         let mut sc = SwapchainState::new(xr::Session::from_raw(session), next, swapchain_info());
         sc.set_images((1..=IMAGES as u64).collect());

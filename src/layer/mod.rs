@@ -15,6 +15,7 @@ mod entry;
 #[cfg(test)]
 mod fake_runtime;
 mod ffi;
+mod frame_retry;
 pub mod graphics;
 mod headset_settings;
 mod image_states;

@@ -72,6 +72,7 @@ pub unsafe extern "system" fn create_session(
             regions_seen: false,
             motion,
             frame_in_use: None,
+            retry: Default::default(),
         };
         state::registry()
             .sessions
@@ -292,6 +293,39 @@ mod tests {
         assert_eq!(rig.runtime_calls(), ["create_swapchain"]);
         assert_eq!(rig.fake.calls().requested_shaders, 1);
         assert!(lock(&rig.state()).graphics.is_none());
+    }
+
+    /// Frames whose graphics cannot be reached now (the app's OpenGL context current on
+    /// another thread) pass through whole and keep the engine; the layer tries at the next
+    /// frame, then ever less often, and enhances again once a try succeeds.
+    #[test]
+    fn unreachable_graphics_pass_frames_through_and_are_tried_again_ever_less_often() {
+        let rig = Rig::new();
+        rig.fake
+            .answer(Outcome::Unreachable("the fake is out of reach".into()));
+        let mut tried = Vec::new();
+        for frame in 0..8 {
+            let before = rig.fake.calls().enhanced.len();
+            rig.render();
+            assert_eq!(rig.end_frame(), xr::Result::SUCCESS);
+            if rig.fake.calls().enhanced.len() > before {
+                tried.push(frame);
+            }
+        }
+        assert_eq!(tried, [0, 1, 3, 7]);
+        assert_eq!(rig.runtime_calls(), FRAME.repeat(8));
+        assert_eq!(rig.fake.calls().stopped_building, 0);
+        assert!(lock(&rig.state()).graphics.is_some());
+        rig.fake.answer(Outcome::Enhance);
+        for _ in 0..8 {
+            rig.render();
+            rig.end_frame();
+        }
+        // Frame 15 is the next try; it and every frame after it are enhanced.
+        assert_eq!(lock(&rig.state()).processed, 1);
+        rig.render();
+        rig.end_frame();
+        assert_eq!(lock(&rig.state()).processed, 2);
     }
 
     /// Frames whose shaders are still being built pass through, and the engine stays.

@@ -69,6 +69,8 @@ pub struct SessionState {
     pub motion: super::session_motion::SessionMotion,
     /// The background frame this xrEndFrame's mappings were computed for.
     pub frame_in_use: Option<crate::camera::Frame>,
+    /// Frames passed through while the graphics could not be reached, and when to try again.
+    pub retry: super::frame_retry::FrameRetry,
 }
 
 impl SessionState {

@@ -29,3 +29,20 @@ pub fn assert_one_pass_through_line(run: &SandboxRun, why: &str) {
         "{what}"
     );
 }
+
+/// The layer said once that frames pass through while it cannot reach what they need, naming
+/// `why`, and that it tries again; it neither passed the session through for good nor
+/// processed a frame.
+pub fn assert_one_retry_line(run: &SandboxRun, why: &str) {
+    let what = run.describe();
+    let lines = layer_lines(run);
+    let tries: Vec<_> = lines.iter().filter(|l| l.contains("tries again")).collect();
+    assert_eq!(tries.len(), 1, "{what}");
+    assert!(tries[0].contains(why), "{why}: {tries:?}");
+    for never in ["passing", "processing frames", "camera mapping"] {
+        assert!(
+            !lines.iter().any(|l| l.contains(never)),
+            "{never:?}: {what}"
+        );
+    }
+}

@@ -22,6 +22,8 @@ pub enum Outcome {
     Pending,
     /// The engine fails for good, for this reason.
     Fail(String),
+    /// What the frame needs cannot be reached now, for this reason.
+    Unreachable(String),
     /// The engine's code panics.
     Panic,
 }
@@ -165,6 +167,7 @@ impl SessionGraphics for FakeGraphics {
             Outcome::Enhance => Ok(Vec::new()),
             Outcome::Pending => Err(NotDone::Pending),
             Outcome::Fail(why) => Err(NotDone::Failed(why)),
+            Outcome::Unreachable(why) => Err(NotDone::Unreachable(why)),
             Outcome::Panic => panic!("the fake graphics panic while enhancing"),
         }
     }

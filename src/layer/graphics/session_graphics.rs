@@ -54,6 +54,10 @@ pub enum NotDone {
     Failed(String),
     /// This frame passes through untouched, for this reason (one sentence); the next is tried.
     Skipped(String),
+    /// What the frame needs cannot be reached now, for this reason (one sentence), and may be
+    /// later (the app's OpenGL context current on another thread): the frame passes through,
+    /// the engine stays, and later frames try again ever less often (layer/frame_retry.rs).
+    Unreachable(String),
 }
 
 /// A session's graphics, as the layer uses them.

@@ -7,7 +7,7 @@
 use super::app_context::{AppContext, Entered};
 use super::gl_frame_call::{failed, gl_view, Frame};
 use super::left_engines;
-use super::program_builder::{Built, ProgramBuilder};
+use super::program_builder::ProgramBuilder;
 use crate::algorithm::params::Params;
 use crate::config::InPlace;
 use crate::gpu::core::blurred_texels::BlurredTexels;
@@ -26,6 +26,10 @@ use std::time::{Duration, Instant};
 /// How long a frame with `wait_for_pipelines` waits for its programs.
 const PROGRAM_WAIT: Duration = Duration::from_secs(60);
 
+#[path = "session_programs.rs"]
+mod programs;
+use programs::Prepared;
+
 pub struct GlSession {
     api: &'static str,
     context: Box<dyn AppContext>,
@@ -40,6 +44,9 @@ pub struct GlSession {
     warmed: Vec<(u32, u32, Params)>,
     /// Builds running on threads of the layer's own, one per set of programs the caches lacked.
     builders: Vec<ProgramBuilder>,
+    /// Binaries of ended builds not yet handed to the engine (the app's context could not be
+    /// made current when they ended): handed at the next call in it.
+    unlinked: Vec<ProgramBinaries>,
     /// The time the longest build off the app's threads took (they run side by side).
     beside_time: Duration,
     /// The time swapchain creation spent building (or linking from the caches) and running
@@ -66,6 +73,7 @@ impl GlSession {
             build: (None, None),
             warmed: Vec::new(),
             builders: Vec::new(),
+            unlinked: Vec::new(),
             beside_time: Duration::ZERO,
             warm_up_time: Duration::ZERO,
             after_builds_time: Duration::ZERO,
@@ -78,7 +86,8 @@ impl GlSession {
         &mut self,
         f: impl FnOnce(&mut GlFrameRunner, &mut Option<(u64, BlurredTexels)>) -> Result<R, NotDone>,
     ) -> Result<R, NotDone> {
-        let entered = Entered::enter(&*self.context).map_err(NotDone::Failed)?;
+        // Current on another thread now is not for good: later frames try again.
+        let entered = Entered::enter(&*self.context).map_err(NotDone::Unreachable)?;
         // SAFETY: the app's context is current on this thread.
         unsafe { left_engines::delete_left_on(self.context.key()) };
         let engine = match self.engine.take() {
@@ -97,6 +106,9 @@ impl GlSession {
                     InPlace::Off => engine.set_in_place(false),
                     InPlace::Auto => engine.set_in_place(!engine.caps().software),
                 }
+                for binaries in self.unlinked.drain(..) {
+                    engine.take_program_binaries(binaries);
+                }
                 if self.build.0.is_none() {
                     log::info(&format!(
                         "the app's OpenGL context: {} (OpenGL {}.{})",
@@ -114,152 +126,6 @@ impl GlSession {
         };
         drop(entered);
         result
-    }
-}
-
-/// What became of a view shape's programs when the session first met it.
-enum Prepared {
-    /// Met before.
-    Seen,
-    /// The caches held them: linked in the app's context.
-    Cached,
-    /// Their build on a thread of the layer's own started (or one of the same programs runs).
-    Building,
-    /// The driver compiles off the calling thread (GL_KHR_parallel_shader_compile on a GPU):
-    /// frame calls start the builds and poll them, never waiting.
-    InContext,
-    /// It could not start (why): they are left to the app's context.
-    NoBuilder(String),
-    /// The engine refused the shape (the frame calls say why).
-    Failed,
-}
-
-impl GlSession {
-    /// For a view shape (internal format, width, settings) not met before: links its programs
-    /// from the caches (the binary cache's file read again first at a `loading` call, never in
-    /// a frame call), or leaves them to a driver that compiles off the calling thread, or
-    /// starts their build on a thread of the layer's own (one build per set of programs).
-    fn prepare_shape(&mut self, shape: (u32, u32), params: &Params, loading: bool) -> Prepared {
-        let (internal, width) = shape;
-        // Every frame call asks: the settings are cloned only for a shape not met before.
-        let seen = |(i, w, p): &(u32, u32, Params)| (*i, *w) == (internal, width) && p == params;
-        if self.warmed.iter().any(seen) {
-            return Prepared::Seen;
-        }
-        self.warmed.push((internal, width, params.clone()));
-        let cached = self.in_context(|engine, _| {
-            let ids = engine
-                .shape_program_ids(internal, width, params)
-                .map_err(failed)?;
-            if loading {
-                engine.reload_program_cache();
-            }
-            // SAFETY: inside `in_context`: the app's context is current on this thread.
-            let cached = unsafe { engine.ready_from_cache(internal, width, params) };
-            let caps = engine.caps();
-            let parallel = caps.parallel_compile && !caps.software;
-            let found = (caps.driver.clone(), ids, engine.in_place(), parallel);
-            Ok((cached.map_err(failed)?, found))
-        });
-        let (driver, ids, in_place, parallel) = match cached {
-            Ok((true, _)) => return Prepared::Cached,
-            Ok((false, found)) => found,
-            Err(_) => return Prepared::Failed,
-        };
-        if parallel {
-            return Prepared::InContext;
-        }
-        if self.builders.iter().any(|b| b.ids == ids) {
-            return Prepared::Building;
-        }
-        match ProgramBuilder::start(&driver, (internal, width, in_place), params, ids) {
-            Ok(builder) => {
-                log::debug(&format!(
-                    "OpenGL programs for {} views {width} wide: building them on a thread of the layer's own, in an OpenGL context of its own",
-                    self.format_name(i64::from(internal))
-                ));
-                self.builders.push(builder);
-                Prepared::Building
-            }
-            Err(why) => Prepared::NoBuilder(why),
-        }
-    }
-
-    /// Builds (or links from the caches) and runs once the programs of one view shape; the
-    /// time it took.
-    fn warm_up(&mut self, internal: u32, width: u32, params: &Params, when: &str) -> Duration {
-        let since = Instant::now();
-        let warmed = self.in_context(|engine, _| {
-            // SAFETY: inside `in_context`: the app's context is current on this thread.
-            unsafe { engine.warm_up(internal, width, params, PROGRAM_WAIT) }.map_err(failed)
-        });
-        if let Ok(true) = warmed {
-            log::debug(&format!(
-                "OpenGL programs for {} views {width} wide built and run once {when} in {:.3} s",
-                self.format_name(i64::from(internal)),
-                since.elapsed().as_secs_f64()
-            ));
-        }
-        since.elapsed()
-    }
-
-    /// Err(Pending) while a build off the app's threads runs (waited for with `wait`); one that
-    /// ended is followed by linking its programs from the caches in the app's context.
-    fn await_builders(&mut self, wait: bool) -> Result<(), NotDone> {
-        loop {
-            let mut i = 0;
-            while i < self.builders.len() {
-                match self.builders[i].poll() {
-                    Built::Running => i += 1,
-                    Built::Ended(outcome) => {
-                        let builder = self.builders.remove(i);
-                        self.builder_ended(builder, outcome);
-                    }
-                }
-            }
-            if self.builders.is_empty() {
-                return Ok(());
-            }
-            if !wait {
-                return Err(NotDone::Pending);
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-    }
-
-    /// A build ended: its programs are linked from the binaries it handed back (no file is
-    /// read in the frame call) and run once in the app's context (milliseconds). What is not there (the build failed, or the driver
-    /// refused a binary) is left to the frame calls, one program per call, frames passing
-    /// through meanwhile: no frame call compiles a whole set.
-    fn builder_ended(
-        &mut self,
-        builder: ProgramBuilder,
-        outcome: Result<(Duration, ProgramBinaries), String>,
-    ) {
-        let (internal, width, params) = builder.shape.clone();
-        drop(builder);
-        let name = self.format_name(i64::from(internal));
-        if let Err(why) = outcome {
-            log::info(&format!(
-                "the OpenGL programs for {name} views {width} wide were not built off the app's threads ({why}): frame calls build them, one program per call, and the frames go through untouched until they are ready"
-            ));
-            return;
-        }
-        let (took, binaries) = outcome.unwrap_or_default();
-        self.beside_time = self.beside_time.max(took);
-        let linked = self.in_context(|engine, _| {
-            engine.take_program_binaries(binaries);
-            // SAFETY: inside `in_context`: the app's context is current.
-            unsafe { engine.ready_from_cache(internal, width, &params) }.map_err(failed)
-        });
-        log::debug(&format!(
-            "OpenGL programs for {name} views {width} wide built off the app's threads in {:.3} s",
-            took.as_secs_f64()
-        ));
-        if let Ok(true) = linked {
-            let took = self.warm_up(internal, width, &params, "from the caches");
-            self.after_builds_time += took;
-        }
     }
 }
 
