@@ -48,7 +48,9 @@ pub fn run(
         }
         extensions.mndx_egl_enable = true;
     }
-    let instance = crate::create_instance(entry, &extensions, report)?;
+    let instance = stats.calls.time("xrCreateInstance", || {
+        crate::create_instance(entry, &extensions, report)
+    })?;
     let system = instance
         .system(xr::FormFactor::HEAD_MOUNTED_DISPLAY)
         .ctx("xrGetSystem")?;
@@ -124,7 +126,9 @@ fn run_session(
     report: &mut Report,
     stats: &mut Stats,
 ) -> Result<()> {
-    let (session, mut waiter, mut stream) = create_session(instance, system, gl)?;
+    let (session, mut waiter, mut stream) = stats
+        .calls
+        .time("xrCreateSession", || create_session(instance, system, gl))?;
     stats.startup.session_created();
     let offered = session
         .enumerate_swapchain_formats()
@@ -143,7 +147,10 @@ fn run_session(
     let space = session
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
-    let (projection, quad) = layer_swapchains(&session, &format, view_size, options)?;
+    let (projection, quad) = stats.calls.time(
+        "xrCreateSwapchain (projection and quad, with their images' set-up)",
+        || layer_swapchains(&session, &format, view_size, options),
+    )?;
     let churn = options.churn_swapchains.then(|| GlChurn {
         churner: Churner::default(),
         plan: churn::plan(

@@ -154,7 +154,9 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     }
     let mut extensions = xr::ExtensionSet::default();
     extensions.khr_vulkan_enable2 = true;
-    let instance = create_instance(&entry, &extensions, report)?;
+    let instance = stats.calls.time("xrCreateInstance", || {
+        create_instance(&entry, &extensions, report)
+    })?;
     report.timespec_offered = available.khr_convert_timespec_time;
     report.timespec_lookup = timespec_lookup(&entry, &instance);
     if options.provoke_xr_error {
@@ -245,11 +247,15 @@ fn run_session(
 ) -> Result<()> {
     let (instance, system, gpu) = (world.instance, world.system, world.gpu);
     let gipa_calls = gipa::calls();
-    // SAFETY: the Vulkan objects were made through this instance for this system, and `gpu`
-    // outlives the session (`run` drops it after its sessions).
-    let (session, mut waiter, mut stream) =
+    let create = || {
+        // SAFETY: the Vulkan objects were made through this instance for this system, and
+        // `gpu` outlives the session (`run` drops it after its sessions).
         unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
-            .ctx("xrCreateSession")?;
+    };
+    let (session, mut waiter, mut stream) = stats
+        .calls
+        .time("xrCreateSession", create)
+        .ctx("xrCreateSession")?;
     report.vk_gipa_calls_in_create_session += gipa::calls() - gipa_calls;
     stats.startup.session_created();
     let offered = session
@@ -316,7 +322,12 @@ fn run_frames(
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
     let check = options.check_untouched;
-    let projection = projection_swapchain(session, gpu, format, view_size, options.layout, check)?
+    let projection = stats
+        .calls
+        .time(
+            "xrCreateSwapchain (projection, with its images' set-up)",
+            || projection_swapchain(session, gpu, format, view_size, options.layout, check),
+        )?
         .timed(options.timing);
     let quad = options
         .quad
