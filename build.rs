@@ -115,7 +115,8 @@ impl Build {
     /// Writes `file`.glsl from `parsed`; its id in the OpenGL table.
     fn write_glsl(&mut self, file: &str, parsed: &Parsed, entry: &str) -> usize {
         let uniforms = glsl::write_glsl(&self.out, file, parsed, entry);
-        self.gl.add(file, uniforms)
+        let source = fs::read(self.out.join(format!("{file}.glsl"))).unwrap();
+        self.gl.add(file, tables::source_hash(&source), uniforms)
     }
 
     /// The stage files' single shaders (finish_tiles, copy_pixels), in the narrow access.

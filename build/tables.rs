@@ -106,6 +106,8 @@ pub struct GlUniform {
 #[derive(Default)]
 pub struct GlTable {
     pub files: Vec<String>,
+    /// Each file's [`source_hash`], in `files`' order.
+    pub hashes: Vec<u64>,
     pub uniforms: Option<Vec<GlUniform>>,
     /// The id of `finish_tiles.glsl`.
     pub finish_tiles: Option<usize>,
@@ -117,7 +119,7 @@ pub struct GlTable {
 
 impl GlTable {
     /// Lists `file`.glsl with the Params uniforms it declares; its id.
-    pub fn add(&mut self, file: &str, uniforms: Vec<GlUniform>) -> usize {
+    pub fn add(&mut self, file: &str, hash: u64, uniforms: Vec<GlUniform>) -> usize {
         // The engine sets them by one list: naga declares the whole block in every module
         // whose entry reads it (finish_tiles reads none).
         match &self.uniforms {
@@ -126,6 +128,7 @@ impl GlTable {
             Some(u) => assert_eq!(*u, uniforms, "{file}.glsl: its Params uniforms differ"),
         }
         self.files.push(file.to_string());
+        self.hashes.push(hash);
         self.files.len() - 1
     }
 
@@ -138,6 +141,11 @@ impl GlTable {
             s += &format!(
                 "    (\"{f}\", include_str!(concat!(env!(\"OUT_DIR\"), \"/{f}.glsl\"))),\n"
             );
+        }
+        s += "];\n/// Each module's source hash (FNV-1a 64 of its bytes, as `source_hash` computes it), by\n/// id: the program binary cache's keys, without hashing every module at run time.\n";
+        s += "pub static GL_MODULE_HASHES: &[u64] = &[\n";
+        for h in &self.hashes {
+            s += &format!("    {h:#018x},\n");
         }
         s += "];\n/// The uniforms naga's GLSL declares for `Params` (name, PARAMS byte offset, type).\n";
         s += "pub static GL_PARAMS: &[(&str, u32, GlParam)] = &[\n";
@@ -200,4 +208,13 @@ fn classify_rows(variants: &[(Classify, usize)]) -> String {
             format!("    ({f}, {a}, {m}, {id}),\n")
         })
         .collect()
+}
+
+/// FNV-1a 64 of `bytes`: the OpenGL program binary cache's key of a module's source
+/// (src/gpu/opengl/pipelines/binary_cache.rs `source_hash`; a unit test there holds the two
+/// equal).
+pub fn source_hash(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
 }

@@ -9,7 +9,7 @@
 //! one program per call: the work is sliced across frames. A linked program's binary (glGetProgramBinary) goes into the
 //! binary cache (binary_cache.rs), from which a later process links it without compiling.
 
-use super::binary_cache::{source_hash, BinaryCache, ProgramBinaries};
+use super::binary_cache::{BinaryCache, ProgramBinaries};
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
@@ -52,9 +52,9 @@ include!(concat!(env!("OUT_DIR"), "/gl_shader_table.rs"));
 /// One id of every program source of this build: `contrastxr gl-programs --sources ID`
 /// refuses to fill the caches for a layer whose sources differ.
 pub fn gl_sources_id() -> u64 {
-    GL_MODULES
+    GL_MODULE_HASHES
         .iter()
-        .fold(0, |id, (_, source)| id.rotate_left(7) ^ source_hash(source))
+        .fold(0, |id, &hash| id.rotate_left(7) ^ hash)
 }
 
 /// A linked program and its Params uniforms' locations (GL_PARAMS order; -1 for a uniform
@@ -178,7 +178,7 @@ impl Programs {
             let next = match &self.slots[id] {
                 Slot::Ready(_) | Slot::Failed(_) => return,
                 Slot::NotStarted => {
-                    if let Some(p) = self.link_cached(g, source) {
+                    if let Some(p) = self.link_cached(g, id) {
                         self.slots[id] = Slot::Ready(p);
                         return;
                     }
@@ -239,7 +239,7 @@ impl Programs {
                         unsafe { (g.delete_program)(program) };
                         fail(log)
                     } else {
-                        self.cache.store(g, program, source_hash(source));
+                        self.cache.store(g, program, GL_MODULE_HASHES[id]);
                         Slot::Ready(Program {
                             raw: program,
                             locations: locations(g, program),
@@ -269,8 +269,8 @@ impl Programs {
     }
 
     /// The program linked from a cached binary, if there is one the driver takes.
-    fn link_cached(&mut self, g: &Gl, source: &str) -> Option<Program> {
-        let hash = source_hash(source);
+    fn link_cached(&mut self, g: &Gl, id: usize) -> Option<Program> {
+        let hash = GL_MODULE_HASHES[id];
         let (format, bytes) = self.cache.get(hash)?;
         if !self.binary_formats.contains(&format) {
             // glProgramBinary raises GL_INVALID_ENUM into the app's flag for a format the
@@ -305,7 +305,7 @@ impl Programs {
 
     /// The binaries the cache holds of the programs `ids`.
     pub fn binaries(&self, ids: &[usize]) -> ProgramBinaries {
-        let hashes = ids.iter().map(|&id| source_hash(GL_MODULES[id].1));
+        let hashes = ids.iter().map(|&id| GL_MODULE_HASHES[id]);
         self.cache.binaries(hashes)
     }
 
@@ -316,11 +316,7 @@ impl Programs {
 
     /// Writes the binary cache's file where programs were added (see binary_cache.rs).
     pub fn save_cache(&mut self) {
-        let current: std::collections::HashSet<u64> = GL_MODULES
-            .iter()
-            .map(|(_, source)| source_hash(source))
-            .collect();
-        self.cache.save(current);
+        self.cache.save(GL_MODULE_HASHES.iter().copied().collect());
     }
 
     /// Deletes every program (the context current).
@@ -426,8 +422,19 @@ pub fn enhance(
 
 #[cfg(test)]
 mod tests {
+    use super::super::binary_cache::source_hash;
     use super::*;
     use crate::gpu::opengl::GlOffline;
+
+    /// The hashes build.rs wrote are each module's `source_hash`, as the cache's file keys
+    /// them (a program's binary is found under its source's hash, in any build).
+    #[test]
+    fn the_built_hashes_are_the_sources_hashes() {
+        assert_eq!(GL_MODULE_HASHES.len(), GL_MODULES.len());
+        for (&(name, source), &hash) in GL_MODULES.iter().zip(GL_MODULE_HASHES) {
+            assert_eq!(source_hash(source), hash, "{name}");
+        }
+    }
 
     /// glGetError of the offline context (EGL's loader; the engine itself never calls it).
     fn get_error() -> unsafe extern "C" fn() -> u32 {
@@ -455,14 +462,13 @@ mod tests {
         }
         let mut programs = Programs::new(&caps);
         let format = (1..).find(|f| !caps.binary_formats.contains(f)).unwrap();
-        let (_, source) = GL_MODULES[0];
-        let hash = source_hash(source);
+        let hash = GL_MODULE_HASHES[0];
         programs.cache.keep(hash, format, vec![1, 2, 3, 4]);
         assert!(programs.cache.get(hash).is_some());
         let error = get_error();
         // SAFETY: the offline context is current on this thread.
         assert_eq!(unsafe { error() }, 0, "an error before the test");
-        assert!(programs.link_cached(&g, source).is_none());
+        assert!(programs.link_cached(&g, 0).is_none());
         // SAFETY: as above.
         assert_eq!(unsafe { error() }, 0, "loading the binary raised an error");
         assert!(programs.cache.get(hash).is_none(), "the binary was kept");
