@@ -724,11 +724,20 @@ fn every_glsl_module_must_declare_the_same_uniforms() {
         kind: "F32",
     };
     let mut gl = GlTable::default();
-    assert_eq!(gl.add("finish_tiles", vec![]), 0);
-    assert_eq!(gl.add("a", vec![u("pc.lambda_e", 16)]), 1);
-    assert_eq!(gl.add("b", vec![u("pc.lambda_e", 16)]), 2);
+    assert_eq!(gl.add("finish_tiles", 1, vec![]), 0);
+    assert_eq!(gl.add("a", 1, vec![u("pc.lambda_e", 16)]), 1);
+    assert_eq!(gl.add("b", 1, vec![u("pc.lambda_e", 16)]), 2);
     let m = failure(move || {
-        gl.add("c", vec![u("pc.lambda_jnd", 20)]);
+        gl.add("c", 1, vec![u("pc.lambda_jnd", 20)]);
     });
     assert!(m.contains("c.glsl: its Params uniforms differ"), "{m}");
+}
+
+/// The build's module hash is FNV-1a 64 (its published test values), the hash the program
+/// binary cache keys its file by.
+#[test]
+fn module_hashes_are_fnv_1a_64() {
+    assert_eq!(tables::source_hash(b""), 0xcbf2_9ce4_8422_2325);
+    assert_eq!(tables::source_hash(b"a"), 0xaf63_dc4c_8601_ec8c);
+    assert_eq!(tables::source_hash(b"foobar"), 0x8594_4171_f739_67e8);
 }
