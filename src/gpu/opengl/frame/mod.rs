@@ -4,13 +4,13 @@
 mod frame_runner;
 mod frame_view;
 mod prepared_background;
-mod program_warm_up;
 mod region;
 pub mod state_guard;
 mod variant_programs;
 mod view_check;
 mod view_pixels;
 mod view_recipe;
+mod warm_up;
 
 pub use frame_runner::{GlFrameRunner, Outcome, StoreThrough};
 pub use frame_view::{GlTarget, GlView};
