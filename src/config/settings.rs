@@ -299,31 +299,63 @@ impl Settings {
         }
     }
 
-    /// The one startup line's parameter part.
+    /// The one startup line's parameter part: the view mode and method, the settings the
+    /// method reads (its entry in the method table names them), then the ones every method
+    /// shares.
     pub fn describe(&self) -> String {
         let p = &self.params;
-        format!(
-            "mode={} method={} lambda_e={} lambda_jnd_scaled={} transmittance={} achromatic_boost={} luminance_cap={} blur={}x{}/{} fov_scale={:?} fov_offset={:?} fov={} camera_profile={} background={} force={} quad_layers={} capture={}",
-            p.mode.name(),
-            p.method.name(),
-            p.lambda_e,
-            p.lambda_jnd_scaled,
-            p.transmittance,
-            p.achromatic_boost,
-            p.luminance_cap,
-            if p.blur { p.blur_size } else { 1 },
-            if p.blur { p.blur_size } else { 1 },
-            p.blur_sigma,
-            p.fov_scale,
-            p.fov_offset,
-            p.fov,
-            self.describe_profile(),
-            self.background,
-            self.force,
-            self.quad_layers,
-            self.capture_dir
-                .as_ref()
-                .map_or("off".into(), |d| d.display().to_string()),
-        )
+        let value = |name: &str| {
+            super::key(name).map_or_else(|| "?".into(), |k| k.get(self).to_string())
+        };
+        let mut parts = vec![
+            format!("mode={}", p.mode.name()),
+            format!("method={}", p.method.name()),
+        ];
+        for name in p.method.entry().settings {
+            parts.push(format!("{name}={}", value(name)));
+        }
+        let blur = if p.blur { p.blur_size } else { 1 };
+        parts.extend([
+            format!("transmittance={}", p.transmittance),
+            format!("blur={blur}x{blur}/{}", p.blur_sigma),
+            format!("fov_scale={:?}", p.fov_scale),
+            format!("fov_offset={:?}", p.fov_offset),
+            format!("fov={}", p.fov),
+            format!("camera_profile={}", self.describe_profile()),
+            format!("background={}", self.background),
+            format!("force={}", self.force),
+            format!("quad_layers={}", self.quad_layers),
+            format!(
+                "capture={}",
+                self.capture_dir
+                    .as_ref()
+                    .map_or("off".into(), |d| d.display().to_string())
+            ),
+        ]);
+        parts.join(" ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::algorithm::method::Method;
+
+    /// The startup line names each setting the method in use reads, with its value, and no
+    /// other method's.
+    #[test]
+    fn the_startup_line_names_the_methods_own_settings() {
+        let mut s = Settings::default();
+        let paper = s.describe();
+        assert!(paper.starts_with("mode=enhance method=paper lambda_e=0.4 "), "{paper}");
+        assert!(paper.contains(" achromatic_boost=0 "), "{paper}");
+        assert!(!paper.contains("world_nits"), "{paper}");
+        s.params.method = Method::Perceptual;
+        s.params.perceptual.world_nits = 5000.0;
+        let perceptual = s.describe();
+        for said in ["method=perceptual", " world_nits=5000 ", " frequency=\"blur\" "] {
+            assert!(perceptual.contains(said), "{said}: {perceptual}");
+        }
+        assert!(perceptual.contains(" capture=off"), "{perceptual}");
     }
 }
