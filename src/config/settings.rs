@@ -304,9 +304,8 @@ impl Settings {
     /// shares.
     pub fn describe(&self) -> String {
         let p = &self.params;
-        let value = |name: &str| {
-            super::key(name).map_or_else(|| "?".into(), |k| k.get(self).to_string())
-        };
+        let value =
+            |name: &str| super::key(name).map_or_else(|| "?".into(), |k| k.get(self).to_string());
         let mut parts = vec![
             format!("mode={}", p.mode.name()),
             format!("method={}", p.method.name()),
@@ -347,13 +346,20 @@ mod tests {
     fn the_startup_line_names_the_methods_own_settings() {
         let mut s = Settings::default();
         let paper = s.describe();
-        assert!(paper.starts_with("mode=enhance method=paper lambda_e=0.4 "), "{paper}");
+        assert!(
+            paper.starts_with("mode=enhance method=paper lambda_e=0.4 "),
+            "{paper}"
+        );
         assert!(paper.contains(" achromatic_boost=0 "), "{paper}");
         assert!(!paper.contains("world_nits"), "{paper}");
         s.params.method = Method::Perceptual;
         s.params.perceptual.world_nits = 5000.0;
         let perceptual = s.describe();
-        for said in ["method=perceptual", " world_nits=5000 ", " frequency=\"blur\" "] {
+        for said in [
+            "method=perceptual",
+            " world_nits=5000 ",
+            " frequency=\"blur\" ",
+        ] {
             assert!(perceptual.contains(said), "{said}: {perceptual}");
         }
         assert!(perceptual.contains(" capture=off"), "{perceptual}");
