@@ -45,7 +45,8 @@ impl FrameRetry {
     pub fn failed(&mut self, why: &str) {
         if self.failed_tries == 0 {
             let line = format!(
-                "{why}: this frame passes through untouched; the layer tries again at the next frame, then after 2, 4, 8 ... frames (at most {LONGEST_WAIT})"
+                "{why}: {} at the next frame, then after 2, 4, 8 ... frames (at most {LONGEST_WAIT})",
+                log::TRIES_AGAIN
             );
             self.log(0, &line);
         }
@@ -61,8 +62,10 @@ impl FrameRetry {
             return;
         }
         let line = format!(
-            "enhancing again after {} frames passed through ({})",
-            self.passed, self.why
+            "{} {} frames passed through ({})",
+            log::ENHANCING_AGAIN,
+            self.passed,
+            self.why
         );
         self.log(1, &line);
         *self = FrameRetry {

@@ -31,6 +31,11 @@ pub const LOADED: &str = "layer loaded into ";
 /// "OpenGL (Xlib)", "OpenGL (EGL)", ...) and whether the layer enhances it:
 /// `graphics API of this session: OpenGL (Xlib), enhanced` or `..., passed through`.
 pub const GRAPHICS_API: &str = "graphics API of this session: ";
+/// The line when frames begin to pass through for a cause that may pass (the app's OpenGL
+/// context current on another thread), after the cause: `WHY: this frame passes through ...`.
+pub const TRIES_AGAIN: &str = "this frame passes through untouched; the layer tries again";
+/// The line when a try succeeds after such frames: `enhancing again after N frames ...`.
+pub const ENHANCING_AGAIN: &str = "enhancing again after";
 
 struct Log {
     /// The file's queue to its writer; None without a file.

@@ -118,9 +118,18 @@ fn verdict(text: &str) -> Option<(bool, &'static str)> {
     const LOG: &str = "`contrastxr log` shows the whole log of that app";
     if text.contains("enhancement began")
         || text.contains("processing frames")
+        || text.starts_with(log::ENHANCING_AGAIN)
         || text.ends_with(": enhancing")
     {
         return Some((true, ""));
+    }
+    if text.contains(log::TRIES_AGAIN) {
+        return Some((
+            false,
+            "the app's OpenGL context was current on another thread when it called xrEndFrame \
+             (or xrReleaseSwapchainImage): the layer can enhance only frames whose thread can \
+             make it current; if it never could, report it to the app's developers",
+        ));
     }
     if text.contains(" off (CONTRASTXR is 0") {
         return Some((false, "start the app with CONTRASTXR=1"));
@@ -330,6 +339,39 @@ mod tests {
             "last app /usr/bin/hello_xr (pid 9, 2026-01-01T00:00:00.000Z), OpenGL (Xlib) \
              session, enhanced: enhancement began 0.300 s after the session started"
         );
+    }
+
+    /// Frames passed through while the app's OpenGL context was current on another thread:
+    /// a warning while it lasts, fine again once the layer enhances again.
+    #[test]
+    fn frames_passed_for_a_context_busy_elsewhere_are_a_warning_until_enhanced_again() {
+        let busy = format!(
+            "2026-01-01T00:00:00.300Z [pid 5] the app's OpenGL context could not be made current on the thread calling the layer (is it current on another thread?): {} at the next frame, then after 2, 4, 8 ... frames (at most 64)",
+            log::TRIES_AGAIN
+        );
+        let mut lines = vec![
+            "2026-01-01T00:00:00.000Z [pid 5] layer loaded into /usr/bin/app".to_string(),
+            "2026-01-01T00:00:00.100Z [pid 5] graphics API of this session: OpenGL (Xlib), enhanced".into(),
+            "2026-01-01T00:00:00.110Z [pid 5] session on the app's OpenGL (Xlib) context, background color:#e0d020: enhancing".into(),
+            busy,
+        ];
+        let read = |lines: &[String]| {
+            last_app(&lines.iter().map(String::as_str).collect::<Vec<_>>()).finding()
+        };
+        let f = read(&lines);
+        assert_eq!(f.status, Status::Warn, "{}", f.detail);
+        assert!(
+            f.detail.contains("could not be made current"),
+            "{}",
+            f.detail
+        );
+        let fix = f.fix.unwrap_or_default();
+        assert!(fix.contains("current on another thread"), "{fix}");
+        lines.push(format!(
+            "2026-01-01T00:00:01.000Z [pid 5] {} 3 frames passed through (the app's OpenGL context could not be made current ...)",
+            log::ENHANCING_AGAIN
+        ));
+        assert_eq!(read(&lines).status, Status::Ok);
     }
 
     #[test]
