@@ -31,6 +31,9 @@ pub struct Stats {
     /// With --timing: every frame-loop call's wall time (the swapchains' added after each
     /// session).
     pub calls: Calls,
+    /// With --timing: the wall time of the calls that create the instance, each session and
+    /// its projection swapchain (start-up, kept apart from the frame loop's).
+    pub create_calls: Calls,
     /// When the first session was created and its first frames ended (kept with or without
     /// --timing: a few numbers).
     pub startup: Startup,

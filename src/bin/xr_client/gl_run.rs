@@ -48,7 +48,7 @@ pub fn run(
         }
         extensions.mndx_egl_enable = true;
     }
-    let instance = stats.calls.time("xrCreateInstance", || {
+    let instance = stats.create_calls.time("xrCreateInstance", || {
         crate::create_instance(entry, &extensions, report)
     })?;
     let system = instance
@@ -127,7 +127,7 @@ fn run_session(
     stats: &mut Stats,
 ) -> Result<()> {
     let (session, mut waiter, mut stream) = stats
-        .calls
+        .create_calls
         .time("xrCreateSession", || create_session(instance, system, gl))?;
     stats.startup.session_created();
     let offered = session
@@ -147,7 +147,7 @@ fn run_session(
     let space = session
         .create_reference_space(xr::ReferenceSpaceType::LOCAL, xr::Posef::IDENTITY)
         .ctx("xrCreateReferenceSpace")?;
-    let (projection, quad) = stats.calls.time(
+    let (projection, quad) = stats.create_calls.time(
         "xrCreateSwapchain (projection and quad, with their images' set-up)",
         || layer_swapchains(&session, &format, view_size, options),
     )?;

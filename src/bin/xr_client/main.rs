@@ -78,6 +78,7 @@ fn main() -> ExitCode {
     };
     let mut stats = Stats {
         calls: timing::Calls::new(options.timing),
+        create_calls: timing::Calls::new(options.timing),
         ..Stats::default()
     };
     for _ in 0..options.instances.max(1) {
@@ -154,7 +155,7 @@ fn run(options: &Options, report: &mut Report, stats: &mut Stats) -> Result<()> 
     }
     let mut extensions = xr::ExtensionSet::default();
     extensions.khr_vulkan_enable2 = true;
-    let instance = stats.calls.time("xrCreateInstance", || {
+    let instance = stats.create_calls.time("xrCreateInstance", || {
         create_instance(&entry, &extensions, report)
     })?;
     report.timespec_offered = available.khr_convert_timespec_time;
@@ -253,7 +254,7 @@ fn run_session(
         unsafe { instance.create_session::<xr::Vulkan>(system, &gpu.session_create_info()) }
     };
     let (session, mut waiter, mut stream) = stats
-        .calls
+        .create_calls
         .time("xrCreateSession", create)
         .ctx("xrCreateSession")?;
     report.vk_gipa_calls_in_create_session += gipa::calls() - gipa_calls;
@@ -323,7 +324,7 @@ fn run_frames(
         .ctx("xrCreateReferenceSpace")?;
     let check = options.check_untouched;
     let projection = stats
-        .calls
+        .create_calls
         .time(
             "xrCreateSwapchain (projection, with its images' set-up)",
             || projection_swapchain(session, gpu, format, view_size, options.layout, check),

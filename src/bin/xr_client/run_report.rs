@@ -111,6 +111,9 @@ pub struct Timing {
     /// Each frame-loop call's wall time over every frame, warm-up included, by call name
     /// (`xrWaitFrame`, ..., a quad's swapchain calls with ` (quad)` after the name).
     pub calls: CallTable,
+    /// xrCreateInstance, xrCreateSession and xrCreateSwapchain (the projection's, with the
+    /// client's set-up of its images), each session's, by call name.
+    pub create_calls: CallTable,
     /// Seconds from xrCreateSession returning (the first session's) to the return of each of the
     /// first 30 submitted frames' xrEndFrame.
     pub first_frames_s: Vec<f64>,
@@ -186,6 +189,7 @@ impl Timing {
             drain_ms_median: percentile(d, 0.5),
             drain_ms_p95: percentile(d, 0.95),
             calls: CallTable::new(&stats.calls),
+            create_calls: CallTable::new(&stats.create_calls),
             first_frames_s: first_frames_s.map(|s| (s * 1e6).round() / 1e6).collect(),
             session_to_last_frame_s: startup.last_frame_s,
             frames_per_second: startup
@@ -207,7 +211,7 @@ impl Timing {
             self.frames,
             self.warm_up
         );
-        for (name, t) in &self.calls.0 {
+        for (name, t) in self.calls.0.iter().chain(&self.create_calls.0) {
             text += &format!(
                 "  {name:<31} median {:>8.3} ms, p95 {:>8.3} ms, max {:>8.3} ms, {} calls\n",
                 t.median_ms, t.p95_ms, t.max_ms, t.count
