@@ -18,6 +18,7 @@ pub mod path;
 pub mod resolve;
 mod settings;
 pub mod shipped;
+mod startup_line;
 pub mod value;
 pub mod watch;
 
@@ -27,5 +28,6 @@ pub use origin::{Origin, Table};
 pub use path::Env;
 pub use resolve::{check, is_off, resolve, resolve_for, resolve_with, Resolved, Source, Who};
 pub use settings::{Capture, CopyBack, CopyIn, InPlace, Registration, Settings, EYES};
+pub use startup_line::describe;
 pub use value::{Kind, Value};
 pub use watch::Live;

@@ -86,7 +86,7 @@ fn startup_line(settings: &Settings, app: &str) -> String {
         env!("CARGO_PKG_VERSION")
     );
     if settings.enabled {
-        line += &format!(", {}", settings.describe());
+        line += &format!(", {}", config::describe(settings));
     }
     line
 }
