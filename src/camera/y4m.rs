@@ -28,9 +28,12 @@ pub(crate) struct Y4m {
     full_range: bool,
     /// File offset of each frame's pixel data.
     offsets: Vec<u64>,
-    /// The last frame's YUV bytes: one buffer for every frame read, at the file's size (at
-    /// most `user_file::MAX_SIDE` a side: 384 MiB at 4:2:0), the one full-size copy kept.
+    /// The last frame's YUV bytes, one buffer for every frame read: the whole frame when it
+    /// is at most `whole_bytes`, else one row of each plane (a frame of the largest size a
+    /// file may declare, 16384 a side, would be 384 MiB at 4:2:0).
     data: Vec<u8>,
+    /// The largest frame read whole, in one read; a larger one is read row by row.
+    whole_bytes: u64,
     /// The size frames are delivered at most (the camera size): a larger frame is shrunk row by
     /// row as it is converted, as an `image:` still is, so the RGBA frames a player keeps
     /// cost what camera frames do.
@@ -94,54 +97,116 @@ impl Y4m {
         let mut file = user_file::open(&self.path, u64::MAX)
             .map_err(|why| format!("{} {why}", self.path.display()))?;
         let mut data = std::mem::take(&mut self.data);
-        data.resize(self.frame_bytes() as usize, 0);
-        let read = file
-            .seek(SeekFrom::Start(self.offsets[index]))
-            .and_then(|_| file.read_exact(&mut data))
-            .map_err(|e| format!("{}: frame {index}: {e}", self.path.display()));
-        let image = read.map(|_| self.to_rgba(&data, into));
+        let image = if self.frame_bytes() <= self.whole_bytes {
+            self.read_whole(&mut file, index, &mut data, into)
+        } else {
+            self.read_rows(&mut file, index, &mut data, into)
+        };
         self.data = data;
-        image
+        image.map_err(|e| format!("{}: frame {index}: {e}", self.path.display()))
     }
 
-    /// The frame in `data` as RGBA, in `into`'s buffer where it fits: at the file's size, or
-    /// shrunk to at most `most` when larger.
-    fn to_rgba(&self, data: &[u8], into: RgbaImage) -> RgbaImage {
+    /// The frame read in one piece into `data`, then converted.
+    fn read_whole(
+        &self,
+        file: &mut File,
+        index: usize,
+        data: &mut Vec<u8>,
+        into: RgbaImage,
+    ) -> std::io::Result<RgbaImage> {
+        data.resize(self.frame_bytes() as usize, 0);
+        file.seek(SeekFrom::Start(self.offsets[index]))?;
+        file.read_exact(data)?;
+        let (w, h) = (self.width as usize, self.height as usize);
+        let (luma, chroma) = data.split_at(w * h);
+        let (cb, cr) = chroma.split_at(chroma.len() / 2);
+        let cw = self.chroma_size().0 as usize;
+        let shift_y = self.shift_y();
+        self.to_rgba(into, |y, out| {
+            let c = (y >> shift_y) * cw..((y >> shift_y) + 1) * cw;
+            let (u, v) = (cb.get(c.clone()).unwrap_or(&[]), cr.get(c).unwrap_or(&[]));
+            self.row_rgba(&luma[y * w..(y + 1) * w], u, v, out);
+            Ok(())
+        })
+    }
+
+    /// The frame read a row of each plane at a time into `data` (three rows' bytes), each
+    /// converted as it comes.
+    fn read_rows(
+        &self,
+        file: &mut File,
+        index: usize,
+        data: &mut Vec<u8>,
+        into: RgbaImage,
+    ) -> std::io::Result<RgbaImage> {
+        let (w, h) = (u64::from(self.width), u64::from(self.height));
+        let (cw, ch) = self.chroma_size();
+        let (cw, ch) = (u64::from(cw), u64::from(ch));
+        let start = self.offsets[index];
+        data.resize((w + 2 * cw) as usize, 0);
+        let (luma, chroma) = data.split_at_mut(w as usize);
+        let (cb, cr) = chroma.split_at_mut(cw as usize);
+        let shift_y = self.shift_y();
+        let mut chroma_row = None;
+        self.to_rgba(into, |y, out| {
+            let mut read_at = |at: u64, into: &mut [u8]| {
+                file.seek(SeekFrom::Start(at))?;
+                file.read_exact(into)
+            };
+            read_at(start + y as u64 * w, luma)?;
+            let c = (y >> shift_y) as u64;
+            if cw > 0 && chroma_row != Some(c) {
+                read_at(start + w * h + c * cw, cb)?;
+                read_at(start + w * h + cw * ch + c * cw, cr)?;
+                chroma_row = Some(c);
+            }
+            self.row_rgba(luma, cb, cr, out);
+            Ok(())
+        })
+    }
+
+    fn shift_y(&self) -> u32 {
+        match self.chroma {
+            Chroma::Planes { shift_y, .. } => shift_y,
+            Chroma::Mono => 0,
+        }
+    }
+
+    /// The frame whose row `y` `row` writes as RGBA, in `into`'s buffer where it fits: at the
+    /// file's size, or shrunk to at most `most` when larger.
+    fn to_rgba(
+        &self,
+        into: RgbaImage,
+        mut row: impl FnMut(usize, &mut [[u8; 4]]) -> std::io::Result<()>,
+    ) -> std::io::Result<RgbaImage> {
         let (w, h) = (self.width, self.height);
         if w <= self.most.0 && h <= self.most.1 {
             let mut image = crate::camera::pool::sized(into, w, h);
             for (y, out) in image.pixels.chunks_exact_mut(w as usize).enumerate() {
-                self.row_rgba(data, y, out);
+                row(y, out)?;
             }
-            return image;
+            return Ok(image);
         }
         let mut shrink = Shrink::new((w, h), self.most, false, into.pixels);
-        let mut row = vec![[0, 0, 0, 255]; w as usize];
+        let mut pixels = vec![[0, 0, 0, 255]; w as usize];
         for y in 0..h as usize {
-            self.row_rgba(data, y, &mut row);
-            shrink.row(&row);
+            row(y, &mut pixels)?;
+            shrink.row(&pixels);
         }
-        shrink.finish()
+        Ok(shrink.finish())
     }
 
-    /// Row `y` of the frame in `data`, converted into `out` (`width` pixels).
-    fn row_rgba(&self, data: &[u8], y: usize, out: &mut [[u8; 4]]) {
-        let w = self.width as usize;
-        let (cw, ch) = self.chroma_size();
-        let (luma, chroma) = data.split_at(w * self.height as usize);
-        let (cb, cr) = chroma.split_at(cw as usize * ch as usize);
+    /// A row of the frame from its luma row and the chroma rows under it (empty for mono),
+    /// converted into `out` (`width` pixels).
+    fn row_rgba(&self, luma: &[u8], cb: &[u8], cr: &[u8], out: &mut [[u8; 4]]) {
         let convert = if self.full_range {
             bt601_full_to_rgb
         } else {
             bt601_limited_to_rgb
         };
-        let luma = &luma[y * w..(y + 1) * w];
         for (x, (px, &l)) in out.iter_mut().zip(luma).enumerate() {
             let (u, v) = match self.chroma {
-                Chroma::Planes { shift_x, shift_y } => {
-                    let i = (y >> shift_y) * cw as usize + (x >> shift_x);
-                    (cb[i], cr[i])
-                }
+                Chroma::Planes { shift_x, .. } => (cb[x >> shift_x], cr[x >> shift_x]),
                 Chroma::Mono => (128, 128),
             };
             let [r, g, b] = convert(l, u, v);
@@ -149,6 +214,10 @@ impl Y4m {
         }
     }
 }
+
+/// The largest frame read in one piece (a 4096x4096 4:2:0 frame is 24 MiB); a larger one is
+/// read a row of each plane at a time.
+const WHOLE_FRAME_BYTES: u64 = 32 << 20;
 
 /// The longest header line read (the stream header and each FRAME header are short).
 const MAX_LINE: u64 = 4096;
@@ -170,6 +239,7 @@ fn parse_header(line: &str) -> Result<Y4m, String> {
         full_range: false,
         offsets: Vec::new(),
         data: Vec::new(),
+        whole_bytes: WHOLE_FRAME_BYTES,
         most: (u32::MAX, u32::MAX),
     };
     for token in tokens.filter(|t| !t.is_empty()) {
@@ -288,6 +358,48 @@ mod tests {
         assert_eq!(y.frame_bytes(), 15 + 12);
         assert!(parse_header("YUV4MPEG2 W5 H3 C420p10").is_err());
         assert!(parse_header("YUV4MPEG W5 H3").is_err());
+    }
+
+    /// A frame read a row at a time (as a frame over `WHOLE_FRAME_BYTES` is) gives what the
+    /// whole read gives, in every chroma layout, at the file's size and shrunk, and keeps only
+    /// a row of each plane.
+    #[test]
+    fn frames_read_row_by_row_equal_frames_read_whole() {
+        let dir = crate::scratch::ScratchDir::new("y4m-rows");
+        let (w, h) = (13u32, 7u32);
+        for (tag, (sx, sy)) in [
+            ("420", (1, 1)),
+            ("422", (1, 0)),
+            ("444", (0, 0)),
+            ("mono", (9, 9)),
+        ] {
+            let path = dir.join(format!("{tag}.y4m"));
+            let (cw, ch) = match tag {
+                "mono" => (0, 0),
+                _ => ((w + (1 << sx) - 1) >> sx, (h + (1 << sy) - 1) >> sy),
+            };
+            let mut bytes = format!("YUV4MPEG2 W{w} H{h} F10:1 C{tag}\n").into_bytes();
+            for frame in 0..2u32 {
+                bytes.extend(b"FRAME\n");
+                let n = w * h + 2 * cw * ch;
+                bytes.extend((0..n).map(|i| (i * 37 + frame * 11 + i / w) as u8));
+            }
+            std::fs::write(&path, bytes).unwrap();
+            for most in [(w, h), (5, 3)] {
+                let empty = || RgbaImage::new(0, 0, [0; 4]);
+                let mut whole = Y4m::open(&path, most).unwrap();
+                let mut rows = Y4m::open(&path, most).unwrap();
+                rows.whole_bytes = 0;
+                for frame in 0..2 {
+                    let a = whole.read_frame(frame, empty()).unwrap();
+                    let b = rows.read_frame(frame, empty()).unwrap();
+                    assert_eq!(a, b, "{tag}, frame {frame}, at most {most:?}");
+                }
+                assert_eq!(whole.data.len() as u64, whole.frame_bytes(), "{tag}");
+                assert_eq!(rows.data.len() as u32, w + 2 * cw, "{tag}");
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
