@@ -171,6 +171,25 @@ def ablations(parts, out):
             out.append(f"| {ablation} | " + " | ".join(cells) + " |")
 
 
+def shader_statistics(parts, out):
+    for entry in parts.get("vk", []):
+        output = entry.get("output") or {}
+        if "shader_statistics_error" in output:
+            out.append(f"\n### Shader statistics\n\nnone: {output['shader_statistics_error']}")
+        shaders = output.get("shader_statistics")
+        if not shaders:
+            continue
+        names = list(dict.fromkeys(k for s in shaders for e in s["executables"]
+                                   for k in e["statistics"]))
+        out.append("\n### Shader statistics (the driver's compiler)\n")
+        out.append("| shader | subgroup | " + " | ".join(names) + " |")
+        out.append("|---|---|" + "---|" * len(names))
+        for s in shaders:
+            for e in s["executables"]:
+                cells = [str(e["statistics"].get(k, "-")) for k in names]
+                out.append(f"| {s['shader']} | {e['subgroup_size']} | " + " | ".join(cells) + " |")
+
+
 def main(argv):
     if len(argv) < 2:
         print(__doc__.strip())
@@ -196,6 +215,7 @@ def main(argv):
     enhance_target(vk, out)
     method_target(vk, perceptual, out)
     ablations(parts, out)
+    shader_statistics(parts, out)
     if len(argv) > 2:
         with open(argv[2]) as f:
             out.append("\n### Start-up\n")

@@ -19,6 +19,7 @@ fn each_backend(test: impl Fn(&mut dyn OfflineBackend)) {
         index: 0,
         validation: true,
         matching: None,
+        shader_statistics: false,
     };
     let mut vulkan =
         VkOffline::with_options(&options).unwrap_or_else(|e| panic!("Vulkan engine: {e}"));

@@ -22,6 +22,7 @@ fn engine() -> VkOffline {
         index: 0,
         validation: true,
         matching: None,
+        shader_statistics: false,
     })
     .unwrap_or_else(|e| panic!("GPU engine: {e}"))
 }
@@ -1202,4 +1203,64 @@ fn bench_ablations_are_rows_of_their_own() {
         err.contains("directions is not built for the method paper"),
         "{err}"
     );
+}
+
+/// Whether the first device offers the compiler's statistics, asked of Vulkan here (not
+/// through the engine's own check).
+fn device_offers_statistics(e: &VkOffline) -> bool {
+    use ash::vk;
+    let (instance, physical) = (&e.gpu.instance, e.gpu.physical);
+    // SAFETY: physical is the engine's device, of its live instance.
+    let listed = unsafe { instance.enumerate_device_extension_properties(physical) }
+        .unwrap()
+        .iter()
+        .any(|x| x.extension_name_as_c_str() == Ok(ash::khr::pipeline_executable_properties::NAME));
+    let mut feature = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut feature);
+    // SAFETY: as above; the engine needs Vulkan 1.1.
+    unsafe { instance.get_physical_device_features2(physical, &mut features) };
+    listed && feature.pipeline_executable_info == vk::TRUE
+}
+
+#[test]
+fn shader_statistics_are_reported_where_the_driver_has_them() {
+    let e = VkOffline::with_options(&DeviceOptions {
+        index: 0,
+        validation: true,
+        matching: None,
+        shader_statistics: true,
+    })
+    .unwrap_or_else(|e| panic!("GPU engine: {e}"));
+    let offered = device_offers_statistics(&e);
+    assert_eq!(e.gpu.shader_statistics, offered);
+    match e.bench_shader_statistics(&Params::default()) {
+        Ok(all) => {
+            assert!(offered, "statistics from a device that does not offer them");
+            assert_eq!(all.len(), 10, "{all:?}");
+            for shader in &all {
+                assert!(!shader.executables.is_empty(), "{}", shader.shader);
+                assert!(
+                    shader.executables.iter().all(|x| !x.statistics.is_empty()),
+                    "{shader:?}"
+                );
+            }
+        }
+        Err(why) => {
+            assert!(!offered, "the device offers statistics, yet: {why}");
+            assert!(why
+                .to_string()
+                .contains("VK_KHR_pipeline_executable_properties"));
+        }
+    }
+    assert_clean(&e);
+    // The command line gives them (or why not) in the bench's JSON.
+    let v = small_bench(&["--shader-stats"]);
+    match offered {
+        true => assert_eq!(
+            v["shader_statistics"].as_array().map(Vec::len),
+            Some(10),
+            "{v}"
+        ),
+        false => assert!(v["shader_statistics_error"].is_string(), "{v}"),
+    }
 }

@@ -127,6 +127,7 @@ fn the_gpu_is_within_one_code_value_of_the_reference() {
         index: 0,
         validation: true,
         matching: None,
+        shader_statistics: false,
     })
     .unwrap_or_else(|e| panic!("GPU engine: {e}"));
     let camera = noise(131, 83, 5);

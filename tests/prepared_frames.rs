@@ -29,6 +29,7 @@ const OPTIONS: DeviceOptions = DeviceOptions {
     index: 0,
     validation: true,
     matching: None,
+    shader_statistics: false,
 };
 const REGION: (u32, u32) = (40, 30);
 const CAMERA: (u32, u32) = (96, 64);

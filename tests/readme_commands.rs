@@ -203,6 +203,10 @@ const NOT_RUN: &[(&str, &str)] = &[
         "a mention; tests/gpu_engine.rs runs --ablate",
     ),
     (
+        "contrastxr bench --shader-stats",
+        "a mention; tests/gpu_engine.rs runs --shader-stats",
+    ),
+    (
         "contrastxr bench --sizes 1268x720,2064x2208 --runs 10 --path copy",
         "minutes",
     ),

@@ -4,6 +4,7 @@
 use super::args::Args;
 use super::error::CliError;
 use super::options::{self, method_usage};
+use super::shader_stats::{self, ShaderReport};
 use contrastxr::algorithm::{Method, Params};
 use contrastxr::gpu::core::bench::{Ablation, BenchCase, BenchResult, Content, CAMERA_SIZE};
 use contrastxr::gpu::opengl::GlOffline;
@@ -15,7 +16,7 @@ pub fn usage() -> String {
     format!(
         "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
          \x20                       [--content typical,full] [--path P] [--engine vulkan|opengl]\n\
-         \x20                       [--ablate LIST] [method options]\n\n\
+         \x20                       [--ablate LIST] [--shader-stats] [method options]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
@@ -64,7 +65,13 @@ pub fn usage() -> String {
          For --method perceptual: method, background, directions (the paper's colour the only\n\
          candidate), bisection (none back toward the display colour), search (both), classify\n\
          (the paper's classify, which lists every tile with content, instead of the method's\n\
-         own). all: every one the method has.\n\n{}",
+         own). all: every one the method has.\n\
+         --shader-stats (Vulkan) adds what the driver's compiler says of the frame's per-pixel\n\
+         shaders on RGBA8 sRGB for the method (classify and enhance, general and shared-fetch,\n\
+         for the buffer path, in place and the sampled read; finish_tiles): registers,\n\
+         instructions, spills, by the driver's own names (VK_KHR_pipeline_executable_properties;\n\
+         a line saying so where the driver has none), after the rows or in the JSON\n\
+         (shader_statistics).\n\n{}",
         contrastxr::gpu::core::bench::WARM_UP_RUNS,
         contrastxr::gpu::core::bench::CAMERA_SIZE.0,
         contrastxr::gpu::core::bench::CAMERA_SIZE.1,
@@ -191,7 +198,13 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     };
     let ablations = parse_ablations(args.value(&["--ablate"])?, params.method, opengl)?;
     let json = args.flag("--json");
+    let shader_stats = args.flag("--shader-stats");
     args.finish()?;
+    if opengl && shader_stats {
+        return Err(CliError::Usage(
+            "--shader-stats is Vulkan's (VK_KHR_pipeline_executable_properties)".into(),
+        ));
+    }
     let cases = |tiles: bool| {
         bench_cases(
             &sizes,
@@ -207,16 +220,30 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         index: device,
         validation: false,
         matching: None,
+        shader_statistics: shader_stats,
     };
     let mut engine =
         VkOffline::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
     let device = engine.device_name().to_string();
     let cases = cases(tiles.unwrap_or(!engine.gpu.is_cpu()));
-    report(&device, json, &cases, |case| {
+    let stats = shader_stats.then(|| {
+        engine
+            .bench_shader_statistics(&params)
+            .map_err(|e| e.to_string())
+    });
+    let output = Output { json, stats };
+    report(&device, &output, &cases, |case| {
         engine
             .bench(case, &params)
             .map_err(|e| CliError::Failure(e.to_string()))
     })
+}
+
+/// How the rows are printed: as text, or as JSON at the end; with the shaders' statistics
+/// where `--shader-stats` asked for them.
+struct Output {
+    json: bool,
+    stats: Option<ShaderReport>,
 }
 
 /// Every case: each size, content and ablation.
@@ -250,7 +277,8 @@ fn bench_cases(
 fn run_opengl(cases: &[BenchCase], params: &Params, json: bool) -> Result<(), CliError> {
     let mut gl = GlOffline::new().map_err(|e| CliError::Failure(e.to_string()))?;
     let device = format!("OpenGL: {}", gl.engine().caps().driver);
-    report(&device, json, cases, |case| {
+    let output = Output { json, stats: None };
+    report(&device, &output, cases, |case| {
         gl.bench(case, params)
             .map_err(|e| CliError::Failure(e.to_string()))
     })
@@ -259,10 +287,11 @@ fn run_opengl(cases: &[BenchCase], params: &Params, json: bool) -> Result<(), Cl
 /// Runs every case, printing each row as it comes (or the JSON at the end).
 fn report(
     device: &str,
-    json: bool,
+    output: &Output,
     cases: &[BenchCase],
     mut bench: impl FnMut(&BenchCase) -> Result<BenchResult, CliError>,
 ) -> Result<(), CliError> {
+    let json = output.json;
     if !json {
         super::error::print(&format!("device: {device}\n{}\n", header()));
     }
@@ -280,8 +309,13 @@ fn report(
         }
         results.push((r, vs_none));
     }
-    if json {
-        super::error::print(&format!("{}\n", to_json(device, &results)));
+    match (&output.stats, json) {
+        (_, true) => super::error::print(&format!(
+            "{}\n",
+            to_json(device, &results, output.stats.as_ref())
+        )),
+        (Some(stats), false) => super::error::print(&shader_stats::text(stats)),
+        (None, false) => {}
     }
     Ok(())
 }
@@ -360,7 +394,11 @@ fn optional(v: Option<f64>, decimals: usize) -> String {
     v.map_or_else(|| "-".into(), |v| format!("{v:.decimals$}"))
 }
 
-fn to_json(device: &str, results: &[(BenchResult, Option<f64>)]) -> String {
+fn to_json(
+    device: &str,
+    results: &[(BenchResult, Option<f64>)],
+    stats: Option<&ShaderReport>,
+) -> String {
     let rows: Vec<serde_json::Value> = results
         .iter()
         .map(|(r, vs_none)| {
@@ -399,5 +437,11 @@ fn to_json(device: &str, results: &[(BenchResult, Option<f64>)]) -> String {
             })
         })
         .collect();
-    serde_json::json!({ "device": device, "results": rows }).to_string()
+    let mut all = serde_json::Map::new();
+    all.insert("device".into(), device.into());
+    all.insert("results".into(), rows.into());
+    if let Some(stats) = stats {
+        shader_stats::json(stats, &mut all);
+    }
+    serde_json::Value::Object(all).to_string()
 }

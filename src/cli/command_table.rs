@@ -34,6 +34,7 @@ const BENCH_OPTIONS: &[Opt] = &[
         "method|background|codec|per-pixel|enhance-pass|shared-fetch|directions|bisection|search|classify|all,...",
     ),
     Opt::flag("--json"),
+    Opt::flag("--shader-stats"),
 ];
 
 pub const COMMANDS: &[Subcommand] = &[

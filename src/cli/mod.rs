@@ -22,5 +22,6 @@ mod log;
 mod options;
 mod pan;
 mod parse;
+mod shader_stats;
 
 pub use parse::main;

@@ -16,5 +16,5 @@ pub mod vulkan;
 pub use self::core::{BackgroundInput, CameraRect, OfflineBackend, PixelFormat, PixelLayout};
 pub use vulkan::device::{DeviceOptions, GpuDevice, GpuError};
 pub use vulkan::frame::{CapturedView, FrameOptions, FrameRunner, FrameView, ViewKey, ViewPath};
-pub use vulkan::offline::VkOffline;
+pub use vulkan::offline::{ShaderStatistics, VkOffline};
 pub use vulkan::record::{CameraResources, PixelsIn, Placement, Recorder, ViewShape, ViewTarget};

@@ -2,6 +2,7 @@
 //! tests) or one that belongs to someone else (the app's device, inside the OpenXR layer).
 //! Drop destroys only what this object created.
 
+use super::compute_device::create_compute_device;
 use super::error::{GpuError, VkResultExt};
 use super::pinned_libraries::PinnedLibraries;
 use ash::vk;
@@ -45,6 +46,9 @@ pub struct GpuDevice {
     pub allocator: ManuallyDrop<Mutex<Allocator>>,
     pub name: String,
     pub validation: Option<Arc<ValidationLog>>,
+    /// VK_KHR_pipeline_executable_properties is enabled: pipelines can report the compiler's
+    /// statistics (gpu/vulkan/pipelines/shader_statistics.rs).
+    pub shader_statistics: bool,
     owned: Option<Owned>,
     /// The GPU may still use memory or objects of this device: Drop then frees nothing.
     abandoned: bool,
@@ -60,6 +64,9 @@ pub struct DeviceOptions {
     /// Take the physical device with this vendor, device and pipelineCacheUUID instead of
     /// `index` (a device of the same kind as someone else's).
     pub matching: Option<DeviceKind>,
+    /// Enable VK_KHR_pipeline_executable_properties where the driver has it
+    /// ([`GpuDevice::shader_statistics`]).
+    pub shader_statistics: bool,
 }
 
 impl DeviceOptions {
@@ -72,6 +79,7 @@ impl DeviceOptions {
                 .unwrap_or(0),
             validation: std::env::var("CONTRASTXR_VK_VALIDATION").is_ok_and(|v| v == "1"),
             matching: None,
+            shader_statistics: false,
         }
     }
 }
@@ -164,33 +172,6 @@ fn create_messenger(
     })
 }
 
-fn compute_family(instance: &ash::Instance, physical: vk::PhysicalDevice) -> Option<u32> {
-    // SAFETY: physical is a handle enumerated from this instance.
-    let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-    families
-        .iter()
-        .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
-        .map(|i| i as u32)
-}
-
-/// A device with one queue of the first compute family of `physical` (a device of `instance`).
-fn create_compute_device(
-    instance: &ash::Instance,
-    physical: vk::PhysicalDevice,
-) -> Result<(ash::Device, u32), GpuError> {
-    let family = compute_family(instance, physical)
-        .ok_or_else(|| GpuError::NoDevice("the device has no compute queue".into()))?;
-    let priorities = [1.0];
-    let queues = [vk::DeviceQueueCreateInfo::default()
-        .queue_family_index(family)
-        .queue_priorities(&priorities)];
-    let info = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
-    // SAFETY: physical belongs to the live instance; info and its arrays live until the call
-    // returns.
-    let device = unsafe { instance.create_device(physical, &info, None) }.vk("vkCreateDevice")?;
-    Ok((device, family))
-}
-
 fn device_name(instance: &ash::Instance, physical: vk::PhysicalDevice) -> String {
     // SAFETY: physical is a handle enumerated from this instance.
     let props = unsafe { instance.get_physical_device_properties(physical) };
@@ -248,7 +229,7 @@ impl GpuDevice {
         };
         // From here on, a failure must destroy the instance: build the device in a helper.
         match Self::create_device(&entry, &instance, options) {
-            Ok((physical, device, family)) => {
+            Ok((physical, device, family, statistics)) => {
                 let allocator = match create_allocator(&instance, &device, physical) {
                     Ok(a) => a,
                     Err(e) => {
@@ -262,6 +243,7 @@ impl GpuDevice {
                 // SAFETY: the device was created with one queue of `family`.
                 let mut gpu = unsafe { Self::assemble(handles, family, 0) };
                 gpu.validation = log;
+                gpu.shader_statistics = statistics;
                 gpu.owned = Some(Owned {
                     messenger,
                     instance: true,
@@ -318,7 +300,7 @@ impl GpuDevice {
         entry: &ash::Entry,
         instance: &ash::Instance,
         options: &DeviceOptions,
-    ) -> Result<(vk::PhysicalDevice, ash::Device, u32), GpuError> {
+    ) -> Result<(vk::PhysicalDevice, ash::Device, u32, bool), GpuError> {
         let _ = entry;
         // SAFETY: instance is a valid instance.
         let physicals =
@@ -343,8 +325,9 @@ impl GpuDevice {
                 "the device supports only Vulkan 1.0".into(),
             ));
         }
-        let (device, family) = create_compute_device(instance, physical)?;
-        Ok((physical, device, family))
+        let (device, family, statistics) =
+            create_compute_device(instance, physical, options.shader_statistics)?;
+        Ok((physical, device, family, statistics))
     }
 
     /// Wraps a device that belongs to someone else (the app's, in the layer). Nothing of it is
@@ -401,6 +384,7 @@ impl GpuDevice {
             queue_family,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             validation: None,
+            shader_statistics: false,
             owned: None,
             abandoned: false,
         }

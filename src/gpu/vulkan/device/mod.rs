@@ -6,6 +6,7 @@ pub mod app_queue;
 mod barrier;
 mod buffer;
 mod commands;
+mod compute_device;
 mod device_image;
 mod error;
 mod gpu_device;

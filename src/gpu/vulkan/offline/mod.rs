@@ -3,9 +3,11 @@
 
 mod bench;
 mod bench_rig;
+mod bench_shaders;
 mod image_copy_path;
 mod in_place_region;
 mod offline_engine;
 
+pub use bench_shaders::ShaderStatistics;
 pub use image_copy_path::AppImage;
 pub use offline_engine::VkOffline;
