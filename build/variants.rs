@@ -174,8 +174,8 @@ impl Ablated {
 pub fn ablated_variants() -> Vec<Ablated> {
     let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
     let methods = [
-        (paper_code(), ABLATIONS),
-        (perceptual_code(), PERCEPTUAL_ABLATIONS),
+        (paper_code(), &ABLATIONS[..]),
+        (perceptual_code(), &PERCEPTUAL_ABLATIONS[..]),
     ];
     let accesses: Vec<PixelAccess> = pixel_accesses()
         .into_iter()
@@ -185,7 +185,7 @@ pub fn ablated_variants() -> Vec<Ablated> {
         .into_iter()
         .flat_map(|(method, ablations)| {
             let accesses = &accesses;
-            ablations.into_iter().flat_map(move |ablate| {
+            ablations.iter().flat_map(move |&ablate| {
                 accesses.iter().map(move |&pixels| Ablated {
                     method,
                     pixels,

@@ -69,6 +69,10 @@ fn srgb_decode(v: vec4<f32>) -> vec4<f32> {
 // Cube root of positive values without pow or division: Newton's method on x^(-1/3) from a
 // bit-pattern seed (src/gpu/core/approx_constants.rs; 4e-7 relative error), then x * x^(-2/3).
 fn cbrt(x: vec4<f32>) -> vec4<f32> {
+    // The benchmark's cube-root ablation only (ABLATE is 0 in every shader the layer runs).
+    if ((ABLATE & ABLATE_CUBE_ROOT) != 0u) {
+        return pow(x, vec4<f32>(1.0 / 3.0));
+    }
     let third_bits = vec4<u32>(vec4<f32>(bitcast<vec4<u32>>(x)) * (1.0 / 3.0));
     var r = bitcast<vec4<f32>>(vec4<u32>(CBRT_SEED_MAGIC) - third_bits);
     let x3 = x * (1.0 / 3.0);

@@ -902,6 +902,13 @@ fn channels(pixels: &[[u8; 4]]) -> Vec<u32> {
 }
 
 /// The channels of RGBA8 words.
+/// Every value of `a` within one step of `b`'s.
+fn assert_within_one(a: &[u32], b: &[u32], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}");
+    let worst = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max();
+    assert!(worst <= Some(1), "{what}: values differ by up to {worst:?}");
+}
+
 fn rgba8_channels(words: &[u32]) -> Vec<u32> {
     words
         .iter()
@@ -1040,7 +1047,7 @@ fn mappings_the_shared_fetches_cannot_serve_take_the_general_variant() {
 #[test]
 fn bench_ablations_take_out_what_they_name() {
     use contrastxr::gpu::core::interface::{
-        ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_ENHANCE_PASS, ABLATE_METHOD,
+        ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_CUBE_ROOT, ABLATE_ENHANCE_PASS, ABLATE_METHOD,
     };
     let mut e = engine();
     let (camera, other_camera) = (noise(64, 40, 23), noise(64, 40, 29));
@@ -1081,6 +1088,10 @@ fn bench_ablations_take_out_what_they_name() {
         assert_ne!(other, enhanced, "{width}: the camera made no difference");
         assert_ne!(grey, raw, "{width}: no enhancement over the grey");
         assert_eq!(grey, grey_too, "{width}: the camera still read");
+        // The cube roots by pow: replaced, not taken out, so still the enhancement.
+        let by_pow = run(&mut e, ABLATE_CUBE_ROOT, PixelFormat::SRGB8, &camera);
+        let what = format!("{width}: cube roots by pow");
+        assert_within_one(&rgba8_channels(&by_pow), &rgba8_channels(&enhanced), &what);
     }
     // In place, in the app's image.
     let raw = raw_words(PixelFormat::SRGB8, &noise(48, 9, 43));

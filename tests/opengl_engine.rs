@@ -916,9 +916,14 @@ fn assert_same_arithmetic(gl: &GlOffline, a: &[u32], b: &[u32], what: &str) {
 /// through the paper's classify its own.
 #[test]
 fn opengl_ablations_take_out_what_they_name() {
+    let channels = |words: &[u32]| -> std::vec::IntoIter<u8> {
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        bytes.into_iter()
+    };
     use contrastxr::algorithm::Method;
     use contrastxr::gpu::core::interface::{
-        ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_DIRECTIONS, ABLATE_ENHANCE_PASS, ABLATE_METHOD,
+        ABLATE_BACKGROUND, ABLATE_CODEC, ABLATE_CUBE_ROOT, ABLATE_DIRECTIONS, ABLATE_ENHANCE_PASS,
+        ABLATE_METHOD,
     };
     let mut gl = context();
     let (camera, other_camera) = (noise(64, 40, 23), noise(64, 40, 29));
@@ -951,6 +956,16 @@ fn opengl_ablations_take_out_what_they_name() {
         );
         let what = format!("in place {in_place}: no codec against RGBA8");
         assert_same_arithmetic(&gl, &without_codec, &as_unorm, &what);
+        // The cube roots by pow: replaced, not taken out, so still the enhancement.
+        let by_pow = run(&mut gl, ABLATE_CUBE_ROOT, SRGB8_ALPHA8, &camera, &paper);
+        let worst = channels(&by_pow)
+            .zip(channels(&enhanced))
+            .map(|(a, b)| a.abs_diff(b))
+            .max();
+        assert!(
+            worst <= Some(1),
+            "in place {in_place}: cube roots by pow: {worst:?}"
+        );
         let grey = run(&mut gl, ABLATE_BACKGROUND, SRGB8_ALPHA8, &camera, &paper);
         let grey_too = run(
             &mut gl,

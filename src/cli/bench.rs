@@ -61,7 +61,9 @@ pub fn usage() -> String {
          colour kept), background (a constant grey, no camera texel reads), codec (no sRGB decode\n\
          or encode), per-pixel (the three: loads, quantisation and stores left), enhance-pass\n\
          (the enhance pass returns at once: classify, finish_tiles, the indirect dispatch),\n\
-         shared-fetch (the general background sampling instead of shared fetches; Vulkan only).\n\
+         shared-fetch (the general background sampling instead of shared fetches; Vulkan only),\n\
+         cube-root (not taken out but replaced: the CIELAB cube roots by the driver's pow\n\
+         instead of Newton steps; the output is still the enhancement, within 1 code value).\n\
          For --method perceptual: method, background, directions (the paper's colour the only\n\
          candidate), bisection (none back toward the display colour), search (both), classify\n\
          (the paper's classify, which lists every tile with content, instead of the method's\n\

@@ -31,7 +31,7 @@ const BENCH_OPTIONS: &[Opt] = &[
     Opt::value("--engine", "vulkan|opengl"),
     Opt::value(
         "--ablate",
-        "method|background|codec|per-pixel|enhance-pass|shared-fetch|directions|bisection|search|classify|all,...",
+        "method|background|codec|per-pixel|enhance-pass|shared-fetch|cube-root|directions|bisection|search|classify|all,...",
     ),
     Opt::flag("--json"),
     Opt::flag("--shader-stats"),

@@ -305,14 +305,20 @@ pub const ABLATE_ENHANCE_PASS: u32 = 8;
 pub const ABLATE_DIRECTIONS: u32 = 16;
 /// The perceptual method without its bisection back toward the display colour.
 pub const ABLATE_BISECTION: u32 = 32;
+/// Not a part taken out but one replaced: the CIELAB conversions' cube roots by the driver's
+/// `pow(x, 1/3)` (a GPU's own logarithm and exponential) instead of the bit-pattern seed and
+/// the Newton steps, to show what they cost on a device. Its output is still an enhancement.
+pub const ABLATE_CUBE_ROOT: u32 = 64;
 /// The ablations the paper's `enhance` is built for: each part alone, the three per-pixel parts
-/// together (only the loads, the quantisation and the stores left), the pass.
-pub const ABLATIONS: [u32; 5] = [
+/// together (only the loads, the quantisation and the stores left), the pass, the cube roots
+/// by `pow`.
+pub const ABLATIONS: [u32; 6] = [
     ABLATE_METHOD,
     ABLATE_BACKGROUND,
     ABLATE_CODEC,
     ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC,
     ABLATE_ENHANCE_PASS,
+    ABLATE_CUBE_ROOT,
 ];
 /// The ablations the perceptual method's `enhance` is built for: the method, the background,
 /// its search's two parts alone and together.
@@ -327,7 +333,7 @@ pub const PERCEPTUAL_ABLATIONS: [u32; 5] = [
 // The method codes are the method table's (src/algorithm/method/table.rs, `code`).
 
 /// The codes written into every shader as WGSL constants, by name.
-pub const CODES: [(&str, u32); 43] = [
+pub const CODES: [(&str, u32); 44] = [
     ("TILE", TILE),
     ("DECODE_ROWS", DECODE_ROWS),
     ("INDIRECT_ROW_GROUPS", INDIRECT_ROW_GROUPS),
@@ -380,6 +386,7 @@ pub const CODES: [(&str, u32); 43] = [
     ("ABLATE_ENHANCE_PASS", ABLATE_ENHANCE_PASS),
     ("ABLATE_DIRECTIONS", ABLATE_DIRECTIONS),
     ("ABLATE_BISECTION", ABLATE_BISECTION),
+    ("ABLATE_CUBE_ROOT", ABLATE_CUBE_ROOT),
 ];
 
 /// The blurred background packs each texel's linear R, G, B into 21 bits each (two texels per

@@ -3,8 +3,8 @@
 
 use crate::algorithm::params::Method;
 use crate::gpu::core::interface::{
-    ABLATE_BACKGROUND, ABLATE_BISECTION, ABLATE_CODEC, ABLATE_DIRECTIONS, ABLATE_ENHANCE_PASS,
-    ABLATE_METHOD, ABLATIONS, PERCEPTUAL_ABLATIONS,
+    ABLATE_BACKGROUND, ABLATE_BISECTION, ABLATE_CODEC, ABLATE_CUBE_ROOT, ABLATE_DIRECTIONS,
+    ABLATE_ENHANCE_PASS, ABLATE_METHOD, ABLATIONS, PERCEPTUAL_ABLATIONS,
 };
 
 /// The camera frame size the background preparation is timed with (a common camera mode).
@@ -54,6 +54,9 @@ pub enum Ablation {
     EnhancePass,
     /// The general background sampling instead of the shared fetches.
     SharedFetch,
+    /// The cube roots by the driver's `pow` instead of the Newton steps (replaced, not taken
+    /// out: the output is still an enhancement).
+    CubeRoot,
     /// The perceptual method's 18 directions: the paper's colour the only candidate.
     Directions,
     /// The perceptual method's bisection back toward the display colour.
@@ -65,7 +68,7 @@ pub enum Ablation {
 }
 
 impl Ablation {
-    pub const ALL: [Ablation; 11] = [
+    pub const ALL: [Ablation; 12] = [
         Ablation::None,
         Ablation::Method,
         Ablation::Background,
@@ -73,6 +76,7 @@ impl Ablation {
         Ablation::PerPixel,
         Ablation::EnhancePass,
         Ablation::SharedFetch,
+        Ablation::CubeRoot,
         Ablation::Directions,
         Ablation::Bisection,
         Ablation::Search,
@@ -89,6 +93,7 @@ impl Ablation {
             Ablation::PerPixel => "per-pixel",
             Ablation::EnhancePass => "enhance-pass",
             Ablation::SharedFetch => "shared-fetch",
+            Ablation::CubeRoot => "cube-root",
             Ablation::Directions => "directions",
             Ablation::Bisection => "bisection",
             Ablation::Search => "search",
@@ -121,6 +126,7 @@ impl Ablation {
             Ablation::Codec => ABLATE_CODEC,
             Ablation::PerPixel => ABLATE_METHOD | ABLATE_BACKGROUND | ABLATE_CODEC,
             Ablation::EnhancePass => ABLATE_ENHANCE_PASS,
+            Ablation::CubeRoot => ABLATE_CUBE_ROOT,
             Ablation::Directions => ABLATE_DIRECTIONS,
             Ablation::Bisection => ABLATE_BISECTION,
             Ablation::Search => ABLATE_DIRECTIONS | ABLATE_BISECTION,
