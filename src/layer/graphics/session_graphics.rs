@@ -147,3 +147,57 @@ pub enum Bound {
     /// The session passes through, and why (one sentence).
     PassThrough(String),
 }
+
+/// The handles of an enumeration the runtime filled with `count` structs of type `T`, the
+/// graphics API's image struct, which `ty` names (None: the first struct names another type).
+///
+/// # Safety
+/// `images` points to `count` structs of the type its first one names.
+pub unsafe fn image_handles<T>(
+    images: *const xr::SwapchainImageBaseHeader,
+    count: usize,
+    ty: xr::StructureType,
+    handle: impl Fn(&T) -> u64,
+) -> Option<Vec<u64>> {
+    // SAFETY: images holds at least one struct (the caller's contract).
+    if unsafe { (*images).ty } != ty {
+        return None;
+    }
+    let typed = images as *const T;
+    // SAFETY: the first struct names T, so all `count` are T (the caller's contract).
+    Some(
+        (0..count)
+            .map(|i| handle(unsafe { &*typed.add(i) }))
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_handles_reads_every_struct_of_its_type_only() {
+        let structs: Vec<xr::SwapchainImageVulkanKHR> = (1..=3)
+            .map(|k| xr::SwapchainImageVulkanKHR {
+                ty: xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR,
+                next: std::ptr::null_mut(),
+                image: 100 + k,
+            })
+            .collect();
+        let base = structs.as_ptr() as *const xr::SwapchainImageBaseHeader;
+        let vulkan = xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR;
+        let opengl = xr::StructureType::SWAPCHAIN_IMAGE_OPENGL_KHR;
+        // SAFETY: base points to three Vulkan image structs.
+        let read =
+            unsafe { image_handles(base, 3, vulkan, |i: &xr::SwapchainImageVulkanKHR| i.image) };
+        assert_eq!(read, Some(vec![101, 102, 103]));
+        // SAFETY: as above; the type does not match, so nothing is read as OpenGL's.
+        let other = unsafe {
+            image_handles(base, 3, opengl, |i: &xr::SwapchainImageOpenGLKHR| {
+                u64::from(i.image)
+            })
+        };
+        assert_eq!(other, None);
+    }
+}

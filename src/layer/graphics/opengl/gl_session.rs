@@ -15,7 +15,7 @@ use crate::gpu::core::{BackgroundInput, OverlayPixels};
 use crate::gpu::opengl::{GlFormat, GlFrameRunner, GlView, ProgramBinaries};
 use crate::gpu::PixelFormat;
 use crate::layer::graphics::session_graphics::{
-    CapturedImage, NotDone, SessionGraphics, ViewImage,
+    image_handles, CapturedImage, NotDone, SessionGraphics, ViewImage,
 };
 use crate::layer::live_settings::Settings;
 use crate::layer::log;
@@ -180,17 +180,13 @@ impl SessionGraphics for GlSession {
         images: *const xr::SwapchainImageBaseHeader,
         count: usize,
     ) -> Option<Vec<u64>> {
-        // SAFETY: images holds at least one struct (the caller's contract).
-        if unsafe { (*images).ty } != xr::StructureType::SWAPCHAIN_IMAGE_OPENGL_KHR {
-            return None;
+        let ty = xr::StructureType::SWAPCHAIN_IMAGE_OPENGL_KHR;
+        // SAFETY: the caller's contract, passed on.
+        unsafe {
+            image_handles(images, count, ty, |i: &xr::SwapchainImageOpenGLKHR| {
+                u64::from(i.image)
+            })
         }
-        let gl_images = images as *const xr::SwapchainImageOpenGLKHR;
-        // SAFETY: count OpenGL image structs were written.
-        Some(
-            (0..count)
-                .map(|i| u64::from(unsafe { (*gl_images.add(i)).image }))
-                .collect(),
-        )
     }
 
     fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, _: bool) {

@@ -10,7 +10,7 @@ use crate::gpu::vulkan::frame::{copy_path, FrameOptions, FrameRunner, PipelinesR
 use crate::gpu::vulkan::pipelines::Origin;
 use crate::gpu::{FrameView, GpuDevice, GpuError, PixelFormat, Recorder, ViewPath, ViewShape};
 use crate::layer::graphics::session_graphics::{
-    Bound, CapturedImage, NotDone, SessionGraphics, ViewImage,
+    image_handles, Bound, CapturedImage, NotDone, SessionGraphics, ViewImage,
 };
 use crate::layer::live_settings::Settings;
 use crate::layer::log;
@@ -204,17 +204,9 @@ impl SessionGraphics for VulkanSession {
         images: *const xr::SwapchainImageBaseHeader,
         count: usize,
     ) -> Option<Vec<u64>> {
-        // SAFETY: images holds at least one struct (the caller's contract).
-        if unsafe { (*images).ty } != xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR {
-            return None;
-        }
-        let vk_images = images as *const xr::SwapchainImageVulkanKHR;
-        // SAFETY: count Vulkan image structs were written.
-        Some(
-            (0..count)
-                .map(|i| unsafe { (*vk_images.add(i)).image })
-                .collect(),
-        )
+        let ty = xr::StructureType::SWAPCHAIN_IMAGE_VULKAN_KHR;
+        // SAFETY: the caller's contract, passed on.
+        unsafe { image_handles(images, count, ty, |i: &xr::SwapchainImageVulkanKHR| i.image) }
     }
 
     fn request_shaders(
