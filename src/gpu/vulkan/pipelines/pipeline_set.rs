@@ -443,9 +443,19 @@ pub fn binding_count(kind: BindingKind) -> u32 {
 
 fn compute_pipeline(shared: &Shared, shader: &ShaderModule) -> Result<vk::Pipeline, GpuError> {
     crate::fault::check("pipeline-creation").map_err(GpuError::Unsupported)?;
+    let flags = vk::PipelineCreateFlags::empty();
+    create_compute_pipeline(&shared.device, (shared.cache, shared.layout), shader, flags)
+}
+
+/// `shader`'s compute pipeline with `layout`, through `cache` (null: none), with `flags`.
+pub(super) fn create_compute_pipeline(
+    device: &ash::Device,
+    (cache, layout): (vk::PipelineCache, vk::PipelineLayout),
+    shader: &ShaderModule,
+    flags: vk::PipelineCreateFlags,
+) -> Result<vk::Pipeline, GpuError> {
     let words = shader.words();
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
-    let device = &shared.device;
     // SAFETY: words is SPIR-V produced and validated by naga at build time.
     let module = unsafe { device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
     let entry = std::ffi::CString::new(shader.entry).expect("entry names have no NUL");
@@ -454,10 +464,12 @@ fn compute_pipeline(shared: &Shared, shader: &ShaderModule) -> Result<vk::Pipeli
         .module(module)
         .name(&entry);
     let info = [vk::ComputePipelineCreateInfo::default()
+        .flags(flags)
         .stage(stage)
-        .layout(shared.layout)];
-    // SAFETY: module, layout and cache are valid (the cache is internally synchronised).
-    let result = unsafe { device.create_compute_pipelines(shared.cache, &info, None) };
+        .layout(layout)];
+    // SAFETY: module, layout and cache are valid (the cache is internally synchronised); the
+    // flags' features are the caller's to have enabled.
+    let result = unsafe { device.create_compute_pipelines(cache, &info, None) };
     // SAFETY: a shader module may be destroyed once pipelines using it are created.
     unsafe { device.destroy_shader_module(module, None) };
     result

@@ -3,6 +3,7 @@
 //! names and in the units each driver gives them. For `contrastxr bench --shader-stats`, to see
 //! where a GPU's time goes without a profiler.
 
+use super::pipeline_set::create_compute_pipeline;
 use crate::gpu::core::modules::ShaderModule;
 use crate::gpu::vulkan::device::{GpuDevice, GpuError, VkResultExt};
 use ash::vk;
@@ -31,47 +32,14 @@ pub fn shader_statistics(
                 .into(),
         ));
     }
-    let pipeline = capturing_pipeline(gpu, layout, shader)?;
+    // No pipeline cache: a cached pipeline may come back without its statistics.
+    let flags = vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR;
+    let no_cache = (vk::PipelineCache::null(), layout);
+    let pipeline = create_compute_pipeline(&gpu.device, no_cache, shader, flags)?;
     let result = read_statistics(gpu, pipeline);
     // SAFETY: the pipeline was never bound to a command buffer.
     unsafe { gpu.device.destroy_pipeline(pipeline, None) };
     result
-}
-
-/// The shader's compute pipeline, built to keep its statistics (no pipeline cache: a cached
-/// pipeline may come back without them).
-fn capturing_pipeline(
-    gpu: &GpuDevice,
-    layout: vk::PipelineLayout,
-    shader: &ShaderModule,
-) -> Result<vk::Pipeline, GpuError> {
-    let words = shader.words();
-    let info = vk::ShaderModuleCreateInfo::default().code(&words);
-    // SAFETY: words is SPIR-V produced and validated by naga at build time.
-    let module =
-        unsafe { gpu.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
-    let entry = std::ffi::CString::new(shader.entry).expect("entry names have no NUL");
-    let stage = vk::PipelineShaderStageCreateInfo::default()
-        .stage(vk::ShaderStageFlags::COMPUTE)
-        .module(module)
-        .name(&entry);
-    let info = [vk::ComputePipelineCreateInfo::default()
-        .flags(vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR)
-        .stage(stage)
-        .layout(layout)];
-    // SAFETY: module and layout are valid; the extension's feature is enabled on this device.
-    let result = unsafe {
-        gpu.device
-            .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
-    };
-    // SAFETY: a shader module may be destroyed once pipelines using it are created.
-    unsafe { gpu.device.destroy_shader_module(module, None) };
-    result
-        .map(|p| p[0])
-        .map_err(|(_, result)| GpuError::Vulkan {
-            call: "vkCreateComputePipelines",
-            result,
-        })
 }
 
 fn read_statistics(
