@@ -172,16 +172,17 @@ def ablations(parts, out):
 
 
 def shader_statistics(parts, out):
-    for entry in parts.get("vk", []):
+    entries = [(name, e) for name in ("vk", "perceptual") for e in parts.get(name, [])]
+    for name, entry in entries:
         output = entry.get("output") or {}
         if "shader_statistics_error" in output:
-            out.append(f"\n### Shader statistics\n\nnone: {output['shader_statistics_error']}")
+            out.append(f"\n### Shader statistics, {name}\n\nnone: {output['shader_statistics_error']}")
         shaders = output.get("shader_statistics")
         if not shaders:
             continue
         names = list(dict.fromkeys(k for s in shaders for e in s["executables"]
                                    for k in e["statistics"]))
-        out.append("\n### Shader statistics (the driver's compiler)\n")
+        out.append(f"\n### Shader statistics, {name} (the driver's compiler)\n")
         out.append("| shader | subgroup | " + " | ".join(names) + " |")
         out.append("|---|---|" + "---|" * len(names))
         for s in shaders:
