@@ -2,7 +2,7 @@
 
 use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use contrastxr::algorithm::Params;
-use contrastxr::config::{self, Key, Settings, Value};
+use contrastxr::config::{Key, Settings, Value, KEYS};
 use contrastxr::image::RgbaImage;
 
 use super::args::Args;
@@ -10,81 +10,62 @@ use super::args::Opt;
 use super::backend_choice::Backend;
 use super::error::CliError;
 
-/// A setting of the method the offline commands take as an option: its name in
-/// [`contrastxr::config::KEYS`] (where its meaning, kind and default come from), the option, and
-/// the value's name in the help (None: a `--no-` flag that turns a switch off).
-pub struct ParamOption {
-    pub key: &'static str,
-    pub option: Opt,
+/// The settings of the method the offline commands take as options: the keys of
+/// [`contrastxr::config::KEYS`] with an `option` (where its meaning, kind and default come
+/// from), in KEYS' order, with the option each is parsed by.
+fn method_keys() -> impl Iterator<Item = (&'static Key, Opt)> {
+    KEYS.iter().filter_map(|k| k.option.map(|o| (k, opt(o))))
 }
 
-const fn option(key: &'static str, long: &'static str, value: &'static str) -> ParamOption {
-    ParamOption {
-        key,
-        option: Opt::value(long, value),
+/// A key's option: a value, or a `--no-` flag where the value's name is "".
+const fn opt((long, value): (&'static str, &'static str)) -> Opt {
+    match value.is_empty() {
+        true => Opt::flag(long),
+        false => Opt::value(long, value),
     }
 }
 
-const fn switch_off(key: &'static str, long: &'static str) -> ParamOption {
-    ParamOption {
-        key,
-        option: Opt::flag(long),
+const OPTION_COUNT: usize = {
+    let mut n = 0;
+    let mut i = 0;
+    while i < KEYS.len() {
+        if KEYS[i].option.is_some() {
+            n += 1;
+        }
+        i += 1;
     }
-}
-
-/// The method's settings as options; each is parsed and checked by its key, as in the config
-/// file (a test holds this list to KEYS).
-pub const PARAM_OPTIONS: [ParamOption; 17] = [
-    option("method", "--method", "M"),
-    option("lambda_e", "--lambda-e", "F"),
-    option("lambda_jnd_scaled", "--lambda-jnd-scaled", "F"),
-    option("transmittance", "--transmittance", "F"),
-    option("achromatic_boost", "--achromatic-boost", "F"),
-    option("luminance_cap", "--luminance-cap", "F"),
-    option("blur_size", "--blur-size", "N"),
-    option("blur_sigma", "--blur-sigma", "F"),
-    switch_off("blur", "--no-blur"),
-    option("fov_scale", "--fov-scale", "X,Y"),
-    option("fov_offset", "--fov-offset", "X,Y"),
-    switch_off("fov", "--no-fov"),
-    option("display_peak_nits", "--display-peak-nits", "NITS"),
-    option("world_nits", "--world-nits", "NITS"),
-    option("target_contrast", "--target-contrast", "F"),
-    option("min_luminance", "--min-luminance", "NITS"),
-    option("frequency", "--frequency", "FREQ"),
-];
+    n
+};
 
 /// The options [`params`] reads.
 pub const METHOD_OPTIONS: &[Opt] = &{
-    let mut all = [Opt::flag(""); PARAM_OPTIONS.len()];
-    let mut i = 0;
-    while i < PARAM_OPTIONS.len() {
-        all[i] = PARAM_OPTIONS[i].option;
+    let mut all = [Opt::flag(""); OPTION_COUNT];
+    let (mut i, mut j) = (0, 0);
+    while i < KEYS.len() {
+        if let Some(o) = KEYS[i].option {
+            all[j] = opt(o);
+            j += 1;
+        }
         i += 1;
     }
     all
 };
-
-fn key_of(o: &ParamOption) -> &'static Key {
-    config::key(o.key).expect("PARAM_OPTIONS names KEYS (tested)")
-}
 
 /// The method options' help, from each key's description and default.
 pub fn method_usage() -> String {
     let defaults = Settings::default();
     let mut s =
         String::from("method and preprocessing options (defaults as in the config file):\n");
-    for o in &PARAM_OPTIONS {
-        let key = key_of(o);
-        let left = match o.option.value {
-            Some(v) => format!("{} {v}", o.option.long),
-            None => o.option.long.to_string(),
+    for (key, option) in method_keys() {
+        let left = match option.value {
+            Some(v) => format!("{} {v}", option.long),
+            None => option.long.to_string(),
         };
-        let default = match o.option.value {
+        let default = match option.value {
             Some(_) => format!(" ({})", key.get(&defaults)),
             None => String::new(),
         };
-        let doc = match o.option.value {
+        let doc = match option.value {
             Some(_) => key.doc.to_string(),
             None => format!("{} = false", key.name),
         };
@@ -127,21 +108,21 @@ pub const ENGINE_OPTIONS: &[Opt] = &[Opt::value("--engine", "E")];
 /// Takes the method and preprocessing options out of `args`, starting from the defaults.
 pub fn params(args: &mut Args) -> Result<Params, CliError> {
     let mut settings = Settings::default();
-    for o in &PARAM_OPTIONS {
-        let key = key_of(o);
-        let value = match o.option.value {
-            None if args.flag(o.option.long) => Value::Bool(false),
+    for (key, option) in method_keys() {
+        let long = option.long;
+        let value = match option.value {
+            None if args.flag(long) => Value::Bool(false),
             None => continue,
-            Some(_) => match args.value(&[o.option.long])? {
+            Some(_) => match args.value(&[long])? {
                 Some(text) => key.parse_setting(&text).map_err(|_| {
                     let kind = key.kind.describe();
-                    CliError::Failure(format!("{} must be {kind}, got '{text}'", o.option.long))
+                    CliError::Failure(format!("{long} must be {kind}, got '{text}'"))
                 })?,
                 None => continue,
             },
         };
         key.apply(&mut settings, value)
-            .map_err(|e| CliError::Failure(format!("{}: {e}", o.option.long)))?;
+            .map_err(|e| CliError::Failure(format!("{long}: {e}")))?;
     }
     Ok(settings.params)
 }
@@ -168,23 +149,22 @@ pub fn save_image(img: &RgbaImage, path: &str) -> Result<(), CliError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use contrastxr::config::{Kind, KEYS};
+    use contrastxr::config::Kind;
 
     #[test]
-    fn every_option_is_a_key_of_its_kind() {
-        for o in &PARAM_OPTIONS {
-            let key = KEYS.iter().find(|k| k.name == o.key);
-            let key = key.unwrap_or_else(|| panic!("{} is not in KEYS", o.key));
-            let flag = o.option.value.is_none();
-            assert_eq!(flag, key.kind == Kind::Bool, "{}", o.key);
+    fn every_option_is_named_after_its_key_and_of_its_kind() {
+        for (key, option) in method_keys() {
+            let flag = option.value.is_none();
+            assert_eq!(flag, key.kind == Kind::Bool, "{}", key.name);
             let long = format!("--{}", key.name.replace('_', "-"));
             let expected = if flag {
                 format!("--no-{}", &long[2..])
             } else {
                 long
             };
-            assert_eq!(o.option.long, expected);
+            assert_eq!(option.long, expected);
         }
+        assert_eq!(METHOD_OPTIONS.len(), method_keys().count());
     }
 
     #[test]
@@ -201,7 +181,7 @@ mod tests {
             };
             if k.apply(&mut changed, other).is_ok() && changed.params != defaults.params {
                 assert!(
-                    PARAM_OPTIONS.iter().any(|o| o.key == k.name) || k.name == "mode",
+                    k.option.is_some() || k.name == "mode",
                     "{} changes the method but has no option",
                     k.name
                 );
@@ -212,8 +192,8 @@ mod tests {
     #[test]
     fn the_help_names_each_option_with_its_default() {
         let usage = method_usage();
-        for o in &PARAM_OPTIONS {
-            assert!(usage.contains(o.option.long), "{}", o.option.long);
+        for option in METHOD_OPTIONS {
+            assert!(usage.contains(option.long), "{}", option.long);
         }
         assert!(usage.contains("--lambda-e F"), "{usage}");
         assert!(usage.contains("(0.4)"), "{usage}");

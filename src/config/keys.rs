@@ -19,6 +19,10 @@ pub struct Key {
     /// The variable is a `NO_` switch: on means the setting is false.
     pub env_negated: bool,
     pub kind: Kind,
+    /// The option the offline commands that run the method take for it (enhance, evaluate,
+    /// bench, animate, gl-programs): its spelling and its value's name in their help, or ""
+    /// for a `--no-` switch that turns the setting off; None: a setting of the layer only.
+    pub option: Option<(&'static str, &'static str)>,
     pub doc: &'static str,
     set: fn(&mut Settings, Value) -> Result<(), String>,
     get: fn(&Settings) -> Value,
@@ -216,6 +220,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_METHOD",
         env_negated: false,
         kind: Kind::Text,
+        option: Some(("--method", "M")),
         doc: crate::algorithm::method::METHOD_DOC,
         set: set_method,
         get: |s| Value::Text(s.params.method.name().into()),
@@ -225,6 +230,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_MODE",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: crate::algorithm::method::MODE_DOC,
         set: set_mode,
         get: |s| Value::Text(s.params.mode.name().into()),
@@ -234,6 +240,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_LAMBDA_E",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--lambda-e", "F")),
         doc: "largest colour change in the scaled space (the paper's lambda'_E)",
         set: |s, v| {
             s.params.lambda_e = float(v)?;
@@ -246,6 +253,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_LAMBDA_JND_SCALED",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--lambda-jnd-scaled", "F")),
         doc: "JND radius in the scaled space",
         set: |s, v| {
             s.params.lambda_jnd_scaled = float(v)?;
@@ -258,6 +266,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_TRANSMITTANCE",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--transmittance", "F")),
         doc: "lens transmittance applied to the background, in [0, 1]",
         set: |s, v| {
             s.params.transmittance = float(v)?;
@@ -270,6 +279,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_WIDTH",
         env_negated: false,
         kind: Kind::Count,
+        option: None,
         doc: "wanted camera width: the smallest offered size at least this wide (at most 8192)",
         set: |s, v| {
             s.camera.width = camera_side(v)?;
@@ -282,6 +292,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_HEIGHT",
         env_negated: false,
         kind: Kind::Count,
+        option: None,
         doc: "wanted camera height (at most 8192)",
         set: |s, v| {
             s.camera.height = camera_side(v)?;
@@ -294,6 +305,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_FPS",
         env_negated: false,
         kind: Kind::Count,
+        option: None,
         doc: "wanted camera rate: the lowest offered rate at least this high",
         set: |s, v| {
             s.camera.fps = u32::try_from(count(v)?).map_err(|_| "too large")?;
@@ -306,6 +318,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_EXPOSURE",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "auto (the camera's automatic exposure) or a fixed exposure time in microseconds",
         set: |s, v| {
             s.camera.controls.exposure_us = auto_or_count(v)?;
@@ -318,6 +331,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_WHITE_BALANCE",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "auto (the camera's automatic white balance) or a fixed colour temperature in kelvin",
         set: |s, v| {
             s.camera.controls.white_balance_k = auto_or_count(v)?;
@@ -330,6 +344,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_GAIN",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "auto (the camera's automatic gain) or a fixed gain in the camera's units",
         set: |s, v| {
             s.camera.controls.gain = auto_or_count(v)?;
@@ -342,6 +357,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_BACKGROUND_SMOOTHING",
         env_negated: false,
         kind: Kind::Float,
+        option: None,
         doc: "temporal smoothing: weight of the newest camera frame in a moving average, in (0, 1]; 0 = off",
         set: |s, v| {
             let w = float(v)?;
@@ -358,6 +374,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_ACHROMATIC_BOOST",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--achromatic-boost", "F")),
         doc: "beyond the paper: raise chroma on near-grey backgrounds, in [0, 1] (0 = off)",
         set: |s, v| {
             s.params.achromatic_boost = float(v)?;
@@ -370,6 +387,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_LUMINANCE_CAP",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--luminance-cap", "F")),
         doc: "beyond the paper: output luminance at most (1 + cap) x input (0 = off)",
         set: |s, v| {
             s.params.luminance_cap = float(v)?;
@@ -382,6 +400,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_DISPLAY_PEAK_NITS",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--display-peak-nits", "NITS")),
         doc: "perceptual model: the display's luminance at full white, in cd/m^2 (> 0)",
         set: |s, v| {
             s.params.perceptual.display_peak_nits = float64(v)?;
@@ -394,6 +413,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_WORLD_NITS",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--world-nits", "NITS")),
         doc: "perceptual model: the world's luminance, in cd/m^2 before the lens, that the camera's full white stands for (>= 0)",
         set: |s, v| {
             s.params.perceptual.world_nits = float64(v)?;
@@ -406,6 +426,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_TARGET_CONTRAST",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--target-contrast", "F")),
         doc: "perceptual model: the perceived contrast c' at which content counts as visible enough, in (0, 1] (1 is never reached)",
         set: |s, v| {
             s.params.perceptual.target_contrast = float64(v)?;
@@ -418,6 +439,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_MIN_LUMINANCE",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--min-luminance", "NITS")),
         doc: "perceptual model: the floor, in cd/m^2, on the luminance contrast sensitivity is taken at (0.1 to 31623)",
         set: |s, v| {
             s.params.perceptual.min_luminance = float64(v)?;
@@ -430,6 +452,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_FREQUENCY",
         env_negated: false,
         kind: Kind::Text,
+        option: Some(("--frequency", "FREQ")),
         doc: "perceptual model: the spatial frequency contrast is judged at: blur (the one the background's blur halves), ensemble (four frequencies of images) or a number of cycles per degree",
         set: set_frequency,
         get: |s| Value::Text(s.params.perceptual.frequency.name()),
@@ -439,6 +462,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_NO_BLUR",
         env_negated: true,
         kind: Kind::Bool,
+        option: Some(("--no-blur", "")),
         doc: "blur the background before use",
         set: |s, v| {
             s.params.blur = boolean(v)?;
@@ -451,6 +475,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_BLUR_SIZE",
         env_negated: false,
         kind: Kind::Count,
+        option: Some(("--blur-size", "N")),
         doc: "Gaussian kernel size in camera pixels (odd, at most 15)",
         set: |s, v| {
             s.params.blur_size = u32::try_from(count(v)?).map_err(|_| "too large")?;
@@ -463,6 +488,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_BLUR_SIGMA",
         env_negated: false,
         kind: Kind::Float,
+        option: Some(("--blur-sigma", "F")),
         doc: "Gaussian sigma in camera pixels",
         set: |s, v| {
             s.params.blur_sigma = float(v)?;
@@ -475,6 +501,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_NO_FOV",
         env_negated: true,
         kind: Kind::Bool,
+        option: Some(("--no-fov", "")),
         doc: "map display to camera coordinates (false: camera_uv = display_uv, no registration)",
         set: |s, v| {
             s.params.fov = boolean(v)?;
@@ -487,6 +514,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_FOV_SCALE",
         env_negated: false,
         kind: Kind::Pair,
+        option: Some(("--fov-scale", "X,Y")),
         doc: "manual mapping camera_uv = fov_scale * display_uv + fov_offset, for both eyes; other than the default (or fov_offset other than its default), it overrides the camera profile",
         set: |s, v| {
             s.params.fov_scale = pair(v)?;
@@ -499,6 +527,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_FOV_OFFSET",
         env_negated: false,
         kind: Kind::Pair,
+        option: Some(("--fov-offset", "X,Y")),
         doc: "see fov_scale",
         set: |s, v| {
             s.params.fov_offset = pair(v)?;
@@ -511,6 +540,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_FOV",
         env_negated: false,
         kind: Kind::Pair,
+        option: None,
         doc: "camera profile: the camera's full field of view [horizontal, vertical] in degrees ([0, 0] = not given)",
         set: set_camera_fov,
         get: |s| Value::Pair(s.registration.camera_fov),
@@ -520,6 +550,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_INTRINSICS",
         env_negated: false,
         kind: Kind::Numbers(6),
+        option: None,
         doc: "camera profile: [fx, fy, cx, cy, width, height] in pixels as OpenCV calibrates them (all 0 = not given; used instead of camera_fov)",
         set: set_camera_intrinsics,
         get: |s| Value::Numbers(s.registration.camera_intrinsics.to_vec()),
@@ -529,6 +560,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_POSITION",
         env_negated: false,
         kind: Kind::Numbers(3),
+        option: None,
         doc: "camera profile: [x, y, z] metres from the point between the eyes (+x right, +y up, -z forward)",
         set: |s, v| {
             s.registration.camera_position = numbers(v)?;
@@ -541,6 +573,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_ROTATION",
         env_negated: false,
         kind: Kind::Numbers(3),
+        option: None,
         doc: "camera profile: [pitch, yaw, roll] degrees relative to the head (pitch > 0 tilts it up, yaw > 0 turns it left)",
         set: |s, v| {
             s.registration.camera_rotation = numbers(v)?;
@@ -553,6 +586,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_SCENE_DISTANCE",
         env_negated: false,
         kind: Kind::Float,
+        option: None,
         doc: "camera profile: the distance in metres at which camera and eyes line up exactly",
         set: set_scene_distance,
         get: |s| Value::Float(s.registration.scene_distance),
@@ -562,6 +596,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_MOTION_COMPENSATION",
         env_negated: false,
         kind: Kind::Bool,
+        option: None,
         doc: "map each view from the camera at the frame's capture time to the eye at display time (false: head-fixed)",
         set: |s, v| {
             s.motion.compensation = boolean(v)?;
@@ -574,6 +609,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_LATENCY_MS",
         env_negated: false,
         kind: Kind::Float,
+        option: None,
         doc: "milliseconds by which the camera's frames are older than their timestamps say",
         set: |s, v| {
             s.motion.camera_latency_ms = non_negative(v)?;
@@ -586,6 +622,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_WORLD_LATENCY_MS",
         env_negated: false,
         kind: Kind::Float,
+        option: None,
         doc: "background world: milliseconds between a simulated frame's capture and its delivery",
         set: |s, v| {
             s.camera.world_latency_ms = non_negative(v)?;
@@ -598,6 +635,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_LEFT_EYE_OFFSET",
         env_negated: false,
         kind: Kind::Pair,
+        option: None,
         doc: "left eye's correction: move the background picture by [x, y] (fractions of the view, +y down); written by contrastxr calibrate",
         set: |s, v| {
             s.registration.eye_offset[0] = pair(v)?;
@@ -610,6 +648,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_LEFT_EYE_SCALE",
         env_negated: false,
         kind: Kind::Pair,
+        option: None,
         doc: "left eye's correction: scale the background picture by [x, y] about the view's centre",
         set: |s, v| {
             s.registration.eye_scale[0] = eye_scale(v)?;
@@ -622,6 +661,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_RIGHT_EYE_OFFSET",
         env_negated: false,
         kind: Kind::Pair,
+        option: None,
         doc: "right eye's correction, as left_eye_offset",
         set: |s, v| {
             s.registration.eye_offset[1] = pair(v)?;
@@ -634,6 +674,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_RIGHT_EYE_SCALE",
         env_negated: false,
         kind: Kind::Pair,
+        option: None,
         doc: "right eye's correction, as left_eye_scale",
         set: |s, v| {
             s.registration.eye_scale[1] = eye_scale(v)?;
@@ -646,6 +687,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_BACKGROUND",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "v4l2:auto, v4l2:/dev/videoN, image:PATH, video:PATH, world:PATH or color:#RRGGBB",
         set: set_background,
         get: |s| Value::Text(s.background.clone()),
@@ -655,6 +697,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_COLOUR_CAMERA",
         env_negated: false,
         kind: Kind::Bool,
+        option: None,
         doc: "the headset has a colour camera for the background (false: use image:, video: or color:, or a camera of your own)",
         set: |s, v| {
             s.colour_camera = boolean(v)?;
@@ -667,6 +710,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAMERA_USB_IDS",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "the headset's own camera, as comma-separated USB ids VID:PID (as lsusb prints them): v4l2:auto takes it before any other camera, and doctor says whether it is connected; \"\" = none",
         set: |s, v| {
             let Value::Text(text) = v else {
@@ -682,6 +726,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_FORCE",
         env_negated: false,
         kind: Kind::Bool,
+        option: None,
         doc: "act on any environment blend mode, not only ADDITIVE",
         set: |s, v| {
             s.force = boolean(v)?;
@@ -694,6 +739,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_ENVIRONMENT_BLEND_MODE",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "the display's true blend mode: additive (apps are offered ADDITIVE, and its frames are enhanced, even where the runtime reports only OPAQUE), or \"\" to trust the runtime",
         set: |s, v| {
             s.additive_display = match v {
@@ -710,6 +756,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_PIPELINES",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "background: frames pass through untouched until the shader pipelines are built on the layer's thread; wait: the first frame waits for them (every frame enhanced, as captures and tests that count frames need)",
         set: |s, v| {
             s.wait_for_pipelines = match v {
@@ -726,6 +773,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_QUAD_LAYERS",
         env_negated: false,
         kind: Kind::Bool,
+        option: None,
         doc: "also enhance quad layers",
         set: |s, v| {
             s.quad_layers = boolean(v)?;
@@ -738,6 +786,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_IN_PLACE",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "on: enhance the app's images in place (Vulkan: storage usage added to its swapchains; OpenGL: through an image unit), and where the runtime refuses storage (Vulkan) through an image of the layer's own, copied image to image; off: always through a buffer copy of each view; auto: on, except on CPU drivers (lavapipe, llvmpipe), where the buffer copies are cheaper than storage-image access",
         set: |s, v| {
             s.in_place = match v {
@@ -753,6 +802,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_COPY_BACK",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "Vulkan, for a view enhanced through an image of the layer's own (the runtime refused storage usage, as on sRGB swapchains): region: the whole region copied back into the app's image; tiles: only the tiles the enhancement listed drawn back (a render pass), the rest of the image left as the app rendered it",
         set: |s, v| {
             s.copy_back = match v {
@@ -768,6 +818,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_COPY_IN",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "Vulkan, for a view enhanced through an image of the layer's own: region: the region copied into it first; sampled: on 8-bit sRGB swapchains (sampled usage added to them), the region read through a sampled view of the app's image instead, and only the tiles the enhancement listed drawn back, whatever copy_back says",
         set: |s, v| {
             s.copy_in = match v {
@@ -783,6 +834,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAPTURE_DIR",
         env_negated: false,
         kind: Kind::Text,
+        option: None,
         doc: "write display/output/background PNGs of processed frames here (\"\" = off)",
         set: set_capture_dir,
         get: |s| {
@@ -798,6 +850,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAPTURE_FRAMES",
         env_negated: false,
         kind: Kind::Count,
+        option: None,
         doc: "how many processed frames to capture",
         set: |s, v| {
             s.capture_frames = count(v)?;
@@ -810,6 +863,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_CAPTURE_SKIP",
         env_negated: false,
         kind: Kind::Count,
+        option: None,
         doc: "processed frames to let pass before capturing",
         set: |s, v| {
             s.capture_skip = count(v)?;
@@ -822,6 +876,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_INDICATOR",
         env_negated: false,
         kind: Kind::Bool,
+        option: None,
         doc: "show the mode and lambda_e in the eye image for a few seconds after start and after each change",
         set: |s, v| {
             s.indicator = boolean(v)?;
@@ -834,6 +889,7 @@ pub const KEYS: &[Key] = &[
         env: "CONTRASTXR_INDICATOR_SECONDS",
         env_negated: false,
         kind: Kind::Float,
+        option: None,
         doc: "how long the indicator shows, in seconds (0 to 60)",
         set: |s, v| {
             let seconds = float(v)?;
