@@ -1,7 +1,7 @@
 //! `contrastxr bench --shader-stats`: the driver compiler's statistics of the frame's
 //! per-pixel shaders, as text after the bench's rows or in its JSON.
 
-use contrastxr::gpu::ShaderStatistics;
+use contrastxr::gpu::{ShaderStatistics, StatisticValue};
 
 /// The statistics, or why there are none.
 pub type ShaderReport = Result<Vec<ShaderStatistics>, String>;
@@ -31,8 +31,18 @@ pub fn text(report: &ShaderReport) -> String {
     s
 }
 
+fn json_value(v: StatisticValue) -> serde_json::Value {
+    match v {
+        StatisticValue::Bool(b) => b.into(),
+        StatisticValue::Int(i) => i.into(),
+        StatisticValue::Uint(u) => u.into(),
+        StatisticValue::Float(x) => x.into(),
+        StatisticValue::Unknown => serde_json::Value::Null,
+    }
+}
+
 /// `"shader_statistics"`: a list of shaders, each with its executables' statistics (numbers
-/// and booleans as JSON's), or `"shader_statistics_error"`.
+/// and booleans as JSON's, null for a format not known), or `"shader_statistics_error"`.
 pub fn json(report: &ShaderReport, into: &mut serde_json::Map<String, serde_json::Value>) {
     let all = match report {
         Err(why) => {
@@ -46,7 +56,7 @@ pub fn json(report: &ShaderReport, into: &mut serde_json::Map<String, serde_json
             let statistics: serde_json::Map<String, serde_json::Value> = e
                 .statistics
                 .iter()
-                .map(|(k, v)| (k.clone(), serde_json::from_str(v).unwrap_or(v.clone().into())))
+                .map(|(k, v)| (k.clone(), json_value(*v)))
                 .collect();
             serde_json::json!({
                 "name": e.executable,

@@ -17,4 +17,5 @@ pub use self::core::{BackgroundInput, CameraRect, OfflineBackend, PixelFormat, P
 pub use vulkan::device::{DeviceOptions, GpuDevice, GpuError};
 pub use vulkan::frame::{CapturedView, FrameOptions, FrameRunner, FrameView, ViewKey, ViewPath};
 pub use vulkan::offline::{ShaderStatistics, VkOffline};
+pub use vulkan::pipelines::StatisticValue;
 pub use vulkan::record::{CameraResources, PixelsIn, Placement, Recorder, ViewShape, ViewTarget};

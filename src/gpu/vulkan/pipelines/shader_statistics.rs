@@ -15,7 +15,30 @@ pub struct ExecutableStatistics {
     pub executable: String,
     /// The executable's subgroup size (0 where the driver does not say).
     pub subgroup_size: u32,
-    pub statistics: Vec<(String, String)>,
+    pub statistics: Vec<(String, StatisticValue)>,
+}
+
+/// A statistic's value, in the type the driver gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StatisticValue {
+    Bool(bool),
+    Int(i64),
+    Uint(u64),
+    Float(f64),
+    /// A format the extension did not define when this was written.
+    Unknown,
+}
+
+impl std::fmt::Display for StatisticValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StatisticValue::Bool(b) => write!(f, "{b}"),
+            StatisticValue::Int(i) => write!(f, "{i}"),
+            StatisticValue::Uint(u) => write!(f, "{u}"),
+            StatisticValue::Float(x) => write!(f, "{x}"),
+            StatisticValue::Unknown => f.write_str("?"),
+        }
+    }
 }
 
 /// The statistics of `shader` compiled as a compute pipeline with `layout`, on a device made
@@ -76,15 +99,16 @@ fn text(name: Result<&std::ffi::CStr, std::ffi::FromBytesUntilNulError>) -> Stri
         .unwrap_or_default()
 }
 
-fn value(s: &vk::PipelineExecutableStatisticKHR) -> String {
+fn value(s: &vk::PipelineExecutableStatisticKHR) -> StatisticValue {
+    use vk::PipelineExecutableStatisticFormatKHR as Format;
     // SAFETY: the union's member is the one `format` names (the extension's contract).
     unsafe {
         match s.format {
-            vk::PipelineExecutableStatisticFormatKHR::BOOL32 => (s.value.b32 != 0).to_string(),
-            vk::PipelineExecutableStatisticFormatKHR::INT64 => s.value.i64.to_string(),
-            vk::PipelineExecutableStatisticFormatKHR::UINT64 => s.value.u64.to_string(),
-            vk::PipelineExecutableStatisticFormatKHR::FLOAT64 => s.value.f64.to_string(),
-            _ => "?".into(),
+            Format::BOOL32 => StatisticValue::Bool(s.value.b32 != 0),
+            Format::INT64 => StatisticValue::Int(s.value.i64),
+            Format::UINT64 => StatisticValue::Uint(s.value.u64),
+            Format::FLOAT64 => StatisticValue::Float(s.value.f64),
+            _ => StatisticValue::Unknown,
         }
     }
 }
