@@ -15,7 +15,7 @@ use crate::camera::clock::{instant_of_ns, monotonic_now_ns};
 use crate::camera::error::CameraError;
 use crate::camera::log_sink::log;
 use crate::camera::mailbox::{Frame, Shared};
-use crate::camera::rig::WorldRig;
+use crate::camera::rig::{HeadPoses, WorldRig};
 use crate::camera::source::CaptureConfig;
 use crate::image::RgbaImage;
 use std::collections::VecDeque;
@@ -89,30 +89,20 @@ impl Camera {
                 // A late thread skips captures rather than bunching them.
                 next = (next + self.period_ns).max(now);
             }
-            while let Some(&t) = pending.front() {
-                if now < t + self.latency_ns {
-                    break;
-                }
-                match self.rig.poses.take(t) {
-                    Some(Some(head)) => {
-                        sequence += 1;
-                        shared.publish(Frame {
-                            image: Arc::new(self.render(&head)),
-                            sequence,
-                            captured_at: Some(instant_of_ns(t)),
-                            prepared: None,
-                        });
-                    }
-                    Some(None) => {}
-                    None if now < t + self.latency_ns + POSE_WAIT_NS => break,
-                    None => {
-                        if !warned {
-                            log("world: no head pose for a capture time: frame dropped");
-                            warned = true;
-                        }
-                    }
-                }
-                pending.pop_front();
+            let (newest, unlocated) =
+                newest_due(&mut pending, now, self.latency_ns, &self.rig.poses);
+            if unlocated && !warned {
+                log("world: no head pose for a capture time: frame dropped");
+                warned = true;
+            }
+            if let Some((t, head)) = newest {
+                sequence += 1;
+                shared.publish(Frame {
+                    image: Arc::new(self.render(&head)),
+                    sequence,
+                    captured_at: Some(instant_of_ns(t)),
+                    prepared: None,
+                });
             }
             let due = pending
                 .front()
@@ -125,6 +115,34 @@ impl Camera {
     fn render(&self, head: &Pose) -> RgbaImage {
         render(&self.panorama, &self.rig.profile, head, self.size)
     }
+}
+
+/// Takes the captures due by `now` (delivered `latency_ns` after their time) off `pending`,
+/// and returns the newest whose head pose is known, and whether one was dropped for want of
+/// a pose. Only the newest is rendered: a thread that fell behind (a loaded machine) delivers
+/// the latest view, as a real camera's newest frame supersedes the ones before it, instead of
+/// rendering each stale one in turn and falling further behind. A due capture whose pose may
+/// still come stops the scan.
+fn newest_due(
+    pending: &mut VecDeque<i64>,
+    now: i64,
+    latency_ns: i64,
+    poses: &HeadPoses,
+) -> (Option<(i64, Pose)>, bool) {
+    let (mut newest, mut unlocated) = (None, false);
+    while let Some(&t) = pending.front() {
+        if now < t + latency_ns {
+            break;
+        }
+        match poses.take(t) {
+            Some(Some(head)) => newest = Some((t, head)),
+            Some(None) => {}
+            None if now < t + latency_ns + POSE_WAIT_NS => break,
+            None => unlocated = true,
+        }
+        pending.pop_front();
+    }
+    (newest, unlocated)
 }
 
 /// What a camera mounted as `profile` says on a head at `head` sees of the panorama.
@@ -217,6 +235,40 @@ mod tests {
         };
         let c = render(&p, &profile(), &right, (64, 48)).get(32, 24);
         assert!((f64::from(c[0]) - 0.625 * 255.0).abs() <= 2.0, "{c:?}");
+    }
+
+    /// A thread behind by three captures renders only the newest; one whose pose may still
+    /// come holds back the later ones; one past the pose wait is dropped and said.
+    #[test]
+    fn only_the_newest_due_capture_is_rendered() {
+        let poses = HeadPoses::default();
+        let turned = Pose {
+            position: DVec3::ZERO,
+            orientation: DQuat::from_rotation_y(0.1),
+        };
+        let mut pending: VecDeque<i64> = [10, 20, 30, 40].into();
+        for t in [10, 20] {
+            poses.record(t, Some(Pose::IDENTITY));
+        }
+        poses.record(30, Some(turned));
+        poses.record(40, Some(Pose::IDENTITY));
+        // At 135 with latency 100 the captures at 10, 20 and 30 are due, 40 is not.
+        let (newest, unlocated) = newest_due(&mut pending, 135, 100, &poses);
+        assert_eq!(newest, Some((30, turned)));
+        assert!(!unlocated);
+        assert_eq!(pending, [40]);
+        // A due capture with no answer yet waits (and the ones after it with it)...
+        let mut pending: VecDeque<i64> = [50, 60].into();
+        poses.record(60, Some(turned));
+        assert_eq!(newest_due(&mut pending, 200, 100, &poses), (None, false));
+        assert_eq!(pending, [50, 60]);
+        // ...until the pose wait has passed: then it is dropped, and the later one delivered.
+        let late = 50 + 100 + POSE_WAIT_NS;
+        assert_eq!(
+            newest_due(&mut pending, late, 100, &poses),
+            (Some((60, turned)), true)
+        );
+        assert!(pending.is_empty());
     }
 
     #[test]
