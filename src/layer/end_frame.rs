@@ -345,6 +345,10 @@ fn process(s: &mut SessionState, items: Vec<ViewImage>, blend: Option<xr::Enviro
         sequence,
     };
     let done = enhance(s, &items, background, options);
+    let times = s.graphics.as_mut().expect("checked above").take_gpu_times();
+    if let Some(line) = s.gpu_time.add(&times, Instant::now()) {
+        log::info(&line);
+    }
     let graphics = s.graphics.as_ref().expect("checked above");
     let lines = graphics.frame_lines(&items, prepared.is_some());
     match done {

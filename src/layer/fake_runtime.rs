@@ -196,6 +196,7 @@ impl Rig {
             motion: Default::default(),
             frame_in_use: None,
             retry: Default::default(),
+            gpu_time: Default::default(),
         };
         let mut sc = SwapchainState::new(xr::Session::from_raw(session), next, swapchain_info());
         sc.set_images((1..=IMAGES as u64).collect());

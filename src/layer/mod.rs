@@ -16,6 +16,7 @@ mod entry;
 mod fake_runtime;
 mod ffi;
 mod frame_retry;
+mod gpu_time;
 pub mod graphics;
 mod headset_settings;
 mod image_states;

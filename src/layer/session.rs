@@ -73,6 +73,7 @@ pub unsafe extern "system" fn create_session(
             motion,
             frame_in_use: None,
             retry: Default::default(),
+            gpu_time: Default::default(),
         };
         state::registry()
             .sessions

@@ -71,6 +71,8 @@ pub struct SessionState {
     pub frame_in_use: Option<crate::camera::Frame>,
     /// Frames passed through while the graphics could not be reached, and when to try again.
     pub retry: super::frame_retry::FrameRetry,
+    /// The GPU time of the layer's work per enhanced frame, for the log.
+    pub gpu_time: super::gpu_time::GpuTimeLog,
 }
 
 impl SessionState {
@@ -95,6 +97,9 @@ impl SessionState {
     /// its pipeline thread, then destroys what it made. On the app's thread, inside
     /// xrDestroySession or xrDestroyInstance.
     pub fn end_engines(&mut self) {
+        if let Some(line) = std::mem::take(&mut self.gpu_time).session_line() {
+            log::info(&line);
+        }
         for engine in self
             .graphics
             .take()

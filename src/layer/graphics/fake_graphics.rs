@@ -137,6 +137,10 @@ impl SessionGraphics for FakeGraphics {
         }
     }
 
+    fn take_gpu_times(&mut self) -> Vec<std::time::Duration> {
+        Vec::new()
+    }
+
     fn forget_swapchain(&mut self, _swapchain: u64) -> Result<(), String> {
         match *lock(&self.handle.forget_fails) {
             true => Err("the fake graphics cannot release the swapchain's views".into()),

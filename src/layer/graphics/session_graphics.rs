@@ -127,6 +127,10 @@ pub trait SessionGraphics: Send {
         overlay: Option<&OverlayPixels>,
         capture: bool,
     ) -> Result<Vec<CapturedImage>, NotDone>;
+    /// The GPU time of each enhanced frame's work measured since the last call (timestamps
+    /// on the app's queue or context, read without waiting, so normally a frame or more
+    /// behind), oldest first; empty where the device or context writes none.
+    fn take_gpu_times(&mut self) -> Vec<std::time::Duration>;
     /// The log's line while frames pass through because shaders are still being built.
     fn pending_line(&self) -> &'static str;
     /// What the shaders took to build, for the log's line on when enhancement began.

@@ -128,6 +128,7 @@ gl_functions! {
     begin_query = "glBeginQuery": fn(Enum, Uint);
     end_query = "glEndQuery": fn(Enum);
     get_query_objectui64v = "glGetQueryObjectui64v": fn(Uint, Enum, *mut u64);
+    query_counter = "glQueryCounter": fn(Uint, Enum);
     texture_view = "glTextureView": fn(Uint, Enum, Uint, Enum, Uint, Uint, Uint, Uint);
     bind_image_texture = "glBindImageTexture": fn(Uint, Uint, Int, u8, Int, Enum, Enum);
     texture_storage_2d = "glTextureStorage2D": fn(Uint, Sizei, Enum, Sizei, Sizei);
@@ -337,6 +338,10 @@ pub const TRANSFORM_FEEDBACK_PAUSED: Enum = 0x8E23;
 // Timer queries (GL 3.3).
 pub const TIME_ELAPSED: Enum = 0x88BF;
 pub const QUERY_RESULT: Enum = 0x8866;
+pub const QUERY_RESULT_AVAILABLE: Enum = 0x8867;
+pub const TIMESTAMP: Enum = 0x8E28;
+// Query buffer objects (GL 4.4): a bound one takes query results instead of the pointer.
+pub const QUERY_BUFFER_BINDING: Enum = 0x9193;
 
 // Image units and texture views (GL 4.2, 4.3).
 pub const TEXTURE_IMMUTABLE_FORMAT: Enum = 0x912F;

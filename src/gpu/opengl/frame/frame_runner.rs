@@ -114,6 +114,8 @@ pub struct GlFrameRunner {
     /// 0 and true but for `contrastxr bench --ablate`.
     pub(super) ablate: u32,
     pub(super) own_classify: bool,
+    /// Each frame's GPU time, from timestamp queries around its work.
+    pub(super) times: super::frame_times::FrameTimes,
 }
 
 /// The mapping of a view whose rows are stored bottom first: buffer row v' is display row
@@ -184,6 +186,7 @@ impl GlFrameRunner {
             last_in_place: Vec::new(),
             ablate: 0,
             own_classify: true,
+            times: Default::default(),
         })
     }
 
@@ -443,6 +446,8 @@ impl GlFrameRunner {
         let _quiet = unsafe { DebugOutputOff::new(&self.gl) };
         self.save_program_cache();
         self.programs.destroy(&self.gl);
+        // SAFETY: the context is current (this call's contract).
+        unsafe { self.destroy_times() };
         self.drop_background();
         // SAFETY: the context is current (this call's contract).
         unsafe { self.texel_buffers.destroy(&self.gl) };
@@ -465,5 +470,44 @@ impl GlFrameRunner {
     /// The function table (for the offline context's own transfers).
     pub(in crate::gpu::opengl) fn gl(&self) -> &Gl {
         &self.gl
+    }
+}
+
+impl GlFrameRunner {
+    /// Marks the start of a frame's work in the context (before its background upload), and
+    /// takes in the earlier frames' times the driver has by now.
+    ///
+    /// # Safety
+    /// The engine's context is current on this thread.
+    pub unsafe fn frame_started(&mut self) {
+        // SAFETY: this call's contract.
+        unsafe {
+            self.times.collect(&self.gl);
+            self.times.start(&self.gl);
+        }
+    }
+
+    /// Marks the end of the frame's work (after its last command).
+    ///
+    /// # Safety
+    /// As `frame_started`.
+    pub unsafe fn frame_ended(&mut self) {
+        // SAFETY: this call's contract.
+        unsafe { self.times.end(&self.gl) };
+    }
+
+    /// The GPU time of each frame's work read since the last call, oldest first: from when
+    /// the context's earlier commands (the app's frame) completed to when the frame's did.
+    pub fn take_gpu_times(&mut self) -> Vec<std::time::Duration> {
+        self.times.take()
+    }
+
+    /// Deletes the timer's queries (in `destroy`).
+    ///
+    /// # Safety
+    /// As `frame_started`.
+    unsafe fn destroy_times(&mut self) {
+        // SAFETY: this call's contract.
+        unsafe { self.times.destroy(&self.gl) };
     }
 }

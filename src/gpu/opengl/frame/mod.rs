@@ -2,6 +2,7 @@
 //! passes, the overlays and captures, with the app's GL state saved and put back.
 
 mod frame_runner;
+mod frame_times;
 mod frame_view;
 mod prepared_background;
 mod region;

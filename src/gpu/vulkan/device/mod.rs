@@ -10,6 +10,7 @@ mod compute_device;
 mod device_image;
 mod error;
 mod gpu_device;
+mod gpu_timer;
 mod image_copy;
 mod layer_view;
 mod physical_devices;
@@ -22,6 +23,7 @@ pub use commands::Commands;
 pub use device_image::DeviceImage;
 pub use error::{GpuError, VkResultExt};
 pub use gpu_device::{DeviceKind, DeviceOptions, GpuDevice};
+pub use gpu_timer::GpuTimer;
 pub use image_copy::{
     record_first_layout, record_image_region_copy, record_layout_barriers, record_region_copy,
     ImageRegion,

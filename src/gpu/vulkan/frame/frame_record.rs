@@ -19,6 +19,7 @@ impl FrameRunner {
     pub(super) fn submit(&mut self) -> Result<(), GpuError> {
         // Inside xrEndFrame: the OpenXR spec gives the runtime, and so its layers, the app's
         // queue during this call.
+        self.times.record_end(&self.gpu, self.commands.cmd);
         self.commands.submit(&self.gpu)
     }
 
@@ -105,6 +106,7 @@ impl FrameRunner {
         staging: &[(GpuBuffer, GpuBuffer)],
     ) -> Result<(), GpuError> {
         self.commands.begin(&self.gpu)?;
+        self.times.record_start(&self.gpu, self.commands.cmd);
         self.record_prepared_copy();
         let next = self.commands.next_submission();
         self.ring.record_use(&self.gpu, self.commands.cmd, next);

@@ -5,6 +5,7 @@
 //! release is held until then). Knows nothing of OpenXR.
 
 use super::app_views::AppImageViews;
+use super::frame_times::FrameTimes;
 use super::frame_view::{CapturedView, FrameView, ViewKey, ViewPath};
 use super::overlay_copies::Overlays;
 use super::prepared_view::PreparedView;
@@ -76,6 +77,8 @@ pub struct FrameRunner {
     pub(super) app_views: AppImageViews,
     /// The image-copy path's tiles drawn back: pipelines, attachments, the frame's draws.
     pub(super) tiles: TileWriteBack,
+    /// Each frame's GPU time, from timestamps around its submissions.
+    pub(super) times: FrameTimes,
     /// Set once the engine's objects were destroyed (or left alive after a GPU failure).
     torn_down: bool,
     /// What making the process's warm-up device (CPU drivers) gave, when this session's
@@ -113,6 +116,7 @@ impl FrameRunner {
             overlays: Overlays::default(),
             app_views: AppImageViews::default(),
             tiles: TileWriteBack::default(),
+            times: FrameTimes::new(&gpu),
             torn_down: false,
             warm_up_made,
             gpu,
@@ -137,6 +141,13 @@ impl FrameRunner {
     /// to make) one; None afterwards.
     pub fn warm_up_made(&mut self) -> Option<WarmUpMade> {
         self.warm_up_made.take()
+    }
+
+    /// The GPU time of each frame's work measured since the last call, oldest first: from
+    /// when the queue's earlier work (the app's frame) finished to when the frame's own did.
+    /// Empty where the queue writes no timestamps.
+    pub fn take_gpu_times(&mut self) -> Vec<Duration> {
+        self.times.take()
     }
 
     pub fn build_report(&self) -> Option<BuildReport> {
@@ -191,6 +202,7 @@ impl FrameRunner {
     fn wait_idle_within(&mut self, timeout_ns: u64) -> Result<(), GpuError> {
         self.commands.wait(&self.gpu, timeout_ns)?;
         self.ring.finished_through(self.commands.finished_through());
+        self.times.read(&self.gpu);
         Ok(())
     }
 
@@ -336,6 +348,7 @@ impl FrameRunner {
         options: FrameOptions,
     ) -> Result<Vec<CapturedView>, GpuError> {
         let PipelinesReady(()) = ready;
+        self.times.next_frame();
         self.request_shared_fetches(views, params, background.image);
         crate::fault::check("image-capture").map_err(GpuError::Unsupported)?;
         // Before the wait: prepared texels may be in, or go into, a slot no submitted frame reads.
@@ -469,6 +482,7 @@ impl FrameRunner {
         self.app_views.destroy(&self.gpu);
         self.tiles.destroy(&self.gpu);
         self.engine.destroy(&self.gpu);
+        self.times.destroy(&self.gpu);
         // Waited for above: this wait cannot fail.
         let _ = self.commands.destroy(&self.gpu);
         Ok(())

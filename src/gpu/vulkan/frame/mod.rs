@@ -7,6 +7,7 @@ mod app_bindings;
 mod app_views;
 mod frame_record;
 mod frame_runner;
+mod frame_times;
 mod frame_view;
 mod overlay_copies;
 mod prepared_background;

@@ -84,6 +84,8 @@ impl Frame<'_> {
         capture: bool,
     ) -> Result<Vec<CapturedImage>, NotDone> {
         let t = texels(self.background, prepared_here, self.params);
+        // SAFETY: the caller's contract: the app's context is current.
+        unsafe { engine.frame_started() };
         let started = Instant::now();
         let mappings: Vec<_> = self.gl_views.iter().map(|v| v.mapping).collect();
         // SAFETY: the caller's contract: the app's context is current.
@@ -103,6 +105,8 @@ impl Frame<'_> {
             // SAFETY: as for the enhancement above.
             unsafe { self.draw_overlay(engine, o) }?;
         }
+        // SAFETY: as for `frame_started` above.
+        unsafe { engine.frame_ended() };
         if !capture {
             return Ok(Vec::new());
         }

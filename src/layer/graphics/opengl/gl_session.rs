@@ -276,6 +276,12 @@ impl SessionGraphics for GlSession {
         })
     }
 
+    fn take_gpu_times(&mut self) -> Vec<Duration> {
+        self.engine
+            .as_mut()
+            .map_or_else(Vec::new, GlFrameRunner::take_gpu_times)
+    }
+
     fn pending_line(&self) -> &'static str {
         if !self.builders.is_empty() {
             return "building the OpenGL programs on a thread of the layer's own, in an OpenGL context of its own: frames go through untouched until they are ready";

@@ -276,6 +276,10 @@ impl SessionGraphics for VulkanSession {
             .collect())
     }
 
+    fn take_gpu_times(&mut self) -> Vec<std::time::Duration> {
+        self.engine.take_gpu_times()
+    }
+
     fn pending_line(&self) -> &'static str {
         "building the shader pipelines on the layer's own thread: frames go through untouched until they are ready"
     }

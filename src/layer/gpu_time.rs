@@ -1,0 +1,195 @@
+//! The GPU time of the layer's work per enhanced frame, as the session's engine measures it on
+//! the app's queue or context (timestamps from when the app's earlier work has finished to
+//! when the layer's has), said in the log: once a minute for the minute past, and for the whole
+//! session when it ends. A frame's CPU time inside xrEndFrame says nothing of this on a GPU,
+//! where the work runs after the call returns. Bounded however long the session: histograms,
+//! not a list of frames.
+
+use std::time::{Duration, Instant};
+
+/// How often the log says the last period's figures.
+const PERIOD: Duration = Duration::from_secs(60);
+
+/// The histogram's bins: the first holds times under FIRST, each next one a RATIO wider; the
+/// last also holds everything beyond. A quantile is read within half a bin (0.5 %).
+const FIRST: f64 = 1e-6;
+const RATIO: f64 = 1.01;
+/// 1 us * 1.01^1620 ~ 10 s.
+const BINS: usize = 1620;
+
+/// Frame GPU times, binned on a log scale.
+#[derive(Clone)]
+struct Histogram {
+    bins: Vec<u32>,
+    count: u64,
+    largest: Duration,
+}
+
+impl Histogram {
+    fn new() -> Histogram {
+        Histogram {
+            bins: vec![0; BINS],
+            count: 0,
+            largest: Duration::ZERO,
+        }
+    }
+
+    fn bin(t: Duration) -> usize {
+        let s = t.as_secs_f64();
+        if s < FIRST {
+            return 0;
+        }
+        ((s / FIRST).ln() / RATIO.ln())
+            .floor()
+            .min((BINS - 1) as f64) as usize
+            + 1
+    }
+
+    fn add(&mut self, t: Duration) {
+        let bin = Self::bin(t).min(BINS - 1);
+        self.bins[bin] = self.bins[bin].saturating_add(1);
+        self.count += 1;
+        self.largest = self.largest.max(t);
+    }
+
+    /// The time below which a fraction `q` of the frames fall: the geometric middle of its
+    /// bin, never above the largest time seen.
+    fn quantile(&self, q: f64) -> Duration {
+        let rank = ((q * self.count as f64).ceil() as u64).clamp(1, self.count.max(1));
+        let mut seen = 0u64;
+        for (k, &n) in self.bins.iter().enumerate() {
+            seen += u64::from(n);
+            if seen >= rank {
+                let middle = match k {
+                    0 => FIRST / 2.0,
+                    k => FIRST * RATIO.powf(k as f64 - 0.5),
+                };
+                return Duration::from_secs_f64(middle).min(self.largest);
+            }
+        }
+        self.largest
+    }
+
+    /// "median 0.412 ms, 95th percentile 0.530 ms, largest 1.203 ms, 1200 frames".
+    fn summary(&self) -> String {
+        let ms = |t: Duration| t.as_secs_f64() * 1e3;
+        format!(
+            "median {:.3} ms, 95th percentile {:.3} ms, largest {:.3} ms, {} frame{}",
+            ms(self.quantile(0.5)),
+            ms(self.quantile(0.95)),
+            ms(self.largest),
+            self.count,
+            if self.count == 1 { "" } else { "s" }
+        )
+    }
+}
+
+/// A session's frame GPU times: the current period's and the whole session's.
+pub struct GpuTimeLog {
+    period: Histogram,
+    session: Histogram,
+    /// When the current period began (the first measured frame's arrival, then each line).
+    since: Option<Instant>,
+}
+
+impl Default for GpuTimeLog {
+    fn default() -> Self {
+        GpuTimeLog {
+            period: Histogram::new(),
+            session: Histogram::new(),
+            since: None,
+        }
+    }
+}
+
+impl GpuTimeLog {
+    /// Takes frames' measured GPU times; returns the log's line for the period once a period
+    /// has passed since the last (or since the first measured frame).
+    pub fn add(&mut self, times: &[Duration], now: Instant) -> Option<String> {
+        if times.is_empty() {
+            return None;
+        }
+        for &t in times {
+            self.period.add(t);
+            self.session.add(t);
+        }
+        let since = *self.since.get_or_insert(now);
+        if now.duration_since(since) < PERIOD {
+            return None;
+        }
+        let line = format!(
+            "GPU time of the layer's work per frame over the last {} s: {}",
+            now.duration_since(since).as_secs(),
+            self.period.summary()
+        );
+        self.period = Histogram::new();
+        self.since = Some(now);
+        Some(line)
+    }
+
+    /// The log's line for the whole session (None where no frame was measured: the device
+    /// or context has no timestamps, or nothing was enhanced).
+    pub fn session_line(&self) -> Option<String> {
+        (self.session.count > 0).then(|| {
+            format!(
+                "GPU time of the layer's work per frame over the session: {}",
+                self.session.summary()
+            )
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn us(n: u64) -> Duration {
+        Duration::from_micros(n)
+    }
+
+    /// Quantiles within the bins' half width of the exact order statistics.
+    #[test]
+    fn quantiles_are_read_within_half_a_percent() {
+        let mut h = Histogram::new();
+        // 1000 frames of 100, 101, ... 1099 us: median 599 us (rank 500), p95 1049 us (950).
+        for k in 0..1000 {
+            h.add(us(100 + k));
+        }
+        let near = |got: Duration, want: f64| {
+            let got = got.as_secs_f64() * 1e6;
+            assert!((got / want - 1.0).abs() <= 0.006, "{got} us, not {want} us");
+        };
+        near(h.quantile(0.5), 599.0);
+        near(h.quantile(0.95), 1049.0);
+        assert_eq!(h.largest, us(1099));
+        near(h.quantile(1.0), 1099.0);
+        assert!(h.quantile(1.0) <= us(1099), "never above the largest");
+        // Out of the bins' range on both sides: kept, counted.
+        h.add(Duration::from_nanos(10));
+        h.add(Duration::from_secs(60));
+        assert_eq!(h.count, 1002);
+        assert_eq!(h.largest, Duration::from_secs(60));
+    }
+
+    #[test]
+    fn a_line_each_period_and_one_for_the_session() {
+        let mut log = GpuTimeLog::default();
+        let t0 = Instant::now();
+        assert_eq!(log.session_line(), None, "nothing measured");
+        assert_eq!(log.add(&[], t0), None);
+        assert_eq!(log.add(&[us(400), us(420)], t0), None);
+        assert_eq!(log.add(&[us(410)], t0 + Duration::from_secs(30)), None);
+        let line = log
+            .add(&[us(2000)], t0 + Duration::from_secs(61))
+            .expect("a period has passed");
+        assert!(line.contains("over the last 61 s"), "{line}");
+        assert!(line.contains("largest 2.000 ms, 4 frames"), "{line}");
+        assert!(line.contains("median 0.41"), "{line}");
+        // The next period starts empty; the session keeps everything.
+        let next = log.add(&[us(300)], t0 + Duration::from_secs(122)).unwrap();
+        assert!(next.contains("largest 0.300 ms, 1 frame"), "{next}");
+        let session = log.session_line().unwrap();
+        assert!(session.contains("over the session"), "{session}");
+        assert!(session.contains(", 5 frames"), "{session}");
+    }
+}

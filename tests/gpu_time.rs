@@ -1,0 +1,92 @@
+//! The layer's GPU time per frame, measured with timestamps on the app's queue (Vulkan) or in
+//! its context (OpenGL) and said in the log at the session's end, against the real Monado
+//! runtime in the sandbox (see tests/common/mod.rs for the skip/require rule). The client's
+//! own clock bounds it independently: each frame's layer work starts after the client enters
+//! xrEndFrame and is finished once the client's drain after it (vkQueueWaitIdle, glFinish)
+//! returns, so no frame's GPU time exceeds its xrEndFrame plus its drain.
+
+mod common;
+
+use common::{layer_lines, sandbox, SandboxRun, XR_CLIENT};
+
+/// The session line's figures: (median ms, 95th percentile ms, largest ms, frames).
+fn session_figures(run: &SandboxRun) -> (f64, f64, f64, u64) {
+    let lines = layer_lines(run);
+    let prefix = "GPU time of the layer's work per frame over the session: ";
+    let line = lines
+        .iter()
+        .find_map(|l| l.strip_prefix(prefix))
+        .unwrap_or_else(|| panic!("no session line: {lines:#?}"));
+    // "median 0.412 ms, 95th percentile 0.530 ms, largest 1.203 ms, 1200 frames"
+    let number = |after: &str| -> f64 {
+        let at = line.find(after).unwrap_or_else(|| panic!("{line}")) + after.len();
+        line[at..].split(' ').next().unwrap().parse().unwrap()
+    };
+    let frames = line.rsplit(", ").next().unwrap().split(' ').next().unwrap();
+    (
+        number("median "),
+        number("95th percentile "),
+        number("largest "),
+        frames.parse().unwrap(),
+    )
+}
+
+fn check(graphics: &str) {
+    let Some(sandbox) = sandbox() else { return };
+    let cmd = [
+        XR_CLIENT,
+        "--graphics",
+        graphics,
+        "--json",
+        "--timing",
+        "--frames",
+        "60",
+        "--size",
+        "160x120",
+    ];
+    let env = [
+        ("CONTRASTXR", "1"),
+        ("CONTRASTXR_FORCE", "1"),
+        ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+    ];
+    let run = match graphics {
+        "opengl" => sandbox.run_x11_for(&cmd, &env, 240),
+        _ => sandbox.run_for(&cmd, &env, 240),
+    };
+    run.assert_success();
+    let (median, p95, largest, frames) = session_figures(&run);
+    let timing = &run.client_report()["timing"];
+    let ms = |k: &str| timing[k].as_f64().unwrap();
+    let (end_frame, drain) = (ms("end_frame_ms_p95"), ms("drain_ms_p95"));
+    eprintln!(
+        "{graphics}: layer GPU median {median} ms, p95 {p95} ms, largest {largest} ms over \
+         {frames} frames; client xrEndFrame p95 {end_frame} ms, drain p95 {drain} ms"
+    );
+    // Every enhanced frame but the last (read at the next frame, or not at all), less those
+    // passed through while the shaders were built: most of the frames submitted.
+    let submitted = run.client_report()["frames_submitted"].as_u64().unwrap();
+    assert!(
+        frames <= submitted && frames >= submitted / 2,
+        "{frames} frames measured of {submitted} submitted"
+    );
+    assert!(median <= p95 && p95 <= largest, "{median} {p95} {largest}");
+    // Work on 2 views of 160x120 takes a CPU driver well over 10 us: a unit or a query read
+    // wrongly shows here.
+    assert!(median >= 0.01, "median {median} ms");
+    // At least 90 % of the frames have xrEndFrame + drain within the sum of their 95th
+    // percentiles, so the median of each frame's (smaller) GPU time is within it too.
+    assert!(
+        median <= end_frame + drain,
+        "median {median} ms > xrEndFrame p95 {end_frame} ms + drain p95 {drain} ms"
+    );
+}
+
+#[test]
+fn vulkan_sessions_say_the_layers_gpu_time() {
+    check("vulkan");
+}
+
+#[test]
+fn opengl_sessions_say_the_layers_gpu_time() {
+    check("opengl");
+}
