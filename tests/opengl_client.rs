@@ -336,7 +336,9 @@ fn opengl_programs_for_a_changed_mode_are_built_off_the_apps_threads() {
         env.push((k.into(), v));
     }
     let run = std::thread::scope(|s| {
-        let run = s.spawn(|| client_opengl("R8G8B8A8_SRGB", 300, &as_refs(&env), &[], 240));
+        // 40 s at the runtime's 20 Hz: on a loaded machine (CI beside two busy loops) each of
+        // the two builds, with empty caches, took 11 s of the 15 s that 300 frames gave.
+        let run = s.spawn(|| client_opengl("R8G8B8A8_SRGB", 800, &as_refs(&env), &[], 240));
         let first = capture.join("frame-5-view-0.json");
         common::wait_for(&first, std::time::Duration::from_secs(120));
         let out = std::process::Command::new(common::CLI)
