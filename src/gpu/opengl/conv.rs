@@ -53,3 +53,15 @@ impl GlFormat {
         gl::RGB10_A2,
     ];
 }
+
+/// The image unit format the in-place programs take a texture of `internal` as: the storage
+/// texel format of their variant (interface.rs, `in_place_texel`), of the texture's size.
+pub(in crate::gpu::opengl) fn image_unit_format(internal: u32) -> Option<gl::Enum> {
+    match internal {
+        gl::RGBA8 | gl::SRGB8_ALPHA8 => Some(gl::RGBA8),
+        gl::RGBA16F => Some(gl::RGBA16F),
+        gl::RGBA16 => Some(gl::RGBA16UI),
+        gl::RGB10_A2 => Some(gl::R32UI),
+        _ => None,
+    }
+}

@@ -31,7 +31,7 @@ use crate::gpu::core::interface::in_place_texel;
 use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::plan::{view_steps, NoPlan};
 use crate::gpu::core::CameraRect;
-use crate::gpu::opengl::conv::GlFormat;
+use crate::gpu::opengl::conv::{image_unit_format, GlFormat};
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
@@ -63,18 +63,6 @@ pub enum StoreThrough {
     Texture(gl::Enum),
     /// A texture view of it in this format (an sRGB texture as GL_RGBA8).
     View(gl::Enum),
-}
-
-/// The image unit format the in-place programs take a texture of `internal` as: the storage
-/// texel format of their variant (interface.rs, `in_place_texel`), of the texture's size.
-fn image_format(internal: u32) -> Option<gl::Enum> {
-    match internal {
-        gl::RGBA8 | gl::SRGB8_ALPHA8 => Some(gl::RGBA8),
-        gl::RGBA16F => Some(gl::RGBA16F),
-        gl::RGBA16 => Some(gl::RGBA16UI),
-        gl::RGB10_A2 => Some(gl::R32UI),
-        _ => None,
-    }
 }
 
 /// A view slot's buffers, kept across frames and remade only when a view needs more.
@@ -261,7 +249,7 @@ impl GlFrameRunner {
         if !self.in_place || in_place_texel(format.pixel.shader_code()).is_none() {
             return None;
         }
-        let unit_format = image_format(v.internal_format)?;
+        let unit_format = image_unit_format(v.internal_format)?;
         if !format.pixel.srgb {
             return Some(StoreThrough::Texture(unit_format));
         }
@@ -447,7 +435,7 @@ impl GlFrameRunner {
         self.save_program_cache();
         self.programs.destroy(&self.gl);
         // SAFETY: the context is current (this call's contract).
-        unsafe { self.destroy_times() };
+        unsafe { self.times.destroy(&self.gl) };
         self.drop_background();
         // SAFETY: the context is current (this call's contract).
         unsafe { self.texel_buffers.destroy(&self.gl) };
@@ -474,8 +462,8 @@ impl GlFrameRunner {
 }
 
 impl GlFrameRunner {
-    /// Marks the start of a frame's work in the context (before its background upload), and
-    /// takes in the earlier frames' times the driver has by now.
+    /// Marks the start of a frame's work in the context, before its background upload, and
+    /// takes in the earlier frames' GPU times the driver has by now (frame_times.rs).
     ///
     /// # Safety
     /// The engine's context is current on this thread.
@@ -487,7 +475,7 @@ impl GlFrameRunner {
         }
     }
 
-    /// Marks the end of the frame's work (after its last command).
+    /// Marks the end of the frame's work.
     ///
     /// # Safety
     /// As `frame_started`.
@@ -496,18 +484,8 @@ impl GlFrameRunner {
         unsafe { self.times.end(&self.gl) };
     }
 
-    /// The GPU time of each frame's work read since the last call, oldest first: from when
-    /// the context's earlier commands (the app's frame) completed to when the frame's did.
+    /// The GPU time of each frame's work read since the last call, oldest first.
     pub fn take_gpu_times(&mut self) -> Vec<std::time::Duration> {
         self.times.take()
-    }
-
-    /// Deletes the timer's queries (in `destroy`).
-    ///
-    /// # Safety
-    /// As `frame_started`.
-    unsafe fn destroy_times(&mut self) {
-        // SAFETY: this call's contract.
-        unsafe { self.times.destroy(&self.gl) };
     }
 }
