@@ -310,6 +310,32 @@ fn opengl_live_background_is_written_on_the_source_thread() {
     assert_follows_the_video(&views);
 }
 
+/// Waits until a captured frame's JSON in `dir` names `mode` in its settings; false at the
+/// timeout.
+fn wait_for_mode(dir: &std::path::Path, mode: &str, timeout: std::time::Duration) -> bool {
+    let end = std::time::Instant::now() + timeout;
+    let mut read = std::collections::HashSet::new();
+    while std::time::Instant::now() < end {
+        let files = std::fs::read_dir(dir).into_iter().flatten().flatten();
+        for path in files.map(|e| e.path()) {
+            if path.extension().is_none_or(|x| x != "json") || read.contains(&path) {
+                continue;
+            }
+            // A file still being written reads again on the next pass.
+            let text = std::fs::read_to_string(&path).unwrap_or_default();
+            let Ok(json) = serde_json::from_str::<serde_json::Value>(&text) else {
+                continue;
+            };
+            if json["params"]["mode"] == mode {
+                return true;
+            }
+            read.insert(path);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    false
+}
+
 /// A setting that needs other programs, changed while the app runs (`contrastxr set mode
 /// heatmap` through the config file), has them built off the app's threads too, with empty
 /// caches:
@@ -335,10 +361,14 @@ fn opengl_programs_for_a_changed_mode_are_built_off_the_apps_threads() {
     ] {
         env.push((k.into(), v));
     }
+    let stop = dir.join("stop");
+    let stop_arg = stop.to_string_lossy().into_owned();
+    let extra = ["--stop-file", stop_arg.as_str()];
     let run = std::thread::scope(|s| {
-        // 40 s at the runtime's 20 Hz: on a loaded machine (CI beside two busy loops) each of
-        // the two builds, with empty caches, took 11 s of the 15 s that 300 frames gave.
-        let run = s.spawn(|| client_opengl("R8G8B8A8_SRGB", 800, &as_refs(&env), &[], 240));
+        // At most 120 s at the runtime's 20 Hz; the run ends once a heatmap frame is captured.
+        // On a loaded machine (CI beside two busy loops) each of the two builds, with empty
+        // caches, took 11 s.
+        let run = s.spawn(|| client_opengl("R8G8B8A8_SRGB", 2400, &as_refs(&env), &extra, 240));
         let first = capture.join("frame-5-view-0.json");
         common::wait_for(&first, std::time::Duration::from_secs(120));
         let out = std::process::Command::new(common::CLI)
@@ -346,7 +376,10 @@ fn opengl_programs_for_a_changed_mode_are_built_off_the_apps_threads() {
             .env("CONTRASTXR_CONFIG", &config)
             .output()
             .unwrap();
+        let heatmap = wait_for_mode(&capture, "heatmap", std::time::Duration::from_secs(150));
+        std::fs::write(&stop, "").unwrap();
         assert!(out.status.success(), "{out:?}");
+        eprintln!("a heatmap frame captured: {heatmap}");
         run.join().unwrap()
     });
     let Some(run) = run else { return };

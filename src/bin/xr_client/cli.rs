@@ -32,6 +32,8 @@ usage: contrastxr-xr-client [options]
   --layout array|side-by-side
                           one swapchain with arraySize 2, or one wide swapchain (default array)
   --frames N              frames to submit before ending the session (default 60)
+  --stop-file PATH        end the session before --frames once PATH exists (looked for
+                          before each frame): a test's run lasts as long as it needs
   --quad                  also submit a quad layer with its own swapchain
   --quad-strips N         with --quad: submit the quad's image as N quad layers, one per
                           horizontal strip (N regions of one swapchain in one frame; default 1)
@@ -154,6 +156,8 @@ pub struct Options {
     pub format: Option<SwapchainFormat>,
     pub layout: Layout,
     pub frames: u32,
+    /// End the session early once this file exists (--stop-file).
+    pub stop_file: Option<std::path::PathBuf>,
     pub quad: bool,
     /// Quad layers the quad's image is split into (horizontal strips).
     pub quad_strips: u32,
@@ -203,6 +207,7 @@ impl Default for Options {
             format: None,
             layout: Layout::Array,
             frames: 60,
+            stop_file: None,
             quad: false,
             quad_strips: 1,
             size: None,
@@ -246,6 +251,7 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
             "--frames" => {
                 options.frames = value()?.parse().map_err(|_| "--frames needs a count")?
             }
+            "--stop-file" => options.stop_file = Some(value()?.into()),
             "--size" => options.size = Some(parse_size(&value()?)?),
             "--content" => options.content = parse_content(&value()?)?,
             "--quad" => options.quad = true,
@@ -405,6 +411,12 @@ mod tests {
             (Layout::SideBySide, 7, true, Some((64, 48)))
         );
         assert!(o.validation && o.json && !o.list_formats);
+        assert_eq!(o.stop_file, None);
+        let o = parse_str("--frames 900 --stop-file /tmp/x/stop").unwrap();
+        assert_eq!(
+            o.stop_file.as_deref(),
+            Some(std::path::Path::new("/tmp/x/stop"))
+        );
         let o = parse_str("--pipelined --script acquire,wait,release,end-empty").unwrap();
         assert!(o.pipelined);
         assert_eq!(o.script.unwrap().len(), 4);

@@ -1,6 +1,7 @@
 //! The session's life: wait for READY, begin, submit frames, request exit after N frames, end on
 //! STOPPING, leave on EXITING. Every OpenXR or Vulkan failure ends the loop with an error.
 
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use openxr as xr;
@@ -44,6 +45,8 @@ pub struct Stats {
     /// With --script: each op's XrResult, and whether the script ran to its end.
     pub script: Vec<String>,
     pub script_ran: bool,
+    /// The run ended before --frames because --stop-file's file appeared.
+    pub stopped: bool,
 }
 
 /// A session's frames, whatever its graphics API: what [`run`] calls while the session runs.
@@ -114,8 +117,12 @@ pub fn run<F: Frames>(
         }
         let done = if options.script.is_some() {
             stats.script_ran
+        } else if stats.frames_submitted - first_frame >= options.frames {
+            true
         } else {
-            stats.frames_submitted - first_frame >= options.frames
+            let stop = options.stop_file.as_deref().is_some_and(Path::exists);
+            stats.stopped |= stop;
+            stop
         };
         if done && !exit_requested {
             frames

@@ -105,7 +105,10 @@ fn main() -> ExitCode {
     let ran = options.list_formats
         || stats.script_ran
         || (options.script.is_none()
-            && stats.frames_submitted >= options.frames * options.sessions * options.instances);
+            && (stats.stopped
+                || stats.frames_submitted
+                    >= options.frames * options.sessions * options.instances));
+    report.stopped_by_file = stats.stopped;
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     print(&report, &options);
     if options.exit_marker {

@@ -7,11 +7,14 @@ pub use crate::memory::Sample;
 
 #[derive(Serialize, Debug, Default)]
 pub struct Report {
-    /// True when the session ran to its end with no OpenXR/Vulkan error and no validation error.
+    /// True when the session ran to its end (or to --stop-file's file) with no OpenXR/Vulkan error and no validation error.
     pub ok: bool,
     pub frames_requested: u32,
     pub frames_submitted: u32,
     pub frames_ended: u32,
+    /// With --stop-file: the run ended before --frames because the file appeared.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub stopped_by_file: bool,
     pub reached_focused: bool,
     /// The session's graphics API: "vulkan" or "opengl".
     pub graphics: String,
