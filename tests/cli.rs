@@ -1090,6 +1090,7 @@ fn doctor_without_a_manifest_reports_the_problem_and_its_fix() {
             "camera-profile",
             "device-profile",
             "last-app",
+            "gpu-time",
             "steam"
         ]
     );
@@ -1222,7 +1223,7 @@ fn doctor_names_the_config_files_bad_line() {
 }
 
 /// An app whose session was OpenGL: doctor names the API from the log and says which one the
-/// layer enhances.
+/// layer enhances, and the GPU time per frame the log gave last.
 #[test]
 fn doctor_names_the_last_sessions_graphics_api() {
     let root = fresh_home("doctor-opengl");
@@ -1234,6 +1235,9 @@ fn doctor_names_the_last_sessions_graphics_api() {
 ",
     );
     let (_, report) = doctor(&root, &[]);
+    let g = finding(&report, "gpu-time");
+    assert_eq!(g["status"], "ok", "{g}");
+    assert!(text(g, "detail").contains("logged no GPU time"), "{g}");
     let l = finding(&report, "last-app");
     assert_eq!(l["status"], "warn", "{l}");
     assert!(text(l, "detail").contains("(OpenGL (Xlib))"), "{l}");
@@ -1249,9 +1253,19 @@ fn doctor_names_the_last_sessions_graphics_api() {
 2026-01-01T00:00:00.000Z [pid 8] layer loaded into /usr/bin/hello_xr
 2026-01-01T00:00:00.300Z [pid 8] graphics API of this session: OpenGL (Xlib), enhanced
 2026-01-01T00:00:00.900Z [pid 8] enhancement began 0.600 s after the session started
+2026-01-01T00:01:01.000Z [pid 8] GPU time of the layer's work per frame over the last 60 s: median 0.412 ms, 95th percentile 0.530 ms, largest 1.203 ms, 1200 frames
+2026-01-01T00:01:30.000Z [pid 8] GPU time of the layer's work per frame over the session: median 0.415 ms, 95th percentile 0.540 ms, largest 1.203 ms, 1800 frames
 ",
     );
     let (_, report) = doctor(&root, &[]);
+    // The GPU time: the log's last such line, the session's.
+    let g = finding(&report, "gpu-time");
+    assert_eq!(g["status"], "ok", "{g}");
+    assert_eq!(
+        text(g, "detail"),
+        "last app: GPU time of the layer's work per frame over the session: median 0.415 ms, \
+         95th percentile 0.540 ms, largest 1.203 ms, 1800 frames"
+    );
     let l = finding(&report, "last-app");
     assert_eq!(l["status"], "ok", "{l}");
     assert!(

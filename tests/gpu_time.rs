@@ -44,10 +44,15 @@ fn check(graphics: &str) {
         "--size",
         "160x120",
     ];
+    // One frame captured past the first 30 enhanced: its JSON carries the figures so far.
+    let capture = common::scratch_dir(&format!("gpu-time-{graphics}"));
+    let capture_dir = capture.to_string_lossy().into_owned();
     let env = [
         ("CONTRASTXR", "1"),
         ("CONTRASTXR_FORCE", "1"),
         ("CONTRASTXR_BACKGROUND", "color:#e0d020"),
+        ("CONTRASTXR_CAPTURE_DIR", capture_dir.as_str()),
+        ("CONTRASTXR_CAPTURE_SKIP", "30"),
     ];
     let run = match graphics {
         "opengl" => sandbox.run_x11_for(&cmd, &env, 240),
@@ -78,6 +83,24 @@ fn check(graphics: &str) {
     assert!(
         median <= end_frame + drain,
         "median {median} ms > xrEndFrame p95 {end_frame} ms + drain p95 {drain} ms"
+    );
+    captured_figures(&capture, frames, largest);
+}
+
+/// The captured view's `layer_gpu_ms`: the session's figures up to that frame, so fewer frames
+/// than the session's and none larger than its largest.
+fn captured_figures(dir: &std::path::Path, session_frames: u64, session_largest: f64) {
+    let json = dir.join("frame-30-view-0.json");
+    let text = std::fs::read_to_string(&json).unwrap_or_else(|e| panic!("{json:?}: {e}"));
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let gpu = &json["layer_gpu_ms"];
+    let n = |k: &str| gpu[k].as_f64().unwrap_or_else(|| panic!("no {k}: {json}"));
+    let frames = gpu["frames"].as_u64().unwrap();
+    assert!(frames >= 1 && frames < session_frames, "{gpu}");
+    assert!(n("median") >= 0.01 && n("median") <= n("p95"), "{gpu}");
+    assert!(
+        n("p95") <= n("largest") && n("largest") <= session_largest,
+        "{gpu}"
     );
 }
 

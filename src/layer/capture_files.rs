@@ -120,7 +120,8 @@ pub struct CaptureJob {
 }
 
 impl CaptureJob {
-    /// The job of one captured view: its JSON is made here, its files by [`write`](Self::write).
+    /// The job of one captured view: its JSON is made here, with `extra`'s keys (the view's
+    /// motion, the layer's GPU time so far), its files by [`write`](Self::write).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         dir: &Path,
@@ -130,7 +131,7 @@ impl CaptureJob {
         api: &Api,
         background: Arc<RgbaImage>,
         settings: &Settings,
-        motion: serde_json::Map<String, serde_json::Value>,
+        extra: serde_json::Map<String, serde_json::Value>,
     ) -> CaptureJob {
         let item = &captured.view;
         let (w, h) = item.key.extent;
@@ -154,7 +155,7 @@ impl CaptureJob {
             "params": settings_json(settings),
         });
         if let Some(object) = json.as_object_mut() {
-            object.extend(motion);
+            object.extend(extra);
         }
         CaptureJob {
             dir: Some(dir.to_path_buf()),

@@ -434,7 +434,10 @@ fn write_capture(s: &SessionState, views: Vec<CapturedImage>, bg: &Arc<RgbaImage
         return;
     };
     for (k, v) in views.into_iter().enumerate() {
-        let motion = motion::capture_json(s.motion.views.get(k));
+        let mut extra = motion::capture_json(s.motion.views.get(k));
+        if let Some(gpu) = s.gpu_time.session_json() {
+            extra.insert("layer_gpu_ms".into(), gpu);
+        }
         let Some(graphics) = s.graphics.as_ref() else {
             return;
         };
@@ -450,7 +453,7 @@ fn write_capture(s: &SessionState, views: Vec<CapturedImage>, bg: &Arc<RgbaImage
             &api,
             bg.clone(),
             &s.settings,
-            motion,
+            extra,
         );
         capture_writer::write(job);
     }

@@ -5,6 +5,7 @@
 //! where the work runs after the call returns. Bounded however long the session: histograms,
 //! not a list of frames.
 
+use super::log::GPU_TIME;
 use std::time::{Duration, Instant};
 
 /// How often the log says the last period's figures.
@@ -118,7 +119,7 @@ impl GpuTimeLog {
             return None;
         }
         let line = format!(
-            "GPU time of the layer's work per frame over the last {} s: {}",
+            "{GPU_TIME}the last {} s: {}",
             now.duration_since(since).as_secs(),
             self.period.summary()
         );
@@ -130,11 +131,22 @@ impl GpuTimeLog {
     /// The log's line for the whole session (None where no frame was measured: the device
     /// or context has no timestamps, or nothing was enhanced).
     pub fn session_line(&self) -> Option<String> {
-        (self.session.count > 0).then(|| {
-            format!(
-                "GPU time of the layer's work per frame over the session: {}",
-                self.session.summary()
-            )
+        (self.session.count > 0)
+            .then(|| format!("{GPU_TIME}the session: {}", self.session.summary()))
+    }
+
+    /// The session's figures so far, as `scripts/bench-xr` gives them (`layer_gpu_ms`):
+    /// median, p95 and largest in ms, and the frames measured; None before any frame was.
+    pub fn session_json(&self) -> Option<serde_json::Value> {
+        let h = &self.session;
+        let ms = |t: Duration| (t.as_secs_f64() * 1e6).round() / 1e3;
+        (h.count > 0).then(|| {
+            serde_json::json!({
+                "median": ms(h.quantile(0.5)),
+                "p95": ms(h.quantile(0.95)),
+                "largest": ms(h.largest),
+                "frames": h.count,
+            })
         })
     }
 }
@@ -176,6 +188,7 @@ mod tests {
         let mut log = GpuTimeLog::default();
         let t0 = Instant::now();
         assert_eq!(log.session_line(), None, "nothing measured");
+        assert_eq!(log.session_json(), None);
         assert_eq!(log.add(&[], t0), None);
         assert_eq!(log.add(&[us(400), us(420)], t0), None);
         assert_eq!(log.add(&[us(410)], t0 + Duration::from_secs(30)), None);
@@ -191,5 +204,15 @@ mod tests {
         let session = log.session_line().unwrap();
         assert!(session.contains("over the session"), "{session}");
         assert!(session.contains(", 5 frames"), "{session}");
+        // The same figures in the capture JSON's form (ms to the microsecond).
+        let json = log.session_json().unwrap();
+        assert_eq!(json["frames"], 5);
+        assert_eq!(json["largest"], 2.0);
+        let median = json["median"].as_f64().unwrap();
+        assert!((median / 0.41 - 1.0).abs() < 0.006, "{json}");
+        assert!(
+            session.contains(&format!("median {median:.3} ms")),
+            "{session} {json}"
+        );
     }
 }

@@ -34,6 +34,10 @@ pub const GRAPHICS_API: &str = "graphics API of this session: ";
 /// The line when frames begin to pass through for a cause that may pass (the app's OpenGL
 /// context current on another thread), after the cause: `WHY: this frame passes through ...`.
 pub const TRIES_AGAIN: &str = "this frame passes through untouched; the layer tries again";
+/// The lines of the layer's GPU time per frame, once a minute and at the session's end:
+/// `GPU time of the layer's work per frame over the last 60 s: median ...` (`over the
+/// session: ...`).
+pub const GPU_TIME: &str = "GPU time of the layer's work per frame over ";
 /// The line when a try succeeds after such frames: `enhancing again after N frames ...`.
 pub const ENHANCING_AGAIN: &str = "enhancing again after";
 

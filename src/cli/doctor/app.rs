@@ -184,6 +184,14 @@ impl LastApp {
         })
     }
 
+    /// The text of the last line the app logged that starts with `prefix`.
+    pub fn last_line(&self, prefix: &str) -> Option<&str> {
+        self.lines.iter().rev().find_map(|l| {
+            let text = log::parse_line(l)?.text;
+            text.starts_with(prefix).then_some(text)
+        })
+    }
+
     /// The graphics API of the app's last session, from the layer's [`log::GRAPHICS_API`] line.
     pub fn session(&self) -> Option<Session<'_>> {
         self.lines

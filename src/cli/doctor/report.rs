@@ -3,7 +3,7 @@
 use super::super::args::{Args, Opt};
 use super::super::error::{print, CliError};
 use super::finding::{Finding, Status};
-use super::{app, camera, manifest, profile, runtime, steam};
+use super::{app, camera, gpu_time_finding, manifest, profile, runtime, steam};
 
 pub const OPTIONS: &[Opt] = &[Opt::flag("--json")];
 
@@ -26,6 +26,9 @@ pub fn usage() -> String {
      \x20                 settings name (camera_usb_ids) is connected, before any app ran too\n\
      \x20 last-app        what the last app that loaded the layer logged: its session's\n\
      \x20                 graphics API, and the layer on, or why not\n\
+     \x20 gpu-time        the GPU time the layer's work took per frame in the last app, as its\n\
+     \x20                 log says it (median, 95th percentile, largest; once a minute and at\n\
+     \x20                 each session's end)\n\
      \x20 steam           PRESSURE_VESSEL_IMPORT_OPENXR_1_LAYERS, which Steam games need: here,\n\
      \x20                 or in the games' launch options (Steam's localconfig.vdf)\n\
      --json: one JSON object: graphics_apis_enhanced and every finding (name, status, detail, fix).\n\
@@ -53,6 +56,7 @@ fn findings() -> Vec<Finding> {
         camera::profile(&env, last.system()),
         profile::device_profile(&env, last.system()),
         last.finding(),
+        gpu_time_finding::finding(&last),
         steam::steam(),
     ]);
     all
