@@ -33,7 +33,13 @@ fn session_figures(run: &SandboxRun) -> (f64, f64, f64, u64) {
 
 fn check(graphics: &str) {
     let Some(sandbox) = sandbox() else { return };
+    // The layer's log file goes to a folder of the test's (the sandbox passes no
+    // XDG_STATE_HOME: it goes on the command line), for `contrastxr doctor` to read after.
+    let state = common::scratch_dir(&format!("gpu-time-state-{graphics}"));
+    let state_home = format!("XDG_STATE_HOME={}", state.display());
     let cmd = [
+        "/usr/bin/env",
+        &state_home,
         XR_CLIENT,
         "--graphics",
         graphics,
@@ -85,6 +91,28 @@ fn check(graphics: &str) {
         "median {median} ms > xrEndFrame p95 {end_frame} ms + drain p95 {drain} ms"
     );
     captured_figures(&capture, frames, largest);
+    doctor_gives_the_session_line(&state, &run);
+}
+
+/// `contrastxr doctor`, reading the log file the layer wrote, gives the session's line as its
+/// `gpu-time` finding.
+fn doctor_gives_the_session_line(state: &std::path::Path, run: &SandboxRun) {
+    let lines = layer_lines(run);
+    let line = lines
+        .iter()
+        .find(|l| l.starts_with("GPU time of the layer's work per frame over the session: "))
+        .expect("checked above");
+    let out = std::process::Command::new(common::CLI)
+        .args(["doctor", "--json"])
+        .env("XDG_STATE_HOME", state)
+        .output()
+        .unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stdout)));
+    let findings = report["findings"].as_array().unwrap();
+    let gpu = findings.iter().find(|f| f["name"] == "gpu-time").unwrap();
+    assert_eq!(gpu["status"], "ok", "{gpu}");
+    assert_eq!(gpu["detail"], format!("last app: {line}"), "{gpu}");
 }
 
 /// The captured view's `layer_gpu_ms`: the session's figures up to that frame, so fewer frames
