@@ -66,6 +66,8 @@ fn check(graphics: &str) {
     };
     run.assert_success();
     let (median, p95, largest, frames) = session_figures(&run);
+    let runtime_period = run.client_report()["display_period_ms"].as_f64().unwrap();
+    frame_period_is_the_runtimes(&run, runtime_period);
     let timing = &run.client_report()["timing"];
     let ms = |k: &str| timing[k].as_f64().unwrap();
     let (end_frame, drain) = (ms("end_frame_ms_p95"), ms("drain_ms_p95"));
@@ -115,6 +117,30 @@ fn doctor_gives_the_session_line(state: &std::path::Path, run: &SandboxRun) {
     assert_eq!(gpu["detail"], format!("last app: {line}"), "{gpu}");
 }
 
+/// The frame period the session line gives: the runtime's (xrWaitFrame's predicted display
+/// period, as the client saw it), or a whole multiple where the client missed frames (the
+/// runtime then predicts display times periods apart).
+fn frame_period_is_the_runtimes(run: &SandboxRun, runtime_period: f64) {
+    let lines = layer_lines(run);
+    let line = lines
+        .iter()
+        .find(|l| l.contains("over the session: "))
+        .unwrap();
+    let words = line
+        .split_once(" (frame period ")
+        .and_then(|(_, p)| p.strip_suffix(" ms)"))
+        .unwrap_or_else(|| panic!("no frame period: {line}"));
+    let period: f64 = words.parse().unwrap();
+    let times = period / runtime_period;
+    let whole = times.round();
+    // The line's one decimal, and the histogram's half bin.
+    let near = 0.05 / runtime_period + 0.006;
+    assert!(
+        whole >= 1.0 && (times / whole - 1.0).abs() <= near,
+        "frame period {period} ms against the runtime's {runtime_period} ms: {line}"
+    );
+}
+
 /// The captured view's `layer_gpu_ms`: the session's figures up to that frame, so fewer frames
 /// than the session's and none larger than its largest.
 fn captured_figures(dir: &std::path::Path, session_frames: u64, session_largest: f64) {
@@ -130,6 +156,7 @@ fn captured_figures(dir: &std::path::Path, session_frames: u64, session_largest:
         n("p95") <= n("largest") && n("largest") <= session_largest,
         "{gpu}"
     );
+    assert!(n("frame_period") > 0.0, "{gpu}");
 }
 
 #[test]

@@ -273,6 +273,7 @@ fn background_sequence(frame_sequence: u64, s: &Settings) -> u64 {
 /// Enhances the held images of this frame and remembers its regions; any failure turns the
 /// session into pass-through.
 pub(super) fn enhance_frame(s: &mut SessionState, info: &xr::FrameEndInfo) {
+    s.gpu_time.display_time(info.display_time.as_nanos());
     s.frame_in_use = s.background.as_ref().and_then(|bg| bg.latest());
     let captured_at = s.frame_in_use.as_ref().and_then(|f| f.captured_at);
     let mut moving = motion::at_end_frame(s, info.display_time, captured_at);

@@ -85,10 +85,14 @@ impl Histogram {
     }
 }
 
-/// A session's frame GPU times: the current period's and the whole session's.
+/// A session's frame GPU times: the current period's and the whole session's; and the app's
+/// frame period, from the display times of its xrEndFrame calls, to hold them against.
 pub struct GpuTimeLog {
     period: Histogram,
     session: Histogram,
+    /// Steps between successive frames' display times over the session.
+    frame_period: Histogram,
+    last_display_time: Option<i64>,
     /// When the current period began (the first measured frame's arrival, then each line).
     since: Option<Instant>,
 }
@@ -98,12 +102,37 @@ impl Default for GpuTimeLog {
         GpuTimeLog {
             period: Histogram::new(),
             session: Histogram::new(),
+            frame_period: Histogram::new(),
+            last_display_time: None,
             since: None,
         }
     }
 }
 
 impl GpuTimeLog {
+    /// Takes a frame's display time (xrEndFrame's `displayTime`, ns): the step from the last
+    /// one is a frame period (a frame the app skipped makes one step of two periods: the
+    /// median stays the period). Steps not in (0, 1 s] (a paused app, a clock gone back) are
+    /// not counted.
+    pub fn display_time(&mut self, ns: i64) {
+        let last = self.last_display_time.replace(ns);
+        let step = last.map_or(0, |last| ns.saturating_sub(last));
+        if step > 0 && step <= 1_000_000_000 {
+            self.frame_period.add(Duration::from_nanos(step as u64));
+        }
+    }
+
+    /// ` (frame period 11.1 ms)`, once display times came; empty before.
+    fn period_words(&self) -> String {
+        match self.frame_period.count {
+            0 => String::new(),
+            _ => format!(
+                " (frame period {:.1} ms)",
+                self.frame_period.quantile(0.5).as_secs_f64() * 1e3
+            ),
+        }
+    }
+
     /// Takes frames' measured GPU times; returns the log's line for the period once a period
     /// has passed since the last (or since the first measured frame).
     pub fn add(&mut self, times: &[Duration], now: Instant) -> Option<String> {
@@ -119,9 +148,10 @@ impl GpuTimeLog {
             return None;
         }
         let line = format!(
-            "{GPU_TIME}the last {} s: {}",
+            "{GPU_TIME}the last {} s: {}{}",
             now.duration_since(since).as_secs(),
-            self.period.summary()
+            self.period.summary(),
+            self.period_words()
         );
         self.period = Histogram::new();
         self.since = Some(now);
@@ -131,12 +161,15 @@ impl GpuTimeLog {
     /// The log's line for the whole session (None where no frame was measured: the device
     /// or context has no timestamps, or nothing was enhanced).
     pub fn session_line(&self) -> Option<String> {
-        (self.session.count > 0)
-            .then(|| format!("{GPU_TIME}the session: {}", self.session.summary()))
+        (self.session.count > 0).then(|| {
+            let (figures, period) = (self.session.summary(), self.period_words());
+            format!("{GPU_TIME}the session: {figures}{period}")
+        })
     }
 
     /// The session's figures so far, as `scripts/bench-xr` gives them (`layer_gpu_ms`):
-    /// median, p95 and largest in ms, and the frames measured; None before any frame was.
+    /// median, p95 and largest in ms, and the frames measured; and the app's frame period
+    /// (median, ms; null before display times came). None before any frame was measured.
     pub fn session_json(&self) -> Option<serde_json::Value> {
         let h = &self.session;
         let ms = |t: Duration| (t.as_secs_f64() * 1e6).round() / 1e3;
@@ -146,6 +179,8 @@ impl GpuTimeLog {
                 "p95": ms(h.quantile(0.95)),
                 "largest": ms(h.largest),
                 "frames": h.count,
+                "frame_period": (self.frame_period.count > 0)
+                    .then(|| ms(self.frame_period.quantile(0.5))),
             })
         })
     }
@@ -214,5 +249,38 @@ mod tests {
             session.contains(&format!("median {median:.3} ms")),
             "{session} {json}"
         );
+        assert_eq!(
+            json["frame_period"],
+            serde_json::Value::Null,
+            "no display times"
+        );
+        assert!(session.ends_with(", 5 frames"), "{session}");
+    }
+
+    #[test]
+    fn the_frame_period_is_the_median_step_of_the_display_times() {
+        let mut log = GpuTimeLog::default();
+        let ms = 1_000_000i64;
+        // 90 Hz (11.111 ms), one frame skipped (a 22.2 ms step), a clock gone back and a
+        // pause of 5 s: neither of the last two counts.
+        let mut t = 1_000 * ms;
+        for k in 0..20 {
+            log.display_time(t);
+            t += if k == 7 { 22_222_222 } else { 11_111_111 };
+        }
+        log.display_time(t - 50 * ms);
+        log.display_time(t + 5_000 * ms);
+        log.display_time(t + 5_000 * ms + 11_111_111);
+        assert_eq!(
+            log.frame_period.count, 20,
+            "19 steps of the first run, 1 after the pause"
+        );
+        log.add(&[us(500)], Instant::now());
+        let line = log.session_line().unwrap();
+        assert!(line.ends_with(", 1 frame (frame period 11.1 ms)"), "{line}");
+        let period = log.session_json().unwrap()["frame_period"]
+            .as_f64()
+            .unwrap();
+        assert!((period / 11.111 - 1.0).abs() < 0.006, "{period}");
     }
 }

@@ -47,6 +47,8 @@ pub struct Stats {
     pub script_ran: bool,
     /// The run ended before --frames because --stop-file's file appeared.
     pub stopped: bool,
+    /// xrWaitFrame's predictedDisplayPeriod at the last frame, in ns.
+    pub display_period_ns: i64,
 }
 
 /// A session's frames, whatever its graphics API: what [`run`] calls while the session runs.
@@ -180,6 +182,7 @@ fn frame(
         .time("xrBeginFrame", || frame_stream.begin())
         .ctx("xrBeginFrame")?;
     stats.frames_ended += 1;
+    stats.display_period_ns = state.predicted_display_period.as_nanos();
     if !state.should_render || options.script.is_some() {
         // Apart from xrEndFrame: with no layers, a layer has nothing to do in it.
         let (time, mode) = (state.predicted_display_time, scene.blend_mode);

@@ -357,6 +357,7 @@ impl frame_loop::Frames for GlFrames<'_> {
             .time("xrBeginFrame", || self.stream.begin())
             .ctx("xrBeginFrame")?;
         stats.frames_ended += 1;
+        stats.display_period_ns = frame_state.predicted_display_period.as_nanos();
         let (time, frame) = (frame_state.predicted_display_time, stats.frames_ended - 1);
         if !frame_state.should_render || options.script.is_some() {
             let end = (

@@ -95,6 +95,7 @@ fn main() -> ExitCode {
     report.script = std::mem::take(&mut stats.script);
     report.memory = std::mem::take(&mut stats.memory);
     report.frames_ended = stats.frames_ended;
+    report.display_period_ms = stats.display_period_ns as f64 / 1e6;
     report.reached_focused = stats.reached_focused;
     if options.timing {
         let run_s = started.elapsed().as_secs_f64();

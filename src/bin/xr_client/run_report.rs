@@ -12,6 +12,8 @@ pub struct Report {
     pub frames_requested: u32,
     pub frames_submitted: u32,
     pub frames_ended: u32,
+    /// The runtime's frame period (xrWaitFrame's predictedDisplayPeriod at the last frame), ms.
+    pub display_period_ms: f64,
     /// With --stop-file: the run ended before --frames because the file appeared.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub stopped_by_file: bool,
