@@ -245,11 +245,16 @@ impl Timing {
 impl Report {
     pub fn summary(&self) -> String {
         format!(
-            "contrastxr-xr-client: {} - {} of {} frames submitted, {} {} {}x{}{}, blend {}, runtime {}, \
-             vulkan validation {} errors {} warnings{}",
+            "contrastxr-xr-client: {} - {} of {} frames submitted{}, {} {} {}x{}{}, blend {}, \
+             runtime {}, vulkan validation {} errors {} warnings{}",
             if self.ok { "ok" } else { "FAILED" },
             self.frames_submitted,
             self.frames_requested,
+            if self.stopped_by_file {
+                " (ended by --stop-file)"
+            } else {
+                ""
+            },
             self.format,
             self.layout,
             self.view_size[0],
@@ -259,7 +264,10 @@ impl Report {
             self.runtime,
             self.vk_validation_errors,
             self.vk_validation_warnings,
-            self.errors.iter().map(|e| format!("; error: {e}")).collect::<String>(),
+            self.errors
+                .iter()
+                .map(|e| format!("; error: {e}"))
+                .collect::<String>(),
         )
     }
 
