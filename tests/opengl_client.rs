@@ -384,6 +384,8 @@ fn opengl_programs_for_a_changed_mode_are_built_off_the_apps_threads() {
     });
     let Some(run) = run else { return };
     run.assert_success();
+    let report = run.client_report();
+    assert_eq!(report["stopped_by_file"], true, "{}", run.describe());
     let lines = layer_lines(&run);
     let builds = lines
         .iter()
