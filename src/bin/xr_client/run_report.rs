@@ -7,7 +7,8 @@ pub use crate::memory::Sample;
 
 #[derive(Serialize, Debug, Default)]
 pub struct Report {
-    /// True when the session ran to its end (or to --stop-file's file) with no OpenXR/Vulkan error and no validation error.
+    /// True when the session ran to its end (or to --stop-file's file) with no OpenXR/Vulkan
+    /// error and no validation error.
     pub ok: bool,
     pub frames_requested: u32,
     pub frames_submitted: u32,
