@@ -9,15 +9,21 @@ mod common;
 
 use common::{layer_lines, sandbox, SandboxRun, XR_CLIENT};
 
-/// The session line's figures: (median ms, 95th percentile ms, largest ms, frames).
-fn session_figures(run: &SandboxRun) -> (f64, f64, f64, u64) {
+/// The start of the layer's line for the whole session.
+const SESSION_LINE: &str = "GPU time of the layer's work per frame over the session: ";
+
+/// The layer's line for the whole session, whole.
+fn session_line(run: &SandboxRun) -> String {
     let lines = layer_lines(run);
-    let prefix = "GPU time of the layer's work per frame over the session: ";
-    let line = lines
-        .iter()
-        .find_map(|l| l.strip_prefix(prefix))
-        .unwrap_or_else(|| panic!("no session line: {lines:#?}"));
-    // "median 0.412 ms, 95th percentile 0.530 ms, largest 1.203 ms, 1200 frames"
+    let line = lines.iter().find(|l| l.starts_with(SESSION_LINE));
+    line.unwrap_or_else(|| panic!("no session line: {lines:#?}"))
+        .clone()
+}
+
+/// The session line's figures: (median ms, 95th percentile ms, largest ms, frames).
+fn session_figures(line: &str) -> (f64, f64, f64, u64) {
+    let line = &line[SESSION_LINE.len()..];
+    // "median 0.412 ms, 95th percentile 0.530 ms, largest 1.203 ms, 1200 frames (...)"
     let number = |after: &str| -> f64 {
         let at = line.find(after).unwrap_or_else(|| panic!("{line}")) + after.len();
         line[at..].split(' ').next().unwrap().parse().unwrap()
@@ -65,10 +71,12 @@ fn check(graphics: &str) {
         _ => sandbox.run_for(&cmd, &env, 240),
     };
     run.assert_success();
-    let (median, p95, largest, frames) = session_figures(&run);
-    let runtime_period = run.client_report()["display_period_ms"].as_f64().unwrap();
-    frame_period_is_the_runtimes(&run, runtime_period);
-    let timing = &run.client_report()["timing"];
+    let line = session_line(&run);
+    let (median, p95, largest, frames) = session_figures(&line);
+    let report = run.client_report();
+    let runtime_period = report["display_period_ms"].as_f64().unwrap();
+    frame_period_is_the_runtimes(&line, runtime_period);
+    let timing = &report["timing"];
     let ms = |k: &str| timing[k].as_f64().unwrap();
     let (end_frame, drain) = (ms("end_frame_ms_p95"), ms("drain_ms_p95"));
     eprintln!(
@@ -77,7 +85,7 @@ fn check(graphics: &str) {
     );
     // Every enhanced frame but the last (read at the next frame, or not at all), less those
     // passed through while the shaders were built: most of the frames submitted.
-    let submitted = run.client_report()["frames_submitted"].as_u64().unwrap();
+    let submitted = report["frames_submitted"].as_u64().unwrap();
     assert!(
         frames <= submitted && frames >= submitted / 2,
         "{frames} frames measured of {submitted} submitted"
@@ -93,17 +101,12 @@ fn check(graphics: &str) {
         "median {median} ms > xrEndFrame p95 {end_frame} ms + drain p95 {drain} ms"
     );
     captured_figures(&capture, frames, largest);
-    doctor_gives_the_session_line(&state, &run);
+    doctor_gives_the_session_line(&state, &line);
 }
 
 /// `contrastxr doctor`, reading the log file the layer wrote, gives the session's line as its
 /// `gpu-time` finding.
-fn doctor_gives_the_session_line(state: &std::path::Path, run: &SandboxRun) {
-    let lines = layer_lines(run);
-    let line = lines
-        .iter()
-        .find(|l| l.starts_with("GPU time of the layer's work per frame over the session: "))
-        .expect("checked above");
+fn doctor_gives_the_session_line(state: &std::path::Path, line: &str) {
     let out = std::process::Command::new(common::CLI)
         .args(["doctor", "--json"])
         .env("XDG_STATE_HOME", state)
@@ -120,12 +123,7 @@ fn doctor_gives_the_session_line(state: &std::path::Path, run: &SandboxRun) {
 /// The frame period the session line gives: the runtime's (xrWaitFrame's predicted display
 /// period, as the client saw it), or a whole multiple where the client missed frames (the
 /// runtime then predicts display times periods apart).
-fn frame_period_is_the_runtimes(run: &SandboxRun, runtime_period: f64) {
-    let lines = layer_lines(run);
-    let line = lines
-        .iter()
-        .find(|l| l.contains("over the session: "))
-        .unwrap();
+fn frame_period_is_the_runtimes(line: &str, runtime_period: f64) {
     let words = line
         .split_once(" (frame period ")
         .and_then(|(_, p)| p.strip_suffix(" ms)"))
