@@ -61,7 +61,7 @@ fn inst(op: u32, operands: &[u32]) -> Vec<u32> {
 fn extension(name: &str) -> Vec<u32> {
     let mut bytes = name.as_bytes().to_vec();
     bytes.push(0);
-    while bytes.len() % 4 != 0 {
+    while !bytes.len().is_multiple_of(4) {
         bytes.push(0);
     }
     let words: Vec<u32> = bytes

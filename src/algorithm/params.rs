@@ -195,7 +195,7 @@ impl Params {
                 self.transmittance
             ));
         }
-        if self.blur && (self.blur_size % 2 == 0 || self.blur_size > MAX_BLUR_SIZE) {
+        if self.blur && (self.blur_size.is_multiple_of(2) || self.blur_size > MAX_BLUR_SIZE) {
             return Err(format!(
                 "blur_size must be odd and at most {MAX_BLUR_SIZE}, got {}",
                 self.blur_size

@@ -136,7 +136,7 @@ pub fn run<F: Frames>(
         // Frames go on until STOPPING arrives, as the spec asks after xrRequestExitSession.
         let submitted = stats.frames_submitted;
         frames.frame(options, stats)?;
-        if stats.frames_submitted != submitted && stats.frames_submitted % 50 == 0 {
+        if stats.frames_submitted != submitted && stats.frames_submitted.is_multiple_of(50) {
             stats
                 .memory
                 .push(crate::memory::Sample::now(stats.frames_submitted));

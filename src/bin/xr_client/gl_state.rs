@@ -126,7 +126,7 @@ impl GlStateCheck {
     /// pending, and disturbs what --disturb-gl-state names. `frame`: frames ended before.
     pub fn before_end_frame(&mut self, frame: u32) -> Result<()> {
         let o = &self.objects;
-        self.read_drawable = if self.checked % 2 == 0 {
+        self.read_drawable = if self.checked.is_multiple_of(2) {
             o.read
         } else {
             o.draw

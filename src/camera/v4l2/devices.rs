@@ -110,7 +110,7 @@ fn sizes(device: &Device, fourcc: FourCC) -> io::Result<Vec<(u32, u32)>> {
             FrameSizeEnum::Stepwise(s) => {
                 out.push((s.min_width, s.min_height));
                 let on_grid = |v: u32, min: u32, max: u32, step: u32| {
-                    v >= min && v <= max && (v - min) % step.max(1) == 0
+                    v >= min && v <= max && (v - min).is_multiple_of(step.max(1))
                 };
                 if on_grid(640, s.min_width, s.max_width, s.step_width)
                     && on_grid(480, s.min_height, s.max_height, s.step_height)

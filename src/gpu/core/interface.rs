@@ -185,7 +185,7 @@ pub const PERCEPTUAL_MAX_FREQUENCIES: u32 = 4;
 /// The buffer's size in words.
 pub const PERCEPTUAL_WORDS: u32 =
     PERCEPTUAL_HEADER_WORDS + PERCEPTUAL_MAX_FREQUENCIES * 4 * PERCEPTUAL_TABLE_LEN;
-const _: () = assert!(PERCEPTUAL_HEADER_WORDS % 4 == 0);
+const _: () = assert!(PERCEPTUAL_HEADER_WORDS.is_multiple_of(4));
 /// Header offsets: linear RGB -> LMS (9 words, row-major), RGB -> luminance (3 words), then
 /// one word each.
 pub const PERCEPTUAL_AT_RGB_TO_LMS: u32 = 0;

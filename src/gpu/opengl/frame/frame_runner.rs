@@ -116,7 +116,7 @@ pub fn rows_from_bottom(m: &CameraMapping) -> CameraMapping {
 
 /// Whether rows of `width` pixels are whole 16-byte groups (the wide access).
 pub(in crate::gpu::opengl) fn rows_aligned(width: u32, bytes_per_pixel: u32) -> bool {
-    (width * bytes_per_pixel) % 16 == 0
+    (width * bytes_per_pixel).is_multiple_of(16)
 }
 
 pub(super) fn texture_level_int(g: &Gl, texture: u32, pname: gl::Enum) -> i32 {

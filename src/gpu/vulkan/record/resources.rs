@@ -150,7 +150,7 @@ pub struct ViewTarget {
 /// per-pixel passes may read and write 16 bytes at a time (shaders/access_wide.wgsl). True for
 /// most widths in use.
 pub fn rows_aligned(width: u32, format: PixelFormat) -> bool {
-    (width * format.bytes_per_pixel()) % 16 == 0
+    (width * format.bytes_per_pixel()).is_multiple_of(16)
 }
 
 impl ViewTarget {
