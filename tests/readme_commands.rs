@@ -477,7 +477,9 @@ fn script_problems(command: &str) -> Vec<String> {
 
 /// Cargo's own subcommands, whose `--help` lists their options; fmt, clippy and deb are
 /// plugins, which a machine may lack.
-const CARGO_OWN: &[&str] = &["build", "test", "run", "clean", "check", "doc", "bench", "metadata"];
+const CARGO_OWN: &[&str] = &[
+    "build", "test", "run", "clean", "check", "doc", "bench", "metadata",
+];
 const CARGO_PLUGINS: &[&str] = &["fmt", "clippy", "deb"];
 
 /// What is wrong with a `cargo ...` command: a subcommand or option cargo does not have, a

@@ -9,7 +9,7 @@ use super::live_settings::Settings;
 use super::state::{self, SessionState, SwapchainInfo, SwapchainState};
 use super::{session, swapchain};
 use openxr_sys as xr;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::ffi::c_char;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
@@ -82,11 +82,23 @@ unsafe extern "system" fn destroy_swapchain(sc: xr::Swapchain) -> xr::Result {
     record(sc.into_raw(), call)
 }
 
+/// Sessions whose swapchains the fake runtime fails to make, whatever the usage (as a runtime
+/// out of memory does).
+fn failing_creates() -> MutexGuard<'static, HashSet<u64>> {
+    static FAILING: OnceLock<Mutex<HashSet<u64>>> = OnceLock::new();
+    let failing = FAILING.get_or_init(Default::default);
+    failing.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 unsafe extern "system" fn create_swapchain(
     s: xr::Session,
     _: *const xr::SwapchainCreateInfo,
     swapchain: *mut xr::Swapchain,
 ) -> xr::Result {
+    if failing_creates().contains(&s.into_raw()) {
+        record(s.into_raw(), "create_swapchain, failed");
+        return xr::Result::ERROR_RUNTIME_FAILURE;
+    }
     // SAFETY: the layer forwards the app's handle pointer, valid in these tests.
     unsafe { *swapchain = xr::Swapchain::from_raw(fresh_handle()) };
     let call = queue_call("create_swapchain", "create_swapchain, queue not held");
@@ -212,6 +224,11 @@ impl Rig {
             swapchain: xr::Swapchain::from_raw(swapchain),
             fake,
         }
+    }
+
+    /// From now on the fake runtime fails every xrCreateSwapchain of this session.
+    pub fn fail_swapchain_creates(&self) {
+        failing_creates().insert(self.session.into_raw());
     }
 
     /// The layer's state of the session.

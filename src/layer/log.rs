@@ -257,6 +257,12 @@ pub fn once(key: &str, line: &str) {
     }
 }
 
+/// Whether a line was logged under `key` with [`once`] in this process.
+#[cfg(test)]
+pub fn said_once(key: &str) -> bool {
+    lock().seen.contains(key)
+}
+
 pub fn debug(line: &str) {
     let mut log = lock();
     if log.debug {

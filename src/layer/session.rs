@@ -296,6 +296,23 @@ mod tests {
         assert!(lock(&rig.state()).graphics.is_none());
     }
 
+    /// A runtime that fails xrCreateSwapchain whatever the usage (out of memory, say): the
+    /// app gets the runtime's error after the layer's request and then the app's own, and the
+    /// log says the runtime failed, not that it refused the layer's usage.
+    #[test]
+    fn a_create_the_runtime_fails_with_any_usage_is_not_logged_as_a_refusal() {
+        let rig = Rig::new();
+        rig.fail_swapchain_creates();
+        let mut made = xr::Swapchain::NULL;
+        let info = super::super::fake_runtime::colour_swapchain();
+        // SAFETY: the layer's entry point with valid arguments.
+        let created = unsafe { swapchain::create_swapchain(rig.session, &info, &mut made) };
+        assert_eq!(created, xr::Result::ERROR_RUNTIME_FAILURE);
+        assert_eq!(rig.runtime_calls(), ["create_swapchain, failed"; 2]);
+        assert!(log::said_once("create-failed-0-ERROR_RUNTIME_FAILURE"));
+        assert!(!log::said_once("no-transfer-0"));
+    }
+
     /// Frames whose graphics cannot be reached now (the app's OpenGL context current on
     /// another thread) pass through whole and keep the engine; the layer tries at the next
     /// frame, then ever less often, and enhances again once a try succeeds.

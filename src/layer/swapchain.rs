@@ -76,6 +76,9 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             };
             let mut in_place = false;
             let mut refused = None;
+            // What the runtime refused: logged only once a create with less usage succeeds
+            // (else the runtime failed the app's own request, and said nothing of the usage).
+            let mut refusals: Vec<(String, String)> = Vec::new();
             if let Some(extra) = plan.as_ref().and_then(|p| p.in_place) {
                 let (made, result) = create_with(extra);
                 in_place = made;
@@ -83,9 +86,9 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 if !made {
                     refused = Some(result);
                     let path = plan.as_ref().map_or("copy", |p| p.copy_path);
-                    log::once(&format!("no-storage-{format}"), &format!(
+                    refusals.push((format!("no-storage-{format}"), format!(
                         "the runtime refused storage usage on swapchains of format {format} ({result:?}): their views are enhanced through a copy (path {path})"
-                    ));
+                    )));
                 }
             }
             let mut sampled = false;
@@ -94,18 +97,18 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 sampled = made;
                 usage_granted |= made;
                 if !made {
-                    log::once(&format!("no-sampled-{format}"), &format!(
+                    refusals.push((format!("no-sampled-{format}"), format!(
                         "the runtime refused sampled usage on swapchains of format {format} ({result:?}): their views are copied into the layer's image (copy_in = \"sampled\" needs it)"
-                    ));
+                    )));
                 }
             }
             if pixel.is_some() && !usage_granted {
                 let (made, result) = create_with(xr::SwapchainUsageFlags::EMPTY);
                 usage_granted = made;
                 if !made {
-                    log::once(&format!("no-transfer-{format}"), &format!(
+                    refusals.push((format!("no-transfer-{format}"), format!(
                     "the runtime refused transfer usage on swapchains of format {format} ({result:?}): those pass through"
-                ));
+                )));
                 }
             }
             if result.into_raw() < 0 {
@@ -113,6 +116,7 @@ pub(crate) unsafe extern "system" fn create_swapchain(
                 result =
                     unsafe { create_downstream(next.create_swapchain, session, info, swapchain) };
             }
+            log_refusals(&refusals, format, result);
             // Every swapchain is tracked (with its session's dispatch); only processable ones are touched.
             if result.into_raw() >= 0 {
                 let mut info = SwapchainInfo::new(app_info, pixel, usage_granted, in_place);
@@ -133,6 +137,21 @@ pub(crate) unsafe extern "system" fn create_swapchain(
             Ok(result)
         },
     )
+}
+
+/// Logs each usage the runtime refused, once per kind and format, where the create finally
+/// succeeded; where even the app's own request failed, one line saying so instead: the
+/// failure was the runtime's (out of memory, say), not a refusal of the layer's usage.
+fn log_refusals(refusals: &[(String, String)], format: i64, result: xr::Result) {
+    if result.into_raw() >= 0 {
+        for (key, line) in refusals {
+            log::once(key, line);
+        }
+    } else if !refusals.is_empty() {
+        log::once(&format!("create-failed-{format}-{result:?}"), &format!(
+            "the runtime failed xrCreateSwapchain of format {format} ({result:?}) with the app's own usage as well: the app gets that error"
+        ));
+    }
 }
 
 /// Starts building the shaders that views of this swapchain will need (Vulkan: on the

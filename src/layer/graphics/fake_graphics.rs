@@ -109,8 +109,9 @@ impl SessionGraphics for FakeGraphics {
         format!("fake format {api_format}")
     }
 
+    /// As Vulkan's copy path: usage the app's create info may lack, so the layer asks for it.
     fn needed_usage(&self) -> xr::SwapchainUsageFlags {
-        xr::SwapchainUsageFlags::EMPTY
+        xr::SwapchainUsageFlags::TRANSFER_SRC | xr::SwapchainUsageFlags::TRANSFER_DST
     }
 
     fn in_place_usage(
