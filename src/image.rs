@@ -94,7 +94,9 @@ impl RgbaImage {
     pub fn decode_jpeg(data: &[u8]) -> Result<RgbaImage, String> {
         let (width, height, pixels) = jpeg_rgba(data)?;
         let pixels = pixels
-            .chunks_exact(4)
+            .as_chunks::<4>()
+            .0
+            .iter()
             .map(|p| [p[0], p[1], p[2], 255])
             .collect();
         Ok(RgbaImage {
@@ -204,7 +206,9 @@ fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, Strin
     let mut shrink = Shrink::new((width, height), most, false, Vec::new());
     if shrink.size() == (width, height) {
         let pixels = pixels
-            .chunks_exact(4)
+            .as_chunks::<4>()
+            .0
+            .iter()
             .map(|p| [p[0], p[1], p[2], 255])
             .collect();
         return Ok(RgbaImage {
@@ -217,7 +221,12 @@ fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, Strin
     let mut row = Vec::with_capacity(width as usize);
     for line in pixels.chunks_exact(4 * width as usize) {
         row.clear();
-        row.extend(line.chunks_exact(4).map(|p| [p[0], p[1], p[2], 255]));
+        row.extend(
+            line.as_chunks::<4>()
+                .0
+                .iter()
+                .map(|p| [p[0], p[1], p[2], 255]),
+        );
         shrink.row(&row);
     }
     Ok(shrink.finish())
@@ -375,7 +384,7 @@ impl Shrink {
     fn emit(&mut self) {
         // Each output pixel covers from.0 x from.1 units of unit weight: the sums' divisor.
         let area = self.from.0 as f32 * self.from.1 as f32;
-        for px in self.sums[0].chunks_exact(4) {
+        for px in self.sums[0].as_chunks::<4>().0 {
             let code = |v: f32| {
                 crate::colour::quantize(crate::colour::srgb_encode(
                     f64::from(v / area).clamp(0.0, 1.0),
@@ -403,19 +412,25 @@ impl Shrink {
 fn rgba_pixels(color: png::ColorType, data: &[u8]) -> Result<(Vec<[u8; 4]>, bool), String> {
     Ok(match color {
         png::ColorType::Rgba => (
-            data.chunks_exact(4)
+            data.as_chunks::<4>()
+                .0
+                .iter()
                 .map(|p| [p[0], p[1], p[2], p[3]])
                 .collect(),
             true,
         ),
         png::ColorType::Rgb => (
-            data.chunks_exact(3)
+            data.as_chunks::<3>()
+                .0
+                .iter()
                 .map(|p| [p[0], p[1], p[2], 255])
                 .collect(),
             false,
         ),
         png::ColorType::GrayscaleAlpha => (
-            data.chunks_exact(2)
+            data.as_chunks::<2>()
+                .0
+                .iter()
                 .map(|p| [p[0], p[0], p[0], p[1]])
                 .collect(),
             true,

@@ -265,7 +265,9 @@ fn max_difference(a: &RgbaImage, b: &RgbaImage) -> Result<u8, String> {
 fn read_rgba(path: &Path) -> RgbaImage {
     let bytes = std::fs::read(path).unwrap();
     let pixels = bytes
-        .chunks_exact(4)
+        .as_chunks::<4>()
+        .0
+        .iter()
         .map(|p| [p[0], p[1], p[2], p[3]])
         .collect();
     RgbaImage {

@@ -358,7 +358,9 @@ fn encode(format: PixelFormat, p: [u8; 4]) -> Vec<u32> {
         pixel_codec::encode(format, [linear(p[0]), linear(p[1]), linear(p[2]), a])
     };
     bytes
-        .chunks_exact(4)
+        .as_chunks::<4>()
+        .0
+        .iter()
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
 }

@@ -89,7 +89,9 @@ fn raw(dir: &Path, frame: usize, view: usize, kind: &str) -> Vec<[u8; 4]> {
     let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     assert_eq!(bytes.len(), WIDTH * HEIGHT * 4, "{}", path.display());
     bytes
-        .chunks_exact(4)
+        .as_chunks::<4>()
+        .0
+        .iter()
         .map(|p| [p[0], p[1], p[2], p[3]])
         .collect()
 }

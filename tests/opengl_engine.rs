@@ -90,7 +90,9 @@ fn encode(format: GlFormat, p: [u8; 4]) -> Vec<u32> {
         pixel_codec::encode(format.pixel, [linear(p[0]), linear(p[1]), linear(p[2]), a])
     };
     bytes
-        .chunks_exact(4)
+        .as_chunks::<4>()
+        .0
+        .iter()
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
 }

@@ -171,7 +171,7 @@ fn nv12_row(luma: &[u8], chroma: &[u8], out: &mut [[u8; 4]]) {
 }
 
 fn packed_row(row: &[u8], out: &mut [[u8; 4]], [r, g, b]: [usize; 3]) {
-    for (px, src) in out.iter_mut().zip(row.chunks_exact(3)) {
+    for (px, src) in out.iter_mut().zip(row.as_chunks::<3>().0) {
         *px = [src[r], src[g], src[b], 255];
     }
 }

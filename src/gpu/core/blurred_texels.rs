@@ -126,10 +126,10 @@ impl BlurredTexels {
         let mut packed = vec![0u64; w];
         for (y, dst) in bytes.chunks_exact_mut(w * TEXEL_BYTES).enumerate() {
             vertical(&rows, (w, h), y, &blur, &mut out);
-            for (q, c) in packed.iter_mut().zip(out.chunks_exact(3)) {
+            for (q, c) in packed.iter_mut().zip(out.as_chunks::<3>().0) {
                 *q = pack(c);
             }
-            for (x, entry) in dst.chunks_exact_mut(TEXEL_BYTES).enumerate() {
+            for (x, entry) in dst.as_chunks_mut::<TEXEL_BYTES>().0.iter_mut().enumerate() {
                 entry[..8].copy_from_slice(&packed[x].to_le_bytes());
                 entry[8..].copy_from_slice(&packed[(x + 1).min(w - 1)].to_le_bytes());
             }
@@ -208,7 +208,7 @@ fn horizontal(camera: &RgbaImage, blur: &BlurTaps, out: &mut Vec<f32>) {
         .chunks_exact(w)
         .zip(out.chunks_exact_mut(3 * w))
     {
-        for (i, p) in padded.chunks_exact_mut(3).enumerate() {
+        for (i, p) in padded.as_chunks_mut::<3>().0.iter_mut().enumerate() {
             let c = row[i.saturating_sub(half).min(w - 1)];
             p.copy_from_slice(&[lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]]);
         }

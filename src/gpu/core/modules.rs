@@ -19,7 +19,9 @@ impl ShaderModule {
     /// The SPIR-V as words (build.rs wrote them little-endian).
     pub fn words(&self) -> Vec<u32> {
         self.bytes
-            .chunks_exact(4)
+            .as_chunks::<4>()
+            .0
+            .iter()
             .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect()
     }

@@ -397,7 +397,9 @@ impl GlOffline {
         self.delete_texture(texture);
         let out = flip(&result?);
         Ok(out
-            .chunks_exact(4)
+            .as_chunks::<4>()
+            .0
+            .iter()
             .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect())
     }

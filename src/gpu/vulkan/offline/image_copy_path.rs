@@ -170,7 +170,9 @@ impl VkOffline {
                     GpuError::Unsupported("staging buffer is not host-visible".into())
                 })?;
                 Ok(mapped
-                    .chunks_exact(4)
+                    .as_chunks::<4>()
+                    .0
+                    .iter()
                     .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
                     .collect())
             });

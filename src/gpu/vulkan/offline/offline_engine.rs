@@ -234,7 +234,9 @@ impl VkOffline {
                 .mapped()
                 .ok_or_else(|| GpuError::Unsupported("result buffer is not host-visible".into()))?;
             Ok(bytes[..words * 4]
-                .chunks_exact(4)
+                .as_chunks::<4>()
+                .0
+                .iter()
                 .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
                 .collect())
         });
@@ -273,7 +275,7 @@ impl VkOffline {
             let bytes = bg.blurred.mapped().ok_or_else(|| {
                 GpuError::Unsupported("background buffers are not host-visible".into())
             })?;
-            let entries = bytes[..n * 16].chunks_exact(16);
+            let entries = bytes[..n * 16].as_chunks::<16>().0.iter();
             let (linear, right) = entries
                 .map(|e| (unpack_linear(&e[..8]), unpack_linear(&e[8..])))
                 .unzip();

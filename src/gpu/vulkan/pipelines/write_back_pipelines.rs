@@ -34,7 +34,7 @@ impl WriteBackConstants {
             self.pad,
         ];
         let mut b = [0u8; 16];
-        for (chunk, w) in b.chunks_exact_mut(4).zip(words) {
+        for (chunk, w) in b.as_chunks_mut::<4>().0.iter_mut().zip(words) {
             chunk.copy_from_slice(&w.to_le_bytes());
         }
         b
@@ -94,7 +94,9 @@ fn fragment(code: u32) -> Option<&'static [u8]> {
 
 fn words(bytes: &[u8]) -> Vec<u32> {
     bytes
-        .chunks_exact(4)
+        .as_chunks::<4>()
+        .0
+        .iter()
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
 }
