@@ -93,10 +93,7 @@ impl RgbaImage {
     /// Decodes a baseline or progressive JPEG (colour or grey) to RGB with alpha 255.
     pub fn decode_jpeg(data: &[u8]) -> Result<RgbaImage, String> {
         let (width, height, pixels) = jpeg_rgba(data)?;
-        let pixels = pixels
-            .as_chunks::<4>()
-            .0
-            .iter()
+        let pixels = groups::<4>(&pixels)
             .map(|p| [p[0], p[1], p[2], 255])
             .collect();
         Ok(RgbaImage {
@@ -205,10 +202,7 @@ fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, Strin
     let (width, height, pixels) = jpeg_rgba(bytes)?;
     let mut shrink = Shrink::new((width, height), most, false, Vec::new());
     if shrink.size() == (width, height) {
-        let pixels = pixels
-            .as_chunks::<4>()
-            .0
-            .iter()
+        let pixels = groups::<4>(&pixels)
             .map(|p| [p[0], p[1], p[2], 255])
             .collect();
         return Ok(RgbaImage {
@@ -221,12 +215,7 @@ fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, Strin
     let mut row = Vec::with_capacity(width as usize);
     for line in pixels.chunks_exact(4 * width as usize) {
         row.clear();
-        row.extend(
-            line.as_chunks::<4>()
-                .0
-                .iter()
-                .map(|p| [p[0], p[1], p[2], 255]),
-        );
+        row.extend(groups::<4>(line).map(|p| [p[0], p[1], p[2], 255]));
         shrink.row(&row);
     }
     Ok(shrink.finish())
@@ -409,28 +398,20 @@ impl Shrink {
 }
 
 /// A decoded PNG's samples (after EXPAND and STRIP_16) as RGBA, and whether it had alpha.
+/// The whole N-byte pixels of `data`, in order (a trailing part of a pixel is left out).
+fn groups<const N: usize>(data: &[u8]) -> std::slice::Iter<'_, [u8; N]> {
+    data.as_chunks::<N>().0.iter()
+}
+
 fn rgba_pixels(color: png::ColorType, data: &[u8]) -> Result<(Vec<[u8; 4]>, bool), String> {
     Ok(match color {
-        png::ColorType::Rgba => (
-            data.as_chunks::<4>()
-                .0
-                .iter()
-                .map(|p| [p[0], p[1], p[2], p[3]])
-                .collect(),
-            true,
-        ),
+        png::ColorType::Rgba => (data.as_chunks::<4>().0.to_vec(), true),
         png::ColorType::Rgb => (
-            data.as_chunks::<3>()
-                .0
-                .iter()
-                .map(|p| [p[0], p[1], p[2], 255])
-                .collect(),
+            groups::<3>(data).map(|p| [p[0], p[1], p[2], 255]).collect(),
             false,
         ),
         png::ColorType::GrayscaleAlpha => (
-            data.as_chunks::<2>()
-                .0
-                .iter()
+            groups::<2>(data)
                 .map(|p| [p[0], p[0], p[0], p[1]])
                 .collect(),
             true,
