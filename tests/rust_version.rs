@@ -2,6 +2,7 @@
 //! requirements) is at least what every locked dependency needs, build and test dependencies
 //! included: with an older toolchain cargo refuses the build with the dependency's name, not
 //! ours. `cargo metadata` reads each package's own `rust-version` from the lock file's versions.
+//! The toolchain rustup picks for the checks (`rust-toolchain.toml`) meets that too.
 
 use std::process::Command;
 
@@ -82,6 +83,52 @@ fn the_declared_rust_covers_every_locked_dependency_and_the_readme_says_it() {
     assert!(
         readme.contains(&format!("**Rust {ours}** or newer")),
         "README's requirements should name **Rust {ours}** or newer"
+    );
+}
+
+/// `rust-toolchain.toml`'s `[toolchain]` table.
+fn pinned_toolchain() -> toml_edit::Table {
+    let text = std::fs::read_to_string(format!("{ROOT}/rust-toolchain.toml")).unwrap();
+    let doc: toml_edit::DocumentMut = text.parse().expect("rust-toolchain.toml parses");
+    doc["toolchain"]
+        .as_table()
+        .expect("a [toolchain] table")
+        .clone()
+}
+
+#[test]
+fn the_pinned_toolchain_meets_rust_version_and_carries_the_checks() {
+    let toolchain = pinned_toolchain();
+    let channel = toolchain["channel"].as_str().expect("channel is a string");
+    // A release number (1.95.0), not `stable`: a moving channel brings new lints unannounced.
+    assert_eq!(
+        channel.split('.').count(),
+        3,
+        "channel {channel:?} is not a release"
+    );
+    let cargo_toml = std::fs::read_to_string(format!("{ROOT}/Cargo.toml")).unwrap();
+    let doc: toml_edit::DocumentMut = cargo_toml.parse().unwrap();
+    let declared = doc["package"]["rust-version"].as_str().unwrap();
+    assert!(
+        version(channel) >= version(declared),
+        "rust-toolchain.toml's {channel} is older than rust-version {declared}"
+    );
+    let components: Vec<&str> = toolchain["components"]
+        .as_array()
+        .expect("components listed")
+        .iter()
+        .filter_map(|c| c.as_str())
+        .collect();
+    for needed in ["rustfmt", "clippy"] {
+        assert!(
+            components.contains(&needed),
+            "scripts/test runs {needed}: {components:?}"
+        );
+    }
+    let readme = std::fs::read_to_string(format!("{ROOT}/README.md")).unwrap();
+    assert!(
+        readme.contains(&format!("Rust {channel}")),
+        "README's requirements should name the pinned Rust {channel}"
     );
 }
 
