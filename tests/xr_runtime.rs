@@ -301,6 +301,20 @@ fn sandbox_returns_the_command_status_and_passes_the_environment() {
     assert_eq!(run.stdout.trim(), "seen inside");
 }
 
+/// Runs get a fresh machine's soft limit of open files (1024), whatever the host's: a runtime
+/// or layer that needs more fails here too, not only on a newcomer's machine.
+#[test]
+fn sandbox_runs_with_a_fresh_machines_open_file_limit() {
+    let Some(sandbox) = sandbox() else { return };
+    let run = sandbox.run(&["sh", "-c", "ulimit -Sn"], &[]);
+    run.assert_success();
+    let limit: u64 = run.stdout.trim().parse().expect("a number");
+    assert!(
+        limit <= 1024,
+        "soft open-file limit {limit} inside the sandbox"
+    );
+}
+
 /// The contrastxr layer is installed as an implicit layer, as for a user: the loader finds the
 /// manifest (and leaves the layer off while CONTRASTXR is unset).
 #[test]

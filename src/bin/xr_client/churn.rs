@@ -7,6 +7,7 @@
 //! swapchain calls use the app's context, which must not be current on two threads at once.
 
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::time::{Duration, Instant};
 
 use ash::vk;
 use openxr as xr;
@@ -14,6 +15,13 @@ use openxr as xr;
 /// Swapchains alive at once: each lives while the next few are made, so a layer's xrEndFrame
 /// finds some of them tracked when one is destroyed.
 const ALIVE: usize = 4;
+
+/// The least time between two of the churn thread's swapchains. Monado destroys a swapchain on
+/// its compositor thread, once a frame: unpaced, thousands a second pile up between two of its
+/// frames, each image's memory an open file on lavapipe, until the service reaches the usual
+/// limit of 1024 open files and the next create fails (VK_ERROR_OUT_OF_DEVICE_MEMORY). Paced,
+/// a destroy still lands every few milliseconds, inside every xrEndFrame.
+const STEP_MIN: Duration = Duration::from_millis(2);
 
 /// Sizes the format churn cycles through: the smallest, and a full-HD eye (what the
 /// conformance suite creates).
@@ -119,8 +127,8 @@ where
     }
 }
 
-/// Creates, enumerates and destroys the plan's swapchains in turn until `stop`; counts them in
-/// `churned`. Returns the first error, if any.
+/// Creates, enumerates and destroys the plan's swapchains in turn, at most one per STEP_MIN,
+/// until `stop`; counts them in `churned`. Returns the first error, if any.
 pub fn churn<G: xr::Graphics>(
     session: &xr::Session<G>,
     plan: &[Churn],
@@ -135,9 +143,11 @@ where
         if stop.load(Ordering::Relaxed) {
             break;
         }
+        let started = Instant::now();
         if let Err(e) = churner.step(session, c, churned) {
             return Some(e);
         }
+        std::thread::sleep(STEP_MIN.saturating_sub(started.elapsed()));
     }
     None
 }
