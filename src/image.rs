@@ -93,9 +93,7 @@ impl RgbaImage {
     /// Decodes a baseline or progressive JPEG (colour or grey) to RGB with alpha 255.
     pub fn decode_jpeg(data: &[u8]) -> Result<RgbaImage, String> {
         let (width, height, pixels) = jpeg_rgba(data)?;
-        let pixels = groups::<4>(&pixels)
-            .map(|p| [p[0], p[1], p[2], 255])
-            .collect();
+        let pixels = opaque(&pixels).collect();
         Ok(RgbaImage {
             width,
             height,
@@ -202,9 +200,7 @@ fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, Strin
     let (width, height, pixels) = jpeg_rgba(bytes)?;
     let mut shrink = Shrink::new((width, height), most, false, Vec::new());
     if shrink.size() == (width, height) {
-        let pixels = groups::<4>(&pixels)
-            .map(|p| [p[0], p[1], p[2], 255])
-            .collect();
+        let pixels = opaque(&pixels).collect();
         return Ok(RgbaImage {
             width,
             height,
@@ -215,7 +211,7 @@ fn decode_jpeg_within(bytes: &[u8], most: (u32, u32)) -> Result<RgbaImage, Strin
     let mut row = Vec::with_capacity(width as usize);
     for line in pixels.chunks_exact(4 * width as usize) {
         row.clear();
-        row.extend(groups::<4>(line).map(|p| [p[0], p[1], p[2], 255]));
+        row.extend(opaque(line));
         shrink.row(&row);
     }
     Ok(shrink.finish())
@@ -397,12 +393,17 @@ impl Shrink {
     }
 }
 
-/// A decoded PNG's samples (after EXPAND and STRIP_16) as RGBA, and whether it had alpha.
 /// The whole N-byte pixels of `data`, in order (a trailing part of a pixel is left out).
 fn groups<const N: usize>(data: &[u8]) -> std::slice::Iter<'_, [u8; N]> {
     data.as_chunks::<N>().0.iter()
 }
 
+/// `jpeg_rgba`'s samples as pixels with alpha 255 (JPEG has no alpha).
+fn opaque(samples: &[u8]) -> impl Iterator<Item = [u8; 4]> + '_ {
+    groups::<4>(samples).map(|p| [p[0], p[1], p[2], 255])
+}
+
+/// A decoded PNG's samples (after EXPAND and STRIP_16) as RGBA, and whether it had alpha.
 fn rgba_pixels(color: png::ColorType, data: &[u8]) -> Result<(Vec<[u8; 4]>, bool), String> {
     Ok(match color {
         png::ColorType::Rgba => (data.as_chunks::<4>().0.to_vec(), true),
