@@ -8,6 +8,11 @@ use std::process::Command;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
+/// A file of the checkout.
+fn read(name: &str) -> String {
+    std::fs::read_to_string(format!("{ROOT}/{name}")).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
 /// `1.88` or `1.88.0` as (major, minor): patch releases never raise a crate's needs.
 fn version(text: &str) -> (u32, u32) {
     let mut parts = text.split('.').map(|p| p.parse::<u32>().unwrap());
@@ -79,7 +84,7 @@ fn the_declared_rust_covers_every_locked_dependency_and_the_readme_says_it() {
         "the locked build has only {} packages: metadata misread",
         packages.len()
     );
-    let readme = std::fs::read_to_string(format!("{ROOT}/README.md")).unwrap();
+    let readme = read("README.md");
     assert!(
         readme.contains(&format!("**Rust {ours}** or newer")),
         "README's requirements should name **Rust {ours}** or newer"
@@ -88,7 +93,7 @@ fn the_declared_rust_covers_every_locked_dependency_and_the_readme_says_it() {
 
 /// `rust-toolchain.toml`'s `[toolchain]` table.
 fn pinned_toolchain() -> toml_edit::Table {
-    let text = std::fs::read_to_string(format!("{ROOT}/rust-toolchain.toml")).unwrap();
+    let text = read("rust-toolchain.toml");
     let doc: toml_edit::DocumentMut = text.parse().expect("rust-toolchain.toml parses");
     doc["toolchain"]
         .as_table()
@@ -106,7 +111,7 @@ fn the_pinned_toolchain_meets_rust_version_and_carries_the_checks() {
         3,
         "channel {channel:?} is not a release"
     );
-    let cargo_toml = std::fs::read_to_string(format!("{ROOT}/Cargo.toml")).unwrap();
+    let cargo_toml = read("Cargo.toml");
     let doc: toml_edit::DocumentMut = cargo_toml.parse().unwrap();
     let declared = doc["package"]["rust-version"].as_str().unwrap();
     assert!(
@@ -125,7 +130,7 @@ fn the_pinned_toolchain_meets_rust_version_and_carries_the_checks() {
             "scripts/test runs {needed}: {components:?}"
         );
     }
-    let readme = std::fs::read_to_string(format!("{ROOT}/README.md")).unwrap();
+    let readme = read("README.md");
     assert!(
         readme.contains(&format!("Rust {channel}")),
         "README's requirements should name the pinned Rust {channel}"
