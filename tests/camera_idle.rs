@@ -75,7 +75,7 @@ fn a_slow_camera_closes_after_enhancing_stops_and_no_call_waits_for_it() {
         "240",
     ];
     let (run, switched) = std::thread::scope(|s| {
-        let app = s.spawn(|| sandbox.run_for(&cmd, &env, 240));
+        let app = s.spawn(|| sandbox.run(&cmd, &env));
         // Enhancing stops while the camera is still opening (it takes 3 s to open).
         let deadline = Instant::now() + Duration::from_secs(120);
         while !std::fs::read_to_string(&log).is_ok_and(|t| t.contains("opening")) {

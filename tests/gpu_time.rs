@@ -67,8 +67,8 @@ fn check(graphics: &str) {
         ("CONTRASTXR_CAPTURE_SKIP", "30"),
     ];
     let run = match graphics {
-        "opengl" => sandbox.run_x11_for(&cmd, &env, 240),
-        _ => sandbox.run_for(&cmd, &env, 240),
+        "opengl" => sandbox.run_x11(&cmd, &env),
+        _ => sandbox.run(&cmd, &env),
     };
     run.assert_success();
     let line = session_line(&run);

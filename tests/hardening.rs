@@ -12,7 +12,7 @@ mod common;
 
 use common::{
     layer_lines, sandbox, scratch_dir, session_memory, wait_for, ApiDump, SandboxRun, Validation,
-    CLI, SYNC_VALIDATION, XR_CLIENT,
+    CLI, RUN_TIMEOUT_S, SYNC_VALIDATION, XR_CLIENT,
 };
 use contrastxr::config::{self, Env, Source, KEYS};
 use contrastxr::image::RgbaImage;
@@ -86,7 +86,7 @@ fn client(tag: &str, config: &Path, env: &[(&str, &str)], args: &[&str]) -> Opti
         .find(|w| w[0] == "--frames")
         .and_then(|w| w[1].parse().ok())
         .unwrap_or(60);
-    let run = sandbox.run_for(&cmd, &all, 120 + frames / 5);
+    let run = sandbox.run_for(&cmd, &all, RUN_TIMEOUT_S + frames / 5);
     validation.assert_clean();
     let report = run.client_report();
     let lines = layer_lines(&run);
@@ -516,7 +516,7 @@ fn an_unwritable_log_file_is_said_once_and_never_blocks() {
             "--frames",
             "5",
         ];
-        let run = sandbox.run_for(&[&cmd[..], &["--size", SIZE]].concat(), &env, 60);
+        let run = sandbox.run(&[&cmd[..], &["--size", SIZE]].concat(), &env);
         run.assert_success();
         let lines = layer_lines(&run);
         let said: Vec<_> = lines.iter().filter(|l| l.contains("log file")).collect();

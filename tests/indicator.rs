@@ -35,7 +35,7 @@ fn run_opengl(tag: &str, extra: &[(&str, &str)]) -> Option<PathBuf> {
     env.extend_from_slice(extra);
     let cmd = client_cmd(&frames, true);
     let cmd: Vec<&str> = cmd.iter().map(String::as_str).collect();
-    sandbox.run_x11_for(&cmd, &env, 300).assert_success();
+    sandbox.run_x11(&cmd, &env).assert_success();
     Some(dir)
 }
 

@@ -230,7 +230,7 @@ fn run(name: &str, compensation: bool) -> Option<Vec<Seen>> {
         ("CONTRASTXR_CAPTURE_FRAMES", "60"),
     ];
     let cmd = [XR_CLIENT, "--json", "--frames", "100", "--size", "160x120"];
-    let out = sandbox.run_for(&cmd, &env, 240);
+    let out = sandbox.run(&cmd, &env);
     out.assert_success();
     let lines = common::layer_lines(&out);
     let said = |text: &str| lines.iter().any(|l| l.contains(text));
@@ -337,7 +337,7 @@ fn the_layers_clock_extension_stays_hidden_from_the_app() {
             ("CONTRASTXR_FORCE", "1"),
             ("CONTRASTXR_BACKGROUND", "color:#808080"),
         ];
-        let run = sandbox.run_for(&cmd, &env, 120);
+        let run = sandbox.run(&cmd, &env);
         run.assert_success();
         let report = run.client_report();
         seen.push((
@@ -445,7 +445,7 @@ fn a_still_image_stays_head_fixed_with_compensation_on() {
     ];
     let count = frames.to_string();
     let cmd = [XR_CLIENT, "--json", "--frames", &count, "--size", "64x48"];
-    let out = sandbox.run_for(&cmd, &env, 240);
+    let out = sandbox.run(&cmd, &env);
     out.assert_success();
     let lines = common::layer_lines(&out);
     let logged: Vec<Vec<Vec<f64>>> = (0..2)

@@ -9,7 +9,7 @@ mod common;
 
 use common::capture_check::{capture_dir, captures, check_view, sample};
 use common::pass_through::{assert_one_pass_through_line, assert_one_retry_line, assert_untouched};
-use common::{gl_client, layer_lines, sandbox, ApiDump, SandboxRun};
+use common::{gl_client, layer_lines, sandbox, ApiDump, SandboxRun, RUN_TIMEOUT_S};
 use std::path::Path;
 
 /// The layer's variables for an enhancing run with two frames captured into `dir` (no
@@ -48,7 +48,7 @@ fn hello_xr_opengl(tag: &str, env: &[(&str, &str)], stdin: &str) -> Option<(Sand
     all.push(("XR_ENABLE_API_LAYERS", ApiDump::LAYER));
     all.extend_from_slice(env);
     let script = format!("{stdin} | hello_xr -g OpenGL");
-    let run = sandbox.run_x11_for(&["sh", "-c", &script], &all, 120);
+    let run = sandbox.run_x11(&["sh", "-c", &script], &all);
     Some((run, dump))
 }
 
@@ -105,7 +105,7 @@ fn hello_xr_with_opengl_is_enhanced() {
 /// The project's client with an OpenGL session (one array swapchain) of 12 frames in
 /// `format`, through the layer with `env`.
 fn client_opengl(format: &str, env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
-    gl_client::client_opengl(format, 12, env, extra, 120)
+    gl_client::client_opengl(format, 12, env, extra, RUN_TIMEOUT_S)
 }
 
 /// The colour formats Monado offers OpenGL apps (no GL_RGB10_A2), by the client's names.
@@ -353,7 +353,9 @@ fn a_failed_build_leaves_the_programs_to_the_frame_calls_one_at_a_time() {
     ] {
         env.push((k.into(), v.into()));
     }
-    let Some(run) = gl_client::client_opengl("R8G8B8A8_UNORM", 60, &as_refs(&env), &[], 180) else {
+    let Some(run) =
+        gl_client::client_opengl("R8G8B8A8_UNORM", 60, &as_refs(&env), &[], RUN_TIMEOUT_S)
+    else {
         return;
     };
     run.assert_success();
@@ -392,7 +394,8 @@ fn an_opengl_app_that_exits_during_the_build_waits_for_it_first() {
         ("XDG_CACHE_HOME", &*cache.to_string_lossy()),
     ];
     let extra = ["--exit-marker"];
-    let Some(run) = gl_client::client_opengl("R8G8B8A8_UNORM", 4, &env, &extra, 120) else {
+    let Some(run) = gl_client::client_opengl("R8G8B8A8_UNORM", 4, &env, &extra, RUN_TIMEOUT_S)
+    else {
         return;
     };
     run.assert_success();

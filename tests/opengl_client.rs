@@ -14,7 +14,7 @@ use common::capture_check::{
 };
 use common::gl_client::{client_opengl, GL_VIEW};
 use common::semantics::{self, assert_same_answers, enhanced_frames, Case};
-use common::{layer_lines, sandbox, scratch_dir, session_memory, XR_CLIENT};
+use common::{layer_lines, sandbox, scratch_dir, session_memory, RUN_TIMEOUT_S, XR_CLIENT};
 use std::path::Path;
 
 /// Each view's size in these runs.
@@ -64,7 +64,7 @@ fn enhanced_run(
     extra: &[&str],
     views: usize,
 ) -> Option<Vec<Captured>> {
-    let run = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(env), extra, 120)?;
+    let run = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(env), extra, RUN_TIMEOUT_S)?;
     run.assert_success();
     let lines = layer_lines(&run);
     let processing = format!("processing frames ({views} views per frame)");
@@ -125,7 +125,7 @@ fn opengl_layouts_are_enhanced_at_their_own_rects() {
 fn without_the_layer_side_by_side_and_quad_images_are_untouched() {
     let env = [("CONTRASTXR", "0")];
     let extra = ["--layout", "side-by-side", "--quad", "--check-untouched"];
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &env, &extra, 120) else {
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &env, &extra, RUN_TIMEOUT_S) else {
         return;
     };
     run.assert_success();
@@ -204,11 +204,11 @@ fn check_case(tag: &str, case: Case) {
         if let Some(format) = format {
             cmd.extend_from_slice(&["--format", format]);
         }
-        let off = sandbox.run_x11_for(&cmd, &[("CONTRASTXR", "0")], 120);
+        let off = sandbox.run_x11(&cmd, &[("CONTRASTXR", "0")]);
         let dir = scratch_dir(&format!("semantics-{tag}"));
         let mut env = layer_env(&dir, "color:#e0d020", 1000);
         env.retain(|(k, _)| k != "CONTRASTXR_CAPTURE_SKIP");
-        let on = sandbox.run_x11_for(&cmd, &as_refs(&env), 120);
+        let on = sandbox.run_x11(&cmd, &as_refs(&env));
         let answers = assert_same_answers(&tag, case, &off, &on);
         assert_eq!(
             enhanced_frames(&dir),
@@ -256,7 +256,8 @@ fn opengl_swapchain_churn_keeps_enhancing() {
     let dir = scratch_dir("opengl-client-churn");
     let env = layer_env(&dir, "color:#e0d020", 2);
     let extra = ["--frames", "40", "--churn-formats"];
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(&env), &extra, 120) else {
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(&env), &extra, RUN_TIMEOUT_S)
+    else {
         return;
     };
     run.assert_success();
@@ -292,7 +293,7 @@ fn opengl_live_background_is_written_on_the_source_thread() {
     let dir = scratch_dir(tag);
     let video = video_dir(tag, 6);
     let env = layer_env(&dir, &format!("video:{}", video.display()), 12);
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", 24, &as_refs(&env), &[], 180) else {
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 24, &as_refs(&env), &[], RUN_TIMEOUT_S) else {
         return;
     };
     run.assert_success();
@@ -368,7 +369,8 @@ fn opengl_programs_for_a_changed_mode_are_built_off_the_apps_threads() {
         // At most 120 s at the runtime's 20 Hz; the run ends once a heatmap frame is captured.
         // On a loaded machine (CI beside two busy loops) each of the two builds, with empty
         // caches, took 11 s.
-        let run = s.spawn(|| client_opengl("R8G8B8A8_SRGB", 2400, &as_refs(&env), &extra, 240));
+        let run =
+            s.spawn(|| client_opengl("R8G8B8A8_SRGB", 2400, &as_refs(&env), &extra, RUN_TIMEOUT_S));
         let first = capture.join("frame-5-view-0.json");
         common::wait_for(&first, std::time::Duration::from_secs(120));
         let out = std::process::Command::new(common::CLI)

@@ -37,7 +37,7 @@ fn client_egl(env: &[(&str, &str)], extra: &[&str]) -> Option<SandboxRun> {
         "R8G8B8A8_SRGB",
     ];
     cmd.extend_from_slice(extra);
-    let run = sandbox.run_x11_for(&cmd, env, 120);
+    let run = sandbox.run_x11(&cmd, env);
     run.assert_success();
     assert_eq!(
         run.client_report()["gl_binding"],

@@ -49,7 +49,7 @@ fn client_with(
     if let Some(items) = disturb {
         cmd.extend(["--disturb-gl-state", items]);
     }
-    Some(sandbox.run_x11_for(&cmd, &env, 120))
+    Some(sandbox.run_x11(&cmd, &env))
 }
 
 /// Monado's OpenGL (Xlib) client compositor saves the app's current drawables swapped (the draw
@@ -308,7 +308,7 @@ fn the_apps_x_errors_reach_its_handler_while_the_layer_switches_contexts() {
         "--format",
         "R8G8B8A8_SRGB",
     ];
-    let run = sandbox.run_x11_for(&cmd, &env, 120);
+    let run = sandbox.run_x11(&cmd, &env);
     run.assert_success();
     let report = run.client_report();
     let what = run.describe();

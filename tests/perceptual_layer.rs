@@ -9,7 +9,7 @@ mod common;
 
 use common::capture_check::{capture_dir, captures, check_view, sample};
 use common::gl_client::client_opengl;
-use common::{layer_lines, sandbox, XR_CLIENT};
+use common::{layer_lines, sandbox, RUN_TIMEOUT_S, XR_CLIENT};
 use std::path::Path;
 
 /// The layer's variables: the perceptual method outdoors, every pixel spending the paper's
@@ -97,7 +97,7 @@ fn vulkan_sessions_get_the_perceptual_method_within_the_reference() {
 fn opengl_sessions_get_the_perceptual_method_within_the_reference() {
     let dir = capture_dir("perceptual-opengl");
     let env = layer_env(&dir);
-    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(&env), &[], 120) else {
+    let Some(run) = client_opengl("R8G8B8A8_SRGB", 12, &as_refs(&env), &[], RUN_TIMEOUT_S) else {
         return;
     };
     run.assert_success();

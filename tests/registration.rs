@@ -27,7 +27,7 @@ fn run_client(config: &Path, env: &[(&str, &str)], frames: &str) -> Option<Vec<S
     ];
     all.extend(env);
     let cmd = [XR_CLIENT, "--json", "--frames", frames, "--size", "64x48"];
-    let run = sandbox.run_for(&cmd, &all, 180);
+    let run = sandbox.run(&cmd, &all);
     run.assert_success();
     Some(layer_lines(&run))
 }

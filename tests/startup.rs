@@ -57,7 +57,7 @@ fn client(tag: &str, cache: &Path, pipelines: &str, args: &[&str]) -> Option<Run
     env.extend(validation.env());
     let mut cmd = vec![XR_CLIENT, "--validation", "--json", "--size", "64x48"];
     cmd.extend(args);
-    let run = sandbox.run_for(&cmd, &env, 240);
+    let run = sandbox.run(&cmd, &env);
     validation.assert_clean();
     let report = run.client_report();
     let lines = layer_lines(&run);
@@ -226,7 +226,7 @@ fn an_app_calling_vulkan_while_the_layer_builds_never_crashes() {
             ("CONTRASTXR_LOG", "debug"),
             ("XDG_CACHE_HOME", cache.as_str()),
         ];
-        let r = sandbox.run_for(&args, &env, 240);
+        let r = sandbox.run(&args, &env);
         r.assert_success();
         let lines = layer_lines(&r);
         let made: Vec<usize> = (0..lines.len())

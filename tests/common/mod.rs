@@ -25,8 +25,10 @@ use std::sync::OnceLock;
 
 pub const XR_CLIENT: &str = env!("CARGO_BIN_EXE_contrastxr-xr-client");
 const REQUIRE_VAR: &str = "CONTRASTXR_REQUIRE_SANDBOX";
-/// The longest one sandbox run may take; exit status 124 means it was stopped.
-const RUN_TIMEOUT_S: u32 = 300;
+/// The longest one sandbox run may take; exit status 124 means it was stopped. A guard against
+/// a hung app or runtime, not a timing check: on a loaded machine with a cold cache, the layer's
+/// OpenGL build alone (on a thread below the app's priority) may take its whole 60 s limit.
+pub const RUN_TIMEOUT_S: u64 = 300;
 
 pub struct Sandbox {
     script: PathBuf,
@@ -142,7 +144,7 @@ impl Sandbox {
     /// `env` is added to the environment of the script, which passes CONTRASTXR*, XR_*, VK_*,
     /// LP_*, RUST_*, MESA_* variables to the command. Stdin is empty.
     pub fn run(&self, cmd: &[&str], env: &[(&str, &str)]) -> SandboxRun {
-        self.run_for(cmd, env, u64::from(RUN_TIMEOUT_S))
+        self.run_for(cmd, env, RUN_TIMEOUT_S)
     }
 }
 
@@ -446,10 +448,15 @@ impl Sandbox {
     /// [`Sandbox::run`] where the command may change the root (`run --overlay`): its changes
     /// go to a layer that ends with the run.
     pub fn run_overlay(&self, cmd: &[&str], env: &[(&str, &str)]) -> SandboxRun {
-        self.run_with(&["--overlay"], cmd, env, u64::from(RUN_TIMEOUT_S))
+        self.run_with(&["--overlay"], cmd, env, RUN_TIMEOUT_S)
     }
 
-    /// [`Sandbox::run_for`] with an X server beside the service (`run --x11`), for OpenGL apps.
+    /// [`Sandbox::run`] with an X server beside the service (`run --x11`), for OpenGL apps.
+    pub fn run_x11(&self, cmd: &[&str], env: &[(&str, &str)]) -> SandboxRun {
+        self.run_with(&["--x11"], cmd, env, RUN_TIMEOUT_S)
+    }
+
+    /// [`Sandbox::run_x11`] with its own time limit in seconds.
     pub fn run_x11_for(&self, cmd: &[&str], env: &[(&str, &str)], timeout_s: u64) -> SandboxRun {
         self.run_with(&["--x11"], cmd, env, timeout_s)
     }
