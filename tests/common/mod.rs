@@ -27,7 +27,7 @@ pub const XR_CLIENT: &str = env!("CARGO_BIN_EXE_contrastxr-xr-client");
 const REQUIRE_VAR: &str = "CONTRASTXR_REQUIRE_SANDBOX";
 /// The longest one sandbox run may take; exit status 124 means it was stopped. A guard against
 /// a hung app or runtime, not a timing check: on a loaded machine with a cold cache, the layer's
-/// OpenGL build alone (on a thread below the app's priority) may take its whole 60 s limit.
+/// OpenGL build alone (on a thread below the app's priority) can take over a minute.
 pub const RUN_TIMEOUT_S: u64 = 300;
 
 pub struct Sandbox {

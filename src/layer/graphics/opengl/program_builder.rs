@@ -13,6 +13,7 @@
 //! first leaves the thread to end on its own, and the process's exit waits for it
 //! (gpu/core/process_exit.rs).
 
+use super::build_watch::BuildWatch;
 use crate::algorithm::params::Params;
 use crate::gpu::core::process_exit;
 use crate::gpu::opengl::device::caps::same_driver;
@@ -20,8 +21,8 @@ use crate::gpu::opengl::{GlOffline, ProgramBinaries};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// How long the layer waits for a build before it goes on without it.
-const LIMIT: Duration = Duration::from_secs(60);
+/// How long the build waits for its programs: the layer gives up on it before (build_watch.rs).
+const LIMIT: Duration = Duration::from_secs(600);
 
 /// The nice value added to a build thread: below the app's threads and its driver's.
 const BUILD_NICENESS: i32 = 10;
@@ -30,6 +31,7 @@ const BUILD_NICENESS: i32 = 10;
 pub struct ProgramBuilder {
     thread: Option<JoinHandle<Result<ProgramBinaries, String>>>,
     pub since: Instant,
+    watch: BuildWatch,
     pub shape: (u32, u32, Params),
     /// The programs it builds (the engine's ids), so that a shape needing the same ones does
     /// not start another build.
@@ -62,25 +64,28 @@ impl ProgramBuilder {
             .name("contrastxr-gl-build".into())
             .spawn(move || build(&driver, (internal_format, width, in_place), &wanted, ids))
             .map_err(|e| format!("no build thread: {e}"))?;
+        let since = Instant::now();
         Ok(ProgramBuilder {
             thread: Some(thread),
-            since: Instant::now(),
+            since,
+            watch: BuildWatch::new(since),
             shape: (internal_format, width, params.clone()),
             ids,
         })
     }
 
-    /// Whether the build ended, without waiting; one past LIMIT is left to end on its own.
+    /// Whether the build ended, without waiting; one the layer gives up on (build_watch.rs)
+    /// is left to end on its own.
     pub fn poll(&mut self) -> Built {
         let Some(thread) = self.thread.as_ref() else {
             return Built::Ended(Err("already ended".into()));
         };
         if !thread.is_finished() {
-            if self.since.elapsed() < LIMIT {
+            let Some(why) = self.watch.overdue(thread) else {
                 return Built::Running;
-            }
+            };
             self.thread = None;
-            return Built::Ended(Err(format!("it ran past {} s", LIMIT.as_secs())));
+            return Built::Ended(Err(why));
         }
         let thread = self.thread.take().expect("checked above");
         // The thread has ended: joining it does not wait.
