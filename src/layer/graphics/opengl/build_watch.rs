@@ -14,13 +14,14 @@ const QUIET_LIMIT: Duration = Duration::from_secs(60);
 /// The CPU time a build may use.
 const CPU_LIMIT: Duration = Duration::from_secs(60);
 
-/// How long the layer waits for a build in all, and for one whose CPU time cannot be read.
-const LIMIT: Duration = Duration::from_secs(600);
+/// How long the layer waits for a build in all (the build's own limit too), and for one whose
+/// CPU time cannot be read.
+pub const LIMIT: Duration = Duration::from_secs(600);
 const UNWATCHED_LIMIT: Duration = Duration::from_secs(60);
 
 /// A build's thread as the layer last saw it.
 pub struct BuildWatch {
-    since: Instant,
+    pub since: Instant,
     /// The thread's CPU time at its last increase, and when that was seen.
     cpu: Duration,
     busy_at: Instant,

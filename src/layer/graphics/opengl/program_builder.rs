@@ -13,7 +13,7 @@
 //! first leaves the thread to end on its own, and the process's exit waits for it
 //! (gpu/core/process_exit.rs).
 
-use super::build_watch::BuildWatch;
+use super::build_watch::{BuildWatch, LIMIT};
 use crate::algorithm::params::Params;
 use crate::gpu::core::process_exit;
 use crate::gpu::opengl::device::caps::same_driver;
@@ -21,16 +21,12 @@ use crate::gpu::opengl::{GlOffline, ProgramBinaries};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// How long the build waits for its programs: the layer gives up on it before (build_watch.rs).
-const LIMIT: Duration = Duration::from_secs(600);
-
 /// The nice value added to a build thread: below the app's threads and its driver's.
 const BUILD_NICENESS: i32 = 10;
 
 /// A build of the programs of one view shape.
 pub struct ProgramBuilder {
     thread: Option<JoinHandle<Result<ProgramBinaries, String>>>,
-    pub since: Instant,
     watch: BuildWatch,
     pub shape: (u32, u32, Params),
     /// The programs it builds (the engine's ids), so that a shape needing the same ones does
@@ -64,11 +60,9 @@ impl ProgramBuilder {
             .name("contrastxr-gl-build".into())
             .spawn(move || build(&driver, (internal_format, width, in_place), &wanted, ids))
             .map_err(|e| format!("no build thread: {e}"))?;
-        let since = Instant::now();
         Ok(ProgramBuilder {
             thread: Some(thread),
-            since,
-            watch: BuildWatch::new(since),
+            watch: BuildWatch::new(Instant::now()),
             shape: (internal_format, width, params.clone()),
             ids,
         })
@@ -90,7 +84,7 @@ impl ProgramBuilder {
         let thread = self.thread.take().expect("checked above");
         // The thread has ended: joining it does not wait.
         Built::Ended(match thread.join() {
-            Ok(Ok(binaries)) => Ok((self.since.elapsed(), binaries)),
+            Ok(Ok(binaries)) => Ok((self.watch.since.elapsed(), binaries)),
             Ok(Err(why)) => Err(why),
             Err(_) => Err("the build thread panicked".into()),
         })
