@@ -14,11 +14,13 @@
 //! goes on leaves the layer building nothing more (its frames pass through).
 
 use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex, MutexGuard, Once, OnceLock};
 use std::time::{Duration, Instant};
 
-/// The longest the process's exit waits for a build in progress (a compile on lavapipe takes
-/// up to a few seconds on a loaded machine).
+/// The longest the process's exit waits for the builds in progress. Each stops at its next
+/// step once the exit began (a Vulkan pipeline, an OpenGL program, the programs' first run), so
+/// the wait is for one step: up to a few seconds on lavapipe or llvmpipe, more under heavy load.
 const EXIT_WAIT: Duration = Duration::from_secs(20);
 
 #[derive(Default)]
@@ -118,14 +120,18 @@ pub fn exiting() -> bool {
 }
 
 /// Stops new work and waits for the work in progress; says how long when it waited (the app's
-/// exit took that much longer). Runs once per exit (again: nothing left to wait for).
+/// exit took that much longer). Runs at most twice per exit (the main thread's destructor, then
+/// the handler), against one deadline from the first run and with one line: a second run finds
+/// nothing left, or the deadline past (the driver's destructors may have run by then anyway).
 extern "C" fn at_exit() {
     // Called by glibc: a panic must not unwind into it.
     let _ = std::panic::catch_unwind(wait_for_work);
 }
 
 fn wait_for_work() {
-    let started = Instant::now();
+    static FIRST_RUN: OnceLock<Instant> = OnceLock::new();
+    static SAID: AtomicBool = AtomicBool::new(false);
+    let started = *FIRST_RUN.get_or_init(Instant::now);
     let deadline = started + EXIT_WAIT;
     lock().exiting = true;
     let waits = std::mem::take(&mut *exit_waits());
@@ -141,13 +147,53 @@ fn wait_for_work() {
             Err(p) => p.into_inner().0,
         };
     }
+    let left_running = w.busy;
     drop(w);
-    if waited {
-        // Plain stderr, never a panic: the layer's log may already be shut down this late.
-        let ms = started.elapsed().as_millis();
+    if waited && !SAID.swap(true, Ordering::Relaxed) {
         let _ = writeln!(
             std::io::stderr(),
-            "contrastxr: the app's exit waited {ms} ms for shader builds still running in the driver"
+            "{}",
+            exit_line(started.elapsed(), left_running)
+        );
+    }
+}
+
+/// The one line of an exit that waited. Plain stderr, never a panic: the layer's log may
+/// already be shut down this late.
+fn exit_line(waited: Duration, left_running: u32) -> String {
+    let ms = waited.as_millis();
+    let mut line = format!(
+        "contrastxr: the app's exit waited {ms} ms for shader builds still running in the driver"
+    );
+    if left_running > 0 {
+        line += &format!(
+            " and went on with {left_running} still running ({} s at most)",
+            EXIT_WAIT.as_secs()
+        );
+    }
+    line
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The exit's one line says when it went on with builds still running, and only then.
+    #[test]
+    fn the_exit_line_says_what_it_left_running() {
+        let done = exit_line(Duration::from_millis(812), 0);
+        assert_eq!(
+            done,
+            "contrastxr: the app's exit waited 812 ms for shader builds still running in the driver"
+        );
+        let given_up = exit_line(EXIT_WAIT, 1);
+        assert!(
+            given_up.starts_with("contrastxr: the app's exit waited 20000 ms"),
+            "{given_up}"
+        );
+        assert!(
+            given_up.ends_with("and went on with 1 still running (20 s at most)"),
+            "{given_up}"
         );
     }
 }

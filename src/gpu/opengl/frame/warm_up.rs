@@ -10,6 +10,7 @@ use super::state_guard::DebugOutputOff;
 use crate::algorithm::params::{Params, ViewMode};
 use crate::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::gpu::core::process_exit;
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl};
 use crate::gpu::opengl::device::GlError;
@@ -27,7 +28,7 @@ impl GlFrameRunner {
     /// Builds the programs views of `internal_format`, `width` texels wide, need for `params`,
     /// waiting up to `limit`, and runs them once on a texture of the layer's own (deleted
     /// after). Ok(false) when they were not ready within `limit` (the frame calls go on with
-    /// the build). The app's GL state is put back as by `enhance`.
+    /// the build) or the process began to exit. The app's GL state is put back as by `enhance`.
     ///
     /// # Safety
     /// The engine's context is current on this thread.
@@ -81,10 +82,15 @@ impl GlFrameRunner {
     ) -> Result<bool, GlError> {
         let views = std::slice::from_ref(view);
         let since = Instant::now();
-        // SAFETY: the context is current (the caller's contract).
-        while !unsafe { self.ready(views, params) }? {
-            if since.elapsed() > limit {
+        // Each step builds one program: the process's exit (process_exit.rs) waits for the step
+        // under way, never for the rest of the set.
+        loop {
+            if process_exit::exiting() || since.elapsed() > limit {
                 return Ok(false);
+            }
+            // SAFETY: the context is current (the caller's contract).
+            if unsafe { self.ready(views, params) }? {
+                break;
             }
         }
         if !self.has_background() {
@@ -94,6 +100,9 @@ impl GlFrameRunner {
             let texels = BlurredTexels::prepare(&black, BlurTaps::of(params));
             // SAFETY: as above.
             unsafe { self.set_background(&texels) }?;
+        }
+        if process_exit::exiting() {
+            return Ok(false);
         }
         // SAFETY: as above; the view's texture is ours, written by nothing else.
         let outcome = unsafe { self.enhance(views, params) }?;
