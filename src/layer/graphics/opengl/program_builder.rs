@@ -117,11 +117,11 @@ fn build(
     // the only context this thread ever makes current.
     let built = unsafe { gl.engine().warm_up(internal_format, width, params, LIMIT) }
         .map_err(|e| e.to_string())?;
-    if !built && process_exit::exiting() {
-        return Err("the app is exiting".into());
-    }
     if !built {
-        return Err(format!("not built within {} s", LIMIT.as_secs()));
+        return Err(match process_exit::exiting() {
+            true => "the app is exiting".into(),
+            false => format!("not built within {} s", LIMIT.as_secs()),
+        });
     }
     gl.engine().save_program_cache();
     Ok(gl.engine().program_binaries(&ids))
