@@ -166,12 +166,12 @@ fn request_shaders(s: &Mutex<SessionState>, format: PixelFormat, width: u32, in_
     if !s.settings.force && !super::blend::additive_possible(s.handle, &s.next) {
         return;
     }
-    let params = s.settings.params.clone();
+    let (params, wait) = (s.settings.params.clone(), s.settings.wait_for_pipelines);
     let Some(graphics) = s.graphics.as_mut() else {
         return;
     };
     let prepared = contain("while preparing the shaders at xrCreateSwapchain", || {
-        graphics.request_shaders(&params, format, width, in_place)
+        graphics.request_shaders(&params, format, width, in_place, wait)
     });
     if let Err(panic) = prepared {
         s.pass_through(&panic.to_string());

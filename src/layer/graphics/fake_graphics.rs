@@ -131,7 +131,7 @@ impl SessionGraphics for FakeGraphics {
         None
     }
 
-    fn request_shaders(&mut self, _: &Params, _: PixelFormat, _: u32, _: bool) {
+    fn request_shaders(&mut self, _: &Params, _: PixelFormat, _: u32, _: bool, _: bool) {
         self.handle.calls().requested_shaders += 1;
         if self.outcome() == Outcome::Panic {
             panic!("the fake graphics panic while requesting shaders");

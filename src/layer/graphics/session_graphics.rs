@@ -109,8 +109,16 @@ pub trait SessionGraphics: Send {
         count: usize,
     ) -> Option<Vec<u64>>;
     /// Starts building what views of this shape will need, where the API builds ahead (called
-    /// when the app makes a swapchain the layer will enhance).
-    fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, in_place: bool);
+    /// when the app makes a swapchain the layer will enhance); `wait`: the first frame will
+    /// wait for the build (`pipelines = "wait"`), so it runs at the app's priority.
+    fn request_shaders(
+        &mut self,
+        params: &Params,
+        format: PixelFormat,
+        width: u32,
+        in_place: bool,
+        wait: bool,
+    );
     /// Drops what the engine keeps for a swapchain the app destroys.
     fn forget_swapchain(&mut self, swapchain: u64) -> Result<(), String>;
     /// Connects a live source's prepared texels straight to the engine, where it can take them.

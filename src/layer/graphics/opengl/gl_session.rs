@@ -189,18 +189,25 @@ impl SessionGraphics for GlSession {
         }
     }
 
-    fn request_shaders(&mut self, params: &Params, format: PixelFormat, width: u32, _: bool) {
+    fn request_shaders(
+        &mut self,
+        params: &Params,
+        format: PixelFormat,
+        width: u32,
+        _: bool,
+        wait: bool,
+    ) {
         // At a loading-time call: programs the caches hold are linked and run once here, in
         // the app's context; the rest are built on a thread of the layer's own while the frames
-        // pass through, or, where it cannot run, here. What fails is met again, and said, by
-        // the frame calls.
+        // pass through (or the first frame waits for them), or, where it cannot run, here.
+        // What fails is met again, and said, by the frame calls.
         let Some(internal) = GlFormat::ALL
             .into_iter()
             .find(|&f| GlFormat::of(f).is_ok_and(|g| g.pixel == format))
         else {
             return;
         };
-        match self.prepare_shape((internal, width), params, true) {
+        match self.prepare_shape((internal, width), params, (true, wait)) {
             Prepared::Cached => {}
             Prepared::NoBuilder(why) => log::debug(&format!(
                 "OpenGL programs built in the app's context: {why}"
@@ -229,7 +236,8 @@ impl SessionGraphics for GlSession {
         // off the app's threads too where it can be.
         for v in views {
             let (internal, width) = (v.api_format as u32, v.key.extent.0);
-            if let Prepared::NoBuilder(why) = self.prepare_shape((internal, width), params, false) {
+            let prepared = self.prepare_shape((internal, width), params, (false, wait));
+            if let Prepared::NoBuilder(why) = prepared {
                 log::debug(&format!(
                     "OpenGL programs built in frame calls on the app's context: {why}"
                 ));

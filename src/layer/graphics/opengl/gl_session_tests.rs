@@ -176,7 +176,7 @@ fn a_finished_build_is_linked_without_reading_the_cache_in_a_frame_call() {
     };
     let mut session = Box::new(GlSession::new("OpenGL (test)", Box::new(context)));
     // Swapchain creation: the caches are read (bounded), the build starts on its thread.
-    session.request_shaders(&params, format.pixel, w, false);
+    session.request_shaders(&params, format.pixel, w, false, false);
     assert!(!session.builders.is_empty(), "no build started");
     let views = [view];
     let since = Instant::now();

@@ -21,8 +21,29 @@ use crate::gpu::opengl::{GlOffline, ProgramBinaries};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// The nice value added to a build thread: below the app's threads and its driver's.
+/// The nice value added to a build thread the app's frames do not wait for: below the app's
+/// threads and its driver's.
 const BUILD_NICENESS: i32 = 10;
+
+/// A build thread's priority.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum BuildPriority {
+    /// Below the app's threads (`BUILD_NICENESS`): its frames pass through meanwhile.
+    BelowTheApp,
+    /// The app's (`pipelines = "wait"`): its first frame waits for the build, so a lower
+    /// priority would only hold the app back longer on a busy CPU.
+    App,
+}
+
+impl BuildPriority {
+    /// Gives the calling thread (a build thread, which started at the app's thread's nice
+    /// value) this priority.
+    fn enter(self) {
+        if self == BuildPriority::BelowTheApp {
+            crate::camera::priority::lower_this_thread(BUILD_NICENESS);
+        }
+    }
+}
 
 /// A build of the programs of one view shape.
 pub struct ProgramBuilder {
@@ -43,13 +64,14 @@ pub enum Built {
 
 impl ProgramBuilder {
     /// Starts building the programs `ids` that views of `internal_format`, `width` texels
-    /// wide, need for `params` (stored `in_place` or not), on a thread of the layer's own, for
-    /// the app's `driver`.
+    /// wide, need for `params` (stored `in_place` or not), on a thread of the layer's own at
+    /// `priority`, for the app's `driver`.
     pub fn start(
         driver: &str,
         (internal_format, width, in_place): (u32, u32, bool),
         params: &Params,
         ids: [usize; 3],
+        priority: BuildPriority,
     ) -> Result<ProgramBuilder, String> {
         if crate::fault::hit("gl-program-thread") {
             return Err("the build thread could not start (fault point)".into());
@@ -58,7 +80,10 @@ impl ProgramBuilder {
         process_exit::watch();
         let thread = std::thread::Builder::new()
             .name("contrastxr-gl-build".into())
-            .spawn(move || build(&driver, (internal_format, width, in_place), &wanted, ids))
+            .spawn(move || {
+                priority.enter();
+                build(&driver, (internal_format, width, in_place), &wanted, ids)
+            })
             .map_err(|e| format!("no build thread: {e}"))?;
         Ok(ProgramBuilder {
             thread: Some(thread),
@@ -103,7 +128,6 @@ fn build(
     let Some(_busy) = process_exit::Busy::begin() else {
         return Err("the app is exiting".into());
     };
-    crate::camera::priority::lower_this_thread(BUILD_NICENESS);
     if crate::fault::hit("gl-program-build") {
         return Err("the build failed (fault point)".into());
     }
@@ -125,4 +149,33 @@ fn build(
     }
     gl.engine().save_program_cache();
     Ok(gl.engine().program_binaries(&ids))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The nice value of the calling thread.
+    fn own_nice() -> i32 {
+        // SAFETY: getpriority of this thread's own id only reads it.
+        unsafe { libc::getpriority(libc::PRIO_PROCESS, libc::gettid() as libc::id_t) }
+    }
+
+    /// The nice value a new thread has after entering `priority`, and the spawning thread's.
+    fn nice_in(priority: BuildPriority) -> (i32, i32) {
+        let app = own_nice();
+        let build = std::thread::spawn(move || {
+            priority.enter();
+            own_nice()
+        });
+        (build.join().unwrap(), app)
+    }
+
+    #[test]
+    fn a_build_the_frames_wait_for_runs_at_the_apps_priority_and_others_below_it() {
+        let (build, app) = nice_in(BuildPriority::App);
+        assert_eq!(build, app);
+        let (build, app) = nice_in(BuildPriority::BelowTheApp);
+        assert_eq!(build, (app + BUILD_NICENESS).min(19));
+    }
 }

@@ -6,7 +6,7 @@ use super::{GlSession, PROGRAM_WAIT};
 use crate::algorithm::params::Params;
 use crate::gpu::opengl::ProgramBinaries;
 use crate::layer::graphics::opengl::gl_frame_call::failed;
-use crate::layer::graphics::opengl::program_builder::{Built, ProgramBuilder};
+use crate::layer::graphics::opengl::program_builder::{BuildPriority, Built, ProgramBuilder};
 use crate::layer::graphics::session_graphics::{NotDone, SessionGraphics};
 use crate::layer::log;
 use std::time::{Duration, Instant};
@@ -33,12 +33,13 @@ impl GlSession {
     /// For a view shape (internal format, width, settings) not met before: links its programs
     /// from the caches (the binary cache's file read again first at a `loading` call, never in
     /// a frame call), or leaves them to a driver that compiles off the calling thread, or
-    /// starts their build on a thread of the layer's own (one build per set of programs).
+    /// starts their build on a thread of the layer's own (one build per set of programs), below
+    /// the app's priority unless the app's frames `wait` for it.
     pub(super) fn prepare_shape(
         &mut self,
         shape: (u32, u32),
         params: &Params,
-        loading: bool,
+        (loading, wait): (bool, bool),
     ) -> Prepared {
         let (internal, width) = shape;
         // Every frame call asks: the settings are cloned only for a shape not met before.
@@ -77,7 +78,12 @@ impl GlSession {
         if self.builders.iter().any(|b| b.ids == ids) {
             return Prepared::Building;
         }
-        match ProgramBuilder::start(&driver, (internal, width, in_place), params, ids) {
+        let priority = match wait {
+            true => BuildPriority::App,
+            false => BuildPriority::BelowTheApp,
+        };
+        let shape = (internal, width, in_place);
+        match ProgramBuilder::start(&driver, shape, params, ids, priority) {
             Ok(builder) => {
                 log::debug(&format!(
                     "OpenGL programs for {} views {width} wide: building them on a thread of the layer's own, in an OpenGL context of its own",

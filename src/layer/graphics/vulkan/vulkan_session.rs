@@ -215,7 +215,9 @@ impl SessionGraphics for VulkanSession {
         format: PixelFormat,
         width: u32,
         in_place: bool,
+        _: bool,
     ) {
+        // The engine's pipeline thread runs at the app's priority whatever `pipelines` says.
         // The path of its views where the swapchain has every usage the layer may add.
         let path = self.path_of(format, in_place, (true, true));
         let shape = ViewShape {
