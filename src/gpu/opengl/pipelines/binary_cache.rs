@@ -16,7 +16,7 @@ const MAGIC: &[u8; 8] = b"CXRGLPB1";
 
 /// Binaries of some programs (source hash, binary format, bytes), handed from one engine to
 /// another of the same driver: from a build thread's context to the app's, in memory.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct ProgramBinaries(Vec<(u64, u32, Vec<u8>)>);
 
 pub struct BinaryCache {

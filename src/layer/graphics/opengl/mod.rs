@@ -3,6 +3,7 @@
 //! (glx_context.rs, egl_context.rs), the app's swapchain images as GL texture names. No GL call happens on a thread of the layer's own.
 
 mod app_context;
+mod build_settle;
 mod build_watch;
 mod egl_context;
 mod gl_bindings;

@@ -13,6 +13,7 @@
 //! first leaves the thread to end on its own, and the process's exit waits for it
 //! (gpu/core/process_exit.rs).
 
+use super::build_settle;
 use super::build_watch::{BuildWatch, LIMIT};
 use crate::algorithm::params::Params;
 use crate::gpu::core::process_exit;
@@ -117,13 +118,16 @@ impl ProgramBuilder {
 }
 
 /// The build, on its own thread: an offline context, the driver checked, the programs built
-/// and run once, the binaries written; the binaries of `ids`.
+/// and run once, the binaries written; the binaries of `ids`. It ends once their machine code
+/// is where the app's context finds it (build_settle.rs): the frame call that links them then
+/// does not compile them again.
 fn build(
     driver: &str,
     (internal_format, width, in_place): (u32, u32, bool),
     params: &Params,
     ids: [usize; 3],
 ) -> Result<ProgramBinaries, String> {
+    let since = Instant::now();
     // Counted until the offline context is gone (dropped before `_busy`).
     let Some(_busy) = process_exit::Busy::begin() else {
         return Err("the app is exiting".into());
@@ -148,7 +152,11 @@ fn build(
         });
     }
     gl.engine().save_program_cache();
-    Ok(gl.engine().program_binaries(&ids))
+    let binaries = gl.engine().program_binaries(&ids);
+    drop(gl);
+    let shape = (internal_format, width, in_place);
+    build_settle::settle(&binaries, shape, params, since.elapsed());
+    Ok(binaries)
 }
 
 #[cfg(test)]

@@ -82,8 +82,7 @@ impl GlSession {
             true => BuildPriority::App,
             false => BuildPriority::BelowTheApp,
         };
-        let shape = (internal, width, in_place);
-        match ProgramBuilder::start(&driver, shape, params, ids, priority) {
+        match ProgramBuilder::start(&driver, (internal, width, in_place), params, ids, priority) {
             Ok(builder) => {
                 log::debug(&format!(
                     "OpenGL programs for {} views {width} wide: building them on a thread of the layer's own, in an OpenGL context of its own",
