@@ -34,6 +34,10 @@ usage: contrastxr-xr-client [options]
   --frames N              frames to submit before ending the session (default 60)
   --stop-file PATH        end the session before --frames once PATH exists (looked for
                           before each frame): a test's run lasts as long as it needs
+  --until-modified N      with --check-untouched: end the session before --frames once N of
+                          its frames were found changed after the client wrote them (a run
+                          lasts until the layer has enhanced that many, however long its
+                          shaders take to build)
   --quad                  also submit a quad layer with its own swapchain
   --quad-strips N         with --quad: submit the quad's image as N quad layers, one per
                           horizontal strip (N regions of one swapchain in one frame; default 1)
@@ -158,6 +162,8 @@ pub struct Options {
     pub frames: u32,
     /// End the session early once this file exists (--stop-file).
     pub stop_file: Option<std::path::PathBuf>,
+    /// End the session early once this many frames were found changed (--until-modified).
+    pub until_modified: Option<u32>,
     pub quad: bool,
     /// Quad layers the quad's image is split into (horizontal strips).
     pub quad_strips: u32,
@@ -208,6 +214,7 @@ impl Default for Options {
             layout: Layout::Array,
             frames: 60,
             stop_file: None,
+            until_modified: None,
             quad: false,
             quad_strips: 1,
             size: None,
@@ -252,6 +259,12 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
                 options.frames = value()?.parse().map_err(|_| "--frames needs a count")?
             }
             "--stop-file" => options.stop_file = Some(value()?.into()),
+            "--until-modified" => {
+                let n = value()?
+                    .parse()
+                    .map_err(|_| "--until-modified needs a count")?;
+                options.until_modified = Some(n)
+            }
             "--size" => options.size = Some(parse_size(&value()?)?),
             "--content" => options.content = parse_content(&value()?)?,
             "--quad" => options.quad = true,
@@ -349,6 +362,9 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Options, String> 
     if !options.disturb_gl_state.is_empty() && !options.check_gl_state {
         return Err("--disturb-gl-state needs --check-gl-state".into());
     }
+    if options.until_modified.is_some() && !options.check_untouched {
+        return Err("--until-modified needs --check-untouched".into());
+    }
     Ok(options)
 }
 
@@ -417,6 +433,10 @@ mod tests {
             o.stop_file.as_deref(),
             Some(std::path::Path::new("/tmp/x/stop"))
         );
+        let o = parse_str("--check-untouched --until-modified 40").unwrap();
+        assert_eq!(o.until_modified, Some(40));
+        assert!(parse_str("--check-untouched --until-modified many").is_err());
+        assert!(parse_str("--until-modified 40").is_err());
         let o = parse_str("--pipelined --script acquire,wait,release,end-empty").unwrap();
         assert!(o.pipelined);
         assert_eq!(o.script.unwrap().len(), 4);

@@ -47,6 +47,8 @@ pub struct Stats {
     pub script_ran: bool,
     /// The run ended before --frames because --stop-file's file appeared.
     pub stopped: bool,
+    /// A session ended before --frames because --until-modified's count was reached.
+    pub reached_modified: bool,
     /// xrWaitFrame's predictedDisplayPeriod at the last frame, in ns.
     pub display_period_ns: i64,
 }
@@ -60,6 +62,8 @@ pub trait Frames {
     /// One frame: xrWaitFrame, xrBeginFrame, the layers (none with --script), xrEndFrame;
     /// counts it in `stats`.
     fn frame(&mut self, options: &Options, stats: &mut Stats) -> Result<()>;
+    /// With --check-untouched: this session's frames found changed so far.
+    fn modified(&self) -> usize;
 }
 
 pub fn run<F: Frames>(
@@ -121,6 +125,12 @@ pub fn run<F: Frames>(
             stats.script_ran
         } else if stats.frames_submitted - first_frame >= options.frames {
             true
+        } else if options
+            .until_modified
+            .is_some_and(|n| frames.modified() >= n as usize)
+        {
+            stats.reached_modified = true;
+            true
         } else {
             let stop = options.stop_file.as_deref().is_some_and(Path::exists);
             stats.stopped |= stop;
@@ -164,6 +174,11 @@ impl Frames for VulkanFrames<'_, '_> {
 
     fn frame(&mut self, options: &Options, stats: &mut Stats) -> Result<()> {
         frame(self.scene, self.waiter, self.stream, options, stats)
+    }
+
+    fn modified(&self) -> usize {
+        let swapchains = std::iter::once(&self.scene.projection).chain(&self.scene.quad);
+        swapchains.map(PatternSwapchain::modified).sum()
     }
 }
 

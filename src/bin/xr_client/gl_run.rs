@@ -341,6 +341,14 @@ impl frame_loop::Frames for GlFrames<'_> {
         crate::script::run(&*self, ops)
     }
 
+    fn modified(&self) -> usize {
+        let swapchains = std::iter::once(&self.projection).chain(&self.quad);
+        swapchains
+            .filter_map(|s| s.check.as_ref())
+            .map(|c| c.modified.len())
+            .sum()
+    }
+
     fn frame(&mut self, options: &Options, stats: &mut Stats) -> Result<()> {
         if let Some(churn) = &mut self.churn {
             let c = &churn.plan[churn.next % churn.plan.len()];

@@ -107,9 +107,11 @@ fn main() -> ExitCode {
         || stats.script_ran
         || (options.script.is_none()
             && (stats.stopped
+                || stats.reached_modified
                 || stats.frames_submitted
                     >= options.frames * options.sessions * options.instances));
     report.stopped_by_file = stats.stopped;
+    report.stopped_by_modified = stats.reached_modified;
     report.ok = report.errors.is_empty() && report.vk_validation_errors == 0 && ran;
     print(&report, &options);
     if options.exit_marker {

@@ -306,6 +306,11 @@ impl PatternSwapchain {
         check.log.record(index, frame, same);
     }
 
+    /// With --check-untouched: the frames whose image had changed so far.
+    pub fn modified(&self) -> usize {
+        self.check.as_ref().map_or(0, |c| c.log.modified.len())
+    }
+
     /// (images checked, frames whose image had changed).
     pub fn check_result(&self) -> (u32, Vec<u32>) {
         self.check

@@ -7,8 +7,8 @@ pub use crate::memory::Sample;
 
 #[derive(Serialize, Debug, Default)]
 pub struct Report {
-    /// True when the session ran to its end (or to --stop-file's file) with no OpenXR/Vulkan
-    /// error and no validation error.
+    /// True when the session ran to its end (or to --stop-file's file, or --until-modified's
+    /// count) with no OpenXR/Vulkan error and no validation error.
     pub ok: bool,
     pub frames_requested: u32,
     pub frames_submitted: u32,
@@ -18,6 +18,10 @@ pub struct Report {
     /// With --stop-file: the run ended before --frames because the file appeared.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub stopped_by_file: bool,
+    /// With --until-modified: the run ended before --frames because that many frames were
+    /// found changed.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub stopped_by_modified: bool,
     pub reached_focused: bool,
     /// The session's graphics API: "vulkan" or "opengl".
     pub graphics: String,
@@ -253,6 +257,8 @@ impl Report {
             self.frames_requested,
             if self.stopped_by_file {
                 " (ended by --stop-file)"
+            } else if self.stopped_by_modified {
+                " (ended by --until-modified)"
             } else {
                 ""
             },
