@@ -5,8 +5,9 @@
 //! a frame call, would compile the whole set again there: a frame call of many seconds. So
 //! before the build hands its binaries back, its thread waits for those writers to go idle,
 //! then links the binaries in a second context of its own and runs them once, as the app's
-//! context will; a run about as slow as a compile means the code was not on disk yet, and it
-//! waits and checks again, a few times at most.
+//! context will; a run about as slow as a compile while the writers were still busy (its wait
+//! for them ran out) means the code was not on disk yet, and it waits and checks again, a few
+//! times at most.
 
 use crate::algorithm::params::Params;
 use crate::gpu::core::process_exit;
@@ -42,8 +43,9 @@ pub struct Settled {
 }
 
 /// Waits until linking `binaries` and running them once in a new context of this driver is
-/// fast (`built_in`: how long the build took), or the checks run out; None when no check ran
-/// (the driver refused a binary, the app began to exit, or no context). Views of
+/// fast (`built_in`: how long the build took), or slow with the writers idle before it, or the
+/// checks run out; None when no check ran (no writer threads, the driver refused a binary,
+/// the app began to exit, or no context). Views of
 /// `internal_format`, `width` texels wide, stored `in_place` or not, for `params`.
 pub fn settle(
     binaries: &ProgramBinaries,
@@ -51,6 +53,11 @@ pub fn settle(
     params: &Params,
     built_in: Duration,
 ) -> Option<Settled> {
+    // No writers: the driver keeps no disk cache (or is not Mesa), and the app's context
+    // compiles whatever it lacks however long this thread waits.
+    if writer_states().is_empty() {
+        return None;
+    }
     let since = Instant::now();
     for check in 1..=CHECKS {
         let writers_idle = wait_for_writers(WRITERS_LIMIT);
@@ -66,7 +73,9 @@ pub fn settle(
                 ))
             })
             .ok()??;
-        if is_fast(ran, built_in) || check == CHECKS {
+        // Slow although the writers had gone idle: the code is not coming (a cache full or
+        // keyed apart); another check would only compile it again.
+        if is_fast(ran, built_in) || writers_idle || check == CHECKS {
             let settled = Settled {
                 check,
                 ran,
