@@ -123,7 +123,7 @@ fn relinked_run(
 
 /// Waits until every disk cache writer thread of the driver in this process sleeps, seen
 /// twice in a row, or `limit` passed (false), or the app began to exit.
-pub fn wait_for_writers(limit: Duration) -> bool {
+fn wait_for_writers(limit: Duration) -> bool {
     let since = Instant::now();
     let mut idle_before = false;
     while since.elapsed() < limit && !process_exit::exiting() {
@@ -140,7 +140,7 @@ pub fn wait_for_writers(limit: Duration) -> bool {
 /// The scheduler states (`R` running, `S` sleeping, `D` in I/O, ...) of this process's
 /// threads that write a Mesa driver's shader disk cache: Mesa names them `disk$N`, after the
 /// process's name.
-pub fn writer_states() -> Vec<char> {
+fn writer_states() -> Vec<char> {
     let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
         return Vec::new();
     };
