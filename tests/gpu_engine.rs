@@ -435,8 +435,11 @@ fn with_mode(mode: ViewMode) -> Params {
 
 /// `contrastxr bench` of one 64x40 view, full content, 3 runs, with `extra` options: its JSON.
 fn small_bench(extra: &[&str]) -> serde_json::Value {
-    let mut args = vec!["bench", "--sizes", "64x40", "--views", "1", "--runs", "3"];
+    let mut args = vec!["bench", "--sizes", "64x40", "--runs", "3"];
     args.extend(["--content", "full", "--json"]);
+    if !extra.contains(&"--views") {
+        args.extend(["--views", "1"]);
+    }
     args.extend(extra);
     let o = cli(&args, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -500,8 +503,11 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     let cpu = v["device"].as_str().is_some_and(|d| d.contains("llvmpipe"));
     assert_eq!(r["frame_image_copy_tiles_ms"].is_null(), cpu, "{r}");
     assert_eq!(r["frame_sampled_tiles_ms"].is_null(), cpu, "{r}");
-    let v = small_bench(&["--path", "tiles"]);
+    // Two views: each holds four of the engine's views (buffer, in place, image copy,
+    // sampled), more than a pool sized for the tools' four would give out on a GPU.
+    let v = small_bench(&["--path", "tiles", "--views", "2"]);
     let r = &v["results"][0];
+    assert_eq!(r["views"].as_u64(), Some(2), "{r}");
     let ms = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {r}"));
     assert!(ms("frame_image_copy_tiles_ms") > 0.0, "{r}");
     let tiles_over_in_place = ms("frame_image_copy_tiles_ms") / ms("frame_in_place_ms");
@@ -1274,4 +1280,35 @@ fn shader_statistics_are_reported_where_the_driver_has_them() {
         ),
         false => assert!(v["shader_statistics_error"].is_string(), "{v}"),
     }
+}
+
+/// An engine sized for one view (and two background frames) refuses the sets of three views
+/// and a background on every driver, as a GPU's driver does (lavapipe would hand them out):
+/// the bench sizes its engine by its views.
+#[test]
+fn an_engine_refuses_more_views_than_it_was_sized_for() {
+    use contrastxr::gpu::core::bench::{Ablation, BenchCase, Content};
+    let options = DeviceOptions {
+        validation: true,
+        ..DeviceOptions::from_env()
+    };
+    let case = |views| BenchCase {
+        region: (32, 16),
+        views,
+        content: Content::Full,
+        runs: 1,
+        in_place: false,
+        image_copy: false,
+        tiles: false,
+        ablation: Ablation::None,
+    };
+    let params = Params::default();
+    let mut small = VkOffline::with_views(&options, 1).expect("a Vulkan device");
+    small.bench(&case(1), &params).expect("one view fits");
+    let err = small.bench(&case(3), &params).unwrap_err().to_string();
+    assert!(err.contains("ERROR_OUT_OF_POOL_MEMORY"), "{err}");
+    assert_clean(&small);
+    let mut sized = VkOffline::with_views(&options, 3).expect("a Vulkan device");
+    sized.bench(&case(3), &params).expect("three views fit");
+    assert_clean(&sized);
 }

@@ -57,7 +57,8 @@ pub fn usage() -> String {
          --ablate LIST (each case once per item, after none; either engine) takes one part out of\n\
          the enhancement to show what it costs, in every column that runs it (enh/none: its\n\
          enhancement over the case's none; the output is then no enhancement; on the bench's\n\
-         RGBA8 sRGB). For --method paper: method (no CIELAB conversion or method, the display\n\
+         RGBA8 sRGB; the sampled read, which has no ablated variants, is left out of an\n\
+         ablation's rows). For --method paper: method (no CIELAB conversion or method, the display\n\
          colour kept), background (a constant grey, no camera texel reads), codec (no sRGB decode\n\
          or encode), per-pixel (the three: loads, quantisation and stores left), enhance-pass\n\
          (the enhance pass returns at once: classify, finish_tiles, the indirect dispatch),\n\
@@ -224,8 +225,11 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         matching: None,
         shader_statistics: shader_stats,
     };
-    let mut engine =
-        VkOffline::with_options(&options).map_err(|e| CliError::Failure(e.to_string()))?;
+    let mut engine = VkOffline::with_views(
+        &options,
+        views.saturating_mul(VkOffline::BENCH_TARGETS_PER_VIEW),
+    )
+    .map_err(|e| CliError::Failure(e.to_string()))?;
     let device = engine.device_name().to_string();
     let cases = cases(tiles.unwrap_or(!engine.gpu.is_cpu()));
     let stats = shader_stats.then(|| {
@@ -266,7 +270,9 @@ fn bench_cases(
                     runs,
                     in_place,
                     image_copy,
-                    tiles: image_copy && tiles,
+                    // The sampled read has no ablated variants: an ablation's row times
+                    // the other paths.
+                    tiles: image_copy && tiles && ablation == Ablation::None,
                     ablation,
                 });
             }

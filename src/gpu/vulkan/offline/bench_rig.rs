@@ -80,6 +80,10 @@ fn app_image(gpu: &GpuDevice, case: &BenchCase) -> Result<DeviceImage, GpuError>
 }
 
 impl VkOffline {
+    /// The engine views a bench case holds per app view at most: the buffer path's, in place,
+    /// the image-copy path's and the sampled read's (`with_views` takes this many per view).
+    pub const BENCH_TARGETS_PER_VIEW: u32 = 4;
+
     /// One view through the image-copy path per app image, bound to an image of its own.
     fn add_image_copy_views(&mut self, rig: &mut Rig, case: &BenchCase) -> Result<(), GpuError> {
         let gpu = &self.gpu;

@@ -58,8 +58,14 @@ impl VkOffline {
     }
 
     pub fn with_options(options: &DeviceOptions) -> Result<VkOffline, GpuError> {
+        Self::with_views(options, 4)
+    }
+
+    /// As `with_options`, holding up to `max_views` views at once (each takes a descriptor
+    /// set of the engine's pool, which refuses more on every driver).
+    pub fn with_views(options: &DeviceOptions, max_views: u32) -> Result<VkOffline, GpuError> {
         let gpu = GpuDevice::create(options)?;
-        let engine = Recorder::new(&gpu, 4, BuildMode::Inline, None)?;
+        let engine = Recorder::new(&gpu, max_views, BuildMode::Inline, None)?;
         let commands = RefCell::new(Commands::new(&gpu)?);
         Ok(VkOffline {
             engine,

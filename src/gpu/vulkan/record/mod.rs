@@ -6,6 +6,7 @@ mod image_bindings;
 mod passes;
 mod recorder;
 mod resources;
+mod set_pool;
 mod variant_pipelines;
 mod write_back_draw;
 

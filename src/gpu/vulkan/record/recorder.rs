@@ -26,9 +26,10 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::resources::{
-    alloc_all, camera_stride, free_set, transfer_storage, CameraResources, PixelsIn, Placement,
-    ViewShape, ViewTarget, STORAGE, TEXELS_FORMAT,
+    alloc_all, camera_stride, transfer_storage, CameraResources, PixelsIn, Placement, ViewShape,
+    ViewTarget, STORAGE, TEXELS_FORMAT,
 };
+use super::set_pool::SetPool;
 
 /// The per-pixel passes' workgroups are TILE x TILE (src/gpu/core/interface.rs, WORKGROUPS).
 pub(super) const WORKGROUP: u32 = TILE;
@@ -42,7 +43,7 @@ const DECODED_SLACK: u64 = 16 * 8;
 
 pub struct Recorder {
     pub(super) pipelines: Pipelines,
-    pool: vk::DescriptorPool,
+    pool: SetPool,
     /// Take the shared-fetch variant where a view's mapping allows it (gpu/core/shared_fetch.rs);
     /// off only to compare it with the general one.
     pub(super) shared_fetch: bool,
@@ -78,12 +79,7 @@ impl Recorder {
                 .ty(vk::DescriptorType::STORAGE_IMAGE)
                 .descriptor_count(max_sets * binding_count(BindingKind::StorageImage)),
         ];
-        let info = vk::DescriptorPoolCreateInfo::default()
-            .flags(vk::DescriptorPoolCreateFlags::FREE_DESCRIPTOR_SET)
-            .max_sets(max_sets)
-            .pool_sizes(&sizes);
-        // SAFETY: valid create info on a valid device.
-        match unsafe { gpu.device.create_descriptor_pool(&info, None) } {
+        match SetPool::new(gpu, max_sets, &sizes) {
             Ok(pool) => Ok(Recorder {
                 pipelines,
                 pool,
@@ -91,12 +87,9 @@ impl Recorder {
                 ablate: 0,
                 own_classify: true,
             }),
-            Err(result) => {
+            Err(e) => {
                 pipelines.destroy(gpu);
-                Err(GpuError::Vulkan {
-                    call: "vkCreateDescriptorPool",
-                    result,
-                })
+                Err(e)
             }
         }
     }
@@ -134,7 +127,7 @@ impl Recorder {
             texels: DeviceImage::none(),
             texels_view: vk::ImageView::null(),
             set: vk::DescriptorSet::null(),
-            pool: self.pool,
+            pool: self.pool.clone(),
         };
         if let Err(e) = self.make_texels(gpu, &mut bg) {
             bg.destroy(gpu);
@@ -194,20 +187,10 @@ impl Recorder {
         Ok(())
     }
 
+    /// A set of the passes' layout; the pool holds max_views views plus MAX_BACKGROUNDS
+    /// background frames, and refuses more on every driver.
     fn allocate_set(&self, gpu: &GpuDevice) -> Result<vk::DescriptorSet, GpuError> {
-        let layouts = [self.pipelines.set_layout()];
-        let info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.pool)
-            .set_layouts(&layouts);
-        // SAFETY: pool and layout are valid; the pool was sized for max_views views plus
-        // MAX_BACKGROUNDS background frames.
-        match unsafe { gpu.device.allocate_descriptor_sets(&info) } {
-            Ok(sets) => Ok(sets[0]),
-            Err(result) => Err(GpuError::Vulkan {
-                call: "vkAllocateDescriptorSets",
-                result,
-            }),
-        }
+        self.pool.allocate(gpu, self.pipelines.set_layout())
     }
 
     /// A view enhanced through a copy of its region (`pixels`).
@@ -353,7 +336,7 @@ impl Recorder {
     }
 
     pub fn destroy_view(&self, gpu: &GpuDevice, view: &mut ViewTarget) {
-        free_set(gpu, self.pool, &mut view.set);
+        self.pool.free(gpu, &mut view.set);
         for b in [&mut view.pixels, &mut view.tiles, &mut view.perceptual] {
             b.destroy(gpu);
         }
@@ -450,9 +433,7 @@ impl Recorder {
     }
 
     pub fn destroy(&mut self, gpu: &GpuDevice) {
-        // SAFETY: the caller guarantees the GPU no longer uses the pool's sets.
-        unsafe { gpu.device.destroy_descriptor_pool(self.pool, None) };
-        self.pool = vk::DescriptorPool::null();
+        self.pool.destroy(gpu);
         self.pipelines.destroy(gpu);
     }
 }

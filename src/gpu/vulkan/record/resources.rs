@@ -2,6 +2,7 @@
 //! buffers and as a sampled image), a view's target (its pixels and tile list), where they
 //! live, and how they are allocated and freed.
 
+use super::set_pool::SetPool;
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_SAMPLED, ACCESS_WIDE};
 use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::PixelFormat;
@@ -24,7 +25,7 @@ pub struct CameraResources {
     pub(super) texels_view: vk::ImageView,
     /// The preparation pass's descriptor set (camera, blurred).
     pub(super) set: vk::DescriptorSet,
-    pub(super) pool: vk::DescriptorPool,
+    pub(super) pool: SetPool,
 }
 
 impl CameraResources {
@@ -55,7 +56,7 @@ impl CameraResources {
     }
 
     pub fn destroy(&mut self, gpu: &GpuDevice) {
-        free_set(gpu, self.pool, &mut self.set);
+        self.pool.free(gpu, &mut self.set);
         // SAFETY: the view is ours (null is ignored) and the GPU no longer uses it.
         unsafe { gpu.device.destroy_image_view(self.texels_view, None) };
         self.texels_view = vk::ImageView::null();
@@ -72,14 +73,6 @@ pub(crate) const TEXELS_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 /// Pixels per camera buffer row: the width rounded up to whole 16-byte entries.
 pub(super) fn camera_stride(width: u32) -> u32 {
     width.next_multiple_of(4)
-}
-
-pub(super) fn free_set(gpu: &GpuDevice, pool: vk::DescriptorPool, set: &mut vk::DescriptorSet) {
-    if *set != vk::DescriptorSet::null() {
-        // SAFETY: the set came from this pool and the GPU no longer uses it.
-        let _ = unsafe { gpu.device.free_descriptor_sets(pool, &[*set]) };
-        *set = vk::DescriptorSet::null();
-    }
 }
 
 /// Where a view's per-pixel passes read and write its pixels.
