@@ -35,30 +35,6 @@ impl StorageImage {
         )
     }
 
-    /// Probe: an image of `app_format` (mutable) with a storage view of `format`.
-    pub fn for_copies_of(
-        gpu: &GpuDevice,
-        size: (u32, u32),
-        (app_format, format): (vk::Format, vk::Format),
-    ) -> Result<Self, GpuError> {
-        use vk::ImageUsageFlags as U;
-        let flags = vk::ImageCreateFlags::MUTABLE_FORMAT | vk::ImageCreateFlags::EXTENDED_USAGE;
-        let usage = U::STORAGE | U::TRANSFER_SRC | U::TRANSFER_DST;
-        let image = DeviceImage::with_flags(gpu, size, app_format, usage, flags)?;
-        let range = vk::ImageSubresourceRange::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .level_count(1)
-            .layer_count(1);
-        let info = vk::ImageViewCreateInfo::default()
-            .image(image.raw)
-            .view_type(vk::ImageViewType::TYPE_2D)
-            .format(format)
-            .subresource_range(range);
-        // SAFETY: a view of our own image, in a format its MUTABLE_FORMAT allows.
-        let view = unsafe { gpu.device.create_image_view(&info, None) }.vk("vkCreateImageView")?;
-        Ok(StorageImage { image, view, format })
-    }
-
     fn with_usage(
         gpu: &GpuDevice,
         size: (u32, u32),

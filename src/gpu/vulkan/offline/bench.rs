@@ -84,9 +84,6 @@ impl VkOffline {
                 }
             }
         }
-        if std::env::var_os("CONTRASTXR_BENCH_PROBE").is_some() {
-            self.probe(rig, params, case.runs)?;
-        }
         let ms = samples.map(median);
         Ok(BenchResult {
             case: *case,
@@ -146,7 +143,7 @@ impl VkOffline {
 
     /// What the layer records per display frame in place: gpu/vulkan/frame/frame_record.rs's `record` for
     /// in-place views, less the background and captures. Nothing without in-place views.
-    pub(super) fn record_frame_in_place(
+    fn record_frame_in_place(
         &self,
         cmd: vk::CommandBuffer,
         rig: &Rig,
@@ -170,7 +167,7 @@ impl VkOffline {
     /// (gpu/vulkan/frame/frame_record.rs's `record` for such views, less the background and captures):
     /// with `enhance`, the passes between the copies; with `tiles` (and `enhance`), the listed
     /// tiles drawn back instead of the regions copied back. Nothing without image-copy views.
-    pub(super) fn record_frame_image_copy(
+    fn record_frame_image_copy(
         &self,
         cmd: vk::CommandBuffer,
         rig: &Rig,
@@ -245,7 +242,7 @@ impl VkOffline {
         Ok(())
     }
 
-    pub(super) fn timestamp(&self, cmd: vk::CommandBuffer, pool: vk::QueryPool, query: u32) {
+    fn timestamp(&self, cmd: vk::CommandBuffer, pool: vk::QueryPool, query: u32) {
         // SAFETY: cmd is recording; the query was reset in this command buffer. BOTTOM_OF_PIPE:
         // written once all earlier commands are complete.
         unsafe {

@@ -98,15 +98,8 @@ impl VkOffline {
             pixels_in: PixelsIn::Image,
         };
         for _ in &rig.images {
-            let own = match std::env::var_os("CONTRASTXR_PROBE_OWN_SRGB") {
-                Some(_) => StorageImage::for_copies_of(
-                    gpu,
-                    case.region,
-                    (vk::Format::R8G8B8A8_SRGB, own_format),
-                )?,
-                None => StorageImage::for_copies(gpu, case.region, own_format)?,
-            };
-            rig.own_images.push(own);
+            rig.own_images
+                .push(StorageImage::for_copies(gpu, case.region, own_format)?);
             let target = (shape, case.region.1);
             let target =
                 self.engine

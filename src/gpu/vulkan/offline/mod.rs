@@ -2,7 +2,6 @@
 //! or through copies, and the benchmark (`contrastxr bench`).
 
 mod bench;
-mod bench_probe;
 mod bench_rig;
 mod bench_shaders;
 mod image_copy_path;
