@@ -819,11 +819,11 @@ pub const KEYS: &[Key] = &[
         env_negated: false,
         kind: Kind::Text,
         option: None,
-        doc: "Vulkan, for a view enhanced through an image of the layer's own: region: the region copied into it first; sampled: on 8-bit sRGB swapchains (sampled usage added to them), the region read through a sampled view of the app's image instead, and only the tiles the enhancement listed drawn back, whatever copy_back says",
+        doc: "Vulkan, for a view enhanced through an image of the layer's own: region: the region copied into it first; sampled: on 8-bit sRGB swapchains (sampled usage added to them), the region read through a sampled view of the app's image instead, and only the tiles the enhancement listed drawn back, whatever copy_back says; auto: sampled on a GPU, region on CPU drivers (lavapipe, llvmpipe), where a sampled texel costs more than the copy it saves",
         set: |s, v| {
             s.copy_in = match v {
-                Value::Text(t) => CopyIn::parse(&t).ok_or(format!("{t:?} is not region or sampled"))?,
-                other => return Err(format!("{other} is not region or sampled")),
+                Value::Text(t) => CopyIn::parse(&t).ok_or(format!("{t:?} is not auto, region or sampled"))?,
+                other => return Err(format!("{other} is not auto, region or sampled")),
             };
             Ok(())
         },

@@ -123,6 +123,8 @@ impl CopyBack {
 /// How a view enhanced through an image of the layer's own gets the app's pixels (`copy_in`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CopyIn {
+    /// Sampled on a GPU, region on a CPU driver (docs/performance.md says why).
+    Auto,
     /// The region copied into the layer's image first (vkCmdCopyImage).
     Region,
     /// Read through a sampled view of the app's image (8-bit sRGB), the listed tiles drawn
@@ -133,6 +135,7 @@ pub enum CopyIn {
 impl CopyIn {
     pub fn parse(text: &str) -> Option<CopyIn> {
         match text.trim().to_ascii_lowercase().as_str() {
+            "auto" => Some(CopyIn::Auto),
             "region" => Some(CopyIn::Region),
             "sampled" => Some(CopyIn::Sampled),
             _ => None,
@@ -141,6 +144,7 @@ impl CopyIn {
 
     pub fn name(self) -> &'static str {
         match self {
+            CopyIn::Auto => "auto",
             CopyIn::Region => "region",
             CopyIn::Sampled => "sampled",
         }
@@ -157,7 +161,7 @@ impl Default for Settings {
             quad_layers: false,
             in_place: InPlace::Auto,
             copy_back: CopyBack::Region,
-            copy_in: CopyIn::Region,
+            copy_in: CopyIn::Auto,
             wait_for_pipelines: false,
             params: Params::default(),
             background: "v4l2:auto".into(),

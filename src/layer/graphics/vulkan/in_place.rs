@@ -33,19 +33,32 @@ pub fn copy_path(gpu: &GpuDevice, settings: &Settings, format: PixelFormat) -> V
     match wanted(gpu, settings) {
         true => {
             let path = crate::gpu::vulkan::frame::copy_path(gpu, format);
-            image_copy_way(path, format, ways(settings), (true, true))
+            image_copy_way(path, format, ways(gpu, settings), (true, true))
         }
         false => ViewPath::BufferCopy,
     }
 }
 
-/// The ways the settings ask of the image-copy path: the listed tiles drawn back
-/// (`copy_back = "tiles"`), the region read through a sampled view (`copy_in = "sampled"`).
-pub fn ways(settings: &Settings) -> (bool, bool) {
+/// The ways the settings ask of the image-copy path on this device: the listed tiles drawn
+/// back (`copy_back = "tiles"`), the region read through a sampled view (`copy_in =
+/// "sampled"`, or `auto` on a GPU).
+pub fn ways(gpu: &GpuDevice, settings: &Settings) -> (bool, bool) {
     (
         settings.copy_back == CopyBack::Tiles,
-        settings.copy_in == CopyIn::Sampled,
+        sampled_wanted(settings.copy_in, gpu.is_cpu()),
     )
+}
+
+/// Whether `copy_in` asks for the sampled read on a device that is (`cpu`) a CPU driver or not:
+/// on a GPU it reads the app's image once, through the texture unit, where the region copy
+/// moves it twice through the copy path; on a CPU driver a sampled texel costs more than the
+/// memcpy it saves (docs/performance.md).
+pub fn sampled_wanted(copy_in: CopyIn, cpu: bool) -> bool {
+    match copy_in {
+        CopyIn::Auto => !cpu,
+        CopyIn::Region => false,
+        CopyIn::Sampled => true,
+    }
 }
 
 /// `path` (a view's copy path) with the way `ways` asks of the image-copy path, where the
@@ -91,4 +104,20 @@ pub fn added_usage(
     listed.is_none().then_some(
         xr::SwapchainUsageFlags::UNORDERED_ACCESS | xr::SwapchainUsageFlags::MUTABLE_FORMAT,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `auto` takes the sampled read on a GPU only; the two named ways hold on any device.
+    #[test]
+    fn copy_in_auto_samples_on_a_gpu_and_copies_on_a_cpu_driver() {
+        assert!(sampled_wanted(CopyIn::Auto, false));
+        assert!(!sampled_wanted(CopyIn::Auto, true));
+        for cpu in [false, true] {
+            assert!(sampled_wanted(CopyIn::Sampled, cpu));
+            assert!(!sampled_wanted(CopyIn::Region, cpu));
+        }
+    }
 }

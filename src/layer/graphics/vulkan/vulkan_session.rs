@@ -30,7 +30,7 @@ pub struct VulkanSession {
     /// last swapchain's creation) rather than copying the region back.
     tiles: AtomicBool,
     /// Whether the image-copy path reads 8-bit sRGB views through a sampled view
-    /// (`copy_in = "sampled"` at the last swapchain's creation).
+    /// (`copy_in = "sampled"`, or `auto` on a GPU, at the last swapchain's creation).
     sampled: AtomicBool,
 }
 
@@ -47,8 +47,8 @@ pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bo
     Some(match set_up(b, settings) {
         Ok(engine) => Bound::Enhanced(Box::new(VulkanSession {
             image_copy: AtomicBool::new(in_place::wanted(&engine.gpu, settings)),
-            tiles: AtomicBool::new(in_place::ways(settings).0),
-            sampled: AtomicBool::new(in_place::ways(settings).1),
+            tiles: AtomicBool::new(in_place::ways(&engine.gpu, settings).0),
+            sampled: AtomicBool::new(in_place::ways(&engine.gpu, settings).1),
             engine,
             ready: None,
         })),
@@ -180,7 +180,7 @@ impl SessionGraphics for VulkanSession {
     ) -> Option<xr::SwapchainUsageFlags> {
         let wanted = in_place::wanted(&self.engine.gpu, settings);
         self.image_copy.store(wanted, Ordering::Relaxed);
-        let (tiles, sampled) = in_place::ways(settings);
+        let (tiles, sampled) = in_place::ways(&self.engine.gpu, settings);
         self.tiles.store(tiles, Ordering::Relaxed);
         self.sampled.store(sampled, Ordering::Relaxed);
         in_place::added_usage(&self.engine.gpu, settings, format, info)
