@@ -142,6 +142,26 @@ const RUN: &[Run] = &[
 /// Concrete examples not run here, and why.
 const NOT_RUN: &[(&str, &str)] = &[
     (
+        "contrastxr bench --path all --ablate all --runs 30",
+        "a GPU's measurement (scripts/gpu-check runs it); tests/gpu_engine.rs runs --ablate and --path all",
+    ),
+    (
+        "contrastxr bench --path all --runs 30",
+        "a GPU's measurement (scripts/gpu-check runs it); tests/gpu_engine.rs runs --path all",
+    ),
+    (
+        "contrastxr bench --runs 30",
+        "a GPU's measurement (scripts/gpu-check runs it); tests/gpu_engine.rs runs the bench",
+    ),
+    (
+        "contrastxr enhance --engine gpu",
+        "a start-up measurement without its files (scripts/gpu-check names them); tests/gpu_engine.rs runs it",
+    ),
+    (
+        "contrastxr gl-programs --format 0x8C43 --width 1920",
+        "a start-up measurement on a GPU (scripts/gpu-check runs it)",
+    ),
+    (
         "contrastxr install --user",
         "needs the layer library built beside the tool; tests/cli.rs installs one",
     ),
