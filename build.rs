@@ -239,18 +239,22 @@ impl Build {
                     method_wgsl(v.method)
                 )
             };
-            let sampling = if v.shared() { &shared_fetch } else { &general };
-            let source_here = source(sampling);
-            let general_source = v.shared().then(|| source(&general));
-            let parsed = self.write(&file, "enhance", &source_here, "enhance");
+            // The general sampling for every view; the paper's also with shared fetches, which
+            // the views whose mapping allows them take (as without an ablation).
+            let (general_source, shared_source) = (source(&general), source(&shared_fetch));
+            let parsed = self.write(&file, "enhance", &general_source, "enhance");
             let id = self.table.add(&file, "enhance", false, Some(v.pixels));
-            self.table.ablated.push((v, id));
+            self.table.ablated.push((v, false, id));
+            if v.shared() {
+                let shared_file = format!("{file}_s");
+                self.write(&shared_file, "enhance", &shared_source, "enhance");
+                let id = self
+                    .table
+                    .add(&shared_file, "enhance", false, Some(v.pixels));
+                self.table.ablated.push((v, true, id));
+            }
             if v.pixels.gl() {
                 // OpenGL has no shared fetches: its variants sample as its own `enhance` does.
-                let parsed = match general_source {
-                    Some(general_source) => parse("enhance", &general_source),
-                    None => parsed,
-                };
                 let id = self.write_glsl(&file, &parsed, "enhance");
                 self.gl.ablated.push((v, id));
             }

@@ -30,8 +30,8 @@ pub struct Table {
     pub decode_blur: Vec<usize>,
     pub enhance: Vec<(Enhance, usize)>,
     pub classify: Vec<(Classify, usize)>,
-    /// The benchmark's ablated `enhance` variants.
-    pub ablated: Vec<(Ablated, usize)>,
+    /// The benchmark's ablated `enhance` variants, with whether each shares fetches.
+    pub ablated: Vec<(Ablated, bool, usize)>,
 }
 
 impl Table {
@@ -84,9 +84,16 @@ impl Table {
         s += "];\n/// (format, access, method, id) of each `classify` variant.\n";
         s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n";
         s += &classify_rows(&self.classify);
-        s += "];\n/// (method, access, ablations, id) of each ablated `enhance` variant of the\n/// benchmark.\n";
-        s += "pub static ENHANCE_ABLATED: &[(u32, u32, u32, usize)] = &[\n";
-        s += &ablated_rows(&self.ablated);
+        s += "];\n/// (method, access, ablations, shared fetches, id) of each ablated `enhance` variant\n/// of the benchmark.\n";
+        s += "pub static ENHANCE_ABLATED: &[(u32, u32, u32, bool, usize)] = &[\n";
+        s += &self
+            .ablated
+            .iter()
+            .map(|(v, shared, id)| {
+                let (m, a, x) = (v.method, v.pixels.access, v.ablate);
+                format!("    ({m}, {a}, {x}, {shared}, {id}),\n")
+            })
+            .collect::<String>();
         s + "];\n"
     }
 }

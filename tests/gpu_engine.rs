@@ -1312,3 +1312,32 @@ fn an_engine_refuses_more_views_than_it_was_sized_for() {
     sized.bench(&case(3), &params).expect("three views fit");
     assert_clean(&sized);
 }
+
+/// The cube roots by the driver's `pow` (the bench's `cube-root` ablation, a candidate for
+/// GPUs, whose special-function unit does it in a few cycles) hold the ±1 contract against the
+/// CPU reference on random images at three lambda_e, as the Newton steps do; through the
+/// shared fetches and the general sampling (a camera frame the view's mapping shares fetches
+/// over, and one it does not: the ablated variants sample as the view otherwise would).
+#[test]
+fn cube_roots_by_pow_conform_to_the_cpu_reference() {
+    use contrastxr::gpu::core::interface::ABLATE_CUBE_ROOT;
+    let mut e = engine();
+    e.set_ablation(ABLATE_CUBE_ROOT);
+    for camera in [noise(64, 40, 5), noise(131, 83, 5)] {
+        for (k, lambda_e) in [0.1f32, 0.4, 1.0].into_iter().enumerate() {
+            let params = Params {
+                lambda_e,
+                ..Params::default()
+            };
+            let display = noise(97, 61, 31 + k as u32);
+            let bad = nonconformant(&mut e, &display, &camera, &params.camera_mapping(), &params);
+            let size = (camera.width, camera.height);
+            assert!(
+                bad.is_empty(),
+                "camera {size:?}, lambda_e {lambda_e}: {bad:?}"
+            );
+        }
+    }
+    e.set_ablation(0);
+    assert_clean(&e);
+}

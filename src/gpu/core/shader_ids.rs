@@ -78,10 +78,10 @@ fn enhance_variant(
 /// The benchmark's `enhance` of a method (its code) with the ablations `ablate`
 /// (interface.rs ABLATE_*), reaching the pixels by `access`: the paper's method (with shared
 /// fetches) or the perceptual method, in mode enhance on RGBA8 sRGB; None for the others.
-pub fn enhance_ablated(method: u32, access: u32, ablate: u32) -> Option<ShaderId> {
+pub fn enhance_ablated(method: u32, access: u32, ablate: u32, shared: bool) -> Option<ShaderId> {
     modules::ENHANCE_ABLATED
         .iter()
-        .find(|&&(m, a, x, _)| (m, a, x) == (method, access, ablate))
+        .find(|&&(m, a, x, s, _)| (m, a, x, s) == (method, access, ablate, shared))
         .map(|&(.., k)| ShaderId(k))
 }
 
@@ -175,16 +175,21 @@ mod tests {
         // Each method's ablations for each access of RGBA8 sRGB, in place in its texel.
         use crate::gpu::core::interface::{ABLATIONS, FORMAT_SRGB_BIT, PERCEPTUAL_ABLATIONS};
         let srgb8 = rgba8 | FORMAT_SRGB_BIT;
-        for &(m, access, ablate, k) in modules::ENHANCE_ABLATED {
-            assert_eq!(enhance_ablated(m, access, ablate), Some(ShaderId(k)));
+        for &(m, access, ablate, shared, k) in modules::ENHANCE_ABLATED {
+            assert_eq!(
+                enhance_ablated(m, access, ablate, shared),
+                Some(ShaderId(k))
+            );
             let file = format!("enhance_ablated_m{m}_f{srgb8}_a{access}_x{ablate}");
+            let file = if shared { file + "_s" } else { file };
             assert_eq!(name(ShaderId(k)), file);
             let in_place = (access == ACCESS_IN_PLACE).then_some(srgb8);
             assert_eq!(in_place_format(ShaderId(k)), in_place);
         }
-        let ablations = ABLATIONS.len() + PERCEPTUAL_ABLATIONS.len();
+        // The paper's twice (general sampling and shared fetches), the perceptual method's once.
+        let ablations = 2 * ABLATIONS.len() + PERCEPTUAL_ABLATIONS.len();
         assert_eq!(modules::ENHANCE_ABLATED.len(), 3 * ablations);
-        assert_eq!(enhance_ablated(paper, ACCESS_IN_PLACE, 0), None);
+        assert_eq!(enhance_ablated(paper, ACCESS_IN_PLACE, 0, false), None);
         assert!(!reads_camera(FINISH_TILES));
     }
 }

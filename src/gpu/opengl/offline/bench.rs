@@ -209,7 +209,8 @@ impl GlOffline {
         }))
     }
 
-    /// Runs `f` inside the time-elapsed query of `span` (between two glFinish on a CPU driver).
+    /// Runs `f` inside the time-elapsed query of `span`, begun once earlier work is done (between
+    /// two glFinish on a CPU driver).
     fn span(
         &mut self,
         rig: &mut GlRig,
@@ -227,8 +228,13 @@ impl GlOffline {
             rig.walls[span] = started.elapsed().as_secs_f64() * 1e3;
             return r;
         }
+        // All earlier work done first (the untimed restore's copies included), as the Vulkan
+        // bench's barrier before each span: a GPU may still be copying when the query begins.
         // SAFETY: the context is current; a query name of this context, no other query active.
-        unsafe { (self.engine().gl().begin_query)(gl::TIME_ELAPSED, rig.queries[span]) };
+        unsafe {
+            (self.engine().gl().finish)();
+            (self.engine().gl().begin_query)(gl::TIME_ELAPSED, rig.queries[span]);
+        }
         let r = f(self);
         // SAFETY: as above; the query begun above.
         unsafe { (self.engine().gl().end_query)(gl::TIME_ELAPSED) };

@@ -19,12 +19,12 @@ impl Recorder {
         mapping: &CameraMapping,
     ) -> Result<vk::Pipeline, GpuError> {
         let (codes, access, extras) = (key.codes(), key.access, key.extras);
+        let shares = shares_fetches(mapping, view.region, view.camera_size);
         if self.ablate != 0 {
-            return self.ablated_pipeline(key);
+            return self.ablated_pipeline(key, shares);
         }
-        let shared = shader_ids::enhance_shared(codes, access, extras).filter(|_| {
-            self.shared_fetch && shares_fetches(mapping, view.region, view.camera_size)
-        });
+        let shared = shader_ids::enhance_shared(codes, access, extras)
+            .filter(|_| self.shared_fetch && shares);
         match shared.map(|id| self.pipelines.get(id)) {
             Some(Ok(p)) => Ok(p),
             _ => self
@@ -33,9 +33,13 @@ impl Recorder {
         }
     }
 
-    /// The benchmark's ablated `enhance` for the view's variant, where one is built.
-    fn ablated_pipeline(&self, key: VariantKey) -> Result<vk::Pipeline, GpuError> {
-        let id = shader_ids::enhance_ablated(key.method, key.access, self.ablate)
+    /// The benchmark's ablated `enhance` for the view's variant, where one is built: with
+    /// shared fetches where the view's mapping allows them (`shares`) and they are built (the
+    /// paper's), as without an ablation, else with the general sampling.
+    fn ablated_pipeline(&self, key: VariantKey, shares: bool) -> Result<vk::Pipeline, GpuError> {
+        let shared = shares && self.shared_fetch;
+        let id = shader_ids::enhance_ablated(key.method, key.access, self.ablate, shared)
+            .or_else(|| shader_ids::enhance_ablated(key.method, key.access, self.ablate, false))
             .filter(|_| key.has_ablated_variants())
             .ok_or_else(|| GpuError::Unsupported(no_ablated_variant(self.ablate)))?;
         self.pipelines.get(id)
