@@ -241,11 +241,11 @@ impl Build {
             };
             // The general sampling for every view; the paper's also with shared fetches, which
             // the views whose mapping allows them take (as without an ablation).
-            let (general_source, shared_source) = (source(&general), source(&shared_fetch));
-            let parsed = self.write(&file, "enhance", &general_source, "enhance");
+            let shared_source = v.shared().then(|| source(&shared_fetch));
+            let parsed = self.write(&file, "enhance", &source(&general), "enhance");
             let id = self.table.add(&file, "enhance", false, Some(v.pixels));
             self.table.ablated.push((v, false, id));
-            if v.shared() {
+            if let Some(shared_source) = shared_source {
                 let shared_file = format!("{file}_s");
                 self.write(&shared_file, "enhance", &shared_source, "enhance");
                 let id = self

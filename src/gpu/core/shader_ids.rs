@@ -76,8 +76,9 @@ fn enhance_variant(
 }
 
 /// The benchmark's `enhance` of a method (its code) with the ablations `ablate`
-/// (interface.rs ABLATE_*), reaching the pixels by `access`: the paper's method (with shared
-/// fetches) or the perceptual method, in mode enhance on RGBA8 sRGB; None for the others.
+/// (interface.rs ABLATE_*), reaching the pixels by `access`, sampling by shared fetches
+/// (`shared`: the paper's method only) or the general way: the paper's or the perceptual method,
+/// in mode enhance on RGBA8 sRGB; None for the others.
 pub fn enhance_ablated(method: u32, access: u32, ablate: u32, shared: bool) -> Option<ShaderId> {
     modules::ENHANCE_ABLATED
         .iter()

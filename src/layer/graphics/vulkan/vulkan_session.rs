@@ -45,13 +45,16 @@ pub unsafe fn bind(base: &xr::BaseInStructure, settings: &Settings) -> Option<Bo
     // SAFETY: the type tag says this is a Vulkan binding (the caller's contract).
     let b = unsafe { &*(base as *const _ as *const xr::GraphicsBindingVulkanKHR) };
     Some(match set_up(b, settings) {
-        Ok(engine) => Bound::Enhanced(Box::new(VulkanSession {
-            image_copy: AtomicBool::new(in_place::wanted(&engine.gpu, settings)),
-            tiles: AtomicBool::new(in_place::ways(&engine.gpu, settings).0),
-            sampled: AtomicBool::new(in_place::ways(&engine.gpu, settings).1),
-            engine,
-            ready: None,
-        })),
+        Ok(engine) => {
+            let (tiles, sampled) = in_place::ways(&engine.gpu, settings);
+            Bound::Enhanced(Box::new(VulkanSession {
+                image_copy: AtomicBool::new(in_place::wanted(&engine.gpu, settings)),
+                tiles: AtomicBool::new(tiles),
+                sampled: AtomicBool::new(sampled),
+                engine,
+                ready: None,
+            }))
+        }
         Err(e) => Bound::PassThrough(format!(
             "GPU set-up failed ({e}): passing frames through untouched"
         )),
