@@ -216,11 +216,12 @@ impl Build {
                 specialise((v.method, 0, format), false),
                 method_wgsl(v.method)
             );
-            let parsed = self.write(&file, "enhance", &source, "classify");
-            let id = self.table.add(&file, "classify", false, Some(v.pixels));
+            let entry = v.entry();
+            let parsed = self.write(&file, "enhance", &source, entry);
+            let id = self.table.add(&file, entry, false, Some(v.pixels));
             self.table.classify.push((v, id));
             if v.pixels.gl() {
-                let id = self.write_glsl(&file, &parsed, "classify");
+                let id = self.write_glsl(&file, &parsed, entry);
                 self.gl.classify.push((v, id));
             }
         }

@@ -81,8 +81,8 @@ impl Table {
         s += "/// (method, mode, format, access, extras, shared fetches, id) of each `enhance`\n/// variant.\n";
         s += "pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[\n";
         s += &enhance_rows(&self.enhance);
-        s += "];\n/// (format, access, method, id) of each `classify` variant.\n";
-        s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n";
+        s += "];\n/// (format, access, method, by tile rows, id) of each `classify` variant.\n";
+        s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, bool, usize)] = &[\n";
         s += &classify_rows(&self.classify);
         s += "];\n/// (method, access, ablations, shared fetches, id) of each ablated `enhance` variant\n/// of the benchmark.\n";
         s += "pub static ENHANCE_ABLATED: &[(u32, u32, u32, bool, usize)] = &[\n";
@@ -171,7 +171,7 @@ impl GlTable {
             enhance_rows(&self.enhance)
         );
         s += &format!(
-            "/// (format, access, method, id) of each `classify` GLSL variant.\npub static GL_CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[\n{}];\n",
+            "/// (format, access, method, by tile rows, id) of each `classify` GLSL variant.\npub static GL_CLASSIFY_VARIANTS: &[(u32, u32, u32, bool, usize)] = &[\n{}];\n",
             classify_rows(&self.classify)
         );
         s += &format!(
@@ -206,13 +206,13 @@ fn ablated_rows(variants: &[(Ablated, usize)]) -> String {
         .collect()
 }
 
-/// The rows of a `classify` table: (format, access, method, id).
+/// The rows of a `classify` table: (format, access, method, by tile rows, id).
 fn classify_rows(variants: &[(Classify, usize)]) -> String {
     variants
         .iter()
         .map(|(v, id)| {
-            let (f, a, m) = (v.pixels.format, v.pixels.access, v.method);
-            format!("    ({f}, {a}, {m}, {id}),\n")
+            let (f, a, m, r) = (v.pixels.format, v.pixels.access, v.method, v.rows);
+            format!("    ({f}, {a}, {m}, {r}, {id}),\n")
         })
         .collect()
 }

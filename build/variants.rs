@@ -198,15 +198,26 @@ pub fn ablated_variants() -> Vec<Ablated> {
 
 /// One `classify` variant (mode 0, extras off): built with the paper's method, which lists
 /// every tile with content, or the perceptual method's, which lists only tiles with a pixel
-/// below its target (it leaves the others as they are).
+/// below its target (it leaves the others as they are); an invocation per tile, or (the
+/// benchmark's `classify-rows`, the perceptual method's only) per tile row.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 pub struct Classify {
     pub pixels: PixelAccess,
     /// The method's code: paper_code() or perceptual_code().
     pub method: u32,
+    /// An invocation per tile row (`classify_rows`; src/gpu/core/plan.rs ClassifyCover).
+    pub rows: bool,
 }
 
 impl Classify {
+    /// Its entry point in shaders/enhance.wgsl.
+    pub fn entry(&self) -> &'static str {
+        match self.rows {
+            false => "classify",
+            true => "classify_rows",
+        }
+    }
+
     /// The SPIR-V (and GLSL) file's name, without its extension.
     pub fn file(&self) -> String {
         let own = if self.method == paper_code() {
@@ -214,20 +225,33 @@ impl Classify {
         } else {
             "_perceptual"
         };
+        let rows = if self.rows { "_rows" } else { "" };
         format!(
-            "classify_f{}_a{}{own}",
+            "classify_f{}_a{}{own}{rows}",
             self.pixels.format, self.pixels.access
         )
     }
 }
 
-/// Every `classify` variant, two per pixel access (the paper's, the perceptual method's), in
-/// the table's order.
+/// Every `classify` variant, in the table's order: two per pixel access (the paper's, the
+/// perceptual method's), then the perceptual method's by tile rows for the benchmark's
+/// ablation, on RGBA8 sRGB through the accesses the ablations run (as `ablated_variants`).
 pub fn classify_variants() -> Vec<Classify> {
-    pixel_accesses()
-        .into_iter()
-        .flat_map(|pixels| {
-            [paper_code(), perceptual_code()].map(|method| Classify { pixels, method })
+    let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
+    let per_tile = pixel_accesses().into_iter().flat_map(|pixels| {
+        [paper_code(), perceptual_code()].map(|method| Classify {
+            pixels,
+            method,
+            rows: false,
         })
-        .collect()
+    });
+    let rows = pixel_accesses()
+        .into_iter()
+        .filter(|p| p.format == srgb8 && p.access != ACCESS_SAMPLED)
+        .map(|pixels| Classify {
+            pixels,
+            method: perceptual_code(),
+            rows: true,
+        });
+    per_tile.chain(rows).collect()
 }

@@ -151,7 +151,7 @@ def method_target(vk, perceptual, out):
 
 
 def ablations(parts, out):
-    for name in ("ablate-vk", "ablate-gl", "ablate-perceptual"):
+    for name in ("ablate-vk", "ablate-gl", "ablate-perceptual", "ablate-perceptual-gl"):
         rows = [r for e in parts.get(name, []) for r in (e.get("output") or {}).get("results", [])]
         if not rows:
             continue
@@ -205,6 +205,7 @@ def main(argv):
     vk, gl = results(parts, "vk"), results(parts, "gl")
     perceptual = results(parts, "perceptual")
     for title, rows in [("Vulkan, paper", vk), ("OpenGL, paper", gl),
+                        ("OpenGL, paper, sizes largest first", results(parts, "gl-reversed")),
                         ("Vulkan, perceptual", perceptual)]:
         if rows:
             out.append(f"\n### {title} (ms, medians)\n")

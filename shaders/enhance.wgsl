@@ -426,8 +426,8 @@ fn background_at(x: u32, y: u32) -> Background {
 }
 
 // Of pixels x..x+3 of row y (words w), those the method may change: all, but in the perceptual
-// method's own `classify` variant (built for its enhance and split modes) only those below its
-// target, so that the tiles it leaves alone are not listed at all.
+// method's own `classify` variants (built for its enhance and split modes) only those below
+// its target, so that the tiles it leaves alone are not listed at all.
 fn may_change(x: u32, y: u32, w: Words) -> vec4<bool> {
     if (!METHOD_PERCEPTUAL) {
         return vec4<bool>(true);
@@ -435,22 +435,34 @@ fn may_change(x: u32, y: u32, w: Words) -> vec4<bool> {
     return perceptual_may_change(decode_stored(stored_colours(w)), sampled_background(x, y));
 }
 
-// Whether a tile needs the enhancement pass in the current mode.
+// `content_from` of a tile the current mode wants whatever it holds.
+const WHOLE_TILE: u32 = 0xffffffffu;
+
+// The first column of the tile at x0 whose pixels count as content in the current mode (right
+// of the split divider), or WHOLE_TILE (the background view, the divider's columns).
+fn content_from(x0: u32) -> u32 {
+    if (pc.mode == MODE_BACKGROUND) {
+        return WHOLE_TILE;
+    }
+    if (pc.mode == MODE_SPLIT) {
+        // The divider columns half - 1 and half are drawn on every row.
+        let half = pc.region_size.x / 2u;
+        if (x0 <= half && half < x0 + TILE + 1u) {
+            return WHOLE_TILE;
+        }
+        return max(x0, half + 1u);
+    }
+    return x0;
+}
+
+// Whether a tile needs the enhancement pass in the current mode: it holds a foreground pixel
+// (in the perceptual method's own variant, one it may change).
 fn tile_wanted(tx: u32, ty: u32) -> bool {
     let x0 = tx * TILE;
     let y0 = ty * TILE;
-    let width = pc.region_size.x;
-    if (pc.mode == MODE_BACKGROUND) {
+    let first_x = content_from(x0);
+    if (first_x == WHOLE_TILE) {
         return true;
-    }
-    var first_x = x0;
-    if (pc.mode == MODE_SPLIT) {
-        // The divider columns half - 1 and half are drawn on every row.
-        let half = width / 2u;
-        if (x0 <= half && half < x0 + TILE + 1u) {
-            return true;
-        }
-        first_x = max(x0, half + 1u);
     }
     // Row by row, stopping at the first row with a foreground pixel (a full frame reads one
     // row per tile). Pixels outside the region or left of the split divider are masked.
@@ -482,6 +494,26 @@ fn tile_wanted(tx: u32, ty: u32) -> bool {
     return found;
 }
 
+// Whether row dy of a tile holds a pixel the method may change (in the perceptual method's
+// own `classify_rows`: a foreground pixel below its target).
+fn tile_row_wanted(tx: u32, ty: u32, dy: u32) -> bool {
+    let x0 = tx * TILE;
+    let y = ty * TILE + dy;
+    let first_x = content_from(x0);
+    if (first_x == WHOLE_TILE) {
+        return true;
+    }
+    if (y >= pc.region_size.y) {
+        return false;
+    }
+    // Only a row with content evaluates the model (a GPU skips the others' branch).
+    let content = foreground(x0, y, first_x, false) | foreground(x0 + 4u, y, first_x, false);
+    if (!any(content)) {
+        return false;
+    }
+    return any(foreground(x0, y, first_x, true)) || any(foreground(x0 + 4u, y, first_x, true));
+}
+
 // Of pixels x..x+3 of row y: those in the region, at or right of first_x and foreground, and,
 // where `changing`, of those the ones the method may change.
 fn foreground(x: u32, y: u32, first_x: u32, changing: bool) -> vec4<bool> {
@@ -496,16 +528,49 @@ fn foreground(x: u32, y: u32, first_x: u32, changing: bool) -> vec4<bool> {
     return wanted;
 }
 
+// Appends tile (tx, ty) to the list.
+fn list_tile(tx: u32, ty: u32) {
+    let k = atomicAdd(&tiles.count, 1u);
+    tiles.index[k] = ty * pc.tile_columns + tx;
+}
+
 // One invocation per tile: lists the tiles with any foreground pixel (in the perceptual method's
-// own variant, any it may change), a row of tiles per workgroup (CLASSIFY_WORKGROUP in src/gpu/core/interface.rs) so that the list runs in row order.
+// own variant, any it may change), a row of tiles per workgroup (CLASSIFY_WORKGROUP in
+// src/gpu/core/interface.rs) so that the list runs in row order.
 @compute @workgroup_size(CLASSIFY_WORKGROUP_X, CLASSIFY_WORKGROUP_Y)
 fn classify(@builtin(global_invocation_id) id: vec3<u32>) {
     let rows = (pc.region_size.y + TILE - 1u) / TILE;
     if (id.x >= pc.tile_columns || id.y >= rows || !tile_wanted(id.x, id.y)) {
         return;
     }
-    let k = atomicAdd(&tiles.count, 1u);
-    tiles.index[k] = id.y * pc.tile_columns + id.x;
+    list_tile(id.x, id.y);
+}
+
+// Which of a workgroup's tiles `classify_rows` lists.
+var<workgroup> wanted_tiles: array<atomic<u32>, TILE>;
+
+// The perceptual method's own classify with an invocation per tile row, as `enhance` runs:
+// TILE tiles of a row per workgroup (local.x), TILE rows each (local.y). It lists the tiles
+// `classify` lists, with TILE times as many invocations checking their pixels side by side,
+// but no tile stops at its first pixel below the target (`contrastxr bench --ablate
+// classify-rows` compares them).
+@compute @workgroup_size(TILE, TILE)
+fn classify_rows(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let tx = group.x * TILE + local.x;
+    let ty = group.y;
+    let rows = (pc.region_size.y + TILE - 1u) / TILE;
+    let tile = tx < pc.tile_columns && ty < rows;
+    if (local.y == 0u) {
+        atomicStore(&wanted_tiles[local.x], 0u);
+    }
+    workgroupBarrier();
+    if (tile && tile_row_wanted(tx, ty, local.y)) {
+        atomicStore(&wanted_tiles[local.x], 1u);
+    }
+    workgroupBarrier();
+    if (tile && local.y == 0u && atomicLoad(&wanted_tiles[local.x]) != 0u) {
+        list_tile(tx, ty);
+    }
 }
 
 // Turns the tile count into the enhancement's indirect dispatch: TILE tiles per workgroup, at

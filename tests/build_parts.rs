@@ -336,8 +336,19 @@ fn opengl_gets_every_variant_but_the_bgra_ones_the_shared_fetches_and_the_sample
         .collect();
     let srgb = [LAYOUT_RGBA8, LAYOUT_BGRA8].map(|l| l | FORMAT_SRGB_BIT);
     assert_eq!(sampled, srgb);
-    // classify: two per pixel access, the paper's and the perceptual method's.
-    assert_eq!(classify_variants().len(), 2 * pixel_accesses().len());
+    // classify: two per pixel access, the paper's and the perceptual method's; and the
+    // perceptual method's by tile rows for the ablations' three accesses of RGBA8 sRGB.
+    assert_eq!(classify_variants().len(), 2 * pixel_accesses().len() + 3);
+    let by_rows: Vec<String> = classify_variants()
+        .iter()
+        .filter(|v| v.rows)
+        .map(|v| format!("{} {}", v.file(), v.entry()))
+        .collect();
+    let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
+    let expected: Vec<String> = [ACCESS_WIDE, ACCESS_NARROW, ACCESS_IN_PLACE]
+        .map(|a| format!("classify_f{srgb8}_a{a}_perceptual_rows classify_rows"))
+        .into();
+    assert_eq!(by_rows, expected);
 }
 
 // --- The interface checks ---
@@ -674,7 +685,11 @@ fn the_table_lists_modules_singles_and_variants_with_their_ids() {
     };
     let id = t.add(&v.file(), "enhance", false, Some(pixels));
     t.enhance.push((v, id));
-    let c = variants::Classify { pixels, method: 0 };
+    let c = variants::Classify {
+        pixels,
+        method: 0,
+        rows: false,
+    };
     let id = t.add(&c.file(), "classify", false, Some(pixels));
     t.classify.push((c, id));
     let a = variants::Ablated {
@@ -704,9 +719,9 @@ pub static DECODE_BLUR: &[usize] = &[1];
 pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[
     (0, 2, 0, 2, true, false, 2),
 ];
-/// (format, access, method, id) of each `classify` variant.
-pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, usize)] = &[
-    (0, 2, 0, 3),
+/// (format, access, method, by tile rows, id) of each `classify` variant.
+pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, bool, usize)] = &[
+    (0, 2, 0, false, 3),
 ];
 /// (method, access, ablations, shared fetches, id) of each ablated `enhance` variant
 /// of the benchmark.

@@ -10,6 +10,7 @@ use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::{Method, Params, ViewMode};
 use contrastxr::gpu::core::pixel_codec::half_from_f32;
+use contrastxr::gpu::core::ClassifyChoice;
 use contrastxr::gpu::vulkan::offline::AppImage;
 use contrastxr::gpu::vulkan::VkFormat;
 use contrastxr::gpu::OfflineBackend;
@@ -1128,7 +1129,8 @@ fn bench_ablations_take_out_what_they_name() {
 /// The perceptual method's ablations: without its directions and with every pixel below the
 /// target (target_contrast 1), its output is the paper's; without its bisection it is its own
 /// where no pixel reaches the target, and not at the default target; listing tiles by the
-/// paper's classify changes nothing (each pixel is judged again).
+/// paper's classify changes nothing (each pixel is judged again), nor by its own over tile
+/// rows (`classify-rows`).
 #[test]
 fn perceptual_ablations_take_out_what_they_name() {
     use contrastxr::gpu::core::interface::{ABLATE_BISECTION, ABLATE_DIRECTIONS};
@@ -1178,15 +1180,63 @@ fn perceptual_ablations_take_out_what_they_name() {
         own,
         "no bisection ran"
     );
-    e.set_own_classify(false);
+    e.set_classify(ClassifyChoice::Paper);
     let all_tiles = run(&mut e, 0, &default);
-    e.set_own_classify(true);
-    assert_shared_fetch_contract(
-        &e,
-        &rgba8_channels(&all_tiles),
-        &rgba8_channels(&own),
-        "the paper's classify",
-    );
+    e.set_classify(ClassifyChoice::OwnByRows);
+    let by_rows = run(&mut e, 0, &default);
+    e.set_classify(ClassifyChoice::Own);
+    for (out, what) in [
+        (all_tiles, "the paper's classify"),
+        (by_rows, "by tile rows"),
+    ] {
+        let (out, own) = (rgba8_channels(&out), rgba8_channels(&own));
+        assert_shared_fetch_contract(&e, &out, &own, what);
+    }
+    assert_clean(&e);
+}
+
+/// The perceptual method's classify by tile rows lists every tile its own classify lists: with
+/// one content pixel per tile, in each row and column of the tiles in turn, and every pixel
+/// below the target (target_contrast 1), the outputs are the same word for word, through a
+/// buffer and in place, and the same as with every tile with content listed (the paper's
+/// classify).
+#[test]
+fn the_classify_by_tile_rows_lists_the_tiles_its_own_does() {
+    let mut e = engine();
+    let camera = noise(64, 40, 53);
+    // 12 x 3 tiles, the last row of tiles one pixel high.
+    let image = common::images::one_pixel_per_tile(96, 17, 59);
+    let raw = raw_words(PixelFormat::SRGB8, &image);
+    let mut params = Params {
+        method: Method::Perceptual,
+        ..Params::default()
+    };
+    params.perceptual.target_contrast = 1.0;
+    let srgb = ash::vk::Format::R8G8B8A8_SRGB;
+    for in_place in [false, true] {
+        let mut run = |choice| {
+            e.set_classify(choice);
+            let region = (96, 17);
+            let out = match in_place {
+                false => e.enhance_raw(&raw, region, PixelFormat::SRGB8, &camera, &params),
+                true => e.enhance_raw_in_place(&raw, (region, srgb), &camera, &params),
+            };
+            e.set_classify(ClassifyChoice::Own);
+            out.unwrap_or_else(|err| panic!("in place {in_place}, {choice:?}: {err}"))
+        };
+        let own = run(ClassifyChoice::Own);
+        for choice in [ClassifyChoice::OwnByRows, ClassifyChoice::Paper] {
+            let out = run(choice);
+            let differ = out.iter().zip(&own).filter(|(a, b)| a != b).count();
+            assert_eq!(differ, 0, "in place {in_place}, {choice:?}: pixels differ");
+        }
+        // 12 + 12 + 2 content pixels (rows 0 to 7 of the tiles, then row 16 only), most
+        // changed.
+        let content = raw.iter().filter(|&&w| w != 0).count();
+        let changed = own.iter().zip(&raw).filter(|(o, r)| o != r).count();
+        assert_eq!(content, 26, "in place {in_place}");
+        assert!(changed >= 20, "in place {in_place}: {changed} changed");
+    }
     assert_clean(&e);
 }
 

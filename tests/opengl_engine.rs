@@ -11,7 +11,7 @@ use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
 use contrastxr::algorithm::Params;
-use contrastxr::gpu::core::pixel_codec;
+use contrastxr::gpu::core::{pixel_codec, ClassifyChoice};
 use contrastxr::gpu::opengl::GlFormat;
 use contrastxr::gpu::opengl::{GlOffline, GlTarget, GlView};
 use contrastxr::gpu::OfflineBackend;
@@ -915,7 +915,7 @@ fn assert_same_arithmetic(gl: &GlOffline, a: &[u32], b: &[u32], what: &str) {
 /// enhance pass every word comes back unchanged; without the codec the sRGB words come out as
 /// RGBA8 words do; with the constant background the camera no longer matters; the perceptual
 /// method without its directions, every pixel below the target, gives the paper's output, and
-/// through the paper's classify its own.
+/// through the paper's classify or its own by tile rows its own.
 #[test]
 fn opengl_ablations_take_out_what_they_name() {
     let channels = |words: &[u32]| -> std::vec::IntoIter<u8> {
@@ -1007,11 +1007,16 @@ fn opengl_ablations_take_out_what_they_name() {
         ..Params::default()
     };
     let own = run(&mut gl, 0, SRGB8_ALPHA8, &camera, &default);
-    gl.engine().set_own_classify(false);
-    let all_tiles = run(&mut gl, 0, SRGB8_ALPHA8, &camera, &default);
-    gl.engine().set_own_classify(true);
     assert_ne!(own, raw);
-    assert_same_arithmetic(&gl, &all_tiles, &own, "the paper's classify");
+    for (choice, what) in [
+        (ClassifyChoice::Paper, "the paper's classify"),
+        (ClassifyChoice::OwnByRows, "by tile rows"),
+    ] {
+        gl.engine().set_classify(choice);
+        let out = run(&mut gl, 0, SRGB8_ALPHA8, &camera, &default);
+        gl.engine().set_classify(ClassifyChoice::Own);
+        assert_same_arithmetic(&gl, &out, &own, what);
+    }
     // Other methods and formats have none.
     gl.engine().set_ablation(ABLATE_METHOD);
     let luminance = Params {
@@ -1025,6 +1030,45 @@ fn opengl_ablations_take_out_what_they_name() {
         let err = r.expect_err("no ablated variant").to_string();
         assert!(err.contains("paper's and the perceptual method"), "{err}");
     }
+}
+
+/// The perceptual method's classify by tile rows lists every tile its own classify lists, in
+/// the OpenGL engine too: one content pixel per tile, in each row and column of the tiles in
+/// turn, every pixel below the target (target_contrast 1): the same words through a buffer and
+/// in place, and the same as with every tile with content listed.
+#[test]
+fn opengl_classify_by_tile_rows_lists_the_tiles_its_own_does() {
+    use contrastxr::algorithm::Method;
+    let mut gl = context();
+    let camera = noise(64, 40, 53);
+    let raw: Vec<u32> = common::images::one_pixel_per_tile(96, 17, 59)
+        .pixels
+        .iter()
+        .map(|p| u32::from_le_bytes(*p))
+        .collect();
+    let mut params = Params {
+        method: Method::Perceptual,
+        ..Params::default()
+    };
+    params.perceptual.target_contrast = 1.0;
+    for in_place in [false, true] {
+        gl.engine().set_in_place(in_place);
+        let mut run = |choice| {
+            gl.engine().set_classify(choice);
+            let out = gl.enhance_raw(&raw, (96, 17), SRGB8_ALPHA8, &camera, &params);
+            gl.engine().set_classify(ClassifyChoice::Own);
+            out.unwrap_or_else(|err| panic!("in place {in_place}, {choice:?}: {err}"))
+        };
+        let own = run(ClassifyChoice::Own);
+        for choice in [ClassifyChoice::OwnByRows, ClassifyChoice::Paper] {
+            let out = run(choice);
+            let differ = out.iter().zip(&own).filter(|(a, b)| a != b).count();
+            assert_eq!(differ, 0, "in place {in_place}, {choice:?}: pixels differ");
+        }
+        let changed = own.iter().zip(&raw).filter(|(o, r)| o != r).count();
+        assert!(changed >= 20, "in place {in_place}: {changed} changed");
+    }
+    gl.engine().set_in_place(false);
 }
 
 /// The app's reset status is the app's: a robust context reports a reset once, so the engine

@@ -142,6 +142,10 @@ const RUN: &[Run] = &[
 /// Concrete examples not run here, and why.
 const NOT_RUN: &[(&str, &str)] = &[
     (
+        "contrastxr bench --method perceptual --ablate classify-rows",
+        "minutes on a CPU driver; tests/gpu_engine.rs and tests/opengl_engine.rs run its classify",
+    ),
+    (
         "contrastxr bench --path all --ablate all --runs 30",
         "a GPU's measurement (scripts/gpu-check runs it); tests/gpu_engine.rs runs --ablate and --path all",
     ),

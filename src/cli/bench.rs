@@ -68,7 +68,8 @@ pub fn usage() -> String {
          For --method perceptual: method, background, directions (the paper's colour the only\n\
          candidate), bisection (none back toward the display colour), search (both), classify\n\
          (the paper's classify, which lists every tile with content, instead of the method's\n\
-         own). all: every one the method has.\n\
+         own), classify-rows (replaced: the method's own classify with an invocation per tile\n\
+         row instead of per tile, the same tiles listed). all: every one the method has.\n\
          --shader-stats (Vulkan) adds what the driver's compiler says of the frame's per-pixel\n\
          shaders on RGBA8 sRGB for the method (classify and enhance, general and shared-fetch,\n\
          for the buffer path, in place and the sampled read; finish_tiles): registers,\n\

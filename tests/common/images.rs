@@ -22,3 +22,23 @@ pub fn noise(width: u32, height: u32, seed: u32) -> RgbaImage {
     }
     img
 }
+
+/// `noise` with one content pixel per 8x8 tile (the engine's TILE) and every other pixel
+/// transparent black; tile k's pixel lies at column 3k mod 8 and row k mod 8 of its tile, so
+/// the pixels fall in every row and column of the tiles.
+pub fn one_pixel_per_tile(width: u32, height: u32, seed: u32) -> RgbaImage {
+    let source = noise(width, height, seed);
+    let mut img = RgbaImage::new(width, height, [0, 0, 0, 0]);
+    let columns = width.div_ceil(8);
+    for k in 0..columns * height.div_ceil(8) {
+        let x = (k % columns) * 8 + (3 * k) % 8;
+        let y = (k / columns) * 8 + k % 8;
+        if x < width && y < height {
+            let i = (y * width + x) as usize;
+            let [r, g, b, _] = source.pixels[i];
+            // Opaque and never black: content, whatever the noise gave.
+            img.pixels[i] = [r | 1, g, b, 255];
+        }
+    }
+    img
+}

@@ -215,13 +215,14 @@ pub const DECODE_ROWS: u32 = 8;
 pub const INDIRECT_ROW_GROUPS: u32 = 32768;
 
 /// Each entry point's workgroup size.
-pub const WORKGROUPS: [(&str, [u32; 3]); 7] = [
+pub const WORKGROUPS: [(&str, [u32; 3]); 8] = [
     ("decode", [TILE, TILE, 1]),
     ("decode_blur", [TILE, TILE, 1]),
     ("copy_pixels", [TILE, TILE, 1]),
     ("copy_rows", [TILE, TILE, 1]),
     ("enhance", [TILE, TILE, 1]),
     ("classify", CLASSIFY_WORKGROUP),
+    ("classify_rows", [TILE, TILE, 1]),
     ("finish_tiles", [1, 1, 1]),
 ];
 

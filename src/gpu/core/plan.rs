@@ -45,14 +45,41 @@ pub enum Step {
     Barrier(Reads),
 }
 
+/// How a `classify` variant covers a view's tiles, which its grid follows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClassifyCover {
+    /// An invocation per tile (`classify`), CLASSIFY_WORKGROUP tiles of a row per workgroup:
+    /// it stops at the tile's first content, one row of a full frame.
+    Tiles,
+    /// An invocation per tile row (`classify_rows`, the perceptual method's, for the
+    /// benchmark's `classify-rows`), TILE tiles of a row per workgroup: TILE times as many
+    /// invocations check the pixels side by side.
+    TileRows,
+}
+
+impl ClassifyCover {
+    /// Its workgroups over a view of `tiles` (columns, rows).
+    pub fn grid(self, tiles: (u32, u32)) -> Grid {
+        let per_group = match self {
+            ClassifyCover::Tiles => (CLASSIFY_WORKGROUP[0], CLASSIFY_WORKGROUP[1]),
+            ClassifyCover::TileRows => (TILE, 1),
+        };
+        Grid::Groups(tiles.0.div_ceil(per_group.0), tiles.1.div_ceil(per_group.1))
+    }
+}
+
 /// A method's passes that the steps cannot run.
 #[derive(Debug, PartialEq, Eq)]
 pub struct NoPlan(pub &'static str);
 
-/// The steps of one view of `region` texels for `passes`, in their order: classify lists the
-/// tiles with content, finish_tiles turns their count into dispatch arguments, enhance runs
-/// over the listed tiles only. Each pass needs the one before it.
-pub fn view_steps(passes: &[Pass], region: (u32, u32)) -> Result<Vec<Step>, NoPlan> {
+/// The steps of one view of `region` texels for `passes`, in their order: classify (of
+/// `cover`) lists the tiles with content, finish_tiles turns their count into dispatch
+/// arguments, enhance runs over the listed tiles only. Each pass needs the one before it.
+pub fn view_steps(
+    passes: &[Pass],
+    region: (u32, u32),
+    cover: ClassifyCover,
+) -> Result<Vec<Step>, NoPlan> {
     let tiles = (region.0.div_ceil(TILE), region.1.div_ceil(TILE));
     let mut steps = Vec::new();
     let mut last = None;
@@ -60,11 +87,7 @@ pub fn view_steps(passes: &[Pass], region: (u32, u32)) -> Result<Vec<Step>, NoPl
         match (pass, last) {
             (Pass::Classify, None) => {
                 steps.push(Step::ClearTiles);
-                let groups = Grid::Groups(
-                    tiles.0.div_ceil(CLASSIFY_WORKGROUP[0]),
-                    tiles.1.div_ceil(CLASSIFY_WORKGROUP[1]),
-                );
-                steps.push(Step::Dispatch(Shader::Classify, groups));
+                steps.push(Step::Dispatch(Shader::Classify, cover.grid(tiles)));
             }
             (Pass::FinishTiles, Some(Pass::Classify)) => {
                 steps.push(Step::Barrier(Reads::Tiles));
@@ -119,7 +142,7 @@ mod tests {
         // 100x40 texels: 13x5 tiles of 8 (interface.rs TILE), in classify's workgroups of 64
         // tiles of a row: 1x5 of them.
         assert_eq!((TILE, CLASSIFY_WORKGROUP), (8, [64, 1, 1]));
-        let steps = view_steps(&PER_PIXEL_PASSES, (100, 40)).unwrap();
+        let steps = view_steps(&PER_PIXEL_PASSES, (100, 40), ClassifyCover::Tiles).unwrap();
         assert_eq!(
             steps,
             [
@@ -134,12 +157,29 @@ mod tests {
         );
     }
 
+    /// By tile rows, classify runs a workgroup per TILE tiles of a row; by tiles, one per
+    /// CLASSIFY_WORKGROUP tiles.
+    #[test]
+    fn the_classify_grid_follows_its_cover() {
+        // 100x40 texels: 13x5 tiles.
+        let grid = |cover| view_steps(&PER_PIXEL_PASSES, (100, 40), cover).unwrap()[1];
+        let rows = Step::Dispatch(Shader::Classify, Grid::Groups(2, 5));
+        let tiles = Step::Dispatch(Shader::Classify, Grid::Groups(1, 5));
+        assert_eq!(grid(ClassifyCover::TileRows), rows);
+        assert_eq!(grid(ClassifyCover::Tiles), tiles);
+    }
+
     /// Every method's passes (its entry in method/table.rs) make steps the backends run.
     #[test]
     fn every_method_has_a_plan() {
         for method in crate::algorithm::method::Method::ALL {
             let passes = method.entry().passes;
-            assert!(view_steps(passes, (64, 64)).is_ok(), "{}", method.name());
+            let cover = ClassifyCover::Tiles;
+            assert!(
+                view_steps(passes, (64, 64), cover).is_ok(),
+                "{}",
+                method.name()
+            );
         }
     }
 
@@ -154,7 +194,10 @@ mod tests {
             &[Classify, Classify, FinishTiles, Enhance],
             &[],
         ] {
-            assert!(view_steps(passes, (8, 8)).is_err(), "{passes:?}");
+            assert!(
+                view_steps(passes, (8, 8), ClassifyCover::Tiles).is_err(),
+                "{passes:?}"
+            );
         }
     }
 
@@ -181,7 +224,7 @@ mod tests {
 
     #[test]
     fn encoding_keeps_the_order_and_stops_at_an_error() {
-        let steps = view_steps(&PER_PIXEL_PASSES, (8, 8)).unwrap();
+        let steps = view_steps(&PER_PIXEL_PASSES, (8, 8), ClassifyCover::Tiles).unwrap();
         let mut log = Log::default();
         let result = encode(&steps, &mut log);
         assert_eq!(result, Err("no enhance over TileList(4)".to_string()));

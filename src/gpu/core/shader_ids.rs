@@ -3,6 +3,7 @@
 
 use super::codes::mode_code;
 use super::modules;
+use super::plan::ClassifyCover;
 use crate::algorithm::params::ViewMode;
 use std::fmt;
 
@@ -86,12 +87,17 @@ pub fn enhance_ablated(method: u32, access: u32, ablate: u32, shared: bool) -> O
         .map(|&(.., k)| ShaderId(k))
 }
 
-/// The `classify` shader for a pixel format (shader code), pixel access and the method code
-/// it lists tiles for (`VariantKey::classify_method`).
-pub fn classify(format: u32, access: u32, method: u32) -> Result<ShaderId, NoShader> {
+/// The `classify` shader for a pixel format (shader code), pixel access, the method code it
+/// lists tiles for and its cover (`VariantKey::classify_taken`).
+pub fn classify(
+    format: u32,
+    access: u32,
+    (method, cover): (u32, ClassifyCover),
+) -> Result<ShaderId, NoShader> {
+    let rows = cover == ClassifyCover::TileRows;
     modules::CLASSIFY_VARIANTS
         .iter()
-        .find(|&&(f, a, m, _)| (f, a, m) == (format, access, method))
+        .find(|&&(f, a, m, r, _)| (f, a, m, r) == (format, access, method, rows))
         .map(|&(.., k)| ShaderId(k))
         .ok_or(NoShader)
 }
@@ -113,7 +119,7 @@ mod tests {
     use super::*;
     use crate::algorithm::params::Method;
     use crate::gpu::core::codes::method_code;
-    use crate::gpu::core::interface::ACCESS_IN_PLACE;
+    use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_SAMPLED};
 
     /// The ids name the shaders they stand for in `modules::all()`.
     #[test]
@@ -139,7 +145,7 @@ mod tests {
         // The defaults have a shared-fetch variant for every format and access; the others
         // none.
         let (paper, enhance_mode) = (0, mode_code(ViewMode::Enhance));
-        for &(f, w, ..) in modules::CLASSIFY_VARIANTS {
+        for &(f, w, ..) in modules::CLASSIFY_VARIANTS.iter().filter(|v| !v.3) {
             assert!(enhance_shared((paper, enhance_mode, f), w, false).is_some());
             assert!(enhance_shared((paper, enhance_mode, f), w, true).is_none());
             assert!(enhance_shared((1, enhance_mode, f), w, false).is_none());
@@ -147,29 +153,42 @@ mod tests {
                 enhance_shared((paper, mode_code(ViewMode::Background), f), w, false).is_none()
             );
         }
-        // Two per format and access: the paper's and the perceptual method's.
+        // Two per format and access: the paper's and the perceptual method's; and the
+        // perceptual method's by tile rows for the ablations' accesses of RGBA8 sRGB.
         let perceptual = method_code(Method::Perceptual);
-        for &(f, w, m, k) in modules::CLASSIFY_VARIANTS {
-            assert_eq!(classify(f, w, m).unwrap(), ShaderId(k));
+        let srgb8 = crate::gpu::core::interface::LAYOUT_RGBA8
+            | crate::gpu::core::interface::FORMAT_SRGB_BIT;
+        for &(f, w, m, rows, k) in modules::CLASSIFY_VARIANTS {
+            let cover = [ClassifyCover::Tiles, ClassifyCover::TileRows][usize::from(rows)];
+            assert_eq!(classify(f, w, (m, cover)).unwrap(), ShaderId(k));
             let own = if m == perceptual { "_perceptual" } else { "" };
-            assert_eq!(name(ShaderId(k)), format!("classify_f{f}_a{w}{own}"));
+            let by_rows = if rows { "_rows" } else { "" };
+            assert_eq!(
+                name(ShaderId(k)),
+                format!("classify_f{f}_a{w}{own}{by_rows}")
+            );
             assert!(m == perceptual || m == paper);
+            assert!(!rows || (m == perceptual && f == srgb8 && w != ACCESS_SAMPLED));
         }
-        let counted = |m| {
+        let counted = |m, rows| {
             modules::CLASSIFY_VARIANTS
                 .iter()
-                .filter(|v| v.2 == m)
+                .filter(|v| (v.2, v.3) == (m, rows))
                 .count()
         };
-        assert_eq!(counted(perceptual), counted(paper));
+        assert_eq!(counted(perceptual, false), counted(paper, false));
+        assert_eq!(counted(perceptual, true), 3);
+        assert_eq!(counted(paper, true), 0);
         assert!(reads_camera(decode_blur(7).unwrap()) && reads_camera(DECODE_CAMERA));
         let rgba8 = crate::gpu::core::interface::LAYOUT_RGBA8;
         assert_eq!(
-            in_place_format(classify(rgba8, ACCESS_IN_PLACE, paper).unwrap()),
+            in_place_format(
+                classify(rgba8, ACCESS_IN_PLACE, (paper, ClassifyCover::Tiles)).unwrap()
+            ),
             Some(rgba8)
         );
         assert_eq!(
-            in_place_format(classify(rgba8, 0, perceptual).unwrap()),
+            in_place_format(classify(rgba8, 0, (perceptual, ClassifyCover::Tiles)).unwrap()),
             None
         );
         assert_eq!(in_place_format(FINISH_TILES), None);

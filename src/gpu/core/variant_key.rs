@@ -4,6 +4,7 @@
 use super::codes::{method_code, mode_code};
 use super::interface::{MODE_ENHANCE, MODE_SPLIT};
 use super::pixel_format::PixelFormat;
+use super::plan::ClassifyCover;
 use crate::algorithm::params::{Method, Params};
 
 /// The specialisation of a view's `classify` and `enhance`: the method, the view mode, the pixel
@@ -45,12 +46,16 @@ impl VariantKey {
         }
     }
 
-    /// `classify_method`, or the paper's where `own` is off (the benchmark's `classify`
-    /// ablation: every tile with content listed).
-    pub fn classify_method_if(self, own: bool) -> u32 {
-        match own {
-            true => self.classify_method(),
-            false => method_code(Method::Paper),
+    /// The method code and cover of the `classify` this view takes under `choice`.
+    pub fn classify_taken(self, choice: ClassifyChoice) -> (u32, ClassifyCover) {
+        let own = self.classify_method();
+        match choice {
+            ClassifyChoice::Own => (own, ClassifyCover::Tiles),
+            ClassifyChoice::Paper => (method_code(Method::Paper), ClassifyCover::Tiles),
+            ClassifyChoice::OwnByRows if own == method_code(Method::Perceptual) => {
+                (own, ClassifyCover::TileRows)
+            }
+            ClassifyChoice::OwnByRows => (own, ClassifyCover::Tiles),
         }
     }
 
@@ -66,6 +71,17 @@ impl VariantKey {
     pub fn codes(self) -> (u32, u32, u32) {
         (self.method, self.mode, self.format)
     }
+}
+
+/// Which `classify` views take: their method's own (the layer's), or one the benchmark puts in
+/// its place: the paper's, which lists every tile with content (`--ablate classify`), or the
+/// perceptual method's own with an invocation per tile row (`--ablate classify-rows`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ClassifyChoice {
+    #[default]
+    Own,
+    Paper,
+    OwnByRows,
 }
 
 /// Why a view has no ablated variant for the ablations `ablate` (interface.rs ABLATE_*): the
@@ -135,14 +151,21 @@ mod tests {
             PixelFormat::SRGB8,
             ACCESS_IN_PLACE,
         );
+        let (paper, own) = (method_code(Method::Paper), perceptual.classify_method());
+        let (tiles, rows) = (ClassifyCover::Tiles, ClassifyCover::TileRows);
+        assert_eq!(perceptual.classify_taken(ClassifyChoice::Own), (own, tiles));
         assert_eq!(
-            perceptual.classify_method_if(true),
-            perceptual.classify_method()
+            perceptual.classify_taken(ClassifyChoice::Paper),
+            (paper, tiles)
         );
         assert_eq!(
-            perceptual.classify_method_if(false),
-            method_code(Method::Paper)
+            perceptual.classify_taken(ClassifyChoice::OwnByRows),
+            (own, rows)
         );
+        // Only the perceptual method's own classify is built by tile rows.
+        let paper_key = VariantKey::of(&Params::default(), PixelFormat::SRGB8, ACCESS_IN_PLACE);
+        let by_rows = paper_key.classify_taken(ClassifyChoice::OwnByRows);
+        assert_eq!(by_rows, (paper, tiles));
     }
 
     #[test]

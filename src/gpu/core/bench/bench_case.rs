@@ -6,6 +6,7 @@ use crate::gpu::core::interface::{
     ABLATE_BACKGROUND, ABLATE_BISECTION, ABLATE_CODEC, ABLATE_CUBE_ROOT, ABLATE_DIRECTIONS,
     ABLATE_ENHANCE_PASS, ABLATE_METHOD, ABLATIONS, PERCEPTUAL_ABLATIONS,
 };
+use crate::gpu::core::ClassifyChoice;
 
 /// The camera frame size the background preparation is timed with (a common camera mode).
 pub const CAMERA_SIZE: (u32, u32) = (1280, 720);
@@ -65,10 +66,14 @@ pub enum Ablation {
     Search,
     /// The perceptual method's own `classify`: the paper's lists every tile with content.
     Classify,
+    /// The perceptual method's own `classify` with an invocation per tile row instead of per
+    /// tile (replaced, not taken out: the same tiles listed, the output still the
+    /// enhancement).
+    ClassifyRows,
 }
 
 impl Ablation {
-    pub const ALL: [Ablation; 12] = [
+    pub const ALL: [Ablation; 13] = [
         Ablation::None,
         Ablation::Method,
         Ablation::Background,
@@ -81,6 +86,7 @@ impl Ablation {
         Ablation::Bisection,
         Ablation::Search,
         Ablation::Classify,
+        Ablation::ClassifyRows,
     ];
 
     /// Its name on the command line and in the bench's output.
@@ -98,6 +104,7 @@ impl Ablation {
             Ablation::Bisection => "bisection",
             Ablation::Search => "search",
             Ablation::Classify => "classify",
+            Ablation::ClassifyRows => "classify-rows",
         }
     }
 
@@ -109,18 +116,30 @@ impl Ablation {
         match (method, self) {
             (_, Ablation::None) => true,
             (Method::Paper, Ablation::SharedFetch) => true,
-            (Method::Perceptual, Ablation::Classify) => true,
-            (_, Ablation::SharedFetch | Ablation::Classify) => false,
+            (Method::Perceptual, Ablation::Classify | Ablation::ClassifyRows) => true,
+            (_, Ablation::SharedFetch | Ablation::Classify | Ablation::ClassifyRows) => false,
             (Method::Paper, _) => ABLATIONS.contains(&bits),
             (Method::Perceptual, _) => PERCEPTUAL_ABLATIONS.contains(&bits),
             _ => false,
         }
     }
 
+    /// The `classify` views take under it.
+    pub fn classify(self) -> ClassifyChoice {
+        match self {
+            Ablation::Classify => ClassifyChoice::Paper,
+            Ablation::ClassifyRows => ClassifyChoice::OwnByRows,
+            _ => ClassifyChoice::Own,
+        }
+    }
+
     /// The ABLATE_* bits of its `enhance` variant (0: the layer's own).
     pub fn bits(self) -> u32 {
         match self {
-            Ablation::None | Ablation::SharedFetch | Ablation::Classify => 0,
+            Ablation::None
+            | Ablation::SharedFetch
+            | Ablation::Classify
+            | Ablation::ClassifyRows => 0,
             Ablation::Method => ABLATE_METHOD,
             Ablation::Background => ABLATE_BACKGROUND,
             Ablation::Codec => ABLATE_CODEC,
@@ -206,11 +225,14 @@ pub fn camera_frame(size: (u32, u32)) -> Vec<[u8; 4]> {
 mod tests {
     use super::*;
     use crate::gpu::core::codes::method_code;
-    use crate::gpu::core::interface::ACCESS_WIDE;
+    use crate::gpu::core::interface::{ACCESS_WIDE, FORMAT_SRGB_BIT, LAYOUT_RGBA8};
+    use crate::gpu::core::plan::ClassifyCover;
     use crate::gpu::core::shader_ids;
 
+    const SRGB8_CODE: u32 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
+
     /// An ablation of the shader applies to a method exactly where its variant is built; the
-    /// two that pick another production variant, only to the method that has what they drop.
+    /// three that pick another variant, only to the method that has what they replace.
     #[test]
     fn an_ablation_applies_where_its_variant_is_built() {
         for a in Ablation::ALL {
@@ -221,6 +243,10 @@ mod tests {
                     Ablation::None => true,
                     Ablation::SharedFetch => m == Method::Paper,
                     Ablation::Classify => m == Method::Perceptual,
+                    Ablation::ClassifyRows => {
+                        let key = (method_code(m), ClassifyCover::TileRows);
+                        shader_ids::classify(SRGB8_CODE, ACCESS_WIDE, key).is_ok()
+                    }
                     _ => built.is_some(),
                 };
                 assert_eq!(a.applies_to(m), applies, "{} {}", a.name(), m.name());

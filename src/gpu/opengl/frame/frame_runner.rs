@@ -30,7 +30,7 @@ use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::interface::in_place_texel;
 use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::plan::{view_steps, NoPlan};
-use crate::gpu::core::CameraRect;
+use crate::gpu::core::{CameraRect, ClassifyChoice};
 use crate::gpu::opengl::conv::{image_unit_format, GlFormat};
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
@@ -98,10 +98,10 @@ pub struct GlFrameRunner {
     pub(super) in_place: bool,
     /// Which of the last enhanced views were stored in place (the others through a buffer).
     pub(super) last_in_place: Vec<bool>,
-    /// The benchmark's ablations (interface.rs ABLATE_*) and tile list (variant_programs.rs):
-    /// 0 and true but for `contrastxr bench --ablate`.
+    /// The benchmark's ablations (interface.rs ABLATE_*) and `classify` (variant_programs.rs):
+    /// 0 and the method's own but for `contrastxr bench --ablate`.
     pub(super) ablate: u32,
-    pub(super) own_classify: bool,
+    pub(super) classify: ClassifyChoice,
     /// Each frame's GPU time, from timestamp queries around its work.
     pub(super) times: super::frame_times::FrameTimes,
 }
@@ -173,7 +173,7 @@ impl GlFrameRunner {
             label,
             last_in_place: Vec::new(),
             ablate: 0,
-            own_classify: true,
+            classify: ClassifyChoice::Own,
             times: Default::default(),
         })
     }
@@ -341,7 +341,7 @@ impl GlFrameRunner {
         let mut ids = Vec::new();
         for v in views {
             self.check_view(v)?;
-            ids.extend(self.view_programs(v, params)?);
+            ids.extend(self.view_programs(v, params)?.0);
         }
         self.programs.ready(&self.gl, &ids)
     }
@@ -371,9 +371,10 @@ impl GlFrameRunner {
         let mut ids = Vec::new();
         let mut steps = Vec::new();
         for v in views {
-            ids.extend(self.view_programs(v, params)?);
+            let (programs, cover) = self.view_programs(v, params)?;
+            ids.extend(programs);
             let passes = params.method.entry().passes;
-            let plan = view_steps(passes, (v.rect.2, v.rect.3)).map_err(|NoPlan(why)| {
+            let plan = view_steps(passes, (v.rect.2, v.rect.3), cover).map_err(|NoPlan(why)| {
                 GlError::Input(format!("{}: {why}", params.method.name()))
             })?;
             steps.push(plan);

@@ -5,19 +5,20 @@ use super::frame_runner::{rows_aligned, GlFrameRunner};
 use super::frame_view::GlView;
 use crate::algorithm::params::Params;
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
-use crate::gpu::core::{no_ablated_variant, VariantKey};
+use crate::gpu::core::plan::ClassifyCover;
+use crate::gpu::core::{no_ablated_variant, ClassifyChoice, VariantKey};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::GlError;
 use crate::gpu::opengl::pipelines;
 
 impl GlFrameRunner {
     /// The programs a (checked) view needs: classify, finish_tiles, enhance (those of the
-    /// benchmark's ablations where it sets them).
+    /// benchmark's ablations where it sets them); and how its classify covers the tiles.
     pub(super) fn view_programs(
         &self,
         view: &GlView,
         params: &Params,
-    ) -> Result<[usize; 3], GlError> {
+    ) -> Result<([usize; 3], ClassifyCover), GlError> {
         let in_place = self.store_through(view).is_some();
         let format = view.internal_format;
         let key = Self::shape_key(format, view.rect.2, params, in_place)?;
@@ -57,8 +58,12 @@ impl GlFrameRunner {
     fn key_programs(key: VariantKey, internal_format: u32) -> Result<[usize; 3], GlError> {
         let missing = || GlError::Format(internal_format);
         Ok([
-            pipelines::classify(key.format, key.access, key.classify_method())
-                .ok_or_else(missing)?,
+            pipelines::classify(
+                key.format,
+                key.access,
+                key.classify_taken(ClassifyChoice::Own),
+            )
+            .ok_or_else(missing)?,
             pipelines::GL_FINISH_TILES,
             pipelines::enhance(key.codes(), key.access, key.extras).ok_or_else(missing)?,
         ])
@@ -71,26 +76,29 @@ impl GlFrameRunner {
         self.ablate = ablate;
     }
 
-    /// Whether the perceptual method lists tiles by its own `classify` (on by default); off,
-    /// by the paper's (every tile with content), to compare them.
-    pub fn set_own_classify(&mut self, on: bool) {
-        self.own_classify = on;
+    /// Which `classify` views take (their method's own by default), to compare them.
+    pub fn set_classify(&mut self, choice: ClassifyChoice) {
+        self.classify = choice;
     }
 
-    /// The view's programs as the benchmark's ablations and tile list change them.
+    /// The view's programs as the benchmark's ablations and tile list change them, and how
+    /// the classify taken covers the tiles.
     fn ablated(
         &self,
         key: VariantKey,
         [classify, finish, enhance]: [usize; 3],
-    ) -> Result<[usize; 3], GlError> {
-        let method = key.classify_method_if(self.own_classify);
-        let classify = pipelines::classify(key.format, key.access, method).unwrap_or(classify);
+    ) -> Result<([usize; 3], ClassifyCover), GlError> {
+        let taken = key.classify_taken(self.classify);
+        let (classify, cover) = match pipelines::classify(key.format, key.access, taken) {
+            Some(id) => (id, taken.1),
+            None => (classify, ClassifyCover::Tiles),
+        };
         if self.ablate == 0 {
-            return Ok([classify, finish, enhance]);
+            return Ok(([classify, finish, enhance], cover));
         }
         let enhance = pipelines::enhance_ablated(key.method, key.access, self.ablate)
             .filter(|_| key.has_ablated_variants())
             .ok_or_else(|| GlError::Input(no_ablated_variant(self.ablate)))?;
-        Ok([classify, finish, enhance])
+        Ok(([classify, finish, enhance], cover))
     }
 }

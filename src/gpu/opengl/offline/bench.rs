@@ -18,6 +18,7 @@ use crate::gpu::core::bench::{
     WARM_UP_RUNS,
 };
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
+use crate::gpu::core::ClassifyChoice;
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
@@ -96,10 +97,10 @@ impl GlOffline {
         }
         let engine = self.engine();
         engine.set_ablation(case.ablation.bits());
-        engine.set_own_classify(case.ablation != Ablation::Classify);
+        engine.set_classify(case.ablation.classify());
         let result = self.bench_with(&mut rig, case, params, texels.len(), foreground);
         self.engine().set_ablation(0);
-        self.engine().set_own_classify(true);
+        self.engine().set_classify(ClassifyChoice::Own);
         self.destroy_rig(rig);
         result
     }

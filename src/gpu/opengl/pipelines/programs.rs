@@ -10,6 +10,7 @@
 //! binary cache (binary_cache.rs), from which a later process links it without compiling.
 
 use super::binary_cache::{BinaryCache, ProgramBinaries};
+use crate::gpu::core::plan::ClassifyCover;
 use crate::gpu::core::push_constants::PushConstants;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
@@ -385,12 +386,13 @@ impl Program {
     }
 }
 
-/// The `classify` program of a FORMAT code, access and the method code it lists tiles for
-/// (`VariantKey::classify_method`); None where none is built.
-pub fn classify(format: u32, access: u32, method: u32) -> Option<usize> {
+/// The `classify` program of a FORMAT code, access, the method code it lists tiles for and its
+/// cover (`VariantKey::classify_taken`); None where none is built.
+pub fn classify(format: u32, access: u32, (method, cover): (u32, ClassifyCover)) -> Option<usize> {
+    let rows = cover == ClassifyCover::TileRows;
     GL_CLASSIFY_VARIANTS
         .iter()
-        .find(|&&(f, a, m, _)| (f, a, m) == (format, access, method))
+        .find(|&&(f, a, m, r, _)| (f, a, m, r) == (format, access, method, rows))
         .map(|&(.., id)| id)
 }
 

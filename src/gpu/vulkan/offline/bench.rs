@@ -8,7 +8,7 @@ use super::bench_rig::Rig;
 use super::offline_engine::VkOffline;
 use crate::algorithm::params::Params;
 use crate::gpu::core::bench::{median, Ablation, BenchCase, BenchResult, WARM_UP_RUNS};
-use crate::gpu::core::CameraRect;
+use crate::gpu::core::{CameraRect, ClassifyChoice};
 use crate::gpu::vulkan::device::{
     barrier, record_first_layout, record_image_region_copy, record_layout_barriers,
     record_region_copy, GpuError, ImageRegion, VkResultExt,
@@ -59,11 +59,11 @@ impl VkOffline {
         let ablation = case.ablation;
         self.set_ablation(ablation.bits());
         self.set_shared_fetch(ablation != Ablation::SharedFetch);
-        self.set_own_classify(ablation != Ablation::Classify);
+        self.set_classify(ablation.classify());
         let result = self.bench_with(&mut rig, case, params);
         self.set_ablation(0);
         self.set_shared_fetch(true);
-        self.set_own_classify(true);
+        self.set_classify(ClassifyChoice::Own);
         self.destroy_rig(rig);
         result
     }

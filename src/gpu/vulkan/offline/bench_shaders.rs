@@ -6,7 +6,7 @@ use crate::algorithm::params::Params;
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_SAMPLED, ACCESS_WIDE};
 use crate::gpu::core::modules::MODULES;
 use crate::gpu::core::shader_ids::{self, ShaderId};
-use crate::gpu::core::{PixelFormat, VariantKey};
+use crate::gpu::core::{ClassifyChoice, PixelFormat, VariantKey};
 use crate::gpu::vulkan::device::GpuError;
 use crate::gpu::vulkan::pipelines::{shader_statistics, ExecutableStatistics};
 
@@ -46,10 +46,18 @@ fn bench_shaders(params: &Params) -> Vec<ShaderId> {
     let mut ids = Vec::new();
     for access in [ACCESS_WIDE, ACCESS_IN_PLACE, ACCESS_SAMPLED] {
         let key = VariantKey::of(params, PixelFormat::SRGB8, access);
-        let classify = shader_ids::classify(key.format, access, key.classify_method()).ok();
+        // The method's own classify, and by tile rows (`--ablate classify-rows`) where it has one.
+        let [classify, by_rows] = [ClassifyChoice::Own, ClassifyChoice::OwnByRows]
+            .map(|c| shader_ids::classify(key.format, access, key.classify_taken(c)).ok());
         let general = shader_ids::enhance(key.codes(), access, key.extras).ok();
         let shared = shader_ids::enhance_shared(key.codes(), access, key.extras);
-        ids.extend([classify, Some(shader_ids::FINISH_TILES), general, shared]);
+        ids.extend([
+            classify,
+            by_rows,
+            Some(shader_ids::FINISH_TILES),
+            general,
+            shared,
+        ]);
     }
     let mut unique: Vec<ShaderId> = Vec::new();
     for id in ids.into_iter().flatten() {

@@ -4,7 +4,7 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
-use crate::gpu::core::CameraRect;
+use crate::gpu::core::{CameraRect, ClassifyChoice};
 use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
@@ -95,10 +95,9 @@ impl VkOffline {
         self.engine.set_ablation(ablate);
     }
 
-    /// Whether the perceptual method lists tiles by its own `classify` (on by default); off,
-    /// by the paper's, which lists every tile with content.
-    pub fn set_own_classify(&mut self, on: bool) {
-        self.engine.set_own_classify(on);
+    /// Which `classify` views take (their method's own by default; `ClassifyChoice`).
+    pub fn set_classify(&mut self, choice: ClassifyChoice) {
+        self.engine.set_classify(choice);
     }
 
     pub fn device_name(&self) -> &str {

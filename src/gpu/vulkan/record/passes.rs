@@ -223,10 +223,10 @@ impl Recorder {
         // 16 bits each (interface.rs, region_origin): swapchain images are far smaller.
         push.region_origin = (view.origin.0 & 0xffff) | (view.origin.1 << 16);
         // The method's passes (its entry in src/algorithm/method/table.rs) as steps.
-        let steps =
-            view_steps(params.method.entry().passes, view.region).map_err(|NoPlan(why)| {
-                GpuError::Unsupported(format!("{}: {why}", params.method.name()))
-            })?;
+        let classify = key.classify_taken(self.classify);
+        let steps = view_steps(params.method.entry().passes, view.region, classify.1).map_err(
+            |NoPlan(why)| GpuError::Unsupported(format!("{}: {why}", params.method.name())),
+        )?;
         let mut encoder = ViewEncoder {
             engine: self,
             gpu,
@@ -234,11 +234,8 @@ impl Recorder {
             view,
             push: &push,
             pipelines: [
-                self.pipelines.get(shader_ids::classify(
-                    key.format,
-                    key.access,
-                    key.classify_method_if(self.own_classify),
-                )?)?,
+                self.pipelines
+                    .get(shader_ids::classify(key.format, key.access, classify)?)?,
                 self.pipelines.get(shader_ids::FINISH_TILES)?,
                 self.enhance_pipeline(view, key, mapping)?,
             ],

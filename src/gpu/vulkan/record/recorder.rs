@@ -17,7 +17,7 @@ use crate::gpu::core::interface::{
 use crate::gpu::core::shader_ids::{self, ShaderId};
 use crate::gpu::core::shares_fetches;
 use crate::gpu::core::PixelFormat;
-use crate::gpu::core::VariantKey;
+use crate::gpu::core::{ClassifyChoice, VariantKey};
 use crate::gpu::vulkan::device::{
     colour_layer, DeviceImage, GpuBuffer, GpuDevice, GpuError, VkResultExt,
 };
@@ -50,9 +50,9 @@ pub struct Recorder {
     /// The benchmark's ablations (interface.rs ABLATE_*): 0, but for `contrastxr bench
     /// --ablate`.
     pub(super) ablate: u32,
-    /// The perceptual method lists tiles by its own `classify` (VariantKey::classify_method);
-    /// off only for `contrastxr bench --ablate classify`, which lists every tile with content.
-    pub(super) own_classify: bool,
+    /// Which `classify` views take: their method's own, but for `contrastxr bench --ablate
+    /// classify` and `classify-rows`.
+    pub(super) classify: ClassifyChoice,
 }
 
 pub(super) const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
@@ -85,7 +85,7 @@ impl Recorder {
                 pool,
                 shared_fetch: true,
                 ablate: 0,
-                own_classify: true,
+                classify: ClassifyChoice::Own,
             }),
             Err(e) => {
                 pipelines.destroy(gpu);
@@ -157,10 +157,9 @@ impl Recorder {
         self.ablate = ablate;
     }
 
-    /// Whether the perceptual method lists tiles by its own `classify` (on by default); off,
-    /// by the paper's (every tile with content), to compare them.
-    pub fn set_own_classify(&mut self, on: bool) {
-        self.own_classify = on;
+    /// Which `classify` views take (their method's own by default), to compare them.
+    pub fn set_classify(&mut self, choice: ClassifyChoice) {
+        self.classify = choice;
     }
 
     pub(crate) fn background_parts(bg: &CameraResources) -> (vk::DescriptorSet, vk::Image) {
@@ -364,7 +363,8 @@ impl Recorder {
             for pass in passes {
                 let id = match pass {
                     Pass::Classify => {
-                        shader_ids::classify(key.format, key.access, key.classify_method())?
+                        let own = key.classify_taken(ClassifyChoice::Own);
+                        shader_ids::classify(key.format, key.access, own)?
                     }
                     Pass::FinishTiles => continue,
                     Pass::Enhance => shader_ids::enhance(key.codes(), key.access, key.extras)?,
