@@ -89,3 +89,26 @@ pub fn projective() -> CameraMapping {
         rows: [[0.8, 0.06, 0.05], [-0.04, 0.7, 0.12], [0.12, -0.09, 0.98]],
     }
 }
+
+/// That every `classify` lists the same tiles for `raw` (one content pixel per tile, every
+/// pixel below the target: `images::one_pixel_per_tile`): `run` enhances it under a choice,
+/// and the outputs are the same word for word, with most of its 26 content pixels (a 96x17
+/// view) changed.
+pub fn assert_every_classify_lists_the_same(
+    raw: &[u32],
+    mut run: impl FnMut(contrastxr::gpu::core::ClassifyChoice) -> Vec<u32>,
+    what: &str,
+) {
+    use contrastxr::gpu::core::ClassifyChoice;
+    let own = run(ClassifyChoice::Own);
+    for choice in [ClassifyChoice::OwnByRows, ClassifyChoice::Paper] {
+        let out = run(choice);
+        let differ = out.iter().zip(&own).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "{what}, {choice:?}: pixels differ");
+    }
+    // 12 + 12 + 2 content pixels (rows 0 to 7 of the tiles, then row 16 only).
+    let content = raw.iter().filter(|&&w| w != 0).count();
+    let changed = own.iter().zip(raw).filter(|(o, r)| o != r).count();
+    assert_eq!(content, 26, "{what}");
+    assert!(changed >= 20, "{what}: {changed} changed");
+}
