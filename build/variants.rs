@@ -172,15 +172,11 @@ impl Ablated {
 /// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB but the sampled read (each in
 /// GLSL too, with the general sampling).
 pub fn ablated_variants() -> Vec<Ablated> {
-    let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
     let methods = [
         (paper_code(), &ABLATIONS[..]),
         (perceptual_code(), &PERCEPTUAL_ABLATIONS[..]),
     ];
-    let accesses: Vec<PixelAccess> = pixel_accesses()
-        .into_iter()
-        .filter(|p| p.format == srgb8 && p.access != ACCESS_SAMPLED)
-        .collect();
+    let accesses = ablation_accesses();
     methods
         .into_iter()
         .flat_map(|(method, ablations)| {
@@ -193,6 +189,15 @@ pub fn ablated_variants() -> Vec<Ablated> {
                 })
             })
         })
+        .collect()
+}
+
+/// The pixel accesses the benchmark's ablations run: those of RGBA8 sRGB but the sampled read.
+fn ablation_accesses() -> Vec<PixelAccess> {
+    let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
+    pixel_accesses()
+        .into_iter()
+        .filter(|p| p.format == srgb8 && p.access != ACCESS_SAMPLED)
         .collect()
 }
 
@@ -237,7 +242,6 @@ impl Classify {
 /// perceptual method's), then the perceptual method's by tile rows for the benchmark's
 /// ablation, on RGBA8 sRGB through the accesses the ablations run (as `ablated_variants`).
 pub fn classify_variants() -> Vec<Classify> {
-    let srgb8 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
     let per_tile = pixel_accesses().into_iter().flat_map(|pixels| {
         [paper_code(), perceptual_code()].map(|method| Classify {
             pixels,
@@ -245,13 +249,10 @@ pub fn classify_variants() -> Vec<Classify> {
             rows: false,
         })
     });
-    let rows = pixel_accesses()
-        .into_iter()
-        .filter(|p| p.format == srgb8 && p.access != ACCESS_SAMPLED)
-        .map(|pixels| Classify {
-            pixels,
-            method: perceptual_code(),
-            rows: true,
-        });
+    let rows = ablation_accesses().into_iter().map(|pixels| Classify {
+        pixels,
+        method: perceptual_code(),
+        rows: true,
+    });
     per_tile.chain(rows).collect()
 }

@@ -156,8 +156,7 @@ mod tests {
         // Two per format and access: the paper's and the perceptual method's; and the
         // perceptual method's by tile rows for the ablations' accesses of RGBA8 sRGB.
         let perceptual = method_code(Method::Perceptual);
-        let srgb8 = crate::gpu::core::interface::LAYOUT_RGBA8
-            | crate::gpu::core::interface::FORMAT_SRGB_BIT;
+        let srgb8 = crate::gpu::core::PixelFormat::SRGB8.shader_code();
         for &(f, w, m, rows, k) in modules::CLASSIFY_VARIANTS {
             let cover = [ClassifyCover::Tiles, ClassifyCover::TileRows][usize::from(rows)];
             assert_eq!(classify(f, w, (m, cover)).unwrap(), ShaderId(k));

@@ -225,11 +225,9 @@ pub fn camera_frame(size: (u32, u32)) -> Vec<[u8; 4]> {
 mod tests {
     use super::*;
     use crate::gpu::core::codes::method_code;
-    use crate::gpu::core::interface::{ACCESS_WIDE, FORMAT_SRGB_BIT, LAYOUT_RGBA8};
+    use crate::gpu::core::interface::ACCESS_WIDE;
     use crate::gpu::core::plan::ClassifyCover;
-    use crate::gpu::core::shader_ids;
-
-    const SRGB8_CODE: u32 = LAYOUT_RGBA8 | FORMAT_SRGB_BIT;
+    use crate::gpu::core::{shader_ids, PixelFormat};
 
     /// An ablation of the shader applies to a method exactly where its variant is built; the
     /// three that pick another variant, only to the method that has what they replace.
@@ -245,7 +243,8 @@ mod tests {
                     Ablation::Classify => m == Method::Perceptual,
                     Ablation::ClassifyRows => {
                         let key = (method_code(m), ClassifyCover::TileRows);
-                        shader_ids::classify(SRGB8_CODE, ACCESS_WIDE, key).is_ok()
+                        let srgb8 = PixelFormat::SRGB8.shader_code();
+                        shader_ids::classify(srgb8, ACCESS_WIDE, key).is_ok()
                     }
                     _ => built.is_some(),
                 };
