@@ -16,7 +16,8 @@ pub fn usage() -> String {
     format!(
         "usage: contrastxr bench [--sizes WxH,...] [--views N] [--runs N] [--json] [--device N]\n\
          \x20                       [--content typical,full] [--path P] [--engine vulkan|opengl]\n\
-         \x20                       [--ablate LIST] [--shader-stats] [method options]\n\n\
+         \x20                       [--ablate LIST] [--shader-stats] [--compile-only]\n\
+         \x20                       [method options]\n\n\
          Times on a Vulkan device, with timestamp queries, after {} warm-up runs, the median of\n\
          --runs runs (default 30) of: a plain per-pixel copy of the display regions (the floor),\n\
          the same copy with the enhancement's 16-byte accesses (copy16, ratio16: a stricter\n\
@@ -75,7 +76,10 @@ pub fn usage() -> String {
          for the buffer path, in place and the sampled read; finish_tiles): registers,\n\
          instructions, spills, by the driver's own names (VK_KHR_pipeline_executable_properties;\n\
          a line saying so where the driver has none), after the rows or in the JSON\n\
-         (shader_statistics).\n\n{}",
+         (shader_statistics).\n\
+         --compile-only (Vulkan) reports those statistics alone, timing nothing: the device is\n\
+         only asked to compile, so a compiler without its GPU serves, such as Mesa RADV's for\n\
+         an AMD GPU named by RADV_FORCE_FAMILY (scripts/shader-stats).\n\n{}",
         contrastxr::gpu::core::bench::WARM_UP_RUNS,
         contrastxr::gpu::core::bench::CAMERA_SIZE.0,
         contrastxr::gpu::core::bench::CAMERA_SIZE.1,
@@ -202,11 +206,13 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
     };
     let ablations = parse_ablations(args.value(&["--ablate"])?, params.method, opengl)?;
     let json = args.flag("--json");
-    let shader_stats = args.flag("--shader-stats");
+    let compile_only = args.flag("--compile-only");
+    let shader_stats = args.flag("--shader-stats") || compile_only;
     args.finish()?;
     if opengl && shader_stats {
         return Err(CliError::Usage(
-            "--shader-stats is Vulkan's (VK_KHR_pipeline_executable_properties)".into(),
+            "--shader-stats and --compile-only are Vulkan's (VK_KHR_pipeline_executable_properties)"
+                .into(),
         ));
     }
     let cases = |tiles: bool| {
@@ -226,6 +232,9 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
         matching: None,
         shader_statistics: shader_stats,
     };
+    if compile_only {
+        return report_compiled(&options, &params, json);
+    }
     let mut engine = VkOffline::with_views(
         &options,
         views.saturating_mul(VkOffline::BENCH_TARGETS_PER_VIEW),
@@ -291,6 +300,22 @@ fn run_opengl(cases: &[BenchCase], params: &Params, json: bool) -> Result<(), Cl
         gl.bench(case, params)
             .map_err(|e| CliError::Failure(e.to_string()))
     })
+}
+
+/// `--compile-only`: the shader statistics alone, from a device that need not run anything.
+fn report_compiled(options: &DeviceOptions, params: &Params, json: bool) -> Result<(), CliError> {
+    let (device, stats) = contrastxr::gpu::compiled_shader_statistics(options, params)
+        .map_err(|e| CliError::Failure(e.to_string()))?;
+    let stats: ShaderReport = Ok(stats);
+    if json {
+        let mut all = serde_json::Map::new();
+        all.insert("device".into(), device.into());
+        shader_stats::json(&stats, &mut all);
+        super::error::print(&format!("{}\n", serde_json::Value::Object(all)));
+    } else {
+        super::error::print(&format!("device: {device}\n{}", shader_stats::text(&stats)));
+    }
+    Ok(())
 }
 
 /// Runs every case, printing each row as it comes (or the JSON at the end).

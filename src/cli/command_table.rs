@@ -35,6 +35,7 @@ const BENCH_OPTIONS: &[Opt] = &[
     ),
     Opt::flag("--json"),
     Opt::flag("--shader-stats"),
+    Opt::flag("--compile-only"),
 ];
 
 pub const COMMANDS: &[Subcommand] = &[

@@ -16,6 +16,6 @@ pub mod vulkan;
 pub use self::core::{BackgroundInput, CameraRect, OfflineBackend, PixelFormat, PixelLayout};
 pub use vulkan::device::{DeviceOptions, GpuDevice, GpuError};
 pub use vulkan::frame::{CapturedView, FrameOptions, FrameRunner, FrameView, ViewKey, ViewPath};
-pub use vulkan::offline::{ShaderStatistics, VkOffline};
+pub use vulkan::offline::{compiled_shader_statistics, ShaderStatistics, VkOffline};
 pub use vulkan::pipelines::StatisticValue;
 pub use vulkan::record::{CameraResources, PixelsIn, Placement, Recorder, ViewShape, ViewTarget};

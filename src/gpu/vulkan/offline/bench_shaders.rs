@@ -7,8 +7,8 @@ use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_SAMPLED, ACCESS_WIDE};
 use crate::gpu::core::modules::MODULES;
 use crate::gpu::core::shader_ids::{self, ShaderId};
 use crate::gpu::core::{ClassifyChoice, PixelFormat, VariantKey};
-use crate::gpu::vulkan::device::GpuError;
-use crate::gpu::vulkan::pipelines::{shader_statistics, ExecutableStatistics};
+use crate::gpu::vulkan::device::{DeviceOptions, GpuDevice, GpuError};
+use crate::gpu::vulkan::pipelines::{create_layouts, shader_statistics, ExecutableStatistics};
 
 /// One shader (its SPIR-V file's name) and what the driver's compiler says of it.
 #[derive(Clone, Debug)]
@@ -27,18 +27,47 @@ impl VkOffline {
         &self,
         params: &Params,
     ) -> Result<Vec<ShaderStatistics>, GpuError> {
-        let layout = self.engine.pipelines().layout();
-        bench_shaders(params)
-            .into_iter()
-            .map(|ShaderId(k)| {
-                let module = &MODULES[k];
-                Ok(ShaderStatistics {
-                    shader: module.name,
-                    executables: shader_statistics(&self.gpu, layout, module)?,
-                })
-            })
-            .collect()
+        statistics_of(&self.gpu, self.engine.pipelines().layout(), params)
     }
+}
+
+/// The same statistics on a device made only to compile: no memory, queue work or engine, so
+/// that a compiler without a GPU (RADV's, with RADV_FORCE_FAMILY naming the GPU it compiles
+/// for) reports them too. The device's name and the statistics.
+pub fn compiled_shader_statistics(
+    options: &DeviceOptions,
+    params: &Params,
+) -> Result<(String, Vec<ShaderStatistics>), GpuError> {
+    let options = DeviceOptions {
+        shader_statistics: true,
+        ..options.clone()
+    };
+    let gpu = GpuDevice::create(&options)?;
+    let (set_layout, layout) = create_layouts(&gpu)?;
+    let all = statistics_of(&gpu, layout, params);
+    // SAFETY: the layouts are ours; every pipeline made with them is destroyed.
+    unsafe {
+        gpu.device.destroy_pipeline_layout(layout, None);
+        gpu.device.destroy_descriptor_set_layout(set_layout, None);
+    }
+    Ok((gpu.name.clone(), all?))
+}
+
+fn statistics_of(
+    gpu: &GpuDevice,
+    layout: ash::vk::PipelineLayout,
+    params: &Params,
+) -> Result<Vec<ShaderStatistics>, GpuError> {
+    bench_shaders(params)
+        .into_iter()
+        .map(|ShaderId(k)| {
+            let module = &MODULES[k];
+            Ok(ShaderStatistics {
+                shader: module.name,
+                executables: shader_statistics(gpu, layout, module)?,
+            })
+        })
+        .collect()
 }
 
 /// The shaders of a frame of RGBA8 sRGB views under `params`, each once, in pass order.

@@ -8,6 +8,6 @@ mod image_copy_path;
 mod in_place_region;
 mod offline_engine;
 
-pub use bench_shaders::ShaderStatistics;
+pub use bench_shaders::{compiled_shader_statistics, ShaderStatistics};
 pub use image_copy_path::AppImage;
 pub use offline_engine::VkOffline;

@@ -11,7 +11,7 @@ mod write_back_attachment;
 mod write_back_pipelines;
 
 pub use pipeline_cache::Origin;
-pub(crate) use pipeline_set::binding_count;
+pub(crate) use pipeline_set::{binding_count, create_layouts};
 pub use pipeline_set::{BuildMode, BuildReport, Pipelines, WarmUpHook};
 pub use shader_statistics::{shader_statistics, ExecutableStatistics, StatisticValue};
 pub use write_back_attachment::WriteBackAttachment;

@@ -200,31 +200,7 @@ impl Pipelines {
     }
 
     fn create_layouts(&mut self, gpu: &GpuDevice) -> Result<(), GpuError> {
-        let bindings: Vec<_> = BINDINGS
-            .iter()
-            .map(|b| {
-                let ty = descriptor_type(b.kind);
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(b.number)
-                    .descriptor_type(ty)
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
-            .collect();
-        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: valid create info on a valid device.
-        self.set_layout = unsafe { gpu.device.create_descriptor_set_layout(&info, None) }
-            .vk("vkCreateDescriptorSetLayout")?;
-        let ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            .size(std::mem::size_of::<PushConstants>() as u32)];
-        let set_layouts = [self.set_layout];
-        let info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&set_layouts)
-            .push_constant_ranges(&ranges);
-        // SAFETY: valid create info on a valid device.
-        self.layout = unsafe { gpu.device.create_pipeline_layout(&info, None) }
-            .vk("vkCreatePipelineLayout")?;
+        (self.set_layout, self.layout) = create_layouts(gpu)?;
         Ok(())
     }
 
@@ -478,4 +454,42 @@ pub(super) fn create_compute_pipeline(
             call: "vkCreateComputePipelines",
             result,
         })
+}
+
+/// Descriptor set 0's layout and the pipeline layout every pipeline shares (set 0 and the push
+/// constants); the caller destroys both (on failure, nothing is left).
+pub fn create_layouts(
+    gpu: &GpuDevice,
+) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout), GpuError> {
+    let bindings: Vec<_> = BINDINGS
+        .iter()
+        .map(|b| {
+            let ty = descriptor_type(b.kind);
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(b.number)
+                .descriptor_type(ty)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+    // SAFETY: valid create info on a valid device.
+    let set_layout = unsafe { gpu.device.create_descriptor_set_layout(&info, None) }
+        .vk("vkCreateDescriptorSetLayout")?;
+    let ranges = [vk::PushConstantRange::default()
+        .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        .size(std::mem::size_of::<PushConstants>() as u32)];
+    let set_layouts = [set_layout];
+    let info = vk::PipelineLayoutCreateInfo::default()
+        .set_layouts(&set_layouts)
+        .push_constant_ranges(&ranges);
+    // SAFETY: valid create info on a valid device.
+    match unsafe { gpu.device.create_pipeline_layout(&info, None) } {
+        Ok(layout) => Ok((set_layout, layout)),
+        Err(e) => {
+            // SAFETY: the set layout is ours and unused.
+            unsafe { gpu.device.destroy_descriptor_set_layout(set_layout, None) };
+            Err(e).vk("vkCreatePipelineLayout")
+        }
+    }
 }
