@@ -267,7 +267,8 @@ fn enhance_scaled(d: Colours, b: Colours) -> Colours {
 }
 
 struct Enhanced {
-    // The enhanced colours in linear light, clipped.
+    // The enhanced colours in linear light, clipped, where `changed` (anything elsewhere: those
+    // pixels keep their words).
     linear: Colours,
     // False where the method leaves the pixel unchanged.
     changed: vec4<bool>,
@@ -404,6 +405,17 @@ fn enhance(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id
     let valid = min(TILE, width - x0);
     // The second group re-reads the first where the row ends before it (never stored).
     let second = row + select(0u, 4u, valid > 4u);
+    if (METHOD_PERCEPTUAL) {
+        // One group after the other: the perceptual method's search holds many values, and a
+        // GPU keeps more invocations in flight when the second group's are not held through it
+        // (docs/performance.md, A GPU's compiler with no GPU); a CPU driver runs it as fast.
+        store_group(row, enhance_group(x0, load_group(row), background_at(x0, y)), min(valid, 4u));
+        if (valid > 4u) {
+            let x_second = x0 + 4u;
+            store_group(second, enhance_group(x_second, load_group(second), background_at(x_second, y)), valid - 4u);
+        }
+        return;
+    }
     let w_first = load_group(row);
     let w_second = load_group(second);
     let x_second = x0 + select(0u, 4u, valid > 4u);

@@ -231,6 +231,14 @@ const NOT_RUN: &[(&str, &str)] = &[
         "a mention; tests/gpu_engine.rs runs --shader-stats",
     ),
     (
+        "contrastxr bench --compile-only",
+        "a mention; tests/compiler_statistics.rs runs it through scripts/shader-stats",
+    ),
+    (
+        "contrastxr bench --sizes 2064x2208 --runs 8 --path copy --method perceptual",
+        "minutes",
+    ),
+    (
         "contrastxr bench --sizes 1268x720,2064x2208 --runs 10 --path copy",
         "minutes",
     ),

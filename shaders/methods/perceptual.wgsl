@@ -171,22 +171,56 @@ fn direction(k: u32) -> vec3<f32> {
 
 // A CIELAB step (Delta E units) as a step in the scaled space, per pixel of length r.
 fn scaled_step(u: vec3<f32>, r: vec4<f32>) -> Colours {
-    return Colours(r * (u.x / 50.0), r * (u.y / 128.0), r * (u.z / 128.0));
+    return scaled_steps(vec4<f32>(u.x), vec4<f32>(u.y), vec4<f32>(u.z), r);
 }
 
-// The best candidate so far, per pixel.
+// The same with a direction per pixel (components ux, uy, uz): the same operations, so that a
+// candidate made again from its index is the one the search judged.
+fn scaled_steps(ux: vec4<f32>, uy: vec4<f32>, uz: vec4<f32>, r: vec4<f32>) -> Colours {
+    return Colours(r * (ux / 50.0), r * (uy / 128.0), r * (uz / 128.0));
+}
+
+// The best candidate so far, per pixel: its index (a direction, or PAPER_CANDIDATE), its
+// CIELAB change and c'. Its colours are made again from the index after the search
+// (`candidate_colours`), which holds fewer values through it.
+const PAPER_CANDIDATE: u32 = 18u;
+
 struct Best {
-    colour: Colours,
-    scaled: Colours,
+    index: vec4<u32>,
     change: vec4<f32>,
     perceived: vec4<f32>,
 }
 
-fn keep_better(best: Best, colour: Colours, scaled: Colours, change: vec4<f32>, perceived: vec4<f32>, valid: vec4<bool>) -> Best {
+fn keep_better(best: Best, index: u32, change: vec4<f32>, perceived: vec4<f32>, valid: vec4<bool>) -> Best {
     // Changes within the slack are equal: unclipped, every candidate's is the budget.
     let smaller = change < best.change - BUDGET_SLACK;
     let better = valid & ((perceived > best.perceived) | ((perceived == best.perceived) & smaller));
-    return Best(pick(best.colour, colour, better), pick(best.scaled, scaled, better), select(best.change, change, better), select(best.perceived, perceived, better));
+    return Best(select(best.index, vec4<u32>(index), better), select(best.change, change, better), select(best.perceived, perceived, better));
+}
+
+// A direction's candidate: the colour `budget` away from d (scaled) along it, clipped in linear
+// RGB, and its scaled colour (the clipped one's where clipping moved it).
+struct Candidate {
+    colour: Colours,
+    scaled: Colours,
+    clipped: vec4<bool>,
+}
+
+fn candidate(lab: Colours) -> Candidate {
+    let unclipped = scaled_to_linear(lab);
+    let colour = clip(unclipped);
+    let clipped = (colour[0] != unclipped[0]) | (colour[1] != unclipped[1]) | (colour[2] != unclipped[2]);
+    return Candidate(colour, lab, clipped);
+}
+
+// The linear and scaled colours of each pixel's best candidate (index per pixel); the paper's
+// colour is `paper`.
+fn candidate_colours(index: vec4<u32>, d: Colours, budget: vec4<f32>, paper: Colours) -> Candidate {
+    let u = group_of(direction(index.x), direction(index.y), direction(index.z), direction(index.w));
+    let c = candidate(d + scaled_steps(u[0], u[1], u[2], budget));
+    let is_paper = index == vec4<u32>(PAPER_CANDIDATE);
+    let colour = pick(c.colour, paper, is_paper);
+    return Candidate(colour, pick(c.scaled, linear_to_scaled(colour), c.clipped | is_paper), c.clipped);
 }
 
 // The pixels the method may change: those not seen at the target already (`alone` in
@@ -216,38 +250,34 @@ fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived 
     if (all(alone | none)) {
         return Perceived(unchanged, kind);
     }
-    var best = Best(paper.linear, paper_scaled, budget, perceived_from(paper.linear, world, vec4<f32>(0.0)));
+    var best = Best(vec4<u32>(PAPER_CANDIDATE), budget, perceived_from(paper.linear, world, vec4<f32>(0.0)));
     // The benchmark's ablation of the directions leaves the paper's colour alone.
     let directions = select(18u, 0u, ablated(ABLATE_DIRECTIONS));
     for (var k = 0u; k < directions; k++) {
         let lab = d + scaled_step(direction(k), budget);
-        let unclipped = scaled_to_linear(lab);
-        let colour = clip(unclipped);
-        let clipped = (colour[0] != unclipped[0]) | (colour[1] != unclipped[1]) | (colour[2] != unclipped[2]);
+        let cand = candidate(lab);
         // Only a candidate whose c reaches the best c' so far may beat it (c' <= c).
-        let p = pattern(colour, world);
+        let p = pattern(cand.colour, world);
         let may = p.c >= best.perceived;
         // Clipping in linear RGB may lengthen the change beyond the paper's: then it is no
         // candidate. Unclipped, the change is the budget.
-        var scaled = lab;
         var change = budget;
-        if (any(clipped & may)) {
-            let back = linear_to_scaled(colour);
-            scaled = pick(lab, back, clipped);
-            change = select(budget, delta_e(d, back), clipped);
+        if (any(cand.clipped & may)) {
+            change = select(budget, delta_e(d, linear_to_scaled(cand.colour)), cand.clipped);
         }
         let valid = change <= budget + BUDGET_SLACK;
         let wanted = may & valid;
         let perceived = select(vec4<f32>(-1.0), perceived_of(p, world.model, wanted), wanted);
-        best = keep_better(best, colour, scaled, change, perceived, valid);
+        best = keep_better(best, k, change, perceived, valid);
     }
+    let chosen = candidate_colours(best.index, d, budget, paper.linear);
     let reached = best.perceived >= vec4<f32>(goal);
-    var out = best.colour;
+    var out = chosen.colour;
     if (any(reached & !alone & !none) && !ablated(ABLATE_BISECTION)) {
         // Back toward D on the straight CIELAB line: c'(D) < target <= c'(1).
         var lo = vec4<f32>(0.0);
         var hi = vec4<f32>(1.0);
-        let span = best.scaled - d;
+        let span = chosen.scaled - d;
         for (var step = 0u; step < BISECTION_STEPS; step++) {
             let mid = 0.5 * (lo + hi);
             let colour = clip(scaled_to_linear(d + per_pixel(mid, span)));
@@ -261,5 +291,6 @@ fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived 
     }
     let moved = !alone & !none;
     let moved_kind = select(vec4<u32>(PERCEIVED_OUT_OF_REACH), vec4<u32>(PERCEIVED_TO_TARGET), reached);
-    return Perceived(Enhanced(pick(display, out, moved), moved), select(kind, moved_kind, moved));
+    // A pixel not moved keeps its words (enhance_group), whatever `out` holds there.
+    return Perceived(Enhanced(out, moved), select(kind, moved_kind, moved));
 }
