@@ -6,7 +6,8 @@
 mod common;
 
 use common::conformance::{
-    assert_every_classify_lists_the_same, check_all_methods, nonconformant, projective,
+    assert_every_classify_lists_the_same, assert_the_bound_lists_every_tile_that_changes,
+    check_all_methods, nonconformant, projective,
 };
 use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
@@ -1228,6 +1229,26 @@ fn the_classify_by_tile_rows_lists_the_tiles_its_own_does() {
         };
         assert_every_classify_lists_the_same(&raw, run, &format!("in place {in_place}"));
     }
+    assert_clean(&e);
+}
+
+/// The perceptual method's own classify, with its lower bound of c', lists every tile whose
+/// pixel the enhancement changes: one content pixel per tile of a 256x64 view, three light
+/// levels (common::conformance::assert_the_bound_lists_every_tile_that_changes).
+#[test]
+fn the_bound_of_the_own_classify_lists_every_tile_that_changes() {
+    let mut e = engine();
+    let camera = noise(64, 40, 61);
+    let mut image = common::images::one_pixel_per_tile(256, 64, 67);
+    common::images::darken_every_other(&mut image);
+    let raw = raw_words(PixelFormat::SRGB8, &image);
+    let run = |choice, params: &Params| {
+        e.set_classify(choice);
+        let out = e.enhance_raw(&raw, (256, 64), PixelFormat::SRGB8, &camera, params);
+        e.set_classify(ClassifyChoice::Own);
+        out.unwrap_or_else(|err| panic!("{choice:?}: {err}"))
+    };
+    assert_the_bound_lists_every_tile_that_changes(&raw, run, "Vulkan");
     assert_clean(&e);
 }
 

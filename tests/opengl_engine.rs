@@ -6,7 +6,10 @@
 
 mod common;
 
-use common::conformance::{assert_every_classify_lists_the_same, nonconformant};
+use common::conformance::{
+    assert_every_classify_lists_the_same, assert_the_bound_lists_every_tile_that_changes,
+    nonconformant,
+};
 use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
 use contrastxr::algorithm::perception::frequency::DEFAULT_PIXELS_PER_DEGREE;
@@ -1062,6 +1065,28 @@ fn opengl_classify_by_tile_rows_lists_the_tiles_its_own_does() {
         assert_every_classify_lists_the_same(&raw, run, &format!("in place {in_place}"));
     }
     gl.engine().set_in_place(false);
+}
+
+/// The perceptual method's own classify, with its lower bound of c', lists every tile whose
+/// pixel the enhancement changes (common::conformance::assert_the_bound_lists_every_tile_that_changes).
+#[test]
+fn opengl_the_bound_of_the_own_classify_lists_every_tile_that_changes() {
+    let mut gl = context();
+    let camera = noise(64, 40, 61);
+    let mut image = common::images::one_pixel_per_tile(256, 64, 67);
+    common::images::darken_every_other(&mut image);
+    let raw: Vec<u32> = image
+        .pixels
+        .iter()
+        .map(|p| u32::from_le_bytes(*p))
+        .collect();
+    let run = |choice, params: &Params| {
+        gl.engine().set_classify(choice);
+        let out = gl.enhance_raw(&raw, (256, 64), SRGB8_ALPHA8, &camera, params);
+        gl.engine().set_classify(ClassifyChoice::Own);
+        out.unwrap_or_else(|err| panic!("{choice:?}: {err}"))
+    };
+    assert_the_bound_lists_every_tile_that_changes(&raw, run, "OpenGL");
 }
 
 /// The app's reset status is the app's: a robust context reports a reset once, so the engine

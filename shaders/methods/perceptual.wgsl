@@ -27,6 +27,8 @@ struct Model {
     world: f32,
     log_min_luminance: f32,
     goal: f32,
+    // The target the lower bound of c' must reach (surely_at_target).
+    sure_goal: f32,
     frequencies: u32,
     log_y_first: f32,
     entries_per_log_y: f32,
@@ -35,7 +37,7 @@ struct Model {
 const_assert PERCEPTUAL_AT_RGB_TO_LMS == 0u && PERCEPTUAL_AT_RGB_TO_LUMINANCE == 9u;
 const_assert PERCEPTUAL_AT_HALF_PEAK == 12u && PERCEPTUAL_AT_WORLD == 13u && PERCEPTUAL_AT_LOG_MIN_LUMINANCE == 14u;
 const_assert PERCEPTUAL_AT_TARGET == 15u && PERCEPTUAL_AT_FREQUENCIES == 16u;
-const_assert PERCEPTUAL_AT_LOG_Y_FIRST == 17u && PERCEPTUAL_AT_ENTRIES_PER_LOG_Y == 18u;
+const_assert PERCEPTUAL_AT_LOG_Y_FIRST == 17u && PERCEPTUAL_AT_ENTRIES_PER_LOG_Y == 18u && PERCEPTUAL_AT_SURE_TARGET == 19u;
 
 fn read_model() -> Model {
     let h0 = perceptual[0];
@@ -43,7 +45,7 @@ fn read_model() -> Model {
     let h2 = perceptual[2];
     let h3 = perceptual[3];
     let h4 = perceptual[4];
-    return Model(h0.xyz, vec3<f32>(h0.w, h1.xy), vec3<f32>(h1.zw, h2.x), h2.yzw, h3.x, h3.y, h3.z, h3.w, u32(h4.x), h4.y, h4.z);
+    return Model(h0.xyz, vec3<f32>(h0.w, h1.xy), vec3<f32>(h1.zw, h2.x), h2.yzw, h3.x, h3.y, h3.z, h3.w, h4.w, u32(h4.x), h4.y, h4.z);
 }
 
 fn cone_responses(m: Model, c: Colours) -> Colours {
@@ -111,6 +113,62 @@ fn pattern(display: Colours, world: World) -> Pattern {
     return Pattern(amp, mean, y, sqrt((k0 * k0 + k1 * k1 + k2 * k2) * (1.0 / 3.0)));
 }
 
+// The pattern's opponent channels (castleCSF's K), each against the achromatic mean: one
+// column per channel (achromatic, red-green, yellow-violet).
+fn opponent_contrasts(p: Pattern) -> Colours {
+    let amp = p.amp;
+    let m1 = abs(p.mean[0] + p.mean[1]);
+    let inv_m1 = select(vec4<f32>(0.0), 1.0 / m1, m1 > vec4<f32>(0.0));
+    return Colours(abs(amp[0] + amp[1]) * inv_m1, abs(amp[0] - 2.3112 * amp[1]) * inv_m1, abs(50.9875 * amp[2] - amp[0] - amp[1]) * inv_m1);
+}
+
+// Each pixel's least sensitivities by its luminance band (the bands' floors rise): band k's
+// where Y is at or above its floor, none below the first.
+fn raised(s: Sensitivities, y: vec4<f32>, band: vec4<f32>) -> Sensitivities {
+    let inside = y >= vec4<f32>(band.x);
+    return Sensitivities(select(s.achromatic, vec4<f32>(band.y), inside), select(s.red_green, vec4<f32>(band.z), inside), select(s.yellow_violet, vec4<f32>(band.w), inside));
+}
+
+fn least_sensitivities(y: vec4<f32>) -> Sensitivities {
+    let at = PERCEPTUAL_AT_BANDS / 4u;
+    var s = Sensitivities(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    s = raised(s, y, perceptual[at]);
+    s = raised(s, y, perceptual[at + 1u]);
+    s = raised(s, y, perceptual[at + 2u]);
+    s = raised(s, y, perceptual[at + 3u]);
+    s = raised(s, y, perceptual[at + 4u]);
+    s = raised(s, y, perceptual[at + 5u]);
+    s = raised(s, y, perceptual[at + 6u]);
+    s = raised(s, y, perceptual[at + 7u]);
+    return s;
+}
+
+const_assert PERCEPTUAL_BANDS == 8u && PERCEPTUAL_AT_BANDS % 4u == 0u;
+
+// Where four patterns are surely seen at the target: c' from their bands' least sensitivities
+// (a lower bound of c', src/algorithm/perception/target_bound.rs) reaches the target with a
+// margin. No logarithm, no lookup; false where c' must decide.
+fn surely_at_target(p: Pattern, m: Model) -> vec4<bool> {
+    let s = least_sensitivities(p.luminance);
+    let d = opponent_contrasts(p);
+    let a = d[0] * s.achromatic;
+    let rg = d[1] * s.red_green;
+    let yv = d[2] * s.yellow_violet;
+    let over = p.c - vec4<f32>(m.sure_goal);
+    // c (1 - 1/C) >= target  <=>  C (c - target) >= c, for c > target; squared.
+    return (over > vec4<f32>(0.0)) & ((a * a + rg * rg + yv * yv) * over * over >= p.c * p.c);
+}
+
+// Whether four display colours are seen at the target over their world: surely by the bound,
+// else by c' (only those the bound leaves open make its lookups).
+fn at_target(display: Colours, world: World) -> vec4<bool> {
+    let p = pattern(display, world);
+    let goal = vec4<f32>(world.model.goal);
+    let sure = surely_at_target(p, world.model);
+    let open = !sure & (p.c >= goal);
+    return sure | (select(vec4<f32>(-1.0), perceived_of(p, world.model, open), open) >= goal);
+}
+
 // c' of four patterns: c less its threshold, by castleCSF at the pattern's mean luminance,
 // averaged over the frame's frequencies. Only where `wanted`: where no pixel wants it, 0
 // without the tables (a caller that knows c' cannot matter there, from c, skips the lookups).
@@ -119,13 +177,10 @@ fn perceived_of(p: Pattern, m: Model, wanted: vec4<bool>) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     let log_y = max(LOG10_E * log(max(p.luminance, vec4<f32>(1e-30))), vec4<f32>(m.log_min_luminance));
-    // The opponent channels (castleCSF's K), each against the achromatic mean.
-    let amp = p.amp;
-    let m1 = abs(p.mean[0] + p.mean[1]);
-    let inv_m1 = select(vec4<f32>(0.0), 1.0 / m1, m1 > vec4<f32>(0.0));
-    let d1 = abs(amp[0] + amp[1]) * inv_m1;
-    let d2 = abs(amp[0] - 2.3112 * amp[1]) * inv_m1;
-    let d3 = abs(50.9875 * amp[2] - amp[0] - amp[1]) * inv_m1;
+    let d = opponent_contrasts(p);
+    let d1 = d[0];
+    let d2 = d[1];
+    let d3 = d[2];
     let last = f32(PERCEPTUAL_TABLE_LEN - 1u);
     let x = clamp((log_y - m.log_y_first) * m.entries_per_log_y, vec4<f32>(0.0), vec4<f32>(last));
     let i = min(vec4<u32>(x), vec4<u32>(PERCEPTUAL_TABLE_LEN - 2u));
@@ -226,17 +281,14 @@ fn candidate_colours(index: vec4<u32>, d: Colours, budget: vec4<f32>, paper: Col
 // The pixels the method may change: those not seen at the target already (`alone` in
 // method_perceptual below: the same functions of the same values), for its `classify`.
 fn perceptual_may_change(display: Colours, bg: Background) -> vec4<bool> {
-    let world = world_of(read_model(), bg.linear);
-    let goal = world.model.goal;
-    return !(perceived_from(display, world, vec4<f32>(goal)) >= vec4<f32>(goal));
+    return !at_target(display, world_of(read_model(), bg.linear));
 }
 
 fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived {
     let world = world_of(read_model(), bg.linear);
     let goal = world.model.goal;
-    let before = perceived_from(display, world, vec4<f32>(goal));
     let unchanged = Enhanced(display, vec4<bool>(false));
-    let alone = before >= vec4<f32>(goal);
+    let alone = perceived_from(display, world, vec4<f32>(goal)) >= vec4<f32>(goal);
     if (all(alone)) {
         // Seen at the target already: the paper's budget is not needed.
         return Perceived(unchanged, vec4<u32>(PERCEIVED_LEFT_ALONE));
@@ -283,6 +335,7 @@ fn method_perceptual(display: Colours, d: Colours, bg: Background) -> Perceived 
             let colour = clip(scaled_to_linear(d + per_pixel(mid, span)));
             // Judged as stored, so that the pixel shown reaches the target.
             let shown = decode_stored(quantised(encode_stored(colour)));
+            // (The bound seldom settles these: the search ends near the target.)
             let ok = perceived_from(shown, world, vec4<f32>(goal)) >= vec4<f32>(goal);
             hi = select(hi, mid, ok);
             lo = select(mid, lo, ok);

@@ -112,3 +112,36 @@ pub fn assert_every_classify_lists_the_same(
     assert_eq!(content, 26, "{what}");
     assert!(changed >= 20, "{what}: {changed} changed");
 }
+
+/// That the perceptual method's own `classify`, which settles most pixels at the target by a
+/// lower bound of c' without the tables (src/algorithm/perception/target_bound.rs), lists every
+/// tile whose pixel the enhancement changes: for `raw` (one content pixel per tile,
+/// `images::one_pixel_per_tile`), at three light levels with the default target, `run`'s output
+/// under the own classify is word for word its output with every content tile listed (the
+/// paper's classify, after which the enhancement decides each pixel by c'). Each level must
+/// leave some pixels alone and change others, so that both answers are tested.
+pub fn assert_the_bound_lists_every_tile_that_changes(
+    raw: &[u32],
+    mut run: impl FnMut(contrastxr::gpu::core::ClassifyChoice, &Params) -> Vec<u32>,
+    what: &str,
+) {
+    use contrastxr::gpu::core::ClassifyChoice;
+    let content = raw.iter().filter(|&&w| w != 0).count();
+    for world_nits in [20.0, 500.0, 5000.0] {
+        let mut params = Params {
+            method: Method::Perceptual,
+            ..Params::default()
+        };
+        params.perceptual.world_nits = world_nits;
+        let own = run(ClassifyChoice::Own, &params);
+        let every = run(ClassifyChoice::Paper, &params);
+        let differ = own.iter().zip(&every).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "{what}, {world_nits} cd/m²: pixels differ");
+        let changed = own.iter().zip(raw).filter(|(o, r)| o != r).count();
+        let alone = content - changed;
+        assert!(
+            changed >= content / 20 && alone >= content / 20,
+            "{what}, {world_nits} cd/m²: {changed} of {content} changed"
+        );
+    }
+}

@@ -42,3 +42,14 @@ pub fn one_pixel_per_tile(width: u32, height: u32, seed: u32) -> RgbaImage {
     }
     img
 }
+
+/// Every other content pixel (alpha 255) of `img` made one dim primary, codes 3 to 14 of R, G or
+/// B in turn: low luminance, where the perceptual model's luminance bands differ most.
+pub fn darken_every_other(img: &mut RgbaImage) {
+    let content = img.pixels.iter_mut().filter(|p| p[3] == 255);
+    for (j, p) in content.step_by(2).enumerate() {
+        let mut dim = [0, 0, 0, 255];
+        dim[j % 3] = 3 + (j / 3 % 12) as u8;
+        *p = dim;
+    }
+}

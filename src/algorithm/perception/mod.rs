@@ -8,7 +8,7 @@
 //! content makes), `castle_csf` (the contrast sensitivities), `perceived` (c, C and c'),
 //! `frequency` (which spatial frequency; the settings themselves are
 //! `algorithm::perceptual_settings`, which `Params` holds); of the method: `directions`, `method`,
-//! `tables` (for the GPU) and `report` (per-frame statistics).
+//! `tables` and `target_bound` (for the GPU) and `report` (per-frame statistics).
 
 pub mod castle_csf;
 pub mod directions;
@@ -18,3 +18,4 @@ pub mod light;
 pub mod perceived_contrast;
 pub mod perceptual_pixel;
 pub mod tables;
+pub mod target_bound;

@@ -114,9 +114,9 @@ impl PerceptualTables {
         }
     }
 
-    /// c' of linear display colour `display` over the linear, unattenuated background
-    /// `background`, in f32: 3 lookups per frequency and a few dozen operations.
-    pub fn perceived_contrast(&self, display: Vec3, background: Vec3) -> f32 {
+    /// The pattern linear display colour `display` makes over the linear, unattenuated
+    /// background `background`: its cone responses' mean and amplitude, and its mean luminance Y.
+    pub fn pattern(&self, display: Vec3, background: Vec3) -> ([f32; 3], [f32; 3], f32) {
         let lms_d = apply(&self.rgb_to_lms, display);
         let lms_b = apply(&self.rgb_to_lms, background);
         let amplitude = lms_d.map(|v| 0.5 * self.display_peak_nits * v);
@@ -125,6 +125,13 @@ impl PerceptualTables {
         let lum = Vec3::from(self.rgb_to_luminance);
         let y = self.world_nits_at_eye * lum.dot(background)
             + 0.5 * self.display_peak_nits * lum.dot(display);
+        (mean, amplitude, y)
+    }
+
+    /// c' of linear display colour `display` over the linear, unattenuated background
+    /// `background`, in f32: 3 lookups per frequency and a few dozen operations.
+    pub fn perceived_contrast(&self, display: Vec3, background: Vec3) -> f32 {
+        let (mean, amplitude, y) = self.pattern(display, background);
         let log_y = y.log10().max(self.log_min_luminance);
         let c = rms_cone_contrast(mean, amplitude);
         let sum: f32 = self

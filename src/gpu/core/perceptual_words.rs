@@ -9,7 +9,10 @@ use crate::algorithm::perception::perceived_contrast::Model;
 use crate::algorithm::perception::tables::{
     PerceptualTables, LOG_LUMINANCE_MIN, LOG_LUMINANCE_STEP, TABLE_LEN,
 };
+use crate::algorithm::perception::target_bound::{TargetBound, BANDS};
 use crate::gpu::core::interface::*;
+
+const _: () = assert!(PERCEPTUAL_BANDS as usize == BANDS);
 
 /// The words of a model (PERCEPTUAL_WORDS of them; unused frequencies zero).
 pub fn model_words(model: &Model) -> Vec<u32> {
@@ -31,6 +34,17 @@ pub fn model_words(model: &Model) -> Vec<u32> {
     w[at(PERCEPTUAL_AT_FREQUENCIES)] = n as f32;
     w[at(PERCEPTUAL_AT_LOG_Y_FIRST)] = LOG_LUMINANCE_MIN as f32;
     w[at(PERCEPTUAL_AT_ENTRIES_PER_LOG_Y)] = (1.0 / LOG_LUMINANCE_STEP) as f32;
+    let bound = TargetBound::new(&tables);
+    w[at(PERCEPTUAL_AT_SURE_TARGET)] = bound.sure_target;
+    for (k, s) in bound.least.iter().enumerate() {
+        let band = at(PERCEPTUAL_AT_BANDS) + 4 * k;
+        w[band..band + 4].copy_from_slice(&[
+            bound.floors[k],
+            s.achromatic,
+            s.red_green,
+            s.yellow_violet,
+        ]);
+    }
     for (f, t) in tables.frequencies.iter().take(n).enumerate() {
         for i in 0..TABLE_LEN {
             let entry = at(PERCEPTUAL_HEADER_WORDS) + 4 * (f * TABLE_LEN + i);
@@ -114,6 +128,13 @@ mod tests {
             0.0,
         ];
         assert_eq!(w[at..at + 4], entry);
+        // The bound's third band: its floor, then its three least sensitivities.
+        let bound = TargetBound::new(&tables);
+        let band = PERCEPTUAL_AT_BANDS as usize + 4 * 2;
+        assert_eq!(w[band], bound.floors[2]);
+        assert!((w[band] - 3.162_277_7).abs() < 1e-6, "10^0.5 cd/m^2");
+        assert_eq!(w[band + 2], bound.least[2].red_green);
+        assert_eq!(w[PERCEPTUAL_AT_SURE_TARGET as usize], bound.sure_target);
         let last = &w[w.len() - 4..];
         assert_eq!(last[2], tables.frequencies[3].yellow_violet[TABLE_LEN - 1]);
     }
