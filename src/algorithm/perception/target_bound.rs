@@ -12,7 +12,7 @@ use super::castle_csf::{threshold_multiple, Sensitivities};
 use super::perceived_contrast::rms_cone_contrast;
 use super::tables::{PerceptualTables, LOG_LUMINANCE_MIN, LOG_LUMINANCE_STEP, TABLE_LEN};
 
-/// Luminance bands: band k holds the Y (cd/m^2) at or above 10^BAND_LOG_FLOORS[k].
+/// Luminance bands: band k holds the Y (cd/m^2) at or above `10^BAND_LOG_FLOORS[k]`.
 pub const BANDS: usize = 8;
 pub const BAND_LOG_FLOORS: [f64; BANDS] = [-0.5, 0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0];
 
@@ -101,7 +101,7 @@ mod tests {
         PerceptualTables::new(&Model::new(&settings, 0.4, frequencies))
     }
 
-    /// Colours over [0, 1]^3 on a grid, dark ones included.
+    /// Colours over the unit cube on a grid, dark ones included.
     fn colours() -> Vec<Vec3> {
         let steps = [0.0, 0.002, 0.01, 0.05, 0.2, 0.5, 1.0];
         let mut all = Vec::new();
