@@ -54,7 +54,7 @@ use interface::*;
 use methods::paper_code;
 use parse::{parse, Parsed};
 use tables::{GlTable, Table};
-use wgsl::{method_wgsl, prefix, sampling, specialise};
+use wgsl::{method_wgsl, prefix, sampling, specialise, specialise_with};
 
 /// Stage files and their entry points.
 const STAGES: &[(&str, &[&str])] = &[("enhance", &["finish_tiles"]), ("copy", &["copy_pixels"])];
@@ -190,7 +190,12 @@ impl Build {
             let source = format!(
                 "{}\n{}{body}{}{}",
                 self.prefix(v.pixels.access, v.pixels.format),
-                specialise((v.method, v.mode, v.pixels.format), v.extras),
+                specialise_with(
+                    (v.method, v.mode, v.pixels.format),
+                    v.extras,
+                    0,
+                    v.pow_roots
+                ),
                 if v.shared { &shared_fetch } else { &general },
                 method_wgsl(v.method)
             );
@@ -236,7 +241,7 @@ impl Build {
                 format!(
                     "{}\n{}{body}{sampling}{}",
                     self.prefix(v.pixels.access, v.pixels.format),
-                    wgsl::specialise_ablated(v.codes(), false, v.ablate),
+                    specialise_with(v.codes(), false, v.ablate, v.pow_roots),
                     method_wgsl(v.method)
                 )
             };

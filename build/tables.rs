@@ -78,20 +78,20 @@ impl Table {
             "/// The background pass's id for each blur half-width (index = half-width).\npub static DECODE_BLUR: &[usize] = &{:?};\n",
             self.decode_blur
         );
-        s += "/// (method, mode, format, access, extras, shared fetches, id) of each `enhance`\n/// variant.\n";
-        s += "pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[\n";
+        s += "/// (method, mode, format, access, extras, shared fetches, cube roots by pow, id) of each\n/// `enhance` variant.\n";
+        s += "pub static ENHANCE_VARIANTS: &[VariantRow] = &[\n";
         s += &enhance_rows(&self.enhance);
         s += "];\n/// (format, access, method, by tile rows, id) of each `classify` variant.\n";
         s += "pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, bool, usize)] = &[\n";
         s += &classify_rows(&self.classify);
-        s += "];\n/// (method, access, ablations, shared fetches, id) of each ablated `enhance` variant\n/// of the benchmark.\n";
-        s += "pub static ENHANCE_ABLATED: &[(u32, u32, u32, bool, usize)] = &[\n";
+        s += "];\n/// (method, access, ablations, shared fetches, cube roots by pow, id) of each ablated\n/// `enhance` variant of the benchmark.\n";
+        s += "pub static ENHANCE_ABLATED: &[(u32, u32, u32, bool, bool, usize)] = &[\n";
         s += &self
             .ablated
             .iter()
             .map(|(v, shared, id)| {
-                let (m, a, x) = (v.method, v.pixels.access, v.ablate);
-                format!("    ({m}, {a}, {x}, {shared}, {id}),\n")
+                let (m, a, x, p) = (v.method, v.pixels.access, v.ablate, v.pow_roots);
+                format!("    ({m}, {a}, {x}, {shared}, {p}, {id}),\n")
             })
             .collect::<String>();
         s + "];\n"
@@ -165,9 +165,9 @@ impl GlTable {
                 "/// The id of `finish_tiles.glsl`.\npub const GL_FINISH_TILES: usize = {id};\n"
             );
         }
-        s += "/// (method, mode, format, access, extras, shared fetches, id) of each `enhance` GLSL\n/// variant.\n";
+        s += "/// (method, mode, format, access, extras, shared fetches, cube roots by pow, id) of each\n/// `enhance` GLSL variant.\n";
         s += &format!(
-            "pub static GL_ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[\n{}];\n",
+            "pub static GL_ENHANCE_VARIANTS: &[VariantRow] = &[\n{}];\n",
             enhance_rows(&self.enhance)
         );
         s += &format!(
@@ -175,33 +175,34 @@ impl GlTable {
             classify_rows(&self.classify)
         );
         s += &format!(
-            "/// (method, access, ablations, id) of each ablated `enhance` GLSL variant of the\n/// benchmark.\npub static GL_ENHANCE_ABLATED: &[(u32, u32, u32, usize)] = &[\n{}];\n",
+            "/// (method, access, ablations, cube roots by pow, id) of each ablated `enhance` GLSL\n/// variant of the benchmark.\npub static GL_ENHANCE_ABLATED: &[(u32, u32, u32, bool, usize)] = &[\n{}];\n",
             ablated_rows(&self.ablated)
         );
         s
     }
 }
 
-/// The rows of an `enhance` table: (method, mode, format, access, extras, shared fetches, id).
+/// The rows of an `enhance` table: (method, mode, format, access, extras, shared fetches,
+/// cube roots by pow, id).
 fn enhance_rows(variants: &[(Enhance, usize)]) -> String {
     variants
         .iter()
         .map(|(v, id)| {
             format!(
-                "    ({}, {}, {}, {}, {}, {}, {id}),\n",
-                v.method, v.mode, v.pixels.format, v.pixels.access, v.extras, v.shared
+                "    ({}, {}, {}, {}, {}, {}, {}, {id}),\n",
+                v.method, v.mode, v.pixels.format, v.pixels.access, v.extras, v.shared, v.pow_roots
             )
         })
         .collect()
 }
 
-/// The rows of an ablated `enhance` table: (method, access, ablations, id).
+/// The rows of an ablated `enhance` table: (method, access, ablations, cube roots by pow, id).
 fn ablated_rows(variants: &[(Ablated, usize)]) -> String {
     variants
         .iter()
         .map(|(v, id)| {
-            let (m, a, x) = (v.method, v.pixels.access, v.ablate);
-            format!("    ({m}, {a}, {x}, {id}),\n")
+            let (m, a, x, p) = (v.method, v.pixels.access, v.ablate, v.pow_roots);
+            format!("    ({m}, {a}, {x}, {p}, {id}),\n")
         })
         .collect()
 }

@@ -72,19 +72,23 @@ pub struct Enhance {
     pub extras: bool,
     /// With shared fetches (shaders/sample_shared.wgsl instead of sample_general.wgsl).
     pub shared: bool,
+    /// With the CIELAB cube roots by the driver's `pow` instead of the Newton steps (WGSL
+    /// CUBE_ROOTS_BY_POW): what a GPU's views take, where one is built.
+    pub pow_roots: bool,
 }
 
 impl Enhance {
     /// The SPIR-V (and GLSL) file's name, without its extension.
     pub fn file(&self) -> String {
         format!(
-            "enhance_m{}_v{}_f{}_a{}_e{}{}",
+            "enhance_m{}_v{}_f{}_a{}_e{}{}{}",
             self.method,
             self.mode,
             self.pixels.format,
             self.pixels.access,
             u8::from(self.extras),
-            if self.shared { "_s" } else { "" }
+            if self.shared { "_s" } else { "" },
+            pow_suffix(self.pow_roots)
         )
     }
 
@@ -95,11 +99,23 @@ impl Enhance {
     }
 }
 
-/// Every (method, mode, extras, shared fetches) an `enhance` is built for, for one pixel
-/// access. The fifth switch, shared fetches (shaders/sample_shared.wgsl instead of
+/// The file name's mark of a variant with the cube roots by `pow`.
+fn pow_suffix(pow_roots: bool) -> &'static str {
+    if pow_roots {
+        "_p"
+    } else {
+        ""
+    }
+}
+
+/// Every (method, mode, extras, shared fetches, cube roots) an `enhance` is built for, for one
+/// pixel access. The fifth switch, shared fetches (shaders/sample_shared.wgsl instead of
 /// sample_general.wgsl), has a group's four pixels read their camera texels once, valid only
 /// for some mappings (src/gpu/core/shared_fetch.rs): built only for the defaults (the
 /// paper's method in mode enhance, extras off), each variant costing about 40 kB of library.
+/// The sixth, the cube roots by `pow` (a GPU's special-function unit; the Newton steps cost
+/// less on a CPU driver), is built for the paper's and the perceptual method in mode enhance,
+/// extras off, in place and through the sampled read: the ways a GPU's views take.
 fn enhance_of(pixels: PixelAccess) -> Vec<Enhance> {
     let mut codes: Vec<u32> = METHODS.iter().map(|m| m.code).collect();
     codes.sort();
@@ -113,6 +129,7 @@ fn enhance_of(pixels: PixelAccess) -> Vec<Enhance> {
         pixels,
         extras,
         shared,
+        pow_roots: false,
     };
     let mut v: Vec<Enhance> = METHODS
         .iter()
@@ -126,6 +143,17 @@ fn enhance_of(pixels: PixelAccess) -> Vec<Enhance> {
         .collect();
     v.push(variant(paper_code(), MODE_BACKGROUND, false, false));
     v.push(variant(paper_code(), MODE_ENHANCE, false, true));
+    if pixels.access == ACCESS_IN_PLACE || pixels.access == ACCESS_SAMPLED {
+        let by_pow = |v: Enhance| Enhance {
+            pow_roots: true,
+            ..v
+        };
+        v.extend([
+            by_pow(variant(paper_code(), MODE_ENHANCE, false, false)),
+            by_pow(variant(paper_code(), MODE_ENHANCE, false, true)),
+            by_pow(variant(perceptual_code(), MODE_ENHANCE, false, false)),
+        ]);
+    }
     v
 }
 
@@ -146,6 +174,8 @@ pub struct Ablated {
     pub pixels: PixelAccess,
     /// The ABLATE_* bits.
     pub ablate: u32,
+    /// With the cube roots by `pow` (`Enhance::pow_roots`), as a GPU's views take them.
+    pub pow_roots: bool,
 }
 
 impl Ablated {
@@ -162,15 +192,19 @@ impl Ablated {
     /// The SPIR-V file's name, without its extension.
     pub fn file(&self) -> String {
         format!(
-            "enhance_ablated_m{}_f{}_a{}_x{}",
-            self.method, self.pixels.format, self.pixels.access, self.ablate
+            "enhance_ablated_m{}_f{}_a{}_x{}{}",
+            self.method,
+            self.pixels.format,
+            self.pixels.access,
+            self.ablate,
+            pow_suffix(self.pow_roots)
         )
     }
 }
 
 /// Every ablated variant: the paper's ABLATIONS and the perceptual method's
-/// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB but the sampled read (each in
-/// GLSL too, with the general sampling).
+/// PERCEPTUAL_ABLATIONS, for each pixel access of RGBA8 sRGB but the sampled read, with each
+/// way of taking the cube roots (each in GLSL too, with the general sampling).
 pub fn ablated_variants() -> Vec<Ablated> {
     let methods = [
         (paper_code(), &ABLATIONS[..]),
@@ -186,8 +220,18 @@ pub fn ablated_variants() -> Vec<Ablated> {
                     method,
                     pixels,
                     ablate,
+                    pow_roots: false,
                 })
             })
+        })
+        .flat_map(|v| {
+            [
+                v,
+                Ablated {
+                    pow_roots: true,
+                    ..v
+                },
+            ]
         })
         .collect()
 }

@@ -46,19 +46,22 @@ pub fn prefix(common: &str, access_code: u32, format: u32) -> String {
         + &access(access_code, format)
 }
 
-/// A variant's constants: its method, view mode, FORMAT code and extras; no ablation.
+/// A variant's constants: its method, view mode, FORMAT code and extras; no ablation, the
+/// cube roots by the Newton steps.
 pub fn specialise(codes: (u32, u32, u32), extras: bool) -> String {
-    specialise_ablated(codes, extras, 0)
+    specialise_with(codes, extras, 0, false)
 }
 
-/// A variant's constants with the benchmark's ablations `ablate` (interface.rs ABLATE_*).
-pub fn specialise_ablated(
+/// A variant's constants with the benchmark's ablations `ablate` (interface.rs ABLATE_*) and
+/// the CIELAB cube roots by the driver's `pow` where `pow_roots`.
+pub fn specialise_with(
     (method, mode, format): (u32, u32, u32),
     extras: bool,
     ablate: u32,
+    pow_roots: bool,
 ) -> String {
     format!(
-        "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\nconst ABLATE: u32 = {ablate}u;\n"
+        "const METHOD: u32 = {method}u;\nconst MODE: u32 = {mode}u;\nconst FORMAT: u32 = {format}u;\nconst EXTRAS: bool = {extras};\nconst ABLATE: u32 = {ablate}u;\nconst CUBE_ROOTS_BY_POW: bool = {pow_roots};\n"
     )
 }
 

@@ -68,9 +68,11 @@ fn srgb_decode(v: vec4<f32>) -> vec4<f32> {
 
 // Cube root of positive values without pow or division: Newton's method on x^(-1/3) from a
 // bit-pattern seed (src/gpu/core/approx_constants.rs; 4e-7 relative error), then x * x^(-2/3).
+// The variants a GPU's views take (CUBE_ROOTS_BY_POW) use the driver's pow instead: a GPU's
+// special-function unit does it in a few cycles, where a CPU driver spends more on it than on
+// the Newton steps. The benchmark's cube-root ablation takes the other way.
 fn cbrt(x: vec4<f32>) -> vec4<f32> {
-    // The benchmark's cube-root ablation only (ABLATE is 0 in every shader the layer runs).
-    if ((ABLATE & ABLATE_CUBE_ROOT) != 0u) {
+    if (CUBE_ROOTS_BY_POW != ((ABLATE & ABLATE_CUBE_ROOT) != 0u)) {
         return pow(x, vec4<f32>(1.0 / 3.0));
     }
     let third_bits = vec4<u32>(vec4<f32>(bitcast<vec4<u32>>(x)) * (1.0 / 3.0));

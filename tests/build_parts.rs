@@ -203,6 +203,7 @@ fn the_enhance_variants_cover_every_method_mode_extras_and_access_once() {
                         pixels,
                         extras,
                         shared: false,
+                        pow_roots: false,
                     };
                     assert!(set.contains(&v), "{v:?} missing");
                 }
@@ -214,12 +215,38 @@ fn the_enhance_variants_cover_every_method_mode_extras_and_access_once() {
             pixels,
             extras: false,
             shared,
+            pow_roots: false,
         };
         assert!(set.contains(&paper(MODE_BACKGROUND, false)));
         assert!(set.contains(&paper(MODE_ENHANCE, true)));
+        // The cube roots by pow for the ways a GPU's views take: in place, the sampled read.
+        let gpu_way = pixels.access == ACCESS_IN_PLACE || pixels.access == ACCESS_SAMPLED;
+        let by_pow = |v: Enhance| Enhance {
+            pow_roots: true,
+            ..v
+        };
+        let perceptual = Enhance {
+            method: perceptual_code(),
+            ..paper(MODE_ENHANCE, false)
+        };
+        for v in [
+            paper(MODE_ENHANCE, false),
+            paper(MODE_ENHANCE, true),
+            perceptual,
+        ] {
+            assert_eq!(set.contains(&by_pow(v)), gpu_way, "{v:?}");
+        }
     }
-    // Nothing else: shared fetches only for the defaults, the background mode only once.
+    // Nothing else: shared fetches and the cube roots by pow only for the defaults (and the
+    // perceptual method's), the background mode only once.
     for v in &all {
+        if v.pow_roots {
+            assert!(
+                v.method == paper_code() || (v.method, v.shared) == (perceptual_code(), false),
+                "{v:?}"
+            );
+            assert_eq!((v.mode, v.extras), (MODE_ENHANCE, false));
+        }
         if v.shared {
             assert_eq!(
                 (v.method, v.mode, v.extras),
@@ -232,9 +259,13 @@ fn the_enhance_variants_cover_every_method_mode_extras_and_access_once() {
         }
     }
     // A method adds its view modes x with and without the extras x the pixel accesses.
+    let gpu_ways = pixel_accesses()
+        .iter()
+        .filter(|p| p.access == ACCESS_IN_PLACE || p.access == ACCESS_SAMPLED)
+        .count();
     assert_eq!(
         all.len(),
-        pixel_accesses().len() * (METHODS.len() * ENHANCE_MODES.len() * 2 + 2)
+        pixel_accesses().len() * (METHODS.len() * ENHANCE_MODES.len() * 2 + 2) + 3 * gpu_ways
     );
 }
 
@@ -258,8 +289,14 @@ fn every_variant_has_a_file_of_its_own() {
         },
         extras: false,
         shared: true,
+        pow_roots: false,
     };
     assert_eq!(shared.file(), "enhance_m0_v0_f256_a1_e0_s");
+    let by_pow = Enhance {
+        pow_roots: true,
+        ..shared
+    };
+    assert_eq!(by_pow.file(), "enhance_m0_v0_f256_a1_e0_s_p");
 }
 
 /// The benchmark's ablations: the paper's ABLATIONS (with shared fetches) and the perceptual
@@ -281,18 +318,21 @@ fn the_ablated_variants_are_each_ablation_for_each_srgb8_access() {
         (perceptual_code(), &PERCEPTUAL_ABLATIONS[..]),
     ];
     let count = ABLATIONS.len() + PERCEPTUAL_ABLATIONS.len();
-    assert_eq!(all.len(), accesses.len() * count);
+    assert_eq!(all.len(), 2 * accesses.len() * count);
     for (method, ablations) in methods {
         for &pixels in &accesses {
             for &ablate in ablations {
-                let v = Ablated {
-                    method,
-                    pixels,
-                    ablate,
-                };
-                assert!(set.contains(&v), "{v:?}");
-                assert_eq!(v.codes(), (method, MODE_ENHANCE, srgb8));
-                assert_eq!(v.shared(), method == paper_code());
+                for pow_roots in [false, true] {
+                    let v = Ablated {
+                        method,
+                        pixels,
+                        ablate,
+                        pow_roots,
+                    };
+                    assert!(set.contains(&v), "{v:?}");
+                    assert_eq!(v.codes(), (method, MODE_ENHANCE, srgb8));
+                    assert_eq!(v.shared(), method == paper_code());
+                }
             }
         }
     }
@@ -304,10 +344,19 @@ fn the_ablated_variants_are_each_ablation_for_each_srgb8_access() {
             format: srgb8,
         },
         ablate: ABLATE_BISECTION,
+        pow_roots: false,
     };
     assert_eq!(
         v.file(),
         format!("enhance_ablated_m{}_f256_a2_x32", perceptual_code())
+    );
+    let by_pow = Ablated {
+        pow_roots: true,
+        ..v
+    };
+    assert_eq!(
+        by_pow.file(),
+        format!("enhance_ablated_m{}_f256_a2_x32_p", perceptual_code())
     );
 }
 
@@ -624,9 +673,10 @@ fn the_interface_declarations_name_every_params_field_and_the_access_bindings() 
 fn a_variant_is_specialised_by_constants() {
     assert_eq!(
         wgsl::specialise((1, 2, 256), true),
-        "const METHOD: u32 = 1u;\nconst MODE: u32 = 2u;\nconst FORMAT: u32 = 256u;\nconst EXTRAS: bool = true;\nconst ABLATE: u32 = 0u;\n"
+        "const METHOD: u32 = 1u;\nconst MODE: u32 = 2u;\nconst FORMAT: u32 = 256u;\nconst EXTRAS: bool = true;\nconst ABLATE: u32 = 0u;\nconst CUBE_ROOTS_BY_POW: bool = false;\n"
     );
-    assert!(wgsl::specialise_ablated((0, 0, 256), false, 7).ends_with("const ABLATE: u32 = 7u;\n"));
+    let ablated = wgsl::specialise_with((0, 0, 256), false, 7, true);
+    assert!(ablated.ends_with("const ABLATE: u32 = 7u;\nconst CUBE_ROOTS_BY_POW: bool = true;\n"));
 }
 
 #[test]
@@ -682,6 +732,7 @@ fn the_table_lists_modules_singles_and_variants_with_their_ids() {
         pixels,
         extras: true,
         shared: false,
+        pow_roots: true,
     };
     let id = t.add(&v.file(), "enhance", false, Some(pixels));
     t.enhance.push((v, id));
@@ -696,6 +747,7 @@ fn the_table_lists_modules_singles_and_variants_with_their_ids() {
         method: 0,
         pixels,
         ablate: 5,
+        pow_roots: false,
     };
     let id = t.add(&a.file(), "enhance", false, Some(pixels));
     t.ablated.push((a, true, id));
@@ -706,7 +758,7 @@ fn the_table_lists_modules_singles_and_variants_with_their_ids() {
 pub static MODULES: &[ShaderModule] = &[
     spirv!(\"decode_camera\", \"decode\", true, None, false),
     spirv!(\"decode_blur_0\", \"decode_blur\", true, None, false),
-    spirv!(\"enhance_m0_v2_f0_a2_e1\", \"enhance\", false, Some(0), false),
+    spirv!(\"enhance_m0_v2_f0_a2_e1_p\", \"enhance\", false, Some(0), false),
     spirv!(\"classify_f0_a2\", \"classify\", false, Some(0), false),
     spirv!(\"enhance_ablated_m0_f0_a2_x5\", \"enhance\", false, Some(0), false),
 ];
@@ -714,19 +766,19 @@ pub static MODULES: &[ShaderModule] = &[
 pub const ID_DECODE_CAMERA: usize = 0;
 /// The background pass's id for each blur half-width (index = half-width).
 pub static DECODE_BLUR: &[usize] = &[1];
-/// (method, mode, format, access, extras, shared fetches, id) of each `enhance`
-/// variant.
-pub static ENHANCE_VARIANTS: &[(u32, u32, u32, u32, bool, bool, usize)] = &[
-    (0, 2, 0, 2, true, false, 2),
+/// (method, mode, format, access, extras, shared fetches, cube roots by pow, id) of each
+/// `enhance` variant.
+pub static ENHANCE_VARIANTS: &[VariantRow] = &[
+    (0, 2, 0, 2, true, false, true, 2),
 ];
 /// (format, access, method, by tile rows, id) of each `classify` variant.
 pub static CLASSIFY_VARIANTS: &[(u32, u32, u32, bool, usize)] = &[
     (0, 2, 0, false, 3),
 ];
-/// (method, access, ablations, shared fetches, id) of each ablated `enhance` variant
-/// of the benchmark.
-pub static ENHANCE_ABLATED: &[(u32, u32, u32, bool, usize)] = &[
-    (0, 2, 5, true, 4),
+/// (method, access, ablations, shared fetches, cube roots by pow, id) of each ablated
+/// `enhance` variant of the benchmark.
+pub static ENHANCE_ABLATED: &[(u32, u32, u32, bool, bool, usize)] = &[
+    (0, 2, 5, true, false, 4),
 ];
 "
     );

@@ -37,10 +37,15 @@ fn stat(stats: &serde_json::Value, name: &str) -> u64 {
 
 #[test]
 fn radv_compiles_every_per_pixel_shader_without_a_gpu() {
-    for (method, shaders) in [("paper", 10), ("perceptual", 9)] {
+    // Per access (the buffer path's, in place, the sampled read): classify and enhance (the
+    // paper's also with shared fetches), and in place and the sampled read the enhance again
+    // with the cube roots by pow; finish_tiles and the perceptual method's classify by rows.
+    for (method, shaders) in [("paper", 14), ("perceptual", 11)] {
         let (device, all) = compiled(&["--method", method]);
         assert!(device.contains("RADV NAVI21"), "{device}");
         assert_eq!(all.len(), shaders, "{method}: {all:?}");
+        let by_pow = all.iter().filter(|(name, _)| name.ends_with("_p")).count();
+        assert_eq!(by_pow, if method == "paper" { 4 } else { 2 }, "{method}");
         for (name, stats) in &all {
             assert!(stat(stats, "VGPRs") > 0, "{name}: {stats}");
             assert!(stat(stats, "Instructions") > 0, "{name}: {stats}");

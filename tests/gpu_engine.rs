@@ -505,6 +505,8 @@ fn bench_reports_every_figure_for_the_contents_asked_for() {
     // On a CPU driver all leaves the tiles drawn back out (a draw there spoils the timestamps
     // of later compute work); on a GPU it times them; tiles times them everywhere.
     let cpu = v["device"].as_str().is_some_and(|d| d.contains("llvmpipe"));
+    // The cube roots the device takes: by the Newton steps on a CPU driver, by pow on a GPU.
+    assert_eq!(v["cube_roots"], if cpu { "newton" } else { "pow" }, "{v}");
     assert_eq!(r["frame_image_copy_tiles_ms"].is_null(), cpu, "{r}");
     assert_eq!(r["frame_sampled_tiles_ms"].is_null(), cpu, "{r}");
     // Two views: each holds four of the engine's views (buffer, in place, image copy,
@@ -791,9 +793,25 @@ fn tiles_drawn_back_keep_every_srgb_code() {
 /// for every method, on a region of the second layer of an 8-bit sRGB image.
 #[test]
 fn image_copy_conforms_to_the_cpu_reference() {
-    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
     let mut e = engine();
     let camera = noise(131, 83, 5);
+    for method in Method::ALL {
+        let bad = image_copy_nonconformant(&mut e, &camera, method, ViewPath::ImageCopy);
+        assert_eq!(bad.0, 0, "{method:?}: {} of {} pixels differ", bad.0, bad.1);
+    }
+    assert_clean(&e);
+}
+
+/// How many pixels of a 61x29 sub-rectangle of layer 1 of an 8-bit sRGB image, enhanced by
+/// `method` along `path` (one that writes the engine's own image), do not conform to the CPU
+/// reference; and how many there are.
+fn image_copy_nonconformant(
+    e: &mut VkOffline,
+    camera: &RgbaImage,
+    method: Method,
+    path: ViewPath,
+) -> (usize, u32) {
+    use contrastxr::algorithm::{conformant, enhance_srgb8_trace};
     let (size, extent, offset) = ((70, 40), (61, 29), (6, 9));
     let image = noise(size.0, size.1 * 2, 77);
     let display = RgbaImage {
@@ -816,29 +834,102 @@ fn image_copy_conforms_to_the_cpu_reference() {
         extent,
         layer: 1,
     };
-    for method in Method::ALL {
-        let params = Params {
-            method,
-            ..Params::default()
-        };
-        let out = e
-            .enhance_raw_image_copy(&words, (vk_format, app), &camera, &params)
-            .unwrap();
-        let mapping = params.camera_mapping();
-        let (w, h) = extent;
-        let bg =
-            contrastxr::background_preparation::prepare_mapped(&camera, w, h, &mapping, &params);
-        let view = common::conformance::reference_params(&params, &mapping, w, camera.width);
-        let mut bad = 0;
-        for (i, d) in display.pixels.iter().enumerate() {
-            let (x, y) = (i as u32 % w, i as u32 / w);
-            let word = out[((size.1 + offset.1 + y) * size.0 + offset.0 + x) as usize];
-            let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &view);
-            bad += usize::from(!conformant(&trace, word.to_le_bytes()));
-        }
-        assert_eq!(bad, 0, "{method:?}: {bad} of {} pixels differ", w * h);
+    let params = Params {
+        method,
+        ..Params::default()
+    };
+    let out = e
+        .enhance_raw_image_copy_back(&words, (vk_format, app), (camera, &params), path)
+        .unwrap();
+    let mapping = params.camera_mapping();
+    let (w, h) = extent;
+    let bg = contrastxr::background_preparation::prepare_mapped(camera, w, h, &mapping, &params);
+    let view = common::conformance::reference_params(&params, &mapping, w, camera.width);
+    let mut bad = 0;
+    for (i, d) in display.pixels.iter().enumerate() {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        let word = out[((size.1 + offset.1 + y) * size.0 + offset.0 + x) as usize];
+        let trace = enhance_srgb8_trace(*d, bg.linear[i], bg.scaled[i], &view);
+        bad += usize::from(!conformant(&trace, word.to_le_bytes()));
     }
+    (bad, w * h)
+}
+
+/// The variants with the cube roots by `pow`, which a GPU's views take (forced here: a CPU
+/// driver takes the Newton steps), hold the ±1 contract against the CPU reference along the
+/// ways a GPU takes for an image without storage usage (the region copied into the engine's
+/// image, or read through a sampled view), for both methods that have them; and in place, in
+/// every format that has an in-place variant, they give the Newton steps' output within one
+/// step in every channel (and not bit for bit: the pow variant ran).
+#[test]
+fn cube_roots_by_pow_conform_on_the_ways_a_gpu_takes() {
+    use contrastxr::gpu::core::interface::in_place_texel;
+    use contrastxr::gpu::core::CubeRoots;
+    let mut e = engine();
+    assert_eq!(e.cube_roots(), CubeRoots::for_device(e.is_cpu()));
+    let camera = noise(131, 83, 5);
+    e.set_cube_roots(CubeRoots::Pow);
+    for method in [Method::Paper, Method::Perceptual] {
+        for path in [ViewPath::ImageCopy, ViewPath::SampledTiles] {
+            let (bad, n) = image_copy_nonconformant(&mut e, &camera, method, path);
+            assert_eq!(bad, 0, "{method:?} {path:?}: {bad} of {n} pixels differ");
+        }
+    }
+    let region = (37, 21);
+    let mut moved = 0;
+    for (vk_format, format) in every_format() {
+        if in_place_texel(format.shader_code()).is_none() {
+            continue;
+        }
+        let raw = raw_words(format, &noise(region.0, region.1, 9));
+        for method in [Method::Paper, Method::Perceptual] {
+            let params = Params {
+                method,
+                ..Params::default()
+            };
+            let mut run = |roots| {
+                e.set_cube_roots(roots);
+                e.enhance_raw_in_place(&raw, (region, vk_format), &camera, &params)
+            };
+            let (by_pow, newton) = match (run(CubeRoots::Pow), run(CubeRoots::Newton)) {
+                (Ok(p), Ok(n)) => (p, n),
+                // A format the device has no storage for (lavapipe: BGRA8).
+                (Err(err), _) if err.to_string().contains("not enhanced in place on this") => {
+                    continue
+                }
+                (p, n) => panic!("{vk_format:?}: {:?} {:?}", p.err(), n.err()),
+            };
+            let what = format!("{vk_format:?} {method:?}");
+            // (The perceptual method may find every random pixel of a format at its target.)
+            assert!(
+                method != Method::Paper || newton != raw,
+                "{what}: nothing changed"
+            );
+            let (a, b) = (
+                format_channels(format, &by_pow),
+                format_channels(format, &newton),
+            );
+            assert_within_one(&a, &b, &what);
+            moved += differing(&a, &b);
+        }
+    }
+    assert!(
+        moved > 0,
+        "the pow variants gave the Newton steps' output bit for bit"
+    );
     assert_clean(&e);
+}
+
+/// The channels of a format's words as integers (codes, or half floats' bits).
+fn format_channels(format: PixelFormat, words: &[u32]) -> Vec<u32> {
+    match format.layout {
+        PixelLayout::Rgba8 | PixelLayout::Bgra8 => rgba8_channels(words),
+        PixelLayout::Rgba16Unorm | PixelLayout::Rgba16Float => halves(words),
+        PixelLayout::A2b10g10r10 => words
+            .iter()
+            .flat_map(|w| [w & 0x3ff, w >> 10 & 0x3ff, w >> 20 & 0x3ff, w >> 30])
+            .collect(),
+    }
 }
 
 /// Mappings under which the shared-fetch variant serves views of 96 to 128 pixels on a 64-wide
@@ -1375,13 +1466,13 @@ fn an_engine_refuses_more_views_than_it_was_sized_for() {
     assert_clean(&sized);
 }
 
-/// The cube roots by the driver's `pow` (the bench's `cube-root` ablation, a candidate for
-/// GPUs, whose special-function unit does it in a few cycles) hold the ±1 contract against the
-/// CPU reference on random images at three lambda_e, as the Newton steps do; through the
-/// shared fetches and the general sampling (a camera frame the view's mapping shares fetches
-/// over, and one it does not: the ablated variants sample as the view otherwise would).
+/// The bench's `cube-root` ablation (the cube roots the other way than the device's: on a CPU
+/// driver by `pow`, on a GPU by the Newton steps) holds the ±1 contract against the CPU
+/// reference on random images at three lambda_e, through the buffer path's variants; through
+/// the shared fetches and the general sampling (a camera frame the view's mapping shares
+/// fetches over, and one it does not: the ablated variants sample as the view otherwise would).
 #[test]
-fn cube_roots_by_pow_conform_to_the_cpu_reference() {
+fn the_other_cube_roots_conform_to_the_cpu_reference() {
     use contrastxr::gpu::core::interface::ABLATE_CUBE_ROOT;
     let mut e = engine();
     e.set_ablation(ABLATE_CUBE_ROOT);

@@ -8,7 +8,7 @@ mod common;
 
 use common::conformance::{
     assert_every_classify_lists_the_same, assert_the_bound_lists_every_tile_that_changes,
-    nonconformant,
+    nonconformant, projective,
 };
 use common::images::noise;
 use contrastxr::algorithm::mapping::CameraMapping;
@@ -816,6 +816,95 @@ fn in_place_and_through_a_buffer_give_the_same_texels() {
     }
 }
 
+/// The programs with the cube roots by `pow`, which a GPU's views take (forced here: a CPU
+/// driver takes the Newton steps), hold the ±1 contract against the CPU reference in place on
+/// 8-bit sRGB for both methods that have them, at two lambda_e; and in every format they give
+/// the Newton steps' output within one step in every channel (and not bit for bit: the pow
+/// programs ran).
+#[test]
+fn opengl_cube_roots_by_pow_conform_in_place() {
+    use contrastxr::algorithm::Method;
+    use contrastxr::gpu::core::{CubeRoots, PixelLayout};
+    let mut gl = context();
+    let cpu = gl.on_cpu();
+    assert_eq!(gl.engine().cube_roots(), CubeRoots::for_device(cpu));
+    gl.engine().set_in_place(true);
+    gl.engine().set_cube_roots(CubeRoots::Pow);
+    let camera = noise(70, 50, 23);
+    let display = noise(45, 23, 7);
+    for method in [Method::Paper, Method::Perceptual] {
+        for lambda_e in [0.1, 1.0] {
+            let params = Params {
+                method,
+                lambda_e,
+                ..Params::default()
+            };
+            let bad = nonconformant(&mut gl, &display, &camera, &projective(), &params);
+            let (n, some) = (bad.len(), &bad[..bad.len().min(5)]);
+            assert!(
+                n == 0,
+                "{method:?} lambda_e {lambda_e}: {n} pixels differ, e.g. {some:?}"
+            );
+        }
+    }
+    let region = (37, 21);
+    let mut moved = 0;
+    for internal in [SRGB8_ALPHA8, RGBA8, RGBA16F, RGBA16, RGB10_A2] {
+        let format = GlFormat::of(internal).unwrap();
+        let raw: Vec<u32> = noise(region.0, region.1, 9)
+            .pixels
+            .into_iter()
+            .flat_map(|p| encode(format, p))
+            .collect();
+        let channels = |words: &[u32]| -> Vec<u32> {
+            match format.pixel.layout {
+                PixelLayout::A2b10g10r10 => words
+                    .iter()
+                    .flat_map(|w| [w & 0x3ff, w >> 10 & 0x3ff, w >> 20 & 0x3ff, w >> 30])
+                    .collect(),
+                PixelLayout::Rgba16Unorm | PixelLayout::Rgba16Float => {
+                    words.iter().flat_map(|w| [w & 0xffff, w >> 16]).collect()
+                }
+                _ => words
+                    .iter()
+                    .flat_map(|w| w.to_le_bytes())
+                    .map(u32::from)
+                    .collect(),
+            }
+        };
+        for method in [Method::Paper, Method::Perceptual] {
+            let params = Params {
+                method,
+                ..Params::default()
+            };
+            let mut run = |roots| {
+                gl.engine().set_cube_roots(roots);
+                gl.enhance_raw(&raw, region, internal, &camera, &params)
+                    .unwrap_or_else(|e| panic!("{internal:#x}: {e}"))
+            };
+            let (by_pow, newton) = (run(CubeRoots::Pow), run(CubeRoots::Newton));
+            let what = format!("{internal:#x} {method:?}");
+            // (The perceptual method may find every random pixel of a format at its target.)
+            assert!(
+                method != Method::Paper || newton != raw,
+                "{what}: nothing changed"
+            );
+            let (a, b) = (channels(&by_pow), channels(&newton));
+            let worst = a.iter().zip(&b).map(|(x, y)| x.abs_diff(*y)).max();
+            assert!(
+                worst <= Some(1),
+                "{what}: channels differ by up to {worst:?}"
+            );
+            moved += a.iter().zip(&b).filter(|(x, y)| x != y).count();
+        }
+    }
+    assert!(
+        moved > 0,
+        "the pow programs gave the Newton steps' output bit for bit"
+    );
+    gl.engine().set_cube_roots(CubeRoots::for_device(cpu));
+}
+
 /// `contrastxr bench --engine opengl` reports the OpenGL engine's figures in the Vulkan bench's
 /// JSON: the device names the GL driver, every time is positive, the ratios are the times'
 /// quotients, the frame in place is there (it is the enhancement's figure) and the image-copy
@@ -840,6 +929,8 @@ fn bench_times_the_opengl_engine() {
             .is_some_and(|d| d.starts_with("OpenGL: ")),
         "{v}"
     );
+    let cpu = v["device"].as_str().is_some_and(|d| d.contains("llvmpipe"));
+    assert_eq!(v["cube_roots"], if cpu { "newton" } else { "pow" }, "{v}");
     let results = v["results"].as_array().unwrap();
     assert_eq!(results.len(), 1, "{v}");
     let r = &results[0];

@@ -254,7 +254,8 @@ fn keep_better(best: Best, index: u32, change: vec4<f32>, perceived: vec4<f32>, 
 }
 
 // A direction's candidate: the colour `budget` away from d (scaled) along it, clipped in linear
-// RGB, and its scaled colour (the clipped one's where clipping moved it).
+// RGB, and its scaled colour as asked (`candidate` does not convert the clipped colour back;
+// `candidate_colours` does, where clipping moved it).
 struct Candidate {
     colour: Colours,
     scaled: Colours,

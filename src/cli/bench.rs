@@ -64,8 +64,10 @@ pub fn usage() -> String {
          or encode), per-pixel (the three: loads, quantisation and stores left), enhance-pass\n\
          (the enhance pass returns at once: classify, finish_tiles, the indirect dispatch),\n\
          shared-fetch (the general background sampling instead of shared fetches; Vulkan only),\n\
-         cube-root (not taken out but replaced: the CIELAB cube roots by the driver's pow\n\
-         instead of Newton steps; the output is still the enhancement, within 1 code value).\n\
+         cube-root (not taken out but replaced: the CIELAB cube roots the other way than the\n\
+         engine's, by Newton steps where it takes the driver's pow (a GPU) and by pow where it\n\
+         takes Newton steps (a CPU driver: the first line says which); the output is still the\n\
+         enhancement, within 1 code value).\n\
          For --method perceptual: method, background, directions (the paper's colour the only\n\
          candidate), bisection (none back toward the display colour), search (both), classify\n\
          (the paper's classify, which lists every tile with content, instead of the method's\n\
@@ -247,7 +249,8 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
             .bench_shader_statistics(&params)
             .map_err(|e| e.to_string())
     });
-    let output = Output { json, stats };
+    let roots = engine.cube_roots().name();
+    let output = Output { json, stats, roots };
     report(&device, &output, &cases, |case| {
         engine
             .bench(case, &params)
@@ -260,6 +263,8 @@ pub fn run(args: &mut Args) -> Result<(), CliError> {
 struct Output {
     json: bool,
     stats: Option<ShaderReport>,
+    /// How the engine takes the CIELAB cube roots ("pow" on a GPU, "newton" on a CPU driver).
+    roots: &'static str,
 }
 
 /// Every case: each size, content and ablation.
@@ -295,7 +300,12 @@ fn bench_cases(
 fn run_opengl(cases: &[BenchCase], params: &Params, json: bool) -> Result<(), CliError> {
     let mut gl = GlOffline::new().map_err(|e| CliError::Failure(e.to_string()))?;
     let device = format!("OpenGL: {}", gl.engine().caps().driver);
-    let output = Output { json, stats: None };
+    let roots = gl.engine().cube_roots().name();
+    let output = Output {
+        json,
+        stats: None,
+        roots,
+    };
     report(&device, &output, cases, |case| {
         gl.bench(case, params)
             .map_err(|e| CliError::Failure(e.to_string()))
@@ -327,7 +337,11 @@ fn report(
 ) -> Result<(), CliError> {
     let json = output.json;
     if !json {
-        super::error::print(&format!("device: {device}\n{}\n", header()));
+        let roots = output.roots;
+        super::error::print(&format!(
+            "device: {device}, cube roots: {roots}\n{}\n",
+            header()
+        ));
     }
     let mut results = Vec::new();
     let mut baseline = f64::NAN;
@@ -346,7 +360,7 @@ fn report(
     match (&output.stats, json) {
         (_, true) => super::error::print(&format!(
             "{}\n",
-            to_json(device, &results, output.stats.as_ref())
+            to_json((device, output.roots), &results, output.stats.as_ref())
         )),
         (Some(stats), false) => super::error::print(&shader_stats::text(stats)),
         (None, false) => {}
@@ -429,7 +443,7 @@ fn optional(v: Option<f64>, decimals: usize) -> String {
 }
 
 fn to_json(
-    device: &str,
+    (device, roots): (&str, &str),
     results: &[(BenchResult, Option<f64>)],
     stats: Option<&ShaderReport>,
 ) -> String {
@@ -473,6 +487,7 @@ fn to_json(
         .collect();
     let mut all = serde_json::Map::new();
     all.insert("device".into(), device.into());
+    all.insert("cube_roots".into(), roots.into());
     all.insert("results".into(), rows.into());
     if let Some(stats) = stats {
         shader_stats::json(stats, &mut all);

@@ -36,4 +36,4 @@ pub use offline_backend::OfflineBackend;
 pub use overlay::{encode as overlay_pixel, OverlayPixels, Run};
 pub use pixel_format::{PixelFormat, PixelLayout};
 pub use shared_fetch::shares_fetches;
-pub use variant_key::{no_ablated_variant, ClassifyChoice, VariantKey};
+pub use variant_key::{no_ablated_variant, ClassifyChoice, CubeRoots, VariantKey};

@@ -44,6 +44,10 @@ macro_rules! spirv {
     };
 }
 
+/// A row of an `enhance` variant table (ENHANCE_VARIANTS, OpenGL's GL_ENHANCE_VARIANTS):
+/// (method, mode, format, access, extras, shared fetches, cube roots by pow, id).
+pub type VariantRow = (u32, u32, u32, u32, bool, bool, bool, usize);
+
 // MODULES (every shader; a ShaderId is an index there), the single shaders' ids (ID_*) and
 // the families' tables with their ids (DECODE_BLUR, ENHANCE_VARIANTS, CLASSIFY_VARIANTS,
 // ENHANCE_ABLATED), all written together by build.rs from src/gpu/core/interface.rs.

@@ -2,8 +2,9 @@
 //! mode and a pixel format need (ids into `modules::all()`, generated with it by build.rs).
 
 use super::codes::mode_code;
-use super::modules;
+use super::modules::{self, VariantRow};
 use super::plan::ClassifyCover;
+use super::variant_key::VariantKey;
 use crate::algorithm::params::ViewMode;
 use std::fmt;
 
@@ -44,46 +45,62 @@ pub fn decode_blur(half: u32) -> Result<ShaderId, NoShader> {
         .ok_or(NoShader)
 }
 
-/// The `enhance` shader for a method, view mode and pixel format (shader codes), reaching the
-/// pixels by `access` (interface.rs ACCESS_*); `extras` where the achromatic boost or the
-/// luminance cap is on. The general variant: valid for every mapping.
-pub fn enhance(codes: (u32, u32, u32), access: u32, extras: bool) -> Result<ShaderId, NoShader> {
-    enhance_variant(codes, access, extras, false).ok_or(NoShader)
+/// The `enhance` shader of a view's variant (`key`): the general one, valid for every mapping;
+/// with the cube roots the key asks for where such a variant is built, else the Newton steps'.
+pub fn enhance(key: VariantKey) -> Result<ShaderId, NoShader> {
+    enhance_variant(key, false).ok_or(NoShader)
 }
 
 /// The shared-fetch variant of `enhance` (valid only where gpu/core/shared_fetch.rs says so), where
 /// one is built (the defaults: see build.rs).
-pub fn enhance_shared(codes: (u32, u32, u32), access: u32, extras: bool) -> Option<ShaderId> {
-    enhance_variant(codes, access, extras, true)
+pub fn enhance_shared(key: VariantKey) -> Option<ShaderId> {
+    enhance_variant(key, true)
 }
 
-fn enhance_variant(
-    (method, mode, format): (u32, u32, u32),
-    access: u32,
-    extras: bool,
-    shared: bool,
-) -> Option<ShaderId> {
-    let background = mode == mode_code(ViewMode::Background);
-    let (method, extras) = if background {
-        (0, false)
-    } else {
-        (method, extras)
+fn enhance_variant(key: VariantKey, shared: bool) -> Option<ShaderId> {
+    variant_of(modules::ENHANCE_VARIANTS, key, shared).map(ShaderId)
+}
+
+/// The id in a variant table (the SPIR-V one or OpenGL's, whose rows are alike) of `key`'s
+/// variant with its sampling (`shared`): with the cube roots the key asks for where built, else
+/// the Newton steps'.
+pub fn variant_of(table: &[VariantRow], key: VariantKey, shared: bool) -> Option<usize> {
+    let by_pow = key.roots.by_pow();
+    let found = |pow| row_of(table, key, shared, pow);
+    found(by_pow).or_else(|| found(false).filter(|_| by_pow))
+}
+
+/// The id of the row for `key`, its sampling and cube roots. MODE_BACKGROUND has one variant,
+/// the paper's without extras, whatever the key's method and extras.
+fn row_of(table: &[VariantRow], key: VariantKey, shared: bool, pow: bool) -> Option<usize> {
+    let background = key.mode == mode_code(ViewMode::Background);
+    let (method, extras) = match background {
+        true => (0, false),
+        false => (key.method, key.extras),
     };
-    let wanted = (method, mode, format, access, extras, shared);
-    modules::ENHANCE_VARIANTS
+    let wanted = (
+        method, key.mode, key.format, key.access, extras, shared, pow,
+    );
+    table
         .iter()
-        .find(|&&(m, v, f, a, e, s, _)| (m, v, f, a, e, s) == wanted)
-        .map(|&(.., k)| ShaderId(k))
+        .find(|&&(m, v, f, a, e, s, p, _)| (m, v, f, a, e, s, p) == wanted)
+        .map(|&(.., k)| k)
 }
 
 /// The benchmark's `enhance` of a method (its code) with the ablations `ablate`
 /// (interface.rs ABLATE_*), reaching the pixels by `access`, sampling by shared fetches
-/// (`shared`: the paper's method only) or the general way: the paper's or the perceptual method,
-/// in mode enhance on RGBA8 sRGB; None for the others.
-pub fn enhance_ablated(method: u32, access: u32, ablate: u32, shared: bool) -> Option<ShaderId> {
+/// (`shared`: the paper's method only) or the general way, with the cube roots by `pow` or the
+/// Newton steps: the paper's or the perceptual method, in mode enhance on RGBA8 sRGB; None for
+/// the others.
+pub fn enhance_ablated(
+    method: u32,
+    access: u32,
+    ablate: u32,
+    (shared, pow): (bool, bool),
+) -> Option<ShaderId> {
     modules::ENHANCE_ABLATED
         .iter()
-        .find(|&&(m, a, x, s, _)| (m, a, x, s) == (method, access, ablate, shared))
+        .find(|&&(m, a, x, s, p, _)| (m, a, x, s, p) == (method, access, ablate, shared, pow))
         .map(|&(.., k)| ShaderId(k))
 }
 
@@ -120,6 +137,7 @@ mod tests {
     use crate::algorithm::params::Method;
     use crate::gpu::core::codes::method_code;
     use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_SAMPLED};
+    use crate::gpu::core::variant_key::CubeRoots;
 
     /// The ids name the shaders they stand for in `modules::all()`.
     #[test]
@@ -132,26 +150,50 @@ mod tests {
         assert_eq!(name(COPY_ROWS), "copy_rows");
         assert_eq!(name(decode_blur(3).unwrap()), "decode_blur_3");
         assert!(decode_blur(8).is_err());
-        for &(m, v, f, w, e, shared, k) in modules::ENHANCE_VARIANTS {
+        let key = |(method, mode, format), access, extras, pow: bool| VariantKey {
+            method,
+            mode,
+            format,
+            access,
+            extras,
+            roots: [CubeRoots::Newton, CubeRoots::Pow][usize::from(pow)],
+        };
+        for &(m, v, f, w, e, shared, pow, k) in modules::ENHANCE_VARIANTS {
+            let key = key((m, v, f), w, e, pow);
             let id = match shared {
-                true => enhance_shared((m, v, f), w, e),
-                false => enhance((m, v, f), w, e).ok(),
+                true => enhance_shared(key),
+                false => enhance(key).ok(),
             };
             assert_eq!(id, Some(ShaderId(k)));
             let s = if shared { "_s" } else { "" };
-            let file = format!("enhance_m{m}_v{v}_f{f}_a{w}_e{}{s}", u8::from(e));
+            let p = if pow { "_p" } else { "" };
+            let file = format!("enhance_m{m}_v{v}_f{f}_a{w}_e{}{s}{p}", u8::from(e));
             assert_eq!(name(ShaderId(k)), file);
         }
         // The defaults have a shared-fetch variant for every format and access; the others
         // none.
         let (paper, enhance_mode) = (0, mode_code(ViewMode::Enhance));
         for &(f, w, ..) in modules::CLASSIFY_VARIANTS.iter().filter(|v| !v.3) {
-            assert!(enhance_shared((paper, enhance_mode, f), w, false).is_some());
-            assert!(enhance_shared((paper, enhance_mode, f), w, true).is_none());
-            assert!(enhance_shared((1, enhance_mode, f), w, false).is_none());
-            assert!(
-                enhance_shared((paper, mode_code(ViewMode::Background), f), w, false).is_none()
-            );
+            assert!(enhance_shared(key((paper, enhance_mode, f), w, false, false)).is_some());
+            assert!(enhance_shared(key((paper, enhance_mode, f), w, true, false)).is_none());
+            assert!(enhance_shared(key((1, enhance_mode, f), w, false, false)).is_none());
+            let background = (paper, mode_code(ViewMode::Background), f);
+            assert!(enhance_shared(key(background, w, false, false)).is_none());
+            // Asked for the cube roots by pow: their variant where it is built (the ways a
+            // GPU's views take), else the Newton steps' one.
+            for shared in [false, true] {
+                let variant =
+                    |pow| enhance_variant(key((paper, enhance_mode, f), w, false, pow), shared);
+                let built = w == ACCESS_IN_PLACE || w == ACCESS_SAMPLED;
+                assert_eq!(
+                    variant(true) != variant(false),
+                    built,
+                    "format {f}, access {w}"
+                );
+                assert!(variant(true).is_some());
+            }
+            let split = key((paper, mode_code(ViewMode::Split), f), w, false, true);
+            assert_eq!(enhance(split), enhance(split.with_roots(CubeRoots::Newton)));
         }
         // Two per format and access: the paper's and the perceptual method's; and the
         // perceptual method's by tile rows for the ablations' accesses of RGBA8 sRGB.
@@ -194,21 +236,25 @@ mod tests {
         // Each method's ablations for each access of RGBA8 sRGB, in place in its texel.
         use crate::gpu::core::interface::{ABLATIONS, FORMAT_SRGB_BIT, PERCEPTUAL_ABLATIONS};
         let srgb8 = rgba8 | FORMAT_SRGB_BIT;
-        for &(m, access, ablate, shared, k) in modules::ENHANCE_ABLATED {
+        for &(m, access, ablate, shared, pow, k) in modules::ENHANCE_ABLATED {
             assert_eq!(
-                enhance_ablated(m, access, ablate, shared),
+                enhance_ablated(m, access, ablate, (shared, pow)),
                 Some(ShaderId(k))
             );
             let file = format!("enhance_ablated_m{m}_f{srgb8}_a{access}_x{ablate}");
-            let file = if shared { file + "_s" } else { file };
+            let file = file + if pow { "_p" } else { "" } + if shared { "_s" } else { "" };
             assert_eq!(name(ShaderId(k)), file);
             let in_place = (access == ACCESS_IN_PLACE).then_some(srgb8);
             assert_eq!(in_place_format(ShaderId(k)), in_place);
         }
-        // The paper's twice (general sampling and shared fetches), the perceptual method's once.
+        // The paper's twice (general sampling and shared fetches), the perceptual method's
+        // once; each with both ways of taking the cube roots.
         let ablations = 2 * ABLATIONS.len() + PERCEPTUAL_ABLATIONS.len();
-        assert_eq!(modules::ENHANCE_ABLATED.len(), 3 * ablations);
-        assert_eq!(enhance_ablated(paper, ACCESS_IN_PLACE, 0, false), None);
+        assert_eq!(modules::ENHANCE_ABLATED.len(), 2 * 3 * ablations);
+        assert_eq!(
+            enhance_ablated(paper, ACCESS_IN_PLACE, 0, (false, false)),
+            None
+        );
         assert!(!reads_camera(FINISH_TILES));
     }
 }

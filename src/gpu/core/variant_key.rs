@@ -19,10 +19,51 @@ pub struct VariantKey {
     pub access: u32,
     /// The achromatic boost or the luminance cap is on: the variant with those steps.
     pub extras: bool,
+    /// How the device would take the CIELAB cube roots (a variant without `pow` ones takes
+    /// the Newton steps).
+    pub roots: CubeRoots,
+}
+
+/// How the CIELAB conversions take their cube roots (shaders/common.wgsl `cbrt`), to within
+/// 1e-6 relative either way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum CubeRoots {
+    /// Newton steps from a bit-pattern seed: every variant is built with them.
+    #[default]
+    Newton,
+    /// The driver's `pow`: built for the paper's and the perceptual method in mode enhance,
+    /// extras off, in place and through the sampled read (build/variants.rs).
+    Pow,
+}
+
+impl CubeRoots {
+    /// The way a device takes: `pow` on a GPU, whose special-function unit computes it in a
+    /// few cycles (on an NVIDIA H200 the paper's enhancement took 10-17% less time with it);
+    /// the Newton steps on a CPU driver (lavapipe, llvmpipe), where `pow` costs as much or more.
+    pub fn for_device(cpu: bool) -> CubeRoots {
+        match cpu {
+            true => CubeRoots::Newton,
+            false => CubeRoots::Pow,
+        }
+    }
+
+    /// The variant tables' column: whether the cube roots are by `pow`.
+    pub fn by_pow(self) -> bool {
+        self == CubeRoots::Pow
+    }
+
+    /// As the bench and the logs name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CubeRoots::Newton => "newton",
+            CubeRoots::Pow => "pow",
+        }
+    }
 }
 
 impl VariantKey {
-    /// The variant views of `format`, reached by `access`, take under `params`.
+    /// The variant views of `format`, reached by `access`, take under `params` (with the
+    /// Newton steps' cube roots: `with_roots` gives a device's own).
     pub fn of(params: &Params, format: PixelFormat, access: u32) -> VariantKey {
         VariantKey {
             method: method_code(params.method),
@@ -30,7 +71,13 @@ impl VariantKey {
             format: format.shader_code(),
             access,
             extras: params.achromatic_boost > 0.0 || params.luminance_cap > 0.0,
+            roots: CubeRoots::Newton,
         }
+    }
+
+    /// The same key on a device that takes its cube roots by `roots`.
+    pub fn with_roots(self, roots: CubeRoots) -> VariantKey {
+        VariantKey { roots, ..self }
     }
 
     /// The method code of the view's `classify` variant: the perceptual method's own, which

@@ -235,8 +235,12 @@ mod tests {
     fn an_ablation_applies_where_its_variant_is_built() {
         for a in Ablation::ALL {
             for m in Method::ALL {
-                let built =
-                    shader_ids::enhance_ablated(method_code(m), ACCESS_WIDE, a.bits(), false);
+                let built = shader_ids::enhance_ablated(
+                    method_code(m),
+                    ACCESS_WIDE,
+                    a.bits(),
+                    (false, false),
+                );
                 let applies = match a {
                     Ablation::None => true,
                     Ablation::SharedFetch => m == Method::Paper,

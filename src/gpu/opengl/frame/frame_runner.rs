@@ -30,7 +30,7 @@ use crate::algorithm::params::{Params, ViewMode};
 use crate::gpu::core::interface::in_place_texel;
 use crate::gpu::core::perceptual_words::PerceptualWords;
 use crate::gpu::core::plan::{view_steps, NoPlan};
-use crate::gpu::core::{CameraRect, ClassifyChoice};
+use crate::gpu::core::{CameraRect, ClassifyChoice, CubeRoots};
 use crate::gpu::opengl::conv::{image_unit_format, GlFormat};
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
@@ -102,6 +102,8 @@ pub struct GlFrameRunner {
     /// 0 and the method's own but for `contrastxr bench --ablate`.
     pub(super) ablate: u32,
     pub(super) classify: ClassifyChoice,
+    /// How views take the CIELAB cube roots: `pow` on a GPU (`CubeRoots::for_device`).
+    pub(super) roots: CubeRoots,
     /// Each frame's GPU time, from timestamp queries around its work.
     pub(super) times: super::frame_times::FrameTimes,
 }
@@ -164,6 +166,7 @@ impl GlFrameRunner {
         Ok(GlFrameRunner {
             programs: Programs::new(&caps),
             in_place: !caps.software,
+            roots: CubeRoots::for_device(caps.software),
             gl,
             caps,
             background: None,
@@ -233,7 +236,7 @@ impl GlFrameRunner {
     ) -> Result<[usize; 3], GlError> {
         let code = GlFormat::of(internal_format)?.pixel.shader_code();
         let in_place = self.in_place && in_place_texel(code).is_some();
-        Self::shape_programs(internal_format, width, params, in_place)
+        self.shape_programs(internal_format, width, params, in_place)
     }
 
     /// Which views of the last `enhance` call were stored in place (the others went through

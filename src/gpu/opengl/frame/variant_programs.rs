@@ -6,7 +6,7 @@ use super::frame_view::GlView;
 use crate::algorithm::params::Params;
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_NARROW, ACCESS_WIDE};
 use crate::gpu::core::plan::ClassifyCover;
-use crate::gpu::core::{no_ablated_variant, ClassifyChoice, VariantKey};
+use crate::gpu::core::{no_ablated_variant, ClassifyChoice, CubeRoots, VariantKey};
 use crate::gpu::opengl::conv::GlFormat;
 use crate::gpu::opengl::device::GlError;
 use crate::gpu::opengl::pipelines;
@@ -21,23 +21,26 @@ impl GlFrameRunner {
     ) -> Result<([usize; 3], ClassifyCover), GlError> {
         let in_place = self.store_through(view).is_some();
         let format = view.internal_format;
-        let key = Self::shape_key(format, view.rect.2, params, in_place)?;
+        let key = self.shape_key(format, view.rect.2, params, in_place)?;
         self.ablated(key, Self::key_programs(key, format)?)
     }
 
     /// The programs views of `internal_format`, `width` texels wide, need, in place or not.
     pub(super) fn shape_programs(
+        &self,
         internal_format: u32,
         width: u32,
         params: &Params,
         in_place: bool,
     ) -> Result<[usize; 3], GlError> {
-        let key = Self::shape_key(internal_format, width, params, in_place)?;
+        let key = self.shape_key(internal_format, width, params, in_place)?;
         Self::key_programs(key, internal_format)
     }
 
-    /// The variant views of `internal_format`, `width` texels wide, take, in place or not.
+    /// The variant views of `internal_format`, `width` texels wide, take, in place or not,
+    /// with the cube roots the engine takes.
     fn shape_key(
+        &self,
         internal_format: u32,
         width: u32,
         params: &Params,
@@ -51,7 +54,7 @@ impl GlFrameRunner {
         } else {
             ACCESS_NARROW
         };
-        Ok(VariantKey::of(params, format.pixel, access))
+        Ok(VariantKey::of(params, format.pixel, access).with_roots(self.roots))
     }
 
     /// The programs of a variant (views of `internal_format`).
@@ -65,7 +68,7 @@ impl GlFrameRunner {
             )
             .ok_or_else(missing)?,
             pipelines::GL_FINISH_TILES,
-            pipelines::enhance(key.codes(), key.access, key.extras).ok_or_else(missing)?,
+            pipelines::enhance(key).ok_or_else(missing)?,
         ])
     }
 
@@ -74,6 +77,17 @@ impl GlFrameRunner {
     /// enhance on RGBA8 sRGB only. Their output is not an enhancement.
     pub fn set_ablation(&mut self, ablate: u32) {
         self.ablate = ablate;
+    }
+
+    /// How views take the CIELAB cube roots: the device's way by default
+    /// (`CubeRoots::for_device`); the other, to compare them or to test it on this device.
+    pub fn set_cube_roots(&mut self, roots: CubeRoots) {
+        self.roots = roots;
+    }
+
+    /// How views take the CIELAB cube roots (where their variant is built that way).
+    pub fn cube_roots(&self) -> CubeRoots {
+        self.roots
     }
 
     /// Which `classify` views take (their method's own by default), to compare them.
@@ -96,7 +110,8 @@ impl GlFrameRunner {
         if self.ablate == 0 {
             return Ok(([classify, finish, enhance], cover));
         }
-        let enhance = pipelines::enhance_ablated(key.method, key.access, self.ablate)
+        let pow = key.roots.by_pow();
+        let enhance = pipelines::enhance_ablated(key.method, key.access, self.ablate, pow)
             .filter(|_| key.has_ablated_variants())
             .ok_or_else(|| GlError::Input(no_ablated_variant(self.ablate)))?;
         Ok(([classify, finish, enhance], cover))

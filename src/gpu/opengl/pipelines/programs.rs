@@ -10,8 +10,11 @@
 //! binary cache (binary_cache.rs), from which a later process links it without compiling.
 
 use super::binary_cache::{BinaryCache, ProgramBinaries};
+use crate::gpu::core::modules::VariantRow;
 use crate::gpu::core::plan::ClassifyCover;
 use crate::gpu::core::push_constants::PushConstants;
+use crate::gpu::core::shader_ids;
+use crate::gpu::core::VariantKey;
 use crate::gpu::opengl::device::caps::Caps;
 use crate::gpu::opengl::device::functions::{self as gl, Gl};
 use crate::gpu::opengl::device::GlError;
@@ -396,30 +399,20 @@ pub fn classify(format: u32, access: u32, (method, cover): (u32, ClassifyCover))
         .map(|&(.., id)| id)
 }
 
-/// The benchmark's ablated `enhance` program of a method (its code), access and ablations
-/// (interface.rs ABLATE_*): the paper's or the perceptual method in mode enhance on RGBA8 sRGB;
-/// None for the others.
-pub fn enhance_ablated(method: u32, access: u32, ablate: u32) -> Option<usize> {
+/// The benchmark's ablated `enhance` program of a method (its code), access, ablations
+/// (interface.rs ABLATE_*) and cube roots (by pow or not): the paper's or the perceptual method
+/// in mode enhance on RGBA8 sRGB; None for the others.
+pub fn enhance_ablated(method: u32, access: u32, ablate: u32, pow: bool) -> Option<usize> {
     GL_ENHANCE_ABLATED
         .iter()
-        .find(|&&(m, a, x, _)| (m, a, x) == (method, access, ablate))
+        .find(|&&(m, a, x, p, _)| (m, a, x, p) == (method, access, ablate, pow))
         .map(|&(.., id)| id)
 }
 
-/// The `enhance` program of (method, mode, format) codes, access and extras (MODE_BACKGROUND
-/// has one variant whatever the method and extras).
-pub fn enhance(
-    (method, mode, format): (u32, u32, u32),
-    access: u32,
-    extras: bool,
-) -> Option<usize> {
-    let background = mode == crate::gpu::core::interface::MODE_BACKGROUND;
-    GL_ENHANCE_VARIANTS
-        .iter()
-        .find(|&&(m, v, f, a, e, s, _)| {
-            !s && (v, f, a) == (mode, format, access) && (background || (m, e) == (method, extras))
-        })
-        .map(|&(.., id)| id)
+/// The `enhance` program of a view's variant (`key`; the general sampling: OpenGL has no
+/// shared fetches), with the cube roots the key asks for where built.
+pub fn enhance(key: VariantKey) -> Option<usize> {
+    shader_ids::variant_of(GL_ENHANCE_VARIANTS, key, false)
 }
 
 #[cfg(test)]

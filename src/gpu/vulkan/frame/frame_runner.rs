@@ -169,7 +169,8 @@ impl FrameRunner {
         params: &Params,
         wait: bool,
     ) -> Result<PipelinesReady, GpuError> {
-        let ids = Recorder::shaders_for(params, views.iter().map(FrameView::shape))?;
+        let shapes = views.iter().map(FrameView::shape);
+        let ids = Recorder::shaders_for(params, shapes, self.engine.cube_roots())?;
         match self.engine.ready(&ids)? {
             true => Ok(PipelinesReady(())),
             false if wait => self

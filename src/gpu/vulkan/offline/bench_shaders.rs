@@ -6,7 +6,7 @@ use crate::algorithm::params::Params;
 use crate::gpu::core::interface::{ACCESS_IN_PLACE, ACCESS_SAMPLED, ACCESS_WIDE};
 use crate::gpu::core::modules::MODULES;
 use crate::gpu::core::shader_ids::{self, ShaderId};
-use crate::gpu::core::{ClassifyChoice, PixelFormat, VariantKey};
+use crate::gpu::core::{ClassifyChoice, CubeRoots, PixelFormat, VariantKey};
 use crate::gpu::vulkan::device::{DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::{create_layouts, shader_statistics, ExecutableStatistics};
 
@@ -20,8 +20,8 @@ pub struct ShaderStatistics {
 impl VkOffline {
     /// The statistics of the per-pixel shaders of RGBA8 sRGB views (the bench's format) under
     /// `params`: `finish_tiles`, and for the buffer path's 16-byte access, in place and the
-    /// sampled read, `classify` and `enhance` (the general and the shared-fetch variant).
-    /// An error where the device was not made with `DeviceOptions::shader_statistics` or its
+    /// sampled read, `classify` and `enhance` (the general and the shared-fetch variant, with
+    /// the cube roots by pow too where built). An error where the device was not made with `DeviceOptions::shader_statistics` or its
     /// driver does not report them.
     pub fn bench_shader_statistics(
         &self,
@@ -78,15 +78,16 @@ fn bench_shaders(params: &Params) -> Vec<ShaderId> {
         // The method's own classify, and by tile rows (`--ablate classify-rows`) where it has one.
         let [classify, by_rows] = [ClassifyChoice::Own, ClassifyChoice::OwnByRows]
             .map(|c| shader_ids::classify(key.format, access, key.classify_taken(c)).ok());
-        let general = shader_ids::enhance(key.codes(), access, key.extras).ok();
-        let shared = shader_ids::enhance_shared(key.codes(), access, key.extras);
-        ids.extend([
-            classify,
-            by_rows,
-            Some(shader_ids::FINISH_TILES),
-            general,
-            shared,
-        ]);
+        ids.extend([classify, by_rows, Some(shader_ids::FINISH_TILES)]);
+        // The general and the shared-fetch variant, with each way of taking the cube roots
+        // where it is built.
+        for roots in [CubeRoots::Newton, CubeRoots::Pow] {
+            let key = key.with_roots(roots);
+            ids.extend([
+                shader_ids::enhance(key).ok(),
+                shader_ids::enhance_shared(key),
+            ]);
+        }
     }
     let mut unique: Vec<ShaderId> = Vec::new();
     for id in ids.into_iter().flatten() {
@@ -107,8 +108,10 @@ mod tests {
             .into_iter()
             .map(|ShaderId(k)| MODULES[k].name)
             .collect();
-        // Three accesses, each a classify and two enhance variants, and one finish_tiles.
-        assert_eq!(names.len(), 10, "{names:?}");
+        // Three accesses, each a classify and two enhance variants (the general and the
+        // shared-fetch one), in place and the sampled read also with the cube roots by pow;
+        // and one finish_tiles.
+        assert_eq!(names.len(), 14, "{names:?}");
         assert_eq!(
             names
                 .iter()
@@ -120,6 +123,10 @@ mod tests {
             names.iter().filter(|n| n.starts_with("classify")).count(),
             3
         );
-        assert_eq!(names.iter().filter(|n| n.starts_with("enhance")).count(), 6);
+        assert_eq!(
+            names.iter().filter(|n| n.starts_with("enhance")).count(),
+            10
+        );
+        assert_eq!(names.iter().filter(|n| n.ends_with("_p")).count(), 4);
     }
 }

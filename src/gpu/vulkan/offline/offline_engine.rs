@@ -4,7 +4,7 @@
 use crate::algorithm::mapping::CameraMapping;
 use crate::algorithm::params::Params;
 use crate::gpu::core::blurred_texels::{BlurTaps, BlurredTexels};
-use crate::gpu::core::{CameraRect, ClassifyChoice};
+use crate::gpu::core::{CameraRect, ClassifyChoice, CubeRoots};
 use crate::gpu::core::{OfflineBackend, PixelFormat, PixelLayout};
 use crate::gpu::vulkan::device::{barrier, Commands, DeviceOptions, GpuDevice, GpuError};
 use crate::gpu::vulkan::pipelines::BuildMode;
@@ -86,6 +86,16 @@ impl VkOffline {
     /// default; gpu/core/shared_fetch.rs); off, every view takes the general one, to compare them.
     pub fn set_shared_fetch(&mut self, on: bool) {
         self.engine.set_shared_fetch(on);
+    }
+
+    /// How views take the CIELAB cube roots: the device's way by default
+    /// (`CubeRoots::for_device`); the other, to compare them or to test it on this device.
+    pub fn set_cube_roots(&mut self, roots: CubeRoots) {
+        self.engine.set_cube_roots(roots);
+    }
+
+    pub fn cube_roots(&self) -> CubeRoots {
+        self.engine.cube_roots()
     }
 
     /// The benchmark's ablations (interface.rs ABLATE_*; 0 for none): from now on views take

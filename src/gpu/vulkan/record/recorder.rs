@@ -17,7 +17,7 @@ use crate::gpu::core::interface::{
 use crate::gpu::core::shader_ids::{self, ShaderId};
 use crate::gpu::core::shares_fetches;
 use crate::gpu::core::PixelFormat;
-use crate::gpu::core::{ClassifyChoice, VariantKey};
+use crate::gpu::core::{ClassifyChoice, CubeRoots, VariantKey};
 use crate::gpu::vulkan::device::{
     colour_layer, DeviceImage, GpuBuffer, GpuDevice, GpuError, VkResultExt,
 };
@@ -53,6 +53,8 @@ pub struct Recorder {
     /// Which `classify` views take: their method's own, but for `contrastxr bench --ablate
     /// classify` and `classify-rows`.
     pub(super) classify: ClassifyChoice,
+    /// How views take the CIELAB cube roots: the device's way (`CubeRoots::for_device`).
+    pub(super) roots: CubeRoots,
 }
 
 pub(super) const COMPUTE: vk::PipelineStageFlags = vk::PipelineStageFlags::COMPUTE_SHADER;
@@ -86,6 +88,7 @@ impl Recorder {
                 shared_fetch: true,
                 ablate: 0,
                 classify: ClassifyChoice::Own,
+                roots: CubeRoots::for_device(gpu.is_cpu()),
             }),
             Err(e) => {
                 pipelines.destroy(gpu);
@@ -148,6 +151,17 @@ impl Recorder {
     /// default); off, every view takes the general one, to compare them.
     pub fn set_shared_fetch(&mut self, on: bool) {
         self.shared_fetch = on;
+    }
+
+    /// How views take the CIELAB cube roots: the device's way by default
+    /// (`CubeRoots::for_device`); the other, to compare them or to test it on this device.
+    pub fn set_cube_roots(&mut self, roots: CubeRoots) {
+        self.roots = roots;
+    }
+
+    /// How views take the CIELAB cube roots (where their variant is built that way).
+    pub fn cube_roots(&self) -> CubeRoots {
+        self.roots
     }
 
     /// The benchmark's ablations (interface.rs ABLATE_*; 0, the default, for none): views then
@@ -342,10 +356,12 @@ impl Recorder {
     }
 
     /// The shaders a frame's work needs: the background preparation for `params` and the
-    /// enhancement of views of these pixel formats and widths (None for Mode off).
+    /// enhancement of views of these pixel formats and widths (None for Mode off), on a device
+    /// that takes its cube roots by `roots` (`Recorder::roots`).
     pub fn shaders_for(
         params: &Params,
         views: impl IntoIterator<Item = ViewShape>,
+        roots: CubeRoots,
     ) -> Result<Vec<ShaderId>, GpuError> {
         if params.mode == ViewMode::Off {
             return Ok(Vec::new());
@@ -359,7 +375,7 @@ impl Recorder {
             ids.push(shader_ids::FINISH_TILES);
         }
         for view in views {
-            let key = VariantKey::of(params, view.format, view.access());
+            let key = VariantKey::of(params, view.format, view.access()).with_roots(roots);
             for pass in passes {
                 let id = match pass {
                     Pass::Classify => {
@@ -367,7 +383,7 @@ impl Recorder {
                         shader_ids::classify(key.format, key.access, own)?
                     }
                     Pass::FinishTiles => continue,
-                    Pass::Enhance => shader_ids::enhance(key.codes(), key.access, key.extras)?,
+                    Pass::Enhance => shader_ids::enhance(key)?,
                 };
                 if !ids.contains(&id) {
                     ids.push(id);
@@ -391,8 +407,8 @@ impl Recorder {
             if !self.shared_fetch || !shares_fetches(mapping, region, camera) {
                 continue;
             }
-            let key = VariantKey::of(params, shape.format, shape.access());
-            if let Some(id) = shader_ids::enhance_shared(key.codes(), key.access, key.extras) {
+            let key = VariantKey::of(params, shape.format, shape.access()).with_roots(self.roots);
+            if let Some(id) = shader_ids::enhance_shared(key) {
                 if !ids.contains(&id) {
                     ids.push(id);
                 }

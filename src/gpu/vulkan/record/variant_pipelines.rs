@@ -18,28 +18,30 @@ impl Recorder {
         key: VariantKey,
         mapping: &CameraMapping,
     ) -> Result<vk::Pipeline, GpuError> {
-        let (codes, access, extras) = (key.codes(), key.access, key.extras);
+        let key = key.with_roots(self.roots);
         let shares = shares_fetches(mapping, view.region, view.camera_size);
         if self.ablate != 0 {
             return self.ablated_pipeline(key, shares);
         }
-        let shared = shader_ids::enhance_shared(codes, access, extras)
-            .filter(|_| self.shared_fetch && shares);
+        let shared = shader_ids::enhance_shared(key).filter(|_| self.shared_fetch && shares);
         match shared.map(|id| self.pipelines.get(id)) {
             Some(Ok(p)) => Ok(p),
-            _ => self
-                .pipelines
-                .get(shader_ids::enhance(codes, access, extras)?),
+            _ => self.pipelines.get(shader_ids::enhance(key)?),
         }
     }
 
     /// The benchmark's ablated `enhance` for the view's variant, where one is built: with
     /// shared fetches where the view's mapping allows them (`shares`) and they are built (the
-    /// paper's), as without an ablation, else with the general sampling.
+    /// paper's), as without an ablation, else with the general sampling; with the cube roots
+    /// the device takes.
     fn ablated_pipeline(&self, key: VariantKey, shares: bool) -> Result<vk::Pipeline, GpuError> {
         let shared = shares && self.shared_fetch;
-        let id = shader_ids::enhance_ablated(key.method, key.access, self.ablate, shared)
-            .or_else(|| shader_ids::enhance_ablated(key.method, key.access, self.ablate, false))
+        let pow = key.roots.by_pow();
+        let ablated = |shared| {
+            shader_ids::enhance_ablated(key.method, key.access, self.ablate, (shared, pow))
+        };
+        let id = ablated(shared)
+            .or_else(|| ablated(false))
             .filter(|_| key.has_ablated_variants())
             .ok_or_else(|| GpuError::Unsupported(no_ablated_variant(self.ablate)))?;
         self.pipelines.get(id)

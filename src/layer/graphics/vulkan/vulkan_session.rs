@@ -4,7 +4,7 @@
 
 use super::{app_vulkan, in_place};
 use crate::algorithm::params::Params;
-use crate::gpu::core::{BackgroundInput, OverlayPixels};
+use crate::gpu::core::{BackgroundInput, CubeRoots, OverlayPixels};
 use crate::gpu::vulkan::conv::VkFormat;
 use crate::gpu::vulkan::frame::{copy_path, FrameOptions, FrameRunner, PipelinesReady};
 use crate::gpu::vulkan::pipelines::Origin;
@@ -79,7 +79,8 @@ fn set_up(b: &xr::GraphicsBindingVulkanKHR, settings: &Settings) -> Result<Frame
         )
     }?;
     // The background preparation's shaders first: the views' ones need a swapchain's format.
-    let first = Recorder::shaders_for(&settings.params, []).unwrap_or_default();
+    let roots = CubeRoots::for_device(gpu.is_cpu());
+    let first = Recorder::shaders_for(&settings.params, [], roots).unwrap_or_default();
     gpu.queue_has_compute()?;
     let mut engine = FrameRunner::new(gpu, &first)?;
     log_warm_up_device(&mut engine);
@@ -228,7 +229,8 @@ impl SessionGraphics for VulkanSession {
             width,
             pixels_in: path.pixels_in(),
         };
-        if let Ok(ids) = Recorder::shaders_for(params, [shape]) {
+        let roots = CubeRoots::for_device(self.engine.gpu.is_cpu());
+        if let Ok(ids) = Recorder::shaders_for(params, [shape], roots) {
             self.engine.request(&ids);
         }
     }
