@@ -199,9 +199,11 @@ def main(argv):
     out = []
     for name, entries in parts.items():
         for e in entries:
-            device = (e.get("output") or {}).get("device", "no output")
+            output = e.get("output") or {}
+            device = output.get("device", "no output")
+            roots = f", cube roots: {output['cube_roots']}" if "cube_roots" in output else ""
             out.append(f"- {name}: `{' '.join(e['args'])}`: exit {e['exit']}, {e['seconds']:.0f} s, "
-                       f"{device}")
+                       f"{device}{roots}")
     vk, gl = results(parts, "vk"), results(parts, "gl")
     perceptual = results(parts, "perceptual")
     for title, rows in [("Vulkan, paper", vk), ("OpenGL, paper", gl),

@@ -16,7 +16,7 @@ fn row(size: (u32, u32), content: &str, ms: &[(&str, f64)]) -> serde_json::Value
 }
 
 fn line(part: &str, results: Vec<serde_json::Value>) -> String {
-    let output = serde_json::json!({ "device": "a GPU", "results": results });
+    let output = serde_json::json!({ "device": "a GPU", "cube_roots": "pow", "results": results });
     serde_json::json!({ "part": part, "args": [], "exit": 0, "seconds": 1.0, "output": output })
         .to_string()
 }
@@ -81,6 +81,7 @@ fn each_target_is_met_or_not_by_its_figures() {
         line("perceptual", perceptual),
     ]);
     let has = |s: &str| assert!(report.contains(s), "no {s:?} in:\n{report}");
+    has("a GPU, cube roots: pow");
     // srgb: region's worst 1.2 meets 1.3, tiles' 1.5 does not; region is the lower.
     has("- region: worst 1.20, median row 1.20: met");
     has("- tiles: worst 1.50, median row 1.50: NOT met");
